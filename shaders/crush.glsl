@@ -1,0 +1,114 @@
+#version 430
+// Crush pass (Loviscach 2006, sec. 3): per vertex, fit the 2x2 map M of the local
+// deformation over the 1-ring, bias it with the painted q, and turn the strongest
+// compression into a plane wave (amplitude, wave vector, rest direction) and a
+// material-anchored initial phase.
+#include "include/common.glsl"
+#include "include/topology.glsl"
+
+layout(local_size_x = LOCAL_SIZE) in;
+
+layout(std430, binding = CRUSH_POSED_POINTS) readonly buffer PosedPoints { vec4 posed_points[]; };
+layout(std430, binding = CRUSH_REST_POINTS) readonly buffer RestPoints { vec4 rest_points[]; };
+layout(std430, binding = CRUSH_TOPOLOGY) readonly buffer Topology { int topology[]; };
+// Rest frame per vertex: [2i] = rest normal N0, [2i+1] = rest tangent T1 (unit, orthogonal).
+layout(std430, binding = CRUSH_REST_FRAME) readonly buffer RestFrame { vec4 rest_frame[]; };
+// xyz: painted q (rest space, |q| <= 1); w: rest wavelength W.
+layout(std430, binding = CRUSH_Q_WIDTH) readonly buffer QWidth { vec4 q_width[]; };
+layout(std430, binding = CRUSH_FIELDS) writeonly buffer Fields { WrinkleField fields[]; };
+layout(std430, binding = CRUSH_PHASE) writeonly buffer Phase { float phase[]; };
+
+uniform int u_num_points;
+uniform float u_amplitude_scale;    // s
+uniform float u_min_ratio;          // floor of r for the wave vector (|k| <= 2pi/(W r_min))
+
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_num_points) return;
+
+    vec3 x_i = posed_points[i].xyz;       // posed, local space
+    vec3 X_i = rest_points[i].xyz;        // rest, local space
+    vec3 N0 = rest_frame[2 * i].xyz;      // rest normal
+    vec3 T1 = rest_frame[2 * i + 1].xyz;  // rest tangent
+    vec3 T2 = cross(N0, T1);
+    float W = q_width[i].w;
+
+    // posed normal: area-weighted sum of incident triangle normals (local space)
+    vec3 n_sum = vec3(0.0);
+    for (int e = TRIANGLE_BEGIN(i); e < TRIANGLE_END(i); ++e) {
+        int t = INCIDENT_TRIANGLE(e);
+        vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
+        vec3 p1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz;
+        vec3 p2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz;
+        n_sum += cross(p1 - p0, p2 - p0);
+    }
+    bool usable = length(N0) > 0.5 && length(n_sum) > 0.0;
+    vec3 n = safe_normalize(n_sum, N0);
+
+    // posed tangent frame: the rest frame carried by the minimal rotation N0 -> n
+    vec3 t1 = safe_normalize(minimal_rotation(N0, n, T1, T1), T1);
+    vec3 t2 = cross(n, t1);
+
+    // least squares M a_j ~ b_j over the 1-ring: M = (sum b a^T)(sum a a^T)^-1
+    mat2 AA = mat2(0.0);
+    mat2 BA = mat2(0.0);
+    int count = 0;
+    for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+        int j = NEIGHBOR(e);
+        vec3 rest_edge = rest_points[j].xyz - X_i;     // rest, local space
+        vec3 posed_edge = posed_points[j].xyz - x_i;   // posed, local space
+        vec2 a = vec2(dot(rest_edge, T1), dot(rest_edge, T2));  // rest tangent coords
+        vec2 b = vec2(dot(posed_edge, t1), dot(posed_edge, t2)); // posed tangent coords
+        AA += outerProduct(a, a);
+        BA += outerProduct(b, a);
+        ++count;
+    }
+    float det_a = determinant(AA);
+    float trace_a = AA[0][0] + AA[1][1];
+    // fewer than 2 independent edges (collinear, coincident, isolated): no wrinkle
+    usable = usable && count >= 2 && trace_a > 0.0 && det_a > 1e-6 * trace_a * trace_a;
+    mat2 M = usable ? BA * inverse(AA) : mat2(1.0);
+
+    // painted bias: M <- M (I - q q^T), q projected to the rest tangent plane
+    vec3 q3 = q_width[i].xyz;
+    vec2 q = vec2(dot(q3, T1), dot(q3, T2));
+    float q_len = length(q);
+    if (q_len > 1.0) q /= q_len;
+    M = M * (mat2(1.0) - outerProduct(q, q));
+
+    // smallest eigenpair of the symmetric S = M^T M
+    mat2 S = transpose(M) * M;
+    float sa = S[0][0], sb = S[1][0], sc = S[1][1];
+    float mean = 0.5 * (sa + sc);
+    float radius = sqrt(max(0.25 * (sa - sc) * (sa - sc) + sb * sb, 0.0));
+    float lambda = max(mean - radius, 0.0);
+    vec2 d;
+    vec2 v1 = vec2(lambda - sc, sb);
+    vec2 v2 = vec2(sb, lambda - sa);
+    if (max(dot(v1, v1), dot(v2, v2)) > 1e-24 * max(mean * mean, 1e-30)) {
+        d = normalize(dot(v1, v1) >= dot(v2, v2) ? v1 : v2);
+    } else {
+        d = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
+    }
+    // deterministic sign: the rest direction's largest component is positive
+    vec3 d3 = d.x * T1 + d.y * T2;
+    vec3 ad = abs(d3);
+    float lead = ad.x >= ad.y && ad.x >= ad.z ? d3.x : (ad.y >= ad.z ? d3.y : d3.z);
+    if (lead < 0.0) { d = -d; d3 = -d3; }
+
+    float r = usable || q_len > 0.0 ? min(1.0, sqrt(lambda)) : 1.0;
+    float amplitude = u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r * r, 0.0));
+
+    // k = M^-T (2pi/W) d = (2pi/W) M d / lambda, with lambda floored so |k| stays finite
+    vec2 md = M * d;
+    vec2 k2 = length(md) > 1e-12
+        ? (TWO_PI / W) * md / max(lambda, u_min_ratio * u_min_ratio)
+        : (TWO_PI / (W * u_min_ratio)) * d;
+    vec3 k = k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
+
+    fields[i].normal = vec4(n, usable ? 1.0 : 0.0);
+    fields[i].wave = vec4(k, amplitude);
+    fields[i].direction = vec4(d3, r);
+    // material-anchored start: crests ride with the cloth, frames stay independent
+    phase[i] = (TWO_PI / W) * dot(d3, X_i);
+}

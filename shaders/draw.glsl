@@ -1,0 +1,164 @@
+#version 430
+// Render pass: per pixel, blend the three vertex waves of the triangle, bend the
+// shading normal and deform the texture coordinates (Loviscach 2006, sec. 5).
+// One file, two stages: the loader defines VERTEX_SHADER or FRAGMENT_SHADER.
+#include "include/common.glsl"
+#include "include/topology.glsl"
+
+layout(std430, binding = DRAW_POSED_POINTS) readonly buffer PosedPoints { vec4 posed_points[]; };
+layout(std430, binding = DRAW_FIELDS) readonly buffer Fields { WrinkleField fields[]; };
+layout(std430, binding = DRAW_PHASE) readonly buffer Phase { float phase[]; };
+layout(std430, binding = DRAW_TOPOLOGY) readonly buffer Topology { int topology[]; };
+// Texture coordinates per triangle corner: [3t + c].xy
+layout(std430, binding = DRAW_CORNER_ST) readonly buffer CornerSt { vec4 corner_st[]; };
+
+uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
+uniform mat4 u_world_to_clip;    // view * projection, same convention
+uniform mat4 u_world_to_eye;     // view
+uniform mat3 u_normal_to_world;  // inverse transpose of local_to_world's 3x3 (column-vector)
+uniform vec3 u_eye_local;        // camera position in the mesh's local space
+
+#if defined VERTEX_SHADER
+
+out vec3 v_local;
+out vec3 v_world;
+out vec3 v_normal_local;
+out vec3 v_bary;
+out vec2 v_st;
+
+void main() {
+    int corner = gl_VertexID;           // non-indexed draw: 3 corners per triangle
+    int t = corner / 3;
+    int c = corner - 3 * t;
+    int i = TRIANGLE_CORNER(t, c);
+    vec3 p = posed_points[i].xyz;      // posed, local space
+    v_local = p;
+    vec4 world = u_local_to_world * vec4(p, 1.0);  // local -> world
+    v_world = world.xyz / world.w;
+    v_normal_local = fields[i].normal.xyz;
+    v_bary = vec3(c == 0, c == 1, c == 2);
+    v_st = corner_st[corner].xy;
+    gl_Position = u_world_to_clip * world;         // world -> clip
+}
+
+#elif defined FRAGMENT_SHADER
+
+in vec3 v_local;
+in vec3 v_world;
+in vec3 v_normal_local;
+in vec3 v_bary;
+in vec2 v_st;
+
+layout(location = 0) out vec4 out_color;    // linear RGB, alpha
+layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z
+layout(location = 2) out vec4 out_normal;   // world-space shading normal
+
+// 1D tables stored as N x 1 2D textures (moderngl has no 1D textures); repeat, linear
+uniform sampler2D u_height_profile;    // H over one period
+uniform sampler2D u_gradient_profile;  // dH/dtheta, same sampling
+uniform float u_profile_samples;
+uniform int u_wrinkles;                // 0: same shading, no wrinkles
+uniform vec3 u_diffuse_color;
+uniform int u_has_texture;
+uniform sampler2D u_diffuse_texture;
+uniform vec4 u_texture_scale;
+uniform vec4 u_texture_bias;
+
+#define MAX_LIGHTS 8
+uniform int u_num_lights;
+uniform int u_light_kind[MAX_LIGHTS];      // 0 distant, 1 sphere
+uniform vec3 u_light_radiance[MAX_LIGHTS];
+uniform vec4 u_light_vector[MAX_LIGHTS];   // distant: direction of travel; sphere: position, radius
+uniform vec3 u_ambient;                    // dome lights
+
+float profile(sampler2D table, float theta) {
+    // sample s sits at theta = 2 pi s / N; texel centres are at (s + 0.5) / N
+    return texture(table, vec2(theta / TWO_PI + 0.5 / u_profile_samples, 0.5)).r;
+}
+
+void main() {
+    int t = gl_PrimitiveID;
+    vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
+    float h = 0.0;
+    float amplitude = 0.0;
+    vec3 g = vec3(0.0);
+    if (u_wrinkles != 0) {
+        int i0 = TRIANGLE_CORNER(t, 0);
+        vec3 k0 = fields[i0].wave.xyz;
+        for (int c = 0; c < 3; ++c) {
+            int i = TRIANGLE_CORNER(t, c);
+            vec3 k = fields[i].wave.xyz;
+            float phi = phase[i];
+            if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
+            float a = fields[i].wave.w;
+            float theta = phi + dot(k, v_local - posed_points[i].xyz);  // local space
+            float b = v_bary[c];
+            h += b * a * profile(u_height_profile, theta);
+            g += b * a * profile(u_gradient_profile, theta) * k;
+            amplitude += b * a;
+        }
+        g -= dot(g, n) * n;  // keep the gradient in the tangent plane
+    }
+    vec3 shading_local = safe_normalize(n - g, n);
+
+    // texture deformation: the point seen through the wrinkle, dx = (v/(v.n') - n') h
+    vec2 st = v_st;
+    if (u_has_texture != 0 && u_wrinkles != 0 && h != 0.0) {
+        vec3 v = safe_normalize(u_eye_local - v_local, n);
+        float vn = max(abs(dot(v, shading_local)), 0.25);
+        vec3 dx = (v / vn - shading_local) * h;
+        vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
+        vec3 e1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz - p0;
+        vec3 e2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz - p0;
+        vec2 s0 = corner_st[3 * t].xy;
+        vec2 d1 = corner_st[3 * t + 1].xy - s0;
+        vec2 d2 = corner_st[3 * t + 2].xy - s0;
+        float det = d1.x * d2.y - d2.x * d1.y;
+        if (abs(det) > 1e-20) {
+            vec3 dp_du = (e1 * d2.y - e2 * d1.y) / det;   // dP/dUV, local space
+            vec3 dp_dv = (e2 * d1.x - e1 * d2.x) / det;
+            mat2 gram = mat2(dot(dp_du, dp_du), dot(dp_du, dp_dv),
+                             dot(dp_du, dp_dv), dot(dp_dv, dp_dv));
+            if (abs(determinant(gram)) > 1e-30) {
+                st += inverse(gram) * vec2(dot(dp_du, dx), dot(dp_dv, dx));
+            }
+        }
+    }
+
+    vec3 base = u_diffuse_color;
+    if (u_has_texture != 0) {
+        vec4 texel = texture(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
+        base *= texel.rgb;
+    }
+
+    // local -> world shading normal, facing the camera on double-sided meshes
+    vec3 N = safe_normalize(u_normal_to_world * shading_local, vec3(0.0, 0.0, 1.0));
+    vec3 V = safe_normalize(inverse(u_world_to_eye)[3].xyz - v_world, N);
+    if (!gl_FrontFacing) N = -N;
+
+    vec3 radiance = u_ambient * base;
+    for (int l = 0; l < u_num_lights && l < MAX_LIGHTS; ++l) {
+        vec3 L;
+        vec3 E = u_light_radiance[l];
+        if (u_light_kind[l] == 0) {
+            L = -u_light_vector[l].xyz;
+        } else {
+            vec3 to_light = u_light_vector[l].xyz - v_world;
+            float dist2 = max(dot(to_light, to_light), 1e-12);
+            L = to_light * inversesqrt(dist2);
+            float r = u_light_vector[l].w;
+            E *= PI * r * r / dist2;   // small sphere: irradiance ~ L pi r^2 / d^2
+        }
+        float ndl = max(dot(N, L), 0.0);
+        vec3 H = safe_normalize(L + V, N);
+        float spec = pow(max(dot(N, H), 0.0), 48.0) * 0.12 * float(ndl > 0.0);
+        radiance += E * (base * ndl + spec);  // Lambert diffuse plus a faint Blinn lobe
+    }
+
+    vec4 eye = u_world_to_eye * vec4(v_world, 1.0);
+    out_color = vec4(radiance, 1.0);
+    out_wrinkle = vec4(h, amplitude, -eye.z, 1.0);
+    out_normal = vec4(N, 1.0);
+}
+
+#endif

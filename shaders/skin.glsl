@@ -1,0 +1,111 @@
+#version 430
+// Skin pass: blend shapes, then geomBindTransform, then LBS or DQS, then skeleton
+// space to prim (local) space. Arithmetic follows UsdSkel's ComputeSkinnedPoints.
+// Matrices are USD row-vector matrices uploaded as-is, so GLSL sees their transpose
+// and 'M * vec4(p, 1)' equals USD's 'p * M'.
+#include "include/common.glsl"
+
+layout(local_size_x = LOCAL_SIZE) in;
+
+struct Joint {
+    mat4 xform;          // skinning transform, skeleton space
+    vec4 real;           // DQS rotation quaternion (xyz, w)
+    vec4 dual;           // DQS dual part (xyz, w)
+    vec4 scale_rows[3];  // DQS scale/shear remainder, row-vector 3x3, applied by LBS
+};
+
+layout(std430, binding = SKIN_REST_POINTS) readonly buffer RestPoints { vec4 rest_points[]; };
+layout(std430, binding = SKIN_POSED_POINTS) writeonly buffer PosedPoints { vec4 posed_points[]; };
+layout(std430, binding = SKIN_JOINT_INDICES) readonly buffer JointIndices { int joint_indices[]; };
+layout(std430, binding = SKIN_JOINT_WEIGHTS) readonly buffer JointWeights { float joint_weights[]; };
+layout(std430, binding = SKIN_JOINTS) readonly buffer Joints { Joint joints[]; };
+layout(std430, binding = SKIN_SUBSHAPE_OFFSETS) readonly buffer SubShapeOffsets { vec4 subshape_offsets[]; };
+layout(std430, binding = SKIN_SUBSHAPE_WEIGHTS) readonly buffer SubShapeWeights { float subshape_weights[]; };
+
+uniform int u_num_points;
+uniform int u_influences;      // influences per point
+uniform int u_num_joints;
+uniform int u_num_subshapes;
+uniform int u_method;          // 0: no skinning, 1: LBS, 2: DQS
+uniform int u_has_scale;       // DQS: any joint has scale or shear
+uniform mat4 u_geom_bind;      // local (rest) -> skeleton bind space
+uniform mat4 u_skel_to_local;  // skeleton space -> prim (local) space
+
+vec3 quat_rotate(vec4 q, vec3 v) {
+    return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
+}
+
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_num_points) return;
+
+    // rest (local) + blend shapes -> deformed rest (local)
+    vec3 p = rest_points[i].xyz;
+    for (int s = 0; s < u_num_subshapes; ++s) {
+        float w = subshape_weights[s];
+        if (w != 0.0) p += w * subshape_offsets[s * u_num_points + i].xyz;
+    }
+    if (u_method == 0) {
+        posed_points[i] = vec4(p, 1.0);
+        return;
+    }
+
+    // local -> skeleton bind space
+    vec3 bind_p = (u_geom_bind * vec4(p, 1.0)).xyz;
+    vec3 skel_p = vec3(0.0);
+    int base = i * u_influences;
+
+    if (u_method == 1) {
+        // LBS: skeleton bind space -> skeleton space, weighted per joint
+        for (int k = 0; k < u_influences; ++k) {
+            float w = joint_weights[base + k];
+            int j = joint_indices[base + k];
+            if (w != 0.0 && j >= 0 && j < u_num_joints) {
+                skel_p += (joints[j].xform * vec4(bind_p, 1.0)).xyz * w;
+            }
+        }
+    } else {
+        // DQS: pivot = the joint with the largest weight (first on ties)
+        int pivot = -1;
+        float max_w = -1.0;
+        for (int k = 0; k < u_influences; ++k) {
+            int j = joint_indices[base + k];
+            float w = joint_weights[base + k];
+            if (j >= 0 && j < u_num_joints && (pivot < 0 || max_w < w)) {
+                max_w = w;
+                pivot = j;
+            }
+        }
+        vec4 pivot_q = pivot >= 0 ? joints[pivot].real : vec4(0.0);
+        vec3 scaled_p = vec3(0.0);
+        vec4 sum_real = vec4(0.0);
+        vec4 sum_dual = vec4(0.0);
+        for (int k = 0; k < u_influences; ++k) {
+            int j = joint_indices[base + k];
+            float w = joint_weights[base + k];
+            if (w == 0.0 || j < 0 || j >= u_num_joints) continue;
+            if (u_has_scale != 0) {
+                // scale/shear by LBS, row-vector 3x3
+                scaled_p += (bind_p.x * joints[j].scale_rows[0].xyz
+                           + bind_p.y * joints[j].scale_rows[1].xyz
+                           + bind_p.z * joints[j].scale_rows[2].xyz) * w;
+            }
+            if (dot(joints[j].real, pivot_q) < 0.0) w = -w;  // same hemisphere as the pivot
+            sum_real += joints[j].real * w;
+            sum_dual += joints[j].dual * w;
+        }
+        if (u_has_scale == 0) scaled_p = bind_p;
+        float len = length(sum_real);
+        if (len > 0.0) {
+            sum_real /= len;
+            sum_dual /= len;
+            vec3 t = 2.0 * (sum_real.w * sum_dual.xyz - sum_dual.w * sum_real.xyz
+                            + cross(sum_real.xyz, sum_dual.xyz));
+            skel_p = quat_rotate(sum_real, scaled_p) + t;
+        } else {
+            skel_p = scaled_p;
+        }
+    }
+    // skeleton space -> prim (local) space
+    posed_points[i] = vec4((u_skel_to_local * vec4(skel_p, 1.0)).xyz, 1.0);
+}

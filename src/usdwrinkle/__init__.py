@@ -1,0 +1,19 @@
+"""usdwrinkle: cloth wrinkles on coarse animated meshes in USD pipelines.
+
+Importing the package registers the WrinkleAPI schema plugin with USD.
+"""
+from __future__ import annotations
+
+import warnings
+
+__version__ = "0.1.0"
+
+from . import schema as _schema  # noqa: E402
+
+if not _schema.register():
+    warnings.warn(
+        "usdwrinkle was imported after USD built its schema registry, so WrinkleAPI is "
+        "unknown in this process; import usdwrinkle first or set PXR_PLUGINPATH_NAME="
+        + _schema.schema_dir(), stacklevel=2)
+
+__all__ = ["__version__"]

@@ -1,0 +1,52 @@
+"""Errors that usdwrinkle reports to its users.
+
+Every user-facing problem is a :class:`UsdWrinkleError`. The CLI prints it as
+one line, ``usdwrinkle: error: <what> (<prim path>[.<attribute>][ at frame F])``,
+and exits with code 2. Anything else that escapes is a bug in usdwrinkle.
+"""
+from __future__ import annotations
+
+
+class UsdWrinkleError(Exception):
+    """A problem with the user's input or environment, reported as one line."""
+
+    def __init__(self, what: str, prim_path: str | None = None,
+                 attribute: str | None = None, frame: float | None = None):
+        self.what = what
+        self.prim_path = prim_path
+        self.attribute = attribute
+        self.frame = frame
+        super().__init__(self.one_line())
+
+    def one_line(self) -> str:
+        where = ""
+        if self.prim_path:
+            where = str(self.prim_path)
+            if self.attribute:
+                where += "." + self.attribute
+        if self.frame is not None:
+            frame = int(self.frame) if float(self.frame).is_integer() else self.frame
+            where = f"{where} at frame {frame}" if where else f"at frame {frame}"
+        return f"{self.what} ({where})" if where else self.what
+
+
+class GLContextError(UsdWrinkleError):
+    """No usable OpenGL 4.3 context (compute shaders) could be created."""
+
+
+class SchemaRegistrationError(UsdWrinkleError):
+    """The WrinkleAPI plugin was registered after USD built its schema registry."""
+
+
+class ShaderError(Exception):
+    """A shader failed to load, preprocess or compile.
+
+    Carries the file and line, as moderngl-window's loader does, so that a
+    message from the GLSL compiler points at the file a developer edits.
+    """
+
+    def __init__(self, file: str, line: int, message: str):
+        self.file = file
+        self.line = line
+        self.message = message
+        super().__init__(f"{file}:{line}: {message}")

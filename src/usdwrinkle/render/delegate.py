@@ -1,0 +1,174 @@
+"""Hydra-style render delegate: rprims that sync from the scene delegate, and a
+render pass that runs skin -> crush -> relax per mesh, then draws.
+
+Vocabulary follows pxr/imaging/hd so that a C++ HdRenderDelegate port is
+mechanical: ``RenderDelegate.create_rprim``, ``Mesh.sync(scene_delegate,
+dirty_bits) -> remaining bits``, ``RenderPass.execute(state)``, ``RenderBuffer``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .buffers import Framebuffer, RenderBuffer
+from .context import create_context
+from .passes.crush import CrushPass
+from .passes.draw import DrawPass
+from .passes.relax import RelaxPass
+from .passes.skin import SkinPass
+from .resources import MeshResources
+
+
+class DirtyBits:
+    """As in pxr/imaging/hd/changeTracker.h."""
+
+    CLEAN = 0
+    DIRTY_VISIBILITY = 1 << 3
+    DIRTY_POINTS = 1 << 5
+    DIRTY_PRIMVAR = 1 << 6
+    DIRTY_TOPOLOGY = 1 << 8
+    DIRTY_TRANSFORM = 1 << 9
+    ALL = DIRTY_VISIBILITY | DIRTY_POINTS | DIRTY_PRIMVAR | DIRTY_TOPOLOGY | DIRTY_TRANSFORM
+
+
+class Mesh:
+    """One wrinkled (or plainly drawn) mesh: its GPU resources and current frame."""
+
+    def __init__(self, delegate: "RenderDelegate", path: str):
+        self.delegate = delegate
+        self.path = path
+        self.resources: MeshResources | None = None
+        self.frame = None
+        self.timings: dict[str, float] = {}
+
+    def sync(self, scene_delegate, dirty_bits: int) -> int:
+        """Pull what is dirty from the scene delegate; returns the bits left dirty.
+
+        ``scene_delegate`` provides ``meshes[path]`` (MeshRecord) and
+        ``current_frame.meshes[path]`` (MeshFrame).
+        """
+        if dirty_bits & (DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_PRIMVAR) \
+                or self.resources is None:
+            if self.resources is not None:
+                self.resources.release()
+            self.resources = MeshResources(self.delegate.ctx, scene_delegate.meshes[self.path])
+        if dirty_bits & (DirtyBits.DIRTY_POINTS | DirtyBits.DIRTY_TRANSFORM
+                         | DirtyBits.DIRTY_VISIBILITY):
+            self.frame = scene_delegate.current_frame.meshes[self.path]
+        return DirtyBits.CLEAN
+
+    def compute(self, wrinkles: bool, timer=None) -> None:
+        """Run skin, crush and relax for the synced frame."""
+        d = self.delegate
+        res = self.resources
+        with _timed(timer, "skin", self.timings):
+            d.skin.run(res, self.frame)
+        with _timed(timer, "crush", self.timings):
+            d.crush.run(res, wrinkles)
+        iterations = res.record.params.relax_iterations if wrinkles else 0
+        with _timed(timer, "relax", self.timings):
+            d.relax.run(res, iterations)
+
+    def release(self) -> None:
+        if self.resources is not None:
+            self.resources.release()
+            self.resources = None
+
+
+class _timed:
+    """GL timer query around a pass when profiling (elapsed GPU time in ms)."""
+
+    def __init__(self, ctx, name, sink):
+        self.ctx, self.name, self.sink = ctx, name, sink
+        self.query = ctx.query(time=True) if ctx is not None else None
+
+    def __enter__(self):
+        if self.query is not None:
+            self.query.__enter__()
+
+    def __exit__(self, *exc):
+        if self.query is not None:
+            self.query.__exit__(*exc)
+            self.sink[self.name] = self.sink.get(self.name, 0.0) + self.query.elapsed / 1e6
+            self.query.release() if hasattr(self.query, "release") else None
+
+
+@dataclass
+class RenderPassState:
+    """Camera, framing and AOV bindings of one execution."""
+
+    camera: object
+    lights: tuple
+    width: int
+    height: int
+    wrinkles: bool = True
+    aovs: tuple = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
+    timings: dict = field(default_factory=dict)
+
+
+class RenderDelegate:
+    """Owns the GL context, the compiled passes and the rprims."""
+
+    def __init__(self, ctx=None, profile: bool = False):
+        self.ctx = ctx or create_context()
+        self.profile = profile
+        self.skin = SkinPass(self.ctx)
+        self.crush = CrushPass(self.ctx)
+        self.relax = RelaxPass(self.ctx)
+        self.draw = DrawPass(self.ctx)
+        self.rprims: dict[str, Mesh] = {}
+        self._framebuffer: Framebuffer | None = None
+
+    def create_rprim(self, path: str) -> Mesh:
+        mesh = Mesh(self, path)
+        self.rprims[path] = mesh
+        return mesh
+
+    def destroy_rprim(self, path: str) -> None:
+        mesh = self.rprims.pop(path, None)
+        if mesh is not None:
+            mesh.release()
+
+    def framebuffer(self, width: int, height: int) -> Framebuffer:
+        if self._framebuffer is None or self._framebuffer.size != (width, height):
+            if self._framebuffer is not None:
+                self._framebuffer.release()
+            self._framebuffer = Framebuffer(self.ctx, width, height)
+        return self._framebuffer
+
+    def release(self) -> None:
+        for path in list(self.rprims):
+            self.destroy_rprim(path)
+        if self._framebuffer is not None:
+            self._framebuffer.release()
+            self._framebuffer = None
+
+
+class RenderPass:
+    """Computes the wrinkle fields of every rprim, then draws them into the AOVs."""
+
+    def __init__(self, delegate: RenderDelegate):
+        self.delegate = delegate
+
+    def compute(self, wrinkles: bool, timings: dict | None = None) -> None:
+        timer = self.delegate.ctx if self.delegate.profile else None
+        for mesh in self.delegate.rprims.values():
+            mesh.timings = {}
+            mesh.compute(wrinkles, timer)
+            if timings is not None:
+                for key, value in mesh.timings.items():
+                    timings[key] = timings.get(key, 0.0) + value
+
+    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer]:
+        d = self.delegate
+        ctx = d.ctx
+        fb = d.framebuffer(state.width, state.height)
+        timer = ctx if d.profile else None
+        with _timed(timer, "draw", state.timings):
+            fb.begin()
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.disable(ctx.CULL_FACE)
+            d.draw.begin(state.camera, state.lights, state.wrinkles)
+            for mesh in d.rprims.values():
+                d.draw.draw(mesh.resources, mesh.frame, state.camera)
+        buffers = fb.read()
+        return {name: buffers[name] for name in state.aovs}

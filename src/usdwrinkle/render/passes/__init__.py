@@ -1,0 +1,30 @@
+"""The four passes of Loviscach's method, one module each: skin, crush, relax, draw."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def set_uniforms(program, values: dict) -> None:
+    """Set the uniforms a program actually uses (the compiler drops unused ones)."""
+    for name, value in values.items():
+        try:
+            member = program[name]
+        except KeyError:
+            continue
+        if isinstance(value, np.ndarray):
+            member.write(np.ascontiguousarray(value, dtype=value.dtype).tobytes())
+        else:
+            member.value = value
+
+
+def groups(count: int, local_size: int) -> int:
+    return max((count + local_size - 1) // local_size, 1)
+
+
+def gl_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
+    """A USD row-vector matrix as the float32 bytes GLSL reads as its transpose.
+
+    GLSL is column-major, so uploading M row by row gives GLSL M^T, and then
+    ``M^T * v`` in GLSL equals ``v * M`` in USD: no transpose is needed.
+    """
+    return np.ascontiguousarray(row_vector_matrix, dtype=np.float32)

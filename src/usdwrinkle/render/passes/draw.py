@@ -1,0 +1,92 @@
+"""Draw pass: rasterise every mesh into the AOVs (colour, wrinkle, normal)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ...scene.records import CameraRecord, MeshFrame
+from .. import bindings
+from ..resources import MeshResources
+from ..shaders import program
+from . import gl_matrix, set_uniforms
+
+MAX_LIGHTS = 8
+
+
+def light_uniforms(lights) -> dict:
+    kinds = np.zeros(MAX_LIGHTS, np.int32)
+    radiance = np.zeros((MAX_LIGHTS, 3), np.float32)
+    vectors = np.zeros((MAX_LIGHTS, 4), np.float32)
+    ambient = np.zeros(3, np.float32)
+    count = 0
+    for light in lights:
+        if light.kind == "dome":
+            ambient += np.asarray(light.radiance, np.float32)
+            continue
+        if count == MAX_LIGHTS:
+            continue
+        radiance[count] = light.radiance
+        if light.kind == "distant":
+            vectors[count, :3] = light.direction
+        else:
+            kinds[count] = 1
+            vectors[count, :3] = light.position
+            vectors[count, 3] = light.radius
+        count += 1
+    return {"u_num_lights": count, "u_light_kind": kinds, "u_light_radiance": radiance,
+            "u_light_vector": vectors, "u_ambient": tuple(float(a) for a in ambient)}
+
+
+class DrawPass:
+    def __init__(self, ctx):
+        import moderngl
+
+        self.ctx = ctx
+        self.mode = moderngl.TRIANGLES
+        self.program = program(ctx, "draw.glsl", dict(bindings.DRAW))
+        self.vao = ctx.vertex_array(self.program, [])
+
+    def begin(self, camera: CameraRecord, lights, wrinkles: bool) -> None:
+        world_to_clip = camera.view @ camera.projection  # row-vector: view then projection
+        set_uniforms(self.program, {
+            "u_world_to_clip": gl_matrix(world_to_clip),
+            "u_world_to_eye": gl_matrix(camera.view),
+            "u_wrinkles": int(wrinkles),
+            **light_uniforms(lights),
+        })
+
+    def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord) -> None:
+        if res.num_triangles == 0 or not frame.visible:
+            return
+        record = res.record
+        local_to_world = frame.local_to_world
+        # column-vector normal matrix: inverse transpose of (M3)^T = inverse of M3
+        m3 = local_to_world[:3, :3]
+        try:
+            normal_matrix = np.linalg.inv(m3)
+        except np.linalg.LinAlgError:
+            normal_matrix = np.eye(3)
+        eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
+        material = record.material
+        set_uniforms(self.program, {
+            "u_local_to_world": gl_matrix(local_to_world),
+            "u_normal_to_world": np.ascontiguousarray(normal_matrix.T, np.float32),
+            "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
+            "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),
+            "u_has_texture": int(res.texture is not None),
+            "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
+            "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
+            "u_profile_samples": float(len(record.params.height_profile)),
+            "u_height_profile": 0, "u_gradient_profile": 1, "u_diffuse_texture": 2,
+            **res.topology_uniforms,
+        })
+        res.profiles[0].use(location=0)
+        res.profiles[1].use(location=1)
+        if res.texture is not None:
+            res.texture.use(location=2)
+        b = bindings.DRAW
+        res.posed_points.bind_to_storage_buffer(b["DRAW_POSED_POINTS"])
+        res.fields.bind_to_storage_buffer(b["DRAW_FIELDS"])
+        res.phase_buffer().bind_to_storage_buffer(b["DRAW_PHASE"])
+        res.topology.bind_to_storage_buffer(b["DRAW_TOPOLOGY"])
+        res.corner_st.bind_to_storage_buffer(b["DRAW_CORNER_ST"])
+        self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)

@@ -1,0 +1,73 @@
+"""Skin pass: blend shapes and LBS/DQS on the GPU; point caches are uploaded as posed."""
+from __future__ import annotations
+
+import numpy as np
+
+from ...scene.records import MeshFrame
+from .. import bindings
+from ..resources import JOINT_FLOATS, MeshResources, vec4
+from ..shaders import compute_shader
+from ...scene.skel import dual_quaternions
+from . import gl_matrix, groups, set_uniforms
+
+METHODS = {"classicLinear": 1, "dualQuaternion": 2}
+
+
+def joint_block(joint_transforms: np.ndarray, method: str) -> tuple[np.ndarray, bool]:
+    """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS)."""
+    count = len(joint_transforms)
+    block = np.zeros((max(count, 1), JOINT_FLOATS), np.float32)
+    if count == 0:
+        return block, False
+    block[:count, :16] = joint_transforms.reshape(count, 16)
+    has_scale = False
+    if method == "dualQuaternion":
+        real, dual, scale, has_scale = dual_quaternions(joint_transforms)
+        block[:count, 16:20] = real
+        block[:count, 20:24] = dual
+        rows = np.zeros((count, 3, 4))
+        rows[:, :, :3] = scale
+        block[:count, 24:36] = rows.reshape(count, 12)
+    return block, has_scale
+
+
+class SkinPass:
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.shader = compute_shader(ctx, "skin.glsl",
+                                     {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.SKIN})
+
+    def run(self, res: MeshResources, frame: MeshFrame) -> None:
+        record = res.record
+        if record.skin is None:
+            points = frame.points if frame.points is not None else record.rest_points
+            res.posed_points.write(vec4(points).tobytes())
+            return
+        skin = record.skin
+        for blend_shape, subshape in frame.active_subshapes:
+            res.upload_subshape(blend_shape, subshape)
+        weights = frame.subshape_weights if frame.subshape_weights is not None else np.zeros(0)
+        if len(weights):
+            res.subshape_weights.write(np.asarray(weights, np.float32).tobytes())
+        block, has_scale = joint_block(frame.joint_transforms, skin.method)
+        res.joints.write(block.tobytes())
+        skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
+        set_uniforms(self.shader, {
+            "u_num_points": res.num_points, "u_influences": res.influences,
+            "u_num_joints": min(skin.num_joints, len(frame.joint_transforms)),
+            "u_num_subshapes": skin.num_subshapes,
+            "u_method": METHODS[skin.method] if skinned else 0,
+            "u_has_scale": int(has_scale),
+            "u_geom_bind": gl_matrix(skin.geom_bind),
+            "u_skel_to_local": gl_matrix(frame.skel_to_local if skinned else np.eye(4)),
+        })
+        b = bindings.SKIN
+        res.rest_points.bind_to_storage_buffer(b["SKIN_REST_POINTS"])
+        res.posed_points.bind_to_storage_buffer(b["SKIN_POSED_POINTS"])
+        res.joint_indices.bind_to_storage_buffer(b["SKIN_JOINT_INDICES"])
+        res.joint_weights.bind_to_storage_buffer(b["SKIN_JOINT_WEIGHTS"])
+        res.joints.bind_to_storage_buffer(b["SKIN_JOINTS"])
+        res.subshape_offsets.bind_to_storage_buffer(b["SKIN_SUBSHAPE_OFFSETS"])
+        res.subshape_weights.bind_to_storage_buffer(b["SKIN_SUBSHAPE_WEIGHTS"])
+        self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
+        self.ctx.memory_barrier()

@@ -1,0 +1,99 @@
+"""Shader loading as moderngl-window does it: #include with a depth limit,
+#defines and #line inserted after #version, errors mapped back to file:line.
+
+Shaders are read from the package's ``shaders/`` folder (importlib.resources),
+so an installed wheel works as well as a checkout.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from .._resources import resource_dir
+from ..errors import ShaderError
+
+MAX_INCLUDE_DEPTH = 8
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
+# Mesa: "0:12(3): error: ..."; NVIDIA: "0(12) : error ..."
+_ERROR_LINE = re.compile(r"^(\d+):(\d+)\(\d+\)|^(\d+)\((\d+)\)")
+
+
+class ShaderSource:
+    """One preprocessed shader: text plus the table of source-string numbers."""
+
+    def __init__(self, name: str, defines: dict | None = None, root: Path | None = None):
+        self.root = root or resource_dir("shaders")
+        self.name = name
+        self.files: list[str] = []
+        path = self.root / name
+        if not path.is_file():
+            raise ShaderError(name, 0, "shader file not found")
+        lines = path.read_text().splitlines()
+        if not lines or not lines[0].startswith("#version"):
+            raise ShaderError(name, 1, "#version must be on line 1")
+        self.version = lines[0]
+        self.defines = dict(defines or {})
+        self.body = self._expand(name, lines[1:], 2, depth=0, seen=())
+
+    def _file_number(self, name: str) -> int:
+        if name not in self.files:
+            self.files.append(name)
+        return self.files.index(name)
+
+    def _expand(self, name: str, lines: list[str], first_line: int, depth: int, seen) -> str:
+        number = self._file_number(name)
+        out = [f"#line {first_line} {number}"]
+        for offset, line in enumerate(lines):
+            match = _INCLUDE.match(line)
+            if not match:
+                out.append(line)
+                continue
+            line_no = first_line + offset
+            if depth >= MAX_INCLUDE_DEPTH:
+                raise ShaderError(name, line_no, f"#include nested deeper than {MAX_INCLUDE_DEPTH}")
+            target = match.group(1)
+            path = self.root / target
+            if not path.is_file():
+                raise ShaderError(name, line_no, f"#include \"{target}\" not found")
+            if target in seen:
+                raise ShaderError(name, line_no, f"#include \"{target}\" is recursive")
+            out.append(self._expand(target, path.read_text().splitlines(), 1, depth + 1,
+                                    seen + (target,)))
+            out.append(f"#line {line_no + 1} {number}")
+        return "\n".join(out)
+
+    def text(self, stage_define: str | None = None) -> str:
+        defines = dict(self.defines)
+        if stage_define:
+            defines[stage_define] = 1
+        header = "\n".join(f"#define {key} {value}" for key, value in defines.items())
+        return f"{self.version}\n{header}\n{self.body}\n"
+
+    def map_error(self, message: str) -> ShaderError:
+        """Turn a driver's compile log into a ShaderError naming our file and line."""
+        for line in message.splitlines():
+            match = _ERROR_LINE.match(line.strip())
+            if match:
+                source = int(match.group(1) or match.group(3))
+                line_no = int(match.group(2) or match.group(4))
+                name = self.files[source] if source < len(self.files) else self.name
+                return ShaderError(name, line_no, line.strip())
+        return ShaderError(self.name, 0, message.strip())
+
+
+def compute_shader(ctx, name: str, defines: dict):
+    source = ShaderSource(name, defines)
+    try:
+        return ctx.compute_shader(source.text())
+    except Exception as exc:
+        raise source.map_error(str(exc)) from None
+
+
+def program(ctx, name: str, defines: dict):
+    """A vertex+fragment program from one file with VERTEX_SHADER/FRAGMENT_SHADER sections."""
+    source = ShaderSource(name, defines)
+    try:
+        return ctx.program(vertex_shader=source.text("VERTEX_SHADER"),
+                           fragment_shader=source.text("FRAGMENT_SHADER"))
+    except Exception as exc:
+        raise source.map_error(str(exc)) from None

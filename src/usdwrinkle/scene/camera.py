@@ -1,0 +1,84 @@
+"""Cameras: --camera by path or name, the primary camera, the first camera, or framing.
+
+The image keeps the camera's horizontal field of view; when the image aspect
+differs from the camera's aperture aspect, the vertical extent is adjusted
+(as usdrecord does with the default ``--height``, the aspects agree anyway).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pxr import Gf, Usd, UsdGeom, UsdUtils
+
+from ..errors import UsdWrinkleError
+from .records import CameraRecord
+
+
+def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
+    """Resolve ``--camera``: a prim path, or a camera name; else primary, else first."""
+    cameras = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Camera)]
+    if spec:
+        if spec.startswith("/"):
+            prim = stage.GetPrimAtPath(spec)
+            if not prim or not prim.IsA(UsdGeom.Camera):
+                raise UsdWrinkleError(f"camera '{spec}' not found on the stage", spec)
+            return prim
+        for prim in cameras:
+            if prim.GetName() == spec:
+                return prim
+        raise UsdWrinkleError(f"camera '{spec}' not found on the stage "
+                              f"(cameras: {', '.join(str(c.GetPath()) for c in cameras) or 'none'})")
+    primary = UsdUtils.GetPrimaryCameraName()
+    for prim in cameras:
+        if prim.GetName() == primary:
+            return prim
+    return cameras[0] if cameras else None
+
+
+def camera_aspect(prim: Usd.Prim, time) -> float:
+    cam = UsdGeom.Camera(prim).GetCamera(time)
+    return cam.aspectRatio if cam.aspectRatio > 0 else 1.0
+
+
+def usd_camera(prim: Usd.Prim, time, aspect: float) -> CameraRecord:
+    """A UsdGeom.Camera at ``time`` as view and projection matrices."""
+    gf_cam = UsdGeom.Camera(prim).GetCamera(time)
+    frustum = gf_cam.frustum
+    window = frustum.window
+    width = window.GetMax()[0] - window.GetMin()[0]
+    center_y = 0.5 * (window.GetMax()[1] + window.GetMin()[1])
+    half_h = 0.5 * width / aspect
+    frustum.window = Gf.Range2d(Gf.Vec2d(window.GetMin()[0], center_y - half_h),
+                                Gf.Vec2d(window.GetMax()[0], center_y + half_h))
+    view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
+    projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
+    position = np.asarray(frustum.position, dtype=np.float64)
+    return CameraRecord(str(prim.GetPath()), view, projection, position, aspect)
+
+
+def framing_camera(bounds_min, bounds_max, up_axis: str, aspect: float,
+                   fov_degrees: float = 30.0) -> CameraRecord:
+    """A perspective camera that frames an axis-aligned box from the front, 3/4 high."""
+    lo, hi = np.asarray(bounds_min, float), np.asarray(bounds_max, float)
+    if not np.all(np.isfinite(lo)) or not np.all(np.isfinite(hi)) or np.any(hi < lo):
+        lo, hi = -np.ones(3), np.ones(3)
+    center = 0.5 * (lo + hi)
+    radius = max(0.5 * float(np.linalg.norm(hi - lo)), 1e-3)
+    if up_axis == "Z":
+        up, front = np.array([0.0, 0.0, 1.0]), np.array([0.25, -1.0, 0.3])
+    else:
+        up, front = np.array([0.0, 1.0, 0.0]), np.array([0.25, 0.3, 1.0])
+    front /= np.linalg.norm(front)
+    fov_v = math.radians(fov_degrees)
+    fov_min = min(fov_v, 2 * math.atan(math.tan(fov_v / 2) * aspect))
+    distance = radius / math.sin(fov_min / 2) * 1.05
+    eye = center + front * distance
+    frustum = Gf.Frustum()
+    frustum.SetPerspective(fov_degrees, aspect, max(distance - radius * 2, distance * 1e-3),
+                           distance + radius * 2)
+    look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*center), Gf.Vec3d(*up))
+    frustum.Transform(look.GetInverse())
+    view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
+    projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
+    return CameraRecord("<framing>", view, projection, eye, aspect)

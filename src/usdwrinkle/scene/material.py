@@ -1,0 +1,151 @@
+"""Materials: UsdPreviewSurface diffuseColor, constant or through UsdUVTexture.
+
+Textures are opened through Ar, so a texture inside a .usdz package works; the
+bytes are decoded by OpenImageIO. Texture coordinates become one value per
+triangle corner, whatever the primvar's interpolation.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from functools import lru_cache
+
+import numpy as np
+from pxr import Ar, Usd, UsdGeom, UsdShade
+
+from .records import MaterialRecord
+from .topology import Topology
+
+DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
+
+
+@lru_cache(maxsize=32)
+def load_texture(resolved_path: str) -> np.ndarray:
+    """Decode an image asset into (h, w, 4) float32 linear RGBA, row 0 at the bottom.
+
+    Raises OSError when the asset cannot be read or decoded.
+    """
+    import OpenImageIO as oiio
+
+    asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))
+    if asset is None:
+        raise OSError(f"cannot open texture '{resolved_path}'")
+    data = bytes(asset.GetBuffer())
+    inner = resolved_path.rsplit("[", 1)[-1].rstrip("]")
+    suffix = os.path.splitext(inner)[1] or ".png"
+    # OIIO's Python bindings decode from files; a temporary file keeps Ar in charge of IO.
+    with tempfile.NamedTemporaryFile(suffix=suffix, delete=False) as handle:
+        handle.write(data)
+        tmp = handle.name
+    try:
+        buf = oiio.ImageBuf(tmp)
+        pixels = buf.get_pixels(oiio.FLOAT)
+        if pixels is None or buf.has_error:
+            raise OSError(f"cannot decode texture '{resolved_path}': {buf.geterror()}")
+        spec = buf.spec()
+        pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width,
+                                                              spec.nchannels)
+        encoded_srgb = spec.format.basetype == oiio.UINT8 or suffix.lower() in (
+            ".jpg", ".jpeg", ".png")
+    finally:
+        os.unlink(tmp)
+    rgba = np.ones((pixels.shape[0], pixels.shape[1], 4), np.float32)
+    channels = pixels.shape[2]
+    if channels >= 3:
+        rgba[..., :3] = pixels[..., :3]
+    else:
+        rgba[..., :3] = pixels[..., :1]
+    if channels in (2, 4):
+        rgba[..., 3] = pixels[..., -1]
+    if encoded_srgb:  # 8-bit images are sRGB encoded (UsdUVTexture sourceColorSpace auto)
+        c = rgba[..., :3]
+        rgba[..., :3] = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.ascontiguousarray(rgba[::-1])
+
+
+def corner_values(primvar: UsdGeom.Primvar, topology: Topology, time) -> np.ndarray | None:
+    """A primvar as one value per triangle corner, (m, 3, c); None if unusable."""
+    values = primvar.ComputeFlattened(time)
+    if values is None or len(values) == 0:
+        return None
+    arr = np.asarray(values, dtype=np.float32)
+    arr = arr.reshape(len(arr), -1)
+    interp = primvar.GetInterpolation()
+    tri = topology.triangles
+    if interp in ("vertex", "varying") and len(arr) == topology.num_points:
+        return arr[tri]
+    if interp == "faceVarying" and len(arr) > topology.corner_face_vertex.max(initial=-1):
+        return arr[topology.corner_face_vertex]
+    if interp == "uniform" and len(arr) > topology.triangle_face.max(initial=-1):
+        return np.repeat(arr[topology.triangle_face][:, None, :], 3, axis=1)
+    if interp == "constant":
+        return np.broadcast_to(arr[0], (len(tri), 3, arr.shape[1])).copy()
+    return None
+
+
+def _input_value(shader: UsdShade.Shader, name: str, time):
+    inp = shader.GetInput(name)
+    if not inp:
+        return None, None
+    sources = inp.GetConnectedSources()[0] if inp.HasConnectedSource() else []
+    if sources:
+        return None, sources[0]
+    return inp.Get(time), None
+
+
+def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
+    """Resolve the bound material of a mesh into a MaterialRecord."""
+    color = None
+    texture = None
+    st = None
+    scale = np.ones(4, np.float32)
+    bias = np.zeros(4, np.float32)
+    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    if material:
+        shader, _, _ = material.ComputeSurfaceSource()
+        if shader and shader.GetIdAttr().Get() == "UsdPreviewSurface":
+            value, source = _input_value(shader, "diffuseColor", time)
+            if value is not None:
+                color = np.asarray(value, np.float32)
+            elif source is not None:
+                tex = UsdShade.Shader(source.source.GetPrim())
+                file_value, _ = _input_value(tex, "file", time)
+                fallback, _ = _input_value(tex, "fallback", time)
+                sc, _ = _input_value(tex, "scale", time)
+                bi, _ = _input_value(tex, "bias", time)
+                scale = np.asarray(sc, np.float32) if sc is not None else scale
+                bias = np.asarray(bi, np.float32) if bi is not None else bias
+                if fallback is not None:
+                    color = np.asarray(fallback, np.float32)[:3]
+                varname = "st"
+                _, st_source = _input_value(tex, "st", time)
+                if st_source is not None:
+                    reader = UsdShade.Shader(st_source.source.GetPrim())
+                    name, _ = _input_value(reader, "varname", time)
+                    varname = str(name) if name else varname
+                resolved = file_value.resolvedPath if file_value is not None else ""
+                if file_value is not None and not resolved:
+                    warn(f"texture '{file_value.path}' not found; rendering untextured "
+                         f"({prim.GetPath()})")
+                elif resolved:
+                    try:
+                        texture = load_texture(resolved)
+                    except OSError as exc:
+                        warn(f"{exc}; rendering untextured ({prim.GetPath()})")
+                if texture is not None:
+                    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
+                    st = corner_values(primvar, topology, time) if primvar else None
+                    if st is None or st.shape[-1] < 2:
+                        warn(f"texture coordinates '{varname}' missing; rendering untextured "
+                             f"({prim.GetPath()})")
+                        texture, st = None, None
+                    else:
+                        st = np.ascontiguousarray(st[..., :2])
+                if texture is not None and color is None:
+                    color = np.ones(3, np.float32)
+    if color is None:
+        display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
+        value = display.ComputeFlattened(time) if display and display.HasValue() else None
+        color = np.asarray(value[0], np.float32) if value is not None and len(value) else \
+            DEFAULT_COLOR
+    return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias)

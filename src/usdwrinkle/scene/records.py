@@ -1,0 +1,139 @@
+"""Frozen numpy records: everything the renderer needs, with no Usd objects.
+
+Spaces: "local" is the mesh prim's own space (where UsdSkel's baked points live);
+"world" is the stage's world space. Matrices are 4x4 float64 in USD's row-vector
+convention (p' = p @ M).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .topology import Topology
+
+
+@dataclass(frozen=True)
+class SkinData:
+    """UsdSkel skinning of one mesh, in the mesh's joint order.
+
+    Attributes
+    ----------
+    method : str
+        ``classicLinear`` or ``dualQuaternion``.
+    geom_bind : (4, 4) float64
+        geomBindTransform (mesh local -> skeleton bind space).
+    joint_indices : (n, k) int32
+    joint_weights : (n, k) float32
+    num_joints : int
+    blend_point_indices : list of (p,) int32 or None
+        Per blend shape, the points it moves (None: all points).
+    subshape_offsets : list of (p, 3) float32
+        Per sub-shape (UsdSkelBlendShapeQuery order), its point offsets.
+    """
+
+    method: str
+    geom_bind: np.ndarray
+    joint_indices: np.ndarray
+    joint_weights: np.ndarray
+    num_joints: int
+    blend_point_indices: list = field(default_factory=list)
+    subshape_offsets: list = field(default_factory=list)
+
+    @property
+    def num_subshapes(self) -> int:
+        return len(self.subshape_offsets)
+
+
+@dataclass(frozen=True)
+class WrinkleParams:
+    """Per-mesh wrinkle controls, resolved with fallbacks.
+
+    q : (n, 3) float32, rest-space wrinkle vectors (zero where none painted).
+    width : (n,) float32, rest wavelength W per point.
+    amplitude_scale : float, s.
+    height_profile, gradient_profile : (p,) float32 over one period [0, 2pi).
+    relax_iterations : int.
+    """
+
+    q: np.ndarray
+    width: np.ndarray
+    amplitude_scale: float
+    height_profile: np.ndarray
+    gradient_profile: np.ndarray
+    relax_iterations: int
+
+
+@dataclass(frozen=True)
+class MaterialRecord:
+    """UsdPreviewSurface diffuse colour, constant or from a texture.
+
+    texture : (h, w, 4) float32 linear, row 0 at t = 0 (bottom), or None.
+    corner_st : (m, 3, 2) float32 texture coordinates per triangle corner, or None.
+    """
+
+    diffuse_color: np.ndarray
+    texture: np.ndarray | None = None
+    corner_st: np.ndarray | None = None
+    texture_scale: np.ndarray = field(default_factory=lambda: np.ones(4, np.float32))
+    texture_bias: np.ndarray = field(default_factory=lambda: np.zeros(4, np.float32))
+    wrap_repeat: bool = True
+
+
+@dataclass(frozen=True)
+class MeshRecord:
+    """What does not change over time: topology, rest pose, skinning, parameters."""
+
+    path: str
+    topology: Topology
+    rest_points: np.ndarray            # (n, 3) float32, local
+    rest_normals: np.ndarray           # (n, 3) float32, local
+    skin: SkinData | None
+    point_cached: bool
+    wrinkled: bool
+    params: WrinkleParams
+    material: MaterialRecord
+    double_sided: bool = True
+
+
+@dataclass(frozen=True)
+class MeshFrame:
+    """The time-varying part of one mesh at one frame."""
+
+    local_to_world: np.ndarray                  # (4, 4) float64
+    visible: bool = True
+    points: np.ndarray | None = None            # (n, 3) float32 local (point cache, static)
+    joint_transforms: np.ndarray | None = None  # (J, 4, 4) float64, skeleton space, mesh order
+    skel_to_local: np.ndarray | None = None     # (4, 4) float64
+    subshape_weights: np.ndarray | None = None  # (S,) float32 dense over sub-shapes
+    active_subshapes: tuple = ()                # ((blend_shape, sub_shape), ...)
+
+
+@dataclass(frozen=True)
+class CameraRecord:
+    """A perspective or orthographic view. view: world -> eye; projection: eye -> clip."""
+
+    path: str
+    view: np.ndarray
+    projection: np.ndarray
+    position: np.ndarray
+    aspect: float
+
+
+@dataclass(frozen=True)
+class LightRecord:
+    """kind: distant | sphere | dome. radiance = colour * intensity * 2^exposure."""
+
+    kind: str
+    radiance: np.ndarray
+    direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    radius: float = 0.5
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    time: float
+    camera: CameraRecord
+    lights: tuple
+    meshes: dict

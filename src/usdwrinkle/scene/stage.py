@@ -1,0 +1,247 @@
+"""The scene delegate: a Usd.Stage in, frozen numpy records out.
+
+:class:`StageSceneDelegate` converts once, at this boundary. Per mesh it keeps a
+:class:`MeshRecord` (topology, rest pose, skinning, parameters, material); per
+frame it produces a :class:`FrameRecord` (posing inputs, transforms, camera,
+lights). Nothing downstream sees a Usd object.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+import sys
+
+import numpy as np
+from pxr import Tf, Usd, UsdGeom
+
+from .. import schema
+from ..errors import UsdWrinkleError
+from . import camera as camera_mod
+from .lights import default_lights, read_lights
+from .material import read_material
+from .params import read_params
+from .records import FrameRecord, MeshFrame, MeshRecord
+from .skel import SkelBindings, sample_skin, skin_data
+from .topology import build_topology, vertex_normals
+
+RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+
+
+def _warn_stderr(message: str) -> None:
+    print(f"usdwrinkle: warning: {message}", file=sys.stderr)
+
+
+def open_stage(path: str) -> Usd.Stage:
+    """Open a stage with a one-line error for missing or unreadable files."""
+    if not os.path.exists(path):
+        raise UsdWrinkleError(f"stage file '{path}' does not exist")
+    try:
+        stage = Usd.Stage.Open(path)
+    except Tf.ErrorException as exc:
+        first = str(exc).strip().splitlines()
+        detail = first[-1].strip() if first else "unreadable"
+        raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: {detail}") from None
+    if stage is None:
+        raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
+    return stage
+
+
+def _finite_points(points, path, attribute, time=None):
+    arr = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+    if not np.all(np.isfinite(arr)):
+        frame = None if time is None or time.IsDefault() else time.GetValue()
+        raise UsdWrinkleError("points are not finite (NaN or Inf)", path, attribute, frame)
+    return arr
+
+
+class StageSceneDelegate:
+    """Reads a stage for the render delegate.
+
+    Parameters
+    ----------
+    stage : Usd.Stage or str
+    all_meshes : bool
+        Treat every Mesh as if WrinkleAPI were applied (with fallbacks).
+    relax_iterations : int or None
+        Override every mesh's ``wrinkle:relaxIterations``.
+    warn : callable(str)
+        Receives degraded-input warnings.
+    """
+
+    def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
+                 warn=_warn_stderr):
+        self.stage = open_stage(stage) if isinstance(stage, (str, os.PathLike)) else stage
+        self.all_meshes = all_meshes
+        self.warn = warn
+        self.up_axis = UsdGeom.GetStageUpAxis(self.stage)
+        self.skel = SkelBindings(self.stage)
+        self._prims: dict[str, Usd.Prim] = {}
+        self.meshes: dict[str, MeshRecord] = {}
+        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
+            if not prim.IsA(UsdGeom.Mesh):
+                continue
+            if UsdGeom.Imageable(prim).ComputePurpose() not in RENDERED_PURPOSES:
+                continue
+            record = self._mesh_record(prim, relax_iterations)
+            if record is not None:
+                self.meshes[record.path] = record
+                self._prims[record.path] = prim
+
+    # -- static data -------------------------------------------------------------------
+    def _mesh_record(self, prim: Usd.Prim, relax_iterations) -> MeshRecord | None:
+        path = str(prim.GetPath())
+        mesh = UsdGeom.Mesh(prim)
+        default = Usd.TimeCode.Default()
+        points_attr = mesh.GetPointsAttr()
+        binding = self.skel.get(path)
+        rest_value = None
+        primvars = UsdGeom.PrimvarsAPI(prim)
+        rest_primvar = primvars.GetPrimvar("rest")
+        point_cached = points_attr.GetNumTimeSamples() > 1 and binding is None
+        if point_cached and rest_primvar and rest_primvar.HasAuthoredValue():
+            rest_value = rest_primvar.ComputeFlattened(default)
+            rest_attr_name = "primvars:rest"
+        else:
+            rest_value = points_attr.Get(default)
+            rest_attr_name = "points"
+            if rest_value is None and points_attr.GetNumTimeSamples():
+                rest_value = points_attr.Get(points_attr.GetTimeSamples()[0])
+        if rest_value is None or len(rest_value) == 0:
+            self.warn(f"mesh has no points; skipped ({path})")
+            return None
+        rest = _finite_points(rest_value, path, rest_attr_name)
+        counts = mesh.GetFaceVertexCountsAttr().Get(default)
+        indices = mesh.GetFaceVertexIndicesAttr().Get(default)
+        if counts is None or indices is None:
+            times = mesh.GetFaceVertexCountsAttr().GetTimeSamples()
+            counts = mesh.GetFaceVertexCountsAttr().Get(times[0]) if times else None
+            times = mesh.GetFaceVertexIndicesAttr().GetTimeSamples()
+            indices = mesh.GetFaceVertexIndicesAttr().Get(times[0]) if times else None
+        if counts is None or indices is None or len(counts) == 0:
+            self.warn(f"mesh has no faces; skipped ({path})")
+            return None
+        holes = mesh.GetHoleIndicesAttr().Get(default)
+        topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
+                                  None if holes is None else np.asarray(holes), path)
+        if point_cached and len(rest) != len(points_attr.Get(points_attr.GetTimeSamples()[0])):
+            raise UsdWrinkleError("primvars:rest and points differ in length", path,
+                                  "primvars:rest")
+        if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+            # Flip the triangles' winding, not the faces, so faceVarying corners still map.
+            topology = dataclasses.replace(
+                topology, triangles=np.ascontiguousarray(topology.triangles[:, [0, 2, 1]]),
+                corner_face_vertex=np.ascontiguousarray(topology.corner_face_vertex[:, [0, 2, 1]]))
+        skin = None
+        if binding is not None:
+            skel_query, skinning_query = binding
+            if not skel_query:
+                self.warn(f"skel binding without a valid skeleton; treated as static ({path})")
+            else:
+                skin = skin_data(path, skel_query, skinning_query, len(rest),
+                                 self.skel.blend_queries.get(path))
+        elif prim.HasAPI("SkelBindingAPI") and prim.GetRelationship("skel:skeleton"):
+            targets = prim.GetRelationship("skel:skeleton").GetTargets()
+            if targets:
+                self.warn(f"skel binding to a missing or unusable skeleton; treated as "
+                          f"static ({path})")
+        wrinkled = self.all_meshes or schema.has_wrinkle_api(prim)
+        params = read_params(prim, rest, topology, default, relax_iterations)
+        material = read_material(prim, topology, default, self.warn)
+        double_sided = bool(mesh.GetDoubleSidedAttr().Get())
+        return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
+                          point_cached, wrinkled, params, material, double_sided)
+
+    # -- time ---------------------------------------------------------------------------
+    def frame_range(self) -> list[float]:
+        """The stage's authored start..end frames, or [default] when none."""
+        if self.stage.HasAuthoredTimeCodeRange():
+            start = self.stage.GetStartTimeCode()
+            end = self.stage.GetEndTimeCode()
+            return [float(f) for f in np.arange(start, end + 0.5)]
+        return [float("nan")]
+
+    @staticmethod
+    def time_code(frame: float) -> Usd.TimeCode:
+        return Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
+
+    # -- per frame ----------------------------------------------------------------------
+    def sample_mesh(self, path: str, time: Usd.TimeCode, xform_cache) -> MeshFrame:
+        record = self.meshes[path]
+        prim = self._prims[path]
+        frame = None if time.IsDefault() else time.GetValue()
+        local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
+        visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible
+        if record.skin is not None:
+            skel_query, skinning_query = self.skel.get(path)
+            joints, skel_to_local, weights, active = sample_skin(
+                path, skel_query, skinning_query, self.skel.blend_queries.get(path), time,
+                xform_cache, record.skin.num_subshapes)
+            if joints.shape[0] < record.skin.num_joints:
+                raise UsdWrinkleError(
+                    f"{joints.shape[0]} skinning transforms for {record.skin.num_joints} joints",
+                    path, "skel:joints", frame)
+            if not np.all(np.isfinite(joints)):
+                raise UsdWrinkleError("skinning transforms are not finite", path,
+                                      "skel:skeleton", frame)
+            return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
+                             active)
+        points = None
+        if record.point_cached:
+            value = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
+            points = _finite_points(value, path, "points", time)
+            if len(points) != len(record.rest_points):
+                raise UsdWrinkleError(
+                    f"point count changes over time ({len(points)} != "
+                    f"{len(record.rest_points)})", path, "points", frame)
+        return MeshFrame(local_to_world, visible, points)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World bounds of the rendered meshes over the stage's range (at most 9 samples).
+
+        Fixed for the whole shot, so automatic framing does not depend on which
+        frames a farm chunk renders.
+        """
+        frames = self.frame_range()
+        if len(frames) > 9:
+            frames = list(np.linspace(frames[0], frames[-1], 9))
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for f in frames:
+            cache = UsdGeom.BBoxCache(self.time_code(f), list(RENDERED_PURPOSES),
+                                      useExtentsHint=True)
+            for path in self.meshes:
+                prim = self._prims[path]
+                box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
+                if box.IsEmpty():
+                    continue
+                lo = np.minimum(lo, np.asarray(box.GetMin()))
+                hi = np.maximum(hi, np.asarray(box.GetMax()))
+            skel_roots = {self.skel.get(p)[0].GetSkeleton().GetPrim() for p in self.meshes
+                          if self.meshes[p].skin is not None}
+            for skel_prim in skel_roots:
+                box = cache.ComputeWorldBound(skel_prim).ComputeAlignedRange()
+                if not box.IsEmpty():
+                    lo = np.minimum(lo, np.asarray(box.GetMin()))
+                    hi = np.maximum(hi, np.asarray(box.GetMax()))
+        return lo, hi
+
+    def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
+        prim = camera_mod.find_camera(self.stage, camera_spec)
+        return camera_mod.camera_aspect(prim, self.time_code(frame)) if prim else None
+
+    def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
+        """Everything time-varying at ``frame`` (NaN: the default time)."""
+        time = self.time_code(frame)
+        xform_cache = UsdGeom.XformCache(time)
+        meshes = {path: self.sample_mesh(path, time, xform_cache) for path in self.meshes}
+        prim = camera_mod.find_camera(self.stage, camera_spec)
+        if prim is not None:
+            cam = camera_mod.usd_camera(prim, time, aspect)
+        else:
+            if not hasattr(self, "_bounds"):
+                self._bounds = self.bounds()
+            cam = camera_mod.framing_camera(*self._bounds, self.up_axis, aspect)
+        lights = read_lights(self.stage, time, xform_cache) or default_lights(cam.view)
+        return FrameRecord(frame, cam, tuple(lights), meshes)
+
+
+__all__ = ["StageSceneDelegate", "open_stage"]
