@@ -1,0 +1,1 @@
+"""Command line: one module per concern, as usdAppUtils has framesArgs/cameraArgs."""

@@ -1,0 +1,30 @@
+"""usdwrinkle demo [OUTDIR]: render the bundled shirt sample to PNGs."""
+from __future__ import annotations
+
+import os
+from types import SimpleNamespace
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("demo", help="render the bundled shirt sample stage to PNGs")
+    p.add_argument("outdir", nargs="?", default="usdwrinkle_demo",
+                   help="output folder (default: ./usdwrinkle_demo)")
+    p.add_argument("--width", type=int, default=640, metavar="PX", help="image width (640)")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from .._resources import resource_dir
+    from . import render
+
+    stage = str(resource_dir("sample_stages") / "shirt.usda")
+    os.makedirs(args.outdir, exist_ok=True)
+    ns = SimpleNamespace(stage=stage, output=os.path.join(args.outdir, "shirt.####.png"),
+                         frames=None, camera=None, width=args.width, height=None,
+                         all_meshes=False, relax_iterations=None, no_wrinkles=False,
+                         skip_existing=False, quiet=args.quiet)
+    code = render.run(ns)
+    if code == 0 and not args.quiet:
+        print(f"usdwrinkle: demo frames are in {os.path.abspath(args.outdir)}")
+    return code

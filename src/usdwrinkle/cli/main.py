@@ -1,0 +1,54 @@
+"""usdwrinkle: the console script. ``main(argv) -> int``, errors as one line on stderr.
+
+Exit codes: 0 success, 1 findings (check), 2 user error, 130 interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+
+from .. import __version__
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from . import demo, info, render
+
+    parser = argparse.ArgumentParser(
+        prog="usdwrinkle",
+        description="Plausible cloth wrinkles on coarse animated USD meshes "
+                    "(Loviscach 2006: skin, crush, relax, render on the GPU).")
+    parser.add_argument("--version", action="version", version=f"usdwrinkle {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for module in (render, info, demo):
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help(sys.stderr)
+        return 2
+    from ..errors import UsdWrinkleError
+
+    try:
+        return int(args.run(args) or 0)
+    except UsdWrinkleError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"usdwrinkle: error: {exc.one_line()}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("usdwrinkle: interrupted; finished frames are intact", file=sys.stderr)
+        return 130
+
+
+def entry_point() -> None:
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    entry_point()

@@ -1,0 +1,1 @@
+"""Outputs: images (OpenImageIO) and, later, USD layers. Every file is written atomically."""
