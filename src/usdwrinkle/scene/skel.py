@@ -138,7 +138,7 @@ def dual_quaternions(joint_transforms: np.ndarray):
             continue
         rot = Gf.Matrix4d(rot)
         rot.Orthonormalize()
-        quat = rot.ExtractRotationMatrix().ExtractRotationQuat()
+        quat = rot.ExtractRotationMatrix().ExtractRotation().GetQuaternion()
         dq = Gf.DualQuatd(Gf.Quatd(quat.GetReal(), Gf.Vec3d(quat.GetImaginary())),
                           Gf.Vec3d(translation))
         r, d = dq.GetReal(), dq.GetDual()

@@ -1,0 +1,1 @@
+"""Numpy oracles of the GPU passes: slow, obvious, and the tests' reference."""

@@ -1,0 +1,93 @@
+"""Numpy reference of crush.glsl: the same math, vectorised over vertices."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..render.resources import rest_tangents
+from ..scene.topology import Topology, vertex_normals
+
+MIN_RATIO = 0.05
+
+
+def minimal_rotation(a, b, v, flip_axis):
+    c = np.sum(a * b, axis=1, keepdims=True)
+    axis = np.cross(a, b)
+    rotated = v * c + np.cross(axis, v) + axis * (np.sum(axis * v, axis=1, keepdims=True)
+                                                  / np.maximum(1.0 + c, 1e-30))
+    flipped = 2.0 * np.sum(flip_axis * v, axis=1, keepdims=True) * flip_axis - v
+    return np.where(c < -0.999999, flipped, rotated)
+
+
+def _normalize(v, fallback):
+    length = np.linalg.norm(v, axis=1, keepdims=True)
+    return np.where(length > 1e-30, v / np.maximum(length, 1e-30), fallback)
+
+
+def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray,
+          width: np.ndarray, amplitude_scale: float = 1.0) -> dict:
+    """Per-vertex wave fields, as crush.glsl computes them.
+
+    Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
+    direction (n,3), compression (n,), phase (n,), usable (n,) bool.
+    """
+    rest = np.asarray(rest, np.float64)
+    posed = np.asarray(posed, np.float64)
+    n = len(rest)
+    N0 = vertex_normals(rest, topology).astype(np.float64)
+    T1 = rest_tangents(N0).astype(np.float64)
+    T2 = np.cross(N0, T1)
+    n_posed_sum = np.zeros((n, 3))
+    tri = topology.triangles
+    if len(tri):
+        face = np.cross(posed[tri[:, 1]] - posed[tri[:, 0]], posed[tri[:, 2]] - posed[tri[:, 0]])
+        for c in range(3):
+            np.add.at(n_posed_sum, tri[:, c], face)
+    has_normal = np.linalg.norm(n_posed_sum, axis=1) > 0
+    usable = (np.linalg.norm(N0, axis=1) > 0.5) & has_normal
+    nrm = _normalize(n_posed_sum, N0)
+    t1 = _normalize(minimal_rotation(N0, nrm, T1, T1), T1)
+    t2 = np.cross(nrm, t1)
+
+    src = np.repeat(np.arange(n), np.diff(topology.neighbor_offsets))
+    dst = topology.neighbor_indices
+    rest_edge = rest[dst] - rest[src]
+    posed_edge = posed[dst] - posed[src]
+    a = np.stack([np.sum(rest_edge * T1[src], 1), np.sum(rest_edge * T2[src], 1)], 1)
+    b = np.stack([np.sum(posed_edge * t1[src], 1), np.sum(posed_edge * t2[src], 1)], 1)
+    AA = np.zeros((n, 2, 2))
+    BA = np.zeros((n, 2, 2))
+    np.add.at(AA, src, a[:, :, None] * a[:, None, :])
+    np.add.at(BA, src, b[:, :, None] * a[:, None, :])
+    count = np.diff(topology.neighbor_offsets)
+    det_a = np.linalg.det(AA)
+    trace_a = AA[:, 0, 0] + AA[:, 1, 1]
+    usable &= (count >= 2) & (trace_a > 0) & (det_a > 1e-6 * trace_a ** 2)
+    M = np.tile(np.eye(2), (n, 1, 1))
+    ok = usable
+    M[ok] = BA[ok] @ np.linalg.inv(AA[ok])
+
+    q = np.asarray(q, np.float64)
+    q2 = np.stack([np.sum(q * T1, 1), np.sum(q * T2, 1)], 1)
+    q_len = np.linalg.norm(q2, axis=1)
+    q2 = np.where(q_len[:, None] > 1.0, q2 / np.maximum(q_len, 1e-30)[:, None], q2)
+    M = M @ (np.eye(2) - q2[:, :, None] * q2[:, None, :])
+
+    S = np.transpose(M, (0, 2, 1)) @ M
+    lam_all, vec_all = np.linalg.eigh(S)
+    lam = np.maximum(lam_all[:, 0], 0.0)
+    d = vec_all[:, :, 0]
+    d3 = d[:, :1] * T1 + d[:, 1:] * T2
+    lead = d3[np.arange(n), np.argmax(np.abs(d3), axis=1)]
+    flip = np.where(lead < 0, -1.0, 1.0)
+    d, d3 = d * flip[:, None], d3 * flip[:, None]
+    r = np.where(usable | (q_len > 0), np.minimum(1.0, np.sqrt(lam)), 1.0)
+    width = np.asarray(width, np.float64)
+    amplitude = amplitude_scale * 0.25 * width * np.sqrt(np.maximum(1 - r * r, 0))
+    md = np.einsum("nij,nj->ni", M, d)
+    k2 = (2 * np.pi / width)[:, None] * md / np.maximum(lam, MIN_RATIO ** 2)[:, None]
+    tiny = np.linalg.norm(md, axis=1) <= 1e-12
+    k2[tiny] = ((2 * np.pi / (width * MIN_RATIO))[:, None] * d)[tiny]
+    k = k2[:, :1] * t1 + k2[:, 1:] * t2
+    phase = (2 * np.pi / width) * np.sum(d3 * rest, 1)
+    return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "direction": d3,
+            "compression": r, "phase": phase, "usable": usable}

@@ -1,0 +1,56 @@
+"""Numpy reference of relax.glsl (Jacobi with sign alignment) and the misfit metric."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene.topology import Topology
+
+WEIGHT_FLOOR = 1e-7
+
+
+def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
+    """``iterations`` Jacobi steps; returns the new phases (n,)."""
+    points = np.asarray(points, np.float64)
+    k = np.asarray(wave_vector, np.float64)
+    weight = np.asarray(amplitude, np.float64) + WEIGHT_FLOOR
+    phi = np.asarray(phase, np.float64).copy()
+    n = len(points)
+    src = np.repeat(np.arange(n), np.diff(topology.neighbor_offsets))
+    dst = topology.neighbor_indices
+    sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
+    k_j = k[dst] * sign[:, None]
+    k_bar = 0.5 * (k[src] + k_j)
+    drift = np.sum(k_bar * (points[dst] - points[src]), 1)
+    for _ in range(iterations):
+        predicted = phi[dst] * sign - drift
+        re = weight * np.cos(phi)
+        im = weight * np.sin(phi)
+        np.add.at(re, src, weight[dst] * np.cos(predicted))
+        np.add.at(im, src, weight[dst] * np.sin(predicted))
+        phi = np.where(re * re + im * im > 0, np.arctan2(im, re), phi)
+    return phi
+
+
+def wrap(angle):
+    return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
+
+
+def phase_misfit(points, wave_vector, phase, topology: Topology, mask=None) -> float:
+    """RMS over edges of wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)), radians.
+
+    ``mask`` (n,) bool restricts to edges whose both ends are selected.
+    """
+    points = np.asarray(points, np.float64)
+    k = np.asarray(wave_vector, np.float64)
+    phi = np.asarray(phase, np.float64)
+    edges = topology.edges
+    i, j = edges[:, 0], edges[:, 1]
+    if mask is not None:
+        keep = mask[i] & mask[j]
+        i, j = i[keep], j[keep]
+    if not len(i):
+        return 0.0
+    sign = np.where(np.sum(k[i] * k[j], 1) < 0, -1.0, 1.0)
+    k_bar = 0.5 * (k[i] + sign[:, None] * k[j])
+    residual = wrap(sign * phi[j] - phi[i] - np.sum(k_bar * (points[j] - points[i]), 1))
+    return float(np.sqrt(np.mean(residual ** 2)))
