@@ -94,11 +94,12 @@ class StageSceneDelegate:
         default = Usd.TimeCode.Default()
         points_attr = mesh.GetPointsAttr()
         binding = self.skel.get(path)
-        rest_value = None
         primvars = UsdGeom.PrimvarsAPI(prim)
         rest_primvar = primvars.GetPrimvar("rest")
-        point_cached = points_attr.GetNumTimeSamples() > 1 and binding is None
-        if point_cached and rest_primvar and rest_primvar.HasAuthoredValue():
+        has_rest = binding is None and bool(rest_primvar) and rest_primvar.HasAuthoredValue()
+        # Point caches: time-sampled points, or any points with an authored primvars:rest.
+        point_cached = binding is None and (points_attr.GetNumTimeSamples() > 0 or has_rest)
+        if has_rest:
             rest_value = rest_primvar.ComputeFlattened(default)
             rest_attr_name = "primvars:rest"
         else:
@@ -123,7 +124,9 @@ class StageSceneDelegate:
         holes = mesh.GetHoleIndicesAttr().Get(default)
         topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
                                   None if holes is None else np.asarray(holes), path)
-        if point_cached and len(rest) != len(points_attr.Get(points_attr.GetTimeSamples()[0])):
+        first_points = points_attr.Get(points_attr.GetTimeSamples()[0]) \
+            if points_attr.GetNumTimeSamples() else points_attr.Get(default)
+        if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
                                   "primvars:rest")
         if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:

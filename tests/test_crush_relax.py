@@ -1,0 +1,164 @@
+"""Crush and relax: GPU against the numpy references, and analytic sheets."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.reference.crush import crush as crush_reference
+from usdwrinkle.reference.relax import phase_misfit, relax as relax_reference, wrap
+
+from conftest import grid_sheet
+from helpers import point_cache_stage, rotation_matrix
+
+
+def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
+    engine = WrinkleEngine(stage, ctx=ctx, warn=lambda m: None)
+    try:
+        engine.compute_frame(frame)
+        return engine.read_fields(path), engine.scene.meshes[path]
+    finally:
+        engine.release()
+
+
+def interior(points, margin):
+    lo, hi = points.min(0), points.max(0)
+    return np.all((points[:, :2] > lo[:2] + margin) & (points[:, :2] < hi[:2] - margin), axis=1)
+
+
+def random_cloth(seed):
+    """An icosphere squashed by a smooth random field, with random painted q."""
+    rng = np.random.default_rng(seed)
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    rest = np.asarray(sphere.vertices, np.float32)
+    faces = np.asarray(sphere.faces, np.int32)
+    bend = rng.normal(size=(3, 3)) * 0.25
+    posed = rest @ (np.eye(3) + bend) + 0.15 * np.sin(3 * rest[:, [1, 2, 0]])
+    q = np.zeros_like(rest)
+    painted = rng.random(len(rest)) < 0.3
+    q[painted] = rng.normal(size=(painted.sum(), 3))
+    q[painted] *= (rng.random(painted.sum()) * 0.9 / np.linalg.norm(q[painted], axis=1))[:, None]
+    return rest, posed.astype(np.float32), faces, q.astype(np.float32)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_crush_matches_numpy_reference(gl_context, seed):
+    rest, posed, faces, q = random_cloth(seed)
+    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
+                              width=0.2, relax_iterations=0)
+    ours, record = gpu_fields(gl_context, stage)
+    ref = crush_reference(rest, posed, record.topology, q, record.params.width)
+    assert np.all(ours["usable"] == ref["usable"])
+    np.testing.assert_allclose(ours["compression"], ref["compression"], atol=2e-4)
+    np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
+    np.testing.assert_allclose(ours["normals"], ref["normals"], atol=1e-4)
+    # directions and k are defined where the two eigenvalues differ
+    lam = ref["compression"]
+    defined = (lam < 0.98) & (ref["amplitude"] > 1e-3)
+    assert defined.sum() > 50
+    np.testing.assert_allclose(ours["direction"][defined], ref["direction"][defined], atol=2e-3)
+    k_ours, k_ref = ours["wave_vector"][defined], ref["wave_vector"][defined]
+    rel = np.linalg.norm(k_ours - k_ref, axis=1) / np.linalg.norm(k_ref, axis=1)
+    assert np.max(rel) < 2e-3
+    assert np.max(np.abs(wrap(ours["phase"][defined] - ref["phase"][defined]))) < 1e-3
+
+
+def test_relax_matches_numpy_reference(gl_context):
+    rest, posed, faces, q = random_cloth(3)
+    iterations = 12
+    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
+                              width=0.2, relax_iterations=iterations)
+    ours, record = gpu_fields(gl_context, stage)
+    start = crush_reference(rest, posed, record.topology, q, record.params.width)
+    ref_phase = relax_reference(posed, start["wave_vector"], start["amplitude"], start["phase"],
+                                record.topology, iterations)
+    wrinkled = start["amplitude"] > 1e-3
+    assert wrinkled.sum() > 50
+    diff = np.abs(wrap(ours["phase"][wrinkled] - ref_phase[wrinkled]))
+    assert np.percentile(diff, 99) < 1e-2
+    # relaxation lowers the misfit from the material-anchored start
+    before = phase_misfit(posed, start["wave_vector"], start["phase"], record.topology, wrinkled)
+    after = phase_misfit(posed, ours["wave_vector"], ours["phase"], record.topology, wrinkled)
+    assert after < before
+
+
+@pytest.mark.parametrize("ratio", [0.5, 0.8, 0.95])
+def test_uniform_compression_is_analytic(gl_context, ratio):
+    rest, counts, indices = grid_sheet(31, 31, 2.0)
+    posed = rest * np.array([ratio, 1, 1], np.float32)
+    width = 0.3
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=width)
+    ours, record = gpu_fields(gl_context, stage)
+    inside = interior(rest, 0.1)
+    expected_h = width / 4 * np.sqrt(1 - ratio ** 2)
+    expected_k = 2 * np.pi / (ratio * width)
+    np.testing.assert_allclose(ours["amplitude"][inside], expected_h, rtol=0.01)
+    k = ours["wave_vector"][inside]
+    np.testing.assert_allclose(np.linalg.norm(k, axis=1), expected_k, rtol=0.01)
+    assert np.all(np.abs(k[:, 0]) / np.linalg.norm(k, axis=1) > 0.999)  # k parallel to x
+    np.testing.assert_allclose(ours["compression"][inside], ratio, atol=1e-3)
+    misfit = phase_misfit(posed, ours["wave_vector"], ours["phase"], record.topology, inside)
+    assert misfit < 0.1
+
+
+def test_wrinkles_finer_than_the_mesh(gl_context):
+    """W at half an edge: the exact k.dx prediction keeps the phases consistent."""
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    edge = 2.0 / 20
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.5 * edge)
+    ours, record = gpu_fields(gl_context, stage)
+    inside = interior(rest, 0.15)
+    k = np.linalg.norm(ours["wave_vector"][inside], axis=1)
+    assert np.all(k * edge * 0.7 > 2 * np.pi)  # more than one wave per posed edge
+    misfit = phase_misfit(posed, ours["wave_vector"], ours["phase"], record.topology, inside)
+    assert misfit < 0.1
+
+
+@pytest.mark.parametrize("amount", [0.3, 0.6, 0.9])
+def test_painted_q_without_deformation(gl_context, amount):
+    rest, counts, indices = grid_sheet(15, 15, 2.0)
+    direction = np.array([np.cos(0.4), np.sin(0.4), 0.0])
+    q = np.tile(direction * amount, (len(rest), 1)).astype(np.float32)
+    stage = point_cache_stage(rest, {1: rest}, counts, indices, q=q, width=0.25)
+    ours, _ = gpu_fields(gl_context, stage)
+    np.testing.assert_allclose(ours["compression"], 1 - amount ** 2, atol=1e-4)
+    d = ours["direction"]
+    assert np.all(np.abs(d @ direction) > 0.9999)  # compression along q
+
+
+def test_rigid_motion_changes_nothing(gl_context):
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    posed = rest * np.array([0.75, 1, 1], np.float32)
+    posed[:, 2] += 0.2 * np.sin(posed[:, 0] * 2)  # some bending too
+    rot = rotation_matrix([0.3, -0.8, 0.5], 1.1)
+    moved = (posed @ rot.T + np.array([3.0, -2.0, 1.0])).astype(np.float32)
+    base, _ = gpu_fields(gl_context, point_cache_stage(rest, {1: posed}, counts, indices,
+                                                       width=0.3))
+    turned, _ = gpu_fields(gl_context, point_cache_stage(rest, {1: moved}, counts, indices,
+                                                         width=0.3))
+    wrinkled = base["amplitude"] > 1e-3
+    assert wrinkled.sum() > 100
+    rel_h = np.abs(turned["amplitude"] - base["amplitude"])[wrinkled] / base["amplitude"][wrinkled]
+    k0 = np.linalg.norm(base["wave_vector"], axis=1)[wrinkled]
+    k1 = np.linalg.norm(turned["wave_vector"], axis=1)[wrinkled]
+    assert rel_h.max() < 0.005
+    assert (np.abs(k1 - k0) / k0).max() < 0.005
+    # and k turns with the sheet
+    np.testing.assert_allclose(turned["wave_vector"][wrinkled],
+                               base["wave_vector"][wrinkled] @ rot.T, rtol=0, atol=1e-2 * k0.max())
+
+
+def test_degenerate_geometry_gives_no_wrinkle_and_no_nan(gl_context):
+    # collinear strip, coincident points, an isolated vertex
+    rest = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [3, 0, 0], [5, 5, 5]],
+                    np.float32)
+    counts = [3, 3]
+    indices = [0, 1, 2, 2, 3, 4]
+    stage = point_cache_stage(rest, {1: rest * 0.5}, counts, indices, width=0.5)
+    ours, _ = gpu_fields(gl_context, stage)
+    for name, value in ours.items():
+        assert np.all(np.isfinite(value)), name
+    np.testing.assert_array_equal(ours["compression"], 1.0)
+    np.testing.assert_array_equal(ours["amplitude"], 0.0)
