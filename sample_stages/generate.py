@@ -1,0 +1,348 @@
+"""Generate the sample stages: the paper's three cases (shirt, zeppelin, curtain).
+
+    python sample_stages/generate.py [OUTDIR]
+
+Each stage has a camera, a light, a UsdPreviewSurface material, a UsdSkel rig and
+animation (frames 1-24), WrinkleAPI on the cloth and a painted-q region. The
+.usda files and the texture are committed; rerun this script after changing it.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+import numpy as np
+
+import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
+
+from usdwrinkle import schema
+
+FRAMES = (1, 24)
+
+
+def new_stage(path: str) -> Usd.Stage:
+    if os.path.exists(path):
+        os.remove(path)
+    stage = Usd.Stage.CreateNew(path)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.SetStartTimeCode(FRAMES[0])
+    stage.SetEndTimeCode(FRAMES[1])
+    stage.SetTimeCodesPerSecond(24)
+    stage.SetFramesPerSecond(24)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    return stage
+
+
+def add_camera(stage, eye, target, focal=35.0):
+    cam = UsdGeom.Camera.Define(stage, "/World/main_cam")
+    cam.CreateFocalLengthAttr(focal)
+    cam.CreateHorizontalApertureAttr(36.0)
+    cam.CreateVerticalApertureAttr(24.0)
+    cam.CreateClippingRangeAttr(Gf.Vec2f(0.1, 100.0))
+    look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*target), Gf.Vec3d(0, 1, 0))
+    cam.AddTransformOp().Set(look.GetInverse())
+
+
+def add_lights(stage, direction_euler=(-40.0, 30.0, 0.0)):
+    key = UsdLux.DistantLight.Define(stage, "/World/Lights/key")
+    key.CreateIntensityAttr(1.6)
+    key.CreateColorAttr(Gf.Vec3f(1.0, 0.97, 0.92))
+    key.AddRotateXYZOp().Set(Gf.Vec3f(*direction_euler))
+    dome = UsdLux.DomeLight.Define(stage, "/World/Lights/fill")
+    dome.CreateIntensityAttr(0.25)
+    dome.CreateColorAttr(Gf.Vec3f(0.8, 0.85, 1.0))
+
+
+def add_material(stage, name, color=None, texture=None):
+    material = UsdShade.Material.Define(stage, f"/World/Looks/{name}")
+    shader = UsdShade.Shader.Define(stage, f"/World/Looks/{name}/surface")
+    shader.CreateIdAttr("UsdPreviewSurface")
+    shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.6)
+    material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    if texture:
+        reader = UsdShade.Shader.Define(stage, f"/World/Looks/{name}/st_reader")
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+        tex = UsdShade.Shader.Define(stage, f"/World/Looks/{name}/diffuse_texture")
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(texture)
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+            reader.ConnectableAPI(), "result")
+        tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("repeat")
+        tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("repeat")
+        shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+            tex.ConnectableAPI().CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+    else:
+        shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*color))
+    return material
+
+
+def define_mesh(stage, path, points, counts, indices, st=None):
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(points, np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.asarray(counts, np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(indices, np.int32)))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    mesh.CreateDoubleSidedAttr(True)
+    lo, hi = np.min(points, 0), np.max(points, 0)
+    mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
+    if st is not None:
+        UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+            Vt.Vec2fArray.FromNumpy(np.asarray(st, np.float32)))
+    return mesh
+
+
+def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0, relax_iterations=32):
+    prim = mesh.GetPrim()
+    prim.ApplyAPI(schema.API_NAME)
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.Float,
+                           UsdGeom.Tokens.constant).Set(float(width))
+    if q is not None:
+        primvars.CreatePrimvar("wrinkle:q", Sdf.ValueTypeNames.Vector3fArray,
+                               UsdGeom.Tokens.vertex).Set(
+            Vt.Vec3fArray.FromNumpy(np.asarray(q, np.float32)))
+    prim.CreateAttribute(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(amplitude_scale)
+    prim.CreateAttribute(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int).Set(relax_iterations)
+
+
+def rig(stage, root_path, mesh, joints, bind_xforms, joint_indices, joint_weights,
+        influences, animate):
+    """A SkelRoot with a Skeleton and a SkelAnimation; ``animate(anim)`` authors samples."""
+    skel = UsdSkel.Skeleton.Define(stage, f"{root_path}/Skel")
+    skel.CreateJointsAttr(joints)
+    skel.CreateBindTransformsAttr(Vt.Matrix4dArray([Gf.Matrix4d(m) for m in bind_xforms]))
+    rest = []
+    for i, name in enumerate(joints):
+        parent = name.rsplit("/", 1)[0] if "/" in name else None
+        local = Gf.Matrix4d(bind_xforms[i])
+        if parent is not None:
+            local = local * Gf.Matrix4d(bind_xforms[joints.index(parent)]).GetInverse()
+        rest.append(local)
+    skel.CreateRestTransformsAttr(Vt.Matrix4dArray(rest))
+    anim = UsdSkel.Animation.Define(stage, f"{root_path}/Skel/Anim")
+    anim.CreateJointsAttr(joints)
+    animate(anim, rest)
+    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
+        [anim.GetPath()])
+    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
+    binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
+    binding.CreateJointIndicesPrimvar(False, influences).Set(
+        Vt.IntArray.FromNumpy(np.asarray(joint_indices, np.int32).ravel()))
+    binding.CreateJointWeightsPrimvar(False, influences).Set(
+        Vt.FloatArray.FromNumpy(np.asarray(joint_weights, np.float32).ravel()))
+    binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
+    return skel, anim
+
+
+def grid_faces(rows, cols, wrap_cols=False):
+    faces = []
+    cc = cols if wrap_cols else cols - 1
+    for r in range(rows - 1):
+        for c in range(cc):
+            a = r * cols + c
+            b = r * cols + (c + 1) % cols
+            faces.append([a, b, b + cols, a + cols])
+    faces = np.array(faces, np.int32)
+    return np.full(len(faces), 4, np.int32), faces.ravel()
+
+
+def make_texture(path):
+    """A woven plaid so the texture deformation shows where the cloth folds."""
+    import OpenImageIO as oiio
+
+    size = 256
+    u, v = np.meshgrid(np.arange(size) / size, np.arange(size) / size)
+    base = np.array([0.72, 0.18, 0.16])
+    stripe_a = (np.sin(u * 2 * np.pi * 8) > 0.55)[..., None]
+    stripe_b = (np.sin(v * 2 * np.pi * 8) > 0.55)[..., None]
+    img = base * (1 - 0.45 * stripe_a) * (1 - 0.45 * stripe_b)
+    img = img + np.array([0.9, 0.85, 0.6]) * ((np.abs(np.sin(u * 2 * np.pi * 32)) > 0.97)
+                                              [..., None] * 0.5)
+    img = np.clip(img, 0, 1) ** (1 / 2.2)
+    spec = oiio.ImageSpec(size, size, 3, "uint8")
+    out = oiio.ImageOutput.create(path)
+    out.open(path, spec)
+    out.write_image(np.ascontiguousarray((img * 255).astype(np.uint8)))
+    out.close()
+
+
+def shirt(outdir):
+    """A sleeve (35 x 13 = 455 vertices) on an arm that bends at the elbow."""
+    stage = new_stage(os.path.join(outdir, "shirt.usda"))
+    around, along, length, radius = 35, 13, 3.0, 0.38
+    theta = np.arange(around) * 2 * np.pi / around
+    xs = np.linspace(0, length, along)
+    gx, gt = np.meshgrid(xs, theta, indexing="ij")
+    points = np.stack([gx.ravel(), radius * np.cos(gt).ravel(), radius * np.sin(gt).ravel()], 1)
+    counts, indices = grid_faces(along, around, wrap_cols=True)
+    st = np.stack([(gt / (2 * np.pi)).ravel() * 2, (gx / length).ravel() * 3], 1)
+    os.makedirs(os.path.join(outdir, "textures"), exist_ok=True)
+    make_texture(os.path.join(outdir, "textures", "plaid.png"))
+    UsdSkel.Root.Define(stage, "/World/Arm")
+    mesh = define_mesh(stage, "/World/Arm/Sleeve", points, counts, indices, st)
+    material = add_material(stage, "Plaid", texture="./textures/plaid.png")
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    elbow = 1.5
+    w_fore = np.clip((points[:, 0] - (elbow - 0.35)) / 0.7, 0, 1)
+    w_fore = w_fore * w_fore * (3 - 2 * w_fore)
+    indices_j = np.stack([np.zeros(len(points)), np.ones(len(points))], 1)
+    weights_j = np.stack([1 - w_fore, w_fore], 1)
+    joints = ["shoulder", "shoulder/elbow"]
+    bind = [np.eye(4), np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [elbow, 0, 0, 1]])]
+
+    def animate(anim, rest):
+        anim.CreateTranslationsAttr()
+        anim.CreateRotationsAttr()
+        anim.CreateScalesAttr()
+        for f in range(FRAMES[0], FRAMES[1] + 1):
+            s = (f - FRAMES[0]) / (FRAMES[1] - FRAMES[0])
+            s = s * s * (3 - 2 * s)
+            bend = Gf.Rotation(Gf.Vec3d(0, 0, 1), 105.0 * s).GetQuat()
+            lift = Gf.Rotation(Gf.Vec3d(0, 0, 1), -15.0 * s).GetQuat()
+            anim.GetTranslationsAttr().Set(Vt.Vec3fArray([Gf.Vec3f(0, 0, 0),
+                                                          Gf.Vec3f(elbow, 0, 0)]), f)
+            anim.GetRotationsAttr().Set(Vt.QuatfArray([Gf.Quatf(lift), Gf.Quatf(bend)]), f)
+            anim.GetScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)] * 2), f)
+
+    rig(stage, "/World/Arm", mesh, joints, bind, indices_j, weights_j, 2, animate)
+    # painted region: the cuff gathers along the sleeve axis
+    q = np.zeros_like(points)
+    cuff = np.clip((points[:, 0] - (length - 0.7)) / 0.5, 0, 1)
+    q[:, 0] = 0.55 * cuff
+    apply_wrinkles(mesh, width=0.28, q=q, amplitude_scale=1.0)
+    add_camera(stage, eye=(1.9, 2.6, 4.6), target=(1.35, 0.75, 0.0))
+    add_lights(stage)
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
+def zeppelin(outdir):
+    """A hull (28 x 18 + 2 poles = 506 vertices) that deflates through a blend shape."""
+    stage = new_stage(os.path.join(outdir, "zeppelin.usda"))
+    around, rings, length, radius = 28, 18, 4.0, 0.8
+    theta = np.arange(around) * 2 * np.pi / around
+    t = np.linspace(0, 1, rings + 2)[1:-1]
+    x = (t - 0.5) * length
+    profile = radius * np.sqrt(np.maximum(1 - (2 * t - 1) ** 2, 0)) ** 0.9
+    gx, gt = np.meshgrid(x, theta, indexing="ij")
+    gr = np.repeat(profile[:, None], around, axis=1)
+    body = np.stack([gx.ravel(), (gr * np.cos(gt)).ravel(), (gr * np.sin(gt)).ravel()], 1)
+    points = np.concatenate([body, [[-length / 2, 0, 0], [length / 2, 0, 0]]])
+    counts, indices = grid_faces(rings, around, wrap_cols=True)
+    tail, nose = len(body), len(body) + 1
+    caps = []
+    for c in range(around):
+        caps.append([tail, (c + 1) % around, c])
+        last = (rings - 1) * around
+        caps.append([nose, last + c, last + (c + 1) % around])
+    counts = np.concatenate([counts, np.full(len(caps), 3, np.int32)])
+    indices = np.concatenate([indices, np.array(caps, np.int32).ravel()])
+    UsdSkel.Root.Define(stage, "/World/Zeppelin")
+    mesh = define_mesh(stage, "/World/Zeppelin/Hull", points, counts, indices)
+    material = add_material(stage, "Canvas", color=(0.78, 0.74, 0.62))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    # deflate: the middle loses 28% of its girth, the length stays (the frame is rigid)
+    mid = np.sin(np.pi * np.clip((points[:, 0] / length) + 0.5, 0, 1))
+    offsets = np.zeros_like(points)
+    offsets[:, 1:] = -0.28 * mid[:, None] * points[:, 1:]
+    shape = UsdSkel.BlendShape.Define(stage, "/World/Zeppelin/Hull/deflate")
+    shape.CreateOffsetsAttr(Vt.Vec3fArray.FromNumpy(offsets.astype(np.float32)))
+    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
+    binding.CreateBlendShapesAttr(["deflate"])
+    binding.CreateBlendShapeTargetsRel().SetTargets([shape.GetPath()])
+
+    def animate(anim, rest):
+        anim.CreateBlendShapesAttr(["deflate"])
+        anim.CreateTranslationsAttr().Set(Vt.Vec3fArray([Gf.Vec3f(0, 0, 0)]))
+        anim.CreateRotationsAttr().Set(Vt.QuatfArray([Gf.Quatf(1, 0, 0, 0)]))
+        anim.CreateScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)]))
+        weights = anim.CreateBlendShapeWeightsAttr()
+        for f in range(FRAMES[0], FRAMES[1] + 1):
+            s = (f - FRAMES[0]) / (FRAMES[1] - FRAMES[0])
+            weights.Set(Vt.FloatArray([s]), f)
+
+    rig(stage, "/World/Zeppelin", mesh, ["hull"], [np.eye(4)],
+        np.zeros(len(points)), np.ones(len(points)), 1, animate)
+    # painted region: the nose cone is pulled tight around its tip
+    q = np.zeros_like(points)
+    near_nose = np.clip((points[:, 0] - 1.2) / 0.6, 0, 1)
+    circum = np.stack([np.zeros(len(points)), -points[:, 2], points[:, 1]], 1)
+    circum /= np.maximum(np.linalg.norm(circum, axis=1, keepdims=True), 1e-9)
+    q = circum * (0.6 * near_nose)[:, None]
+    apply_wrinkles(mesh, width=0.3, q=q)
+    add_camera(stage, eye=(1.6, 1.4, 5.2), target=(0.0, 0.0, 0.0))
+    add_lights(stage)
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
+def curtain(outdir):
+    """A curtain (23 x 4 = 92 vertices) gathered along its rail by four joints."""
+    stage = new_stage(os.path.join(outdir, "curtain.usda"))
+    cols, rows, width, height = 23, 4, 2.4, 2.0
+    xs = np.linspace(0, width, cols)
+    ys = np.linspace(0, -height, rows)
+    gy, gx = np.meshgrid(ys, xs, indexing="ij")
+    # a gentle pleat so the drape has a normal to bend
+    gz = 0.04 * np.sin(gx * 2 * np.pi / (width / 6))
+    points = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], 1)
+    counts, indices = grid_faces(rows, cols)
+    st = np.stack([(gx / width).ravel() * 2, (gy / height).ravel() * 2 + 2], 1)
+    UsdSkel.Root.Define(stage, "/World/Curtain")
+    mesh = define_mesh(stage, "/World/Curtain/Cloth", points, counts, indices, st)
+    material = add_material(stage, "Velvet", color=(0.25, 0.32, 0.62))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    anchors = np.linspace(0, width, 4)
+    joints = ["rail", "rail/ring1", "rail/ring2", "rail/ring3"]
+    bind = [np.eye(4)] + [np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [a, 0, 0, 1]])
+                          for a in anchors[1:]]
+    # each vertex follows the two rings around it (linear in x), ring 0 is the rail itself
+    seg = np.clip(np.searchsorted(anchors, points[:, 0], side="right") - 1, 0, 2)
+    local = (points[:, 0] - anchors[seg]) / (anchors[seg + 1] - anchors[seg])
+    ji = np.stack([seg, seg + 1], 1)
+    jw = np.stack([1 - local, local], 1)
+    gathered = np.array([0.0, 0.35, 0.65, 0.95])
+
+    def animate(anim, rest):
+        anim.CreateTranslationsAttr()
+        anim.CreateRotationsAttr().Set(Vt.QuatfArray([Gf.Quatf(1, 0, 0, 0)] * 4))
+        anim.CreateScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)] * 4))
+        for f in range(FRAMES[0], FRAMES[1] + 1):
+            s = (f - FRAMES[0]) / (FRAMES[1] - FRAMES[0])
+            s = s * s * (3 - 2 * s)
+            pos = anchors + s * (gathered - anchors)
+            # joint-local translations: ring k sits relative to the rail (joint 0)
+            anim.GetTranslationsAttr().Set(
+                Vt.Vec3fArray([Gf.Vec3f(0, 0, 0)] + [Gf.Vec3f(float(p), 0, 0)
+                                                     for p in pos[1:]]), f)
+
+    rig(stage, "/World/Curtain", mesh, joints, bind, ji, jw, 2, animate)
+    # painted region: the hem is sewn gathered
+    q = np.zeros_like(points)
+    hem = points[:, 1] < -height + 0.01
+    q[hem, 0] = 0.5
+    apply_wrinkles(mesh, width=0.16, q=q, amplitude_scale=1.0)
+    add_camera(stage, eye=(1.0, -0.6, 4.2), target=(0.9, -1.0, 0.0))
+    add_lights(stage, direction_euler=(-25.0, 35.0, 0.0))
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    outdir = argv[0] if argv else os.path.dirname(os.path.abspath(__file__))
+    os.makedirs(outdir, exist_ok=True)
+    for make in (shirt, zeppelin, curtain):
+        count = make(outdir)
+        print(f"{make.__name__}.usda: {count} vertices")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
