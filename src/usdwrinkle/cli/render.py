@@ -39,6 +39,7 @@ def run(args) -> int:
     from ..outputs.images import check_format, write_image
     from ..errors import UsdWrinkleError
 
+    refuse_overwriting_inputs(args.stage, [args.output])
     check_format(args.output)
     if args.width <= 0 or (args.height is not None and args.height <= 0):
         raise UsdWrinkleError("--width and --height must be positive")

@@ -1,0 +1,139 @@
+"""The usdwrinkle command line, run as a user would (through main(argv))."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from usdwrinkle.cli.main import main
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+EXR_CHANNELS = ("R", "G", "B", "A", "wrinkle.height", "wrinkle.amplitude", "N.X", "N.Y", "N.Z",
+                "Z")
+
+
+def read_exr(path):
+    buf = oiio.ImageBuf(str(path))
+    spec = buf.spec()
+    pixels = buf.get_pixels(oiio.FLOAT).reshape(spec.height, spec.width, spec.nchannels)
+    return {name: pixels[..., i] for i, name in enumerate(spec.channelnames)}
+
+
+def test_render_writes_every_aov(gl_context, tmp_path):
+    out = tmp_path / "shirt.####.exr"
+    assert main(["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "24",
+                 "--width", "192", "--quiet"]) == 0
+    image = read_exr(tmp_path / "shirt.0024.exr")
+    assert sorted(image) == sorted(EXR_CHANNELS)  # EXR stores channels in its own order
+    covered = image["A"] > 0
+    assert 0.05 < covered.mean() < 0.9
+    height, amplitude = image["wrinkle.height"], image["wrinkle.amplitude"]
+    width = 0.28  # the shirt's wrinkle:width, amplitude scale 1
+    assert np.abs(height).max() <= width / 4 + 1e-5
+    assert np.all(np.abs(height) <= amplitude + 1e-6)
+    assert (np.abs(height[covered]) > 0.01).mean() > 0.02  # visible wrinkles
+    assert np.all(height[~covered] == 0)
+    normal = np.stack([image["N.X"], image["N.Y"], image["N.Z"]], -1)[covered]
+    np.testing.assert_allclose(np.linalg.norm(normal, axis=1), 1.0, atol=1e-3)
+    assert np.all(np.isfinite(image["Z"][covered])) and np.all(image["Z"][covered] > 0)
+    assert np.all(np.isinf(image["Z"][~covered]))
+    assert image["wrinkle.height"].shape == (128, 192)  # height from the 3:2 camera
+
+
+def test_no_wrinkles_renders_plain(gl_context, tmp_path):
+    assert main(["render", str(SAMPLES / "curtain.usda"), str(tmp_path / "c.#.exr"),
+                 "--frames", "24", "--width", "96", "--no-wrinkles", "--quiet"]) == 0
+    image = read_exr(tmp_path / "c.24.exr")
+    assert (image["A"] > 0).mean() > 0.05
+    assert np.all(image["wrinkle.height"] == 0) and np.all(image["wrinkle.amplitude"] == 0)
+
+
+def test_png_is_8bit_srgb(gl_context, tmp_path):
+    assert main(["render", str(SAMPLES / "zeppelin.usda"), str(tmp_path / "z.####.png"),
+                 "--frames", "12", "--width", "96", "--quiet"]) == 0
+    spec = oiio.ImageInput.open(str(tmp_path / "z.0012.png")).spec()
+    assert spec.format == oiio.UINT8 and spec.nchannels == 4
+
+
+def test_frame_independence(gl_context, tmp_path):
+    """Frame 24 alone equals frame 24 within 1..24, in every channel (farm chunks agree)."""
+    stage = str(SAMPLES / "shirt.usda")
+    assert main(["render", stage, str(tmp_path / "alone.####.exr"), "--frames", "24",
+                 "--width", "128", "--quiet"]) == 0
+    assert main(["render", stage, str(tmp_path / "run.####.exr"), "--frames", "1:24",
+                 "--width", "128", "--quiet"]) == 0
+    alone = read_exr(tmp_path / "alone.0024.exr")
+    within = read_exr(tmp_path / "run.0024.exr")
+    for name in EXR_CHANNELS:
+        a, b = alone[name], within[name]
+        same_inf = np.isinf(a) & np.isinf(b)
+        with np.errstate(invalid="ignore"):
+            assert np.all(same_inf | (np.abs(a - b) <= 1e-5)), name
+    assert len(list(tmp_path.glob("run.*.exr"))) == 24
+
+
+@pytest.mark.parametrize("argv,fragment", [
+    (["render", "{samples}/shirt.usda", "{tmp}/x.####.png", "--frames", "1:b"], "bad FrameSpec"),
+    (["render", "{samples}/shirt.usda", "{tmp}/x.png", "--frames", "1:3"], "no '#' frame"),
+    (["render", "{samples}/shirt.usda", "{tmp}/x.#.png", "--camera", "nope"], "camera 'nope'"),
+    (["render", "{tmp}/missing.usda", "{tmp}/x.#.png"], "does not exist"),
+    (["render", "{samples}/shirt.usda", "{tmp}/x.#.bmpx"], "unsupported image format"),
+    (["render", "{tmp}/copy.usda", "{tmp}/copy.usda", "--frames", "1"], "input layer"),
+])
+def test_user_errors_are_one_line(gl_context, tmp_path, capsys, argv, fragment):
+    (tmp_path / "copy.usda").write_text((SAMPLES / "curtain.usda").read_text())
+    args = [a.format(samples=SAMPLES, tmp=tmp_path) for a in argv]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("usdwrinkle: error: ")
+    assert fragment in err[0]
+    assert "Traceback" not in err[0]
+    assert (tmp_path / "copy.usda").read_text() == (SAMPLES / "curtain.usda").read_text()
+
+
+def test_missing_gl_gives_one_line(monkeypatch, capsys, tmp_path):
+    import moderngl
+
+    from usdwrinkle.render import context
+
+    def no_egl(**kwargs):
+        raise Exception("libEGL.so: cannot open shared object file")
+
+    monkeypatch.setattr(context, "_context", None)
+    monkeypatch.setattr(moderngl, "create_standalone_context", no_egl)
+    code = main(["render", str(SAMPLES / "curtain.usda"), str(tmp_path / "c.#.png"),
+                 "--frames", "1"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "OpenGL 4.3" in err[0] and "Mesa's EGL" in err[0]
+    assert not list(tmp_path.iterdir())
+
+
+def test_info_prints_plugin_path(gl_context, capsys):
+    assert main(["info"]) == 0
+    out = capsys.readouterr().out
+    assert "GL renderer: " in out and "PXR_PLUGINPATH_NAME=" in out
+    plugin_dir = out.split("PXR_PLUGINPATH_NAME=")[1].split(os.pathsep)[0].strip()
+    assert (Path(plugin_dir) / "plugInfo.json").is_file()
+
+
+def test_demo_renders_the_shirt(gl_context, tmp_path):
+    assert main(["demo", str(tmp_path), "--width", "96", "--quiet"]) == 0
+    frames = sorted(tmp_path.glob("shirt.*.png"))
+    assert len(frames) == 24
+
+
+def test_cesium_man_48_frames(gl_context, corpus, tmp_path):
+    """The issue's acceptance command, at a smaller size."""
+    assert main(["render", str(corpus / "usd-wg" / "CesiumMan.usdz"),
+                 str(tmp_path / "c.####.exr"), "--frames", "1:48", "--all-meshes",
+                 "--width", "160", "--quiet"]) == 0
+    frames = sorted(tmp_path.glob("c.*.exr"))
+    assert len(frames) == 48
+    for path in frames[::8]:
+        image = read_exr(path)
+        assert np.abs(image["wrinkle.height"]).max() > 0
+        assert np.all(np.isfinite(image["R"]))
