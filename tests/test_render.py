@@ -1,0 +1,92 @@
+"""Render pass: goldens on the reference rasteriser (llvmpipe) plus property checks."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from usdwrinkle.engine import WrinkleEngine
+
+from conftest import grid_sheet
+from helpers import point_cache_stage
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+GOLDENS = Path(__file__).resolve().parent / "goldens"
+FAILURES = Path(__file__).resolve().parent / "_failures"
+#: per-channel tolerance on linear colour, and the share of pixels allowed beyond it
+PIXEL_TOLERANCE = 0.02
+SHARE_TOLERANCE = 0.005
+
+
+def reference_rasterizer(ctx) -> bool:
+    return "llvmpipe" in ctx.info.get("GL_RENDERER", "")
+
+
+def save(path: Path, pixels: np.ndarray) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], "float")
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), spec)
+    out.write_image(np.ascontiguousarray(pixels, np.float32))
+    out.close()
+
+
+@pytest.mark.parametrize("stage_name,frame", [("shirt", 24), ("zeppelin", 24), ("curtain", 24)])
+def test_golden_frames(gl_context, regenerate_goldens, stage_name, frame):
+    if not reference_rasterizer(gl_context):
+        pytest.skip("goldens are defined on Mesa llvmpipe only (pygfx's convention)")
+    engine = WrinkleEngine(str(SAMPLES / f"{stage_name}.usda"), ctx=gl_context,
+                           warn=lambda m: None)
+    try:
+        width, height = engine.resolution(240, None, float(frame))
+        buffers = engine.render_frame(float(frame), width, height)
+    finally:
+        engine.release()
+    image = np.concatenate([buffers["color"].pixels, buffers["wrinkle.height"].pixels], axis=2)
+    golden_path = GOLDENS / f"{stage_name}.{frame:04d}.exr"
+    if regenerate_goldens or not golden_path.exists():
+        if not regenerate_goldens:
+            pytest.fail(f"missing golden {golden_path.name}: run pytest --regenerate-goldens")
+        save(golden_path, image)
+    golden = oiio.ImageBuf(str(golden_path)).get_pixels(oiio.FLOAT).reshape(image.shape)
+    # compare colour and the wrinkle height, each against its own scale
+    scale = np.array([1, 1, 1, 1, max(np.abs(golden[..., 4]).max(), 1e-6)])
+    diff = np.abs(image - golden) / scale
+    bad = np.any(diff > PIXEL_TOLERANCE, axis=2)
+    if bad.mean() > SHARE_TOLERANCE:
+        save(FAILURES / f"{stage_name}.{frame:04d}.diff.exr", diff)
+        save(FAILURES / f"{stage_name}.{frame:04d}.actual.exr", image)
+    assert bad.mean() <= SHARE_TOLERANCE, f"{bad.mean():.2%} of pixels differ"
+    assert np.abs(golden[..., 4]).max() > 0.005  # the golden itself shows wrinkles
+
+
+def test_no_wrinkle_where_uncompressed(gl_context):
+    """A sheet that is only stretched (r = 1 everywhere) has zero height at every pixel."""
+    rest, counts, indices = grid_sheet(15, 15, 2.0)
+    stretched = rest * np.array([1.3, 1.1, 1.0], np.float32)
+    stage = point_cache_stage(rest, {1: stretched}, counts, indices, width=0.3)
+    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    try:
+        buffers = engine.render_frame(1.0, 96, 96)
+    finally:
+        engine.release()
+    assert (buffers["color"].pixels[..., 3] > 0).mean() > 0.1
+    assert np.all(buffers["wrinkle.height"].pixels == 0)
+
+
+def test_height_is_bounded_by_amplitude(gl_context):
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    posed = rest * np.array([0.6, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.3, amplitude_scale=0.7)
+    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    try:
+        buffers = engine.render_frame(1.0, 128, 128)
+    finally:
+        engine.release()
+    height = buffers["wrinkle.height"].pixels
+    bound = 0.7 * 0.3 / 4
+    assert np.abs(height).max() <= bound * (1 + 1e-4)
+    # and it reaches close to the analytic amplitude s (W/4) sqrt(1 - r^2)
+    assert np.abs(height).max() > 0.9 * bound * np.sqrt(1 - 0.6 ** 2)
