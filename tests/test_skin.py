@@ -43,28 +43,45 @@ def test_skin_matches_pixar_baseline(gl_context, corpus, name, frames):
     print(f"{name}: worst error {worst:.2e} of extent over {checked} mesh-frames")
 
 
-def test_skin_matches_usdskel_on_cesium_man(gl_context, corpus):
-    """A real asset with 19 joints and 4 influences: GPU skin equals ComputeSkinnedPoints."""
-    path = str(corpus / "usd-wg" / "CesiumMan.usdz")
-    engine = WrinkleEngine(path, all_meshes=True, ctx=gl_context, warn=lambda m: None)
+USDSKEL_CASES = [("usd-wg/CesiumMan.usdz", (1.0, 17.0, 40.0)),
+                 ("openusd-usdskel/twoBends.usda", (1.0, 12.0, 24.0)),
+                 ("usd-wg/SoC-ElephantWithMonochord.usdc", (1.0, 30.0, 90.0)),
+                 ("openusd-usdskel/arm.usda", (1.0, 5.0, 10.0))]
+
+
+@pytest.mark.parametrize("name,frames", USDSKEL_CASES, ids=[c[0] for c in USDSKEL_CASES])
+def test_skin_matches_usdskel(gl_context, corpus, name, frames):
+    """Real assets (joint mappers, subsets of joints, 4 influences): GPU skin equals
+    UsdSkel's own ComputeSkinnedPoints, taken to prim space."""
+    engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context,
+                           warn=lambda m: None)
     stage = engine.scene.stage
-    mesh_path = next(iter(engine.scene.meshes))
-    skel_query, skinning_query = engine.scene.skel.get(mesh_path)
+    skinned = [p for p, r in engine.scene.meshes.items() if r.skin is not None]
+    assert skinned
+    mapped = 0
     try:
-        for frame in (1.0, 17.0, 40.0):
+        for frame in frames:
             engine.compute_frame(frame)
-            ours = engine.read_fields(mesh_path)["points"]
             t = Usd.TimeCode(frame)
-            points = UsdGeom.Mesh(stage.GetPrimAtPath(mesh_path)).GetPointsAttr().Get(t)
-            xforms = skel_query.ComputeSkinningTransforms(t)
-            assert skinning_query.ComputeSkinnedPoints(xforms, points, t)
             cache = UsdGeom.XformCache(t)
-            skel_to_local = (cache.GetLocalToWorldTransform(skel_query.GetSkeleton().GetPrim())
-                             * cache.GetLocalToWorldTransform(stage.GetPrimAtPath(mesh_path))
-                             .GetInverse())
-            theirs = np.array([skel_to_local.Transform(p) for p in points])
-            extent = float(np.max(theirs.max(0) - theirs.min(0)))
-            assert np.max(np.abs(ours - theirs)) / extent <= 1e-5
+            for mesh_path in skinned:
+                skel_query, skinning_query = engine.scene.skel.get(mesh_path)
+                mapper = skinning_query.GetJointMapper()
+                mapped += int(mapper is not None and not mapper.IsIdentity())
+                ours = engine.read_fields(mesh_path)["points"]
+                prim = stage.GetPrimAtPath(mesh_path)
+                points = UsdGeom.Mesh(prim).GetPointsAttr().Get(t)
+                xforms = skel_query.ComputeSkinningTransforms(t)
+                assert skinning_query.ComputeSkinnedPoints(xforms, points, t)
+                skel_to_local = (cache.GetLocalToWorldTransform(
+                    skel_query.GetSkeleton().GetPrim())
+                    * cache.GetLocalToWorldTransform(prim).GetInverse())
+                theirs = np.array([skel_to_local.Transform(p) for p in points])
+                extent = float(np.max(theirs.max(0) - theirs.min(0)))
+                error = np.max(np.abs(ours - theirs)) / extent
+                assert error <= 1e-5, f"{mesh_path} frame {frame}: {error:.2e}"
     finally:
         engine.release()
-    assert UsdSkel  # the oracle module
+    if "twoBends" in name:
+        assert mapped > 0  # the joint-mapper path was exercised
+    assert UsdSkel

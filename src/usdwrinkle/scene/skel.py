@@ -7,7 +7,7 @@ transforms (skeleton space) -> skeleton space to prim (local) space.
 from __future__ import annotations
 
 import numpy as np
-from pxr import Gf, Usd, UsdGeom, UsdSkel
+from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
 from ..errors import UsdWrinkleError
 from .records import SkinData
@@ -97,7 +97,9 @@ def sample_skin(path: str, skel_query, skinning_query, blend_query, time: Usd.Ti
     mapper = skinning_query.GetJointMapper()
     if xforms is not None and mapper is not None and not mapper.IsNull() \
             and not mapper.IsIdentity():
-        xforms = mapper.RemapTransforms(xforms)
+        # joints the mesh names but the skeleton lacks keep the identity
+        order = skinning_query.GetJointOrder()
+        xforms = mapper.RemapTransforms(xforms, Vt.Matrix4dArray(len(order), Gf.Matrix4d(1)))
     joint_transforms = gf_matrices(xforms) if xforms is not None else np.zeros((0, 4, 4))
     skel_prim = skel_query.GetSkeleton().GetPrim()
     skel_to_world = xform_cache.GetLocalToWorldTransform(skel_prim)
