@@ -49,11 +49,11 @@ def add_camera(stage, eye, target, focal=35.0):
 
 def add_lights(stage, direction_euler=(-40.0, 30.0, 0.0)):
     key = UsdLux.DistantLight.Define(stage, "/World/Lights/key")
-    key.CreateIntensityAttr(1.6)
+    key.CreateIntensityAttr(1.15)
     key.CreateColorAttr(Gf.Vec3f(1.0, 0.97, 0.92))
     key.AddRotateXYZOp().Set(Gf.Vec3f(*direction_euler))
     dome = UsdLux.DomeLight.Define(stage, "/World/Lights/fill")
-    dome.CreateIntensityAttr(0.25)
+    dome.CreateIntensityAttr(0.22)
     dome.CreateColorAttr(Gf.Vec3f(0.8, 0.85, 1.0))
 
 

@@ -7,6 +7,7 @@ dirty_bits) -> remaining bits``, ``RenderPass.execute(state)``, ``RenderBuffer``
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 from .buffers import Framebuffer, RenderBuffer
@@ -75,7 +76,12 @@ class Mesh:
 
 
 class _timed:
-    """GL timer query around a pass when profiling (elapsed GPU time in ms)."""
+    """Time a pass when profiling: a GL timer query, or the wall clock around glFinish.
+
+    Mesa's llvmpipe answers GL_TIME_ELAPSED with 1 ns for work it runs on the CPU,
+    so an implausible query result falls back to the finish-bracketed wall clock
+    (recorded under "<pass>.source").
+    """
 
     def __init__(self, ctx, name, sink):
         self.ctx, self.name, self.sink = ctx, name, sink
@@ -83,13 +89,20 @@ class _timed:
 
     def __enter__(self):
         if self.query is not None:
+            self.ctx.finish()
+            self.started = time.perf_counter()
             self.query.__enter__()
 
     def __exit__(self, *exc):
-        if self.query is not None:
-            self.query.__exit__(*exc)
-            self.sink[self.name] = self.sink.get(self.name, 0.0) + self.query.elapsed / 1e6
-            self.query.release() if hasattr(self.query, "release") else None
+        if self.query is None:
+            return
+        self.query.__exit__(*exc)
+        self.ctx.finish()
+        wall_ms = (time.perf_counter() - self.started) * 1e3
+        gpu_ms = self.query.elapsed / 1e6
+        plausible = gpu_ms > 0.01 * wall_ms and gpu_ms <= wall_ms * 1.5 + 0.05
+        self.sink[self.name] = self.sink.get(self.name, 0.0) + (gpu_ms if plausible else wall_ms)
+        self.sink[self.name + ".source"] = "gl-timer-query" if plausible else "wall-clock"
 
 
 @dataclass
@@ -156,7 +169,8 @@ class RenderPass:
             mesh.compute(wrinkles, timer)
             if timings is not None:
                 for key, value in mesh.timings.items():
-                    timings[key] = timings.get(key, 0.0) + value
+                    timings[key] = value if isinstance(value, str) else \
+                        timings.get(key, 0.0) + value
 
     def execute(self, state: RenderPassState) -> dict[str, RenderBuffer]:
         d = self.delegate

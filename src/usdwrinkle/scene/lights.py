@@ -44,5 +44,5 @@ def default_lights(view: np.ndarray) -> list[LightRecord]:
     eye_to_world = np.linalg.inv(view)
     direction = np.array([0.45, -0.6, -0.65]) @ eye_to_world[:3, :3]
     direction /= np.linalg.norm(direction)
-    return [LightRecord("distant", np.array([2.6, 2.5, 2.4]), direction=direction),
-            LightRecord("dome", np.array([0.25, 0.27, 0.3]))]
+    return [LightRecord("distant", np.array([1.25, 1.22, 1.18]), direction=direction),
+            LightRecord("dome", np.array([0.18, 0.19, 0.21]))]

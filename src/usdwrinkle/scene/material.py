@@ -110,13 +110,10 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
             elif source is not None:
                 tex = UsdShade.Shader(source.source.GetPrim())
                 file_value, _ = _input_value(tex, "file", time)
-                fallback, _ = _input_value(tex, "fallback", time)
                 sc, _ = _input_value(tex, "scale", time)
                 bi, _ = _input_value(tex, "bias", time)
                 scale = np.asarray(sc, np.float32) if sc is not None else scale
                 bias = np.asarray(bi, np.float32) if bi is not None else bias
-                if fallback is not None:
-                    color = np.asarray(fallback, np.float32)[:3]
                 varname = "st"
                 _, st_source = _input_value(tex, "st", time)
                 if st_source is not None:
@@ -132,6 +129,9 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
                         texture = load_texture(resolved)
                     except OSError as exc:
                         warn(f"{exc}; rendering untextured ({prim.GetPath()})")
+                if texture is None:
+                    # Untextured means a neutral clay, not the (often black) texture fallback.
+                    color = DEFAULT_COLOR
                 if texture is not None:
                     primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
                     st = corner_values(primvar, topology, time) if primvar else None
