@@ -56,6 +56,10 @@ def test_png_is_8bit_srgb(gl_context, tmp_path):
                  "--frames", "12", "--width", "96", "--quiet"]) == 0
     spec = oiio.ImageInput.open(str(tmp_path / "z.0012.png")).spec()
     assert spec.format == oiio.UINT8 and spec.nchannels == 4
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "z.0012.png").stat().st_mode & 0o777 == 0o666 & ~umask
+    assert not list(tmp_path.glob(".*"))  # no temporary files left behind
 
 
 def test_frame_independence(gl_context, tmp_path):
