@@ -1,0 +1,178 @@
+"""Scene delegate: topology, cameras, lights, materials, visibility, purpose, transforms."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
+
+from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.scene.camera import find_camera
+from usdwrinkle.scene.stage import StageSceneDelegate
+from usdwrinkle.scene.topology import build_topology, ear_clip
+
+from conftest import grid_sheet
+from helpers import point_cache_stage
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+
+
+def polygon_area(points, triangles):
+    a, b, c = points[triangles[:, 0]], points[triangles[:, 1]], points[triangles[:, 2]]
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def test_concave_ngon_is_ear_clipped():
+    # an L-shaped hexagon (concave at vertex 3), area 3
+    points = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]],
+                      np.float32)
+    topo = build_topology([6], [0, 1, 2, 3, 4, 5], points)
+    assert len(topo.triangles) == 4
+    assert polygon_area(points, topo.triangles).sum() == pytest.approx(3.0)
+    normals = np.cross(points[topo.triangles[:, 1]] - points[topo.triangles[:, 0]],
+                       points[topo.triangles[:, 2]] - points[topo.triangles[:, 0]])
+    assert np.all(normals[:, 2] > 0)  # every triangle keeps the face's winding
+    # the fan from vertex 0 would have covered area outside the L; ear clipping does not
+    assert sorted(map(tuple, np.sort(ear_clip(points), axis=1))) != [(0, 1, 2), (0, 2, 3),
+                                                                       (0, 3, 4), (0, 4, 5)]
+
+
+def test_quads_holes_and_face_varying_corners():
+    points, counts, indices = grid_sheet(4, 4, 3.0)  # 9 quads
+    topo = build_topology(counts, indices, points, hole_indices=[4])
+    assert len(topo.triangles) == 16
+    assert 4 not in set(topo.triangle_face.tolist())
+    # corner_face_vertex indexes faceVertexIndices: it maps back to the same points
+    np.testing.assert_array_equal(np.asarray(indices)[topo.corner_face_vertex], topo.triangles)
+    # the middle vertex ring: vertex 5 has neighbours from the 1-ring of kept faces only
+    ring = topo.neighbor_indices[topo.neighbor_offsets[5]:topo.neighbor_offsets[6]]
+    assert set(ring.tolist()) >= {1, 4}
+
+
+def test_bad_topology_is_refused():
+    points = np.zeros((4, 3), np.float32)
+    with pytest.raises(UsdWrinkleError, match="sum to"):
+        build_topology([4, 3], [0, 1, 2, 3], points, prim_path="/M")
+    with pytest.raises(UsdWrinkleError, match="out of range"):
+        build_topology([3], [0, 1, 9], points, prim_path="/M")
+
+
+def test_camera_selection():
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.Camera.Define(stage, "/A/first")
+    UsdGeom.Camera.Define(stage, "/B/main_cam")
+    assert str(find_camera(stage, None).GetPath()) == "/B/main_cam"  # primary camera
+    assert str(find_camera(stage, "first").GetPath()) == "/A/first"  # by name
+    assert str(find_camera(stage, "/A/first").GetPath()) == "/A/first"  # by path
+    with pytest.raises(UsdWrinkleError, match="not found"):
+        find_camera(stage, "/nope")
+    stage.RemovePrim("/B")
+    assert str(find_camera(stage, None).GetPath()) == "/A/first"  # first camera
+    stage.RemovePrim("/A")
+    assert find_camera(stage, None) is None  # framing
+
+
+def test_lights_are_read():
+    stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    UsdLux.SphereLight.Define(stage, "/World/Lights/bulb").CreateIntensityAttr(3.0)
+    scene = StageSceneDelegate(stage)
+    frame = scene.sample(1.0, 1.5)
+    kinds = sorted(light.kind for light in frame.lights)
+    assert kinds == ["distant", "dome", "sphere"]
+    distant = next(light for light in frame.lights if light.kind == "distant")
+    assert np.linalg.norm(distant.direction) == pytest.approx(1.0)
+    assert distant.radiance[0] == pytest.approx(1.15)
+
+
+def test_texture_inside_usdz_is_read_through_ar(corpus):
+    scene = StageSceneDelegate(str(corpus / "usd-wg" / "CesiumMan.usdz"), all_meshes=True,
+                               warn=lambda m: None)
+    record = next(iter(scene.meshes.values()))
+    texture = record.material.texture
+    assert texture is not None and texture.shape == (1024, 1024, 4)
+    assert 0.05 < texture[..., :3].mean() < 0.95  # decoded, not black or white
+    st = record.material.corner_st
+    assert st.shape == (len(record.topology.triangles), 3, 2)
+
+
+def test_missing_texture_warns_and_renders_untextured(tmp_path):
+    stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Plaid/diffuse_texture"))
+    tex.GetInput("file").Set(Sdf.AssetPath("./textures/missing.png"))
+    warnings = []
+    scene = StageSceneDelegate(stage, warn=warnings.append)
+    record = scene.meshes["/World/Arm/Sleeve"]
+    assert record.material.texture is None
+    assert any("missing.png" in w and "untextured" in w for w in warnings)
+
+
+def test_visibility_purpose_and_animated_transforms(gl_context):
+    rest, counts, indices = grid_sheet(5, 5, 1.0)
+    stage = point_cache_stage(rest, {1: rest, 2: rest}, counts, indices, width=0.2)
+    xform = UsdGeom.Xformable(stage.GetPrimAtPath("/Sheet"))
+    op = xform.AddTranslateOp()
+    op.Set(Gf.Vec3d(0, 0, 0), 1)
+    op.Set(Gf.Vec3d(0.4, 0, 0), 2)
+    guide = UsdGeom.Mesh.Define(stage, "/Guide")
+    guide.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(rest))
+    guide.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts))
+    guide.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
+    guide.CreatePurposeAttr(UsdGeom.Tokens.guide)
+    cam = UsdGeom.Camera.Define(stage, "/cam")
+    cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
+    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    try:
+        assert list(engine.scene.meshes) == ["/Sheet"]  # guide purpose is not rendered
+        centers = []
+        for frame in (1.0, 2.0):
+            alpha = engine.render_frame(frame, 120, 80)["color"].pixels[..., 3]
+            ys, xs = np.nonzero(alpha > 0)
+            centers.append(xs.mean())
+        assert centers[1] - centers[0] > 5  # the translate moved the sheet right
+        UsdGeom.Imageable(stage.GetPrimAtPath("/Sheet")).GetVisibilityAttr().Set(
+            UsdGeom.Tokens.invisible, 2)
+        assert engine.render_frame(2.0, 120, 80)["color"].pixels[..., 3].max() == 0
+    finally:
+        engine.release()
+
+
+def test_point_cache_rest_falls_back_to_default_points():
+    rest, counts, indices = grid_sheet(4, 4, 1.0)
+    stage = Usd.Stage.CreateInMemory()
+    mesh = UsdGeom.Mesh.Define(stage, "/M")
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
+    mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(rest))
+    mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(rest * 0.5), 1)
+    scene = StageSceneDelegate(stage)
+    record = scene.meshes["/M"]
+    assert record.point_cached
+    np.testing.assert_allclose(record.rest_points, rest)
+    frame = scene.sample_mesh("/M", Usd.TimeCode(1), UsdGeom.XformCache(Usd.TimeCode(1)))
+    np.testing.assert_allclose(frame.points, rest * 0.5)
+
+
+def test_late_schema_registration_says_how_to_fix():
+    code = (
+        "import os; os.environ.pop('PXR_PLUGINPATH_NAME', None)\n"
+        "from pxr import Usd; Usd.SchemaRegistry()\n"
+        "import warnings\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    warnings.simplefilter('always')\n"
+        "    import usdwrinkle\n"
+        "print('WARN', w[0].message if w else '')\n"
+        "from usdwrinkle import schema\n"
+        "try:\n"
+        "    schema.require_schema()\n"
+        "except Exception as exc:\n"
+        "    print('ERROR', exc)\n")
+    env = {k: v for k, v in __import__("os").environ.items() if k != "PXR_PLUGINPATH_NAME"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, timeout=120).stdout
+    assert "WARN usdwrinkle was imported after USD built its schema registry" in out
+    assert "ERROR the WrinkleAPI schema is not known to USD" in out
+    assert "PXR_PLUGINPATH_NAME=" in out
