@@ -8,15 +8,13 @@ animation (frames 1-24), WrinkleAPI on the cloth and a painted-q region. The
 """
 from __future__ import annotations
 
-import math
 import os
 import sys
 
 import numpy as np
-
-import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 
+import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from usdwrinkle import schema
 
 FRAMES = (1, 24)

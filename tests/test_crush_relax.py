@@ -7,7 +7,8 @@ import trimesh
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.reference.crush import crush as crush_reference
-from usdwrinkle.reference.relax import phase_misfit, relax as relax_reference, wrap
+from usdwrinkle.reference.relax import phase_misfit, wrap
+from usdwrinkle.reference.relax import relax as relax_reference
 
 from conftest import grid_sheet
 from helpers import point_cache_stage, rotation_matrix

@@ -8,7 +8,7 @@ import warnings
 
 __version__ = "0.1.0"
 
-from . import schema as _schema  # noqa: E402
+from . import schema as _schema
 
 if not _schema.register():
     warnings.warn(

@@ -36,8 +36,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from ..engine import WrinkleEngine, format_frame
-    from ..outputs.images import check_format, write_image
     from ..errors import UsdWrinkleError
+    from ..outputs.images import check_format, write_image
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_format(args.output)
@@ -61,7 +61,7 @@ def run(args) -> int:
                                           frames[0] if not math.isnan(frames[0]) else math.nan)
         started = time.perf_counter()
         written = 0
-        for frame, path in reporter.progress(list(zip(frames, outputs)), "render"):
+        for frame, path in reporter.progress(list(zip(frames, outputs, strict=True)), "render"):
             if args.skip_existing and os.path.exists(path):
                 continue
             try:

@@ -56,5 +56,6 @@ def release_context() -> None:
 
 def renderer_info() -> dict:
     ctx = create_context()
-    return {"renderer": ctx.info.get("GL_RENDERER", "?"), "version": ctx.info.get("GL_VERSION", "?"),
+    return {"renderer": ctx.info.get("GL_RENDERER", "?"),
+            "version": ctx.info.get("GL_VERSION", "?"),
             "vendor": ctx.info.get("GL_VENDOR", "?")}

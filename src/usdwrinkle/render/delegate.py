@@ -34,7 +34,7 @@ class DirtyBits:
 class Mesh:
     """One wrinkled (or plainly drawn) mesh: its GPU resources and current frame."""
 
-    def __init__(self, delegate: "RenderDelegate", path: str):
+    def __init__(self, delegate: RenderDelegate, path: str):
         self.delegate = delegate
         self.path = path
         self.resources: MeshResources | None = None

@@ -39,8 +39,10 @@ def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:
     parts = [topo.neighbor_offsets, topo.neighbor_indices, topo.triangle_offsets,
              topo.triangle_indices, topo.triangles.reshape(-1)]
     starts = np.concatenate([[0], np.cumsum([len(p) for p in parts])])
-    uniforms = {"u_neighbor_indices_base": int(starts[1]), "u_triangle_offsets_base": int(starts[2]),
-                "u_triangle_indices_base": int(starts[3]), "u_triangles_base": int(starts[4])}
+    uniforms = {"u_neighbor_indices_base": int(starts[1]),
+                "u_triangle_offsets_base": int(starts[2]),
+                "u_triangle_indices_base": int(starts[3]),
+                "u_triangles_base": int(starts[4])}
     return np.concatenate(parts).astype(np.int32), uniforms
 
 
@@ -83,7 +85,8 @@ class MeshResources:
             self.influences = skin.joint_indices.shape[1]
             self.joint_indices = self._buffer(skin.joint_indices.astype(np.int32))
             self.joint_weights = self._buffer(skin.joint_weights.astype(np.float32))
-            self.joints = self._buffer(np.zeros((max(skin.num_joints, 1), JOINT_FLOATS), np.float32))
+            self.joints = self._buffer(
+                np.zeros((max(skin.num_joints, 1), JOINT_FLOATS), np.float32))
             subshapes = max(skin.num_subshapes, 1)
             self.subshape_offsets = self._buffer(np.zeros((subshapes * n, 4), np.float32))
             self.subshape_weights = self._buffer(np.zeros(subshapes, np.float32))

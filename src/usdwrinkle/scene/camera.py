@@ -17,7 +17,8 @@ from .records import CameraRecord
 
 def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
     """Resolve ``--camera``: a prim path, or a camera name; else primary, else first."""
-    cameras = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Camera)]
+    cameras = [p for p in stage.Traverse(Usd.TraverseInstanceProxies())
+               if p.IsA(UsdGeom.Camera)]
     if spec:
         if spec.startswith("/"):
             prim = stage.GetPrimAtPath(spec)
@@ -27,8 +28,8 @@ def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
         for prim in cameras:
             if prim.GetName() == spec:
                 return prim
-        raise UsdWrinkleError(f"camera '{spec}' not found on the stage "
-                              f"(cameras: {', '.join(str(c.GetPath()) for c in cameras) or 'none'})")
+        names = ", ".join(str(c.GetPath()) for c in cameras) or "none"
+        raise UsdWrinkleError(f"camera '{spec}' not found on the stage (cameras: {names})")
     primary = UsdUtils.GetPrimaryCameraName()
     for prim in cameras:
         if prim.GetName() == primary:

@@ -40,8 +40,10 @@ def _profile(prim, name, time, path):
 
 
 def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
-                time=Usd.TimeCode.Default(), relax_override: int | None = None) -> WrinkleParams:
+                time: Usd.TimeCode | None = None,
+                relax_override: int | None = None) -> WrinkleParams:
     """Resolve WrinkleAPI values for one mesh (also for --all-meshes, with fallbacks)."""
+    time = Usd.TimeCode.Default() if time is None else time
     path = str(prim.GetPath())
     n = len(rest_points)
     primvars = UsdGeom.PrimvarsAPI(prim)

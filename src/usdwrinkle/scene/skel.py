@@ -115,9 +115,10 @@ def sample_skin(path: str, skel_query, skinning_query, blend_query, time: Usd.Ti
             if bmapper is not None and not bmapper.IsNull():
                 shape_weights = bmapper.Remap(shape_weights)
             sub_w, blend_ids, sub_ids = blend_query.ComputeSubShapeWeights(shape_weights)
-            for w, b, s in zip(sub_w, blend_ids, sub_ids):
+            for w, s in zip(sub_w, sub_ids, strict=True):
                 weights[int(s)] += float(w)
-            active = tuple(sorted({(int(b), int(s)) for b, s in zip(blend_ids, sub_ids)}))
+            active = tuple(sorted({(int(b), int(s))
+                                   for b, s in zip(blend_ids, sub_ids, strict=True)}))
     return joint_transforms, skel_to_local, weights, active
 
 

@@ -206,7 +206,7 @@ def build_topology(counts, indices, points, hole_indices=None,
     """Validate, triangulate and build the adjacency of a mesh."""
     counts = np.asarray(counts, dtype=np.int32)
     indices = np.asarray(indices, dtype=np.int32)
-    n = int(len(points))
+    n = len(points)
     validate_faces(counts, indices, n, prim_path)
     triangles, tri_face, corner = triangulate(counts, indices, points, hole_indices)
     m = len(triangles)

@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 
 from ...scene.records import MeshFrame
+from ...scene.skel import dual_quaternions
 from .. import bindings
 from ..resources import JOINT_FLOATS, MeshResources, vec4
 from ..shaders import compute_shader
-from ...scene.skel import dual_quaternions
 from . import gl_matrix, groups, set_uniforms
 
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
