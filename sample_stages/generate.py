@@ -95,7 +95,7 @@ def define_mesh(stage, path, points, counts, indices, st=None):
     return mesh
 
 
-def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0, relax_iterations=32):
+def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0):
     prim = mesh.GetPrim()
     prim.ApplyAPI(schema.API_NAME)
     primvars = UsdGeom.PrimvarsAPI(mesh)
@@ -106,7 +106,6 @@ def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0, relax_iterations=32
                                UsdGeom.Tokens.vertex).Set(
             Vt.Vec3fArray.FromNumpy(np.asarray(q, np.float32)))
     prim.CreateAttribute(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(amplitude_scale)
-    prim.CreateAttribute(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int).Set(relax_iterations)
 
 
 def rig(stage, root_path, mesh, joints, bind_xforms, joint_indices, joint_weights,

@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
+from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate, _warn_stderr
 
 
@@ -25,10 +28,14 @@ class WrinkleEngine:
         ``--camera``: prim path or name.
     profile : bool
         Time every pass with GL timer queries (``last_timings``).
+    history_start : float or None
+        First frame of the shot's phase history (default: the stage's start time code).
+        Every chunk of a shot must use the same value.
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 camera: str | None = None, warn=_warn_stderr, ctx=None, profile: bool = False):
+                 camera: str | None = None, warn=_warn_stderr, ctx=None, profile: bool = False,
+                 history_start: float | None = None):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, warn=warn)
         self.camera = camera
@@ -39,6 +46,10 @@ class WrinkleEngine:
             self.render_delegate.create_rprim(path)
             self._dirty[path] = DirtyBits.ALL
         self.last_timings: dict[str, float] = {}
+        self._history_start = history_start
+        self._history_frame: float | None = None
+        #: wraps the list of preroll frames (the CLI shows a progress bar)
+        self.preroll_progress = lambda frames: frames
         # fail early on a camera that does not exist
         from .scene.camera import find_camera
         find_camera(self.scene.stage, camera)
@@ -54,16 +65,74 @@ class WrinkleEngine:
         aspect = self.scene.camera_aspect(self.camera, frame) or 16.0 / 9.0
         return width, max(1, int(round(width / aspect)))
 
-    def compute_frame(self, frame: float, aspect: float = 16.0 / 9.0, wrinkles: bool = True):
-        """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord."""
-        record = self.scene.sample(frame, aspect, self.camera)
-        self.scene.current_frame = record
+    # -- phase history --------------------------------------------------------------
+    def history_start(self) -> float | None:
+        """The frame where the shot's phase history starts (None: every frame cold)."""
+        if self._history_start is not None:
+            return self._history_start
+        frames = self.scene.frame_range()
+        return None if math.isnan(frames[0]) else frames[0]
+
+    def _history_plan(self, frame: float) -> tuple[list[float], bool]:
+        """Frames to compute before ``frame`` and whether ``frame`` then has history.
+
+        The history runs on the integer grid start, start+1, ... A frame's phases are
+        therefore a deterministic function of the shot, whichever frames a run renders:
+        a farm chunk that starts at frame f replays start..f-1 (compute only, no draw).
+        """
+        start = self.history_start()
+        if start is None or math.isnan(frame) or frame < start:
+            return [], False
+        last = self._history_frame
+        # continue the chain from the last grid frame, or replay it from the start
+        if last is None or last > frame or (last - start) != int(last - start):
+            last = self._history_frame = None
+        first = start if last is None else last + 1
+        if frame == first and last is None:
+            return [], False  # the shot's first frame: a cold start
+        # grid frames before ``frame``; a subframe is one step from its grid frame
+        steps = np.arange(first, frame, 1.0) if frame > first else []
+        return [float(f) for f in steps], True
+
+    def _compute_only(self, frame: float, history: bool, wrinkles: bool) -> None:
+        meshes = self.scene.sample_meshes(frame)
+        self.scene.current_frame = FrameRecord(frame, None, (), meshes)
+        self._sync()
+        self.render_pass.compute(wrinkles, None, history)
+
+    def _sync(self) -> None:
         for path, mesh in self.render_delegate.rprims.items():
             bits = self._dirty[path] | DirtyBits.DIRTY_POINTS | DirtyBits.DIRTY_TRANSFORM \
                 | DirtyBits.DIRTY_VISIBILITY
+            if bits & DirtyBits.DIRTY_TOPOLOGY:
+                self._history_frame = None  # new GPU resources hold no phases
             self._dirty[path] = mesh.sync(self.scene, bits)
+
+    def compute_frame(self, frame: float, aspect: float = 16.0 / 9.0, wrinkles: bool = True):
+        """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
+
+        With wrinkles, earlier frames of the shot that this engine has not computed yet
+        are computed first (see :meth:`_history_plan`), so that the result does not
+        depend on which frames were rendered before.
+        """
+        history = False
+        if wrinkles:
+            if any(self._dirty.values()):
+                self._history_frame = None
+            steps, history = self._history_plan(frame)
+            for index, step in enumerate(self.preroll_progress(steps)):
+                step_history = index > 0 or self._history_frame is not None
+                self._compute_only(step, step_history, wrinkles)
+                self._history_frame = step
+        record = self.scene.sample(frame, aspect, self.camera)
+        self.scene.current_frame = record
+        self._sync()
         self.last_timings = {}
-        self.render_pass.compute(wrinkles, self.last_timings)
+        self.render_pass.compute(wrinkles, self.last_timings, history)
+        start = self.history_start()
+        on_grid = start is not None and not math.isnan(frame) and frame >= start \
+            and float(frame - start).is_integer()
+        self._history_frame = frame if (wrinkles and on_grid) else None
         return record
 
     def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True):

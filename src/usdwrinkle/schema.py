@@ -26,7 +26,7 @@ RELAX_ITERATIONS = "wrinkle:relaxIterations"
 WIDTH_EDGE_MULTIPLE = 4.0
 #: Samples of the default (cosine) profile.
 PROFILE_SAMPLES = 256
-DEFAULT_RELAX_ITERATIONS = 24
+DEFAULT_RELAX_ITERATIONS = 8
 
 _state = {"registered": False, "usable": False}
 

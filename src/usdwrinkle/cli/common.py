@@ -13,6 +13,11 @@ def add_stage_args(parser) -> None:
     parser.add_argument("--relax-iterations", type=int, metavar="N",
                         help="phase relaxation iterations per frame (overrides "
                              "wrinkle:relaxIterations)")
+    parser.add_argument("--history-start", type=float, metavar="FRAME",
+                        help="first frame of the shot's phase history (default: the stage's "
+                             "start time code). Each frame starts from the previous frame's "
+                             "phases, so a run that starts later first computes the frames "
+                             "from here on; every chunk of a shot must use the same value")
 
 
 def stage_layer_paths(stage) -> set[str]:

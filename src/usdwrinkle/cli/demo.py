@@ -22,7 +22,8 @@ def run(args) -> int:
     os.makedirs(args.outdir, exist_ok=True)
     ns = SimpleNamespace(stage=stage, output=os.path.join(args.outdir, "shirt.####.png"),
                          frames=None, camera=None, width=args.width, height=None,
-                         all_meshes=False, relax_iterations=None, no_wrinkles=False,
+                         all_meshes=False, relax_iterations=None, history_start=None,
+                         no_wrinkles=False,
                          skip_existing=False, quiet=args.quiet)
     code = render.run(ns)
     if code == 0 and not args.quiet:

@@ -48,7 +48,8 @@ def run(args) -> int:
     reporter = Reporter(args.quiet)
     engine = WrinkleEngine(args.stage, all_meshes=args.all_meshes,
                            relax_iterations=args.relax_iterations, camera=args.camera,
-                           warn=reporter.warn)
+                           warn=reporter.warn, history_start=args.history_start)
+    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
     try:
         frames = parse_frame_spec(args.frames) if args.frames else engine.scene.frame_range()
         check_output_pattern(args.output, frames)

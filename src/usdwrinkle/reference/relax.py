@@ -54,3 +54,46 @@ def phase_misfit(points, wave_vector, phase, topology: Topology, mask=None) -> f
     k_bar = 0.5 * (k[i] + sign[:, None] * k[j])
     residual = wrap(sign * phi[j] - phi[i] - np.sum(k_bar * (points[j] - points[i]), 1))
     return float(np.sqrt(np.mean(residual ** 2)))
+
+
+def seed(wave_vector, previous_wave_vector, previous_phase):
+    """The warm start of a frame: previous phases, flipped where k flipped."""
+    flip = np.sum(np.asarray(wave_vector, np.float64)
+                  * np.asarray(previous_wave_vector, np.float64), 1) < 0
+    return np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
+
+
+def relax_shot(frames: list, topology: Topology, iterations: int, cold_start_factor: int = 4):
+    """Phase history over a shot, as the engine computes it.
+
+    ``frames``: per frame, a dict with points, wave_vector, amplitude and phase (the
+    anchored phase from crush). Returns the relaxed phases of every frame.
+    """
+    out = []
+    for index, fields in enumerate(frames):
+        if index == 0:
+            start, count = fields["phase"], iterations * cold_start_factor
+        else:
+            start = seed(fields["wave_vector"], frames[index - 1]["wave_vector"], out[-1])
+            count = iterations
+        out.append(relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
+                         topology, count))
+    return out
+
+
+def phase_swim(previous: dict, current: dict) -> float:
+    """How far crests slide over the cloth between two frames, radians (RMS).
+
+    At a vertex, the crest position relative to the material is its phase, so a crest
+    that rides with the cloth keeps it. The RMS change of the phase (sign-aligned
+    where k flipped) is weighted by amplitude, since a faint wrinkle that moves is not
+    seen. 2 pi is one wavelength.
+    """
+    amp = np.minimum(previous["amplitude"], current["amplitude"])
+    keep = amp > 1e-3 * max(float(amp.max(initial=0.0)), 1e-30)
+    if not keep.any():
+        return 0.0
+    start = seed(current["wave_vector"], previous["wave_vector"], previous["phase"])
+    change = wrap(np.asarray(current["phase"], np.float64) - start)[keep]
+    weight = amp[keep] ** 2
+    return float(np.sqrt(np.sum(weight * change ** 2) / np.sum(weight)))

@@ -18,6 +18,9 @@ from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
 from .resources import MeshResources
 
+#: Relaxation from the anchored start (a shot's first frame) runs this many times longer.
+COLD_START_FACTOR = 4
+
 
 class DirtyBits:
     """As in pxr/imaging/hd/changeTracker.h."""
@@ -57,8 +60,13 @@ class Mesh:
             self.frame = scene_delegate.current_frame.meshes[self.path]
         return DirtyBits.CLEAN
 
-    def compute(self, wrinkles: bool, timer=None) -> None:
-        """Run skin, crush and relax for the synced frame."""
+    def compute(self, wrinkles: bool, timer=None, history: bool = False) -> None:
+        """Run skin, crush and relax for the synced frame.
+
+        ``history``: the resources hold the relaxed phases of the shot's previous frame;
+        relaxation then starts from them (``relaxIterations`` steps). Without history it
+        starts from the material-anchored phase and runs COLD_START_FACTOR times longer.
+        """
         d = self.delegate
         res = self.resources
         with _timed(timer, "skin", self.timings):
@@ -66,8 +74,10 @@ class Mesh:
         with _timed(timer, "crush", self.timings):
             d.crush.run(res, wrinkles)
         iterations = res.record.params.relax_iterations if wrinkles else 0
+        if not history:
+            iterations *= COLD_START_FACTOR
         with _timed(timer, "relax", self.timings):
-            d.relax.run(res, iterations)
+            d.relax.run(res, iterations, with_history=history and wrinkles)
 
     def release(self) -> None:
         if self.resources is not None:
@@ -162,11 +172,12 @@ class RenderPass:
     def __init__(self, delegate: RenderDelegate):
         self.delegate = delegate
 
-    def compute(self, wrinkles: bool, timings: dict | None = None) -> None:
+    def compute(self, wrinkles: bool, timings: dict | None = None,
+                history: bool = False) -> None:
         timer = self.delegate.ctx if self.delegate.profile else None
         for mesh in self.delegate.rprims.values():
             mesh.timings = {}
-            mesh.compute(wrinkles, timer)
+            mesh.compute(wrinkles, timer, history)
             if timings is not None:
                 for key, value in mesh.timings.items():
                     timings[key] = value if isinstance(value, str) else \

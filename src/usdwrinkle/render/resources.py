@@ -72,9 +72,16 @@ class MeshResources:
         frame[:, 1, 3] = 0.0
         self.rest_frame = self._buffer(frame)
         self.q_width = self._buffer(vec4(record.params.q, record.params.width))
-        self.fields = self._buffer(np.zeros((n, FIELD_FLOATS), np.float32))
+        # Two field buffers alternate: crush writes this frame's, the seed step reads the
+        # previous frame's wave vectors to carry its phases over (phase history).
+        self.field_buffers = [self._buffer(np.zeros((n, FIELD_FLOATS), np.float32))
+                              for _ in range(2)]
+        self.current_fields = 0
+        self.anchor_phase = self._buffer(np.zeros(n, np.float32))
         self.phase = [self._buffer(np.zeros(n, np.float32)), self._buffer(np.zeros(n, np.float32))]
         self.current_phase = 0
+        #: the frame whose relaxed phases ``phase_buffer()`` holds, or None
+        self.history_frame: float | None = None
         st = record.material.corner_st
         corner = np.zeros((self.num_triangles * 3, 4), np.float32)
         if st is not None:
@@ -130,6 +137,14 @@ class MeshResources:
     def phase_buffer(self):
         return self.phase[self.current_phase]
 
+    @property
+    def fields(self):
+        return self.field_buffers[self.current_fields]
+
+    @property
+    def previous_fields(self):
+        return self.field_buffers[1 - self.current_fields]
+
     def read_fields(self) -> dict:
         """Read back what the passes computed (the bake's single source of truth)."""
         n = self.num_points
@@ -139,7 +154,8 @@ class MeshResources:
         return {"points": posed[:, :3].copy(), "normals": fields[:, 0:3].copy(),
                 "usable": fields[:, 3] > 0.5, "wave_vector": fields[:, 4:7].copy(),
                 "amplitude": fields[:, 7].copy(), "direction": fields[:, 8:11].copy(),
-                "compression": fields[:, 11].copy(), "phase": phase.copy()}
+                "compression": fields[:, 11].copy(), "phase": phase.copy(),
+                "anchor_phase": np.frombuffer(self.anchor_phase.read(), np.float32)[:n].copy()}
 
     def release(self) -> None:
         for buf in self.buffers:

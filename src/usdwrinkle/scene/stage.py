@@ -231,11 +231,17 @@ class StageSceneDelegate:
         prim = camera_mod.find_camera(self.stage, camera_spec)
         return camera_mod.camera_aspect(prim, self.time_code(frame)) if prim else None
 
+    def sample_meshes(self, frame: float, xform_cache=None) -> dict:
+        """The MeshFrames of every mesh at ``frame`` (no camera or lights)."""
+        time = self.time_code(frame)
+        xform_cache = xform_cache or UsdGeom.XformCache(time)
+        return {path: self.sample_mesh(path, time, xform_cache) for path in self.meshes}
+
     def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
         """Everything time-varying at ``frame`` (NaN: the default time)."""
         time = self.time_code(frame)
         xform_cache = UsdGeom.XformCache(time)
-        meshes = {path: self.sample_mesh(path, time, xform_cache) for path in self.meshes}
+        meshes = self.sample_meshes(frame, xform_cache)
         prim = camera_mod.find_camera(self.stage, camera_spec)
         if prim is not None:
             cam = camera_mod.usd_camera(prim, time, aspect)

@@ -17,6 +17,9 @@ class CrushPass:
                                      {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.CRUSH})
 
     def run(self, res: MeshResources, wrinkles: bool = True) -> None:
+        """Write this frame's fields into the other field buffer (the previous frame's
+        stay readable for the relax pass's seed step) and the anchored phase."""
+        res.current_fields = 1 - res.current_fields
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
@@ -28,7 +31,6 @@ class CrushPass:
         res.rest_frame.bind_to_storage_buffer(b["CRUSH_REST_FRAME"])
         res.q_width.bind_to_storage_buffer(b["CRUSH_Q_WIDTH"])
         res.fields.bind_to_storage_buffer(b["CRUSH_FIELDS"])
-        res.phase[0].bind_to_storage_buffer(b["CRUSH_PHASE"])
-        res.current_phase = 0
+        res.anchor_phase.bind_to_storage_buffer(b["CRUSH_PHASE"])
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

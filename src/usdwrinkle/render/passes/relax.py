@@ -1,4 +1,9 @@
-"""Relax pass: Jacobi phase alignment with sign alignment, ping-pong buffers."""
+"""Relax pass: seed the phases, then Jacobi phase alignment (ping-pong buffers).
+
+Seed: with phase history (the previous frame of the shot was computed), each
+vertex starts from its previous phase, sign-aligned to its new wave vector, so
+crests ride with the cloth; otherwise from crush's material-anchored phase.
+"""
 from __future__ import annotations
 
 from .. import bindings
@@ -10,10 +15,23 @@ from . import groups, set_uniforms
 class RelaxPass:
     def __init__(self, ctx):
         self.ctx = ctx
-        self.shader = compute_shader(ctx, "relax.glsl",
-                                     {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.RELAX})
+        defines = {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.RELAX}
+        self.shader = compute_shader(ctx, "relax.glsl", defines)
+        self.seed_shader = compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1})
 
-    def run(self, res: MeshResources, iterations: int) -> None:
+    def seed(self, res: MeshResources, with_history: bool) -> None:
+        b = bindings.RELAX
+        set_uniforms(self.seed_shader, {"u_num_points": res.num_points,
+                                        "u_has_history": int(with_history)})
+        res.fields.bind_to_storage_buffer(b["RELAX_FIELDS"])
+        res.previous_fields.bind_to_storage_buffer(b["RELAX_PREVIOUS_FIELDS"])
+        res.anchor_phase.bind_to_storage_buffer(b["RELAX_ANCHOR"])
+        res.phase_buffer().bind_to_storage_buffer(b["RELAX_PHASE_OUT"])
+        self.seed_shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
+        self.ctx.memory_barrier()
+
+    def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
+        self.seed(res, with_history)
         if iterations <= 0:
             return
         set_uniforms(self.shader, {"u_num_points": res.num_points, **res.topology_uniforms})
