@@ -213,7 +213,7 @@ def shirt(outdir):
     cuff = np.clip((points[:, 0] - (length - 0.7)) / 0.5, 0, 1)
     q[:, 0] = 0.55 * cuff
     apply_wrinkles(mesh, width=0.28, q=q, amplitude_scale=1.0)
-    add_camera(stage, eye=(1.9, 2.6, 4.6), target=(1.35, 0.75, 0.0))
+    add_camera(stage, eye=(2.1, 1.5, 3.7), target=(1.35, 0.45, 0.0))
     add_lights(stage)
     stage.GetRootLayer().Save()
     return len(points)

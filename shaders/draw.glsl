@@ -20,11 +20,14 @@ uniform vec3 u_eye_local;        // camera position in the mesh's local space
 
 #if defined VERTEX_SHADER
 
-out vec3 v_local;
-out vec3 v_world;
-out vec3 v_normal_local;
-out vec3 v_bary;
-out vec2 v_st;
+// centroid: under multisampling, evaluate inside the covered part of the pixel, so that
+// barycentrics never extrapolate past a triangle's edge.
+
+centroid out vec3 v_local;
+centroid out vec3 v_world;
+centroid out vec3 v_normal_local;
+centroid out vec3 v_bary;
+centroid out vec2 v_st;
 
 void main() {
     int corner = gl_VertexID;           // non-indexed draw: 3 corners per triangle
@@ -43,11 +46,11 @@ void main() {
 
 #elif defined FRAGMENT_SHADER
 
-in vec3 v_local;
-in vec3 v_world;
-in vec3 v_normal_local;
-in vec3 v_bary;
-in vec2 v_st;
+centroid in vec3 v_local;
+centroid in vec3 v_world;
+centroid in vec3 v_normal_local;
+centroid in vec3 v_bary;
+centroid in vec2 v_st;
 
 layout(location = 0) out vec4 out_color;    // linear RGB, alpha
 layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z

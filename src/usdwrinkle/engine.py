@@ -135,10 +135,14 @@ class WrinkleEngine:
         self._history_frame = frame if (wrinkles and on_grid) else None
         return record
 
-    def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True):
-        """Compute and draw ``frame``; returns {aov name: RenderBuffer}."""
+    def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True,
+                     samples: int = 4):
+        """Compute and draw ``frame``; returns {aov name: RenderBuffer}.
+
+        ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
+        """
         record = self.compute_frame(frame, width / height, wrinkles)
-        state = RenderPassState(record.camera, record.lights, width, height, wrinkles)
+        state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples)
         buffers = self.render_pass.execute(state)
         self.last_timings.update(state.timings)
         return buffers

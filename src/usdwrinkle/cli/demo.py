@@ -21,7 +21,7 @@ def run(args) -> int:
     stage = str(resource_dir("sample_stages") / "shirt.usda")
     os.makedirs(args.outdir, exist_ok=True)
     ns = SimpleNamespace(stage=stage, output=os.path.join(args.outdir, "shirt.####.png"),
-                         frames=None, camera=None, width=args.width, height=None,
+                         frames=None, camera=None, width=args.width, height=None, samples=4,
                          all_meshes=False, relax_iterations=None, history_start=None,
                          no_wrinkles=False,
                          skip_existing=False, quiet=args.quiet)

@@ -25,6 +25,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--width", type=int, default=960, metavar="PX", help="image width (960)")
     p.add_argument("--height", type=int, metavar="PX",
                    help="image height (default: from the camera's aspect ratio)")
+    p.add_argument("--samples", type=int, default=4, metavar="N",
+                   help="multisamples per pixel for anti-aliased edges (4; 1 turns it off)")
     add_stage_args(p)
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
@@ -43,6 +45,8 @@ def run(args) -> int:
     check_format(args.output)
     if args.width <= 0 or (args.height is not None and args.height <= 0):
         raise UsdWrinkleError("--width and --height must be positive")
+    if args.samples < 1:
+        raise UsdWrinkleError("--samples must be at least 1")
     if args.relax_iterations is not None and args.relax_iterations < 0:
         raise UsdWrinkleError("--relax-iterations must be >= 0")
     reporter = Reporter(args.quiet)
@@ -66,7 +70,8 @@ def run(args) -> int:
             if args.skip_existing and os.path.exists(path):
                 continue
             try:
-                buffers = engine.render_frame(frame, width, height, not args.no_wrinkles)
+                buffers = engine.render_frame(frame, width, height, not args.no_wrinkles,
+                                              args.samples)
             except UsdWrinkleError as exc:
                 if exc.frame is None and not math.isnan(frame):
                     exc.frame = frame

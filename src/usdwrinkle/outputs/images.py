@@ -48,17 +48,20 @@ def write_image(path: str, buffers: dict) -> None:
         spec.z_channel = names.index("Z")
         spec.attribute("compression", "zip")
     else:
-        color = buffers["color"].pixels
-        rgb = srgb_encode(color[..., :3])
+        color = buffers["color"].pixels  # premultiplied by alpha
         alpha = np.clip(color[..., 3:4], 0, 1)
         if ext in (".jpg", ".jpeg"):
-            pixels = rgb * alpha
+            pixels = srgb_encode(color[..., :3])  # over black
         else:
-            pixels = np.concatenate([rgb, alpha], axis=2)
+            # PNG and TIFF store straight (unassociated) alpha
+            straight = np.divide(color[..., :3], alpha, out=np.zeros_like(color[..., :3]),
+                                 where=alpha > 0)
+            pixels = np.concatenate([srgb_encode(straight), alpha], axis=2)
         pixels = np.ascontiguousarray(np.round(pixels * 255), np.uint8)
         spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], "uint8")
         if pixels.shape[2] == 4:
             spec.alpha_channel = 3
+            spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
     with atomic_path(path) as tmp:
         out = oiio.ImageOutput.create(tmp)
         if out is None or not out.open(tmp, spec):

@@ -25,14 +25,29 @@ class RenderBuffer:
 
 
 class Framebuffer:
-    """Three float RGBA attachments plus depth, at one resolution."""
+    """Three float RGBA attachments plus depth, at one resolution.
 
-    def __init__(self, ctx, width: int, height: int):
+    With ``samples`` > 1 the meshes are drawn multisampled (edges anti-aliased) and
+    resolved into single-sample textures. The resolve averages coverage: colour stays
+    premultiplied by alpha (the EXR convention), the other AOVs are divided by alpha so
+    that an edge pixel holds the average over the samples that hit the surface.
+    """
+
+    def __init__(self, ctx, width: int, height: int, samples: int = 4):
         self.ctx = ctx
         self.size = (width, height)
+        max_samples = int(ctx.info.get("GL_MAX_SAMPLES", 1) or 1)
+        self.samples = max(1, min(int(samples), max_samples))
         self.textures = [ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
-        self.depth = ctx.depth_renderbuffer((width, height))
-        self.fbo = ctx.framebuffer(color_attachments=self.textures, depth_attachment=self.depth)
+        self.resolved = ctx.framebuffer(color_attachments=self.textures)
+        multisample = self.samples if self.samples > 1 else 0  # 0: a plain renderbuffer
+        self.depth = ctx.depth_renderbuffer((width, height), samples=multisample)
+        if self.samples > 1:
+            self.targets = [ctx.renderbuffer((width, height), 4, samples=self.samples, dtype="f4")
+                            for _ in range(3)]
+        else:
+            self.targets = self.textures
+        self.fbo = ctx.framebuffer(color_attachments=self.targets, depth_attachment=self.depth)
 
     def begin(self) -> None:
         self.fbo.use()
@@ -40,22 +55,34 @@ class Framebuffer:
         self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
 
     def read(self) -> dict[str, RenderBuffer]:
+        if self.samples > 1:
+            self.ctx.copy_framebuffer(self.resolved, self.fbo)
         width, height = self.size
         planes = []
         for tex in self.textures:
             data = np.frombuffer(tex.read(), np.float32).reshape(height, width, 4)
-            planes.append(data[::-1])  # GL rows start at the bottom, images at the top
-        covered = planes[0][..., 3] > 0.0
+            planes.append(data[::-1].copy())  # GL rows start at the bottom, images at the top
+        alpha = planes[0][..., 3:4]
+        covered = alpha[..., 0] > 0.0
+        for plane in planes[1:]:
+            np.divide(plane, alpha, out=plane, where=alpha > 0)
         out = {}
         for name, (attachment, first, channels) in AOVS.items():
             pixels = planes[attachment][..., first:first + len(channels)].copy()
             if name == "depth":
                 pixels[~covered] = np.inf  # nothing hit: infinitely far
+            if name == "normal":
+                length = np.linalg.norm(pixels, axis=-1, keepdims=True)
+                np.divide(pixels, length, out=pixels, where=length > 0)
             out[name] = RenderBuffer(name, channels, pixels)
         return out
 
     def release(self) -> None:
         self.fbo.release()
+        self.resolved.release()
         self.depth.release()
         for tex in self.textures:
             tex.release()
+        if self.samples > 1:
+            for rb in self.targets:
+                rb.release()

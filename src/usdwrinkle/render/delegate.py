@@ -124,6 +124,7 @@ class RenderPassState:
     width: int
     height: int
     wrinkles: bool = True
+    samples: int = 4
     aovs: tuple = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
     timings: dict = field(default_factory=dict)
 
@@ -151,12 +152,14 @@ class RenderDelegate:
         if mesh is not None:
             mesh.release()
 
-    def framebuffer(self, width: int, height: int) -> Framebuffer:
-        if self._framebuffer is None or self._framebuffer.size != (width, height):
-            if self._framebuffer is not None:
-                self._framebuffer.release()
-            self._framebuffer = Framebuffer(self.ctx, width, height)
-        return self._framebuffer
+    def framebuffer(self, width: int, height: int, samples: int = 4) -> Framebuffer:
+        fb = self._framebuffer
+        if fb is None or fb.size != (width, height) or fb.requested_samples != samples:
+            if fb is not None:
+                fb.release()
+            fb = self._framebuffer = Framebuffer(self.ctx, width, height, samples)
+            fb.requested_samples = samples
+        return fb
 
     def release(self) -> None:
         for path in list(self.rprims):
@@ -186,7 +189,7 @@ class RenderPass:
     def execute(self, state: RenderPassState) -> dict[str, RenderBuffer]:
         d = self.delegate
         ctx = d.ctx
-        fb = d.framebuffer(state.width, state.height)
+        fb = d.framebuffer(state.width, state.height, state.samples)
         timer = ctx if d.profile else None
         with _timed(timer, "draw", state.timings):
             fb.begin()
