@@ -96,13 +96,17 @@ void main() {
     float lead = ad.x >= ad.y && ad.x >= ad.z ? d3.x : (ad.y >= ad.z ? d3.y : d3.z);
     if (lead < 0.0) { d = -d; d3 = -d3; }
 
-    float r = usable || q_len > 0.0 ? min(1.0, sqrt(lambda)) : 1.0;
+    // r in [r_min, 1]: a ring crushed flat still has a finite wavelength W r_min
+    float r = usable || q_len > 0.0 ? clamp(sqrt(lambda), u_min_ratio, 1.0) : 1.0;
     float amplitude = u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r * r, 0.0));
 
-    // k = M^-T (2pi/W) d = (2pi/W) M d / lambda, with lambda floored so |k| stays finite
+    // k = M^-T (2pi/W) d. With M = U S V^T and d the smallest right singular vector,
+    // M^-T d = u / sigma where u = M d / sigma: the direction of M d, length 1/sigma.
+    // sigma is floored at r_min so that |k| <= 2pi/(W r_min) stays finite.
     vec2 md = M * d;
-    vec2 k2 = length(md) > 1e-12
-        ? (TWO_PI / W) * md / max(lambda, u_min_ratio * u_min_ratio)
+    float sigma = length(md);
+    vec2 k2 = sigma > 1e-12
+        ? (TWO_PI / W) * (md / sigma) / max(sigma, u_min_ratio)
         : (TWO_PI / (W * u_min_ratio)) * d;
     vec3 k = k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
 

@@ -85,6 +85,9 @@ void main() {
     float h = 0.0;
     float amplitude = 0.0;
     vec3 g = vec3(0.0);
+    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
+    vec3 bary = clamp(v_bary, 0.0, 1.0);
+    bary /= max(bary.x + bary.y + bary.z, 1e-20);
     if (u_wrinkles != 0) {
         int i0 = TRIANGLE_CORNER(t, 0);
         vec3 k0 = fields[i0].wave.xyz;
@@ -95,7 +98,7 @@ void main() {
             if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
             float a = fields[i].wave.w;
             float theta = phi + dot(k, v_local - posed_points[i].xyz);  // local space
-            float b = v_bary[c];
+            float b = bary[c];
             h += b * a * profile(u_height_profile, theta);
             g += b * a * profile(u_gradient_profile, theta) * k;
             amplitude += b * a;

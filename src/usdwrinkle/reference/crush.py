@@ -80,12 +80,14 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     lead = d3[np.arange(n), np.argmax(np.abs(d3), axis=1)]
     flip = np.where(lead < 0, -1.0, 1.0)
     d, d3 = d * flip[:, None], d3 * flip[:, None]
-    r = np.where(usable | (q_len > 0), np.minimum(1.0, np.sqrt(lam)), 1.0)
+    r = np.where(usable | (q_len > 0), np.clip(np.sqrt(lam), MIN_RATIO, 1.0), 1.0)
     width = np.asarray(width, np.float64)
     amplitude = amplitude_scale * 0.25 * width * np.sqrt(np.maximum(1 - r * r, 0))
     md = np.einsum("nij,nj->ni", M, d)
-    k2 = (2 * np.pi / width)[:, None] * md / np.maximum(lam, MIN_RATIO ** 2)[:, None]
-    tiny = np.linalg.norm(md, axis=1) <= 1e-12
+    sigma = np.linalg.norm(md, axis=1)
+    k2 = (2 * np.pi / width)[:, None] * md / (np.maximum(sigma, 1e-30)
+                                              * np.maximum(sigma, MIN_RATIO))[:, None]
+    tiny = sigma <= 1e-12
     k2[tiny] = ((2 * np.pi / (width * MIN_RATIO))[:, None] * d)[tiny]
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
     phase = (2 * np.pi / width) * np.sum(d3 * rest, 1)

@@ -1,0 +1,64 @@
+"""Property-based checks of the wrinkle fields on random meshes and deformations."""
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from usdwrinkle.engine import WrinkleEngine
+
+from conftest import grid_sheet
+from helpers import point_cache_stage
+
+deformations = st.fixed_dictionaries({
+    "seed": st.integers(0, 2**31 - 1),
+    "stretch_x": st.floats(0.02, 3.0),
+    "stretch_y": st.floats(0.02, 3.0),
+    "shear": st.floats(-2.0, 2.0),
+    "noise": st.sampled_from([0.0, 1e-3, 0.05, 0.5]),
+    "collapse": st.booleans(),
+    "width": st.sampled_from([1e-3, 0.05, 0.3, 50.0]),
+    "scale": st.floats(0.0, 3.0),
+    "q_amount": st.floats(0.0, 1.0),
+})
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(deformations)
+def test_fields_stay_finite_and_bounded(gl_context, params):
+    rng = np.random.default_rng(params["seed"])
+    rest, counts, indices = grid_sheet(9, 9, 1.0)
+    rest = rest + rng.normal(scale=0.02, size=rest.shape).astype(np.float32)
+    posed = rest @ np.array([[params["stretch_x"], params["shear"], 0.0],
+                             [0.0, params["stretch_y"], 0.0],
+                             [0.0, 0.0, 1.0]], np.float32)
+    posed = posed + rng.normal(scale=params["noise"], size=posed.shape)
+    if params["collapse"]:  # a third of the sheet crushed onto one point
+        posed[: len(posed) // 3] = posed[0]
+    q = rng.normal(size=rest.shape)
+    q *= params["q_amount"] / np.linalg.norm(q, axis=1, keepdims=True)
+    stage = point_cache_stage(rest, {1: posed.astype(np.float32)}, counts, indices,
+                              q=q.astype(np.float32), width=params["width"],
+                              amplitude_scale=params["scale"], relax_iterations=4)
+    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    try:
+        engine.compute_frame(1.0)
+        fields = engine.read_fields("/Sheet")
+        image = engine.render_frame(1.0, 48, 48)
+    finally:
+        engine.release()
+    for name, value in fields.items():
+        assert np.all(np.isfinite(value)), name
+    for name, aov in image.items():
+        finite = np.isfinite(aov.pixels) | (name == "depth")
+        assert np.all(finite), name
+    width, scale = params["width"], params["scale"]
+    amplitude = fields["amplitude"]
+    assert np.all(amplitude >= 0)
+    assert np.all(amplitude <= scale * width / 4 * (1 + 1e-5))
+    compression = fields["compression"]
+    assert np.all((compression > 0) & (compression <= 1))
+    wrinkled = amplitude > 0
+    k = np.linalg.norm(fields["wave_vector"], axis=1)
+    assert np.all(k[wrinkled] >= 2 * np.pi / width * (1 - 1e-3))
+    assert np.all(np.abs(image["wrinkle.height"].pixels) <= scale * width / 4 * (1 + 1e-4))
