@@ -23,7 +23,8 @@ deformations = st.fixed_dictionaries({
 })
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=30, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(deformations)
 def test_fields_stay_finite_and_bounded(gl_context, params):
     rng = np.random.default_rng(params["seed"])

@@ -17,6 +17,12 @@ def set_uniforms(program, values: dict) -> None:
             member.value = value
 
 
+def bind_storage(table: dict, buffers: dict) -> None:
+    """Bind buffers to the binding points a pass declares in render/bindings.py."""
+    for name, buffer in buffers.items():
+        buffer.bind_to_storage_buffer(table[name])
+
+
 def groups(count: int, local_size: int) -> int:
     return max((count + local_size - 1) // local_size, 1)
 

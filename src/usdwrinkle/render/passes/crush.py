@@ -4,7 +4,7 @@ from __future__ import annotations
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import compute_shader
-from . import groups, set_uniforms
+from . import bind_storage, groups, set_uniforms
 
 #: Floor of the compression ratio used for the wave vector: |k| <= 2 pi / (W r_min).
 MIN_RATIO = 0.05
@@ -24,13 +24,10 @@ class CrushPass:
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
                                    "u_min_ratio": MIN_RATIO, **res.topology_uniforms})
-        b = bindings.CRUSH
-        res.posed_points.bind_to_storage_buffer(b["CRUSH_POSED_POINTS"])
-        res.rest_points.bind_to_storage_buffer(b["CRUSH_REST_POINTS"])
-        res.topology.bind_to_storage_buffer(b["CRUSH_TOPOLOGY"])
-        res.rest_frame.bind_to_storage_buffer(b["CRUSH_REST_FRAME"])
-        res.q_width.bind_to_storage_buffer(b["CRUSH_Q_WIDTH"])
-        res.fields.bind_to_storage_buffer(b["CRUSH_FIELDS"])
-        res.anchor_phase.bind_to_storage_buffer(b["CRUSH_PHASE"])
+        bind_storage(bindings.CRUSH, {
+            "CRUSH_POSED_POINTS": res.posed_points, "CRUSH_REST_POINTS": res.rest_points,
+            "CRUSH_TOPOLOGY": res.topology, "CRUSH_REST_FRAME": res.rest_frame,
+            "CRUSH_Q_WIDTH": res.q_width, "CRUSH_FIELDS": res.fields,
+            "CRUSH_PHASE": res.anchor_phase})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

@@ -7,7 +7,7 @@ from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import program
-from . import gl_matrix, set_uniforms
+from . import bind_storage, gl_matrix, set_uniforms
 
 MAX_LIGHTS = 8
 
@@ -83,10 +83,8 @@ class DrawPass:
         res.profiles[1].use(location=1)
         if res.texture is not None:
             res.texture.use(location=2)
-        b = bindings.DRAW
-        res.posed_points.bind_to_storage_buffer(b["DRAW_POSED_POINTS"])
-        res.fields.bind_to_storage_buffer(b["DRAW_FIELDS"])
-        res.phase_buffer().bind_to_storage_buffer(b["DRAW_PHASE"])
-        res.topology.bind_to_storage_buffer(b["DRAW_TOPOLOGY"])
-        res.corner_st.bind_to_storage_buffer(b["DRAW_CORNER_ST"])
+        bind_storage(bindings.DRAW, {
+            "DRAW_POSED_POINTS": res.posed_points, "DRAW_FIELDS": res.fields,
+            "DRAW_PHASE": res.phase_buffer(), "DRAW_TOPOLOGY": res.topology,
+            "DRAW_CORNER_ST": res.corner_st})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import compute_shader
-from . import groups, set_uniforms
+from . import bind_storage, groups, set_uniforms
 
 
 class RelaxPass:
@@ -20,13 +20,11 @@ class RelaxPass:
         self.seed_shader = compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1})
 
     def seed(self, res: MeshResources, with_history: bool) -> None:
-        b = bindings.RELAX
         set_uniforms(self.seed_shader, {"u_num_points": res.num_points,
                                         "u_has_history": int(with_history)})
-        res.fields.bind_to_storage_buffer(b["RELAX_FIELDS"])
-        res.previous_fields.bind_to_storage_buffer(b["RELAX_PREVIOUS_FIELDS"])
-        res.anchor_phase.bind_to_storage_buffer(b["RELAX_ANCHOR"])
-        res.phase_buffer().bind_to_storage_buffer(b["RELAX_PHASE_OUT"])
+        bind_storage(bindings.RELAX, {
+            "RELAX_FIELDS": res.fields, "RELAX_PREVIOUS_FIELDS": res.previous_fields,
+            "RELAX_ANCHOR": res.anchor_phase, "RELAX_PHASE_OUT": res.phase_buffer()})
         self.seed_shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
 
@@ -36,9 +34,8 @@ class RelaxPass:
             return
         set_uniforms(self.shader, {"u_num_points": res.num_points, **res.topology_uniforms})
         b = bindings.RELAX
-        res.posed_points.bind_to_storage_buffer(b["RELAX_POSED_POINTS"])
-        res.topology.bind_to_storage_buffer(b["RELAX_TOPOLOGY"])
-        res.fields.bind_to_storage_buffer(b["RELAX_FIELDS"])
+        bind_storage(b, {"RELAX_POSED_POINTS": res.posed_points, "RELAX_TOPOLOGY": res.topology,
+                         "RELAX_FIELDS": res.fields})
         count = groups(res.num_points, bindings.LOCAL_SIZE)
         for _ in range(iterations):
             src = res.current_phase

@@ -8,7 +8,7 @@ from ...scene.skel import dual_quaternions
 from .. import bindings
 from ..resources import JOINT_FLOATS, MeshResources, vec4
 from ..shaders import compute_shader
-from . import gl_matrix, groups, set_uniforms
+from . import bind_storage, gl_matrix, groups, set_uniforms
 
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
 
@@ -61,13 +61,10 @@ class SkinPass:
             "u_geom_bind": gl_matrix(skin.geom_bind),
             "u_skel_to_local": gl_matrix(frame.skel_to_local if skinned else np.eye(4)),
         })
-        b = bindings.SKIN
-        res.rest_points.bind_to_storage_buffer(b["SKIN_REST_POINTS"])
-        res.posed_points.bind_to_storage_buffer(b["SKIN_POSED_POINTS"])
-        res.joint_indices.bind_to_storage_buffer(b["SKIN_JOINT_INDICES"])
-        res.joint_weights.bind_to_storage_buffer(b["SKIN_JOINT_WEIGHTS"])
-        res.joints.bind_to_storage_buffer(b["SKIN_JOINTS"])
-        res.subshape_offsets.bind_to_storage_buffer(b["SKIN_SUBSHAPE_OFFSETS"])
-        res.subshape_weights.bind_to_storage_buffer(b["SKIN_SUBSHAPE_WEIGHTS"])
+        bind_storage(bindings.SKIN, {
+            "SKIN_REST_POINTS": res.rest_points, "SKIN_POSED_POINTS": res.posed_points,
+            "SKIN_JOINT_INDICES": res.joint_indices, "SKIN_JOINT_WEIGHTS": res.joint_weights,
+            "SKIN_JOINTS": res.joints, "SKIN_SUBSHAPE_OFFSETS": res.subshape_offsets,
+            "SKIN_SUBSHAPE_WEIGHTS": res.subshape_weights})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
