@@ -1,6 +1,6 @@
 """usdwrinkle: the console script. ``main(argv) -> int``, errors as one line on stderr.
 
-Exit codes: 0 success, 1 findings (check), 2 user error, 130 interrupted.
+Exit codes: 0 success, 1 findings (check), 2 user error, 3 internal error, 130 interrupted.
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from .. import __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import demo, info, render
+    from . import bake, check, demo, info, render
 
     parser = argparse.ArgumentParser(
         prog="usdwrinkle",
@@ -21,7 +21,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"usdwrinkle {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (render, info, demo):
+    for module in (render, bake, check, info, demo):
         module.add_parser(sub)
     return parser
 
@@ -44,6 +44,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("usdwrinkle: interrupted; finished frames are intact", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug in usdwrinkle: still one line, unless --debug
+        if args.debug:
+            traceback.print_exc()
+        print(f"usdwrinkle: internal error: {type(exc).__name__}: {exc} (rerun with --debug "
+              "for a traceback, and please report it)", file=sys.stderr)
+        return 3
 
 
 def entry_point() -> None:

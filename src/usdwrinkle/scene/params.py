@@ -6,6 +6,7 @@ from pxr import Usd, UsdGeom
 
 from .. import schema
 from ..errors import UsdWrinkleError
+from ..validation import check_amplitude_scale, check_profile, check_q, check_width
 from .records import WrinkleParams
 from .topology import Topology, mean_edge_length
 
@@ -29,20 +30,28 @@ def _get(prim: Usd.Prim, name: str, time):
     return attr.Get(time)
 
 
+def _refuse(findings) -> None:
+    if findings:
+        first = findings[0]
+        raise UsdWrinkleError(first.message, first.prim_path, first.attribute)
+
+
 def _profile(prim, name, time, path):
     value = _get(prim, name, time)
     if value is None or len(value) == 0:
         return None
-    arr = np.asarray(value, dtype=np.float32)
-    if arr.size < 2 or not np.all(np.isfinite(arr)):
-        raise UsdWrinkleError("a profile needs at least 2 finite samples", path, name)
-    return arr
+    _refuse(check_profile(value, name, path))
+    return np.asarray(value, dtype=np.float32)
 
 
 def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
                 time: Usd.TimeCode | None = None,
                 relax_override: int | None = None) -> WrinkleParams:
-    """Resolve WrinkleAPI values for one mesh (also for --all-meshes, with fallbacks)."""
+    """Resolve WrinkleAPI values for one mesh (also for --all-meshes, with fallbacks).
+
+    Values that break the rules of ``usdwrinkle check`` are refused with a
+    UsdWrinkleError naming the prim and the attribute.
+    """
     time = Usd.TimeCode.Default() if time is None else time
     path = str(prim.GetPath())
     n = len(rest_points)
@@ -52,38 +61,25 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     q_primvar = primvars.GetPrimvar("wrinkle:q")
     if q_primvar and q_primvar.HasAuthoredValue():
         value = q_primvar.ComputeFlattened(time)
-        arr = np.asarray(value, dtype=np.float32).reshape(-1, 3) if value is not None else None
-        if arr is None or len(arr) != n:
-            raise UsdWrinkleError(
-                f"q has {0 if arr is None else len(arr)} values for {n} points", path, schema.Q)
-        if q_primvar.GetInterpolation() not in ("vertex", "varying"):
-            raise UsdWrinkleError("q must have vertex interpolation", path, schema.Q)
-        if not np.all(np.isfinite(arr)):
-            raise UsdWrinkleError("q is not finite", path, schema.Q)
-        if np.any(np.linalg.norm(arr, axis=1) > 1.0 + 1e-4):
-            raise UsdWrinkleError("|q| > 1", path, schema.Q)
-        q = arr
+        if value is not None:
+            _refuse(check_q(value, q_primvar.GetInterpolation(), n, path))
+            q = np.asarray(value, dtype=np.float32).reshape(-1, 3)
 
-    width_primvar = primvars.GetPrimvar("wrinkle:width")
     width = None
+    width_primvar = primvars.GetPrimvar("wrinkle:width")
     if width_primvar and width_primvar.HasAuthoredValue():
         value = width_primvar.ComputeFlattened(time)
-        arr = np.atleast_1d(np.asarray(value, dtype=np.float32)) if value is not None else None
-        if arr is None or arr.size not in (1, n):
-            raise UsdWrinkleError(
-                f"width must be constant or have one value per point ({n})", path, schema.WIDTH)
-        if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-            raise UsdWrinkleError("width must be finite and > 0", path, schema.WIDTH)
-        width = np.broadcast_to(arr, (n,)).astype(np.float32)
+        if value is not None:
+            _refuse(check_width(value, n, path))
+            arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
+            width = np.broadcast_to(arr, (n,)).astype(np.float32)
     if width is None:
         fallback = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest_points, topology)
         width = np.full(n, fallback if fallback > 0 else 1.0, np.float32)
 
     scale = _get(prim, schema.AMPLITUDE_SCALE, time)
+    _refuse(check_amplitude_scale(scale, path))
     scale = 1.0 if scale is None else float(scale)
-    if not np.isfinite(scale) or scale < 0:
-        raise UsdWrinkleError("amplitude scale must be finite and >= 0", path,
-                              schema.AMPLITUDE_SCALE)
 
     height = _profile(prim, schema.HEIGHT_PROFILE, time, path)
     gradient = _profile(prim, schema.GRADIENT_PROFILE, time, path)

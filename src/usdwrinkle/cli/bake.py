@@ -1,0 +1,82 @@
+"""usdwrinkle bake STAGE OUTPUT_LAYER: write the wrinkle fields back to USD."""
+from __future__ import annotations
+
+import time
+
+from .common import Reporter, add_stage_args, refuse_overwriting_inputs
+from .frames import add_frame_args, parse_frame_spec
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "bake", help="bake the wrinkle fields of every frame into a USD layer",
+        description="Compute the wrinkles of a stage and write them as per-vertex primvars "
+                    "(primvars:wrinkle:amplitude, compression, waveVector, phase, direction; "
+                    "interpolation vertex) with a time sample per frame. By default the "
+                    "output layer sublayers the input, so 'usdview OUTPUT_LAYER' shows the "
+                    "shot with the baked data.")
+    p.add_argument("stage", help="the USD stage")
+    p.add_argument("output", help="the layer to write (.usda, .usdc or .usd)")
+    add_frame_args(p)
+    add_stage_args(p)
+    p.add_argument("--with-points", action="store_true",
+                   help="also write the posed points, normals and extent in each mesh's local "
+                        "space (as UsdSkelBakeSkinning), and retype the affected SkelRoots to "
+                        "Xform so that the composed stage is not skinned twice")
+    p.add_argument("--display-color", choices=("amplitude", "compression"),
+                   help="also write primvars:displayColor (vertex) as a viridis ramp of that "
+                        "field, for usdview's default shading")
+    p.add_argument("--sparse", action="store_true",
+                   help="write the overs alone, without sublayering the input")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..engine import WrinkleEngine
+    from ..errors import UsdWrinkleError
+    from ..outputs.layers import LayerBaker, check_layer_path
+
+    refuse_overwriting_inputs(args.stage, [args.output])
+    check_layer_path(args.output)
+    reporter = Reporter(args.quiet)
+    engine = WrinkleEngine(args.stage, all_meshes=args.all_meshes,
+                           relax_iterations=args.relax_iterations, warn=reporter.warn,
+                           history_start=args.history_start)
+    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+    try:
+        stage = engine.scene.stage
+        refuse_overwriting_inputs(args.stage, [args.output], stage)
+        frames = parse_frame_spec(args.frames) if args.frames else engine.scene.frame_range()
+        wrinkled = {}
+        for path in engine.wrinkled_paths:
+            if stage.GetPrimAtPath(path).IsInstanceProxy():
+                reporter.warn(f"mesh is inside an instance and cannot be overridden; skipped "
+                              f"({path})")
+                continue
+            wrinkled[path] = engine.scene.meshes[path]
+        if not wrinkled:
+            reporter.warn("no mesh has WrinkleAPI applied; the layer holds no wrinkle data "
+                          "(use --all-meshes to wrinkle every mesh)")
+        baker = LayerBaker(stage, args.stage, wrinkled, engine.scene.meshes,
+                           with_points=args.with_points, display_color=args.display_color,
+                           sparse=args.sparse, warn=reporter.warn)
+        wanted = set(wrinkled) | set(baker.point_meshes)
+        started = time.perf_counter()
+        for frame in reporter.progress(frames, "bake"):
+            try:
+                engine.compute_frame(frame)
+            except UsdWrinkleError as exc:
+                if exc.frame is None and frame == frame:
+                    exc.frame = frame
+                raise
+            baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
+        spec = args.frames or (f"{frames[0]:g}:{frames[-1]:g}" if frames[0] == frames[0]
+                               else "default")
+        baker.save(args.output, spec)
+        if not args.quiet:
+            print(f"usdwrinkle: baked {len(wrinkled)} mesh(es) x {len(frames)} frame(s) to "
+                  f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)
+    finally:
+        engine.release()
+    return 0

@@ -1,0 +1,72 @@
+"""usdwrinkle check STAGE [--json]: USD's own validators plus the WrinkleAPI rules."""
+from __future__ import annotations
+
+import json
+import sys
+
+#: UsdValidation keywords run by ``check``: core, UsdGeom, UsdSkel and our own.
+KEYWORDS = ("UsdCoreValidators", "UsdGeomValidators", "UsdSkelValidators",
+            "UsdShadeValidators", "UsdWrinkleValidators")
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "check", help="validate a stage: USD's validators and the WrinkleAPI rules",
+        description="Run UsdValidation's core, UsdGeom, UsdSkel and UsdShade validators and "
+                    "usdwrinkle's WrinkleAPI checker (registered with UsdValidation as "
+                    "usdWrinkleValidators:WrinkleAPIChecker). Exit 0 when clean, 1 with "
+                    "findings, 2 on usage errors.")
+    p.add_argument("stage", help="the USD stage")
+    p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
+    p.set_defaults(run=run)
+
+
+def _site(error) -> tuple[str, str | None]:
+    for site in error.GetSites():
+        if site.IsProperty():
+            path = site.GetProperty().GetPath()
+            return str(path.GetPrimPath()), path.name
+        if site.IsPrim():
+            return str(site.GetPrim().GetPath()), None
+    return "/", None
+
+
+def collect(stage) -> list[dict]:
+    """Findings of every validator, as dicts (path, attribute, message, validator, type)."""
+    from pxr import UsdValidation
+
+    from ..validation import register_validators
+
+    register_validators()
+    context = UsdValidation.ValidationContext(keywords=list(KEYWORDS))
+    findings = []
+    for error in context.Validate(stage):
+        if error.HasNoError():
+            continue
+        path, attribute = _site(error)
+        validator = error.GetValidator()
+        findings.append({
+            "prim": path, "attribute": attribute, "message": error.GetMessage(),
+            "type": str(error.GetType()).rsplit(".", 1)[-1].lower(),
+            "validator": str(validator.GetMetadata().name) if validator else "",
+        })
+    findings.sort(key=lambda f: (f["prim"], f["attribute"] or "", f["validator"], f["message"]))
+    return findings
+
+
+def run(args) -> int:
+    from ..scene.stage import open_stage
+
+    stage = open_stage(args.stage)
+    findings = collect(stage)
+    if args.json:
+        json.dump({"stage": args.stage, "findings": findings, "clean": not findings},
+                  sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        for f in findings:
+            where = f["prim"] + (f".{f['attribute']}" if f["attribute"] else "")
+            print(f"{f['type']}: {where}: {f['message']} [{f['validator']}]")
+        print(f"usdwrinkle: {len(findings)} finding(s) in {args.stage}" if findings
+              else f"usdwrinkle: {args.stage} is clean")
+    return 1 if findings else 0

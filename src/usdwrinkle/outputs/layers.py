@@ -1,0 +1,208 @@
+"""Bake the wrinkle fields into a USD layer: the per-vertex primvars the GPU computed.
+
+The same engine computes a frame for a render and for a bake; the bake reads back
+the fields of every wrinkled mesh. Layers are written atomically (a temporary file
+beside the target, then a rename), and never over a layer the input stage uses.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
+
+from .. import __version__
+from ..errors import UsdWrinkleError
+from .atomic import atomic_path
+
+LAYER_FORMATS = (".usda", ".usdc", ".usd")
+
+#: baked primvar -> (field, value type)
+PRIMVARS = {
+    "primvars:wrinkle:amplitude": ("amplitude", Sdf.ValueTypeNames.FloatArray),
+    "primvars:wrinkle:compression": ("compression", Sdf.ValueTypeNames.FloatArray),
+    "primvars:wrinkle:waveVector": ("wave_vector", Sdf.ValueTypeNames.Vector3fArray),
+    "primvars:wrinkle:phase": ("phase", Sdf.ValueTypeNames.FloatArray),
+    "primvars:wrinkle:direction": ("direction", Sdf.ValueTypeNames.Vector3fArray),
+}
+DISPLAY_COLOR_FIELDS = ("amplitude", "compression")
+
+# viridis at 9 stops: perceptually uniform, readable by colour-blind viewers
+_VIRIDIS = np.array([
+    [0.267, 0.005, 0.329], [0.283, 0.141, 0.458], [0.254, 0.265, 0.530],
+    [0.207, 0.372, 0.553], [0.164, 0.471, 0.558], [0.128, 0.567, 0.551],
+    [0.135, 0.659, 0.518], [0.267, 0.749, 0.441], [0.478, 0.821, 0.318],
+    [0.741, 0.873, 0.150], [0.993, 0.906, 0.144]])
+
+
+def viridis(values: np.ndarray) -> np.ndarray:
+    """Map [0, 1] to viridis (linear-ish sRGB stops, as displayColor expects)."""
+    t = np.clip(np.nan_to_num(np.asarray(values, np.float64)), 0, 1) * (len(_VIRIDIS) - 1)
+    low = np.floor(t).astype(int).clip(0, len(_VIRIDIS) - 2)
+    frac = (t - low)[:, None]
+    rgb = _VIRIDIS[low] * (1 - frac) + _VIRIDIS[low + 1] * frac
+    return (rgb ** 2.2).astype(np.float32)  # displayColor is linear
+
+
+def display_values(field: str, fields: dict, params) -> np.ndarray:
+    """The [0, 1] quantity shown by --display-color."""
+    if field == "amplitude":
+        full = np.maximum(params.amplitude_scale * params.width / 4.0, 1e-30)
+        return fields["amplitude"] / full
+    return (1.0 - fields["compression"]) / 0.95  # r in [0.05, 1] -> [1, 0]
+
+
+def check_layer_path(path: str) -> str:
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in LAYER_FORMATS:
+        raise UsdWrinkleError(f"unsupported layer format '{ext or path}': use .usda, .usdc or "
+                              ".usd (a .usdz package cannot be edited in place)")
+    return ext
+
+
+def _array(values: np.ndarray, type_name):
+    values = np.ascontiguousarray(values, np.float32)
+    if type_name in (Sdf.ValueTypeNames.FloatArray,):
+        return Vt.FloatArray.FromNumpy(values)
+    if type_name == Sdf.ValueTypeNames.Color3fArray:
+        return Vt.Vec3fArray.FromNumpy(values)
+    return Vt.Vec3fArray.FromNumpy(values)
+
+
+class LayerBaker:
+    """Collects per-frame fields into an Sdf layer; :meth:`save` writes it atomically.
+
+    Parameters
+    ----------
+    stage : Usd.Stage
+        The input stage (for metadata, skel roots and paths).
+    stage_path : str
+        Where the input stage lives (the sublayer path is made relative to the output).
+    meshes : dict path -> MeshRecord
+        The wrinkled meshes to bake.
+    with_points : bool
+        Also bake points, normals and extent (all skinned meshes of the affected skel
+        roots), and retype those SkelRoots to Xform so the composed stage is not
+        skinned twice, as UsdSkelBakeSkinning does.
+    """
+
+    def __init__(self, stage: Usd.Stage, stage_path: str, wrinkled: dict, all_records: dict,
+                 with_points: bool = False, display_color: str | None = None,
+                 sparse: bool = False, warn=lambda m: None):
+        self.stage = stage
+        self.stage_path = stage_path
+        self.wrinkled = wrinkled
+        self.with_points = with_points
+        self.display_color = display_color
+        self.sparse = sparse
+        self.warn = warn
+        self.layer = Sdf.Layer.CreateAnonymous(".usda")
+        self.frames: list[float] = []
+        self.point_meshes: dict = {}
+        self.skel_roots: list[str] = []
+        if with_points:
+            self._collect_point_meshes(all_records)
+        self._specs: dict = {}
+
+    def _collect_point_meshes(self, records: dict) -> None:
+        roots = set()
+        for path in self.wrinkled:
+            prim = self.stage.GetPrimAtPath(path)
+            for ancestor in _ancestors(prim):
+                if ancestor.IsA(UsdSkel.Root):
+                    roots.add(str(ancestor.GetPath()))
+        self.skel_roots = sorted(roots)
+        for path, record in records.items():
+            skinned_here = record.skin is not None and any(
+                path.startswith(root + "/") for root in roots)
+            if path in self.wrinkled or skinned_here:
+                self.point_meshes[path] = record
+
+    def _attr(self, prim_path: str, name: str, type_name, interpolation: str | None = None):
+        key = (prim_path, name)
+        spec = self._specs.get(key)
+        if spec is None:
+            prim_spec = self.layer.GetPrimAtPath(prim_path) or Sdf.CreatePrimInLayer(
+                self.layer, prim_path)
+            spec = prim_spec.attributes.get(name) or Sdf.AttributeSpec(prim_spec, name, type_name)
+            if interpolation:
+                spec.SetInfo("interpolation", interpolation)
+            self._specs[key] = spec
+        return spec.path
+
+    def _set(self, attr_path, frame: float, value) -> None:
+        if math.isnan(frame):
+            self.layer.GetAttributeAtPath(attr_path).default = value
+        else:
+            self.layer.SetTimeSample(attr_path, frame, value)
+
+    def add_frame(self, frame: float, fields_by_path: dict) -> None:
+        """Record one frame: ``fields_by_path[path]`` as returned by read_fields()."""
+        self.frames.append(frame)
+        for path, fields in fields_by_path.items():
+            if path in self.wrinkled:
+                for name, (field, type_name) in PRIMVARS.items():
+                    attr = self._attr(path, name, type_name, UsdGeom.Tokens.vertex)
+                    self._set(attr, frame, _array(fields[field], type_name))
+                if self.display_color:
+                    colors = viridis(display_values(self.display_color, fields,
+                                                    self.wrinkled[path].params))
+                    attr = self._attr(path, "primvars:displayColor",
+                                      Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.vertex)
+                    self._set(attr, frame, Vt.Vec3fArray.FromNumpy(colors))
+            if path in self.point_meshes:
+                points = np.ascontiguousarray(fields["points"], np.float32)
+                self._set(self._attr(path, "points", Sdf.ValueTypeNames.Point3fArray), frame,
+                          Vt.Vec3fArray.FromNumpy(points))
+                normals = np.ascontiguousarray(fields["normals"], np.float32)
+                self._set(self._attr(path, "normals", Sdf.ValueTypeNames.Normal3fArray,
+                                     UsdGeom.Tokens.vertex), frame,
+                          Vt.Vec3fArray.FromNumpy(normals))
+                extent = Vt.Vec3fArray.FromNumpy(
+                    np.stack([points.min(0), points.max(0)]).astype(np.float32))
+                self._set(self._attr(path, "extent", Sdf.ValueTypeNames.Float3Array), frame,
+                          extent)
+
+    def _metadata(self, output_path: str, frame_spec: str) -> None:
+        root = self.stage.GetRootLayer()
+        layer = self.layer
+        layer.timeCodesPerSecond = self.stage.GetTimeCodesPerSecond()
+        layer.framesPerSecond = self.stage.GetFramesPerSecond()
+        timed = [f for f in self.frames if not math.isnan(f)]
+        if timed:
+            layer.startTimeCode = min(timed)
+            layer.endTimeCode = max(timed)
+        for key in ("upAxis", "metersPerUnit"):
+            if root.pseudoRoot.HasInfo(key):
+                layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
+        if root.defaultPrim:
+            layer.defaultPrim = root.defaultPrim
+        if not self.sparse:
+            folder = os.path.dirname(os.path.abspath(output_path))
+            source = os.path.abspath(self.stage_path)
+            layer.subLayerPaths.append(os.path.relpath(source, folder).replace(os.sep, "/"))
+        for root_path in self.skel_roots:
+            spec = self.layer.GetPrimAtPath(root_path) or Sdf.CreatePrimInLayer(self.layer,
+                                                                                 root_path)
+            spec.typeName = "Xform"  # as UsdSkelBakeSkinning: no skinning over baked points
+        layer.customLayerData = {"usdwrinkle": {
+            "version": __version__, "frames": frame_spec, "source": self.stage_path,
+            "withPoints": self.with_points, "displayColor": self.display_color or "",
+            "sparse": self.sparse}}
+
+    def save(self, output_path: str, frame_spec: str) -> None:
+        ext = check_layer_path(output_path)
+        self._metadata(output_path, frame_spec)
+        with atomic_path(output_path) as tmp:
+            # Export picks the file format from the extension; .usd is written as crate
+            args = {"format": "usdc"} if ext == ".usd" else {}
+            if not self.layer.Export(tmp, args=args):
+                raise UsdWrinkleError(f"cannot write layer '{output_path}'")
+
+
+def _ancestors(prim: Usd.Prim):
+    prim = prim.GetParent()
+    while prim and not prim.IsPseudoRoot():
+        yield prim
+        prim = prim.GetParent()

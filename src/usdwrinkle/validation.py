@@ -1,0 +1,163 @@
+"""WrinkleAPI rules, shared by ``usdwrinkle check``, the scene delegate and authoring.
+
+:func:`wrinkle_findings` checks one prim and returns findings; the scene delegate
+refuses the first one as an error, ``check`` lists them all. The rules are also
+registered with UsdValidation (keyword ``UsdWrinkleValidators``) so that other
+tools that run USD's validators find them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pxr import Usd, UsdGeom
+
+from . import schema
+
+VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
+VALIDATOR_KEYWORD = "UsdWrinkleValidators"
+
+
+@dataclass(frozen=True)
+class Finding:
+    prim_path: str
+    attribute: str | None
+    message: str
+    severity: str = "error"
+
+    def one_line(self) -> str:
+        where = self.prim_path + (f".{self.attribute}" if self.attribute else "")
+        return f"{self.message} ({where})"
+
+
+def _times(attr) -> list:
+    times = [Usd.TimeCode.Default()]
+    times.extend(Usd.TimeCode(t) for t in attr.GetTimeSamples())
+    return times
+
+
+def _point_count(prim, time) -> int | None:
+    points = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
+    if points is None:
+        attr = UsdGeom.Mesh(prim).GetPointsAttr()
+        samples = attr.GetTimeSamples()
+        points = attr.Get(samples[0]) if samples else None
+    return None if points is None else len(points)
+
+
+def check_q(values, interpolation: str, point_count: int | None, path: str) -> list[Finding]:
+    out = []
+    arr = np.asarray(values, dtype=np.float64).reshape(-1, 3) if values is not None else None
+    if arr is None:
+        return out
+    if interpolation not in ("vertex", "varying"):
+        out.append(Finding(path, schema.Q, "q must have vertex interpolation"))
+    if point_count is not None and len(arr) != point_count:
+        out.append(Finding(path, schema.Q, f"q has {len(arr)} values for {point_count} points"))
+    if not np.all(np.isfinite(arr)):
+        out.append(Finding(path, schema.Q, "q is not finite"))
+    elif len(arr) and np.max(np.linalg.norm(arr, axis=1)) > 1.0 + 1e-4:
+        out.append(Finding(path, schema.Q, "|q| > 1"))
+    return out
+
+
+def check_width(values, point_count: int | None, path: str) -> list[Finding]:
+    if values is None:
+        return []
+    arr = np.atleast_1d(np.asarray(values, dtype=np.float64))
+    out = []
+    if arr.size != 1 and (point_count is None or arr.size != point_count):
+        out.append(Finding(path, schema.WIDTH, f"width must be constant or have one value per "
+                                               f"point ({point_count})"))
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        out.append(Finding(path, schema.WIDTH, "width must be finite and > 0"))
+    return out
+
+
+def check_profile(values, name: str, path: str) -> list[Finding]:
+    if values is None or len(values) == 0:
+        return []
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.size < 2 or not np.all(np.isfinite(arr)):
+        return [Finding(path, name, "a profile needs at least 2 finite samples")]
+    return []
+
+
+def check_amplitude_scale(value, path: str) -> list[Finding]:
+    if value is None:
+        return []
+    if not np.isfinite(value) or value < 0:
+        return [Finding(path, schema.AMPLITUDE_SCALE, "amplitude scale must be finite and >= 0")]
+    return []
+
+
+def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
+    """Every rule of ``usdwrinkle check`` on one prim with WrinkleAPI (else no findings)."""
+    if not schema.has_wrinkle_api(prim):
+        return []
+    path = str(prim.GetPath())
+    if not prim.IsA(UsdGeom.Mesh):
+        return [Finding(path, None, f"WrinkleAPI is applied to a {prim.GetTypeName() or 'typeless'}"
+                                    " prim, not a Mesh")]
+    findings: list[Finding] = []
+    count = _point_count(prim, Usd.TimeCode.Default())
+    primvars = UsdGeom.PrimvarsAPI(prim)
+    q = primvars.GetPrimvar("wrinkle:q")
+    if q and q.HasAuthoredValue():
+        for time in _times(q.GetAttr()):
+            findings += check_q(q.ComputeFlattened(time), q.GetInterpolation(), count, path)
+    width = primvars.GetPrimvar("wrinkle:width")
+    if width and width.HasAuthoredValue():
+        for time in _times(width.GetAttr()):
+            findings += check_width(width.ComputeFlattened(time), count, path)
+    for name in (schema.HEIGHT_PROFILE, schema.GRADIENT_PROFILE):
+        attr = prim.GetAttribute(name)
+        if attr and attr.HasAuthoredValue():
+            for time in _times(attr):
+                findings += check_profile(attr.Get(time), name, path)
+    attr = prim.GetAttribute(schema.AMPLITUDE_SCALE)
+    if attr and attr.HasAuthoredValue():
+        for time in _times(attr):
+            findings += check_amplitude_scale(attr.Get(time), path)
+    rest = primvars.GetPrimvar("rest")
+    if rest and rest.HasAuthoredValue():
+        value = rest.ComputeFlattened(Usd.TimeCode.Default())
+        if value is not None and count is not None and len(value) != count:
+            findings.append(Finding(path, "primvars:rest",
+                                    f"primvars:rest has {len(value)} values for {count} points"))
+    # one finding per distinct problem, even when several time samples repeat it
+    return list(dict.fromkeys(findings))
+
+
+_registered = {"done": False}
+
+
+def register_validators() -> None:
+    """Register the WrinkleAPI checker with UsdValidation (once per process)."""
+    if _registered["done"]:
+        return
+    from pxr import UsdValidation
+
+    registry = UsdValidation.ValidationRegistry()
+    if not registry.HasValidator(VALIDATOR_NAME):
+        metadata = UsdValidation.ValidatorMetadata(
+            name=VALIDATOR_NAME,
+            doc="WrinkleAPI values: on a Mesh; q of the points' length, vertex, finite, "
+                "|q| <= 1; width finite > 0, constant or per point; profiles with >= 2 finite "
+                "samples; primvars:rest of the points' length; amplitude scale finite >= 0.",
+            keywords=[VALIDATOR_KEYWORD])
+
+        def task(prim, time_range):
+            errors = []
+            for finding in wrinkle_findings(prim):
+                site_path = prim.GetPath()
+                if finding.attribute:
+                    site_path = site_path.AppendProperty(finding.attribute)
+                errors.append(UsdValidation.ValidationError(
+                    "WrinkleAPIValue", UsdValidation.ValidationErrorType.Error,
+                    [UsdValidation.ValidationErrorSite(prim.GetStage(), site_path)],
+                    finding.message))
+            return errors
+
+        registry.RegisterPrimValidator(metadata, task)
+    _registered["done"] = True
