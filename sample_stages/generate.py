@@ -99,8 +99,8 @@ def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0):
     prim = mesh.GetPrim()
     prim.ApplyAPI(schema.API_NAME)
     primvars = UsdGeom.PrimvarsAPI(mesh)
-    primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.Float,
-                           UsdGeom.Tokens.constant).Set(float(width))
+    primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.FloatArray,
+                           UsdGeom.Tokens.constant).Set(Vt.FloatArray([float(width)]))
     if q is not None:
         primvars.CreatePrimvar("wrinkle:q", Sdf.ValueTypeNames.Vector3fArray,
                                UsdGeom.Tokens.vertex).Set(

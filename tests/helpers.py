@@ -33,8 +33,8 @@ def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width
                                UsdGeom.Tokens.vertex).Set(
             Vt.Vec3fArray.FromNumpy(np.asarray(q, np.float32)))
     if width is not None:
-        primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.Float,
-                               UsdGeom.Tokens.constant).Set(float(width))
+        primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.FloatArray,
+                               UsdGeom.Tokens.constant).Set(Vt.FloatArray([float(width)]))
     if amplitude_scale is not None:
         prim.CreateAttribute(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(
             float(amplitude_scale))
