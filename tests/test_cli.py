@@ -120,8 +120,11 @@ def test_info_prints_plugin_path(gl_context, capsys):
     assert main(["info"]) == 0
     out = capsys.readouterr().out
     assert "GL renderer: " in out and "PXR_PLUGINPATH_NAME=" in out
-    plugin_dir = out.split("PXR_PLUGINPATH_NAME=")[1].split(os.pathsep)[0].strip()
-    assert (Path(plugin_dir) / "plugInfo.json").is_file()
+    plugin_dirs = out.split("PXR_PLUGINPATH_NAME=")[1].splitlines()[0].split(os.pathsep)
+    assert (Path(plugin_dirs[0]) / "generatedSchema.usda").is_file()  # the schema
+    assert (Path(plugin_dirs[1]) / "plugInfo.json").is_file()  # the usdview menu
+    python_path = out.split("PYTHONPATH=")[1].splitlines()[0].split(os.pathsep)[0]
+    assert (Path(python_path) / "usdwrinkle" / "__init__.py").is_file()
 
 
 def test_demo_renders_the_shirt(gl_context, tmp_path):

@@ -19,7 +19,8 @@ def test_wheel_ships_its_data_and_runs(tmp_path, gl_context):
     for required in ("usdwrinkle/schemas/plugInfo.json", "usdwrinkle/schemas/generatedSchema.usda",
                      "usdwrinkle/shaders/skin.glsl", "usdwrinkle/shaders/include/common.glsl",
                      "usdwrinkle/sample_stages/shirt.usda",
-                     "usdwrinkle/sample_stages/textures/plaid.png"):
+                     "usdwrinkle/sample_stages/textures/plaid.png",
+                     "usdwrinkle/usdview/plugInfo.json"):
         assert required in names, required
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--quiet", "--target",

@@ -35,8 +35,25 @@ def run(args) -> int:
             print(f"GL renderer: {info['renderer']}; {info['version']}")
         except GLContextError as exc:
             print(f"GL renderer: unavailable: {exc.one_line()}")
-    current = os.environ.get("PXR_PLUGINPATH_NAME", "")
-    value = schema.schema_dir() + (os.pathsep + current if current else "")
-    print("environment for other USD processes (usdview, usdcat):")
-    print(f"  export PXR_PLUGINPATH_NAME={value}")
+    for line in environment_lines():
+        print(line)
     return 0
+
+
+def environment_lines() -> list[str]:
+    """The exact environment usdview needs for the schema and the Wrinkles menu."""
+    import usdwrinkle
+
+    from .. import schema
+    from ..usdview import plugin_dir
+
+    def joined(name, *dirs):
+        current = os.environ.get(name, "")
+        parts = [d for d in dirs if d not in current.split(os.pathsep)]
+        return os.pathsep.join(parts + ([current] if current else []))
+
+    package_parent = os.path.dirname(os.path.dirname(os.path.abspath(usdwrinkle.__file__)))
+    plugin_path = joined("PXR_PLUGINPATH_NAME", schema.schema_dir(), plugin_dir())
+    return ["environment for other USD processes (usdview, usdcat):",
+            f"  export PXR_PLUGINPATH_NAME={plugin_path}",
+            f"  export PYTHONPATH={joined('PYTHONPATH', package_parent)}"]

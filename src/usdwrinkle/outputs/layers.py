@@ -89,7 +89,7 @@ class LayerBaker:
 
     def __init__(self, stage: Usd.Stage, stage_path: str, wrinkled: dict, all_records: dict,
                  with_points: bool = False, display_color: str | None = None,
-                 sparse: bool = False, warn=lambda m: None):
+                 sparse: bool = False, warn=lambda m: None, layer: Sdf.Layer | None = None):
         self.stage = stage
         self.stage_path = stage_path
         self.wrinkled = wrinkled
@@ -97,7 +97,8 @@ class LayerBaker:
         self.display_color = display_color
         self.sparse = sparse
         self.warn = warn
-        self.layer = Sdf.Layer.CreateAnonymous(".usda")
+        # ``layer``: write into an existing layer (usdview's session layer) instead
+        self.layer = layer if layer is not None else Sdf.Layer.CreateAnonymous(".usda")
         self.frames: list[float] = []
         self.point_meshes: dict = {}
         self.skel_roots: list[str] = []

@@ -1,0 +1,108 @@
+"""The usdview plugin's commands, driven by a stand-in for usdviewApi (usd-core has no
+Usdviewq)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import OpenImageIO as oiio
+from pxr import Usd, UsdGeom
+
+from usdwrinkle import usdview
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+
+
+def stand_in(stage, frame, selected=(), camera=None):
+    status = []
+    api = SimpleNamespace(stage=stage, frame=Usd.TimeCode(frame), selectedPrims=list(selected),
+                          prim=selected[0] if selected else None, cameraPrim=camera,
+                          PrintStatus=status.append)
+    return api, status
+
+
+def test_bake_current_frame_writes_the_session_layer(gl_context):
+    stage = Usd.Stage.Open(str(SAMPLES / "zeppelin.usda"))
+    api, status = stand_in(stage, 12)
+    baked = usdview.bake_current_frame(api, ctx=gl_context)
+    assert baked == ["/World/Zeppelin/Hull"]
+    session = stage.GetSessionLayer()
+    assert session.GetPrimAtPath("/World/Zeppelin/Hull")
+    assert not stage.GetRootLayer().dirty  # nothing went into the asset
+    hull = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Zeppelin/Hull"))
+    amplitude = np.asarray(hull.GetPrimvar("wrinkle:amplitude").Get(12))
+    colors = np.asarray(hull.GetPrimvar("displayColor").Get(12))
+    assert amplitude.shape == (506,) and amplitude.max() > 0
+    assert colors.shape == (506, 3)
+    # more amplitude, lighter (viridis runs dark to bright)
+    order = np.argsort(amplitude)
+    assert colors[order[-1]].sum() > colors[order[0]].sum()
+    assert "baked 1 mesh(es) at frame 12" in status[-1]
+
+
+def test_bake_uses_the_selection(gl_context):
+    stage = Usd.Stage.Open(str(SAMPLES / "curtain.usda"))
+    cloth = stage.GetPrimAtPath("/World/Curtain")
+    api, _ = stand_in(stage, 5, selected=[cloth])
+    assert usdview.bake_current_frame(api, ctx=gl_context) == ["/World/Curtain/Cloth"]
+
+
+def test_bake_says_when_nothing_is_wrinkled(gl_context, corpus):
+    stage = Usd.Stage.Open(str(corpus / "openusd-usdskel" / "lbs.usda"))
+    api, status = stand_in(stage, 3)
+    assert usdview.bake_current_frame(api, ctx=gl_context) == []
+    assert "no mesh" in status[-1]
+
+
+def test_render_current_frame_writes_and_opens(gl_context, tmp_path):
+    stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    camera = stage.GetPrimAtPath("/World/main_cam")
+    api, status = stand_in(stage, 24, camera=camera)
+    opened = []
+    paths = usdview.render_current_frame(api, outdir=str(tmp_path), opener=opened.append,
+                                         width=160, ctx=gl_context)
+    assert [Path(p).suffix for p in paths] == [".exr", ".png"]
+    assert opened == [paths[1]]
+    spec = oiio.ImageInput.open(paths[0]).spec()
+    assert (spec.width, spec.height) == (160, 107)
+    assert "wrinkle.height" in spec.channelnames
+    assert "rendered" in status[-1]
+
+
+def test_plugin_registers_a_wrinkles_menu():
+    commands, menus = [], {}
+
+    class Registry:
+        def registerCommandPlugin(self, name, display, callback):  # noqa: N802
+            commands.append((name, display, callback))
+            return name
+
+    class Menu:
+        def __init__(self):
+            self.items = []
+
+        def addItem(self, item):  # noqa: N802
+            self.items.append(item)
+
+    class Builder:
+        def findOrCreateMenu(self, name):  # noqa: N802
+            return menus.setdefault(name, Menu())
+
+    container = usdview.WrinklePluginContainer()
+    container.registerPlugins(Registry(), None)
+    container.configureView(Registry(), Builder())
+    assert [c[1] for c in commands] == ["Bake current frame", "Render current frame"]
+    assert commands[0][2] is usdview.bake_current_frame
+    assert menus["Wrinkles"].items == ["Wrinkles.BakeCurrentFrame", "Wrinkles.RenderCurrentFrame"]
+
+
+def test_plug_info_names_the_container():
+    info = json.loads((Path(usdview.plugin_dir()) / "plugInfo.json").read_text())
+    plugin = info["Plugins"][0]
+    assert plugin["Type"] == "python" and plugin["Name"] == "usdwrinkle.usdview"
+    types = plugin["Info"]["Types"]
+    assert "usdwrinkle.usdview.WrinklePluginContainer" in types
+    assert types["usdwrinkle.usdview.WrinklePluginContainer"]["bases"] == [
+        "pxr.Usdviewq.plugin.PluginContainer"]
