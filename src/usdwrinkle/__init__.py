@@ -16,4 +16,6 @@ if not _schema.register():
         "unknown in this process; import usdwrinkle first or set PXR_PLUGINPATH_NAME="
         + _schema.schema_dir(), stacklevel=2)
 
-__all__ = ["__version__"]
+from .authoring import WrinkleAPI, profile_from_curve, profile_preset  # noqa: E402
+
+__all__ = ["WrinkleAPI", "__version__", "profile_from_curve", "profile_preset"]

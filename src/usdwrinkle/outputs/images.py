@@ -30,6 +30,29 @@ def check_format(path: str) -> str:
     return ext
 
 
+def read_float_image(path: str) -> tuple[np.ndarray, bool]:
+    """Decode an image file: ((h, w, c) float32 with row 0 at the top, is 8-bit).
+
+    Raises OSError with OpenImageIO's reason when it cannot be read.
+    """
+    import OpenImageIO as oiio
+
+    if not os.path.isfile(path):
+        raise OSError(f"cannot read image '{path}': no such file")
+    image = oiio.ImageInput.open(path)
+    if image is None:
+        raise OSError(f"cannot read image '{path}': {oiio.geterror().strip() or 'unreadable'}")
+    try:
+        spec = image.spec()
+        pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        if pixels is None:
+            raise OSError(f"cannot read image '{path}': {image.geterror().strip()}")
+    finally:
+        image.close()
+    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+    return pixels, spec.format.basetype == oiio.UINT8
+
+
 def write_image(path: str, buffers: dict) -> None:
     """Write one frame's render buffers to ``path``, atomically."""
     import OpenImageIO as oiio

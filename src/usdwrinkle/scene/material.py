@@ -25,7 +25,7 @@ def load_texture(resolved_path: str) -> np.ndarray:
 
     Raises OSError when the asset cannot be read or decoded.
     """
-    import OpenImageIO as oiio
+    from ..outputs.images import read_float_image
 
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))
     if asset is None:
@@ -38,17 +38,13 @@ def load_texture(resolved_path: str) -> np.ndarray:
         handle.write(data)
         tmp = handle.name
     try:
-        buf = oiio.ImageBuf(tmp)
-        pixels = buf.get_pixels(oiio.FLOAT)
-        if pixels is None or buf.has_error:
-            raise OSError(f"cannot decode texture '{resolved_path}': {buf.geterror()}")
-        spec = buf.spec()
-        pixels = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width,
-                                                              spec.nchannels)
-        encoded_srgb = spec.format.basetype == oiio.UINT8 or suffix.lower() in (
-            ".jpg", ".jpeg", ".png")
+        pixels, eight_bit = read_float_image(tmp)
+    except OSError as exc:
+        raise OSError(f"cannot decode texture '{resolved_path}': "
+                      f"{str(exc).split(': ', 1)[-1]}") from None
     finally:
         os.unlink(tmp)
+    encoded_srgb = eight_bit or suffix.lower() in (".jpg", ".jpeg", ".png")
     rgba = np.ones((pixels.shape[0], pixels.shape[1], 4), np.float32)
     channels = pixels.shape[2]
     if channels >= 3:

@@ -22,7 +22,7 @@ from .material import read_material
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
 from .skel import SkelBindings, sample_skin, skin_data
-from .topology import build_topology, vertex_normals
+from .topology import Topology, build_topology, vertex_normals
 
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
 
@@ -44,6 +44,53 @@ def open_stage(path: str) -> Usd.Stage:
     if stage is None:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
     return stage
+
+
+def rest_pose(prim: Usd.Prim, skinned: bool = False):
+    """The rest pose of a mesh: (point_cached, rest points value, attribute it came from).
+
+    UsdSkel meshes rest in their authored points. Other meshes are point caches when
+    their points are time-sampled or ``primvars:rest`` is authored; their rest pose is
+    ``primvars:rest`` when authored, else the default-time points, else the first sample.
+    """
+    default = Usd.TimeCode.Default()
+    points_attr = UsdGeom.Mesh(prim).GetPointsAttr()
+    rest_primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("rest")
+    has_rest = not skinned and bool(rest_primvar) and rest_primvar.HasAuthoredValue()
+    point_cached = not skinned and (points_attr.GetNumTimeSamples() > 0 or has_rest)
+    if has_rest:
+        return point_cached, rest_primvar.ComputeFlattened(default), "primvars:rest"
+    value = points_attr.Get(default)
+    if value is None and points_attr.GetNumTimeSamples():
+        value = points_attr.Get(points_attr.GetTimeSamples()[0])
+    return point_cached, value, "points"
+
+
+def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
+    """Triangulated topology of a mesh (None without faces); time-sampled topology is
+    read at its first sample."""
+    mesh = UsdGeom.Mesh(prim)
+    path = str(prim.GetPath())
+
+    def first(attr):
+        value = attr.Get(Usd.TimeCode.Default())
+        if value is None and attr.GetNumTimeSamples():
+            value = attr.Get(attr.GetTimeSamples()[0])
+        return value
+
+    counts = first(mesh.GetFaceVertexCountsAttr())
+    indices = first(mesh.GetFaceVertexIndicesAttr())
+    if counts is None or indices is None or len(counts) == 0:
+        return None
+    holes = mesh.GetHoleIndicesAttr().Get(Usd.TimeCode.Default())
+    topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
+                              None if holes is None else np.asarray(holes), path)
+    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+        # Flip the triangles' winding, not the faces, so faceVarying corners still map.
+        topology = dataclasses.replace(
+            topology, triangles=np.ascontiguousarray(topology.triangles[:, [0, 2, 1]]),
+            corner_face_vertex=np.ascontiguousarray(topology.corner_face_vertex[:, [0, 2, 1]]))
+    return topology
 
 
 def _finite_points(points, path, attribute, time=None):
@@ -94,46 +141,21 @@ class StageSceneDelegate:
         default = Usd.TimeCode.Default()
         points_attr = mesh.GetPointsAttr()
         binding = self.skel.get(path)
-        primvars = UsdGeom.PrimvarsAPI(prim)
-        rest_primvar = primvars.GetPrimvar("rest")
-        has_rest = binding is None and bool(rest_primvar) and rest_primvar.HasAuthoredValue()
-        # Point caches: time-sampled points, or any points with an authored primvars:rest.
-        point_cached = binding is None and (points_attr.GetNumTimeSamples() > 0 or has_rest)
-        if has_rest:
-            rest_value = rest_primvar.ComputeFlattened(default)
-            rest_attr_name = "primvars:rest"
-        else:
-            rest_value = points_attr.Get(default)
-            rest_attr_name = "points"
-            if rest_value is None and points_attr.GetNumTimeSamples():
-                rest_value = points_attr.Get(points_attr.GetTimeSamples()[0])
+        point_cached, rest_value, rest_attr_name = rest_pose(prim, skinned=binding is not None)
+        has_rest = rest_attr_name == "primvars:rest"
         if rest_value is None or len(rest_value) == 0:
             self.warn(f"mesh has no points; skipped ({path})")
             return None
         rest = _finite_points(rest_value, path, rest_attr_name)
-        counts = mesh.GetFaceVertexCountsAttr().Get(default)
-        indices = mesh.GetFaceVertexIndicesAttr().Get(default)
-        if counts is None or indices is None:
-            times = mesh.GetFaceVertexCountsAttr().GetTimeSamples()
-            counts = mesh.GetFaceVertexCountsAttr().Get(times[0]) if times else None
-            times = mesh.GetFaceVertexIndicesAttr().GetTimeSamples()
-            indices = mesh.GetFaceVertexIndicesAttr().Get(times[0]) if times else None
-        if counts is None or indices is None or len(counts) == 0:
+        topology = read_topology(prim, rest)
+        if topology is None:
             self.warn(f"mesh has no faces; skipped ({path})")
             return None
-        holes = mesh.GetHoleIndicesAttr().Get(default)
-        topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
-                                  None if holes is None else np.asarray(holes), path)
         first_points = points_attr.Get(points_attr.GetTimeSamples()[0]) \
             if points_attr.GetNumTimeSamples() else points_attr.Get(default)
         if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
                                   "primvars:rest")
-        if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
-            # Flip the triangles' winding, not the faces, so faceVarying corners still map.
-            topology = dataclasses.replace(
-                topology, triangles=np.ascontiguousarray(topology.triangles[:, [0, 2, 1]]),
-                corner_face_vertex=np.ascontiguousarray(topology.corner_face_vertex[:, [0, 2, 1]]))
         skin = None
         if binding is not None:
             skel_query, skinning_query = binding

@@ -1,0 +1,224 @@
+"""usdwrinkle apply: author WrinkleAPI on meshes, with q painted from textures."""
+from __future__ import annotations
+
+import fnmatch
+import os
+
+import numpy as np
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "apply", help="apply and author WrinkleAPI on meshes (q from textures, widths, profiles)",
+        description="Apply WrinkleAPI to the meshes that PRIM_PATH names and author its "
+                    "attributes. PRIM_PATH may be a pattern: '*' matches within a path "
+                    "element, '**' matches any number of elements (/World/**/Shirt*). "
+                    "Edits go to the stage's root layer, or with -o to an override layer of "
+                    "sparse overs that sublayers nothing. Every value is checked with the "
+                    "rules of 'usdwrinkle check'; a bad one is refused and nothing is written.")
+    p.add_argument("stage", help="the USD stage")
+    p.add_argument("prim_paths", nargs="+", metavar="PRIM_PATH", help="mesh paths or patterns")
+    p.add_argument("-o", "--output", metavar="LAYER",
+                   help="write the edits to this override layer (created or updated) instead "
+                        "of the root layer")
+    p.add_argument("--width", type=float, metavar="W", help="rest wavelength W (scene units)")
+    p.add_argument("--amplitude-scale", type=float, metavar="S", help="amplitude scale s")
+    p.add_argument("--profile", metavar="NAME|FILE",
+                   help="height profile: cosine, sharp, rounded, box, or a text file of heights "
+                        "over one period (or 'theta height' pairs)")
+    p.add_argument("--q", metavar="X,Y,Z:AMOUNT",
+                   help="uniform rest-space direction, projected onto each vertex's tangent "
+                        "plane, with |q| = AMOUNT")
+    p.add_argument("--q-from-texture", metavar="IMAGE",
+                   help="flow map: RG = tangent direction in (u, v) as 2c-1, v up")
+    p.add_argument("--uv", default="st", metavar="PRIMVAR",
+                   help="texture coordinates for the texture options (st)")
+    p.add_argument("--amount-channel", choices=("R", "G", "B", "A"), type=str.upper,
+                   help="flow map channel with the amount (default: the decoded vector's length)")
+    p.add_argument("--q-from-primvar", metavar="NAME",
+                   help="convert a painted vertex primvar (vector, or colour as 2c-1) into q")
+    p.add_argument("--width-from-texture", metavar="IMAGE",
+                   help="grey map that scales the width per vertex (width becomes vertex)")
+    p.add_argument("--clear-q", action="store_true", help="remove the painted q")
+    p.set_defaults(run=run)
+
+
+def _split(path: str) -> list[str]:
+    return [part for part in path.split("/") if part]
+
+
+def _match(parts: list[str], pattern: list[str]) -> bool:
+    if not pattern:
+        return not parts
+    head = pattern[0]
+    if head == "**":
+        return any(_match(parts[i:], pattern[1:]) for i in range(len(parts) + 1))
+    return bool(parts) and fnmatch.fnmatchcase(parts[0], head) and _match(parts[1:], pattern[1:])
+
+
+def match_prims(stage, patterns: list[str]):
+    """Prims named by paths or patterns, in stage order; an error for a pattern with no match."""
+    from pxr import Usd
+
+    from ..errors import UsdWrinkleError
+
+    prims = list(stage.Traverse(Usd.TraverseInstanceProxies()))
+    chosen = {}
+    for pattern in patterns:
+        if not pattern.startswith("/"):
+            raise UsdWrinkleError(f"prim path '{pattern}' must be absolute (start with '/')")
+        parts = _split(pattern)
+        found = [p for p in prims if _match(_split(str(p.GetPath())), parts)]
+        if not found:
+            raise UsdWrinkleError(f"no prim matches '{pattern}'")
+        for prim in found:
+            chosen[str(prim.GetPath())] = prim
+    return list(chosen.values())
+
+
+def parse_q(text: str):
+    from ..errors import UsdWrinkleError
+
+    try:
+        direction, amount = text.split(":")
+        vector = [float(v) for v in direction.split(",")]
+        amount = float(amount)
+        if len(vector) != 3:
+            raise ValueError
+    except ValueError:
+        raise UsdWrinkleError(f"bad --q '{text}' (use X,Y,Z:AMOUNT, e.g. 1,0,0:0.5)") from None
+    if not 0.0 <= amount <= 1.0:
+        raise UsdWrinkleError(f"--q amount {amount} is outside [0, 1]")
+    return np.array(vector), amount
+
+
+def read_profile(spec: str) -> np.ndarray:
+    from ..authoring.profiles import PRESETS, profile_from_curve, profile_preset
+    from ..errors import UsdWrinkleError
+
+    if spec in PRESETS:
+        return profile_preset(spec)
+    if not os.path.isfile(spec):
+        raise UsdWrinkleError(f"--profile '{spec}' is neither a preset ({', '.join(PRESETS)}) "
+                              "nor a file")
+    try:
+        values = np.loadtxt(spec, delimiter=None if "," not in open(spec).read() else ",",
+                            ndmin=1)
+    except ValueError as exc:
+        raise UsdWrinkleError(f"cannot read profile file '{spec}': {exc}") from None
+    return profile_from_curve(values)
+
+
+def run(args) -> int:
+    from pxr import Sdf, Usd, UsdGeom
+
+    from ..authoring import WrinkleAPI
+    from ..authoring.paint import (
+        MeshSurface,
+        q_from_flow_map,
+        q_from_primvar,
+        q_uniform,
+        width_from_texture,
+    )
+    from ..errors import UsdWrinkleError
+    from ..outputs.atomic import atomic_path
+    from ..outputs.layers import check_layer_path
+    from ..scene.stage import open_stage
+    from ..schema import require_schema
+    from .common import stage_layer_paths
+
+    require_schema()
+    q_sources = [args.q, args.q_from_texture, args.q_from_primvar, args.clear_q]
+    if sum(bool(s) for s in q_sources) > 1:
+        raise UsdWrinkleError("choose one of --q, --q-from-texture, --q-from-primvar, --clear-q")
+    if args.width_from_texture and args.width is None:
+        raise UsdWrinkleError("--width-from-texture scales --width: give --width too")
+    q_spec = parse_q(args.q) if args.q else None
+    profile = read_profile(args.profile) if args.profile else None
+
+    stage = open_stage(args.stage)
+    if args.output:
+        check_layer_path(args.output)
+        if os.path.realpath(args.output) in stage_layer_paths(stage):
+            raise UsdWrinkleError(f"-o '{args.output}' is a layer of the stage; leave -o out to "
+                                  "edit the root layer")
+        override = Sdf.Layer.FindOrOpen(args.output) if os.path.exists(args.output) \
+            else Sdf.Layer.CreateAnonymous(os.path.splitext(args.output)[1])
+        if override is None:
+            raise UsdWrinkleError(f"cannot open override layer '{args.output}'")
+        stage = Usd.Stage.Open(stage.GetRootLayer(), override)
+        stage.SetEditTarget(Usd.EditTarget(override))
+        target = override
+    else:
+        target = stage.GetRootLayer()
+        if not target.realPath or target.realPath.lower().endswith(".usdz"):
+            raise UsdWrinkleError(f"cannot edit '{args.stage}' in place (a .usdz package); "
+                                  "use -o LAYER")
+
+    prims = match_prims(stage, args.prim_paths)
+    meshes = [p for p in prims if p.IsA(UsdGeom.Mesh)]
+    if not meshes:
+        raise UsdWrinkleError(f"no Mesh among the prims named ({', '.join(args.prim_paths)})")
+    literal = [p for p in prims if not p.IsA(UsdGeom.Mesh) and str(p.GetPath())
+               in args.prim_paths]
+    if literal:
+        raise UsdWrinkleError("WrinkleAPI applies to Mesh prims only", str(literal[0].GetPath()))
+    for prim in meshes:
+        if prim.IsInstanceProxy():
+            raise UsdWrinkleError("a mesh inside an instance cannot be edited; edit its "
+                                  "prototype's source", str(prim.GetPath()))
+
+    # Compute and check every value before the first edit, so that a refusal writes nothing.
+    plans = []
+    for prim in meshes:
+        surface = MeshSurface(prim) if (q_spec is not None or args.q_from_texture
+                                        or args.q_from_primvar or args.width_from_texture) \
+            else None
+        plan = {"prim": prim}
+        if q_spec is not None:
+            plan["q"] = q_uniform(surface, *q_spec)
+        elif args.q_from_texture:
+            plan["q"] = q_from_flow_map(surface, args.q_from_texture, args.uv,
+                                        args.amount_channel)
+        elif args.q_from_primvar:
+            plan["q"] = q_from_primvar(surface, args.q_from_primvar)
+        if args.width_from_texture:
+            plan["width"] = width_from_texture(surface, args.width_from_texture, args.width,
+                                               args.uv)
+        elif args.width is not None:
+            plan["width"] = np.array([args.width], np.float32)
+        plans.append(plan)
+    from ..validation import check_amplitude_scale, check_q, check_width
+    for plan in plans:
+        path = str(plan["prim"].GetPath())
+        count = len(UsdGeom.Mesh(plan["prim"]).GetPointsAttr().Get() or [])
+        findings = []
+        if "q" in plan:
+            findings += check_q(plan["q"], "vertex", count, path)
+        if "width" in plan:
+            findings += check_width(plan["width"], count, path)
+        if args.amplitude_scale is not None:
+            findings += check_amplitude_scale(args.amplitude_scale, path)
+        if findings:
+            raise UsdWrinkleError(findings[0].message, findings[0].prim_path,
+                                  findings[0].attribute)
+
+    for plan in plans:
+        api = WrinkleAPI.Apply(plan["prim"])
+        if "q" in plan:
+            api.set_q(plan["q"])
+        if args.clear_q:
+            api.clear_q()
+        if "width" in plan:
+            api.CreateWidthPrimvar(plan["width"])
+        if args.amplitude_scale is not None:
+            api.CreateAmplitudeScaleAttr(args.amplitude_scale)
+        if profile is not None:
+            api.set_profile(profile)
+
+    destination = args.output or target.realPath
+    with atomic_path(destination) as tmp:
+        if not target.Export(tmp):
+            raise UsdWrinkleError(f"cannot write '{destination}'")
+    print(f"usdwrinkle: applied WrinkleAPI to {len(meshes)} mesh(es) in {destination}")
+    return 0
