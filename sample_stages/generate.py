@@ -15,7 +15,8 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
-from usdwrinkle import schema
+from usdwrinkle import WrinkleAPI, profile_preset
+from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
 
 FRAMES = (1, 24)
 
@@ -96,16 +97,13 @@ def define_mesh(stage, path, points, counts, indices, st=None):
 
 
 def apply_wrinkles(mesh, width, q=None, amplitude_scale=1.0):
-    prim = mesh.GetPrim()
-    prim.ApplyAPI(schema.API_NAME)
-    primvars = UsdGeom.PrimvarsAPI(mesh)
-    primvars.CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.FloatArray,
-                           UsdGeom.Tokens.constant).Set(Vt.FloatArray([float(width)]))
+    """Author WrinkleAPI through usdwrinkle's own API (each value checked as it is set)."""
+    api = WrinkleAPI.Apply(mesh.GetPrim())
+    api.CreateWidthPrimvar([width])
     if q is not None:
-        primvars.CreatePrimvar("wrinkle:q", Sdf.ValueTypeNames.Vector3fArray,
-                               UsdGeom.Tokens.vertex).Set(
-            Vt.Vec3fArray.FromNumpy(np.asarray(q, np.float32)))
-    prim.CreateAttribute(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(amplitude_scale)
+        api.set_q(q)
+    api.CreateAmplitudeScaleAttr(amplitude_scale)
+    return api
 
 
 def rig(stage, root_path, mesh, joints, bind_xforms, joint_indices, joint_weights,
@@ -331,11 +329,57 @@ def curtain(outdir):
     return len(points)
 
 
+def make_flow_map(path):
+    """A painted flow map: compression runs around the centre (a drawstring gather, so the
+    folds radiate), and the amount fades out towards the rim.
+
+    RG = direction in (u, v) as 2c - 1 with v up; B = amount.
+    """
+    import OpenImageIO as oiio
+
+    size = 128
+    v, u = np.mgrid[0:size, 0:size]
+    u = (u + 0.5) / size - 0.5
+    v = 0.5 - (v + 0.5) / size  # image rows run down, v runs up
+    radius = np.hypot(u, v)
+    swirl = np.stack([-v, u], -1) / np.maximum(radius, 1e-6)[..., None]
+    amount = np.clip(1.0 - radius / 0.45, 0.0, 1.0) * 0.8
+    rgb = np.concatenate([0.5 + 0.5 * swirl, amount[..., None]], -1)
+    out = oiio.ImageOutput.create(path)
+    out.open(path, oiio.ImageSpec(size, size, 3, "uint8"))
+    out.write_image(np.ascontiguousarray(np.round(rgb * 255).astype(np.uint8)))
+    out.close()
+
+
+def flag(outdir):
+    """A static banner (25 x 17 = 425 vertices): its wrinkles are painted, not deformed."""
+    stage = new_stage(os.path.join(outdir, "flag.usda"))
+    cols, rows, width, height = 25, 17, 3.0, 2.0
+    xs, ys = np.linspace(-width / 2, width / 2, cols), np.linspace(0, height, rows)
+    gy, gx = np.meshgrid(ys, xs, indexing="ij")
+    points = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], 1)
+    counts, indices = grid_faces(rows, cols)
+    st = np.stack([(gx.ravel() + width / 2) / width, gy.ravel() / height], 1)
+    mesh = define_mesh(stage, "/World/Flag", points, counts, indices, st)
+    material = add_material(stage, "Silk", color=(0.85, 0.72, 0.3))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    flow = os.path.join(outdir, "textures", "flow_gather.png")
+    make_flow_map(flow)
+    api = apply_wrinkles(mesh, width=0.12)
+    api.set_q(q_from_flow_map(MeshSurface(mesh.GetPrim()), flow, "st", "B"))
+    api.set_profile(profile_preset("sharp"))
+    add_camera(stage, eye=(0.0, 1.0, 4.2), target=(0.0, 1.0, 0.0))
+    add_lights(stage, direction_euler=(-35.0, 25.0, 0.0))
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     outdir = argv[0] if argv else os.path.dirname(os.path.abspath(__file__))
     os.makedirs(outdir, exist_ok=True)
-    for make in (shirt, zeppelin, curtain):
+    os.makedirs(os.path.join(outdir, "textures"), exist_ok=True)
+    for make in (shirt, zeppelin, curtain, flag):
         count = make(outdir)
         print(f"{make.__name__}.usda: {count} vertices")
     return 0

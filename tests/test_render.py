@@ -33,7 +33,8 @@ def save(path: Path, pixels: np.ndarray) -> None:
     out.close()
 
 
-@pytest.mark.parametrize("stage_name,frame", [("shirt", 24), ("zeppelin", 24), ("curtain", 24)])
+@pytest.mark.parametrize("stage_name,frame", [("shirt", 24), ("zeppelin", 24), ("curtain", 24),
+                                              ("flag", 1)])
 def test_golden_frames(gl_context, regenerate_goldens, stage_name, frame):
     if not reference_rasterizer(gl_context):
         pytest.skip("goldens are defined on Mesa llvmpipe only (pygfx's convention)")
