@@ -39,6 +39,9 @@ class WrinkleEngine:
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, warn=warn)
         self.camera = camera
+        # fail on a camera that does not exist before any GPU work
+        from .scene.camera import find_camera
+        find_camera(self.scene.stage, camera)
         self.render_delegate = RenderDelegate(ctx, profile=profile)
         self.render_pass = RenderPass(self.render_delegate)
         self._dirty = {}
@@ -50,9 +53,6 @@ class WrinkleEngine:
         self._history_frame: float | None = None
         #: wraps the list of preroll frames (the CLI shows a progress bar)
         self.preroll_progress = lambda frames: frames
-        # fail early on a camera that does not exist
-        from .scene.camera import find_camera
-        find_camera(self.scene.stage, camera)
 
     @property
     def wrinkled_paths(self) -> list[str]:

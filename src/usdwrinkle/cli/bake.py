@@ -36,18 +36,20 @@ def run(args) -> int:
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
     from ..outputs.layers import LayerBaker, check_layer_path
+    from ..scene.stage import open_stage, stage_frames
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
     reporter = Reporter(args.quiet)
-    engine = WrinkleEngine(args.stage, all_meshes=args.all_meshes,
+    # everything that can be refused without the GPU is checked first
+    stage = open_stage(args.stage)
+    refuse_overwriting_inputs(args.stage, [args.output], stage)
+    frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
+    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
                            relax_iterations=args.relax_iterations, warn=reporter.warn,
                            history_start=args.history_start)
     engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
     try:
-        stage = engine.scene.stage
-        refuse_overwriting_inputs(args.stage, [args.output], stage)
-        frames = parse_frame_spec(args.frames) if args.frames else engine.scene.frame_range()
         wrinkled = {}
         for path in engine.wrinkled_paths:
             if stage.GetPrimAtPath(path).IsInstanceProxy():

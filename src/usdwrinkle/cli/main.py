@@ -1,11 +1,14 @@
 """usdwrinkle: the console script. ``main(argv) -> int``, errors as one line on stderr.
 
-Exit codes: 0 success, 1 findings (check), 2 user error, 3 internal error, 130 interrupted.
+Exit codes: 0 success, 1 findings (check), 2 user error, 3 internal error, 130 interrupted
+(Ctrl-C), 143 terminated (SIGTERM).
 """
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 import traceback
 
 from .. import __version__
@@ -26,7 +29,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM (a farm scheduler stopping the job): unwind like Ctrl-C, so that no
+    temporary file is left behind."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _on_sigterm)
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
@@ -44,6 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("usdwrinkle: interrupted; finished frames are intact", file=sys.stderr)
         return 130
+    except Terminated:
+        print("usdwrinkle: terminated; finished frames are intact", file=sys.stderr)
+        return 143
     except Exception as exc:  # a bug in usdwrinkle: still one line, unless --debug
         if args.debug:
             traceback.print_exc()

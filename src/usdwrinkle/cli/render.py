@@ -40,6 +40,7 @@ def run(args) -> int:
     from ..engine import WrinkleEngine, format_frame
     from ..errors import UsdWrinkleError
     from ..outputs.images import check_format, write_image
+    from ..scene.stage import open_stage, stage_frames
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_format(args.output)
@@ -50,20 +51,21 @@ def run(args) -> int:
     if args.relax_iterations is not None and args.relax_iterations < 0:
         raise UsdWrinkleError("--relax-iterations must be >= 0")
     reporter = Reporter(args.quiet)
-    engine = WrinkleEngine(args.stage, all_meshes=args.all_meshes,
+    # everything that can be refused without the GPU is checked first
+    stage = open_stage(args.stage)
+    frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
+    check_output_pattern(args.output, frames)
+    outputs = [frame_path(args.output, f) for f in frames]
+    refuse_overwriting_inputs(args.stage, outputs, stage)
+    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
                            relax_iterations=args.relax_iterations, camera=args.camera,
                            warn=reporter.warn, history_start=args.history_start)
     engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
     try:
-        frames = parse_frame_spec(args.frames) if args.frames else engine.scene.frame_range()
-        check_output_pattern(args.output, frames)
-        outputs = [frame_path(args.output, f) for f in frames]
-        refuse_overwriting_inputs(args.stage, outputs, engine.scene.stage)
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                           "(use --all-meshes to wrinkle every mesh)")
-        width, height = engine.resolution(args.width, args.height,
-                                          frames[0] if not math.isnan(frames[0]) else math.nan)
+        width, height = engine.resolution(args.width, args.height, frames[0])
         started = time.perf_counter()
         written = 0
         for frame, path in reporter.progress(list(zip(frames, outputs, strict=True)), "render"):

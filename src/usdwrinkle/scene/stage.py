@@ -66,6 +66,14 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
     return point_cached, value, "points"
 
 
+def stage_frames(stage: Usd.Stage) -> list[float]:
+    """The stage's authored start..end frames (step 1), or [NaN] for the default time."""
+    if stage.HasAuthoredTimeCodeRange():
+        start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
+        return [float(f) for f in np.arange(start, end + 0.5)]
+    return [float("nan")]
+
+
 def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
     """Triangulated topology of a mesh (None without faces); time-sampled topology is
     read at its first sample."""
@@ -179,11 +187,7 @@ class StageSceneDelegate:
     # -- time ---------------------------------------------------------------------------
     def frame_range(self) -> list[float]:
         """The stage's authored start..end frames, or [default] when none."""
-        if self.stage.HasAuthoredTimeCodeRange():
-            start = self.stage.GetStartTimeCode()
-            end = self.stage.GetEndTimeCode()
-            return [float(f) for f in np.arange(start, end + 0.5)]
-        return [float("nan")]
+        return stage_frames(self.stage)
 
     @staticmethod
     def time_code(frame: float) -> Usd.TimeCode:
