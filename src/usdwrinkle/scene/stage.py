@@ -155,15 +155,15 @@ class StageSceneDelegate:
             self.warn(f"mesh has no points; skipped ({path})")
             return None
         rest = _finite_points(rest_value, path, rest_attr_name)
-        topology = read_topology(prim, rest)
-        if topology is None:
-            self.warn(f"mesh has no faces; skipped ({path})")
-            return None
         first_points = points_attr.Get(points_attr.GetTimeSamples()[0]) \
             if points_attr.GetNumTimeSamples() else points_attr.Get(default)
         if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
                                   "primvars:rest")
+        topology = read_topology(prim, rest)
+        if topology is None:
+            self.warn(f"mesh has no faces; skipped ({path})")
+            return None
         skin = None
         if binding is not None:
             skel_query, skinning_query = binding
