@@ -70,7 +70,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def entry_point() -> None:
-    sys.exit(main())
+    code = main()
+    from ..render.context import release_context
+
+    release_context()  # the one GL context of the process, released cleanly
+    sys.exit(code)
 
 
 if __name__ == "__main__":
