@@ -6,6 +6,7 @@ rendering then draws, baking reads back what the GPU computed.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -116,6 +117,7 @@ class WrinkleEngine:
         depend on which frames were rendered before.
         """
         history = False
+        steps: list[float] = []
         if wrinkles:
             if any(self._dirty.values()):
                 self._history_frame = None
@@ -124,10 +126,18 @@ class WrinkleEngine:
                 step_history = index > 0 or self._history_frame is not None
                 self._compute_only(step, step_history, wrinkles)
                 self._history_frame = step
+        profile = self.render_delegate.profile
+        started = time.perf_counter()
         record = self.scene.sample(frame, aspect, self.camera)
+        read = time.perf_counter()
         self.scene.current_frame = record
         self._sync()
+        synced = time.perf_counter()
         self.last_timings = {}
+        if profile:
+            self.last_timings["usd_read"] = (read - started) * 1e3
+            self.last_timings["sync"] = (synced - read) * 1e3
+            self.last_timings["preroll_frames"] = float(len(steps))
         self.render_pass.compute(wrinkles, self.last_timings, history)
         start = self.history_start()
         on_grid = start is not None and not math.isnan(frame) and frame >= start \

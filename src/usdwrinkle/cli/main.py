@@ -15,7 +15,7 @@ from .. import __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import apply, bake, check, demo, info, render
+    from . import apply, bake, bench, check, demo, info, render
 
     parser = argparse.ArgumentParser(
         prog="usdwrinkle",
@@ -24,7 +24,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"usdwrinkle {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (render, bake, apply, check, info, demo):
+    for module in (render, bake, apply, check, bench, info, demo):
         module.add_parser(sub)
     return parser
 

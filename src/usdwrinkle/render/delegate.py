@@ -198,5 +198,8 @@ class RenderPass:
             d.draw.begin(state.camera, state.lights, state.wrinkles)
             for mesh in d.rprims.values():
                 d.draw.draw(mesh.resources, mesh.frame, state.camera)
+        started = time.perf_counter()
         buffers = fb.read()
+        if d.profile:
+            state.timings["readback"] = (time.perf_counter() - started) * 1e3
         return {name: buffers[name] for name in state.aovs}

@@ -78,8 +78,12 @@ class MeshResources:
                               for _ in range(2)]
         self.current_fields = 0
         self.anchor_phase = self._buffer(np.zeros(n, np.float32))
-        self.phase = [self._buffer(np.zeros(n, np.float32)), self._buffer(np.zeros(n, np.float32))]
-        self.current_phase = 0
+        #: relaxed phase per vertex (what draw and the bake read)
+        self.phase = self._buffer(np.zeros(n, np.float32))
+        #: unit phasors during relaxation (ping-pong) and the per-edge rotations
+        self.phasors = [self._buffer(np.zeros((n, 2), np.float32)) for _ in range(2)]
+        self.edge_rotations = self._buffer(
+            np.zeros((len(record.topology.neighbor_indices), 4), np.float32))
         #: the frame whose relaxed phases ``phase_buffer()`` holds, or None
         self.history_frame: float | None = None
         st = record.material.corner_st
@@ -135,7 +139,7 @@ class MeshResources:
         self.uploaded_subshapes.add(subshape)
 
     def phase_buffer(self):
-        return self.phase[self.current_phase]
+        return self.phase
 
     @property
     def fields(self):
