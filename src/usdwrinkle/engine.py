@@ -10,9 +10,12 @@ import time
 
 import numpy as np
 
+from .render.buffers import AOVS
 from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
 from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate, _warn_stderr
+
+AOV_NAMES = tuple(AOVS)
 
 
 class WrinkleEngine:
@@ -146,13 +149,15 @@ class WrinkleEngine:
         return record
 
     def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True,
-                     samples: int = 4):
+                     samples: int = 4, aovs: tuple = AOV_NAMES):
         """Compute and draw ``frame``; returns {aov name: RenderBuffer}.
 
         ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
+        ``aovs``: the render buffers to read back (an 8-bit image needs only colour).
         """
         record = self.compute_frame(frame, width / height, wrinkles)
-        state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples)
+        state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples,
+                                tuple(aovs))
         buffers = self.render_pass.execute(state)
         self.last_timings.update(state.timings)
         return buffers

@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from ..engine import WrinkleEngine, format_frame
     from ..errors import UsdWrinkleError
-    from ..outputs.images import check_format, write_image
+    from ..outputs.images import aovs_for, check_format, write_image
     from ..scene.stage import open_stage, stage_frames
 
     refuse_overwriting_inputs(args.stage, [args.output])
@@ -73,7 +73,7 @@ def run(args) -> int:
                 continue
             try:
                 buffers = engine.render_frame(frame, width, height, not args.no_wrinkles,
-                                              args.samples)
+                                              args.samples, aovs_for(path))
             except UsdWrinkleError as exc:
                 if exc.frame is None and not math.isnan(frame):
                     exc.frame = frame

@@ -22,6 +22,11 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
 
 
+def aovs_for(path: str) -> tuple:
+    """The render buffers a file format stores."""
+    return EXR_ORDER if check_format(path) in FLOAT_FORMATS else ("color",)
+
+
 def check_format(path: str) -> str:
     ext = os.path.splitext(path)[1].lower()
     if ext not in FLOAT_FORMATS + EIGHT_BIT_FORMATS:

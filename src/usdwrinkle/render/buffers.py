@@ -54,25 +54,33 @@ class Framebuffer:
         self.ctx.viewport = (0, 0, *self.size)
         self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
 
-    def read(self) -> dict[str, RenderBuffer]:
+    def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
+        """Read back the requested AOVs (only the attachments they need, one copy each)."""
         if self.samples > 1:
             self.ctx.copy_framebuffer(self.resolved, self.fbo)
         width, height = self.size
-        planes = []
-        for tex in self.textures:
-            data = np.frombuffer(tex.read(), np.float32).reshape(height, width, 4)
-            planes.append(data[::-1].copy())  # GL rows start at the bottom, images at the top
-        alpha = planes[0][..., 3:4]
-        covered = alpha[..., 0] > 0.0
-        for plane in planes[1:]:
-            np.divide(plane, alpha, out=plane, where=alpha > 0)
+        needed = {AOVS[name][0] for name in aovs} | {0}  # colour's alpha is the coverage
+        planes = {}
+        for index in sorted(needed):
+            data = np.frombuffer(self.textures[index].read(), np.float32)
+            # GL rows start at the bottom, images at the top: a flipped view, no copy
+            planes[index] = data.reshape(height, width, 4)[::-1]
+        alpha = planes[0][..., 3]
+        inverse = None
+        if self.samples > 1 and any(AOVS[name][0] != 0 for name in aovs):
+            # resolved AOVs are coverage-weighted sums: divide by the coverage
+            inverse = np.zeros((height, width, 1), np.float32)
+            np.divide(1.0, alpha[..., None], out=inverse, where=alpha[..., None] > 0)
         out = {}
-        for name, (attachment, first, channels) in AOVS.items():
-            pixels = planes[attachment][..., first:first + len(channels)].copy()
+        for name in aovs:
+            attachment, first, channels = AOVS[name]
+            pixels = np.ascontiguousarray(planes[attachment][..., first:first + len(channels)])
+            if inverse is not None and attachment != 0:
+                pixels *= inverse
             if name == "depth":
-                pixels[~covered] = np.inf  # nothing hit: infinitely far
-            if name == "normal":
-                length = np.linalg.norm(pixels, axis=-1, keepdims=True)
+                pixels[alpha <= 0.0] = np.inf  # nothing hit: infinitely far
+            if name == "normal" and self.samples > 1:
+                length = np.sqrt(np.einsum("...i,...i->...", pixels, pixels))[..., None]
                 np.divide(pixels, length, out=pixels, where=length > 0)
             out[name] = RenderBuffer(name, channels, pixels)
         return out

@@ -199,7 +199,7 @@ class RenderPass:
             for mesh in d.rprims.values():
                 d.draw.draw(mesh.resources, mesh.frame, state.camera)
         started = time.perf_counter()
-        buffers = fb.read()
+        buffers = fb.read(state.aovs)
         if d.profile:
             state.timings["readback"] = (time.perf_counter() - started) * 1e3
-        return {name: buffers[name] for name in state.aovs}
+        return buffers
