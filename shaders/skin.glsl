@@ -8,7 +8,8 @@
 layout(local_size_x = LOCAL_SIZE) in;
 
 struct Joint {
-    mat4 xform;          // skinning transform, skeleton space
+    mat4 xform;          // LBS: geomBind * skinning transform * skel-to-local, combined on
+                         // the CPU in double precision (local rest -> local posed)
     vec4 real;           // DQS rotation quaternion (xyz, w)
     vec4 dual;           // DQS dual part (xyz, w)
     vec4 scale_rows[3];  // DQS scale/shear remainder, row-vector 3x3, applied by LBS
@@ -50,61 +51,64 @@ void main() {
         return;
     }
 
-    // local -> skeleton bind space
-    vec3 bind_p = (u_geom_bind * vec4(p, 1.0)).xyz;
-    vec3 skel_p = vec3(0.0);
     int base = i * u_influences;
-
     if (u_method == 1) {
-        // LBS: skeleton bind space -> skeleton space, weighted per joint
+        // LBS is linear in the matrices: sum_j w_j (p G J_j S) with the three matrices of
+        // each joint premultiplied, local rest -> local posed in one product
+        vec3 local_p = vec3(0.0);
         for (int k = 0; k < u_influences; ++k) {
             float w = joint_weights[base + k];
             int j = joint_indices[base + k];
             if (w != 0.0 && j >= 0 && j < u_num_joints) {
-                skel_p += (joints[j].xform * vec4(bind_p, 1.0)).xyz * w;
+                local_p += (joints[j].xform * vec4(p, 1.0)).xyz * w;
             }
         }
+        posed_points[i] = vec4(local_p, 1.0);
+        return;
+    }
+
+    // DQS: local -> skeleton bind space
+    vec3 bind_p = (u_geom_bind * vec4(p, 1.0)).xyz;
+    vec3 skel_p = vec3(0.0);
+    // pivot = the joint with the largest weight (first on ties)
+    int pivot = -1;
+    float max_w = -1.0;
+    for (int k = 0; k < u_influences; ++k) {
+        int j = joint_indices[base + k];
+        float w = joint_weights[base + k];
+        if (j >= 0 && j < u_num_joints && (pivot < 0 || max_w < w)) {
+            max_w = w;
+            pivot = j;
+        }
+    }
+    vec4 pivot_q = pivot >= 0 ? joints[pivot].real : vec4(0.0);
+    vec3 scaled_p = vec3(0.0);
+    vec4 sum_real = vec4(0.0);
+    vec4 sum_dual = vec4(0.0);
+    for (int k = 0; k < u_influences; ++k) {
+        int j = joint_indices[base + k];
+        float w = joint_weights[base + k];
+        if (w == 0.0 || j < 0 || j >= u_num_joints) continue;
+        if (u_has_scale != 0) {
+            // scale/shear by LBS, row-vector 3x3
+            scaled_p += (bind_p.x * joints[j].scale_rows[0].xyz
+                       + bind_p.y * joints[j].scale_rows[1].xyz
+                       + bind_p.z * joints[j].scale_rows[2].xyz) * w;
+        }
+        if (dot(joints[j].real, pivot_q) < 0.0) w = -w;  // same hemisphere as the pivot
+        sum_real += joints[j].real * w;
+        sum_dual += joints[j].dual * w;
+    }
+    if (u_has_scale == 0) scaled_p = bind_p;
+    float len = length(sum_real);
+    if (len > 0.0) {
+        sum_real /= len;
+        sum_dual /= len;
+        vec3 t = 2.0 * (sum_real.w * sum_dual.xyz - sum_dual.w * sum_real.xyz
+                        + cross(sum_real.xyz, sum_dual.xyz));
+        skel_p = quat_rotate(sum_real, scaled_p) + t;
     } else {
-        // DQS: pivot = the joint with the largest weight (first on ties)
-        int pivot = -1;
-        float max_w = -1.0;
-        for (int k = 0; k < u_influences; ++k) {
-            int j = joint_indices[base + k];
-            float w = joint_weights[base + k];
-            if (j >= 0 && j < u_num_joints && (pivot < 0 || max_w < w)) {
-                max_w = w;
-                pivot = j;
-            }
-        }
-        vec4 pivot_q = pivot >= 0 ? joints[pivot].real : vec4(0.0);
-        vec3 scaled_p = vec3(0.0);
-        vec4 sum_real = vec4(0.0);
-        vec4 sum_dual = vec4(0.0);
-        for (int k = 0; k < u_influences; ++k) {
-            int j = joint_indices[base + k];
-            float w = joint_weights[base + k];
-            if (w == 0.0 || j < 0 || j >= u_num_joints) continue;
-            if (u_has_scale != 0) {
-                // scale/shear by LBS, row-vector 3x3
-                scaled_p += (bind_p.x * joints[j].scale_rows[0].xyz
-                           + bind_p.y * joints[j].scale_rows[1].xyz
-                           + bind_p.z * joints[j].scale_rows[2].xyz) * w;
-            }
-            if (dot(joints[j].real, pivot_q) < 0.0) w = -w;  // same hemisphere as the pivot
-            sum_real += joints[j].real * w;
-            sum_dual += joints[j].dual * w;
-        }
-        if (u_has_scale == 0) scaled_p = bind_p;
-        float len = length(sum_real);
-        if (len > 0.0) {
-            sum_real /= len;
-            sum_dual /= len;
-            vec3 t = 2.0 * (sum_real.w * sum_dual.xyz - sum_dual.w * sum_real.xyz
-                            + cross(sum_real.xyz, sum_dual.xyz));
-            skel_p = quat_rotate(sum_real, scaled_p) + t;
-        } else {
-            skel_p = scaled_p;
-        }
+        skel_p = scaled_p;
     }
     // skeleton space -> prim (local) space
     posed_points[i] = vec4((u_skel_to_local * vec4(skel_p, 1.0)).xyz, 1.0);

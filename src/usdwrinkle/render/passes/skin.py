@@ -13,13 +13,20 @@ from . import bind_storage, gl_matrix, groups, set_uniforms
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
 
 
-def joint_block(joint_transforms: np.ndarray, method: str) -> tuple[np.ndarray, bool]:
-    """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS)."""
+def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray,
+                skel_to_local: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS).
+
+    For LBS each joint's matrix is geomBind @ skinning transform @ skel-to-local
+    (row-vector, float64, then float32): local rest to local posed in one product.
+    """
     count = len(joint_transforms)
     block = np.zeros((max(count, 1), JOINT_FLOATS), np.float32)
     if count == 0:
         return block, False
-    block[:count, :16] = joint_transforms.reshape(count, 16)
+    if method == "classicLinear":
+        combined = geom_bind[None] @ joint_transforms @ skel_to_local[None]
+        block[:count, :16] = combined.reshape(count, 16)
     has_scale = False
     if method == "dualQuaternion":
         real, dual, scale, has_scale = dual_quaternions(joint_transforms)
@@ -49,7 +56,8 @@ class SkinPass:
         weights = frame.subshape_weights if frame.subshape_weights is not None else np.zeros(0)
         if len(weights):
             res.subshape_weights.write(np.asarray(weights, np.float32).tobytes())
-        block, has_scale = joint_block(frame.joint_transforms, skin.method)
+        block, has_scale = joint_block(frame.joint_transforms, skin.method, skin.geom_bind,
+                                       frame.skel_to_local)
         res.joints.write(block.tobytes())
         skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
         set_uniforms(self.shader, {
