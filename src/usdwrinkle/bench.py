@@ -326,6 +326,69 @@ def end_to_end(quick: bool, ctx, corpus: Path | None) -> dict:
     return out
 
 
+def floors(ctx) -> dict:
+    """What the rasteriser costs before usdwrinkle does anything: an empty dispatch, a
+    6-neighbour gather over 50,000 vertices (the memory pattern of crush and relax), and
+    reading back one 330 kpixel float RGBA target."""
+    n = 50_000
+    rng = np.random.default_rng(0)
+    # neighbours near each vertex, as in a mesh with a good vertex order
+    neighbours = np.clip(np.arange(n)[:, None] + rng.integers(-300, 300, (n, 6)), 0, n - 1)
+    src = ctx.buffer(rng.random((n, 4)).astype(np.float32).tobytes())
+    dst = ctx.buffer(reserve=n * 16)
+    idx = ctx.buffer(neighbours.astype(np.int32).tobytes())
+    empty = ctx.compute_shader("#version 430\nlayout(local_size_x=64) in;\nvoid main() {}\n")
+    gather = ctx.compute_shader(
+        "#version 430\nlayout(local_size_x=64) in;\n"
+        "layout(std430, binding=0) readonly buffer A { vec4 a[]; };\n"
+        "layout(std430, binding=1) writeonly buffer B { vec4 b[]; };\n"
+        "layout(std430, binding=2) readonly buffer C { int c[]; };\n"
+        "uniform int n;\nvoid main() { int i = int(gl_GlobalInvocationID.x); if (i >= n) return;"
+        " vec4 s = vec4(0.0); for (int e = 0; e < 6; ++e) s += a[c[6 * i + e]]; b[i] = s; }\n")
+    gather["n"] = n
+    for buf, binding in ((src, 0), (dst, 1), (idx, 2)):
+        buf.bind_to_storage_buffer(binding)
+    texture = ctx.texture((703, 469), 4, dtype="f4")
+
+    def timed(fn, repeat=20):
+        fn()
+        ctx.finish()
+        started = time.perf_counter()
+        for _ in range(repeat):
+            fn()
+        ctx.finish()
+        return (time.perf_counter() - started) / repeat * 1e3
+
+    out = {"empty_dispatch_ms": timed(lambda: empty.run(1)),
+           "gather6_50k_ms": timed(lambda: gather.run((n + 63) // 64)),
+           "readback_330k_rgba32f_ms": timed(lambda: texture.read(), repeat=10)}
+    for obj in (src, dst, idx, empty, gather, texture):
+        obj.release()
+    return out
+
+
+def history(folder: Path) -> list[dict]:
+    """Key figures of the labelled runs kept in ``folder`` (before/after each change)."""
+    rows = []
+    for path in sorted(folder.glob("*.json")) if folder.is_dir() else []:
+        data = json.loads(path.read_text())
+        table = {r["case"]: r for r in data.get("paper_table", [])}
+        b = table.get("B", {})
+        e2e = data.get("end_to_end", {})
+        rows.append({
+            "file": path.name, "label": data.get("label", path.stem),
+            "quick": data.get("quick"),
+            "shirt_wall_ms": table.get("shirt", {}).get("wall_ms"),
+            "shirt_overhead": table.get("shirt", {}).get("wrinkle_overhead"),
+            "B_crush_ms": b.get("pass_ms", {}).get("crush"),
+            "B_relax_ms": b.get("pass_ms", {}).get("relax"),
+            "B_wall_ms": b.get("wall_ms"),
+            "numpy_speedup": data.get("numpy_baseline", {}).get("speedup"),
+            "cesium_ratio": e2e.get("ratio"),
+        })
+    return rows
+
+
 # -- report ----------------------------------------------------------------------------------
 
 def machine(ctx) -> dict:
@@ -441,8 +504,45 @@ def markdown(result: dict) -> str:
                          f"{r['gpu']:.2f} | {r['readback']:.2f} | {r['encode']:.2f} | "
                          f"{r['total']:.2f} |")
         lines.append(f"\nWith ÷ without wrinkles: {e2e['ratio']:.2f}x.")
-    if result.get("notes"):
-        lines += ["", "## Notes", ""] + [f"- {n}" for n in result["notes"]]
+    f = result.get("floors")
+    if f:
+        rows = {r["case"]: r for r in result["paper_table"]}
+        shirt, b = rows["shirt"], rows["B"]
+        lines += ["", "## What the rasteriser costs by itself", "",
+                  "Measured in the same run, with no usdwrinkle code:", "",
+                  f"- an empty compute dispatch: {f['empty_dispatch_ms']:.3f} ms "
+                  "(each relax iteration is one dispatch);",
+                  f"- a 6-neighbour gather over 50,000 vertices: {f['gather6_50k_ms']:.2f} ms "
+                  "(crush reads about 9 gathers' worth per vertex, each relax step about 2);",
+                  f"- reading back one 330 kpixel RGBA float target: "
+                  f"{f['readback_330k_rgba32f_ms']:.2f} ms.", "",
+                  "So on this machine: the shirt rendered plain, with no wrinkle pass at all, "
+                  f"already takes {shirt['plain_wall_ms']:.1f} ms a frame "
+                  f"({1e3 / shirt['plain_wall_ms']:.0f} fps) against the paper's 3.05 ms. Case "
+                  f"B's crush took {b['pass_ms'].get('crush', 0):.1f} ms and its relax "
+                  f"{b['pass_ms'].get('relax', 0):.1f} ms, while one bare 6-neighbour gather over "
+                  f"as many vertices takes {f['gather6_50k_ms']:.1f} ms here: crush reads each "
+                  "vertex's 1-ring and incident triangles, and relax reads the 1-ring at every "
+                  "iteration. The paper's 8.9 ms for all of case B is below what this software "
+                  "rasteriser gives for the memory traffic alone; on a GPU the same kernels are "
+                  "bandwidth-trivial at these sizes."]
+    hist = result.get("history") or []
+    if hist:
+        lines += ["", "## Before and after each change", "",
+                  "Labelled runs kept in docs/bench/ (quick mode: reduced sizes; compare rows "
+                  "with each other, not with the tables above):", "",
+                  "| run | shirt wall ms | shirt with/without | B crush ms | B relax ms | "
+                  "B wall ms | numpy speed-up | CesiumMan with/without |",
+                  "|---|---|---|---|---|---|---|---|"]
+
+        def fmt(value, spec):
+            return "-" if value is None else format(value, spec)
+
+        for h in hist:
+            lines.append(f"| {h['label']} | {fmt(h['shirt_wall_ms'], '.2f')} | "
+                         f"{fmt(h['shirt_overhead'], '.2f')} | {fmt(h['B_crush_ms'], '.1f')} | "
+                         f"{fmt(h['B_relax_ms'], '.1f')} | {fmt(h['B_wall_ms'], '.1f')} | "
+                         f"{fmt(h['numpy_speedup'], '.1f')} | {fmt(h['cesium_ratio'], '.2f')} |")
     return "\n".join(lines) + "\n"
 
 
@@ -459,6 +559,8 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
                       ("end_to_end", lambda: end_to_end(quick, ctx, corpus))):
         progress(f"bench: {key.replace('_', ' ')}")
         result[key] = step()
+    progress("bench: floors")
+    result["floors"] = floors(ctx)
     result["targets"] = targets(result)
     return result
 
@@ -477,6 +579,10 @@ def add_arguments(parser) -> None:
                         help="markdown report (default docs/benchmarks.md; '-' for stdout)")
     parser.add_argument("--quick", action="store_true",
                         help="reduced sizes and frames: a smoke test, not figures to quote")
+    parser.add_argument("--label", metavar="TEXT",
+                        help="name this run in the JSON (kept in docs/bench/ for before/after)")
+    parser.add_argument("--history", metavar="DIR", default="docs/bench",
+                        help="folder of labelled JSON runs to tabulate (docs/bench)")
     parser.add_argument("--corpus", metavar="DIR",
                         help="folder with usd-wg/CesiumMan.usdz (default ../shared/corpus or "
                              "$USDWRINKLE_CORPUS)")
@@ -490,6 +596,9 @@ def run(args) -> int:
                        progress=lambda m: print(m, file=sys.stderr, flush=True))
     result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
         f" --json {args.json}" if args.json else "")
+    if args.label:
+        result["label"] = args.label
+    result["history"] = history(Path(args.history))
     text = markdown(result)
     if args.markdown == "-":
         sys.stdout.write(text)

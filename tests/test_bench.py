@@ -1,0 +1,47 @@
+"""`usdwrinkle bench --quick` as a smoke test: it finishes and reports every field.
+
+Speed is never asserted here; the figures live in docs/benchmarks.md.
+"""
+from __future__ import annotations
+
+import json
+
+from usdwrinkle.cli.main import main
+
+FIELDS = {
+    "paper_table": ["case", "vertices", "pixels", "pass_ms", "pass_sources", "gpu_ms", "wall_ms",
+                    "wall_fps", "plain_wall_ms", "wrinkle_overhead", "paper", "paper_unit"],
+    "skin_baseline": ["vertices", "usdskel_cpu_ms", "gpu_skin_ms", "gpu_skin_with_readback_ms",
+                      "speedup"],
+}
+
+
+def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
+    out_json, out_md = tmp_path / "bench.json", tmp_path / "bench.md"
+    assert main(["bench", "--quick", "--json", str(out_json), "--markdown", str(out_md),
+                 "--corpus", str(corpus), "--history", str(tmp_path / "none")]) == 0
+    result = json.loads(out_json.read_text())
+    assert result["quick"] is True
+    assert {"machine", "command", "date", "paper_table", "scaling", "skin_baseline",
+            "numpy_baseline", "end_to_end", "floors", "targets"} <= set(result)
+    assert [r["case"] for r in result["paper_table"]] == ["shirt", "zeppelin", "curtain", "A", "B"]
+    for section, keys in FIELDS.items():
+        for row in result[section]:
+            assert set(keys) <= set(row), (section, set(keys) - set(row))
+            for key in keys:
+                assert row[key] is not None
+    for name in ("skin", "crush", "relax", "draw", "readback"):
+        assert all(name in row["pass_ms"] for row in result["paper_table"])
+    scaling = result["scaling"]
+    assert len(scaling["vertices"]) >= 2 and len(scaling["pixels"]) >= 2
+    assert {"slope", "intercept", "r2"} <= set(scaling["vertex_fit"])
+    assert {"numpy_ms", "gpu_ms", "speedup"} <= set(result["numpy_baseline"])
+    e2e = result["end_to_end"]
+    for run in ("wrinkles", "no_wrinkles"):
+        assert {"usd_read", "upload", "gpu", "readback", "encode", "total"} <= set(e2e[run])
+    assert len(result["targets"]) == 6
+    text = out_md.read_text()
+    for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
+                    "## End to end", "## What the rasteriser costs by itself"):
+        assert heading in text
+    assert result["machine"]["gl_renderer"] in text
