@@ -513,7 +513,7 @@ def markdown(result: dict) -> str:
                   f"- an empty compute dispatch: {f['empty_dispatch_ms']:.3f} ms "
                   "(each relax iteration is one dispatch);",
                   f"- a 6-neighbour gather over 50,000 vertices: {f['gather6_50k_ms']:.2f} ms "
-                  "(crush reads about 9 gathers' worth per vertex, each relax step about 2);",
+                  "(the memory pattern of crush and relax);",
                   f"- reading back one 330 kpixel RGBA float target: "
                   f"{f['readback_330k_rgba32f_ms']:.2f} ms.", "",
                   "So on this machine: the shirt rendered plain, with no wrinkle pass at all, "
@@ -583,6 +583,8 @@ def add_arguments(parser) -> None:
                         help="name this run in the JSON (kept in docs/bench/ for before/after)")
     parser.add_argument("--history", metavar="DIR", default="docs/bench",
                         help="folder of labelled JSON runs to tabulate (docs/bench)")
+    parser.add_argument("--from-json", metavar="PATH",
+                        help="measure nothing: rewrite the markdown report from a saved run")
     parser.add_argument("--corpus", metavar="DIR",
                         help="folder with usd-wg/CesiumMan.usdz (default ../shared/corpus or "
                              "$USDWRINKLE_CORPUS)")
@@ -591,13 +593,16 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from .outputs.atomic import atomic_path
 
-    corpus = Path(args.corpus) if args.corpus else default_corpus()
-    result = run_bench(args.quick, corpus,
-                       progress=lambda m: print(m, file=sys.stderr, flush=True))
-    result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
-        f" --json {args.json}" if args.json else "")
-    if args.label:
-        result["label"] = args.label
+    if args.from_json:
+        result = json.loads(Path(args.from_json).read_text())
+    else:
+        corpus = Path(args.corpus) if args.corpus else default_corpus()
+        result = run_bench(args.quick, corpus,
+                           progress=lambda m: print(m, file=sys.stderr, flush=True))
+        result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
+            f" --json {args.json}" if args.json else "")
+        if args.label:
+            result["label"] = args.label
     result["history"] = history(Path(args.history))
     text = markdown(result)
     if args.markdown == "-":
@@ -606,7 +611,7 @@ def run(args) -> int:
         with atomic_path(args.markdown) as tmp:
             Path(tmp).write_text(text)
         print(f"usdwrinkle: wrote {args.markdown}", file=sys.stderr)
-    if args.json:
+    if args.json and not args.from_json:
         with atomic_path(args.json) as tmp:
             Path(tmp).write_text(json.dumps(result, indent=2, default=float) + "\n")
     return 0
