@@ -439,9 +439,10 @@ def markdown(result: dict) -> str:
              f"- machine: {m['cpu']}, {m['cores']} cores; {m['platform']}",
              f"- GL: {m['gl_renderer']}; {m['gl_version']}",
              f"- mode: {'quick (reduced sizes)' if result['quick'] else 'full'}",
-             "- times are medians per frame; per-pass times come from GL timer queries where "
-             "the driver gives plausible ones, else from the wall clock between glFinish calls "
-             "(llvmpipe answers timer queries with 1 ns); `wall` is the whole per-frame pipeline "
+             "- times are medians per frame; per-pass times come from GL timer queries on a "
+             "GPU, and from the wall clock between glFinish calls on a software rasteriser "
+             "(llvmpipe's timer queries do not measure its work); `wall` is the whole per-frame "
+             "pipeline "
              "(USD read, upload, the four passes, readback of every AOV), without file IO; "
              "one sample per pixel", "",
              "## Targets", "", "| measure | target | measured | met |", "|---|---|---|---|"]
