@@ -17,6 +17,7 @@ uniform mat4 u_world_to_clip;    // view * projection, same convention
 uniform mat4 u_world_to_eye;     // view
 uniform mat3 u_normal_to_world;  // inverse transpose of local_to_world's 3x3 (column-vector)
 uniform vec3 u_eye_local;        // camera position in the mesh's local space
+uniform vec3 u_eye_world;        // camera position in world space
 
 #if defined VERTEX_SHADER
 
@@ -139,7 +140,7 @@ void main() {
 
     // local -> world shading normal, facing the camera on double-sided meshes
     vec3 N = safe_normalize(u_normal_to_world * shading_local, vec3(0.0, 0.0, 1.0));
-    vec3 V = safe_normalize(inverse(u_world_to_eye)[3].xyz - v_world, N);
+    vec3 V = safe_normalize(u_eye_world - v_world, N);
     if (!gl_FrontFacing) N = -N;
 
     vec3 radiance = u_ambient * base;

@@ -71,6 +71,7 @@ class DrawPass:
             "u_local_to_world": gl_matrix(local_to_world),
             "u_normal_to_world": np.ascontiguousarray(normal_matrix.T, np.float32),
             "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
+            "u_eye_world": tuple(float(v) for v in camera.position[:3]),
             "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),
             "u_has_texture": int(res.texture is not None),
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
