@@ -94,10 +94,12 @@ void main() {
         vec3 k0 = fields[i0].wave.xyz;
         for (int c = 0; c < 3; ++c) {
             int i = TRIANGLE_CORNER(t, c);
-            vec3 k = fields[i].wave.xyz;
+            vec4 wave = fields[i].wave;
+            float a = wave.w;
+            if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
+            vec3 k = wave.xyz;
             float phi = phase[i];
             if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
-            float a = fields[i].wave.w;
             float theta = phi + dot(k, v_local - posed_points[i].xyz);  // local space
             float b = bary[c];
             h += b * a * profile(u_height_profile, theta);
