@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import time
 
-from .common import Reporter, add_stage_args, refuse_overwriting_inputs
+from .common import (
+    Reporter,
+    add_stage_args,
+    at_frame,
+    refuse_overwriting_inputs,
+    start_engine,
+)
 from .frames import add_frame_args, parse_frame_spec
 
 
@@ -33,8 +39,6 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..engine import WrinkleEngine
-    from ..errors import UsdWrinkleError
     from ..outputs.layers import LayerBaker, check_layer_path
     from ..scene.stage import open_stage, stage_frames
 
@@ -45,10 +49,7 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     refuse_overwriting_inputs(args.stage, [args.output], stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
-    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
-                           relax_iterations=args.relax_iterations, warn=reporter.warn,
-                           history_start=args.history_start)
-    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+    engine = start_engine(args, reporter, stage)
     try:
         wrinkled = {}
         for path in engine.wrinkled_paths:
@@ -66,12 +67,8 @@ def run(args) -> int:
         wanted = set(wrinkled) | set(baker.point_meshes)
         started = time.perf_counter()
         for frame in reporter.progress(frames, "bake"):
-            try:
+            with at_frame(frame):
                 engine.compute_frame(frame)
-            except UsdWrinkleError as exc:
-                if exc.frame is None and frame == frame:
-                    exc.frame = frame
-                raise
             baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
         spec = args.frames or (f"{frames[0]:g}:{frames[-1]:g}" if frames[0] == frames[0]
                                else "default")

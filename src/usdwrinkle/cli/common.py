@@ -1,6 +1,8 @@
 """Arguments and checks shared by subcommands."""
 from __future__ import annotations
 
+import contextlib
+import math
 import os
 import sys
 
@@ -58,3 +60,26 @@ class Reporter:
             return items
         from tqdm import tqdm
         return tqdm(items, desc=desc, unit="frame", file=sys.stderr, dynamic_ncols=True)
+
+
+def start_engine(args, reporter: Reporter, stage, camera: str | None = None):
+    """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
+    from ..engine import WrinkleEngine
+
+    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
+                           relax_iterations=args.relax_iterations, camera=camera,
+                           warn=reporter.warn, history_start=args.history_start)
+    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+    return engine
+
+
+@contextlib.contextmanager
+def at_frame(frame: float):
+    """Name the frame in a per-frame error that did not name one."""
+    try:
+        yield
+    except UsdWrinkleError as exc:
+        if exc.frame is None and not math.isnan(frame):
+            exc.frame = frame
+            exc.args = (exc.one_line(),)
+        raise

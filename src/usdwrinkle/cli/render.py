@@ -1,11 +1,16 @@
 """usdwrinkle render STAGE OUTPUT: render frames headlessly to images."""
 from __future__ import annotations
 
-import math
 import os
 import time
 
-from .common import Reporter, add_stage_args, refuse_overwriting_inputs
+from .common import (
+    Reporter,
+    add_stage_args,
+    at_frame,
+    refuse_overwriting_inputs,
+    start_engine,
+)
 from .frames import add_frame_args, check_output_pattern, frame_path, parse_frame_spec
 
 
@@ -37,7 +42,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..engine import WrinkleEngine, format_frame
+    from ..engine import format_frame
     from ..errors import UsdWrinkleError
     from ..outputs.images import aovs_for, check_format, write_image
     from ..scene.stage import open_stage, stage_frames
@@ -57,10 +62,7 @@ def run(args) -> int:
     check_output_pattern(args.output, frames)
     outputs = [frame_path(args.output, f) for f in frames]
     refuse_overwriting_inputs(args.stage, outputs, stage)
-    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
-                           relax_iterations=args.relax_iterations, camera=args.camera,
-                           warn=reporter.warn, history_start=args.history_start)
-    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+    engine = start_engine(args, reporter, stage, args.camera)
     try:
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
@@ -71,14 +73,9 @@ def run(args) -> int:
         for frame, path in reporter.progress(list(zip(frames, outputs, strict=True)), "render"):
             if args.skip_existing and os.path.exists(path):
                 continue
-            try:
+            with at_frame(frame):
                 buffers = engine.render_frame(frame, width, height, not args.no_wrinkles,
                                               args.samples, aovs_for(path))
-            except UsdWrinkleError as exc:
-                if exc.frame is None and not math.isnan(frame):
-                    exc.frame = frame
-                    exc.args = (exc.one_line(),)
-                raise
             write_image(path, buffers)
             written += 1
         if not args.quiet:
