@@ -138,3 +138,20 @@ def test_our_validator_is_registered_with_usd():
     assert registry.HasValidator(VALIDATOR_NAME)
     names = [str(m.name) for m in registry.GetValidatorMetadataForKeyword("UsdWrinkleValidators")]
     assert VALIDATOR_NAME in names
+
+
+def test_a_scalar_width_is_read_but_flagged(gl_context, tmp_path, capsys):
+    """An asset that authors the width as a plain float (as the width's table in the first
+    design said) still renders and bakes; check points at the schema's float[] type."""
+    path = Path(__file__).resolve().parent / "data" / "scalar_width.usda"
+    assert main(["bake", str(path), str(tmp_path / "baked.usda"), "--quiet"]) == 0
+    stage = Usd.Stage.Open(str(tmp_path / "baked.usda"))
+    amplitude = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Cloth")).GetPrimvar(
+        "wrinkle:amplitude").Get(2)
+    # uniform compression by 0.6 with W = 0.3: h = (W/4) sqrt(1 - 0.36)
+    np.testing.assert_allclose(amplitude, 0.3 / 4 * 0.8, rtol=1e-4)
+    capsys.readouterr()
+    assert main(["check", str(path), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert any(f["validator"] == "usdValidation:AttributeTypeMismatch"
+               and "primvars:wrinkle:width" in f["message"] for f in report["findings"])
