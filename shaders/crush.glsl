@@ -17,10 +17,28 @@ layout(std430, binding = CRUSH_REST_FRAME) readonly buffer RestFrame { vec4 rest
 layout(std430, binding = CRUSH_Q_WIDTH) readonly buffer QWidth { vec4 q_width[]; };
 layout(std430, binding = CRUSH_FIELDS) writeonly buffer Fields { WrinkleField fields[]; };
 layout(std430, binding = CRUSH_PHASE) writeonly buffer Phase { float phase[]; };
+// area-weighted face normal of each triangle (posed, local space), written by FACE_NORMALS
+layout(std430, binding = CRUSH_FACE_NORMALS) buffer FaceNormals { vec4 face_normals[]; };
 
 uniform int u_num_points;
+uniform int u_num_triangles;
 uniform float u_amplitude_scale;    // s
 uniform float u_min_ratio;          // floor of r for the wave vector (|k| <= 2pi/(W r_min))
+
+#if defined FACE_NORMALS
+
+// Each triangle's normal once, so that a vertex sums its triangles' normals with one
+// load each instead of three corner lookups and three points.
+void main() {
+    int t = int(gl_GlobalInvocationID.x);
+    if (t >= u_num_triangles) return;
+    vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
+    vec3 p1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz;
+    vec3 p2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz;
+    face_normals[t] = vec4(cross(p1 - p0, p2 - p0), 0.0);
+}
+
+#else
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
@@ -36,11 +54,7 @@ void main() {
     // posed normal: area-weighted sum of incident triangle normals (local space)
     vec3 n_sum = vec3(0.0);
     for (int e = TRIANGLE_BEGIN(i); e < TRIANGLE_END(i); ++e) {
-        int t = INCIDENT_TRIANGLE(e);
-        vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
-        vec3 p1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz;
-        vec3 p2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz;
-        n_sum += cross(p1 - p0, p2 - p0);
+        n_sum += face_normals[INCIDENT_TRIANGLE(e)].xyz;
     }
     bool usable = length(N0) > 0.5 && length(n_sum) > 0.0;
     vec3 n = safe_normalize(n_sum, N0);
@@ -116,3 +130,5 @@ void main() {
     // material-anchored start: crests ride with the cloth, frames stay independent
     phase[i] = (TWO_PI / W) * dot(d3, X_i);
 }
+
+#endif

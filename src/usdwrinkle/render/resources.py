@@ -91,6 +91,7 @@ class MeshResources:
         if st is not None:
             corner[:, :2] = st.reshape(-1, 2)
         self.corner_st = self._buffer(corner)
+        self.face_normals = self._buffer(np.zeros((self.num_triangles, 4), np.float32))
         skin = record.skin
         if skin is not None:
             self.influences = skin.joint_indices.shape[1]

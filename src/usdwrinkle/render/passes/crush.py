@@ -13,8 +13,9 @@ MIN_RATIO = 0.05
 class CrushPass:
     def __init__(self, ctx):
         self.ctx = ctx
-        self.shader = compute_shader(ctx, "crush.glsl",
-                                     {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.CRUSH})
+        defines = {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.CRUSH}
+        self.shader = compute_shader(ctx, "crush.glsl", defines)
+        self.face_shader = compute_shader(ctx, "crush.glsl", {**defines, "FACE_NORMALS": 1})
 
     def run(self, res: MeshResources, wrinkles: bool = True) -> None:
         """Write this frame's fields into the other field buffer (the previous frame's
@@ -24,10 +25,15 @@ class CrushPass:
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
                                    "u_min_ratio": MIN_RATIO, **res.topology_uniforms})
+        set_uniforms(self.face_shader, {"u_num_triangles": res.num_triangles,
+                                        **res.topology_uniforms})
         bind_storage(bindings.CRUSH, {
             "CRUSH_POSED_POINTS": res.posed_points, "CRUSH_REST_POINTS": res.rest_points,
             "CRUSH_TOPOLOGY": res.topology, "CRUSH_REST_FRAME": res.rest_frame,
             "CRUSH_Q_WIDTH": res.q_width, "CRUSH_FIELDS": res.fields,
-            "CRUSH_PHASE": res.anchor_phase})
+            "CRUSH_PHASE": res.anchor_phase, "CRUSH_FACE_NORMALS": res.face_normals})
+        if res.num_triangles:
+            self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
+            self.ctx.memory_barrier()
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
