@@ -12,6 +12,7 @@ import numpy as np
 
 from .render.buffers import AOVS
 from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
+from .scene.camera import find_camera
 from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate, _warn_stderr
 
@@ -31,7 +32,8 @@ class WrinkleEngine:
     camera : str or None
         ``--camera``: prim path or name.
     profile : bool
-        Time every pass with GL timer queries (``last_timings``).
+        Time every pass (``last_timings``): GL timer queries on a GPU, the wall clock
+        between glFinish calls on a software rasteriser.
     history_start : float or None
         First frame of the shot's phase history (default: the stage's start time code).
         Every chunk of a shot must use the same value.
@@ -43,9 +45,7 @@ class WrinkleEngine:
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, warn=warn)
         self.camera = camera
-        # fail on a camera that does not exist before any GPU work
-        from .scene.camera import find_camera
-        find_camera(self.scene.stage, camera)
+        find_camera(self.scene.stage, camera)  # a missing camera fails before any GPU work
         self.render_delegate = RenderDelegate(ctx, profile=profile)
         self.render_pass = RenderPass(self.render_delegate)
         self._dirty = {}
