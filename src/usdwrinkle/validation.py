@@ -13,6 +13,7 @@ import numpy as np
 from pxr import Usd, UsdGeom
 
 from . import schema
+from .errors import UsdWrinkleError
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"
@@ -36,7 +37,16 @@ def _times(attr) -> list:
     return times
 
 
-def _point_count(prim, time) -> int | None:
+def refuse(findings: list[Finding]) -> None:
+    """Raise the first finding as a UsdWrinkleError (the scene delegate and authoring)."""
+    if findings:
+        first = findings[0]
+        raise UsdWrinkleError(first.message, first.prim_path, first.attribute)
+
+
+def point_count(prim, time=None) -> int | None:
+    """The mesh's point count at ``time`` (default time, else its first sample)."""
+    time = Usd.TimeCode.Default() if time is None else time
     points = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
     if points is None:
         attr = UsdGeom.Mesh(prim).GetPointsAttr()
@@ -100,7 +110,7 @@ def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
         return [Finding(path, None, f"WrinkleAPI is applied to a {prim.GetTypeName() or 'typeless'}"
                                     " prim, not a Mesh")]
     findings: list[Finding] = []
-    count = _point_count(prim, Usd.TimeCode.Default())
+    count = point_count(prim)
     primvars = UsdGeom.PrimvarsAPI(prim)
     q = primvars.GetPrimvar("wrinkle:q")
     if q and q.HasAuthoredValue():

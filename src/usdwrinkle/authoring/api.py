@@ -17,13 +17,14 @@ from pxr import Sdf, Usd, UsdGeom, Vt
 from .. import schema
 from ..errors import UsdWrinkleError
 from ..scene.params import derive_gradient
-from ..validation import check_amplitude_scale, check_profile, check_q, check_width
-
-
-def _refuse(findings) -> None:
-    if findings:
-        first = findings[0]
-        raise UsdWrinkleError(first.message, first.prim_path, first.attribute)
+from ..validation import (
+    check_amplitude_scale,
+    check_profile,
+    check_q,
+    check_width,
+    point_count,
+    refuse,
+)
 
 
 class WrinkleAPI:
@@ -84,8 +85,7 @@ class WrinkleAPI:
         return str(self._prim.GetPath())
 
     def _point_count(self) -> int | None:
-        points = UsdGeom.Mesh(self._prim).GetPointsAttr().Get()
-        return None if points is None else len(points)
+        return point_count(self._prim)
 
     def GetQPrimvar(self) -> UsdGeom.Primvar:  # noqa: N802
         return self._primvars().GetPrimvar("wrinkle:q")
@@ -107,7 +107,7 @@ class WrinkleAPI:
         interpolation = UsdGeom.Tokens.constant if values is None or values.size == 1 \
             else UsdGeom.Tokens.vertex
         if values is not None:
-            _refuse(check_width(values, self._point_count(), self._path()))
+            refuse(check_width(values, self._point_count(), self._path()))
         primvar = self._primvars().CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.FloatArray,
                                                  interpolation)
         primvar.SetInterpolation(interpolation)
@@ -120,7 +120,7 @@ class WrinkleAPI:
 
     def _create(self, name, type_name, value, check=None):
         if value is not None and check is not None:
-            _refuse(check(value))
+            refuse(check(value))
         attr = self._prim.CreateAttribute(name, type_name)
         if value is not None:
             attr.Set(value)
@@ -177,7 +177,7 @@ class WrinkleAPI:
     def set_q(self, q, time=Usd.TimeCode.Default()) -> None:  # noqa: B008
         """Set q from an (n, 3) array; checks length, finiteness and |q| <= 1 first."""
         arr = np.asarray(q, dtype=np.float32).reshape(-1, 3)
-        _refuse(check_q(arr, UsdGeom.Tokens.vertex, self._point_count(), self._path()))
+        refuse(check_q(arr, UsdGeom.Tokens.vertex, self._point_count(), self._path()))
         primvar = self._primvars().CreatePrimvar("wrinkle:q", Sdf.ValueTypeNames.Vector3fArray,
                                                  UsdGeom.Tokens.vertex)
         primvar.SetInterpolation(UsdGeom.Tokens.vertex)

@@ -125,6 +125,7 @@ def run(args) -> int:
     from ..outputs.layers import check_layer_path
     from ..scene.stage import open_stage
     from ..schema import require_schema
+    from ..validation import check_amplitude_scale, check_q, check_width, point_count, refuse
     from .common import stage_layer_paths
 
     require_schema()
@@ -188,10 +189,9 @@ def run(args) -> int:
         elif args.width is not None:
             plan["width"] = np.array([args.width], np.float32)
         plans.append(plan)
-    from ..validation import check_amplitude_scale, check_q, check_width
     for plan in plans:
         path = str(plan["prim"].GetPath())
-        count = len(UsdGeom.Mesh(plan["prim"]).GetPointsAttr().Get() or [])
+        count = point_count(plan["prim"])
         findings = []
         if "q" in plan:
             findings += check_q(plan["q"], "vertex", count, path)
@@ -199,9 +199,7 @@ def run(args) -> int:
             findings += check_width(plan["width"], count, path)
         if args.amplitude_scale is not None:
             findings += check_amplitude_scale(args.amplitude_scale, path)
-        if findings:
-            raise UsdWrinkleError(findings[0].message, findings[0].prim_path,
-                                  findings[0].attribute)
+        refuse(findings)
 
     for plan in plans:
         api = WrinkleAPI.Apply(plan["prim"])

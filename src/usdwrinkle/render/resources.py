@@ -84,8 +84,6 @@ class MeshResources:
         self.phasors = [self._buffer(np.zeros((n, 2), np.float32)) for _ in range(2)]
         self.edge_rotations = self._buffer(
             np.zeros((len(record.topology.neighbor_indices), 4), np.float32))
-        #: the frame whose relaxed phases ``phase_buffer()`` holds, or None
-        self.history_frame: float | None = None
         st = record.material.corner_st
         corner = np.zeros((self.num_triangles * 3, 4), np.float32)
         if st is not None:
@@ -139,9 +137,6 @@ class MeshResources:
         self.subshape_offsets.write(row.tobytes(), offset=subshape * self.num_points * 16)
         self.uploaded_subshapes.add(subshape)
 
-    def phase_buffer(self):
-        return self.phase
-
     @property
     def fields(self):
         return self.field_buffers[self.current_fields]
@@ -155,7 +150,7 @@ class MeshResources:
         n = self.num_points
         fields = np.frombuffer(self.fields.read(), np.float32)[:n * FIELD_FLOATS].reshape(n, 12)
         posed = np.frombuffer(self.posed_points.read(), np.float32)[:n * 4].reshape(n, 4)
-        phase = np.frombuffer(self.phase_buffer().read(), np.float32)[:n]
+        phase = np.frombuffer(self.phase.read(), np.float32)[:n]
         return {"points": posed[:, :3].copy(), "normals": fields[:, 0:3].copy(),
                 "usable": fields[:, 3] > 0.5, "wave_vector": fields[:, 4:7].copy(),
                 "amplitude": fields[:, 7].copy(), "direction": fields[:, 8:11].copy(),

@@ -6,7 +6,7 @@ from pxr import Usd, UsdGeom
 
 from .. import schema
 from ..errors import UsdWrinkleError
-from ..validation import check_amplitude_scale, check_profile, check_q, check_width
+from ..validation import check_amplitude_scale, check_profile, check_q, check_width, refuse
 from .records import WrinkleParams
 from .topology import Topology, mean_edge_length
 
@@ -30,17 +30,11 @@ def _get(prim: Usd.Prim, name: str, time):
     return attr.Get(time)
 
 
-def _refuse(findings) -> None:
-    if findings:
-        first = findings[0]
-        raise UsdWrinkleError(first.message, first.prim_path, first.attribute)
-
-
 def _profile(prim, name, time, path):
     value = _get(prim, name, time)
     if value is None or len(value) == 0:
         return None
-    _refuse(check_profile(value, name, path))
+    refuse(check_profile(value, name, path))
     return np.asarray(value, dtype=np.float32)
 
 
@@ -62,7 +56,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     if q_primvar and q_primvar.HasAuthoredValue():
         value = q_primvar.ComputeFlattened(time)
         if value is not None:
-            _refuse(check_q(value, q_primvar.GetInterpolation(), n, path))
+            refuse(check_q(value, q_primvar.GetInterpolation(), n, path))
             q = np.asarray(value, dtype=np.float32).reshape(-1, 3)
 
     width = None
@@ -70,7 +64,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     if width_primvar and width_primvar.HasAuthoredValue():
         value = width_primvar.ComputeFlattened(time)
         if value is not None:
-            _refuse(check_width(value, n, path))
+            refuse(check_width(value, n, path))
             arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
             width = np.broadcast_to(arr, (n,)).astype(np.float32)
     if width is None:
@@ -78,7 +72,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         width = np.full(n, fallback if fallback > 0 else 1.0, np.float32)
 
     scale = _get(prim, schema.AMPLITUDE_SCALE, time)
-    _refuse(check_amplitude_scale(scale, path))
+    refuse(check_amplitude_scale(scale, path))
     scale = 1.0 if scale is None else float(scale)
 
     height = _profile(prim, schema.HEIGHT_PROFILE, time, path)

@@ -172,22 +172,13 @@ def triangulate(counts: np.ndarray, indices: np.ndarray, points: np.ndarray,
         if np.any(turns < -1e-12 * max(np.abs(turns).max(), 1e-30)):
             concave.append(face)
     if concave:
-        replace = {}
-        for face in concave:
-            ids = indices[starts[face]:starts[face] + counts[face]]
-            replace[face] = np.array(ear_clip(pts[ids]), dtype=np.int64) + starts[face]
-        # rebuild: keep the bulk fan rows of convex faces, swap the concave ones
-        pieces = []
-        face_pieces = []
+        # ear clipping also gives n - 2 triangles: overwrite the fan rows of those faces
         tri_start = np.concatenate([[0], np.cumsum(tri_per_face)])
-        for n, face in enumerate(faces):
-            if face in replace:
-                pieces.append(replace[face])
-            else:
-                pieces.append(corner[tri_start[n]:tri_start[n + 1]])
-            face_pieces.append(np.full(tri_per_face[n], face))
-        corner = np.concatenate(pieces) if pieces else corner
-        face_of_tri = np.concatenate(face_pieces) if face_pieces else face_of_tri
+        for face in concave:
+            row = tri_start[np.searchsorted(faces, face)]
+            ids = indices[starts[face]:starts[face] + counts[face]]
+            corner[row:row + counts[face] - 2] = np.array(ear_clip(pts[ids]), np.int64) \
+                + starts[face]
     triangles = indices[corner] if corner.size else np.zeros((0, 3), np.int64)
     return (triangles.astype(np.int32).reshape(-1, 3), face_of_tri.astype(np.int32),
             corner.astype(np.int32).reshape(-1, 3))

@@ -86,6 +86,6 @@ class DrawPass:
             res.texture.use(location=2)
         bind_storage(bindings.DRAW, {
             "DRAW_POSED_POINTS": res.posed_points, "DRAW_FIELDS": res.fields,
-            "DRAW_PHASE": res.phase_buffer(), "DRAW_TOPOLOGY": res.topology,
+            "DRAW_PHASE": res.phase, "DRAW_TOPOLOGY": res.topology,
             "DRAW_CORNER_ST": res.corner_st})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
