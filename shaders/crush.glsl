@@ -8,17 +8,21 @@
 
 layout(local_size_x = LOCAL_SIZE) in;
 
-layout(std430, binding = CRUSH_POSED_POINTS) readonly buffer PosedPoints { vec4 posed_points[]; };
-layout(std430, binding = CRUSH_REST_POINTS) readonly buffer RestPoints { vec4 rest_points[]; };
-layout(std430, binding = CRUSH_TOPOLOGY) readonly buffer Topology { int topology[]; };
+layout(binding = CRUSH_POSED_POINTS) uniform sampler2D posed_points;  // local space
+layout(binding = CRUSH_REST_POINTS) uniform sampler2D rest_points;    // local space
+
+#if defined FACE_NORMALS
+// area-weighted face normal of each triangle (posed, local space)
+layout(rgba32f, binding = CRUSH_FACE_NORMALS_OUT) writeonly uniform image2D face_normals;
+#else
 // Rest frame per vertex: [2i] = rest normal N0, [2i+1] = rest tangent T1 (unit, orthogonal).
-layout(std430, binding = CRUSH_REST_FRAME) readonly buffer RestFrame { vec4 rest_frame[]; };
+layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
 // xyz: painted q (rest space, |q| <= 1); w: rest wavelength W.
-layout(std430, binding = CRUSH_Q_WIDTH) readonly buffer QWidth { vec4 q_width[]; };
-layout(std430, binding = CRUSH_FIELDS) writeonly buffer Fields { WrinkleField fields[]; };
-layout(std430, binding = CRUSH_PHASE) writeonly buffer Phase { float phase[]; };
-// area-weighted face normal of each triangle (posed, local space), written by FACE_NORMALS
-layout(std430, binding = CRUSH_FACE_NORMALS) buffer FaceNormals { vec4 face_normals[]; };
+layout(binding = CRUSH_Q_WIDTH) uniform sampler2D q_width;
+layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
+layout(rgba32f, binding = CRUSH_FIELDS) writeonly uniform image2D fields;
+layout(r32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;
+#endif
 
 uniform int u_num_points;
 uniform int u_num_triangles;
@@ -32,10 +36,10 @@ uniform float u_min_ratio;          // floor of r for the wave vector (|k| <= 2p
 void main() {
     int t = int(gl_GlobalInvocationID.x);
     if (t >= u_num_triangles) return;
-    vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
-    vec3 p1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz;
-    vec3 p2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz;
-    face_normals[t] = vec4(cross(p1 - p0, p2 - p0), 0.0);
+    vec3 p0 = fetch(posed_points, TRIANGLE_CORNER(t, 0)).xyz;
+    vec3 p1 = fetch(posed_points, TRIANGLE_CORNER(t, 1)).xyz;
+    vec3 p2 = fetch(posed_points, TRIANGLE_CORNER(t, 2)).xyz;
+    STORE(face_normals, t, vec4(cross(p1 - p0, p2 - p0), 0.0));
 }
 
 #else
@@ -44,17 +48,18 @@ void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
 
-    vec3 x_i = posed_points[i].xyz;       // posed, local space
-    vec3 X_i = rest_points[i].xyz;        // rest, local space
-    vec3 N0 = rest_frame[2 * i].xyz;      // rest normal
-    vec3 T1 = rest_frame[2 * i + 1].xyz;  // rest tangent
+    vec3 x_i = fetch(posed_points, i).xyz;       // posed, local space
+    vec3 X_i = fetch(rest_points, i).xyz;        // rest, local space
+    vec3 N0 = fetch(rest_frame, 2 * i).xyz;      // rest normal
+    vec3 T1 = fetch(rest_frame, 2 * i + 1).xyz;  // rest tangent
     vec3 T2 = cross(N0, T1);
-    float W = q_width[i].w;
+    vec4 q_w = fetch(q_width, i);
+    float W = q_w.w;
 
     // posed normal: area-weighted sum of incident triangle normals (local space)
     vec3 n_sum = vec3(0.0);
     for (int e = TRIANGLE_BEGIN(i); e < TRIANGLE_END(i); ++e) {
-        n_sum += face_normals[INCIDENT_TRIANGLE(e)].xyz;
+        n_sum += fetch(face_normals, INCIDENT_TRIANGLE(e)).xyz;
     }
     bool usable = length(N0) > 0.5 && length(n_sum) > 0.0;
     vec3 n = safe_normalize(n_sum, N0);
@@ -69,8 +74,8 @@ void main() {
     int count = 0;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
-        vec3 rest_edge = rest_points[j].xyz - X_i;     // rest, local space
-        vec3 posed_edge = posed_points[j].xyz - x_i;   // posed, local space
+        vec3 rest_edge = fetch(rest_points, j).xyz - X_i;     // rest, local space
+        vec3 posed_edge = fetch(posed_points, j).xyz - x_i;   // posed, local space
         vec2 a = vec2(dot(rest_edge, T1), dot(rest_edge, T2));  // rest tangent coords
         vec2 b = vec2(dot(posed_edge, t1), dot(posed_edge, t2)); // posed tangent coords
         AA += outerProduct(a, a);
@@ -84,7 +89,7 @@ void main() {
     mat2 M = usable ? BA * inverse(AA) : mat2(1.0);
 
     // painted bias: M <- M (I - q q^T), q projected to the rest tangent plane
-    vec3 q3 = q_width[i].xyz;
+    vec3 q3 = q_w.xyz;
     vec2 q = vec2(dot(q3, T1), dot(q3, T2));
     float q_len = length(q);
     if (q_len > 1.0) q /= q_len;
@@ -124,11 +129,11 @@ void main() {
         : (TWO_PI / (W * u_min_ratio)) * d;
     vec3 k = k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
 
-    fields[i].normal = vec4(n, usable ? 1.0 : 0.0);
-    fields[i].wave = vec4(k, amplitude);
-    fields[i].direction = vec4(d3, r);
+    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
+    STORE(fields, FIELD_WAVE(i), vec4(k, amplitude));
+    STORE(fields, FIELD_DIRECTION(i), vec4(d3, r));
     // material-anchored start: crests ride with the cloth, frames stay independent
-    phase[i] = (TWO_PI / W) * dot(d3, X_i);
+    STORE(phase, i, vec4((TWO_PI / W) * dot(d3, X_i)));
 }
 
 #endif

@@ -5,12 +5,11 @@
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
-layout(std430, binding = DRAW_POSED_POINTS) readonly buffer PosedPoints { vec4 posed_points[]; };
-layout(std430, binding = DRAW_FIELDS) readonly buffer Fields { WrinkleField fields[]; };
-layout(std430, binding = DRAW_PHASE) readonly buffer Phase { float phase[]; };
-layout(std430, binding = DRAW_TOPOLOGY) readonly buffer Topology { int topology[]; };
+layout(binding = DRAW_POSED_POINTS) uniform sampler2D posed_points;  // local space
+layout(binding = DRAW_FIELDS) uniform sampler2D fields;
+layout(binding = DRAW_PHASE) uniform sampler2D phase;
 // Texture coordinates per triangle corner: [3t + c].xy
-layout(std430, binding = DRAW_CORNER_ST) readonly buffer CornerSt { vec4 corner_st[]; };
+layout(binding = DRAW_CORNER_ST) uniform sampler2D corner_st;
 
 uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
 uniform mat4 u_world_to_clip;    // view * projection, same convention
@@ -35,13 +34,13 @@ void main() {
     int t = corner / 3;
     int c = corner - 3 * t;
     int i = TRIANGLE_CORNER(t, c);
-    vec3 p = posed_points[i].xyz;      // posed, local space
+    vec3 p = fetch(posed_points, i).xyz;  // posed, local space
     v_local = p;
     vec4 world = u_local_to_world * vec4(p, 1.0);  // local -> world
     v_world = world.xyz / world.w;
-    v_normal_local = fields[i].normal.xyz;
+    v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
-    v_st = corner_st[corner].xy;
+    v_st = fetch(corner_st, corner).xy;
     gl_Position = u_world_to_clip * world;         // world -> clip
 }
 
@@ -58,13 +57,13 @@ layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye
 layout(location = 2) out vec4 out_normal;   // world-space shading normal
 
 // 1D tables stored as N x 1 2D textures (moderngl has no 1D textures); repeat, linear
-uniform sampler2D u_height_profile;    // H over one period
-uniform sampler2D u_gradient_profile;  // dH/dtheta, same sampling
+layout(binding = DRAW_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
+layout(binding = DRAW_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
 uniform float u_profile_samples;
 uniform int u_wrinkles;                // 0: same shading, no wrinkles
 uniform vec3 u_diffuse_color;
 uniform int u_has_texture;
-uniform sampler2D u_diffuse_texture;
+layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
 uniform vec4 u_texture_bias;
 
@@ -91,16 +90,16 @@ void main() {
     bary /= max(bary.x + bary.y + bary.z, 1e-20);
     if (u_wrinkles != 0) {
         int i0 = TRIANGLE_CORNER(t, 0);
-        vec3 k0 = fields[i0].wave.xyz;
+        vec3 k0 = fetch(fields, FIELD_WAVE(i0)).xyz;
         for (int c = 0; c < 3; ++c) {
             int i = TRIANGLE_CORNER(t, c);
-            vec4 wave = fields[i].wave;
+            vec4 wave = fetch(fields, FIELD_WAVE(i));
             float a = wave.w;
             if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
             vec3 k = wave.xyz;
-            float phi = phase[i];
+            float phi = fetch(phase, i).x;
             if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
-            float theta = phi + dot(k, v_local - posed_points[i].xyz);  // local space
+            float theta = phi + dot(k, v_local - fetch(posed_points, i).xyz);  // local space
             float b = bary[c];
             h += b * a * profile(u_height_profile, theta);
             g += b * a * profile(u_gradient_profile, theta) * k;
@@ -116,12 +115,12 @@ void main() {
         vec3 v = safe_normalize(u_eye_local - v_local, n);
         float vn = max(abs(dot(v, shading_local)), 0.25);
         vec3 dx = (v / vn - shading_local) * h;
-        vec3 p0 = posed_points[TRIANGLE_CORNER(t, 0)].xyz;
-        vec3 e1 = posed_points[TRIANGLE_CORNER(t, 1)].xyz - p0;
-        vec3 e2 = posed_points[TRIANGLE_CORNER(t, 2)].xyz - p0;
-        vec2 s0 = corner_st[3 * t].xy;
-        vec2 d1 = corner_st[3 * t + 1].xy - s0;
-        vec2 d2 = corner_st[3 * t + 2].xy - s0;
+        vec3 p0 = fetch(posed_points, TRIANGLE_CORNER(t, 0)).xyz;
+        vec3 e1 = fetch(posed_points, TRIANGLE_CORNER(t, 1)).xyz - p0;
+        vec3 e2 = fetch(posed_points, TRIANGLE_CORNER(t, 2)).xyz - p0;
+        vec2 s0 = fetch(corner_st, 3 * t).xy;
+        vec2 d1 = fetch(corner_st, 3 * t + 1).xy - s0;
+        vec2 d2 = fetch(corner_st, 3 * t + 2).xy - s0;
         float det = d1.x * d2.y - d2.x * d1.y;
         if (abs(det) > 1e-20) {
             vec3 dp_du = (e1 * d2.y - e2 * d1.y) / det;   // dP/dUV, local space

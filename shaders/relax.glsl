@@ -17,10 +17,9 @@ layout(local_size_x = LOCAL_SIZE) in;
 
 uniform int u_num_points;
 
-layout(std430, binding = RELAX_FIELDS) readonly buffer Fields { WrinkleField fields[]; };
-// per directed edge (CSR order): xy = e^{-i d_ij}, z = +1 or -1 (flip), w = weight a_j
-layout(std430, binding = RELAX_EDGES) buffer Edges { vec4 edges[]; };
-layout(std430, binding = RELAX_TOPOLOGY) readonly buffer Topology { int topology[]; };
+layout(binding = RELAX_FIELDS) uniform sampler2D fields;
+// Per directed edge (CSR order): xy = e^{-i d_ij}, z = +1 or -1 (flip), w = weight a_j.
+// SEED writes them (image), the steps read them (texture).
 
 // A tiny floor on the weights keeps arg() defined where no vertex is wrinkled.
 const float WEIGHT_FLOOR = 1e-7;
@@ -29,64 +28,64 @@ vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y 
 
 #if defined SEED
 
-layout(std430, binding = RELAX_PREVIOUS_FIELDS) readonly buffer PreviousFields {
-    WrinkleField previous_fields[];
-};
-layout(std430, binding = RELAX_ANCHOR) readonly buffer Anchor { float anchor_phase[]; };
+layout(binding = RELAX_PREVIOUS_FIELDS) uniform sampler2D previous_fields;
+layout(binding = RELAX_ANCHOR) uniform sampler2D anchor_phase;
 // in place: each vertex reads its own last-frame phase and writes its seed (the result
 // when there are no iterations)
-layout(std430, binding = RELAX_PHASE) buffer Phase { float phase[]; };
-layout(std430, binding = RELAX_POSED_POINTS) readonly buffer PosedPoints { vec4 posed_points[]; };
-layout(std430, binding = RELAX_Z_OUT) writeonly buffer ZOut { vec2 z_out[]; };
+layout(r32f, binding = RELAX_PHASE) uniform image2D phase;
+layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
+layout(rg32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(rgba32f, binding = RELAX_EDGES_OUT) writeonly uniform image2D edges;
 
 uniform int u_has_history;
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
-    vec3 k_i = fields[i].wave.xyz;
-    float start = anchor_phase[i];
+    vec3 k_i = fetch(fields, FIELD_WAVE(i)).xyz;
+    float start = fetch(anchor_phase, i).x;
     if (u_has_history != 0) {
         // keep last frame's phase; flip it where the wave vector flipped
-        float flip = dot(k_i, previous_fields[i].wave.xyz) < 0.0 ? -1.0 : 1.0;
-        start = flip * phase[i];
+        float flip = dot(k_i, fetch(previous_fields, FIELD_WAVE(i)).xyz) < 0.0 ? -1.0 : 1.0;
+        start = flip * imageLoad(phase, TABLE_TEXEL(i)).x;
     }
-    phase[i] = start;
-    z_out[i] = vec2(cos(start), sin(start));
-    vec3 x_i = posed_points[i].xyz;  // posed, local space
+    STORE(phase, i, vec4(start));
+    STORE(z_out, i, vec4(cos(start), sin(start), 0.0, 0.0));
+    vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
-        vec3 k_j = fields[j].wave.xyz;
-        float flip = dot(k_i, k_j) < 0.0 ? -1.0 : 1.0;
-        vec3 k_bar = 0.5 * (k_i + flip * k_j);
-        float drift = dot(k_bar, posed_points[j].xyz - x_i);
-        edges[e] = vec4(cos(drift), -sin(drift), flip, fields[j].wave.w + WEIGHT_FLOOR);
+        vec4 wave_j = fetch(fields, FIELD_WAVE(j));
+        float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
+        vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
+        float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
+        STORE(edges, e, vec4(cos(drift), -sin(drift), flip, wave_j.w + WEIGHT_FLOOR));
     }
 }
 
 #else
 
-layout(std430, binding = RELAX_Z_IN) readonly buffer ZIn { vec2 z_in[]; };
-layout(std430, binding = RELAX_Z_OUT) writeonly buffer ZOut { vec2 z_out[]; };
-layout(std430, binding = RELAX_PHASE) writeonly buffer Phase { float phase[]; };
+layout(binding = RELAX_EDGES) uniform sampler2D edges;
+layout(binding = RELAX_Z_IN) uniform sampler2D z_in;
+layout(rg32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(r32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 
 uniform int u_write_phase;  // the last iteration also stores phi = arg z
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
-    vec2 z_i = z_in[i];
-    vec2 sum = (fields[i].wave.w + WEIGHT_FLOOR) * z_i;
+    vec2 z_i = fetch(z_in, i).xy;
+    vec2 sum = (fetch(fields, FIELD_WAVE(i)).w + WEIGHT_FLOOR) * z_i;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
-        vec4 edge = edges[e];
-        vec2 z_j = z_in[NEIGHBOR(e)];
+        vec4 edge = fetch(edges, e);
+        vec2 z_j = fetch(z_in, NEIGHBOR(e)).xy;
         z_j.y *= edge.z;  // conjugate when the neighbour's wave is flipped
         sum += edge.w * complex_mul(z_j, edge.xy);
     }
     float len2 = dot(sum, sum);
     vec2 z = len2 > 0.0 ? sum * inversesqrt(len2) : z_i;
-    z_out[i] = z;
-    if (u_write_phase != 0) phase[i] = atan(z.y, z.x);
+    STORE(z_out, i, vec4(z, 0.0, 0.0));
+    if (u_write_phase != 0) STORE(phase, i, vec4(atan(z.y, z.x)));
 }
 
 #endif

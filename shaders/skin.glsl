@@ -7,19 +7,20 @@
 
 layout(local_size_x = LOCAL_SIZE) in;
 
-struct Joint {
-    mat4 xform;          // LBS: geomBind * skinning transform * skel-to-local, combined on
-                         // the CPU in double precision (local rest -> local posed)
-    vec4 real;           // DQS rotation quaternion (xyz, w)
-    vec4 dual;           // DQS dual part (xyz, w)
-    vec4 scale_rows[3];  // DQS scale/shear remainder, row-vector 3x3, applied by LBS
-};
+// Joints: 9 texels each.
+//   0..3  LBS: columns of geomBind * skinning transform * skel-to-local, combined on the
+//         CPU in double precision (local rest -> local posed)
+//   4     DQS rotation quaternion (xyz, w)
+//   5     DQS dual part (xyz, w)
+//   6..8  DQS scale/shear remainder, row-vector 3x3 rows, applied by LBS
+#define JOINT_TEXELS 9
+#define JOINT(j, k) fetch(joints, JOINT_TEXELS * (j) + (k))
 
-layout(std430, binding = SKIN_REST_POINTS) readonly buffer RestPoints { vec4 rest_points[]; };
-layout(std430, binding = SKIN_POSED_POINTS) writeonly buffer PosedPoints { vec4 posed_points[]; };
-layout(std430, binding = SKIN_JOINT_INDICES) readonly buffer JointIndices { int joint_indices[]; };
-layout(std430, binding = SKIN_JOINT_WEIGHTS) readonly buffer JointWeights { float joint_weights[]; };
-layout(std430, binding = SKIN_JOINTS) readonly buffer Joints { Joint joints[]; };
+layout(binding = SKIN_REST_POINTS) uniform sampler2D rest_points;
+layout(binding = SKIN_JOINT_INDICES) uniform highp isampler2D joint_indices;
+layout(binding = SKIN_JOINT_WEIGHTS) uniform sampler2D joint_weights;
+layout(binding = SKIN_JOINTS) uniform sampler2D joints;
+layout(rgba32f, binding = SKIN_POSED_POINTS) writeonly uniform image2D posed_points;
 layout(std430, binding = SKIN_SUBSHAPE_OFFSETS) readonly buffer SubShapeOffsets { vec4 subshape_offsets[]; };
 layout(std430, binding = SKIN_SUBSHAPE_WEIGHTS) readonly buffer SubShapeWeights { float subshape_weights[]; };
 
@@ -41,13 +42,13 @@ void main() {
     if (i >= u_num_points) return;
 
     // rest (local) + blend shapes -> deformed rest (local)
-    vec3 p = rest_points[i].xyz;
+    vec3 p = fetch(rest_points, i).xyz;
     for (int s = 0; s < u_num_subshapes; ++s) {
         float w = subshape_weights[s];
         if (w != 0.0) p += w * subshape_offsets[s * u_num_points + i].xyz;
     }
     if (u_method == 0) {
-        posed_points[i] = vec4(p, 1.0);
+        STORE(posed_points, i, vec4(p, 1.0));
         return;
     }
 
@@ -57,13 +58,14 @@ void main() {
         // each joint premultiplied, local rest -> local posed in one product
         vec3 local_p = vec3(0.0);
         for (int k = 0; k < u_influences; ++k) {
-            float w = joint_weights[base + k];
-            int j = joint_indices[base + k];
+            float w = fetch(joint_weights, base + k).x;
+            int j = fetch(joint_indices, base + k).x;
             if (w != 0.0 && j >= 0 && j < u_num_joints) {
-                local_p += (joints[j].xform * vec4(p, 1.0)).xyz * w;
+                mat4 xform = mat4(JOINT(j, 0), JOINT(j, 1), JOINT(j, 2), JOINT(j, 3));
+                local_p += (xform * vec4(p, 1.0)).xyz * w;
             }
         }
-        posed_points[i] = vec4(local_p, 1.0);
+        STORE(posed_points, i, vec4(local_p, 1.0));
         return;
     }
 
@@ -74,30 +76,31 @@ void main() {
     int pivot = -1;
     float max_w = -1.0;
     for (int k = 0; k < u_influences; ++k) {
-        int j = joint_indices[base + k];
-        float w = joint_weights[base + k];
+        int j = fetch(joint_indices, base + k).x;
+        float w = fetch(joint_weights, base + k).x;
         if (j >= 0 && j < u_num_joints && (pivot < 0 || max_w < w)) {
             max_w = w;
             pivot = j;
         }
     }
-    vec4 pivot_q = pivot >= 0 ? joints[pivot].real : vec4(0.0);
+    vec4 pivot_q = pivot >= 0 ? JOINT(pivot, 4) : vec4(0.0);
     vec3 scaled_p = vec3(0.0);
     vec4 sum_real = vec4(0.0);
     vec4 sum_dual = vec4(0.0);
     for (int k = 0; k < u_influences; ++k) {
-        int j = joint_indices[base + k];
-        float w = joint_weights[base + k];
+        int j = fetch(joint_indices, base + k).x;
+        float w = fetch(joint_weights, base + k).x;
         if (w == 0.0 || j < 0 || j >= u_num_joints) continue;
         if (u_has_scale != 0) {
             // scale/shear by LBS, row-vector 3x3
-            scaled_p += (bind_p.x * joints[j].scale_rows[0].xyz
-                       + bind_p.y * joints[j].scale_rows[1].xyz
-                       + bind_p.z * joints[j].scale_rows[2].xyz) * w;
+            scaled_p += (bind_p.x * JOINT(j, 6).xyz
+                       + bind_p.y * JOINT(j, 7).xyz
+                       + bind_p.z * JOINT(j, 8).xyz) * w;
         }
-        if (dot(joints[j].real, pivot_q) < 0.0) w = -w;  // same hemisphere as the pivot
-        sum_real += joints[j].real * w;
-        sum_dual += joints[j].dual * w;
+        vec4 real = JOINT(j, 4);
+        if (dot(real, pivot_q) < 0.0) w = -w;  // same hemisphere as the pivot
+        sum_real += real * w;
+        sum_dual += JOINT(j, 5) * w;
     }
     if (u_has_scale == 0) scaled_p = bind_p;
     float len = length(sum_real);
@@ -111,5 +114,5 @@ void main() {
         skel_p = scaled_p;
     }
     // skeleton space -> prim (local) space
-    posed_points[i] = vec4((u_skel_to_local * vec4(skel_p, 1.0)).xyz, 1.0);
+    STORE(posed_points, i, vec4((u_skel_to_local * vec4(skel_p, 1.0)).xyz, 1.0));
 }

@@ -5,12 +5,23 @@
 const float PI = 3.14159265358979323846;
 const float TWO_PI = 6.28318530717958647692;
 
-// Per-vertex wrinkle fields written by crush, read by relax and draw.
-struct WrinkleField {
-    vec4 normal;      // xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
-    vec4 wave;        // xyz: wave vector k (local space, posed); w: amplitude h
-    vec4 direction;   // xyz: rest-space unit direction d of strongest compression; w: r
-};
+// Tables (render/resources.py): element i of a table is texel (i % TABLE_WIDTH,
+// i / TABLE_WIDTH) of a 2D texture. Read with fetch (texelFetch), write with STORE
+// (imageStore). fetch is a function, not a macro: Mesa's preprocessor rejects a macro
+// used inside its own argument, as in fetch(points, TRIANGLE_CORNER(t, 0)).
+#define TABLE_TEXEL(i) ivec2((i) & (TABLE_WIDTH - 1), (i) >> TABLE_WIDTH_LOG2)
+#define STORE(image, i, value) imageStore(image, TABLE_TEXEL(i), value)
+vec4 fetch(sampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 0); }
+ivec4 fetch(isampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 0); }
+
+// Per-vertex wrinkle fields written by crush, read by relax and draw: three texels of
+// the fields table per vertex.
+//   normal     xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
+//   wave       xyz: wave vector k (local space, posed); w: amplitude h
+//   direction  xyz: rest-space unit direction d of strongest compression; w: r
+#define FIELD_NORMAL(i) (3 * (i))
+#define FIELD_WAVE(i) (3 * (i) + 1)
+#define FIELD_DIRECTION(i) (3 * (i) + 2)
 
 vec3 safe_normalize(vec3 v, vec3 fallback) {
     float len = length(v);

@@ -1,22 +1,40 @@
-"""Shader storage binding points, declared once here and injected as #defines.
+"""Texture units, image units and storage-buffer bindings of each pass, declared once
+here and injected into the shaders as #defines.
 
-Each pass binds its own buffers before it runs, so no shader uses more than 8
-blocks (the GL 4.3 minimum per stage).
+Tables (resources.Table) are read through texture units (``layout(binding=N) uniform
+sampler2D``) and written through image units (``layout(binding=N) uniform image2D``);
+the two are separate namespaces in GL. Each pass binds what it uses before it runs, so
+no stage needs more than 8 image units or 16 texture units (the GL 4.5 minimums).
 """
 from __future__ import annotations
 
-SKIN = {"SKIN_REST_POINTS": 0, "SKIN_POSED_POINTS": 1, "SKIN_JOINT_INDICES": 2,
-        "SKIN_JOINT_WEIGHTS": 3, "SKIN_JOINTS": 4, "SKIN_SUBSHAPE_OFFSETS": 5,
-        "SKIN_SUBSHAPE_WEIGHTS": 6}
-CRUSH = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "CRUSH_TOPOLOGY": 2,
-         "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FIELDS": 5, "CRUSH_PHASE": 6,
-         "CRUSH_FACE_NORMALS": 7}
-RELAX = {"RELAX_POSED_POINTS": 0, "RELAX_TOPOLOGY": 1, "RELAX_FIELDS": 2,
-         "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_PHASE": 5, "RELAX_EDGES": 6,
-         # the iteration kernel has no previous fields: its phasors take binding 3
-         "RELAX_Z_IN": 3, "RELAX_Z_OUT": 7}
-DRAW = {"DRAW_POSED_POINTS": 0, "DRAW_FIELDS": 1, "DRAW_PHASE": 2, "DRAW_TOPOLOGY": 3,
-        "DRAW_CORNER_ST": 4}
-
 #: Work group size of every compute pass.
 LOCAL_SIZE = 64
+
+#: Tables are 2^TABLE_WIDTH_LOG2 texels wide: 2048 x 16384 (GL 4.5's minimum
+#: GL_MAX_TEXTURE_SIZE) holds 33 M elements.
+TABLE_WIDTH_LOG2 = 11
+TABLE_WIDTH = 1 << TABLE_WIDTH_LOG2
+
+#: Defines every shader gets.
+COMMON = {"LOCAL_SIZE": LOCAL_SIZE, "TABLE_WIDTH": TABLE_WIDTH,
+          "TABLE_WIDTH_LOG2": TABLE_WIDTH_LOG2}
+
+# texture units (reads)
+SKIN = {"SKIN_REST_POINTS": 0, "SKIN_JOINT_INDICES": 1, "SKIN_JOINT_WEIGHTS": 2,
+        "SKIN_JOINTS": 3,
+        # image units (writes)
+        "SKIN_POSED_POINTS": 0,
+        # storage buffers: blend shapes (only the sub-shapes with a weight are read)
+        "SKIN_SUBSHAPE_OFFSETS": 0, "SKIN_SUBSHAPE_WEIGHTS": 1}
+CRUSH = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "TOPOLOGY_TABLE": 2,
+         "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FACE_NORMALS": 5,
+         # image units
+         "CRUSH_FIELDS": 0, "CRUSH_PHASE": 1, "CRUSH_FACE_NORMALS_OUT": 2}
+RELAX = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
+         "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_EDGES": 5, "RELAX_Z_IN": 6,
+         # image units
+         "RELAX_PHASE": 0, "RELAX_Z_OUT": 1, "RELAX_EDGES_OUT": 2}
+DRAW = {"DRAW_HEIGHT_PROFILE": 0, "DRAW_GRADIENT_PROFILE": 1, "DRAW_DIFFUSE_TEXTURE": 2,
+        "DRAW_POSED_POINTS": 3, "DRAW_FIELDS": 4, "DRAW_PHASE": 5, "TOPOLOGY_TABLE": 6,
+        "DRAW_CORNER_ST": 7}

@@ -1,20 +1,28 @@
-"""GPU resources of one mesh: the SSBOs the passes read and write.
+"""GPU resources of one mesh: the tables the passes read and write.
+
+Per-vertex, per-edge and per-triangle arrays live in *tables*: 2D float or int
+textures TABLE_WIDTH texels wide, element i at texel (i % TABLE_WIDTH, i / TABLE_WIDTH).
+Passes read them with texelFetch and write them with imageStore. On Mesa's llvmpipe a
+texelFetch gather is about four times cheaper than the same SSBO load (each SSBO load
+runs a per-lane loop with bounds checks; docs/benchmarks.md), and on a GPU a fetch
+through the texture cache is at least as fast as a storage-buffer load.
 
 Created when the topology is new or changed, reused every frame after that;
-per-frame data is written into the existing buffers.
+per-frame data is written into the existing tables.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..scene.records import MeshRecord
+from .bindings import TABLE_WIDTH
 
-FIELD_FLOATS = 12  # WrinkleField: normal, wave, direction (3 x vec4)
-JOINT_FLOATS = 36  # Joint: mat4 + real + dual + 3 scale rows (9 x vec4)
+FIELD_FLOATS = 12  # per vertex: normal, wave, direction (3 texels of 4 floats)
+JOINT_TEXELS = 9  # Joint: mat4 (4 columns) + real + dual + 3 scale rows, as vec4s
 
 
 def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
-    """(n, 3) -> (n, 4) float32 (std430 arrays use vec4, never vec3)."""
+    """(n, 3) -> (n, 4) float32 (tables have 1, 2 or 4 components, never 3)."""
     out = np.empty((len(points), 4), np.float32)
     out[:, :3] = points
     out[:, 3] = w
@@ -34,7 +42,7 @@ def rest_tangents(normals: np.ndarray) -> np.ndarray:
 
 
 def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:
-    """The int SSBO of include/topology.glsl and the uniforms giving its part offsets."""
+    """The int table of include/topology.glsl and the uniforms giving its part offsets."""
     topo = record.topology
     parts = [topo.neighbor_offsets, topo.neighbor_indices, topo.triangle_offsets,
              topo.triangle_indices, topo.triangles.reshape(-1)]
@@ -51,8 +59,59 @@ def _bytes(array: np.ndarray) -> bytes:
     return data if data else b"\0" * 16  # GL buffers cannot be empty
 
 
+class Table:
+    """``count`` elements of 1, 2 or 4 float32 (or int32) components in a 2D texture.
+
+    Element i is texel (i % TABLE_WIDTH, i // TABLE_WIDTH): shaders read it with
+    ``FETCH(table, i)`` and write it with ``STORE(image, i, value)`` (common.glsl).
+    """
+
+    def __init__(self, ctx, count: int, components: int, dtype: str = "f4", data=None):
+        import moderngl
+
+        self.count = int(count)
+        self.components = components
+        self.dtype = np.dtype(np.int32 if dtype == "i4" else np.float32)
+        rows = max(-(-self.count // TABLE_WIDTH), 1)
+        self.texture = ctx.texture((TABLE_WIDTH, rows), components, dtype=dtype)
+        self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)  # integer tables need it
+        if data is not None:
+            self.write(data)
+
+    def write(self, array) -> None:
+        """Write all ``count`` elements: whole rows in one upload, the rest in another."""
+        flat = np.ascontiguousarray(array, dtype=self.dtype).reshape(-1)
+        expected = self.count * self.components
+        if flat.size != expected:
+            raise ValueError(f"table of {self.count} x {self.components}: got {flat.size} values")
+        full_rows, rest = divmod(self.count, TABLE_WIDTH)
+        row_values = TABLE_WIDTH * self.components
+        if full_rows:
+            self.texture.write(flat[:full_rows * row_values].tobytes(),
+                               viewport=(0, 0, TABLE_WIDTH, full_rows))
+        if rest:
+            self.texture.write(flat[full_rows * row_values:].tobytes(),
+                               viewport=(0, full_rows, rest, 1))
+
+    def read(self) -> np.ndarray:
+        """The ``count`` elements, (count, components) (or (count,) for one component)."""
+        data = np.frombuffer(self.texture.read(), self.dtype)[:self.count * self.components]
+        return data.reshape(self.count, self.components) if self.components > 1 else data
+
+    def use(self, unit: int) -> None:
+        """Bind for reading (texelFetch) on texture unit ``unit``."""
+        self.texture.use(location=unit)
+
+    def bind_image(self, unit: int, read: bool = False) -> None:
+        """Bind for writing (imageStore), and reading with imageLoad if ``read``."""
+        self.texture.bind_to_image(unit, read=read, write=True)
+
+    def release(self) -> None:
+        self.texture.release()
+
+
 class MeshResources:
-    """All buffers of one mesh on the GPU."""
+    """All tables and buffers of one mesh on the GPU."""
 
     def __init__(self, ctx, record: MeshRecord):
         self.ctx = ctx
@@ -60,47 +119,51 @@ class MeshResources:
         n = len(record.rest_points)
         self.num_points = n
         self.num_triangles = len(record.topology.triangles)
+        self.num_edges = len(record.topology.neighbor_indices)
         self.buffers = []
-        self.rest_points = self._buffer(vec4(record.rest_points))
-        self.posed_points = self._buffer(vec4(record.rest_points))
+        self.tables = []
+        self.rest_points = self._table(n, 4, data=vec4(record.rest_points))
+        self.posed_points = self._table(n, 4, data=vec4(record.rest_points))
         topo, self.topology_uniforms = topology_block(record)
-        self.topology = self._buffer(topo)
+        self.topology = self._table(len(topo), 1, "i4", topo)
         frame = np.empty((n, 2, 4), np.float32)
         frame[:, 0, :3] = record.rest_normals
         frame[:, 0, 3] = 0.0
         frame[:, 1, :3] = rest_tangents(record.rest_normals)
         frame[:, 1, 3] = 0.0
-        self.rest_frame = self._buffer(frame)
-        self.q_width = self._buffer(vec4(record.params.q, record.params.width))
-        # Two field buffers alternate: crush writes this frame's, the seed step reads the
+        # [2i] = rest normal, [2i + 1] = rest tangent
+        self.rest_frame = self._table(2 * n, 4, data=frame)
+        self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
+        # Two field tables alternate: crush writes this frame's, the seed step reads the
         # previous frame's wave vectors to carry its phases over (phase history).
-        self.field_buffers = [self._buffer(np.zeros((n, FIELD_FLOATS), np.float32))
-                              for _ in range(2)]
+        # [3i] = normal, [3i + 1] = wave, [3i + 2] = direction (common.glsl)
+        self.field_tables = [self._table(3 * n, 4, data=np.zeros((3 * n, 4), np.float32))
+                             for _ in range(2)]
         self.current_fields = 0
-        self.anchor_phase = self._buffer(np.zeros(n, np.float32))
+        self.anchor_phase = self._table(n, 1, data=np.zeros(n, np.float32))
         #: relaxed phase per vertex (what draw and the bake read)
-        self.phase = self._buffer(np.zeros(n, np.float32))
+        self.phase = self._table(n, 1, data=np.zeros(n, np.float32))
         #: unit phasors during relaxation (ping-pong) and the per-edge rotations
-        self.phasors = [self._buffer(np.zeros((n, 2), np.float32)) for _ in range(2)]
-        self.edge_rotations = self._buffer(
-            np.zeros((len(record.topology.neighbor_indices), 4), np.float32))
+        self.phasors = [self._table(n, 2) for _ in range(2)]
+        self.edge_rotations = self._table(self.num_edges, 4)
         st = record.material.corner_st
-        corner = np.zeros((self.num_triangles * 3, 4), np.float32)
+        corner = np.zeros((self.num_triangles * 3, 2), np.float32)
         if st is not None:
-            corner[:, :2] = st.reshape(-1, 2)
-        self.corner_st = self._buffer(corner)
-        self.face_normals = self._buffer(np.zeros((self.num_triangles, 4), np.float32))
+            corner[:] = st.reshape(-1, 2)
+        self.corner_st = self._table(3 * self.num_triangles, 2, data=corner)
+        self.face_normals = self._table(self.num_triangles, 4)
         skin = record.skin
         if skin is not None:
             self.influences = skin.joint_indices.shape[1]
-            self.joint_indices = self._buffer(skin.joint_indices.astype(np.int32))
-            self.joint_weights = self._buffer(skin.joint_weights.astype(np.float32))
-            self.joints = self._buffer(
-                np.zeros((max(skin.num_joints, 1), JOINT_FLOATS), np.float32))
+            count = n * self.influences
+            self.joint_indices = self._table(count, 1, "i4", skin.joint_indices)
+            self.joint_weights = self._table(count, 1, "f4", skin.joint_weights)
+            self.joints = self._table(max(skin.num_joints, 1) * JOINT_TEXELS, 4)
             subshapes = max(skin.num_subshapes, 1)
             self.subshape_offsets = self._buffer(np.zeros((subshapes * n, 4), np.float32))
             self.subshape_weights = self._buffer(np.zeros(subshapes, np.float32))
             self.uploaded_subshapes: set[int] = set()
+        self.textures = []
         self.texture = None
         if record.material.texture is not None:
             tex = record.material.texture
@@ -114,6 +177,11 @@ class MeshResources:
             tex.repeat_y = False
             self.profiles.append(tex)
         self.textures = [t for t in [self.texture, *self.profiles] if t is not None]
+
+    def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
+        table = Table(self.ctx, count, components, dtype, data)
+        self.tables.append(table)
+        return table
 
     def _buffer(self, array: np.ndarray):
         buf = self.ctx.buffer(_bytes(array))
@@ -138,28 +206,29 @@ class MeshResources:
         self.uploaded_subshapes.add(subshape)
 
     @property
-    def fields(self):
-        return self.field_buffers[self.current_fields]
+    def fields(self) -> Table:
+        return self.field_tables[self.current_fields]
 
     @property
-    def previous_fields(self):
-        return self.field_buffers[1 - self.current_fields]
+    def previous_fields(self) -> Table:
+        return self.field_tables[1 - self.current_fields]
 
     def read_fields(self) -> dict:
         """Read back what the passes computed (the bake's single source of truth)."""
         n = self.num_points
-        fields = np.frombuffer(self.fields.read(), np.float32)[:n * FIELD_FLOATS].reshape(n, 12)
-        posed = np.frombuffer(self.posed_points.read(), np.float32)[:n * 4].reshape(n, 4)
-        phase = np.frombuffer(self.phase.read(), np.float32)[:n]
+        fields = self.fields.read().reshape(n, FIELD_FLOATS)
+        posed = self.posed_points.read()
         return {"points": posed[:, :3].copy(), "normals": fields[:, 0:3].copy(),
                 "usable": fields[:, 3] > 0.5, "wave_vector": fields[:, 4:7].copy(),
                 "amplitude": fields[:, 7].copy(), "direction": fields[:, 8:11].copy(),
-                "compression": fields[:, 11].copy(), "phase": phase.copy(),
-                "anchor_phase": np.frombuffer(self.anchor_phase.read(), np.float32)[:n].copy()}
+                "compression": fields[:, 11].copy(), "phase": self.phase.read().copy(),
+                "anchor_phase": self.anchor_phase.read().copy()}
 
     def release(self) -> None:
         for buf in self.buffers:
             buf.release()
+        for table in self.tables:
+            table.release()
         for tex in self.textures:
             tex.release()
-        self.buffers, self.textures = [], []
+        self.buffers, self.tables, self.textures = [], [], []

@@ -17,10 +17,19 @@ def set_uniforms(program, values: dict) -> None:
             member.value = value
 
 
-def bind_storage(table: dict, buffers: dict) -> None:
-    """Bind buffers to the binding points a pass declares in render/bindings.py."""
-    for name, buffer in buffers.items():
-        buffer.bind_to_storage_buffer(table[name])
+def bind(units: dict, reads: dict | None = None, writes: dict | None = None,
+         read_writes: dict | None = None, storage: dict | None = None) -> None:
+    """Bind a pass's tables and buffers to the units it declares in render/bindings.py:
+    tables it reads to texture units, tables it writes (or reads and writes in place) to
+    image units, storage buffers to SSBO binding points."""
+    for name, table in (reads or {}).items():
+        table.use(units[name])
+    for name, table in (writes or {}).items():
+        table.bind_image(units[name])
+    for name, table in (read_writes or {}).items():
+        table.bind_image(units[name], read=True)
+    for name, buffer in (storage or {}).items():
+        buffer.bind_to_storage_buffer(units[name])
 
 
 def groups(count: int, local_size: int) -> int:

@@ -7,7 +7,7 @@ from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import program
-from . import bind_storage, gl_matrix, set_uniforms
+from . import bind, gl_matrix, set_uniforms
 
 MAX_LIGHTS = 8
 
@@ -42,7 +42,7 @@ class DrawPass:
 
         self.ctx = ctx
         self.mode = moderngl.TRIANGLES
-        self.program = program(ctx, "draw.glsl", dict(bindings.DRAW))
+        self.program = program(ctx, "draw.glsl", {**bindings.COMMON, **bindings.DRAW})
         self.vao = ctx.vertex_array(self.program, [])
 
     def begin(self, camera: CameraRecord, lights, wrinkles: bool) -> None:
@@ -77,15 +77,15 @@ class DrawPass:
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
             "u_profile_samples": float(len(record.params.height_profile)),
-            "u_height_profile": 0, "u_gradient_profile": 1, "u_diffuse_texture": 2,
             **res.topology_uniforms,
         })
-        res.profiles[0].use(location=0)
-        res.profiles[1].use(location=1)
+        units = bindings.DRAW
+        res.profiles[0].use(location=units["DRAW_HEIGHT_PROFILE"])
+        res.profiles[1].use(location=units["DRAW_GRADIENT_PROFILE"])
         if res.texture is not None:
-            res.texture.use(location=2)
-        bind_storage(bindings.DRAW, {
+            res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
+        bind(units, reads={
             "DRAW_POSED_POINTS": res.posed_points, "DRAW_FIELDS": res.fields,
-            "DRAW_PHASE": res.phase, "DRAW_TOPOLOGY": res.topology,
+            "DRAW_PHASE": res.phase, "TOPOLOGY_TABLE": res.topology,
             "DRAW_CORNER_ST": res.corner_st})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)

@@ -10,38 +10,38 @@ from __future__ import annotations
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import compute_shader
-from . import bind_storage, groups, set_uniforms
+from . import bind, groups, set_uniforms
 
 
 class RelaxPass:
     def __init__(self, ctx):
         self.ctx = ctx
-        defines = {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.RELAX}
+        defines = {**bindings.COMMON, **bindings.RELAX}
         self.shader = compute_shader(ctx, "relax.glsl", defines)
         self.seed_shader = compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1})
 
     def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
-        table = bindings.RELAX
+        units = bindings.RELAX
         count = groups(res.num_points, bindings.LOCAL_SIZE)
         set_uniforms(self.seed_shader, {"u_num_points": res.num_points,
                                         "u_has_history": int(with_history),
                                         **res.topology_uniforms})
-        bind_storage(table, {
-            "RELAX_POSED_POINTS": res.posed_points, "RELAX_TOPOLOGY": res.topology,
+        bind(units, reads={
+            "RELAX_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology,
             "RELAX_FIELDS": res.fields, "RELAX_PREVIOUS_FIELDS": res.previous_fields,
-            "RELAX_ANCHOR": res.anchor_phase, "RELAX_PHASE": res.phase,
-            "RELAX_EDGES": res.edge_rotations, "RELAX_Z_OUT": res.phasors[0]})
+            "RELAX_ANCHOR": res.anchor_phase},
+            writes={"RELAX_Z_OUT": res.phasors[0], "RELAX_EDGES_OUT": res.edge_rotations},
+            read_writes={"RELAX_PHASE": res.phase})
         self.seed_shader.run(count)
         self.ctx.memory_barrier()
         if iterations <= 0:
             return  # the seed wrote the phase
         set_uniforms(self.shader, {"u_num_points": res.num_points, **res.topology_uniforms})
-        bind_storage(table, {"RELAX_TOPOLOGY": res.topology, "RELAX_FIELDS": res.fields,
-                             "RELAX_EDGES": res.edge_rotations, "RELAX_PHASE": res.phase})
+        bind(units, reads={"RELAX_EDGES": res.edge_rotations})
         for step in range(iterations):
             src = step % 2
-            res.phasors[src].bind_to_storage_buffer(table["RELAX_Z_IN"])
-            res.phasors[1 - src].bind_to_storage_buffer(table["RELAX_Z_OUT"])
+            bind(units, reads={"RELAX_Z_IN": res.phasors[src]},
+                 writes={"RELAX_Z_OUT": res.phasors[1 - src]})
             set_uniforms(self.shader, {"u_write_phase": int(step == iterations - 1)})
             self.shader.run(count)
             self.ctx.memory_barrier()

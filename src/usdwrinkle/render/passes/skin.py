@@ -6,9 +6,9 @@ import numpy as np
 from ...scene.records import MeshFrame
 from ...scene.skel import dual_quaternions
 from .. import bindings
-from ..resources import JOINT_FLOATS, MeshResources, vec4
+from ..resources import JOINT_TEXELS, MeshResources, vec4
 from ..shaders import compute_shader
-from . import bind_storage, gl_matrix, groups, set_uniforms
+from . import bind, gl_matrix, groups, set_uniforms
 
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
 
@@ -21,7 +21,7 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
     (row-vector, float64, then float32): local rest to local posed in one product.
     """
     count = len(joint_transforms)
-    block = np.zeros((max(count, 1), JOINT_FLOATS), np.float32)
+    block = np.zeros((max(count, 1), JOINT_TEXELS * 4), np.float32)
     if count == 0:
         return block, False
     if method == "classicLinear":
@@ -41,14 +41,13 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
 class SkinPass:
     def __init__(self, ctx):
         self.ctx = ctx
-        self.shader = compute_shader(ctx, "skin.glsl",
-                                     {"LOCAL_SIZE": bindings.LOCAL_SIZE, **bindings.SKIN})
+        self.shader = compute_shader(ctx, "skin.glsl", {**bindings.COMMON, **bindings.SKIN})
 
     def run(self, res: MeshResources, frame: MeshFrame) -> None:
         record = res.record
         if record.skin is None:
             points = frame.points if frame.points is not None else record.rest_points
-            res.posed_points.write(vec4(points).tobytes())
+            res.posed_points.write(vec4(points))
             return
         skin = record.skin
         for blend_shape, subshape in frame.active_subshapes:
@@ -58,7 +57,7 @@ class SkinPass:
             res.subshape_weights.write(np.asarray(weights, np.float32).tobytes())
         block, has_scale = joint_block(frame.joint_transforms, skin.method, skin.geom_bind,
                                        frame.skel_to_local)
-        res.joints.write(block.tobytes())
+        res.joints.write(block)
         skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
         set_uniforms(self.shader, {
             "u_num_points": res.num_points, "u_influences": res.influences,
@@ -69,10 +68,11 @@ class SkinPass:
             "u_geom_bind": gl_matrix(skin.geom_bind),
             "u_skel_to_local": gl_matrix(frame.skel_to_local if skinned else np.eye(4)),
         })
-        bind_storage(bindings.SKIN, {
-            "SKIN_REST_POINTS": res.rest_points, "SKIN_POSED_POINTS": res.posed_points,
-            "SKIN_JOINT_INDICES": res.joint_indices, "SKIN_JOINT_WEIGHTS": res.joint_weights,
-            "SKIN_JOINTS": res.joints, "SKIN_SUBSHAPE_OFFSETS": res.subshape_offsets,
-            "SKIN_SUBSHAPE_WEIGHTS": res.subshape_weights})
+        bind(bindings.SKIN, reads={
+            "SKIN_REST_POINTS": res.rest_points, "SKIN_JOINT_INDICES": res.joint_indices,
+            "SKIN_JOINT_WEIGHTS": res.joint_weights, "SKIN_JOINTS": res.joints},
+            writes={"SKIN_POSED_POINTS": res.posed_points},
+            storage={"SKIN_SUBSHAPE_OFFSETS": res.subshape_offsets,
+                     "SKIN_SUBSHAPE_WEIGHTS": res.subshape_weights})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
