@@ -17,7 +17,11 @@ AOVS = {
 
 @dataclass
 class RenderBuffer:
-    """One AOV: (height, width, channels) float32, row 0 at the top of the image."""
+    """One AOV: (height, width, channels) float32, row 0 at the top of the image.
+
+    ``pixels`` may be a view into a wider array (one attachment holds several AOVs);
+    it is never written again by the renderer.
+    """
 
     name: str
     channel_names: tuple
@@ -55,30 +59,33 @@ class Framebuffer:
         self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
 
     def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
-        """Read back the requested AOVs (only the attachments they need, one copy each)."""
+        """Read back the requested AOVs: only the attachments they need, each straight into
+        a new array (the draw pass flips y in clip space, so GL's bottom-up rows already
+        come out top-down). AOVs that need no arithmetic are views of those arrays."""
         if self.samples > 1:
             self.ctx.copy_framebuffer(self.resolved, self.fbo)
         width, height = self.size
         needed = {AOVS[name][0] for name in aovs} | {0}  # colour's alpha is the coverage
         planes = {}
         for index in sorted(needed):
-            data = np.frombuffer(self.textures[index].read(), np.float32)
-            # GL rows start at the bottom, images at the top: a flipped view, no copy
-            planes[index] = data.reshape(height, width, 4)[::-1]
-        alpha = planes[0][..., 3]
+            # a fresh array per frame: buffers handed out earlier are never overwritten
+            planes[index] = np.empty((height, width, 4), np.float32)
+            self.textures[index].read_into(planes[index])
+        alpha = planes[0][..., 3:4]
+        covered = alpha > 0.0
         inverse = None
         if self.samples > 1 and any(AOVS[name][0] != 0 for name in aovs):
             # resolved AOVs are coverage-weighted sums: divide by the coverage
             inverse = np.zeros((height, width, 1), np.float32)
-            np.divide(1.0, alpha[..., None], out=inverse, where=alpha[..., None] > 0)
+            np.divide(1.0, alpha, out=inverse, where=covered)
         out = {}
         for name in aovs:
             attachment, first, channels = AOVS[name]
-            pixels = np.ascontiguousarray(planes[attachment][..., first:first + len(channels)])
+            pixels = planes[attachment][..., first:first + len(channels)]
             if inverse is not None and attachment != 0:
-                pixels *= inverse
+                pixels = pixels * inverse
             if name == "depth":
-                pixels[alpha <= 0.0] = np.inf  # nothing hit: infinitely far
+                pixels = np.where(covered, pixels, np.float32(np.inf))  # nothing hit: far
             if name == "normal" and self.samples > 1:
                 length = np.sqrt(np.einsum("...i,...i->...", pixels, pixels))[..., None]
                 np.divide(pixels, length, out=pixels, where=length > 0)

@@ -10,6 +10,7 @@ from ..shaders import program
 from . import bind, gl_matrix, set_uniforms
 
 MAX_LIGHTS = 8
+FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
 
 
 def light_uniforms(lights) -> dict:
@@ -46,7 +47,11 @@ class DrawPass:
         self.vao = ctx.vertex_array(self.program, [])
 
     def begin(self, camera: CameraRecord, lights, wrinkles: bool) -> None:
-        world_to_clip = camera.view @ camera.projection  # row-vector: view then projection
+        # row-vector: view, projection, then y flipped so that GL's first row (the bottom)
+        # is the image's top row and the readback needs no flip; that mirror turns the
+        # winding around, so front faces are clockwise
+        world_to_clip = camera.view @ camera.projection @ FLIP_Y
+        self.ctx.front_face = "cw"
         set_uniforms(self.program, {
             "u_world_to_clip": gl_matrix(world_to_clip),
             "u_world_to_eye": gl_matrix(camera.view),
