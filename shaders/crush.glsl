@@ -12,6 +12,7 @@ layout(binding = CRUSH_POSED_POINTS) uniform sampler2D posed_points;  // local s
 layout(binding = CRUSH_REST_POINTS) uniform sampler2D rest_points;    // local space
 
 #if defined FACE_NORMALS
+layout(binding = CRUSH_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
 // area-weighted face normal of each triangle (posed, local space)
 layout(rgba32f, binding = CRUSH_FACE_NORMALS_OUT) writeonly uniform image2D face_normals;
 #else
@@ -36,9 +37,10 @@ uniform float u_min_ratio;          // floor of r for the wave vector (|k| <= 2p
 void main() {
     int t = int(gl_GlobalInvocationID.x);
     if (t >= u_num_triangles) return;
-    vec3 p0 = fetch(posed_points, TRIANGLE_CORNER(t, 0)).xyz;
-    vec3 p1 = fetch(posed_points, TRIANGLE_CORNER(t, 1)).xyz;
-    vec3 p2 = fetch(posed_points, TRIANGLE_CORNER(t, 2)).xyz;
+    ivec3 corner = fetch(triangles, t).xyz;
+    vec3 p0 = fetch(posed_points, corner.x).xyz;
+    vec3 p1 = fetch(posed_points, corner.y).xyz;
+    vec3 p2 = fetch(posed_points, corner.z).xyz;
     STORE(face_normals, t, vec4(cross(p1 - p0, p2 - p0), 0.0));
 }
 

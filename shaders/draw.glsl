@@ -10,6 +10,7 @@ layout(binding = DRAW_FIELDS) uniform sampler2D fields;
 layout(binding = DRAW_PHASE) uniform sampler2D phase;
 // Texture coordinates per triangle corner: [3t + c].xy
 layout(binding = DRAW_CORNER_ST) uniform sampler2D corner_st;
+layout(binding = DRAW_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
 
 uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
 uniform mat4 u_world_to_clip;    // view * projection, same convention
@@ -30,10 +31,13 @@ centroid out vec3 v_bary;
 centroid out vec2 v_st;
 
 void main() {
-    int corner = gl_VertexID;           // non-indexed draw: 3 corners per triangle
+    // Not indexed: 3 corners per triangle, each run on its own, because the barycentric
+    // weights and face-varying st are per corner. (Indexed, with the weights computed per
+    // fragment from the three corners, was no faster on llvmpipe: docs/benchmarks.md.)
+    int corner = gl_VertexID;
     int t = corner / 3;
     int c = corner - 3 * t;
-    int i = TRIANGLE_CORNER(t, c);
+    int i = fetch(triangles, t)[c];
     vec3 p = fetch(posed_points, i).xyz;  // posed, local space
     v_local = p;
     vec4 world = u_local_to_world * vec4(p, 1.0);  // local -> world
@@ -88,11 +92,11 @@ void main() {
     // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
     vec3 bary = clamp(v_bary, 0.0, 1.0);
     bary /= max(bary.x + bary.y + bary.z, 1e-20);
+    ivec3 corners = fetch(triangles, t).xyz;
     if (u_wrinkles != 0) {
-        int i0 = TRIANGLE_CORNER(t, 0);
-        vec3 k0 = fetch(fields, FIELD_WAVE(i0)).xyz;
+        vec3 k0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
         for (int c = 0; c < 3; ++c) {
-            int i = TRIANGLE_CORNER(t, c);
+            int i = corners[c];
             vec4 wave = fetch(fields, FIELD_WAVE(i));
             float a = wave.w;
             if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
@@ -115,9 +119,9 @@ void main() {
         vec3 v = safe_normalize(u_eye_local - v_local, n);
         float vn = max(abs(dot(v, shading_local)), 0.25);
         vec3 dx = (v / vn - shading_local) * h;
-        vec3 p0 = fetch(posed_points, TRIANGLE_CORNER(t, 0)).xyz;
-        vec3 e1 = fetch(posed_points, TRIANGLE_CORNER(t, 1)).xyz - p0;
-        vec3 e2 = fetch(posed_points, TRIANGLE_CORNER(t, 2)).xyz - p0;
+        vec3 p0 = fetch(posed_points, corners.x).xyz;
+        vec3 e1 = fetch(posed_points, corners.y).xyz - p0;
+        vec3 e2 = fetch(posed_points, corners.z).xyz - p0;
         vec2 s0 = fetch(corner_st, 3 * t).xy;
         vec2 d1 = fetch(corner_st, 3 * t + 1).xy - s0;
         vec2 d2 = fetch(corner_st, 3 * t + 2).xy - s0;

@@ -45,12 +45,11 @@ def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:
     """The int table of include/topology.glsl and the uniforms giving its part offsets."""
     topo = record.topology
     parts = [topo.neighbor_offsets, topo.neighbor_indices, topo.triangle_offsets,
-             topo.triangle_indices, topo.triangles.reshape(-1)]
+             topo.triangle_indices]
     starts = np.concatenate([[0], np.cumsum([len(p) for p in parts])])
     uniforms = {"u_neighbor_indices_base": int(starts[1]),
                 "u_triangle_offsets_base": int(starts[2]),
-                "u_triangle_indices_base": int(starts[3]),
-                "u_triangles_base": int(starts[4])}
+                "u_triangle_indices_base": int(starts[3])}
     return np.concatenate(parts).astype(np.int32), uniforms
 
 
@@ -126,6 +125,10 @@ class MeshResources:
         self.posed_points = self._table(n, 4, data=vec4(record.rest_points))
         topo, self.topology_uniforms = topology_block(record)
         self.topology = self._table(len(topo), 1, "i4", topo)
+        # the three corners of each triangle in one texel (w unused)
+        corners = np.zeros((self.num_triangles, 4), np.int32)
+        corners[:, :3] = record.topology.triangles
+        self.triangles = self._table(self.num_triangles, 4, "i4", corners)
         frame = np.empty((n, 2, 4), np.float32)
         frame[:, 0, :3] = record.rest_normals
         frame[:, 0, 3] = 0.0
@@ -150,7 +153,7 @@ class MeshResources:
         corner = np.zeros((self.num_triangles * 3, 2), np.float32)
         if st is not None:
             corner[:] = st.reshape(-1, 2)
-        self.corner_st = self._table(3 * self.num_triangles, 2, data=corner)
+        self.corner_st = self._table(3 * self.num_triangles, 2, data=corner)  # [3t + c]
         self.face_normals = self._table(self.num_triangles, 4)
         skin = record.skin
         if skin is not None:

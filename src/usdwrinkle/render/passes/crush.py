@@ -30,7 +30,8 @@ class CrushPass:
         units = bindings.CRUSH
         bind(units, reads={"CRUSH_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology})
         if res.num_triangles:
-            bind(units, writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals})
+            bind(units, reads={"CRUSH_TRIANGLES": res.triangles},
+                 writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals})
             self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
             self.ctx.memory_barrier()
         bind(units, reads={"CRUSH_REST_POINTS": res.rest_points,

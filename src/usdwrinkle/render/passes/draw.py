@@ -92,5 +92,5 @@ class DrawPass:
         bind(units, reads={
             "DRAW_POSED_POINTS": res.posed_points, "DRAW_FIELDS": res.fields,
             "DRAW_PHASE": res.phase, "TOPOLOGY_TABLE": res.topology,
-            "DRAW_CORNER_ST": res.corner_st})
+            "DRAW_CORNER_ST": res.corner_st, "DRAW_TRIANGLES": res.triangles})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
