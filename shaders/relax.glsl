@@ -18,7 +18,9 @@ layout(local_size_x = LOCAL_SIZE) in;
 uniform int u_num_points;
 
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
-// Per directed edge (CSR order): xy = e^{-i d_ij}, z = +1 or -1 (flip), w = weight a_j.
+// Per directed edge (CSR order): xy = e^{-i d_ij}, z = flip * a_j (the neighbour's weight,
+// negative where its wave is flipped; a_j > 0 thanks to the floor), w = j as a float (exact
+// below 2^24 points). One fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
 // A tiny floor on the weights keeps arg() defined where no vertex is wrinkled.
@@ -58,7 +60,8 @@ void main() {
         float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
         vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
         float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
-        STORE(edges, e, vec4(cos(drift), -sin(drift), flip, wave_j.w + WEIGHT_FLOOR));
+        STORE(edges, e, vec4(cos(drift), -sin(drift), flip * (wave_j.w + WEIGHT_FLOOR),
+                             float(j)));
     }
 }
 
@@ -78,9 +81,9 @@ void main() {
     vec2 sum = (fetch(fields, FIELD_WAVE(i)).w + WEIGHT_FLOOR) * z_i;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         vec4 edge = fetch(edges, e);
-        vec2 z_j = fetch(z_in, NEIGHBOR(e)).xy;
-        z_j.y *= edge.z;  // conjugate when the neighbour's wave is flipped
-        sum += edge.w * complex_mul(z_j, edge.xy);
+        vec2 z_j = fetch(z_in, int(edge.w)).xy;
+        if (edge.z < 0.0) z_j.y = -z_j.y;  // conjugate when the neighbour's wave is flipped
+        sum += abs(edge.z) * complex_mul(z_j, edge.xy);
     }
     float len2 = dot(sum, sum);
     vec2 z = len2 > 0.0 ? sum * inversesqrt(len2) : z_i;

@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import UsdWrinkleError
 from ..scene.records import MeshRecord
 from .bindings import TABLE_WIDTH
 
+#: relax.glsl stores neighbour indices as floats, exact below 2^24
+MAX_POINTS = 1 << 24
 FIELD_FLOATS = 12  # per vertex: normal, wave, direction (3 texels of 4 floats)
 JOINT_TEXELS = 9  # Joint: mat4 (4 columns) + real + dual + 3 scale rows, as vec4s
 
@@ -65,13 +68,20 @@ class Table:
     ``FETCH(table, i)`` and write it with ``STORE(image, i, value)`` (common.glsl).
     """
 
-    def __init__(self, ctx, count: int, components: int, dtype: str = "f4", data=None):
+    def __init__(self, ctx, count: int, components: int, dtype: str = "f4", data=None,
+                 what: str = "table", path: str | None = None):
         import moderngl
 
         self.count = int(count)
         self.components = components
         self.dtype = np.dtype(np.int32 if dtype == "i4" else np.float32)
         rows = max(-(-self.count // TABLE_WIDTH), 1)
+        max_rows = int(ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384) or 16384)
+        if rows > max_rows:
+            raise UsdWrinkleError(
+                f"mesh too large for the GPU: its {what} has {self.count:,} elements, "
+                f"at most {TABLE_WIDTH * max_rows:,} fit ({TABLE_WIDTH} x "
+                f"GL_MAX_TEXTURE_SIZE {max_rows})", path)
         self.texture = ctx.texture((TABLE_WIDTH, rows), components, dtype=dtype)
         self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)  # integer tables need it
         if data is not None:
@@ -116,11 +126,24 @@ class MeshResources:
         self.ctx = ctx
         self.record = record
         n = len(record.rest_points)
+        if n >= MAX_POINTS:
+            raise UsdWrinkleError(f"mesh too large: {n:,} points, usdwrinkle handles fewer "
+                                  f"than {MAX_POINTS:,} per mesh", record.path, "points")
         self.num_points = n
         self.num_triangles = len(record.topology.triangles)
         self.num_edges = len(record.topology.neighbor_indices)
         self.buffers = []
         self.tables = []
+        self.textures = []
+        try:
+            self._create(record)
+        except BaseException:
+            self.release()  # a table that does not fit must not leak the ones before it
+            raise
+
+    def _create(self, record: MeshRecord) -> None:
+        ctx = self.ctx
+        n = self.num_points
         self.rest_points = self._table(n, 4, data=vec4(record.rest_points))
         self.posed_points = self._table(n, 4, data=vec4(record.rest_points))
         topo, self.topology_uniforms = topology_block(record)
@@ -182,7 +205,7 @@ class MeshResources:
         self.textures = [t for t in [self.texture, *self.profiles] if t is not None]
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
-        table = Table(self.ctx, count, components, dtype, data)
+        table = Table(self.ctx, count, components, dtype, data, path=self.record.path)
         self.tables.append(table)
         return table
 
