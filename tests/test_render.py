@@ -91,3 +91,23 @@ def test_height_is_bounded_by_amplitude(gl_context):
     assert np.abs(height).max() <= bound * (1 + 1e-4)
     # and it reaches close to the analytic amplitude s (W/4) sqrt(1 - r^2)
     assert np.abs(height).max() > 0.9 * bound * np.sqrt(1 - 0.6 ** 2)
+
+
+def test_buffers_handed_out_are_never_overwritten(gl_context):
+    """The framebuffer reuses its readback arrays only when nobody holds them."""
+    engine = WrinkleEngine(str(SAMPLES / "flag.usda"), ctx=gl_context, warn=lambda m: None)
+    try:
+        first = engine.render_frame(1.0, 64, 48, samples=1)
+        kept = {name: buf.pixels.copy() for name, buf in first.items()}
+        depth_view = first["depth"].pixels  # a new array; colour and normal are views
+        second = engine.render_frame(12.0, 64, 48, samples=1)
+        third = engine.render_frame(24.0, 64, 48, samples=1)
+    finally:
+        engine.release()
+    for name, pixels in kept.items():
+        np.testing.assert_array_equal(first[name].pixels, pixels, err_msg=name)
+    assert depth_view is first["depth"].pixels
+    # the frames differ, so an overwrite would have shown
+    assert not np.array_equal(second["color"].pixels, kept["color"])
+    assert not np.array_equal(third["normal"].pixels, second["normal"].pixels) or \
+        not np.array_equal(third["color"].pixels, second["color"].pixels)

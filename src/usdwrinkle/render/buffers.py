@@ -1,6 +1,7 @@
 """Render buffers (AOVs) and the offscreen framebuffer they are read from."""
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,8 @@ class Framebuffer:
         else:
             self.targets = self.textures
         self.fbo = ctx.framebuffer(color_attachments=self.targets, depth_attachment=self.depth)
+        self._planes: list[np.ndarray | None] = [None] * 3
+        self._unshared_refs = 0
 
     def begin(self) -> None:
         self.fbo.use()
@@ -68,8 +71,7 @@ class Framebuffer:
         needed = {AOVS[name][0] for name in aovs} | {0}  # colour's alpha is the coverage
         planes = {}
         for index in sorted(needed):
-            # a fresh array per frame: buffers handed out earlier are never overwritten
-            planes[index] = np.empty((height, width, 4), np.float32)
+            planes[index] = self._plane(index)
             self.textures[index].read_into(planes[index])
         alpha = planes[0][..., 3:4]
         covered = alpha > 0.0
@@ -92,7 +94,21 @@ class Framebuffer:
             out[name] = RenderBuffer(name, channels, pixels)
         return out
 
+    def _plane(self, index: int) -> np.ndarray:
+        """The array attachment ``index`` is read into: last frame's when nobody holds it
+        (or a view of it) any more, else a new one, so buffers handed out are never
+        overwritten. Reusing it saves the page faults of fresh memory (2 ms per 330 kpixel
+        plane here, ten times the copy itself)."""
+        # Only the list holds it when the count is what it was right after allocation
+        # (measured with the same expression, so it holds on any Python version).
+        if self._planes[index] is None or \
+                sys.getrefcount(self._planes[index]) != self._unshared_refs:
+            self._planes[index] = np.empty((self.size[1], self.size[0], 4), np.float32)
+            self._unshared_refs = sys.getrefcount(self._planes[index])
+        return self._planes[index]
+
     def release(self) -> None:
+        self._planes = [None] * 3
         self.fbo.release()
         self.resolved.release()
         self.depth.release()
