@@ -40,6 +40,10 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     for run in ("wrinkles", "no_wrinkles"):
         assert {"usd_read", "upload", "gpu", "readback", "encode", "total"} <= set(e2e[run])
     assert len(result["targets"]) == 6
+    floors = result["floors"]
+    assert {"empty_dispatch_ms", "gather6_50k_ms", "gather6_50k_tables_ms", "copy_points_ms",
+            "readback_330k_rgba32f_ms"} <= set(floors)
+    assert floors["copy_points"] == result["skin_baseline"][-1]["vertices"]
     text = out_md.read_text()
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
                     "## End to end", "## What the rasteriser costs by itself"):
