@@ -8,8 +8,10 @@
 layout(local_size_x = LOCAL_SIZE) in;
 
 // Joints: 9 texels each.
-//   0..3  LBS: columns of geomBind * skinning transform * skel-to-local, combined on the
-//         CPU in double precision (local rest -> local posed)
+//   0..2  LBS: the first three columns of the row-vector matrix geomBind * skinning
+//         transform * skel-to-local, combined on the CPU in double precision (local rest ->
+//         local posed): posed coordinate c = dot(column c, (p, 1))
+//   3     unused
 //   4     DQS rotation quaternion (xyz, w)
 //   5     DQS dual part (xyz, w)
 //   6..8  DQS scale/shear remainder, row-vector 3x3 rows, applied by LBS
@@ -17,8 +19,8 @@ layout(local_size_x = LOCAL_SIZE) in;
 #define JOINT(j, k) fetch(joints, JOINT_TEXELS * (j) + (k))
 
 layout(binding = SKIN_REST_POINTS) uniform sampler2D rest_points;
-layout(binding = SKIN_JOINT_INDICES) uniform highp isampler2D joint_indices;
-layout(binding = SKIN_JOINT_WEIGHTS) uniform sampler2D joint_weights;
+// per influence: x = joint index (a float; -1 outside the skeleton), y = weight
+layout(binding = SKIN_INFLUENCES) uniform sampler2D influences;
 layout(binding = SKIN_JOINTS) uniform sampler2D joints;
 layout(rgba32f, binding = SKIN_POSED_POINTS) writeonly uniform image2D posed_points;
 layout(std430, binding = SKIN_SUBSHAPE_OFFSETS) readonly buffer SubShapeOffsets { vec4 subshape_offsets[]; };
@@ -58,11 +60,13 @@ void main() {
         // each joint premultiplied, local rest -> local posed in one product
         vec3 local_p = vec3(0.0);
         for (int k = 0; k < u_influences; ++k) {
-            float w = fetch(joint_weights, base + k).x;
-            int j = fetch(joint_indices, base + k).x;
+            vec2 influence = fetch(influences, base + k).xy;
+            int j = int(influence.x);
+            float w = influence.y;
             if (w != 0.0 && j >= 0 && j < u_num_joints) {
-                mat4 xform = mat4(JOINT(j, 0), JOINT(j, 1), JOINT(j, 2), JOINT(j, 3));
-                local_p += (xform * vec4(p, 1.0)).xyz * w;
+                vec4 p1 = vec4(p, 1.0);
+                local_p += vec3(dot(JOINT(j, 0), p1), dot(JOINT(j, 1), p1),
+                                dot(JOINT(j, 2), p1)) * w;
             }
         }
         STORE(posed_points, i, vec4(local_p, 1.0));
@@ -76,8 +80,9 @@ void main() {
     int pivot = -1;
     float max_w = -1.0;
     for (int k = 0; k < u_influences; ++k) {
-        int j = fetch(joint_indices, base + k).x;
-        float w = fetch(joint_weights, base + k).x;
+        vec2 influence = fetch(influences, base + k).xy;
+        int j = int(influence.x);
+        float w = influence.y;
         if (j >= 0 && j < u_num_joints && (pivot < 0 || max_w < w)) {
             max_w = w;
             pivot = j;
@@ -88,8 +93,9 @@ void main() {
     vec4 sum_real = vec4(0.0);
     vec4 sum_dual = vec4(0.0);
     for (int k = 0; k < u_influences; ++k) {
-        int j = fetch(joint_indices, base + k).x;
-        float w = fetch(joint_weights, base + k).x;
+        vec2 influence = fetch(influences, base + k).xy;
+        int j = int(influence.x);
+        float w = influence.y;
         if (w == 0.0 || j < 0 || j >= u_num_joints) continue;
         if (u_has_scale != 0) {
             // scale/shear by LBS, row-vector 3x3

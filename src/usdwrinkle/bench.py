@@ -612,13 +612,14 @@ def markdown(result: dict) -> str:
         if skin and f.get("copy_points") == skin["vertices"] and "gather6_50k_tables_ms" in f:
             # the gather floor reads 12 texels per vertex (6 indices, 6 values)
             per_texel_ns = f["gather6_50k_tables_ms"] * 1e6 / (50_000 * 12)
-            floor_ms = skin["vertices"] * 14 * per_texel_ns * 1e-6
+            floor_ms = skin["vertices"] * 9 * per_texel_ns * 1e-6
             lines += ["", f"UsdSkel's C++ skinning of {skin['vertices']:,} points took "
                       f"{skin['usdskel_cpu_ms']:.1f} ms, the GPU skin pass "
                       f"{skin['gpu_skin_ms']:.1f} ms. Only copying as many points from one "
                       f"table to another takes {f['copy_points_ms']:.1f} ms here, and an LBS "
-                      "point with two influences reads 14 texels (its rest point; per "
-                      "influence its joint index, weight and four matrix columns): at the "
+                      "point with two influences reads 9 texels (its rest point; per "
+                      "influence one texel of joint index and weight and three matrix "
+                      "columns): at the "
                       f"gather's {per_texel_ns:.1f} ns per texel that is {floor_ms:.0f} ms of "
                       "fetches alone. llvmpipe runs compute on the same two cores through a "
                       "per-texel fetch path, where UsdSkel runs a tight multithreaded loop "

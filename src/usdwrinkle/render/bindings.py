@@ -21,8 +21,7 @@ COMMON = {"LOCAL_SIZE": LOCAL_SIZE, "TABLE_WIDTH": TABLE_WIDTH,
           "TABLE_WIDTH_LOG2": TABLE_WIDTH_LOG2}
 
 # texture units (reads)
-SKIN = {"SKIN_REST_POINTS": 0, "SKIN_JOINT_INDICES": 1, "SKIN_JOINT_WEIGHTS": 2,
-        "SKIN_JOINTS": 3,
+SKIN = {"SKIN_REST_POINTS": 0, "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,
         # image units (writes)
         "SKIN_POSED_POINTS": 0,
         # storage buffers: blend shapes (only the sub-shapes with a weight are read)

@@ -21,7 +21,7 @@ from .bindings import TABLE_WIDTH
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 MAX_POINTS = 1 << 24
 FIELD_FLOATS = 12  # per vertex: normal, wave, direction (3 texels of 4 floats)
-JOINT_TEXELS = 9  # Joint: mat4 (4 columns) + real + dual + 3 scale rows, as vec4s
+JOINT_TEXELS = 9  # Joint: 3 LBS matrix columns, 1 unused, real, dual, 3 scale rows
 
 
 def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
@@ -182,8 +182,14 @@ class MeshResources:
         if skin is not None:
             self.influences = skin.joint_indices.shape[1]
             count = n * self.influences
-            self.joint_indices = self._table(count, 1, "i4", skin.joint_indices)
-            self.joint_weights = self._table(count, 1, "f4", skin.joint_weights)
+            # one texel per influence: (joint index as a float, exact below 2^24; weight);
+            # indices outside the skeleton become -1, which the pass skips
+            indices = np.asarray(skin.joint_indices, np.int64)
+            valid = (indices >= 0) & (indices < max(skin.num_joints, 0))
+            packed = np.empty((count, 2), np.float32)
+            packed[:, 0] = np.where(valid, indices, -1).reshape(-1)
+            packed[:, 1] = np.asarray(skin.joint_weights, np.float32).reshape(-1)
+            self.influence_table = self._table(count, 2, data=packed)
             self.joints = self._table(max(skin.num_joints, 1) * JOINT_TEXELS, 4)
             subshapes = max(skin.num_subshapes, 1)
             self.subshape_offsets = self._buffer(np.zeros((subshapes * n, 4), np.float32))

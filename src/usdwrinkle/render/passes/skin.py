@@ -18,7 +18,8 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
     """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS).
 
     For LBS each joint's matrix is geomBind @ skinning transform @ skel-to-local
-    (row-vector, float64, then float32): local rest to local posed in one product.
+    (row-vector, float64, then float32): local rest to local posed in one product, stored
+    as its first three columns.
     """
     count = len(joint_transforms)
     block = np.zeros((max(count, 1), JOINT_TEXELS * 4), np.float32)
@@ -26,7 +27,10 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
         return block, False
     if method == "classicLinear":
         combined = geom_bind[None] @ joint_transforms @ skel_to_local[None]
-        block[:count, :16] = combined.reshape(count, 16)
+        # texels 0..2: the first three columns of the row-vector matrix, so that posed
+        # coordinate c = dot(column c, (p, 1)); the fourth column of an affine matrix is
+        # (0, 0, 0, 1) and is not needed
+        block[:count, :12] = combined.transpose(0, 2, 1)[:, :3, :].reshape(count, 12)
     has_scale = False
     if method == "dualQuaternion":
         real, dual, scale, has_scale = dual_quaternions(joint_transforms)
@@ -69,8 +73,8 @@ class SkinPass:
             "u_skel_to_local": gl_matrix(frame.skel_to_local if skinned else np.eye(4)),
         })
         bind(bindings.SKIN, reads={
-            "SKIN_REST_POINTS": res.rest_points, "SKIN_JOINT_INDICES": res.joint_indices,
-            "SKIN_JOINT_WEIGHTS": res.joint_weights, "SKIN_JOINTS": res.joints},
+            "SKIN_REST_POINTS": res.rest_points, "SKIN_INFLUENCES": res.influence_table,
+            "SKIN_JOINTS": res.joints},
             writes={"SKIN_POSED_POINTS": res.posed_points},
             storage={"SKIN_SUBSHAPE_OFFSETS": res.subshape_offsets,
                      "SKIN_SUBSHAPE_WEIGHTS": res.subshape_weights})
