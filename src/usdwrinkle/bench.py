@@ -112,25 +112,33 @@ def _median(values):
     return float(statistics.median(values)) if values else float("nan")
 
 
-def measure_frames(engine, width, height, frames, wrinkles=True, warmup=3, repeat=1):
-    """Median per-pass times (ms), median wall time per frame (ms) and the time sources."""
+def measure_frames(engines, width, height, frames, warmup=3, repeat=1):
+    """Per engine (a list of (engine, wrinkles)): median per-pass times (ms), median wall
+    time per frame (ms), the time sources and the frame count.
+
+    The engines take turns frame by frame, so that drift in the machine's speed (large on
+    shared VMs) falls on all of them alike; each keeps its own phase history.
+    """
     for frame in frames[:warmup]:
-        engine.render_frame(frame, width, height, wrinkles, samples=1)
-    walls, passes = [], {name: [] for name in PASSES + ("usd_read", "sync")}
-    sources = {}
-    ctx = engine.render_delegate.ctx
+        for engine, wrinkles in engines:
+            engine.render_frame(frame, width, height, wrinkles, samples=1)
+    results = [([], {name: [] for name in PASSES + ("usd_read", "sync")}, {})
+               for _ in engines]
     for _ in range(repeat):
         for frame in frames[warmup:]:
-            ctx.finish()
-            started = time.perf_counter()
-            engine.render_frame(frame, width, height, wrinkles, samples=1)
-            walls.append((time.perf_counter() - started) * 1e3)
-            for name in passes:
-                if name in engine.last_timings:
-                    passes[name].append(engine.last_timings[name])
-            sources.update({k: v for k, v in engine.last_timings.items() if k.endswith(".source")})
-    return ({name: _median(v) for name, v in passes.items() if v}, _median(walls), sources,
-            len(walls))
+            for (engine, wrinkles), (walls, passes, sources) in zip(engines, results, strict=True):
+                ctx = engine.render_delegate.ctx
+                ctx.finish()
+                started = time.perf_counter()
+                engine.render_frame(frame, width, height, wrinkles, samples=1)
+                walls.append((time.perf_counter() - started) * 1e3)
+                for name in passes:
+                    if name in engine.last_timings:
+                        passes[name].append(engine.last_timings[name])
+                sources.update({k: v for k, v in engine.last_timings.items()
+                                if k.endswith(".source")})
+    return [({name: _median(v) for name, v in passes.items() if v}, _median(walls), sources,
+             len(walls)) for walls, passes, sources in results]
 
 
 def size_for(pixels: int, aspect: float) -> tuple[int, int]:
@@ -149,15 +157,17 @@ def paper_table(quick: bool, ctx) -> list[dict]:
         else:
             stage = sleeve_stage(vertices)
         engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
+        plain = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
         try:
             aspect = engine.scene.camera_aspect(None, 1.0) or 1.0
             width, height = size_for(pixels // (16 if quick else 1), aspect)
             frames = [float(f) for f in range(1, 9 if quick else 25)]
-            passes, wall, sources, count = measure_frames(engine, width, height, frames)
-            _, plain_wall, _, _ = measure_frames(engine, width, height, frames, wrinkles=False)
+            (passes, wall, sources, count), (_, plain_wall, _, _) = measure_frames(
+                [(engine, True), (plain, False)], width, height, frames)
             actual_vertices = sum(len(r.rest_points) for r in engine.scene.meshes.values())
         finally:
             engine.release()
+            plain.release()
         gpu = sum(passes.get(p, 0.0) for p in ("skin", "crush", "relax", "draw"))
         rows.append({
             "case": name, "vertices": actual_vertices, "pixels": width * height,
@@ -192,7 +202,7 @@ def scaling(quick: bool, ctx) -> dict:
         engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True, warn=lambda m: None)
         try:
             n = len(next(iter(engine.scene.meshes.values())).rest_points)
-            passes, wall, _, _ = measure_frames(engine, 512, 512, frames, warmup=2)
+            (passes, wall, _, _), = measure_frames([(engine, True)], 512, 512, frames, warmup=2)
         finally:
             engine.release()
         compute = sum(passes.get(p, 0.0) for p in ("skin", "crush", "relax"))
@@ -203,7 +213,8 @@ def scaling(quick: bool, ctx) -> dict:
     engine = WrinkleEngine(sleeve_stage(5_000), ctx=ctx, profile=True, warn=lambda m: None)
     try:
         for side in pixel_sizes:
-            passes, wall, _, _ = measure_frames(engine, side, side, frames, warmup=2)
+            (passes, wall, _, _), = measure_frames([(engine, True)], side, side, frames,
+                                                     warmup=2)
             draw = passes.get("draw", 0.0)
             by_pixels.append({"pixels": side * side, "side": side, "draw_ms": draw,
                               "readback_ms": passes.get("readback"), "wall_ms": wall,
@@ -517,7 +528,9 @@ def markdown(result: dict) -> str:
              "(llvmpipe's timer queries do not measure its work); `wall` is the whole per-frame "
              "pipeline "
              "(USD read, upload, the four passes, readback of every AOV), without file IO; "
-             "one sample per pixel", "",
+             "one sample per pixel; the wrinkled and the plain render of a case alternate "
+             "frame by frame (two engines), so that drift in the machine's speed falls on "
+             "both", "",
              "## Targets", "", "| measure | target | measured | met |", "|---|---|---|---|"]
     for t in result["targets"]:
         lines.append(f"| {t['measure']} | {t['target']} | {t['value']} | "
@@ -598,7 +611,7 @@ def markdown(result: dict) -> str:
                   "So on this machine: the shirt rendered plain, with no wrinkle pass at all, "
                   f"already takes {shirt['plain_wall_ms']:.1f} ms a frame "
                   f"({1e3 / shirt['plain_wall_ms']:.0f} fps) against the paper's 3.05 ms, and "
-                  f"its draw alone {shirt['pass_ms'].get('draw', 0):.1f} ms: at 330 kpixels "
+                  f"its wrinkled draw {shirt['pass_ms'].get('draw', 0):.1f} ms: at 330 kpixels "
                   "the rasteriser's fill and shading, shared by the plain render, set the "
                   f"frame rate. Case B's crush took {b['pass_ms'].get('crush', 0):.1f} ms and "
                   f"its relax {b['pass_ms'].get('relax', 0):.1f} ms (9 sweeps over the 1-ring), "
