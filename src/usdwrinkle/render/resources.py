@@ -195,20 +195,21 @@ class MeshResources:
             self.subshape_offsets = self._buffer(np.zeros((subshapes * n, 4), np.float32))
             self.subshape_weights = self._buffer(np.zeros(subshapes, np.float32))
             self.uploaded_subshapes: set[int] = set()
-        self.textures = []
+        # textures join self.textures as they are made, so release() frees them on failure
         self.texture = None
         if record.material.texture is not None:
             tex = record.material.texture
             self.texture = ctx.texture((tex.shape[1], tex.shape[0]), 4, _bytes(tex), dtype="f4")
+            self.textures.append(self.texture)
             self.texture.build_mipmaps()
             self.texture.repeat_x = self.texture.repeat_y = True
         self.profiles = []
         for table in (record.params.height_profile, record.params.gradient_profile):
             tex = ctx.texture((len(table), 1), 1, _bytes(table.astype(np.float32)), dtype="f4")
+            self.textures.append(tex)
             tex.repeat_x = True
             tex.repeat_y = False
             self.profiles.append(tex)
-        self.textures = [t for t in [self.texture, *self.profiles] if t is not None]
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
         table = Table(self.ctx, count, components, dtype, data, path=self.record.path)
