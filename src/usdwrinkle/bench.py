@@ -349,9 +349,8 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
     storage buffers and through tables (texelFetch, what the passes use), copying 1 M
     points through a table (the least any skin pass does per point), and reading back one
     330 kpixel float RGBA target that was just drawn."""
-    import moderngl
-
     from .render.bindings import TABLE_WIDTH, TABLE_WIDTH_LOG2
+    from .render.resources import Table
 
     n = 50_000
     rng = np.random.default_rng(0)
@@ -371,14 +370,6 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
         "void main() { int i = int(gl_GlobalInvocationID.x); if (i >= n) return;"
         " vec4 s = vec4(0.0); for (int e = 0; e < 6; ++e) s += a[c[6 * i + e]]; b[i] = s; }\n")
 
-    def table(data: np.ndarray, components: int, dtype: str):
-        rows = -(-len(data) // TABLE_WIDTH)
-        padded = np.zeros((rows * TABLE_WIDTH, components), data.dtype)
-        padded[:len(data)] = data.reshape(len(data), components)
-        tex = ctx.texture((TABLE_WIDTH, rows), components, padded.tobytes(), dtype=dtype)
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        return tex
-
     texel = "ivec2((i) & W, (i) >> LOG2)"
     gather_tables = ctx.compute_shader(
         header + "layout(binding=0) uniform sampler2D a;\n"
@@ -388,9 +379,9 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
         "void main() { int i = int(gl_GlobalInvocationID.x); if (i >= n) return;"
         " vec4 s = vec4(0.0); for (int e = 0; e < 6; ++e)"
         " s += texelFetch(a, T(texelFetch(c, T(6 * i + e), 0).x), 0); imageStore(b, T(i), s); }\n")
-    a_table = table(values, 4, "f4")
-    c_table = table(neighbours.reshape(-1, 1).astype(np.int32), 1, "i4")
-    b_table = table(np.zeros((n, 4), np.float32), 4, "f4")
+    a_table = Table(ctx, n, 4, data=values)
+    c_table = Table(ctx, 6 * n, 1, "i4", neighbours)
+    b_table = Table(ctx, n, 4)
     big = int(copy_points)
     copy = ctx.compute_shader(
         header + "layout(binding=0) uniform sampler2D a;\n"
@@ -398,8 +389,8 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
         f"#define T(i) {texel}\n"
         "void main() { int i = int(gl_GlobalInvocationID.x); if (i >= n) return;"
         " imageStore(b, T(i), texelFetch(a, T(i), 0)); }\n")
-    big_src = table(np.zeros((big, 4), np.float32), 4, "f4")
-    big_dst = table(np.zeros((big, 4), np.float32), 4, "f4")
+    big_src = Table(ctx, big, 4, data=np.zeros((big, 4), np.float32))
+    big_dst = Table(ctx, big, 4)
     # a target that was just drawn (a cleared but never drawn one reads back much faster)
     target = ctx.texture((703, 469), 4, dtype="f4")
     fbo = ctx.framebuffer(color_attachments=[target])
@@ -422,12 +413,12 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
     def run_table_gather():
         a_table.use(0)
         c_table.use(1)
-        b_table.bind_to_image(0, read=False, write=True)
+        b_table.bind_image(0)
         gather_tables.run((n + 63) // 64)
 
     def run_copy():
         big_src.use(0)
-        big_dst.bind_to_image(0, read=False, write=True)
+        big_dst.bind_image(0)
         copy.run((big + 63) // 64)
 
     def draw_and_read():

@@ -138,19 +138,19 @@ class WrinkleAPI:
         return self._attr(schema.HEIGHT_PROFILE)
 
     def CreateHeightProfileAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
-        value = None if default_value is None else Vt.FloatArray.FromNumpy(
-            np.asarray(default_value, np.float32))
-        return self._create(schema.HEIGHT_PROFILE, Sdf.ValueTypeNames.FloatArray, value,
-                            lambda v: check_profile(v, schema.HEIGHT_PROFILE, self._path()))
+        return self._create_profile(schema.HEIGHT_PROFILE, default_value)
 
     def GetGradientProfileAttr(self) -> Usd.Attribute:  # noqa: N802
         return self._attr(schema.GRADIENT_PROFILE)
 
     def CreateGradientProfileAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create_profile(schema.GRADIENT_PROFILE, default_value)
+
+    def _create_profile(self, name: str, default_value) -> Usd.Attribute:
         value = None if default_value is None else Vt.FloatArray.FromNumpy(
             np.asarray(default_value, np.float32))
-        return self._create(schema.GRADIENT_PROFILE, Sdf.ValueTypeNames.FloatArray, value,
-                            lambda v: check_profile(v, schema.GRADIENT_PROFILE, self._path()))
+        return self._create(name, Sdf.ValueTypeNames.FloatArray, value,
+                            lambda v: check_profile(v, name, self._path()))
 
     def GetRelaxIterationsAttr(self) -> Usd.Attribute:  # noqa: N802
         return self._attr(schema.RELAX_ITERATIONS)
