@@ -708,7 +708,8 @@ def run(args) -> int:
         result = run_bench(args.quick, corpus,
                            progress=lambda m: print(m, file=sys.stderr, flush=True))
         result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
-            f" --json {args.json}" if args.json else "")
+            f" --json {args.json}" if args.json else "") + (
+            f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "")
         if args.label:
             result["label"] = args.label
     result["history"] = history(Path(args.history))
