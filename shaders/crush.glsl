@@ -15,6 +15,12 @@ layout(binding = CRUSH_REST_POINTS) uniform sampler2D rest_points;    // local s
 layout(binding = CRUSH_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
 // area-weighted face normal of each triangle (posed, local space)
 layout(rgba32f, binding = CRUSH_FACE_NORMALS_OUT) writeonly uniform image2D face_normals;
+#elif defined FROM_BAKE
+// Baked wave fields (scene/baked.py): [2i] = (k, amplitude), [2i+1] = (direction, r).
+layout(binding = CRUSH_BAKED) uniform sampler2D baked;
+layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
+layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
+layout(rgba32f, binding = CRUSH_FIELDS) writeonly uniform image2D fields;
 #else
 // Rest frame per vertex: [2i] = rest normal N0, [2i+1] = rest tangent T1 (unit, orthogonal).
 layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
@@ -46,6 +52,34 @@ void main() {
 
 #else
 
+// Posed normal of vertex i: the area-weighted sum of its triangles' normals (local
+// space), the rest normal N0 where they cancel. One function for the computed and the
+// baked path, so both draw with the same normals.
+vec3 posed_normal(int i, vec3 N0, out bool usable) {
+    vec3 n_sum = vec3(0.0);
+    for (int e = TRIANGLE_BEGIN(i); e < TRIANGLE_END(i); ++e) {
+        n_sum += fetch(face_normals, INCIDENT_TRIANGLE(e)).xyz;
+    }
+    usable = length(N0) > 0.5 && length(n_sum) > 0.0;
+    return safe_normalize(n_sum, N0);
+}
+
+#if defined FROM_BAKE
+
+// A frame drawn from a bake: the posed normals are geometry and are computed here; the
+// waves are read as baked (no fit, no relax: the bake holds the relaxed phases).
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_num_points) return;
+    bool usable;
+    vec3 n = posed_normal(i, fetch(rest_frame, 2 * i).xyz, usable);
+    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
+    STORE(fields, FIELD_WAVE(i), fetch(baked, 2 * i));
+    STORE(fields, FIELD_DIRECTION(i), fetch(baked, 2 * i + 1));
+}
+
+#else
+
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
@@ -58,13 +92,8 @@ void main() {
     vec4 q_w = fetch(q_width, i);
     float W = q_w.w;
 
-    // posed normal: area-weighted sum of incident triangle normals (local space)
-    vec3 n_sum = vec3(0.0);
-    for (int e = TRIANGLE_BEGIN(i); e < TRIANGLE_END(i); ++e) {
-        n_sum += fetch(face_normals, INCIDENT_TRIANGLE(e)).xyz;
-    }
-    bool usable = length(N0) > 0.5 && length(n_sum) > 0.0;
-    vec3 n = safe_normalize(n_sum, N0);
+    bool usable;
+    vec3 n = posed_normal(i, N0, usable);
 
     // posed tangent frame: the rest frame carried by the minimal rotation N0 -> n
     vec3 t1 = safe_normalize(minimal_rotation(N0, n, T1, T1), T1);
@@ -137,5 +166,7 @@ void main() {
     // material-anchored start: crests ride with the cloth, frames stay independent
     STORE(phase, i, vec4((TWO_PI / W) * dot(d3, X_i)));
 }
+
+#endif
 
 #endif

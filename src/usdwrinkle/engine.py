@@ -37,13 +37,17 @@ class WrinkleEngine:
     history_start : float or None
         First frame of the shot's phase history (default: the stage's start time code).
         Every chunk of a shot must use the same value.
+    use_baked : bool
+        Draw the baked wave fields of meshes that hold them (scene/baked.py): no crush,
+        no relax and no preroll for those meshes. False recomputes everything.
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
                  camera: str | None = None, warn=_warn_stderr, ctx=None, profile: bool = False,
-                 history_start: float | None = None):
+                 history_start: float | None = None, use_baked: bool = True):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
-                                        relax_iterations=relax_iterations, warn=warn)
+                                        relax_iterations=relax_iterations, warn=warn,
+                                        use_baked=use_baked)
         self.camera = camera
         find_camera(self.scene.stage, camera)  # a missing camera fails before any GPU work
         self.render_delegate = RenderDelegate(ctx, profile=profile)
@@ -62,12 +66,14 @@ class WrinkleEngine:
     def wrinkled_paths(self) -> list[str]:
         return [p for p, r in self.scene.meshes.items() if r.wrinkled]
 
+    @property
+    def baked_paths(self) -> list[str]:
+        """The wrinkled meshes drawn from baked wave fields."""
+        return list(self.scene.baked)
+
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (or 16:9 without a camera)."""
-        if height:
-            return width, height
-        aspect = self.scene.camera_aspect(self.camera, frame) or 16.0 / 9.0
-        return width, max(1, int(round(width / aspect)))
+        return image_size(self.scene, self.camera, width, height, frame)
 
     # -- phase history --------------------------------------------------------------
     def history_start(self) -> float | None:
@@ -99,10 +105,11 @@ class WrinkleEngine:
         return [float(f) for f in steps], True
 
     def _compute_only(self, frame: float, history: bool, wrinkles: bool) -> None:
-        meshes = self.scene.sample_meshes(frame)
+        """A preroll step: the meshes that have no baked fields, compute only."""
+        meshes = self.scene.sample_meshes(frame, with_baked=False)
         self.scene.current_frame = FrameRecord(frame, None, (), meshes)
         self._sync()
-        self.render_pass.compute(wrinkles, None, history)
+        self.render_pass.compute(wrinkles, None, history, skip=frozenset(self.scene.baked))
 
     def _sync(self) -> None:
         for path, mesh in self.render_delegate.rprims.items():
@@ -121,7 +128,9 @@ class WrinkleEngine:
         """
         history = False
         steps: list[float] = []
-        if wrinkles:
+        # meshes drawn from a bake need no history; the others replay the shot's start
+        needs_history = any(p not in self.scene.baked for p in self.wrinkled_paths)
+        if wrinkles and needs_history:
             if any(self._dirty.values()):
                 self._history_frame = None
             steps, history = self._history_plan(frame)
@@ -168,6 +177,16 @@ class WrinkleEngine:
 
     def release(self) -> None:
         self.render_delegate.release()
+
+
+def image_size(scene, camera: str | None, width: int, height: int | None,
+               frame: float) -> tuple[int, int]:
+    """``--width`` and ``--height``, the height from the camera's aspect ratio when not
+    given (16:9 without a camera). Needs only the scene delegate, no GL."""
+    if height:
+        return width, height
+    aspect = scene.camera_aspect(camera, frame) or 16.0 / 9.0
+    return width, max(1, int(round(width / aspect)))
 
 
 def format_frame(frame: float) -> str:

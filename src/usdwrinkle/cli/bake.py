@@ -3,13 +3,7 @@ from __future__ import annotations
 
 import time
 
-from .common import (
-    Reporter,
-    add_stage_args,
-    at_frame,
-    refuse_overwriting_inputs,
-    start_engine,
-)
+from .common import Reporter, add_stage_args, refuse_overwriting_inputs, start_engine
 from .frames import add_frame_args, parse_frame_spec
 
 
@@ -35,12 +29,15 @@ def add_parser(subparsers) -> None:
     p.add_argument("--sparse", action="store_true",
                    help="write the overs alone, without sublayering the input")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    # The bake is one process on purpose: each frame's phases start from the previous
+    # frame's (phase history), so its frames cannot be computed apart (README, farms).
     p.set_defaults(run=run)
 
 
 def run(args) -> int:
-    from ..outputs.layers import LayerBaker, check_layer_path
+    from ..outputs.layers import check_layer_path
     from ..scene.stage import open_stage, stage_frames
+    from ..shot import bake_layer
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
@@ -49,32 +46,18 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     refuse_overwriting_inputs(args.stage, [args.output], stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
-    engine = start_engine(args, reporter, stage)
+    # a bake always computes: fields already baked into the input are not its input
+    engine = start_engine(args, reporter, stage, use_baked=False)
     try:
-        wrinkled = {}
-        for path in engine.wrinkled_paths:
-            if stage.GetPrimAtPath(path).IsInstanceProxy():
-                reporter.warn(f"mesh is inside an instance and cannot be overridden; skipped "
-                              f"({path})")
-                continue
-            wrinkled[path] = engine.scene.meshes[path]
-        if not wrinkled:
-            reporter.warn("no mesh has WrinkleAPI applied; the layer holds no wrinkle data "
-                          "(use --all-meshes to wrinkle every mesh)")
-        baker = LayerBaker(stage, args.stage, wrinkled, engine.scene.meshes,
-                           with_points=args.with_points, display_color=args.display_color,
-                           sparse=args.sparse, warn=reporter.warn)
-        wanted = set(wrinkled) | set(baker.point_meshes)
         started = time.perf_counter()
-        for frame in reporter.progress(frames, "bake"):
-            with at_frame(frame):
-                engine.compute_frame(frame)
-            baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
         spec = args.frames or (f"{frames[0]:g}:{frames[-1]:g}" if frames[0] == frames[0]
                                else "default")
-        baker.save(args.output, spec)
+        count = bake_layer(engine, args.stage, args.output, frames, spec,
+                           with_points=args.with_points, display_color=args.display_color,
+                           sparse=args.sparse, warn=reporter.warn,
+                           progress=lambda items: reporter.progress(items, "bake"))
         if not args.quiet:
-            print(f"usdwrinkle: baked {len(wrinkled)} mesh(es) x {len(frames)} frame(s) to "
+            print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
                   f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)
     finally:
         engine.release()

@@ -1,8 +1,6 @@
 """Arguments and checks shared by subcommands."""
 from __future__ import annotations
 
-import contextlib
-import math
 import os
 import sys
 
@@ -62,24 +60,20 @@ class Reporter:
         return tqdm(items, desc=desc, unit="frame", file=sys.stderr, dynamic_ncols=True)
 
 
-def start_engine(args, reporter: Reporter, stage, camera: str | None = None):
-    """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
-    from ..engine import WrinkleEngine
+def engine_options(args, stage_path: str | None = None, camera: str | None = None,
+                   use_baked: bool = True):
+    """The EngineOptions of a render or bake run (shot.py)."""
+    from ..shot import EngineOptions
 
-    engine = WrinkleEngine(stage, all_meshes=args.all_meshes,
-                           relax_iterations=args.relax_iterations, camera=camera,
-                           warn=reporter.warn, history_start=args.history_start)
+    return EngineOptions(os.path.abspath(stage_path or args.stage),
+                         all_meshes=args.all_meshes, relax_iterations=args.relax_iterations,
+                         camera=camera, history_start=args.history_start, use_baked=use_baked)
+
+
+def start_engine(args, reporter: Reporter, stage, camera: str | None = None,
+                 use_baked: bool = True):
+    """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
+    engine = engine_options(args, camera=camera, use_baked=use_baked).create(stage,
+                                                                             reporter.warn)
     engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
     return engine
-
-
-@contextlib.contextmanager
-def at_frame(frame: float):
-    """Name the frame in a per-frame error that did not name one."""
-    try:
-        yield
-    except UsdWrinkleError as exc:
-        if exc.frame is None and not math.isnan(frame):
-            exc.frame = frame
-            exc.args = (exc.one_line(),)
-        raise

@@ -4,13 +4,7 @@ from __future__ import annotations
 import os
 import time
 
-from .common import (
-    Reporter,
-    add_stage_args,
-    at_frame,
-    refuse_overwriting_inputs,
-    start_engine,
-)
+from .common import Reporter, add_stage_args, refuse_overwriting_inputs, start_engine
 from .frames import add_frame_args, check_output_pattern, frame_path, parse_frame_spec
 
 
@@ -20,7 +14,10 @@ def add_parser(subparsers) -> None:
         description="Render wrinkled frames of a USD stage headlessly. OUTPUT holds a '#' frame "
                     "placeholder (out/shot.####.exr); the format follows the extension. EXR gets "
                     "R,G,B,A, wrinkle.height, wrinkle.amplitude, N.X,N.Y,N.Z and Z; PNG, JPEG "
-                    "and TIFF get the 8-bit sRGB beauty.")
+                    "and TIFF get the 8-bit sRGB beauty. Meshes whose baked wave fields "
+                    "('usdwrinkle bake') are in the stage are drawn from them, with no crush, "
+                    "relax or preroll; a frame the bake does not hold (outside its range, or "
+                    "missing inside it) is an error: bake it, or pass --recompute.")
     p.add_argument("stage", help="the USD stage (.usd, .usda, .usdc, .usdz)")
     p.add_argument("output", help="output image path with '#' frame placeholder")
     add_frame_args(p)
@@ -37,15 +34,30 @@ def add_parser(subparsers) -> None:
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
                    help="skip frames whose output file already exists (resume a farm chunk)")
+    p.add_argument("--recompute", action="store_true",
+                   help="ignore baked wave fields in the stage and compute every mesh's "
+                        "wrinkles (with the phase history preroll)")
+    farm = p.add_argument_group(
+        "farm", "render chunks of frames on a Dask cluster (pip install 'usdwrinkle[farm]')")
+    farm.add_argument("--dask", nargs="?", const="local", metavar="SCHEDULER",
+                      help="render on Dask: without SCHEDULER, a local cluster of worker "
+                           "processes; with tcp://host:port, a running 'dask scheduler'. "
+                           "Unless the stage already holds baked wave fields for every "
+                           "frame, they are baked first, once, into STAGE_NAME.wrinkles.usdc "
+                           "beside the outputs")
+    farm.add_argument("--chunk", type=int, metavar="N",
+                      help="frames per task (default: 10, fewer when the shot is short, so "
+                           "that every worker gets at least two chunks)")
+    farm.add_argument("--workers", type=int, metavar="N",
+                      help="worker processes of the local cluster (default: the CPU cores)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(run=run)
 
 
-def run(args) -> int:
-    from ..engine import format_frame
+def check_render_args(args) -> None:
+    """Refuse bad options before any stage is read."""
     from ..errors import UsdWrinkleError
-    from ..outputs.images import aovs_for, check_format, write_image
-    from ..scene.stage import open_stage, stage_frames
+    from ..outputs.images import check_format
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_format(args.output)
@@ -55,6 +67,30 @@ def run(args) -> int:
         raise UsdWrinkleError("--samples must be at least 1")
     if args.relax_iterations is not None and args.relax_iterations < 0:
         raise UsdWrinkleError("--relax-iterations must be >= 0")
+    if args.chunk is not None and args.chunk < 1:
+        raise UsdWrinkleError("--chunk must be at least 1")
+    if args.workers is not None and args.workers < 1:
+        raise UsdWrinkleError("--workers must be at least 1")
+
+
+def summary(written: int, width: int, height: int, output: str, frames: list[float],
+            elapsed: float, baked: list[str], extra: str = "") -> str:
+    """The closing line of a render, serial or on a farm."""
+    from ..engine import format_frame
+
+    last = f" .. {format_frame(frames[-1])}" if len(frames) > 1 else ""
+    text = (f"usdwrinkle: wrote {written} frame(s) {width}x{height} to "
+            f"{frame_path(output, frames[0])}{last} in {elapsed:.1f} s{extra}")
+    if baked:
+        text += f"; baked wave fields: {', '.join(baked)}"
+    return text
+
+
+def run(args) -> int:
+    from ..scene.stage import open_stage, stage_frames
+    from ..shot import ImageOptions, render_frames
+
+    check_render_args(args)
     reporter = Reporter(args.quiet)
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
@@ -62,28 +98,30 @@ def run(args) -> int:
     check_output_pattern(args.output, frames)
     outputs = [frame_path(args.output, f) for f in frames]
     refuse_overwriting_inputs(args.stage, outputs, stage)
-    engine = start_engine(args, reporter, stage, args.camera)
+    if args.dask is not None:
+        from ..farm.client import render_on_dask
+        return render_on_dask(args, reporter, stage, frames, outputs)
+    if args.chunk is not None or args.workers is not None:
+        reporter.warn("--chunk and --workers apply to --dask only; ignored")
+    # --no-wrinkles draws no waves, so it needs no baked frames either
+    engine = start_engine(args, reporter, stage, args.camera,
+                          use_baked=not (args.recompute or args.no_wrinkles))
     try:
+        engine.scene.check_baked(frames)
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                           "(use --all-meshes to wrinkle every mesh)")
         width, height = engine.resolution(args.width, args.height, frames[0])
+        image = ImageOptions(width, height, args.samples, not args.no_wrinkles)
         started = time.perf_counter()
-        written = 0
-        for frame, path in reporter.progress(list(zip(frames, outputs, strict=True)), "render"):
-            if args.skip_existing and os.path.exists(path):
-                continue
-            with at_frame(frame):
-                buffers = engine.render_frame(frame, width, height, not args.no_wrinkles,
-                                              args.samples, aovs_for(path))
-            write_image(path, buffers)
-            written += 1
+        written = render_frames(
+            engine, image, frames, outputs,
+            skip=(lambda path: os.path.exists(path)) if args.skip_existing else
+            (lambda path: False),
+            progress=lambda items: reporter.progress(items, "render"))
         if not args.quiet:
-            elapsed = time.perf_counter() - started
-            print(f"usdwrinkle: wrote {written} frame(s) {width}x{height} to "
-                  f"{frame_path(args.output, frames[0])}"
-                  f"{' .. ' + format_frame(frames[-1]) if len(frames) > 1 else ''} "
-                  f"in {elapsed:.1f} s", flush=True)
+            print(summary(len(written), width, height, args.output, frames,
+                          time.perf_counter() - started, engine.baked_paths), flush=True)
     finally:
         engine.release()
     return 0

@@ -71,6 +71,11 @@ class Mesh:
         res = self.resources
         with _timed(timer, "skin", self.timings):
             d.skin.run(res, self.frame)
+        if wrinkles and self.frame.baked is not None:
+            # baked wave fields: normals only, no fit and no relax (scene/baked.py)
+            with _timed(timer, "crush", self.timings):
+                d.crush.run_baked(res, self.frame.baked)
+            return
         with _timed(timer, "crush", self.timings):
             d.crush.run(res, wrinkles)
         iterations = res.record.params.relax_iterations if wrinkles else 0
@@ -179,9 +184,13 @@ class RenderPass:
         self.delegate = delegate
 
     def compute(self, wrinkles: bool, timings: dict | None = None,
-                history: bool = False) -> None:
+                history: bool = False, skip: frozenset = frozenset()) -> None:
+        """Skin, crush and relax every rprim but those in ``skip`` (a preroll leaves out
+        the meshes drawn from baked fields)."""
         timer = self.delegate.ctx if self.delegate.profile else None
-        for mesh in self.delegate.rprims.values():
+        for path, mesh in self.delegate.rprims.items():
+            if path in skip:
+                continue
             mesh.timings = {}
             mesh.compute(wrinkles, timer, history)
             if timings is not None:

@@ -172,6 +172,7 @@ class MeshResources:
         #: unit phasors during relaxation (ping-pong) and the per-edge rotations
         self.phasors = [self._table(n, 2) for _ in range(2)]
         self.edge_rotations = self._table(self.num_edges, 4)
+        self.baked_waves: Table | None = None  # write_baked() makes it
         st = record.material.corner_st
         corner = np.zeros((self.num_triangles * 3, 2), np.float32)
         if st is not None:
@@ -210,6 +211,20 @@ class MeshResources:
             tex.repeat_x = True
             tex.repeat_y = False
             self.profiles.append(tex)
+
+    def write_baked(self, baked) -> None:
+        """Upload one frame's baked fields (scene.baked.BakedFields): waves into the baked
+        table ([2i] = (k, amplitude), [2i + 1] = (direction, r)), phases into the phase
+        table that draw reads. The baked table is made on first use."""
+        if self.baked_waves is None:
+            self.baked_waves = self._table(2 * self.num_points, 4)
+        block = np.empty((self.num_points, 2, 4), np.float32)
+        block[:, 0, :3] = baked.wave_vector
+        block[:, 0, 3] = baked.amplitude
+        block[:, 1, :3] = baked.direction
+        block[:, 1, 3] = baked.compression
+        self.baked_waves.write(block)
+        self.phase.write(baked.phase)
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
         table = Table(self.ctx, count, components, dtype, data, path=self.record.path)

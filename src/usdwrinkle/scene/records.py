@@ -94,6 +94,9 @@ class MeshRecord:
     params: WrinkleParams
     material: MaterialRecord
     double_sided: bool = True
+    #: the frames of the mesh's baked wave fields ("1..24", "default time"), or None:
+    #: a render draws them instead of running crush and relax (scene/baked.py)
+    baked_range: str | None = None
 
 
 @dataclass(frozen=True)
@@ -107,6 +110,7 @@ class MeshFrame:
     skel_to_local: np.ndarray | None = None     # (4, 4) float64
     subshape_weights: np.ndarray | None = None  # (S,) float32 dense over sub-shapes
     active_subshapes: tuple = ()                # ((blend_shape, sub_shape), ...)
+    baked: object | None = None                 # scene.baked.BakedFields at this frame
 
 
 @dataclass(frozen=True)

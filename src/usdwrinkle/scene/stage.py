@@ -17,6 +17,7 @@ from pxr import Tf, Usd, UsdGeom
 from .. import schema
 from ..errors import UsdWrinkleError
 from . import camera as camera_mod
+from .baked import BakedSource, find_baked
 from .lights import default_lights, read_lights
 from .material import read_material
 from .params import read_params
@@ -121,13 +122,20 @@ class StageSceneDelegate:
         Override every mesh's ``wrinkle:relaxIterations``.
     warn : callable(str)
         Receives degraded-input warnings.
+    use_baked : bool
+        Read the baked wave fields of meshes that hold them (scene/baked.py); such a mesh
+        is wrinkled even without WrinkleAPI. False (``--recompute``, and the bake itself)
+        ignores them.
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 warn=_warn_stderr):
+                 warn=_warn_stderr, use_baked: bool = True):
         self.stage = open_stage(stage) if isinstance(stage, (str, os.PathLike)) else stage
         self.all_meshes = all_meshes
         self.warn = warn
+        self.use_baked = use_baked
+        #: mesh path -> its baked wave fields
+        self.baked: dict[str, BakedSource] = {}
         self.up_axis = UsdGeom.GetStageUpAxis(self.stage)
         self.skel = SkelBindings(self.stage)
         self._prims: dict[str, Usd.Prim] = {}
@@ -177,12 +185,16 @@ class StageSceneDelegate:
             if targets:
                 self.warn(f"skel binding to a missing or unusable skeleton; treated as "
                           f"static ({path})")
-        wrinkled = self.all_meshes or schema.has_wrinkle_api(prim)
+        baked = find_baked(prim, len(rest)) if self.use_baked else None
+        wrinkled = self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None
         params = read_params(prim, rest, topology, default, relax_iterations)
         material = read_material(prim, topology, default, self.warn)
         double_sided = bool(mesh.GetDoubleSidedAttr().Get())
+        if baked is not None:
+            self.baked[path] = baked
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
-                          point_cached, wrinkled, params, material, double_sided)
+                          point_cached, wrinkled, params, material, double_sided,
+                          baked.range_text() if baked is not None else None)
 
     # -- time ---------------------------------------------------------------------------
     def frame_range(self) -> list[float]:
@@ -194,10 +206,15 @@ class StageSceneDelegate:
         return Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
 
     # -- per frame ----------------------------------------------------------------------
-    def sample_mesh(self, path: str, time: Usd.TimeCode, xform_cache) -> MeshFrame:
+    def sample_mesh(self, path: str, time: Usd.TimeCode, xform_cache,
+                    with_baked: bool = True) -> MeshFrame:
+        """One mesh at ``time``; ``with_baked``: also its baked fields, if it has any."""
         record = self.meshes[path]
         prim = self._prims[path]
         frame = None if time.IsDefault() else time.GetValue()
+        baked = None
+        if with_baked and path in self.baked:
+            baked = self.baked[path].at(float("nan") if frame is None else frame)
         local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
         visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible
         if record.skin is not None:
@@ -213,7 +230,7 @@ class StageSceneDelegate:
                 raise UsdWrinkleError("skinning transforms are not finite", path,
                                       "skel:skeleton", frame)
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
-                             active)
+                             active, baked)
         points = None
         if record.point_cached:
             value = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
@@ -222,7 +239,7 @@ class StageSceneDelegate:
                 raise UsdWrinkleError(
                     f"point count changes over time ({len(points)} != "
                     f"{len(record.rest_points)})", path, "points", frame)
-        return MeshFrame(local_to_world, visible, points)
+        return MeshFrame(local_to_world, visible, points, baked=baked)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World bounds of the rendered meshes over the stage's range (at most 9 samples).
@@ -257,11 +274,18 @@ class StageSceneDelegate:
         prim = camera_mod.find_camera(self.stage, camera_spec)
         return camera_mod.camera_aspect(prim, self.time_code(frame)) if prim else None
 
-    def sample_meshes(self, frame: float, xform_cache=None) -> dict:
+    def check_baked(self, frames: list[float]) -> None:
+        """Refuse, before any frame is drawn, a frame that a mesh's bake does not hold."""
+        for source in self.baked.values():
+            for frame in frames:
+                source.check_covers(frame)
+
+    def sample_meshes(self, frame: float, xform_cache=None, with_baked: bool = True) -> dict:
         """The MeshFrames of every mesh at ``frame`` (no camera or lights)."""
         time = self.time_code(frame)
         xform_cache = xform_cache or UsdGeom.XformCache(time)
-        return {path: self.sample_mesh(path, time, xform_cache) for path in self.meshes}
+        return {path: self.sample_mesh(path, time, xform_cache, with_baked)
+                for path in self.meshes}
 
     def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
         """Everything time-varying at ``frame`` (NaN: the default time)."""

@@ -1,4 +1,8 @@
-"""Crush pass: per-vertex compression -> plane wave (GUIDE sec. 1.2)."""
+"""Crush pass: per-vertex compression -> plane wave (docs/method.md, "Crush").
+
+A mesh drawn from baked wave fields runs only the posed-normal part of this pass
+(:meth:`CrushPass.run_baked`): the waves come from the bake.
+"""
 from __future__ import annotations
 
 from .. import bindings
@@ -16,6 +20,18 @@ class CrushPass:
         defines = {**bindings.COMMON, **bindings.CRUSH}
         self.shader = compute_shader(ctx, "crush.glsl", defines)
         self.face_shader = compute_shader(ctx, "crush.glsl", {**defines, "FACE_NORMALS": 1})
+        self.baked_shader = compute_shader(ctx, "crush.glsl", {**defines, "FROM_BAKE": 1})
+
+    def _face_normals(self, res: MeshResources) -> None:
+        set_uniforms(self.face_shader, {"u_num_triangles": res.num_triangles,
+                                        **res.topology_uniforms})
+        bind(bindings.CRUSH, reads={"CRUSH_POSED_POINTS": res.posed_points,
+                                    "TOPOLOGY_TABLE": res.topology})
+        if res.num_triangles:
+            bind(bindings.CRUSH, reads={"CRUSH_TRIANGLES": res.triangles},
+                 writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals})
+            self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
+            self.ctx.memory_barrier()
 
     def run(self, res: MeshResources, wrinkles: bool = True) -> None:
         """Write this frame's fields into the other field buffer (the previous frame's
@@ -25,18 +41,25 @@ class CrushPass:
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
                                    "u_min_ratio": MIN_RATIO, **res.topology_uniforms})
-        set_uniforms(self.face_shader, {"u_num_triangles": res.num_triangles,
-                                        **res.topology_uniforms})
-        units = bindings.CRUSH
-        bind(units, reads={"CRUSH_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology})
-        if res.num_triangles:
-            bind(units, reads={"CRUSH_TRIANGLES": res.triangles},
-                 writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals})
-            self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
-            self.ctx.memory_barrier()
-        bind(units, reads={"CRUSH_REST_POINTS": res.rest_points,
+        self._face_normals(res)
+        bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
                            "CRUSH_FACE_NORMALS": res.face_normals},
              writes={"CRUSH_FIELDS": res.fields, "CRUSH_PHASE": res.anchor_phase})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
+        self.ctx.memory_barrier()
+
+    def run_baked(self, res: MeshResources, baked) -> None:
+        """Fields of a frame drawn from a bake: posed normals computed, waves and phases
+        as baked (``baked``: scene.baked.BakedFields)."""
+        res.current_fields = 1 - res.current_fields
+        res.write_baked(baked)
+        self._face_normals(res)
+        set_uniforms(self.baked_shader, {"u_num_points": res.num_points,
+                                         **res.topology_uniforms})
+        bind(bindings.CRUSH, reads={"CRUSH_REST_FRAME": res.rest_frame,
+                                    "CRUSH_FACE_NORMALS": res.face_normals,
+                                    "CRUSH_BAKED": res.baked_waves},
+             writes={"CRUSH_FIELDS": res.fields})
+        self.baked_shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

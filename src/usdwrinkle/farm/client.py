@@ -1,0 +1,230 @@
+"""``usdwrinkle render --dask``: bake once, render chunks on a Dask cluster, gather.
+
+Flow:
+
+1. Check everything a serial render checks, here, once, without a GL context: the
+   stage, the WrinkleAPI values, the camera, the frames and the outputs.
+2. Start a LocalCluster (worker processes, one thread each), or connect to a running
+   scheduler (``tcp://host:port``).
+3. Unless the stage already holds baked wave fields for every wrinkled mesh and frame,
+   bake them: one sequential, compute-only pass in this process (the phase history runs
+   in time order), written atomically to ``STAGE_NAME.wrinkles.usdc`` beside the
+   outputs. The workers start as spawned processes before this process makes its GL
+   context, so no context crosses a fork.
+4. Submit chunks of ``--chunk`` frames (``retries``: a chunk whose worker dies runs
+   again, and skips the frames that its first run finished); show one progress bar.
+5. On any error or interruption: cancel the futures, shut a local cluster down, and
+   remove the temporary files that killed workers may have left beside the outputs.
+"""
+from __future__ import annotations
+
+import contextlib
+import glob
+import logging
+import math
+import os
+import sys
+import time
+import uuid
+
+from ..errors import UsdWrinkleError
+from ..shot import ImageOptions, bake_layer, frame_spec_text
+from .worker import file_identity, render_chunk
+
+#: how often Dask reruns a chunk whose worker died
+RETRIES = 2
+#: frames per chunk at most, when --chunk is not given
+DEFAULT_CHUNK = 10
+
+
+def _import_dask():
+    try:
+        import distributed
+    except ImportError:
+        raise UsdWrinkleError("--dask needs Dask's distributed scheduler: "
+                              "pip install 'usdwrinkle[farm]'") from None
+    return distributed
+
+
+def default_chunk(frames: int, workers: int) -> int:
+    """At most DEFAULT_CHUNK frames, and at least two chunks per worker where the shot
+    allows, so that a short shot still spreads over every worker."""
+    return max(1, min(DEFAULT_CHUNK, math.ceil(frames / (2 * max(workers, 1)))))
+
+
+def bake_path(output_pattern: str, stage_path: str) -> str:
+    """Where the farm bakes the wave fields: beside the outputs, named after the stage."""
+    folder = os.path.dirname(os.path.abspath(output_pattern))
+    stem = os.path.splitext(os.path.basename(stage_path))[0]
+    return os.path.join(folder, f"{stem}.wrinkles.usdc")
+
+
+def remove_temporaries(paths: list[str]) -> None:
+    """Remove the temporary files of atomic_path() that belong to ``paths`` (a worker
+    killed mid-write leaves its own behind)."""
+    for path in paths:
+        folder = os.path.dirname(os.path.abspath(path))
+        base, ext = os.path.splitext(os.path.basename(path))
+        for tmp in glob.glob(os.path.join(glob.escape(folder),
+                                          f".{glob.escape(base)}.*.tmp{glob.escape(ext)}")):
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def _has_bokeh() -> bool:
+    import importlib.util
+    return importlib.util.find_spec("bokeh") is not None
+
+
+def _connect(distributed, address: str, workers: int | None):
+    """(client, cluster or None, worker count)."""
+    if address == "local":
+        count = workers or os.cpu_count() or 1
+        dashboard = ":0" if _has_bokeh() else None
+        cluster = distributed.LocalCluster(
+            n_workers=count, threads_per_worker=1, processes=True,
+            silence_logs=logging.ERROR, dashboard_address=dashboard)
+        return distributed.Client(cluster), cluster, count
+    try:
+        client = distributed.Client(address, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise UsdWrinkleError(f"cannot reach the Dask scheduler at '{address}' "
+                              f"({type(exc).__name__}: {exc})") from None
+    try:
+        client.wait_for_workers(1, timeout=60)
+    except (TimeoutError, OSError):
+        client.close()
+        raise UsdWrinkleError(f"the Dask scheduler at '{address}' has no workers "
+                              "(start some with 'dask worker ADDRESS')") from None
+    return client, None, len(client.scheduler_info()["workers"])
+
+
+def _needs_bake(scene, frames: list[float], wrinkles: bool, recompute: bool) -> bool:
+    if not wrinkles:
+        return False
+    if recompute:
+        return True
+    for path in scene.meshes:
+        if not scene.meshes[path].wrinkled:
+            continue
+        source = scene.baked.get(path)
+        if source is None or not all(source.covers(f) for f in frames):
+            return True
+    return False
+
+
+def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> int:
+    """Run ``usdwrinkle render --dask``; returns the exit code."""
+    from ..cli.common import engine_options, refuse_overwriting_inputs
+    from ..cli.render import summary
+    from ..engine import image_size
+    from ..scene.camera import find_camera
+    from ..scene.stage import StageSceneDelegate
+
+    distributed = _import_dask()
+    wrinkles = not args.no_wrinkles
+    # the checks of a serial render, once, here (no GL context)
+    scene = StageSceneDelegate(stage, all_meshes=args.all_meshes,
+                               relax_iterations=args.relax_iterations, warn=reporter.warn,
+                               use_baked=wrinkles and not args.recompute)
+    find_camera(stage, args.camera)
+    needs_bake = _needs_bake(scene, frames, wrinkles, args.recompute)
+    layer = bake_path(args.output, args.stage) if needs_bake else None
+    if layer is not None:
+        refuse_overwriting_inputs(args.stage, [layer], stage)
+    if wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
+        reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
+                      "(use --all-meshes to wrinkle every mesh)")
+    width, height = image_size(scene, args.camera, args.width, args.height, frames[0])
+    image = ImageOptions(width, height, args.samples, wrinkles)
+
+    started = time.perf_counter()
+    client = cluster = None
+    futures = []
+    try:
+        client, cluster, workers = _connect(distributed, args.dask, args.workers)
+        if not args.quiet:
+            where = "a local cluster" if cluster is not None else args.dask
+            dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
+                else "none (pip install bokeh for Dask's dashboard)"
+            print(f"usdwrinkle: rendering on {where}, {workers} worker(s); dashboard: "
+                  f"{dashboard}", flush=True)
+        render_stage = args.stage
+        if layer is not None:
+            bake_started = time.perf_counter()
+            engine = engine_options(args, use_baked=False).create(stage, reporter.warn)
+            engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+            try:
+                bake_layer(engine, args.stage, layer, frames,
+                           args.frames or frame_spec_text(frames),
+                           warn=reporter.warn,
+                           progress=lambda items: reporter.progress(items, "bake"))
+            finally:
+                engine.release()
+            if not args.quiet:
+                print(f"usdwrinkle: baked wave fields to {layer} in "
+                      f"{time.perf_counter() - bake_started:.1f} s", flush=True)
+            render_stage = layer
+        options = engine_options(args, stage_path=render_stage, camera=args.camera,
+                                 use_baked=wrinkles)
+        chunk = args.chunk or default_chunk(len(frames), workers)
+        before = [file_identity(p) for p in outputs]
+        run_id = uuid.uuid4().hex[:8]
+        for index, start in enumerate(range(0, len(frames), chunk)):
+            part = slice(start, start + chunk)
+            futures.append(client.submit(
+                render_chunk, options, image, frames[part], outputs[part], before[part],
+                args.skip_existing, retries=RETRIES, pure=False,
+                key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
+        written, baked = _gather(distributed, futures, len(frames), chunk, reporter)
+        if not args.quiet:
+            elapsed = time.perf_counter() - started
+            print(summary(written, width, height, args.output, frames, elapsed, baked,
+                          f" ({len(frames) / elapsed:.1f} fps over the whole run, "
+                          f"{workers} Dask worker(s), chunks of {chunk})"), flush=True)
+    finally:
+        for future in futures:
+            future.cancel()
+        if client is not None:
+            with contextlib.suppress(Exception):  # closing must not mask the error
+                client.close()
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                cluster.close()
+        remove_temporaries(outputs)
+    return 0
+
+
+def _gather(distributed, futures, total: int, chunk: int, reporter) -> tuple[int, list[str]]:
+    """Wait for every chunk; the first input error raises as the serial one would."""
+    bar = None
+    if not reporter.quiet and total > 1:
+        from tqdm import tqdm
+        bar = tqdm(total=total, desc="render", unit="frame", dynamic_ncols=True,
+                   file=sys.stderr)
+    written = 0
+    baked: set[str] = set()
+    try:
+        for future in distributed.as_completed(futures):
+            try:
+                result = future.result()
+            except distributed.client.FutureCancelledError:
+                continue
+            except distributed.KilledWorker as exc:
+                raise UsdWrinkleError(
+                    f"Dask workers died {RETRIES + 1} times while rendering one chunk "
+                    f"({exc}); see the workers' logs") from None
+            for message in result["warnings"]:
+                reporter.warn(message)
+            if result["error"] is not None:
+                error = result["error"]
+                raise UsdWrinkleError(error["what"], error["prim_path"], error["attribute"],
+                                      error["frame"])
+            written += len(result["written"])
+            baked.update(result["baked"])
+            if bar is not None:
+                bar.update(len(result["written"]) + len(result["skipped"]))
+    finally:
+        if bar is not None:
+            bar.close()
+    return written, sorted(baked)

@@ -1,0 +1,85 @@
+"""The task that a Dask worker runs: render one chunk of frames.
+
+One engine per worker process, kept across tasks: the GL context and the compiled
+passes cost most of a short chunk. It is created lazily inside the first task, on the
+thread that runs tasks, never in the parent before the workers start (an EGL context
+does not survive a fork: moderngl issue 414), and made current on the task's thread
+for each chunk.
+
+Input errors come back as a value, not an exception: the client reports the first
+one as the one-line error of a serial render, and Dask neither retries it nor logs a
+remote traceback. Anything else raises, and Dask retries the chunk (``retries``).
+"""
+from __future__ import annotations
+
+import os
+import threading
+
+from ..errors import UsdWrinkleError
+from ..shot import EngineOptions, ImageOptions, render_frames
+
+_lock = threading.Lock()
+_cached: dict = {"key": None, "engine": None}
+
+
+def _engine(options: EngineOptions, warnings: list[str]):
+    """This process's engine for ``options`` (a new stage or options replaces it)."""
+    key = (options, threading.get_ident())
+    if _cached["key"] != key:
+        if _cached["engine"] is not None:
+            _cached["engine"].release()
+            _cached["engine"] = _cached["key"] = None
+        _cached["engine"] = options.create(warn=warnings.append)
+        _cached["key"] = key
+    engine = _cached["engine"]
+    engine.scene.warn = warnings.append
+    return engine
+
+
+def file_identity(path: str):
+    """(device, inode) of an existing file, else None: an atomic write makes a new inode."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino)
+
+
+def written_this_run(path: str, before) -> bool:
+    """True when ``path`` was written after the run took its snapshot ``before``
+    (None: the file did not exist then). A retried chunk skips these frames, so that
+    no frame is written twice."""
+    now = file_identity(path)
+    return now is not None and now != before and os.path.getsize(path) > 0
+
+
+def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float],
+                 paths: list[str], before: list, skip_existing: bool) -> dict:
+    """Render ``frames`` to ``paths``; returns {"written", "skipped", "warnings", "error",
+    "baked", "worker"}.
+
+    ``before``: each path's file identity when the run started (file_identity).
+    """
+    warnings: list[str] = []
+    result = {"written": [], "skipped": [], "warnings": warnings, "error": None,
+              "baked": [], "worker": os.getpid()}
+    previous = dict(zip(paths, before, strict=True))
+
+    def skip(path: str) -> bool:
+        done = (skip_existing and os.path.exists(path)) or \
+            written_this_run(path, previous[path])
+        if done:
+            result["skipped"].append(path)
+        return done
+
+    with _lock:
+        try:
+            engine = _engine(options, warnings)
+            with engine.render_delegate.ctx:  # current on this thread for the chunk
+                result["written"] = render_frames(engine, image, frames, paths, skip=skip)
+            result["baked"] = engine.baked_paths
+        except UsdWrinkleError as exc:
+            result["error"] = {"what": exc.what, "prim_path": exc.prim_path,
+                               "attribute": exc.attribute, "frame": exc.frame,
+                               "type": type(exc).__name__}
+    return result

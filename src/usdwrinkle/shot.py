@@ -1,0 +1,124 @@
+"""A shot's frames to files: the render loop and the bake loop.
+
+The serial ``render`` and ``bake`` commands, the farm's worker tasks and the farm's
+client (which bakes before it distributes) all run these, so a frame rendered on a
+farm is made by exactly the code that renders it serially.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .errors import UsdWrinkleError
+
+
+@dataclass(frozen=True)
+class EngineOptions:
+    """What a WrinkleEngine is made with (picklable: a farm task carries it)."""
+
+    stage: str
+    all_meshes: bool = False
+    relax_iterations: int | None = None
+    camera: str | None = None
+    history_start: float | None = None
+    use_baked: bool = True
+
+    def create(self, stage=None, warn=None):
+        """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``."""
+        from .engine import WrinkleEngine
+
+        kwargs = {"warn": warn} if warn is not None else {}
+        return WrinkleEngine(stage if stage is not None else self.stage,
+                             all_meshes=self.all_meshes,
+                             relax_iterations=self.relax_iterations, camera=self.camera,
+                             history_start=self.history_start, use_baked=self.use_baked,
+                             **kwargs)
+
+
+@dataclass(frozen=True)
+class ImageOptions:
+    """How each frame is drawn."""
+
+    width: int
+    height: int
+    samples: int = 4
+    wrinkles: bool = True
+
+
+@contextlib.contextmanager
+def at_frame(frame: float):
+    """Name the frame in a per-frame error that did not name one."""
+    try:
+        yield
+    except UsdWrinkleError as exc:
+        if exc.frame is None and not math.isnan(frame):
+            exc.frame = frame
+            exc.args = (exc.one_line(),)
+        raise
+
+
+def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[str],
+                  skip: Callable[[str], bool] = lambda path: False,
+                  progress: Callable = lambda items: items) -> list[float]:
+    """Render each frame to its path (atomically); returns the frames written.
+
+    ``skip(path)``: leave that frame alone (``--skip-existing``, a farm retry).
+    ``progress``: wraps the list of (frame, path) pairs (a progress bar).
+    """
+    from .outputs.images import aovs_for, write_image
+
+    written = []
+    for frame, path in progress(list(zip(frames, paths, strict=True))):
+        if skip(path):
+            continue
+        with at_frame(frame):
+            buffers = engine.render_frame(frame, image.width, image.height, image.wrinkles,
+                                          image.samples, aovs_for(path))
+        write_image(path, buffers)
+        written.append(frame)
+    return written
+
+
+def bakeable_meshes(engine, warn) -> dict:
+    """Path -> MeshRecord of the wrinkled meshes a layer can override."""
+    wrinkled = {}
+    for path in engine.wrinkled_paths:
+        if engine.scene.stage.GetPrimAtPath(path).IsInstanceProxy():
+            warn(f"mesh is inside an instance and cannot be overridden; skipped ({path})")
+            continue
+        wrinkled[path] = engine.scene.meshes[path]
+    return wrinkled
+
+
+def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_spec: str,
+               with_points: bool = False, display_color: str | None = None,
+               sparse: bool = False, warn=lambda message: None,
+               progress: Callable = lambda items: items) -> int:
+    """Compute every frame in order (the phase history is sequential in time) and write
+    the wrinkle fields to ``output`` atomically; returns the number of meshes baked."""
+    from .outputs.layers import LayerBaker
+
+    wrinkled = bakeable_meshes(engine, warn)
+    if not wrinkled:
+        warn("no mesh has WrinkleAPI applied; the layer holds no wrinkle data "
+             "(use --all-meshes to wrinkle every mesh)")
+    baker = LayerBaker(engine.scene.stage, stage_path, wrinkled, engine.scene.meshes,
+                       with_points=with_points, display_color=display_color, sparse=sparse,
+                       warn=warn)
+    wanted = set(wrinkled) | set(baker.point_meshes)
+    for frame in progress(frames):
+        with at_frame(frame):
+            engine.compute_frame(frame)
+        baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
+    baker.save(output, frame_spec)
+    return len(wrinkled)
+
+
+def frame_spec_text(frames: list[float]) -> str:
+    """A FrameSpec that names ``frames`` (for the layer's metadata)."""
+    if not frames or math.isnan(frames[0]):
+        return "default"
+    return ",".join(f"{f:g}" for f in frames) if len(frames) < 4 else \
+        f"{frames[0]:g}:{frames[-1]:g}"
