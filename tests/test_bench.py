@@ -23,7 +23,7 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     result = json.loads(out_json.read_text())
     assert result["quick"] is True
     assert {"machine", "command", "date", "paper_table", "scaling", "skin_baseline",
-            "numpy_baseline", "end_to_end", "floors", "targets"} <= set(result)
+            "numpy_baseline", "end_to_end", "preroll", "farm", "floors", "targets"} <= set(result)
     assert [r["case"] for r in result["paper_table"]] == ["shirt", "zeppelin", "curtain", "A", "B"]
     for section, keys in FIELDS.items():
         for row in result[section]:
@@ -39,6 +39,13 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     e2e = result["end_to_end"]
     for run in ("wrinkles", "no_wrinkles"):
         assert {"usd_read", "upload", "gpu", "readback", "encode", "total"} <= set(e2e[run])
+    assert {"baked_2", "baked_late", "direct_late", "late_over_2", "late_frame",
+            "bake_s"} <= set(result["preroll"])
+    assert result["preroll"]["direct_late"] > 0 and result["preroll"]["baked_late"] > 0
+    farm = result["farm"]
+    assert {"frames", "serial_s", "dask_s", "serial_fps", "dask_fps", "speedup",
+            "serial_cpu_utilisation", "dask_cpu_utilisation", "bake_s"} <= set(farm), farm
+    assert farm["frames"] == 8 and farm["speedup"] > 0
     assert len(result["targets"]) == 6
     floors = result["floors"]
     assert {"empty_dispatch_ms", "gather6_50k_ms", "gather6_50k_tables_ms", "copy_points_ms",
@@ -46,6 +53,6 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     assert floors["copy_points"] == result["skin_baseline"][-1]["vertices"]
     text = out_md.read_text()
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
-                    "## End to end", "## What the rasteriser costs by itself"):
+                    "## End to end", "## What the rasteriser costs by itself", "## Farms"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text

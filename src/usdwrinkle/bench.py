@@ -634,6 +634,8 @@ def markdown(result: dict) -> str:
                       f"vertices: {numpy_row['speedup']:.1f}x. Both run on the same two CPU "
                       "cores; numpy pays a temporary array per step of the 1-ring sums, the "
                       "passes gather in registers."]
+    from .farm import bench as farm_bench
+    lines += farm_bench.markdown(result)
     hist = result.get("history") or []
     if hist:
         lines += ["", "## Before and after each change", "",
@@ -667,6 +669,11 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
                       ("end_to_end", lambda: end_to_end(quick, ctx, corpus))):
         progress(f"bench: {key.replace('_', ' ')}")
         result[key] = step()
+    from .farm import bench as farm_bench
+    progress("bench: preroll")
+    result["preroll"] = farm_bench.preroll(quick, ctx)
+    progress("bench: farm")
+    result["farm"] = farm_bench.farm(quick, corpus)
     progress("bench: floors")
     result["floors"] = floors(ctx, result["skin_baseline"][-1]["vertices"])
     result["targets"] = targets(result)
