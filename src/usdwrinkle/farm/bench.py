@@ -170,13 +170,27 @@ def markdown(result: dict) -> list[str]:
             f"{f['serial_one_thread_s']:.1f} | {f['frames'] / f['serial_one_thread_s']:.1f} | "
             f"{f['serial_one_thread_cpu_utilisation']:.0%} of {f['cores']} cores |",
             "", f"Speed-up of `--dask` over serial: {f['speedup']:.2f}x (the issue's aim on a "
-            "2-core machine: 1.6x). What limits it: llvmpipe already rasterises the serial "
-            f"run on every core ({f['serial_cpu_utilisation']:.0%} busy), so spreading the "
-            "serial run's CPU time perfectly over the cores would give at most "
-            f"{f['ceiling_speedup']:.2f}x, before Dask's own costs (starting the cluster, a "
-            "second interpreter with its USD read, GL context and shader compilation per "
-            "worker). With llvmpipe on one thread, the serial run is "
-            f"{f['serial_one_thread_s'] / f['serial_s']:.2f}x slower than with all of them. "
-            "Dask pays off with more cores than one llvmpipe process keeps busy, with several "
-            "machines, or with GPU nodes.", ""]
+            "2-core machine: 1.6x)."]
+        software = any(name in result.get("machine", {}).get("gl_renderer", "")
+                       for name in ("llvmpipe", "softpipe"))
+        if software:
+            lines += [
+                f"What limits it: llvmpipe already rasterises the serial run on every core "
+                f"({f['serial_cpu_utilisation']:.0%} busy), so spreading the serial run's CPU "
+                "time perfectly over the cores would give at most "
+                f"{f['ceiling_speedup']:.2f}x, before Dask's own costs (starting the cluster, "
+                "a second interpreter with its USD read, GL context and shader compilation per "
+                "worker). With llvmpipe on one thread, the serial run is "
+                f"{f['serial_one_thread_s'] / f['serial_s']:.2f}x slower than with all of "
+                "them. Dask pays off with more cores than one llvmpipe process keeps busy, "
+                "with several machines, or with GPU nodes."]
+        else:
+            lines += [
+                f"On a GPU the serial run takes {f['serial_s']:.1f} s for {f['frames']} frames "
+                f"and keeps {f['serial_cpu_utilisation']:.0%} of the CPU busy: a run this short "
+                "is mostly fixed costs, and Dask adds its own (starting the cluster, a second "
+                "interpreter with its USD read, GL context and shader compilation per worker), "
+                "which the frames do not pay back. Dask pays off for shots that run for "
+                "minutes, and across machines."]
+        lines.append("")
     return lines
