@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-from types import SimpleNamespace
 
 
 def add_parser(subparsers) -> None:
@@ -20,11 +19,12 @@ def run(args) -> int:
 
     stage = str(resource_dir("sample_stages") / "shirt.usda")
     os.makedirs(args.outdir, exist_ok=True)
-    ns = SimpleNamespace(stage=stage, output=os.path.join(args.outdir, "shirt.####.png"),
-                         frames=None, camera=None, width=args.width, height=None, samples=4,
-                         all_meshes=False, relax_iterations=None, history_start=None,
-                         no_wrinkles=False,
-                         skip_existing=False, quiet=args.quiet)
+    # the render subcommand's own parser fills in every option's default, so the demo
+    # stays in step with render's options
+    from .main import build_parser
+    argv = ["render", stage, os.path.join(args.outdir, "shirt.####.png"),
+            "--width", str(args.width)] + (["--quiet"] if args.quiet else [])
+    ns = build_parser().parse_args(argv)
     code = render.run(ns)
     if code == 0 and not args.quiet:
         print(f"usdwrinkle: demo frames are in {os.path.abspath(args.outdir)}")
