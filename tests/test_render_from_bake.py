@@ -64,28 +64,38 @@ def test_summary_names_the_baked_meshes(gl_context, tmp_path, shirt_bake, capsys
     assert "baked wave fields" not in capsys.readouterr().out
 
 
+def edited_copy(layer: Path, out: Path, edit) -> Path:
+    """A copy of the bake ``layer`` at ``out`` (its sublayers still found), changed by
+    ``edit(copy)``."""
+    source = Sdf.Layer.FindOrOpen(str(layer))
+    copy = Sdf.Layer.CreateNew(str(out))
+    copy.TransferContent(source)
+    copy.subLayerPaths[:] = [str(layer.parent / p) for p in source.subLayerPaths]
+    edit(copy)
+    copy.Save()
+    return out
+
+
 def perturbed_copy(layer: Path, out: Path, seed: int = 7) -> Path:
     """The bake as another GL implementation might have made it: the same waves to float
     rounding, phases that drifted apart (docs/method.md measures ~1.2 rad median between
     llvmpipe and the float64 reference over 24 frames)."""
-    source = Sdf.Layer.FindOrOpen(str(layer))
-    copy = Sdf.Layer.CreateNew(str(out))
-    copy.TransferContent(source)
-    copy.subLayerPaths[:] = [str(Path(p) if Path(p).is_absolute() else layer.parent / p)
-                             for p in source.subLayerPaths]
     rng = np.random.default_rng(seed)
     phase_path = Sdf.Path(f"{SLEEVE}.primvars:wrinkle:phase")
     wave_path = Sdf.Path(f"{SLEEVE}.primvars:wrinkle:waveVector")
-    for frame in copy.ListTimeSamplesForPath(phase_path):
-        phase = np.asarray(copy.QueryTimeSample(phase_path, frame), np.float64)
-        drift = 1.2 * np.sin(np.arange(len(phase)) * 0.05) + rng.normal(0, 0.05, len(phase))
-        copy.SetTimeSample(phase_path, frame, Vt.FloatArray.FromNumpy(
-            (phase + drift).astype(np.float32)))
-        wave = np.asarray(copy.QueryTimeSample(wave_path, frame), np.float64)
-        wave *= 1 + rng.normal(0, 1e-6, wave.shape)
-        copy.SetTimeSample(wave_path, frame, Vt.Vec3fArray.FromNumpy(wave.astype(np.float32)))
-    copy.Save()
-    return out
+
+    def perturb(copy):
+        for frame in copy.ListTimeSamplesForPath(phase_path):
+            phase = np.asarray(copy.QueryTimeSample(phase_path, frame), np.float64)
+            drift = 1.2 * np.sin(np.arange(len(phase)) * 0.05) + rng.normal(0, 0.05, len(phase))
+            copy.SetTimeSample(phase_path, frame, Vt.FloatArray.FromNumpy(
+                (phase + drift).astype(np.float32)))
+            wave = np.asarray(copy.QueryTimeSample(wave_path, frame), np.float64)
+            wave *= 1 + rng.normal(0, 1e-6, wave.shape)
+            copy.SetTimeSample(wave_path, frame,
+                               Vt.Vec3fArray.FromNumpy(wave.astype(np.float32)))
+
+    return edited_copy(layer, out, perturb)
 
 
 def test_a_bake_from_another_machine_renders_identically_from_the_layer(
@@ -107,16 +117,6 @@ def test_a_bake_from_another_machine_renders_identically_from_the_layer(
     # ... and --recompute ignores the layer's fields: back to this machine's render
     render(other, tmp_path / "recomputed.####.exr", "17", "--recompute")
     assert_same(tmp_path / "ours.0017.exr", tmp_path / "recomputed.0017.exr")
-
-
-def broken_copy(layer: Path, out: Path, edit) -> Path:
-    source = Sdf.Layer.FindOrOpen(str(layer))
-    copy = Sdf.Layer.CreateNew(str(out))
-    copy.TransferContent(source)
-    copy.subLayerPaths[:] = [str(layer.parent / p) for p in source.subLayerPaths]
-    edit(copy)
-    copy.Save()
-    return out
 
 
 def _set(name, frame, transform):
@@ -161,7 +161,7 @@ def _remove_phase(layer):
 ])
 def test_bad_baked_fields_are_one_line_errors(gl_context, tmp_path, shirt_bake, capsys, edit,
                                               frames, message):
-    layer = broken_copy(shirt_bake, tmp_path / "broken.usda", edit)
+    layer = edited_copy(shirt_bake, tmp_path / "broken.usda", edit)
     out = tmp_path / "frames"
     code = main(["render", str(layer), str(out / "s.####.png"), "--frames", frames,
                  "--width", "64", "--quiet"])

@@ -117,8 +117,8 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
 
 
 def frame_spec_text(frames: list[float]) -> str:
-    """A FrameSpec that names ``frames`` (for the layer's metadata)."""
+    """The frames of a bake for its layer's metadata, when no --frames named them:
+    ``first:last``, or ``default``."""
     if not frames or math.isnan(frames[0]):
         return "default"
-    return ",".join(f"{f:g}" for f in frames) if len(frames) < 4 else \
-        f"{frames[0]:g}:{frames[-1]:g}"
+    return f"{frames[0]:g}:{frames[-1]:g}"

@@ -37,7 +37,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from ..outputs.layers import check_layer_path
     from ..scene.stage import open_stage, stage_frames
-    from ..shot import bake_layer
+    from ..shot import bake_layer, frame_spec_text
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
@@ -50,9 +50,8 @@ def run(args) -> int:
     engine = start_engine(args, reporter, stage, use_baked=False)
     try:
         started = time.perf_counter()
-        spec = args.frames or (f"{frames[0]:g}:{frames[-1]:g}" if frames[0] == frames[0]
-                               else "default")
-        count = bake_layer(engine, args.stage, args.output, frames, spec,
+        count = bake_layer(engine, args.stage, args.output, frames,
+                           args.frames or frame_spec_text(frames),
                            with_points=args.with_points, display_color=args.display_color,
                            sparse=args.sparse, warn=reporter.warn,
                            progress=lambda items: reporter.progress(items, "bake"))

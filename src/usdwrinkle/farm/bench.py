@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from .._resources import resource_dir
+from ..render.context import is_software_renderer
 
 
 def _cli(*args, env: dict | None = None) -> tuple[float, float]:
@@ -171,9 +172,7 @@ def markdown(result: dict) -> list[str]:
             f"{f['serial_one_thread_cpu_utilisation']:.0%} of {f['cores']} cores |",
             "", f"Speed-up of `--dask` over serial: {f['speedup']:.2f}x (the issue's aim on a "
             "2-core machine: 1.6x)."]
-        software = any(name in result.get("machine", {}).get("gl_renderer", "")
-                       for name in ("llvmpipe", "softpipe"))
-        if software:
+        if is_software_renderer(result.get("machine", {}).get("gl_renderer", "")):
             lines += [
                 f"What limits it: llvmpipe already rasterises the serial run on every core "
                 f"({f['serial_cpu_utilisation']:.0%} busy), so spreading the serial run's CPU "

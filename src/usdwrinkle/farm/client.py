@@ -19,7 +19,6 @@ Flow:
 from __future__ import annotations
 
 import contextlib
-import glob
 import logging
 import math
 import os
@@ -28,6 +27,7 @@ import time
 import uuid
 
 from ..errors import UsdWrinkleError
+from ..outputs.atomic import remove_temporaries
 from ..shot import ImageOptions, bake_layer, frame_spec_text
 from .worker import file_identity, render_chunk
 
@@ -57,18 +57,6 @@ def bake_path(output_pattern: str, stage_path: str) -> str:
     folder = os.path.dirname(os.path.abspath(output_pattern))
     stem = os.path.splitext(os.path.basename(stage_path))[0]
     return os.path.join(folder, f"{stem}.wrinkles.usdc")
-
-
-def remove_temporaries(paths: list[str]) -> None:
-    """Remove the temporary files of atomic_path() that belong to ``paths`` (a worker
-    killed mid-write leaves its own behind)."""
-    for path in paths:
-        folder = os.path.dirname(os.path.abspath(path))
-        base, ext = os.path.splitext(os.path.basename(path))
-        for tmp in glob.glob(os.path.join(glob.escape(folder),
-                                          f".{glob.escape(base)}.*.tmp{glob.escape(ext)}")):
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
 
 
 def _has_bokeh() -> bool:
@@ -191,7 +179,8 @@ def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str
         if cluster is not None:
             with contextlib.suppress(Exception):
                 cluster.close()
-        remove_temporaries(outputs)
+        for path in outputs:  # killed workers never reach atomic_path's cleanup
+            remove_temporaries(path)
     return 0
 
 

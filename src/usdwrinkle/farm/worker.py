@@ -49,8 +49,11 @@ def written_this_run(path: str, before) -> bool:
     """True when ``path`` was written after the run took its snapshot ``before``
     (None: the file did not exist then). A retried chunk skips these frames, so that
     no frame is written twice."""
-    now = file_identity(path)
-    return now is not None and now != before and os.path.getsize(path) > 0
+    try:
+        st = os.stat(path)
+    except OSError:
+        return False
+    return (st.st_dev, st.st_ino) != before and st.st_size > 0
 
 
 def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float],

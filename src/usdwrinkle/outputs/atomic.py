@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 
@@ -12,6 +13,23 @@ def _umask() -> int:
     return mask
 
 
+def _temporary_affixes(path: str) -> tuple[str, str, str]:
+    """(folder, prefix, suffix) of the temporary files that stand in for ``path``."""
+    folder = os.path.dirname(os.path.abspath(path)) or "."
+    base, ext = os.path.splitext(os.path.basename(path))
+    return folder, f".{base}.", f".tmp{ext}"
+
+
+def remove_temporaries(path: str) -> None:
+    """Remove temporary files of ``path`` that a killed process left behind (one that
+    dies in the middle of atomic_path never reaches its cleanup)."""
+    folder, prefix, suffix = _temporary_affixes(path)
+    pattern = os.path.join(glob.escape(folder), f"{glob.escape(prefix)}*{glob.escape(suffix)}")
+    for tmp in glob.glob(pattern):
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str):
     """Yield a temporary path beside ``path`` (same extension); rename on success.
@@ -19,10 +37,9 @@ def atomic_path(path: str):
     On any error, or Ctrl-C, the temporary file is removed and ``path`` is
     left as it was: never a half-written file.
     """
-    folder = os.path.dirname(os.path.abspath(path)) or "."
+    folder, prefix, suffix = _temporary_affixes(path)
     os.makedirs(folder, exist_ok=True)
-    base, ext = os.path.splitext(os.path.basename(path))
-    fd, tmp = tempfile.mkstemp(prefix=f".{base}.", suffix=f".tmp{ext}", dir=folder)
+    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
     os.close(fd)
     try:
         yield tmp

@@ -10,6 +10,11 @@ import os
 from ..errors import GLContextError
 
 REQUIRED_VERSION = 430
+
+
+def is_software_renderer(gl_renderer: str) -> bool:
+    """Mesa's software rasterisers (llvmpipe, softpipe): the CPU does the GPU's work."""
+    return "llvmpipe" in gl_renderer or "softpipe" in gl_renderer
 _context = None
 
 

@@ -11,7 +11,7 @@ import time
 from dataclasses import dataclass, field
 
 from .buffers import Framebuffer, RenderBuffer
-from .context import create_context
+from .context import create_context, is_software_renderer
 from .passes.crush import CrushPass
 from .passes.draw import DrawPass
 from .passes.relax import RelaxPass
@@ -103,7 +103,7 @@ class _timed:
         self.ctx, self.name, self.sink = ctx, name, sink
         self.query = ctx.query(time=True) if ctx is not None else None
         renderer = ctx.info.get("GL_RENDERER", "") if ctx is not None else ""
-        self.software = "llvmpipe" in renderer or "softpipe" in renderer
+        self.software = is_software_renderer(renderer)
 
     def __enter__(self):
         if self.query is not None:
