@@ -169,7 +169,7 @@ def test_bake_refuses_to_overwrite_inputs_and_leaves_nothing_on_error(gl_context
     source.write_text((SAMPLES / "curtain.usda").read_text())
     before = source.read_text()
     assert main(["bake", str(source), str(source), "--quiet"]) == 2
-    assert "input layer" in capsys.readouterr().err
+    assert "is an input of the stage" in capsys.readouterr().err
     assert source.read_text() == before
     # a bad frame spec fails before anything is written
     assert main(["bake", str(source), str(tmp_path / "x.usda"), "--frames", "a:b",

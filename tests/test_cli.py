@@ -85,7 +85,7 @@ def test_frame_independence(gl_context, tmp_path):
     (["render", "{samples}/shirt.usda", "{tmp}/x.#.png", "--camera", "nope"], "camera 'nope'"),
     (["render", "{tmp}/missing.usda", "{tmp}/x.#.png"], "does not exist"),
     (["render", "{samples}/shirt.usda", "{tmp}/x.#.bmpx"], "unsupported image format"),
-    (["render", "{tmp}/copy.usda", "{tmp}/copy.usda", "--frames", "1"], "input layer"),
+    (["render", "{tmp}/copy.usda", "{tmp}/copy.usda", "--frames", "1"], "is an input of the stage"),
 ])
 def test_user_errors_are_one_line(gl_context, tmp_path, capsys, argv, fragment):
     (tmp_path / "copy.usda").write_text((SAMPLES / "curtain.usda").read_text())

@@ -10,6 +10,8 @@ import time
 
 import numpy as np
 
+from .errors import UsdWrinkleError
+from .limits import MAX_HISTORY_FRAMES
 from .render.buffers import AOVS
 from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
@@ -100,6 +102,11 @@ class WrinkleEngine:
         first = start if last is None else last + 1
         if frame == first and last is None:
             return [], False  # the shot's first frame: a cold start
+        if frame - first > MAX_HISTORY_FRAMES:
+            raise UsdWrinkleError(
+                f"frame {frame:g} is {frame - first:,.0f} frames after the phase history's "
+                f"start {first:g}; more than {MAX_HISTORY_FRAMES:,} frames of history are "
+                "refused (pass --history-start nearer, or bake the shot)")
         # grid frames before ``frame``; a subframe is one step from its grid frame
         steps = np.arange(first, frame, 1.0) if frame > first else []
         return [float(f) for f in steps], True

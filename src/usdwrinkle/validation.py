@@ -14,6 +14,7 @@ from pxr import Usd, UsdGeom
 
 from . import schema
 from .errors import UsdWrinkleError
+from .limits import MAX_PROFILE_VALUE, MAX_RELAX_ITERATIONS
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"
@@ -29,6 +30,31 @@ class Finding:
     def one_line(self) -> str:
         where = self.prim_path + (f".{self.attribute}" if self.attribute else "")
         return f"{self.message} ({where})"
+
+
+_NUMBERS = {"float", "double", "half", "int", "uint", "int64", "uint64", "uchar"}
+_VECTORS3 = {f"{role}3{kind}" for role in ("float", "double", "half") for kind in ("",)} | \
+    {f"{role}3{kind}" for role in ("vector", "normal", "point", "color") for kind in "fdh"}
+#: attribute -> (accepted scalar types, array?, what the message calls it). q and the
+#: profiles are arrays; width may be a constant scalar; the others are scalars.
+EXPECTED_TYPES = {
+    schema.Q: (_VECTORS3, (True,), "a vector3f[] array"),
+    schema.WIDTH: (_NUMBERS - {"uchar"}, (True, False), "a float[] array or a float"),
+    schema.AMPLITUDE_SCALE: (_NUMBERS - {"uchar"}, (False,), "a float"),
+    schema.HEIGHT_PROFILE: (_NUMBERS - {"uchar"}, (True,), "a float[] array"),
+    schema.GRADIENT_PROFILE: (_NUMBERS - {"uchar"}, (True,), "a float[] array"),
+    schema.RELAX_ITERATIONS: ({"int", "uint", "int64", "uint64", "uchar"}, (False,), "an int"),
+}
+
+
+def check_type(attr, path: str) -> list[Finding]:
+    """A WrinkleAPI attribute authored with a type its readers cannot use."""
+    name = attr.GetName()
+    scalars, arrays, wanted = EXPECTED_TYPES[name]
+    type_name = attr.GetTypeName()
+    if str(type_name.scalarType) in scalars and type_name.isArray in arrays:
+        return []
+    return [Finding(path, name, f"must be {wanted}, not {str(type_name) or 'untyped'}")]
 
 
 def _times(attr) -> list:
@@ -66,7 +92,8 @@ def check_q(values, interpolation: str, point_count: int | None, path: str) -> l
         out.append(Finding(path, schema.Q, f"q has {len(arr)} values for {point_count} points"))
     if not np.all(np.isfinite(arr)):
         out.append(Finding(path, schema.Q, "q is not finite"))
-    elif len(arr) and np.max(np.linalg.norm(arr, axis=1)) > 1.0 + 1e-4:
+    elif len(arr) and (np.max(np.abs(arr)) > 1.0 + 1e-4  # first: no overflow in the norm
+                       or np.max(np.linalg.norm(arr, axis=1)) > 1.0 + 1e-4):
         out.append(Finding(path, schema.Q, "|q| > 1"))
     return out
 
@@ -90,6 +117,18 @@ def check_profile(values, name: str, path: str) -> list[Finding]:
     arr = np.asarray(values, dtype=np.float64)
     if arr.size < 2 or not np.all(np.isfinite(arr)):
         return [Finding(path, name, "a profile needs at least 2 finite samples")]
+    if np.max(np.abs(arr)) > MAX_PROFILE_VALUE:
+        return [Finding(path, name, f"profile samples must lie within +-{MAX_PROFILE_VALUE:g} "
+                                    "(a shape of order 1; the amplitude scales it)")]
+    return []
+
+
+def check_relax_iterations(value, path: str) -> list[Finding]:
+    if value is None:
+        return []
+    if not 0 <= int(value) <= MAX_RELAX_ITERATIONS:
+        return [Finding(path, schema.RELAX_ITERATIONS,
+                        f"relax iterations must be in 0..{MAX_RELAX_ITERATIONS:,}")]
     return []
 
 
@@ -111,25 +150,30 @@ def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
                                     " prim, not a Mesh")]
     findings: list[Finding] = []
     count = point_count(prim)
-    primvars = UsdGeom.PrimvarsAPI(prim)
-    q = primvars.GetPrimvar("wrinkle:q")
-    if q and q.HasAuthoredValue():
-        for time in _times(q.GetAttr()):
-            findings += check_q(q.ComputeFlattened(time), q.GetInterpolation(), count, path)
-    width = primvars.GetPrimvar("wrinkle:width")
-    if width and width.HasAuthoredValue():
-        for time in _times(width.GetAttr()):
-            findings += check_width(width.ComputeFlattened(time), count, path)
-    for name in (schema.HEIGHT_PROFILE, schema.GRADIENT_PROFILE):
+    checks = {
+        schema.Q: lambda attr, time: check_q(UsdGeom.Primvar(attr).ComputeFlattened(time),
+                                             UsdGeom.Primvar(attr).GetInterpolation(), count,
+                                             path),
+        schema.WIDTH: lambda attr, time: check_width(UsdGeom.Primvar(attr).ComputeFlattened(time),
+                                                     count, path),
+        schema.HEIGHT_PROFILE: lambda attr, time: check_profile(attr.Get(time), attr.GetName(),
+                                                                path),
+        schema.GRADIENT_PROFILE: lambda attr, time: check_profile(attr.Get(time),
+                                                                  attr.GetName(), path),
+        schema.AMPLITUDE_SCALE: lambda attr, time: check_amplitude_scale(attr.Get(time), path),
+        schema.RELAX_ITERATIONS: lambda attr, time: check_relax_iterations(attr.Get(time), path),
+    }
+    for name, check in checks.items():
         attr = prim.GetAttribute(name)
-        if attr and attr.HasAuthoredValue():
-            for time in _times(attr):
-                findings += check_profile(attr.Get(time), name, path)
-    attr = prim.GetAttribute(schema.AMPLITUDE_SCALE)
-    if attr and attr.HasAuthoredValue():
+        if not attr or not attr.HasAuthoredValue():
+            continue
+        wrong_type = check_type(attr, path)
+        if wrong_type:
+            findings += wrong_type
+            continue
         for time in _times(attr):
-            findings += check_amplitude_scale(attr.Get(time), path)
-    rest = primvars.GetPrimvar("rest")
+            findings += check(attr, time)
+    rest = UsdGeom.PrimvarsAPI(prim).GetPrimvar("rest")
     if rest and rest.HasAuthoredValue():
         value = rest.ComputeFlattened(Usd.TimeCode.Default())
         if value is not None and count is not None and len(value) != count:
@@ -154,7 +198,9 @@ def register_validators() -> None:
             name=VALIDATOR_NAME,
             doc="WrinkleAPI values: on a Mesh; q of the points' length, vertex, finite, "
                 "|q| <= 1; width finite > 0, constant or per point; profiles with >= 2 finite "
-                "samples; primvars:rest of the points' length; amplitude scale finite >= 0.",
+                "samples within +-1000; primvars:rest of the points' length; amplitude scale "
+                "finite >= 0; relax iterations in 0..10,000; every attribute of its schema "
+                "type.",
             keywords=[VALIDATOR_KEYWORD])
 
         def task(prim, time_range):

@@ -109,8 +109,32 @@ def read_profile(spec: str) -> np.ndarray:
     return profile_from_curve(values)
 
 
+def open_override_layer(path: str):
+    """The -o layer: an existing USD layer to update, or a new anonymous one."""
+    from pxr import Sdf, Tf
+
+    from ..errors import UsdWrinkleError
+    from ..scene.diagnostics import usd_diagnostics, usd_error_text
+    from ..scene.inputs import require_regular_file
+
+    if not os.path.exists(path):
+        return Sdf.Layer.CreateAnonymous(os.path.splitext(path)[1])
+    require_regular_file(path, "override layer")
+    try:
+        with usd_diagnostics() as messages:
+            layer = Sdf.Layer.FindOrOpen(path)
+    except Tf.ErrorException as exc:
+        raise UsdWrinkleError(f"cannot open override layer '{path}' (an existing file that "
+                              f"is not a USD layer?): {usd_error_text(exc)}") from None
+    if layer is None:
+        detail = f": {messages[-1]}" if messages else ""
+        raise UsdWrinkleError(f"cannot open override layer '{path}' (an existing file that "
+                              f"is not a USD layer?){detail}")
+    return layer
+
+
 def run(args) -> int:
-    from pxr import Sdf, Usd, UsdGeom
+    from pxr import Usd, UsdGeom
 
     from ..authoring import WrinkleAPI
     from ..authoring.paint import (
@@ -126,7 +150,7 @@ def run(args) -> int:
     from ..scene.stage import open_stage
     from ..schema import require_schema
     from ..validation import check_amplitude_scale, check_q, check_width, point_count, refuse
-    from .common import stage_layer_paths
+    from .common import refuse_overwriting_inputs
 
     require_schema()
     q_sources = [args.q, args.q_from_texture, args.q_from_primvar, args.clear_q]
@@ -140,13 +164,12 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     if args.output:
         check_layer_path(args.output)
-        if os.path.realpath(args.output) in stage_layer_paths(stage):
-            raise UsdWrinkleError(f"-o '{args.output}' is a layer of the stage; leave -o out to "
-                                  "edit the root layer")
-        override = Sdf.Layer.FindOrOpen(args.output) if os.path.exists(args.output) \
-            else Sdf.Layer.CreateAnonymous(os.path.splitext(args.output)[1])
-        if override is None:
-            raise UsdWrinkleError(f"cannot open override layer '{args.output}'")
+        try:
+            refuse_overwriting_inputs(args.stage, [args.output], stage)
+        except UsdWrinkleError:
+            raise UsdWrinkleError(f"-o '{args.output}' is an input of the stage; leave -o out "
+                                  "to edit the root layer") from None
+        override = open_override_layer(args.output)
         stage = Usd.Stage.Open(stage.GetRootLayer(), override)
         stage.SetEditTarget(Usd.EditTarget(override))
         target = override
@@ -214,7 +237,8 @@ def run(args) -> int:
         if profile is not None:
             api.set_profile(profile)
 
-    destination = args.output or target.realPath
+    # a stage reached through a symlink is edited in its real file; the link stays
+    destination = os.path.realpath(args.output or target.realPath)
     with atomic_path(destination) as tmp:
         if not target.Export(tmp):
             raise UsdWrinkleError(f"cannot write '{destination}'")

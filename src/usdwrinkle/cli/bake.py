@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import time
 
-from .common import Reporter, add_stage_args, refuse_overwriting_inputs, start_engine
+from .common import (
+    Reporter,
+    add_stage_args,
+    check_stage_args,
+    refuse_overwriting_inputs,
+    start_engine,
+)
 from .frames import add_frame_args, parse_frame_spec
 
 
@@ -39,6 +45,7 @@ def run(args) -> int:
     from ..scene.stage import open_stage, stage_frames
     from ..shot import bake_layer, frame_spec_text
 
+    check_stage_args(args)
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
     reporter = Reporter(args.quiet)

@@ -20,24 +20,34 @@ def add_stage_args(parser) -> None:
                              "from here on; every chunk of a shot must use the same value")
 
 
-def stage_layer_paths(stage) -> set[str]:
-    paths = set()
-    for layer in stage.GetUsedLayers():
-        real = layer.realPath
-        if real:
-            paths.add(os.path.realpath(real))
-    return paths
+def check_stage_args(args) -> None:
+    """Refuse stage options out of range (add_stage_args), before any stage is read."""
+    from ..limits import MAX_RELAX_ITERATIONS
+    from .frames import check_time_code
+
+    if args.relax_iterations is not None and not \
+            0 <= args.relax_iterations <= MAX_RELAX_ITERATIONS:
+        raise UsdWrinkleError(f"--relax-iterations must be in 0..{MAX_RELAX_ITERATIONS:,}")
+    if args.history_start is not None:
+        check_time_code(args.history_start, "--history-start")
 
 
 def refuse_overwriting_inputs(stage_path: str, outputs: list[str], stage=None) -> None:
-    """Never write over the input stage or any layer it uses."""
-    protected = {os.path.realpath(stage_path)}
+    """Never write over the input stage or anything it reads: its layers (also those of
+    unselected variants, and sublayers that do not exist yet), packages and textures,
+    compared by real path and by inode."""
+    from ..scene.inputs import StageInputs
+    from ..scene.stage import stage_inputs
+
     if stage is not None:
-        protected |= stage_layer_paths(stage)
+        inputs = stage_inputs(stage)
+    else:
+        inputs = StageInputs()
+        inputs.add_file(stage_path)
     for out in outputs:
-        if os.path.realpath(out) in protected:
-            raise UsdWrinkleError(f"output '{out}' is an input layer of the stage; "
-                                  "choose another output path")
+        if inputs.protects(out):
+            raise UsdWrinkleError(f"output '{out}' is an input of the stage: a layer, texture "
+                                  "or other file it reads (choose another output path)")
 
 
 class Reporter:

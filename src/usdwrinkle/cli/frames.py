@@ -7,29 +7,59 @@ import re
 from pxr import UsdUtils
 
 from ..errors import UsdWrinkleError
+from ..limits import MAX_FRAMES, MAX_TIME_CODE
 
 _HASHES = re.compile(r"#+")
 
 
+def check_time_code(value: float, what: str) -> float:
+    """Refuse a time code that is not finite or beyond ``MAX_TIME_CODE``."""
+    if not math.isfinite(value) or abs(value) > MAX_TIME_CODE:
+        raise UsdWrinkleError(f"{what} {value:g} is not a finite time code within "
+                              f"+-{MAX_TIME_CODE:g}")
+    return value
+
+
+def range_count(start: float, end: float, stride: float) -> int:
+    """Frames in start..end by stride (inclusive), without listing them."""
+    return int(math.floor((end - start) / stride + 1e-9)) + 1
+
+
 def parse_frame_spec(spec: str) -> list[float]:
-    """'1:48', '101:109x2', '1,5,10' -> frames, in order, without duplicates."""
-    frames: list[float] = []
+    """'1:48', '101:109x2', '1,5,10' -> frames, in order, without duplicates.
+
+    Refuses non-finite frames, frames beyond +-MAX_TIME_CODE and specs of more than
+    MAX_FRAMES frames before listing any of them.
+    """
+    ranges = []
+    total = 0
     for part in spec.split(","):
         part = part.strip()
         if not part:
             raise UsdWrinkleError(f"bad FrameSpec '{spec}': empty item")
         try:
-            timecodes = list(UsdUtils.TimeCodeRange.CreateFromFrameSpec(part))
+            tcr = UsdUtils.TimeCodeRange.CreateFromFrameSpec(part)
+            valid = tcr.IsValid()
         except Exception:
-            timecodes = []
-        if not timecodes:
+            valid = False
+        if not valid:
             raise UsdWrinkleError(
                 f"bad FrameSpec '{spec}' (use e.g. 1:48, 101:109x2 or 1,5,10)")
-        for tc in timecodes:
-            value = float(tc.GetValue())
-            if value not in frames:
-                frames.append(value)
-    return frames
+        start, end = tcr.startTimeCode.GetValue(), tcr.endTimeCode.GetValue()
+        for value in (start, end):
+            check_time_code(value, f"--frames '{part}': frame")
+        if not math.isfinite(tcr.stride) or tcr.stride == 0:
+            raise UsdWrinkleError(f"--frames '{part}': bad stride {tcr.stride:g}")
+        total += range_count(start, end, tcr.stride)
+        if total > MAX_FRAMES:
+            raise UsdWrinkleError(f"--frames '{spec}' names more than {MAX_FRAMES:,} frames "
+                                  "(the most one run renders; split the shot into chunks)")
+        ranges.append(tcr)
+    frames = {}  # insertion-ordered and linear: a dict, not 'in' on a list
+    for tcr in ranges:
+        for tc in tcr:
+            frames.setdefault(float(tc.GetValue()), None)
+    return list(frames)
 
 
 def add_frame_args(parser) -> None:
@@ -38,20 +68,48 @@ def add_frame_args(parser) -> None:
                              "1,5,10 (default: the stage's start..end, or the default time)")
 
 
+#: decimals of a sub-frame in a file name (frame 1.25 -> 0001.250)
+SUBFRAME_DECIMALS = 3
+
+
+def frame_text(frame: float, width: int = 4) -> str:
+    """A frame number as it appears in a file name: zero-padded, sub-frames to
+    SUBFRAME_DECIMALS decimals (rounded, so 1.9996 names 0002.000), NaN as 'default'."""
+    if math.isnan(frame):
+        return "default"
+    rounded = round(frame, SUBFRAME_DECIMALS)
+    sign = "-" if rounded < 0 else ""
+    whole, fraction = divmod(abs(rounded), 1.0)
+    text = f"{sign}{int(whole):0{width}d}"
+    if round(fraction, SUBFRAME_DECIMALS):
+        text += f"{fraction:.{SUBFRAME_DECIMALS}f}"[1:]
+    elif not float(frame).is_integer():
+        text += "." + "0" * SUBFRAME_DECIMALS
+    return text
+
+
 def frame_path(pattern: str, frame: float) -> str:
     """Replace the first run of '#' by the zero-padded frame number."""
     match = _HASHES.search(pattern)
     if match is None:
         return pattern
-    width = len(match.group(0))
-    if math.isnan(frame):
-        text = "default"
-    elif float(frame).is_integer():
-        text = f"{int(frame):0{width}d}" if frame >= 0 else f"-{int(-frame):0{width}d}"
-    else:
-        whole = int(math.floor(frame))
-        text = f"{whole:0{width}d}" + f"{frame - whole:.3f}"[1:]
-    return pattern[:match.start()] + text + pattern[match.end():]
+    return pattern[:match.start()] + frame_text(frame, len(match.group(0))) + \
+        pattern[match.end():]
+
+
+def frame_paths(pattern: str, frames: list[float]) -> list[str]:
+    """One output path per frame; refuses frames that would share a file name (sub-frames
+    closer than the file name's SUBFRAME_DECIMALS decimals)."""
+    check_output_pattern(pattern, frames)
+    paths = [frame_path(pattern, f) for f in frames]
+    first: dict[str, float] = {}
+    for frame, path in zip(frames, paths, strict=True):
+        other = first.setdefault(path, frame)
+        if other != frame:
+            raise UsdWrinkleError(
+                f"frames {other:g} and {frame:g} would both be written to '{path}' (sub-frames "
+                f"are named to {SUBFRAME_DECIMALS} decimals); choose frames that differ there")
+    return paths
 
 
 def check_output_pattern(pattern: str, frames: list[float]) -> None:

@@ -1,11 +1,16 @@
 """usdwrinkle render STAGE OUTPUT: render frames headlessly to images."""
 from __future__ import annotations
 
-import os
 import time
 
-from .common import Reporter, add_stage_args, refuse_overwriting_inputs, start_engine
-from .frames import add_frame_args, check_output_pattern, frame_path, parse_frame_spec
+from .common import (
+    Reporter,
+    add_stage_args,
+    check_stage_args,
+    refuse_overwriting_inputs,
+    start_engine,
+)
+from .frames import add_frame_args, frame_path, frame_paths, parse_frame_spec
 
 
 def add_parser(subparsers) -> None:
@@ -33,7 +38,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
-                   help="skip frames whose output file already exists (resume a farm chunk)")
+                   help="skip frames whose output file already exists and reads back as a whole "
+                        "image of this size (resume a farm chunk); others are rendered again")
     p.add_argument("--recompute", action="store_true",
                    help="ignore baked wave fields in the stage and compute every mesh's "
                         "wrinkles (with the phase history preroll)")
@@ -65,8 +71,7 @@ def check_render_args(args) -> None:
         raise UsdWrinkleError("--width and --height must be positive")
     if args.samples < 1:
         raise UsdWrinkleError("--samples must be at least 1")
-    if args.relax_iterations is not None and args.relax_iterations < 0:
-        raise UsdWrinkleError("--relax-iterations must be >= 0")
+    check_stage_args(args)
     if args.chunk is not None and args.chunk < 1:
         raise UsdWrinkleError("--chunk must be at least 1")
     if args.workers is not None and args.workers < 1:
@@ -87,6 +92,7 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
 
 
 def run(args) -> int:
+    from ..outputs.images import is_complete_image
     from ..scene.stage import open_stage, stage_frames
     from ..shot import ImageOptions, render_frames
 
@@ -95,8 +101,7 @@ def run(args) -> int:
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
-    check_output_pattern(args.output, frames)
-    outputs = [frame_path(args.output, f) for f in frames]
+    outputs = frame_paths(args.output, frames)
     refuse_overwriting_inputs(args.stage, outputs, stage)
     if args.dask is not None:
         from ..farm.client import render_on_dask
@@ -116,8 +121,8 @@ def run(args) -> int:
         started = time.perf_counter()
         written = render_frames(
             engine, image, frames, outputs,
-            skip=(lambda path: os.path.exists(path)) if args.skip_existing else
-            (lambda path: False),
+            skip=(lambda path: is_complete_image(path, width, height)) if args.skip_existing
+            else (lambda path: False),
             progress=lambda items: reporter.progress(items, "render"))
         if not args.quiet:
             print(summary(len(written), width, height, args.output, frames,

@@ -16,6 +16,7 @@ import os
 import threading
 
 from ..errors import UsdWrinkleError
+from ..outputs.images import is_complete_image
 from ..shot import EngineOptions, ImageOptions, render_frames
 
 _lock = threading.Lock()
@@ -69,8 +70,8 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
     previous = dict(zip(paths, before, strict=True))
 
     def skip(path: str) -> bool:
-        done = (skip_existing and os.path.exists(path)) or \
-            written_this_run(path, previous[path])
+        done = written_this_run(path, previous[path]) or \
+            (skip_existing and is_complete_image(path, image.width, image.height))
         if done:
             result["skipped"].append(path)
         return done

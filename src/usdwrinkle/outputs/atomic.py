@@ -4,7 +4,14 @@ from __future__ import annotations
 import contextlib
 import glob
 import os
+import signal
 import tempfile
+
+from ..errors import UsdWrinkleError
+
+#: the signals that stop a run (Ctrl-C, a scheduler, a closed terminal); held back while
+#: a finished file is renamed into place or a temporary file is removed
+STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
 
 
 def _umask() -> int:
@@ -30,23 +37,74 @@ def remove_temporaries(path: str) -> None:
             os.unlink(tmp)
 
 
+def write_error(path: str, exc: OSError) -> UsdWrinkleError:
+    """An OSError of an output write as the one-line error (full disk, permissions, ...)."""
+    reason = exc.strerror or str(exc)
+    return UsdWrinkleError(f"cannot write '{path}': {reason}")
+
+
+def check_writable(paths) -> None:
+    """Refuse, before any work, outputs that cannot be written: a folder that cannot be
+    made or written to, an output under a file, an output that is a folder."""
+    folders = {}
+    for path in paths:
+        if os.path.isdir(path):
+            raise UsdWrinkleError(f"cannot write '{path}': it is a folder")
+        folders.setdefault(_temporary_affixes(path)[0], path)
+    for folder, path in folders.items():
+        try:
+            os.makedirs(folder, exist_ok=True)
+            fd, probe = tempfile.mkstemp(prefix=".usdwrinkle-probe.", dir=folder)
+            os.close(fd)
+            os.unlink(probe)
+        except OSError as exc:
+            raise write_error(path, exc) from None
+
+
 @contextlib.contextmanager
-def atomic_path(path: str):
+def signals_held():
+    """Hold back stop signals for a short critical section; they arrive when it ends."""
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    except (AttributeError, OSError, ValueError):  # no POSIX signal masks here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str, verify=None):
     """Yield a temporary path beside ``path`` (same extension); rename on success.
 
-    On any error, or Ctrl-C, the temporary file is removed and ``path`` is
-    left as it was: never a half-written file.
+    ``verify(tmp)``, if given, runs before the rename and raises when the file is not
+    complete. On any error, or Ctrl-C, the temporary file is removed and ``path`` is
+    left as it was: never a half-written file. OSErrors (a full disk, a read-only
+    folder, an output that is a folder) become the one-line UsdWrinkleError.
     """
     folder, prefix, suffix = _temporary_affixes(path)
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
-    os.close(fd)
     try:
-        yield tmp
-        # mkstemp makes 0600 files; give the output the permissions a plain open() would
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        os.makedirs(folder, exist_ok=True)
+        if os.path.isdir(path):
+            raise IsADirectoryError(21, "it is a folder")
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
+        os.close(fd)
+    except OSError as exc:
+        raise write_error(path, exc) from None
+    try:
+        try:
+            yield tmp
+            if verify is not None:
+                verify(tmp)
+            # mkstemp makes 0600 files; give the output the permissions a plain open() would
+            os.chmod(tmp, 0o666 & ~_umask())
+            with signals_held():
+                os.replace(tmp, path)
+        except OSError as exc:
+            raise write_error(path, exc) from None
     except BaseException:
-        with contextlib.suppress(OSError):
+        with signals_held(), contextlib.suppress(OSError):
             os.unlink(tmp)
         raise

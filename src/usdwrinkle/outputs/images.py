@@ -5,7 +5,10 @@ PNG/JPEG/TIFF: the 8-bit sRGB beauty (RGBA; RGB over black for JPEG).
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
+import tempfile
 
 import numpy as np
 
@@ -58,11 +61,67 @@ def read_float_image(path: str) -> tuple[np.ndarray, bool]:
     return pixels, spec.format.basetype == oiio.UINT8
 
 
+def is_complete_image(path: str, width: int, height: int) -> bool:
+    """True when ``path`` decodes whole at width x height (``--skip-existing`` trusts only
+    such a file; a truncated or foreign one is rendered again)."""
+    try:
+        pixels, _ = read_float_image(path)
+    except OSError:
+        return False
+    return pixels.shape[:2] == (height, width)
+
+
+def one_line(text: str) -> str:
+    """A library's message (libpng, OpenEXR: often several lines) as one line."""
+    return " ".join(str(text).split()) or "unknown reason"
+
+
+def _scratch_folder() -> str:
+    """Where frames are encoded before they are copied to their output: memory (/dev/shm)
+    where there is one, so that a full output disk fails in our copy, with an error,
+    never inside an image library."""
+    shm = "/dev/shm"
+    if os.path.isdir(shm) and os.access(shm, os.W_OK | os.X_OK):
+        return shm
+    return tempfile.gettempdir()
+
+
+def _check_finite(buffers: dict, aovs) -> None:
+    """No NaN or Inf reaches an image (Z may be +Inf where nothing was hit)."""
+    for aov in aovs:
+        pixels = buffers[aov].pixels
+        bad = np.isnan(pixels) if aov == "depth" else ~np.isfinite(pixels)
+        if bad.any():
+            raise UsdWrinkleError(
+                f"the frame's {aov} has non-finite pixels (NaN or Inf); a camera, light, "
+                "transform or wrinkle value of the scene is out of range")
+
+
+def _encode(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
+    import OpenImageIO as oiio
+
+    out = oiio.ImageOutput.create(scratch)
+    if out is None or not out.open(scratch, spec):
+        raise UsdWrinkleError(f"cannot write image '{path}': {one_line(oiio.geterror())}")
+    ok = out.write_image(pixels)
+    error = out.geterror()
+    closed = out.close()
+    if not (ok and closed):
+        raise UsdWrinkleError(f"cannot write image '{path}': "
+                              f"{one_line(error or out.geterror() or oiio.geterror())}")
+
+
 def write_image(path: str, buffers: dict) -> None:
-    """Write one frame's render buffers to ``path``, atomically."""
+    """Write one frame's render buffers to ``path``, atomically and completely.
+
+    The frame is encoded in memory, copied beside ``path`` and renamed only once the
+    copy has the encoded size: a full disk or a failing close is an error, and never
+    leaves a truncated frame under the output name.
+    """
     import OpenImageIO as oiio
 
     ext = check_format(path)
+    _check_finite(buffers, EXR_ORDER if ext in FLOAT_FORMATS else ("color",))
     if ext in FLOAT_FORMATS:
         planes, names = [], []
         for aov in EXR_ORDER:
@@ -90,11 +149,19 @@ def write_image(path: str, buffers: dict) -> None:
         if pixels.shape[2] == 4:
             spec.alpha_channel = 3
             spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
-    with atomic_path(path) as tmp:
-        out = oiio.ImageOutput.create(tmp)
-        if out is None or not out.open(tmp, spec):
-            raise UsdWrinkleError(f"cannot write image '{path}': {oiio.geterror()}")
-        ok = out.write_image(pixels)
-        out.close()
-        if not ok:
-            raise UsdWrinkleError(f"cannot write image '{path}': {out.geterror()}")
+    fd, scratch = tempfile.mkstemp(prefix=".usdwrinkle-frame.", suffix=ext,
+                                   dir=_scratch_folder())
+    os.close(fd)
+    try:
+        _encode(scratch, spec, pixels, path)
+        size = os.path.getsize(scratch)
+
+        def complete(tmp: str) -> None:
+            if os.path.getsize(tmp) != size:
+                raise OSError(28, f"only {os.path.getsize(tmp)} of {size} bytes were written")
+
+        with atomic_path(path, verify=complete) as tmp:
+            shutil.copyfile(scratch, tmp)
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(scratch)

@@ -5,8 +5,15 @@ import numpy as np
 from pxr import Usd, UsdGeom
 
 from .. import schema
-from ..errors import UsdWrinkleError
-from ..validation import check_amplitude_scale, check_profile, check_q, check_width, refuse
+from ..validation import (
+    check_amplitude_scale,
+    check_profile,
+    check_q,
+    check_relax_iterations,
+    check_type,
+    check_width,
+    refuse,
+)
 from .records import WrinkleParams
 from .topology import Topology, mean_edge_length
 
@@ -24,9 +31,11 @@ def derive_gradient(height: np.ndarray) -> np.ndarray:
 
 
 def _get(prim: Usd.Prim, name: str, time):
+    """An authored WrinkleAPI value (None if unauthored); a wrong type is refused."""
     attr = prim.GetAttribute(name)
     if not attr or not attr.HasAuthoredValue():
         return None
+    refuse(check_type(attr, str(prim.GetPath())))
     return attr.Get(time)
 
 
@@ -54,6 +63,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     q = np.zeros((n, 3), np.float32)
     q_primvar = primvars.GetPrimvar("wrinkle:q")
     if q_primvar and q_primvar.HasAuthoredValue():
+        refuse(check_type(q_primvar.GetAttr(), path))
         value = q_primvar.ComputeFlattened(time)
         if value is not None:
             refuse(check_q(value, q_primvar.GetInterpolation(), n, path))
@@ -62,6 +72,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     width = None
     width_primvar = primvars.GetPrimvar("wrinkle:width")
     if width_primvar and width_primvar.HasAuthoredValue():
+        refuse(check_type(width_primvar.GetAttr(), path))
         value = width_primvar.ComputeFlattened(time)
         if value is not None:
             refuse(check_width(value, n, path))
@@ -83,9 +94,8 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         gradient = derive_gradient(height)
 
     iterations = _get(prim, schema.RELAX_ITERATIONS, time)
-    iterations = schema.DEFAULT_RELAX_ITERATIONS if iterations is None else int(iterations)
     if relax_override is not None:
-        iterations = relax_override
-    if iterations < 0:
-        raise UsdWrinkleError("relax iterations must be >= 0", path, schema.RELAX_ITERATIONS)
+        iterations = relax_override  # the CLI checked it
+    refuse(check_relax_iterations(iterations, path))
+    iterations = schema.DEFAULT_RELAX_ITERATIONS if iterations is None else int(iterations)
     return WrinkleParams(q, width, scale, height, gradient, iterations)

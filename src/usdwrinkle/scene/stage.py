@@ -8,6 +8,7 @@ lights). Nothing downstream sees a Usd object.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import sys
 
@@ -16,8 +17,11 @@ from pxr import Tf, Usd, UsdGeom
 
 from .. import schema
 from ..errors import UsdWrinkleError
+from ..limits import MAX_FRAMES, MAX_TIME_CODE
 from . import camera as camera_mod
 from .baked import BakedSource, find_baked
+from .diagnostics import usd_diagnostics, usd_error_text
+from .inputs import StageInputs, package_file, scan_inputs
 from .lights import default_lights, read_lights
 from .material import read_material
 from .params import read_params
@@ -32,19 +36,41 @@ def _warn_stderr(message: str) -> None:
     print(f"usdwrinkle: warning: {message}", file=sys.stderr)
 
 
-def open_stage(path: str) -> Usd.Stage:
-    """Open a stage with a one-line error for missing or unreadable files."""
+#: root layer identifier -> the StageInputs of stages opened by open_stage
+_INPUTS: dict[str, StageInputs] = {}
+
+
+def open_stage(path: str, warn=None) -> Usd.Stage:
+    """Open a stage with one-line errors: a missing file, one that is not a regular file
+    (anywhere in its layers and textures), an unreadable or malformed layer (with its
+    file:line). USD's warnings while opening go to ``warn`` as one line each."""
     if not os.path.exists(path):
         raise UsdWrinkleError(f"stage file '{path}' does not exist")
+    inputs = scan_inputs(path)
+    root = inputs.layers[0]
     try:
-        stage = Usd.Stage.Open(path)
+        with usd_diagnostics(warn or _warn_stderr):
+            stage = Usd.Stage.Open(root)
     except Tf.ErrorException as exc:
-        first = str(exc).strip().splitlines()
-        detail = first[-1].strip() if first else "unreadable"
-        raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: {detail}") from None
+        raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: "
+                              f"{usd_error_text(exc)}") from None
     if stage is None:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
+    _INPUTS[root.identifier] = inputs
     return stage
+
+
+def stage_inputs(stage: Usd.Stage) -> StageInputs:
+    """Every file the stage reads (scene/inputs.py), for output checks."""
+    root = stage.GetRootLayer()
+    if root.identifier not in _INPUTS:
+        _INPUTS[root.identifier] = scan_inputs(root.realPath) if root.realPath and \
+            "[" not in root.realPath else StageInputs(layers=[root])
+    inputs = _INPUTS[root.identifier]
+    for layer in stage.GetUsedLayers():  # also what a session layer brought in
+        if layer.realPath:
+            inputs.add_file(package_file(layer.realPath))
+    return inputs
 
 
 def rest_pose(prim: Usd.Prim, skinned: bool = False):
@@ -68,11 +94,26 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
 
 
 def stage_frames(stage: Usd.Stage) -> list[float]:
-    """The stage's authored start..end frames (step 1), or [NaN] for the default time."""
-    if stage.HasAuthoredTimeCodeRange():
-        start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
-        return [float(f) for f in np.arange(start, end + 0.5)]
-    return [float("nan")]
+    """The stage's authored start..end frames (step 1), or [NaN] for the default time.
+
+    A range that is not finite, runs backwards, lies beyond +-MAX_TIME_CODE or holds more
+    than MAX_FRAMES frames is refused, naming the layer's metadata.
+    """
+    if not stage.HasAuthoredTimeCodeRange():
+        return [float("nan")]
+    start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
+    where = f"startTimeCode {start:g}, endTimeCode {end:g} of '{stage.GetRootLayer().identifier}'"
+    if not (math.isfinite(start) and math.isfinite(end)) or max(abs(start), abs(end)) > \
+            MAX_TIME_CODE:
+        raise UsdWrinkleError(f"the stage's frame range is not finite within "
+                              f"+-{MAX_TIME_CODE:g} ({where})")
+    if end < start:
+        raise UsdWrinkleError(f"the stage's endTimeCode is before its startTimeCode ({where}); "
+                              "fix the metadata or pass --frames")
+    if end - start + 1 > MAX_FRAMES:
+        raise UsdWrinkleError(f"the stage's frame range holds more than {MAX_FRAMES:,} frames "
+                              f"({where}); pass --frames")
+    return [float(f) for f in np.arange(start, end + 0.5)]
 
 
 def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
@@ -198,8 +239,12 @@ class StageSceneDelegate:
 
     # -- time ---------------------------------------------------------------------------
     def frame_range(self) -> list[float]:
-        """The stage's authored start..end frames, or [default] when none."""
-        return stage_frames(self.stage)
+        """The stage's authored start..end frames, or [default] when none (or when the
+        stage's range is unusable: the commands refuse that unless --frames is given)."""
+        try:
+            return stage_frames(self.stage)
+        except UsdWrinkleError:
+            return [float("nan")]
 
     @staticmethod
     def time_code(frame: float) -> Usd.TimeCode:
