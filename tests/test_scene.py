@@ -27,18 +27,38 @@ def polygon_area(points, triangles):
 
 
 def test_concave_ngon_is_ear_clipped():
-    # an L-shaped hexagon (concave at vertex 3), area 3
-    points = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]],
+    # an L-shaped hexagon (concave at (1, 1)), area 3, listed from (2, 0): the fan from
+    # there would cross the notch and cover area outside the L
+    points = np.array([[2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 0, 0]],
                       np.float32)
+    fan = np.array([[0, i, i + 1] for i in range(1, 5)])
+    assert polygon_area(points, fan).sum() > 3.2
     topo = build_topology([6], [0, 1, 2, 3, 4, 5], points)
     assert len(topo.triangles) == 4
     assert polygon_area(points, topo.triangles).sum() == pytest.approx(3.0)
     normals = np.cross(points[topo.triangles[:, 1]] - points[topo.triangles[:, 0]],
                        points[topo.triangles[:, 2]] - points[topo.triangles[:, 0]])
     assert np.all(normals[:, 2] > 0)  # every triangle keeps the face's winding
-    # the fan from vertex 0 would have covered area outside the L; ear clipping does not
-    assert sorted(map(tuple, np.sort(ear_clip(points), axis=1))) != [(0, 1, 2), (0, 2, 3),
-                                                                       (0, 3, 4), (0, 4, 5)]
+    assert polygon_area(points, np.array(ear_clip(points))).sum() == pytest.approx(3.0)
+
+
+def test_large_concave_polygon_and_clockwise_faces():
+    """A 2,000-corner star (every other corner reflex): earcut covers exactly its area,
+    with the face's winding, whichever way the face turns."""
+    k = 2000
+    theta = np.arange(k) * 2 * np.pi / k
+    radius = np.where(np.arange(k) % 2 == 0, 1.0, 0.5)
+    points = np.stack([radius * np.cos(theta), radius * np.sin(theta), np.zeros(k)], 1)
+    xy = points[:, :2]
+    shoelace = 0.5 * abs(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1)
+                                * xy[:, 1]))
+    for order, sign in ((np.arange(k), 1), (np.arange(k)[::-1], -1)):
+        topo = build_topology([k], order, points)
+        assert len(topo.triangles) == k - 2
+        assert polygon_area(points, topo.triangles).sum() == pytest.approx(shoelace, rel=1e-9)
+        normals = np.cross(points[topo.triangles[:, 1]] - points[topo.triangles[:, 0]],
+                           points[topo.triangles[:, 2]] - points[topo.triangles[:, 0]])
+        assert np.all(sign * normals[:, 2] > 0)
 
 
 def test_quads_holes_and_face_varying_corners():

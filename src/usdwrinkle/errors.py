@@ -27,7 +27,8 @@ class UsdWrinkleError(Exception):
         if self.frame is not None:
             frame = int(self.frame) if float(self.frame).is_integer() else self.frame
             where = f"{where} at frame {frame}" if where else f"at frame {frame}"
-        return f"{self.what} ({where})" if where else self.what
+        what = " ".join(str(self.what).split())  # one line, whatever a library said
+        return f"{what} ({where})" if where else what
 
 
 class GLContextError(UsdWrinkleError):

@@ -51,10 +51,12 @@ def check_type(attr, path: str) -> list[Finding]:
     """A WrinkleAPI attribute authored with a type its readers cannot use."""
     name = attr.GetName()
     scalars, arrays, wanted = EXPECTED_TYPES[name]
-    type_name = attr.GetTypeName()
+    # the type the layers author (the schema's own type wins in GetTypeName)
+    specs = attr.GetPropertyStack(Usd.TimeCode.Default())
+    type_name = next((spec.typeName for spec in specs if spec.typeName), attr.GetTypeName())
     if str(type_name.scalarType) in scalars and type_name.isArray in arrays:
         return []
-    return [Finding(path, name, f"must be {wanted}, not {str(type_name) or 'untyped'}")]
+    return [Finding(path, name, f"{name} must be {wanted}, not {str(type_name) or 'untyped'}")]
 
 
 def _times(attr) -> list:

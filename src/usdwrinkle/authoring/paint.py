@@ -80,10 +80,11 @@ class MeshSurface:
 
 def read_image(path: str) -> np.ndarray:
     """(h, w, 4) float32 in [0, 1] as stored (no colour conversion: data, not colour)."""
+    from ..limits import MAX_TEXTURE_SIZE
     from ..outputs.images import read_float_image
 
     try:
-        pixels, _ = read_float_image(path)
+        pixels, _ = read_float_image(path, MAX_TEXTURE_SIZE)
     except OSError as exc:
         raise UsdWrinkleError(str(exc)) from None
     out = np.zeros((*pixels.shape[:2], 4), np.float32)
@@ -113,8 +114,9 @@ def sample(image: np.ndarray, uv: np.ndarray) -> np.ndarray:
 def q_uniform(surface: MeshSurface, direction, amount: float) -> np.ndarray:
     """A rest-space direction projected onto each tangent plane, with |q| = amount."""
     d = np.asarray(direction, np.float64).reshape(1, 3)
-    if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
+    if not np.all(np.isfinite(d)) or not np.any(d):
         raise UsdWrinkleError("--q needs a finite, non-zero direction")
+    d = d / np.abs(d).max()  # only the direction counts: 1e308 must not overflow
     tangent = surface.project(np.repeat(d, len(surface.rest), axis=0))
     length = np.linalg.norm(tangent, axis=1, keepdims=True)
     # where the direction is the normal itself there is no tangent direction: no q

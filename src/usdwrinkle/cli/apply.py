@@ -145,7 +145,7 @@ def run(args) -> int:
         width_from_texture,
     )
     from ..errors import UsdWrinkleError
-    from ..outputs.atomic import atomic_path
+    from ..outputs.atomic import atomic_path, check_writable
     from ..outputs.layers import check_layer_path
     from ..scene.stage import open_stage
     from ..schema import require_schema
@@ -239,6 +239,7 @@ def run(args) -> int:
 
     # a stage reached through a symlink is edited in its real file; the link stays
     destination = os.path.realpath(args.output or target.realPath)
+    check_writable([destination])
     with atomic_path(destination) as tmp:
         if not target.Export(tmp):
             raise UsdWrinkleError(f"cannot write '{destination}'")

@@ -41,6 +41,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    from ..outputs.atomic import check_writable
     from ..outputs.layers import check_layer_path
     from ..scene.stage import open_stage, stage_frames
     from ..shot import bake_layer, frame_spec_text
@@ -52,6 +53,7 @@ def run(args) -> int:
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     refuse_overwriting_inputs(args.stage, [args.output], stage)
+    check_writable([args.output])
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     # a bake always computes: fields already baked into the input are not its input
     engine = start_engine(args, reporter, stage, use_baked=False)

@@ -1,7 +1,7 @@
 """usdwrinkle: the console script. ``main(argv) -> int``, errors as one line on stderr.
 
-Exit codes: 0 success, 1 findings (check), 2 user error, 3 internal error, 130 interrupted
-(Ctrl-C), 143 terminated (SIGTERM).
+Exit codes: 0 success, 1 findings (check), 2 user error (also out of memory), 3 internal
+error, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM, SIGHUP).
 """
 from __future__ import annotations
 
@@ -30,17 +30,39 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class Terminated(BaseException):
-    """SIGTERM (a farm scheduler stopping the job): unwind like Ctrl-C, so that no
-    temporary file is left behind."""
+    """SIGTERM (a farm scheduler stopping the job) or SIGHUP (a closed terminal or ssh
+    session): unwind like Ctrl-C, so that no temporary file is left behind."""
 
 
 def _on_sigterm(signum, frame):
     raise Terminated()
 
 
+#: what an interrupted command leaves behind (every output is written atomically)
+_AFTER_INTERRUPT = {
+    "render": "; finished frames are intact",
+    "bake": "; the layer was not written",
+    "apply": "; the stage was not changed",
+}
+
+
+def _one_line_warnings() -> None:
+    """Python warnings (numpy's RuntimeWarning and the like) as our one-line warnings."""
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"usdwrinkle: warning: {' '.join(str(message).split())} "
+              f"({category.__name__})", file=sys.stderr)
+
+    warnings.showwarning = show
+
+
 def main(argv: list[str] | None = None) -> int:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _on_sigterm)
+        if hasattr(signal, "SIGHUP"):
+            signal.signal(signal.SIGHUP, _on_sigterm)
+    _one_line_warnings()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
@@ -56,11 +78,17 @@ def main(argv: list[str] | None = None) -> int:
         print(f"usdwrinkle: error: {exc.one_line()}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("usdwrinkle: interrupted; finished frames are intact", file=sys.stderr)
+        print(f"usdwrinkle: interrupted{_AFTER_INTERRUPT.get(args.command, '')}",
+              file=sys.stderr)
         return 130
     except Terminated:
-        print("usdwrinkle: terminated; finished frames are intact", file=sys.stderr)
+        print(f"usdwrinkle: terminated{_AFTER_INTERRUPT.get(args.command, '')}",
+              file=sys.stderr)
         return 143
+    except MemoryError:
+        print("usdwrinkle: error: out of memory (lower --width/--height, --samples or the "
+              "number of meshes, or free memory)", file=sys.stderr)
+        return 2
     except Exception as exc:  # a bug in usdwrinkle: still one line, unless --debug
         if args.debug:
             traceback.print_exc()

@@ -92,6 +92,7 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
 
 
 def run(args) -> int:
+    from ..outputs.atomic import check_writable
     from ..outputs.images import is_complete_image
     from ..scene.stage import open_stage, stage_frames
     from ..shot import ImageOptions, render_frames
@@ -103,6 +104,7 @@ def run(args) -> int:
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     outputs = frame_paths(args.output, frames)
     refuse_overwriting_inputs(args.stage, outputs, stage)
+    check_writable(outputs)
     if args.dask is not None:
         from ..farm.client import render_on_dask
         return render_on_dask(args, reporter, stage, frames, outputs)

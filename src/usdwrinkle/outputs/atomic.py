@@ -40,6 +40,8 @@ def remove_temporaries(path: str) -> None:
 def write_error(path: str, exc: OSError) -> UsdWrinkleError:
     """An OSError of an output write as the one-line error (full disk, permissions, ...)."""
     reason = exc.strerror or str(exc)
+    if isinstance(exc, (FileExistsError, NotADirectoryError)):
+        reason = "a part of its folder path is a file, not a folder"
     return UsdWrinkleError(f"cannot write '{path}': {reason}")
 
 

@@ -20,6 +20,11 @@ EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 
 
+def one_line(text: str) -> str:
+    """A library's message (libpng, OpenEXR: often several lines) as one line."""
+    return " ".join(str(text).split())
+
+
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
     c = np.clip(linear, 0.0, 1.0)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
@@ -38,23 +43,36 @@ def check_format(path: str) -> str:
     return ext
 
 
-def read_float_image(path: str) -> tuple[np.ndarray, bool]:
+def read_float_image(path: str, max_size: int | None = None) -> tuple[np.ndarray, bool]:
     """Decode an image file: ((h, w, c) float32 with row 0 at the top, is 8-bit).
 
-    Raises OSError with OpenImageIO's reason when it cannot be read.
+    Raises OSError with OpenImageIO's reason when it cannot be read, when it is not a
+    regular file, or when its header declares more than ``max_size`` pixels a side
+    (checked before the pixels are allocated).
     """
+    import stat
+
     import OpenImageIO as oiio
 
-    if not os.path.isfile(path):
-        raise OSError(f"cannot read image '{path}': no such file")
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        raise OSError(f"cannot read image '{path}': no such file") from None
+    if not stat.S_ISREG(mode):
+        raise OSError(f"cannot read image '{path}': not a regular file")
     image = oiio.ImageInput.open(path)
     if image is None:
-        raise OSError(f"cannot read image '{path}': {oiio.geterror().strip() or 'unreadable'}")
+        raise OSError(f"cannot read image '{path}': {one_line(oiio.geterror()) or 'unreadable'}")
     try:
         spec = image.spec()
+        if max_size is not None and max(spec.width, spec.height) > max_size:
+            raise OSError(f"cannot read image '{path}': {spec.width}x{spec.height} is larger "
+                          f"than {max_size} pixels a side")
+        if spec.width <= 0 or spec.height <= 0 or spec.nchannels <= 0:
+            raise OSError(f"cannot read image '{path}': empty image")
         pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None:
-            raise OSError(f"cannot read image '{path}': {image.geterror().strip()}")
+            raise OSError(f"cannot read image '{path}': {one_line(image.geterror())}")
     finally:
         image.close()
     pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
@@ -69,11 +87,6 @@ def is_complete_image(path: str, width: int, height: int) -> bool:
     except OSError:
         return False
     return pixels.shape[:2] == (height, width)
-
-
-def one_line(text: str) -> str:
-    """A library's message (libpng, OpenEXR: often several lines) as one line."""
-    return " ".join(str(text).split()) or "unknown reason"
 
 
 def _scratch_folder() -> str:
@@ -107,8 +120,8 @@ def _encode(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
     error = out.geterror()
     closed = out.close()
     if not (ok and closed):
-        raise UsdWrinkleError(f"cannot write image '{path}': "
-                              f"{one_line(error or out.geterror() or oiio.geterror())}")
+        reason = one_line(error or out.geterror() or oiio.geterror()) or "unknown reason"
+        raise UsdWrinkleError(f"cannot write image '{path}': {reason}")
 
 
 def write_image(path: str, buffers: dict) -> None:

@@ -140,6 +140,14 @@ class LayerBaker:
 
     def add_frame(self, frame: float, fields_by_path: dict) -> None:
         """Record one frame: ``fields_by_path[path]`` as returned by read_fields()."""
+        for path, fields in fields_by_path.items():
+            for name, values in fields.items():  # no NaN or Inf reaches a layer
+                if isinstance(values, np.ndarray) and values.dtype.kind == "f" and \
+                        not np.all(np.isfinite(values)):
+                    raise UsdWrinkleError(
+                        f"the computed {name} is not finite (NaN or Inf): the mesh's scale or "
+                        "transform is out of the GPU's float range", path, None,
+                        None if np.isnan(frame) else frame)
         self.frames.append(frame)
         for path, fields in fields_by_path.items():
             if path in self.wrinkled:

@@ -29,6 +29,50 @@ class RenderBuffer:
     pixels: np.ndarray
 
 
+#: bytes per pixel: three RGBA float attachments, and depth
+_ATTACHMENT_BYTES = 3 * 16 + 4
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
+    """Refuse a frame the GL implementation or the memory cannot hold, naming the limit,
+    before anything is allocated (a driver may crash instead of failing cleanly)."""
+    from ..errors import UsdWrinkleError
+
+    limits = (("GL_MAX_TEXTURE_SIZE", max(width, height)),
+              ("GL_MAX_RENDERBUFFER_SIZE", max(width, height)),
+              ("GL_MAX_VIEWPORT_DIMS", max(width, height)))
+    for name, value in limits:
+        limit = ctx.info.get(name)
+        if isinstance(limit, (tuple, list)):
+            limit = min(limit)
+        if limit and value > int(limit):
+            raise UsdWrinkleError(f"image size {width}x{height} exceeds this GL "
+                                  f"implementation's {name} of {int(limit)}")
+    max_samples = int(ctx.info.get("GL_MAX_SAMPLES", 1) or 1)
+    if samples > max_samples:
+        raise UsdWrinkleError(f"--samples {samples} exceeds this GL implementation's "
+                              f"GL_MAX_SAMPLES of {max_samples}")
+    # multisampled targets, the resolved textures, and the read-back copies
+    needed = width * height * (_ATTACHMENT_BYTES * (samples + 1) + 3 * 16 * 2)
+    available = available_memory()
+    if available is not None and needed > available:
+        raise UsdWrinkleError(f"a {width}x{height} frame with {samples} samples needs about "
+                              f"{needed / 2**30:.1f} GiB, but {available / 2**30:.1f} GiB of "
+                              "memory are available; lower --width/--height or --samples")
+
+
 class Framebuffer:
     """Three float RGBA attachments plus depth, at one resolution.
 
@@ -41,8 +85,8 @@ class Framebuffer:
     def __init__(self, ctx, width: int, height: int, samples: int = 4):
         self.ctx = ctx
         self.size = (width, height)
-        max_samples = int(ctx.info.get("GL_MAX_SAMPLES", 1) or 1)
-        self.samples = max(1, min(int(samples), max_samples))
+        check_frame_size(ctx, width, height, int(samples))
+        self.samples = max(1, int(samples))
         self.textures = [ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
         self.resolved = ctx.framebuffer(color_attachments=self.textures)
         multisample = self.samples if self.samples > 1 else 0  # 0: a plain renderbuffer

@@ -15,11 +15,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import UsdWrinkleError
+from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
 from .bindings import TABLE_WIDTH
 
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
-MAX_POINTS = 1 << 24
 FIELD_FLOATS = 12  # per vertex: normal, wave, direction (3 texels of 4 floats)
 JOINT_TEXELS = 9  # Joint: 3 LBS matrix columns, 1 unused, real, dual, 3 scale rows
 

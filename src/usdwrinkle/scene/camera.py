@@ -39,12 +39,40 @@ def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
 
 def camera_aspect(prim: Usd.Prim, time) -> float:
     cam = UsdGeom.Camera(prim).GetCamera(time)
-    return cam.aspectRatio if cam.aspectRatio > 0 else 1.0
+    aspect = cam.aspectRatio
+    return aspect if math.isfinite(aspect) and 1e-3 < aspect < 1e3 else 1.0
+
+
+def check_camera(prim: Usd.Prim, gf_cam: Gf.Camera, time) -> None:
+    """Refuse camera values that give no image (a NaN focal length, a zero aperture, a
+    transform that is not finite), naming the attribute."""
+    path = str(prim.GetPath())
+    frame = None if time.IsDefault() else time.GetValue()
+    near, far = gf_cam.clippingRange.min, gf_cam.clippingRange.max
+    checks = (
+        ("focalLength", gf_cam.focalLength, gf_cam.focalLength > 0, "finite and > 0"),
+        ("horizontalAperture", gf_cam.horizontalAperture, gf_cam.horizontalAperture > 0,
+         "finite and > 0"),
+        ("verticalAperture", gf_cam.verticalAperture, gf_cam.verticalAperture > 0,
+         "finite and > 0"),
+        ("horizontalApertureOffset", gf_cam.horizontalApertureOffset, True, "finite"),
+        ("verticalApertureOffset", gf_cam.verticalApertureOffset, True, "finite"),
+        ("clippingRange", (near, far), 0 < near < far, "finite, with 0 < near < far"),
+    )
+    for name, value, ok, rule in checks:
+        if not (ok and np.all(np.isfinite(value))):
+            raise UsdWrinkleError(f"camera {name} {value} must be {rule}", path, name, frame)
+    transform = np.asarray(gf_cam.transform, np.float64)
+    with np.errstate(over="ignore"):
+        as_float32 = transform.astype(np.float32)
+    if not np.all(np.isfinite(as_float32)):
+        raise UsdWrinkleError("camera transform is not finite", path, "xformOp", frame)
 
 
 def usd_camera(prim: Usd.Prim, time, aspect: float) -> CameraRecord:
     """A UsdGeom.Camera at ``time`` as view and projection matrices."""
     gf_cam = UsdGeom.Camera(prim).GetCamera(time)
+    check_camera(prim, gf_cam, time)
     frustum = gf_cam.frustum
     window = frustum.window
     width = window.GetMax()[0] - window.GetMin()[0]

@@ -1,19 +1,51 @@
 """UsdLux distant, sphere and dome lights; a default key and fill when there are none."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pxr import Usd, UsdGeom, UsdLux
 
+from ..errors import UsdWrinkleError
 from .records import LightRecord
 
+#: radiance beyond this is refused: the draw sums lights in float32 (max 3.4e38)
+MAX_RADIANCE = 1e30
 
-def _radiance(light) -> np.ndarray:
-    color = np.asarray(light.GetColorAttr().Get() or (1, 1, 1), dtype=np.float64)
-    intensity = light.GetIntensityAttr().Get()
-    exposure = light.GetExposureAttr().Get()
+
+def _radiance(light, time) -> np.ndarray:
+    """color * intensity * 2^exposure; a value that is not finite (or that overflows
+    float32) is refused, naming the light and the attribute."""
+    path = str(light.GetPrim().GetPath())
+    frame = None if time.IsDefault() else time.GetValue()
+    color = light.GetColorAttr().Get(time)
+    intensity = light.GetIntensityAttr().Get(time)
+    exposure = light.GetExposureAttr().Get(time)
+    color = np.ones(3) if color is None else np.asarray(color, dtype=np.float64)
     intensity = 1.0 if intensity is None else float(intensity)
     exposure = 0.0 if exposure is None else float(exposure)
-    return color * intensity * 2.0 ** exposure
+    for name, value in (("inputs:color", color), ("inputs:intensity", intensity),
+                        ("inputs:exposure", exposure)):
+        if not np.all(np.isfinite(value)):
+            raise UsdWrinkleError(f"light {name.split(':')[1]} is not finite", path, name,
+                                  frame)
+    # in log2, so that a huge exposure does not overflow before the test
+    peak = float(np.max(np.abs(color))) * abs(intensity)
+    if peak > 0 and math.log2(peak) + exposure > math.log2(MAX_RADIANCE):
+        raise UsdWrinkleError(f"light radiance color*intensity*2^exposure exceeds "
+                              f"{MAX_RADIANCE:g} (intensity {intensity:g}, exposure "
+                              f"{exposure:g})", path, "inputs:exposure", frame)
+    return color * intensity * 2.0 ** max(exposure, -1074.0)
+
+
+def _transform(prim, time, xform_cache) -> np.ndarray:
+    xf = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
+    with np.errstate(over="ignore"):
+        as_float32 = xf.astype(np.float32)
+    if not np.all(np.isfinite(as_float32)):
+        raise UsdWrinkleError("light transform is not finite", str(prim.GetPath()), "xformOp",
+                              None if time.IsDefault() else time.GetValue())
+    return xf
 
 
 def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache) -> list[LightRecord]:
@@ -23,19 +55,23 @@ def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache) -> list
                 UsdGeom.Imageable(prim).ComputeVisibility(time) == UsdGeom.Tokens.invisible:
             continue
         if prim.IsA(UsdLux.DistantLight):
-            xf = np.asarray(xform_cache.GetLocalToWorldTransform(prim))
+            xf = _transform(prim, time, xform_cache)
             direction = np.array([0.0, 0.0, -1.0]) @ xf[:3, :3]
             direction /= max(np.linalg.norm(direction), 1e-30)
-            lights.append(LightRecord("distant", _radiance(UsdLux.DistantLight(prim)),
+            lights.append(LightRecord("distant", _radiance(UsdLux.DistantLight(prim), time),
                                       direction=direction))
         elif prim.IsA(UsdLux.SphereLight):
-            xf = np.asarray(xform_cache.GetLocalToWorldTransform(prim))
+            xf = _transform(prim, time, xform_cache)
             light = UsdLux.SphereLight(prim)
-            radius = light.GetRadiusAttr().Get()
-            lights.append(LightRecord("sphere", _radiance(light), position=xf[3, :3].copy(),
+            radius = light.GetRadiusAttr().Get(time)
+            if radius is not None and not (math.isfinite(radius) and radius >= 0):
+                raise UsdWrinkleError("light radius must be finite and >= 0",
+                                      str(prim.GetPath()), "inputs:radius",
+                                      None if time.IsDefault() else time.GetValue())
+            lights.append(LightRecord("sphere", _radiance(light, time), position=xf[3, :3].copy(),
                                       radius=0.5 if radius is None else float(radius)))
         elif prim.IsA(UsdLux.DomeLight):
-            lights.append(LightRecord("dome", _radiance(UsdLux.DomeLight(prim))))
+            lights.append(LightRecord("dome", _radiance(UsdLux.DomeLight(prim), time)))
     return lights
 
 

@@ -13,6 +13,8 @@ from functools import lru_cache
 import numpy as np
 from pxr import Ar, Usd, UsdGeom, UsdShade
 
+from ..limits import MAX_TEXTURE_SIZE
+from .inputs import package_file, require_regular_file
 from .records import MaterialRecord
 from .topology import Topology
 
@@ -27,10 +29,14 @@ def load_texture(resolved_path: str) -> np.ndarray:
     """
     from ..outputs.images import read_float_image
 
+    require_regular_file(package_file(resolved_path), "texture")
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))
     if asset is None:
         raise OSError(f"cannot open texture '{resolved_path}'")
-    data = bytes(asset.GetBuffer())
+    buffer = asset.GetBuffer() if asset.GetSize() else None
+    if buffer is None:
+        raise OSError(f"cannot decode texture '{resolved_path}': the file is empty")
+    data = bytes(buffer)
     inner = resolved_path.rsplit("[", 1)[-1].rstrip("]")
     suffix = os.path.splitext(inner)[1] or ".png"
     # OIIO's Python bindings decode from files; a temporary file keeps Ar in charge of IO.
@@ -38,7 +44,7 @@ def load_texture(resolved_path: str) -> np.ndarray:
         handle.write(data)
         tmp = handle.name
     try:
-        pixels, eight_bit = read_float_image(tmp)
+        pixels, eight_bit = read_float_image(tmp, MAX_TEXTURE_SIZE)
     except OSError as exc:
         raise OSError(f"cannot decode texture '{resolved_path}': "
                       f"{str(exc).split(': ', 1)[-1]}") from None

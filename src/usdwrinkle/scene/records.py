@@ -6,6 +6,7 @@ convention (p' = p @ M).
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -97,6 +98,11 @@ class MeshRecord:
     #: the frames of the mesh's baked wave fields ("1..24", "default time"), or None:
     #: a render draws them instead of running crush and relax (scene/baked.py)
     baked_range: str | None = None
+
+    @functools.cached_property
+    def extent(self) -> float:
+        """The largest |coordinate| of the rest points (scene/stage.py: check_transform)."""
+        return float(np.abs(self.rest_points).max(initial=0.0))
 
 
 @dataclass(frozen=True)

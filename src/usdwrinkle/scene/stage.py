@@ -17,7 +17,7 @@ from pxr import Tf, Usd, UsdGeom
 
 from .. import schema
 from ..errors import UsdWrinkleError
-from ..limits import MAX_FRAMES, MAX_TIME_CODE
+from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE, MAX_WORLD_COORDINATE
 from . import camera as camera_mod
 from .baked import BakedSource, find_baked
 from .diagnostics import usd_diagnostics, usd_error_text
@@ -143,6 +143,23 @@ def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
     return topology
 
 
+def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -> None:
+    """Refuse a transform that is not finite, or that takes a mesh of half-size ``extent``
+    beyond MAX_WORLD_COORDINATE (where float32 squares of lengths overflow on the GPU)."""
+    matrix = np.asarray(matrix, np.float64)
+    with np.errstate(over="ignore"):
+        as_float32 = matrix.astype(np.float32)
+    if not np.all(np.isfinite(as_float32)):
+        raise UsdWrinkleError("transform is not finite in float32 (NaN, Inf or beyond 3.4e38)",
+                              path, "xformOp", frame)
+    scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
+    reach = scale * extent + float(np.abs(matrix[..., 3, :3]).max(initial=0.0))
+    if reach > MAX_WORLD_COORDINATE:
+        raise UsdWrinkleError(f"the mesh reaches {reach:.3g} scene units from the origin, "
+                              f"beyond +-{MAX_WORLD_COORDINATE:g} (the GPU's float32 range); "
+                              "check the units and the transforms", path, "xformOp", frame)
+
+
 def _finite_points(points, path, attribute, time=None):
     arr = np.asarray(points, dtype=np.float32).reshape(-1, 3)
     if not np.all(np.isfinite(arr)):
@@ -203,6 +220,10 @@ class StageSceneDelegate:
         if rest_value is None or len(rest_value) == 0:
             self.warn(f"mesh has no points; skipped ({path})")
             return None
+        if len(rest_value) >= MAX_POINTS:  # before any per-point work
+            raise UsdWrinkleError(f"mesh too large: {len(rest_value):,} points, usdwrinkle "
+                                  f"handles fewer than {MAX_POINTS:,} per mesh", path,
+                                  rest_attr_name)
         rest = _finite_points(rest_value, path, rest_attr_name)
         first_points = points_attr.Get(points_attr.GetTimeSamples()[0]) \
             if points_attr.GetNumTimeSamples() else points_attr.Get(default)
@@ -261,6 +282,7 @@ class StageSceneDelegate:
         if with_baked and path in self.baked:
             baked = self.baked[path].at(float("nan") if frame is None else frame)
         local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
+        check_transform(local_to_world, path, frame, record.extent)
         visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible
         if record.skin is not None:
             skel_query, skinning_query = self.skel.get(path)
@@ -274,6 +296,8 @@ class StageSceneDelegate:
             if not np.all(np.isfinite(joints)):
                 raise UsdWrinkleError("skinning transforms are not finite", path,
                                       "skel:skeleton", frame)
+            check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
+                            record.extent)
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
                              active, baked)
         points = None
@@ -284,6 +308,7 @@ class StageSceneDelegate:
                 raise UsdWrinkleError(
                     f"point count changes over time ({len(points)} != "
                     f"{len(record.rest_points)})", path, "points", frame)
+            check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
         return MeshFrame(local_to_world, visible, points, baked=baked)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

@@ -1,6 +1,7 @@
 """Mesh topology: triangulation (concave n-gons, holes) and adjacency in CSR form.
 
-All arrays are numpy; only faces that are not convex are visited one by one.
+All arrays are numpy; only faces that are not convex are visited one by one, and each
+is ear-clipped by mapbox earcut (C++).
 """
 from __future__ import annotations
 
@@ -72,8 +73,16 @@ def _newell_normal(poly: np.ndarray) -> np.ndarray:
     ])
 
 
+def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit axes (u, v) of the plane of ``normal``, with u x v = normal."""
+    axis_u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    axis_u /= np.linalg.norm(axis_u)
+    return axis_u, np.cross(normal, axis_u)
+
+
 def ear_clip(poly: np.ndarray) -> list[tuple[int, int, int]]:
-    """Triangulate one simple polygon (possibly concave) by ear clipping.
+    """Triangulate one simple polygon (possibly concave) by ear clipping (mapbox earcut,
+    O(n log n) with z-order hashing: a 10,000-gon takes milliseconds).
 
     Parameters
     ----------
@@ -82,56 +91,51 @@ def ear_clip(poly: np.ndarray) -> list[tuple[int, int, int]]:
 
     Returns
     -------
-    list of (a, b, c) local corner indices, k - 2 of them. A polygon with no
-    ear (self-intersecting or degenerate) falls back to a fan.
+    list of (a, b, c) local corner indices, k - 2 of them, each wound as the polygon. A
+    polygon that earcut cannot cover with k - 2 triangles (self-intersecting or
+    degenerate) falls back to a fan.
     """
+    import mapbox_earcut
+
     k = len(poly)
-    normal = _newell_normal(poly.astype(np.float64))
+    fan = [(0, i, i + 1) for i in range(1, k - 1)]
+    poly = np.asarray(poly, np.float64)
+    normal = _newell_normal(poly)
     length = np.linalg.norm(normal)
-    if length < 1e-30:
-        return [(0, i, i + 1) for i in range(1, k - 1)]
-    normal /= length
-    axis_u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-    axis_u /= np.linalg.norm(axis_u)
-    axis_v = np.cross(normal, axis_u)
-    flat = np.stack([poly @ axis_u, poly @ axis_v], axis=1)
+    if not np.isfinite(length) or length < 1e-30:
+        return fan
+    axis_u, axis_v = _plane_axes(normal / length)
+    flat = np.stack([poly @ axis_u, poly @ axis_v], axis=1)  # counter-clockwise
+    tri = mapbox_earcut.triangulate_float64(flat, np.array([k], np.uint32)).reshape(-1, 3)
+    if len(tri) != k - 2:
+        return fan
+    a, b, c = flat[tri[:, 0]], flat[tri[:, 1]], flat[tri[:, 2]]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    tri = np.where((area < 0)[:, None], tri[:, [0, 2, 1]], tri)  # keep the face's winding
+    return [tuple(int(i) for i in row) for row in tri]
 
-    def cross2(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
 
-    remaining = list(range(k))
-    out: list[tuple[int, int, int]] = []
-    guard = 0
-    while len(remaining) > 3 and guard < k * k:
-        guard += 1
-        found = False
-        m = len(remaining)
-        for idx in range(m):
-            a, b, c = remaining[idx - 1], remaining[idx], remaining[(idx + 1) % m]
-            if cross2(flat[a], flat[b], flat[c]) <= 0:  # reflex or flat corner
-                continue
-            inside = False
-            for other in remaining:
-                if other in (a, b, c):
-                    continue
-                p = flat[other]
-                if (cross2(flat[a], flat[b], p) >= 0 and cross2(flat[b], flat[c], p) >= 0
-                        and cross2(flat[c], flat[a], p) >= 0):
-                    inside = True
-                    break
-            if not inside:
-                out.append((a, b, c))
-                remaining.pop(idx)
-                found = True
-                break
-        if not found:
-            break
-    if len(remaining) > 3:  # no ear left: degenerate polygon, fan the rest
-        out.extend((remaining[0], remaining[i], remaining[i + 1])
-                   for i in range(1, len(remaining) - 1))
-    elif len(remaining) == 3:
-        out.append(tuple(remaining))
-    return out
+def concave_faces(faces: np.ndarray, counts: np.ndarray, starts: np.ndarray,
+                  indices: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The faces among ``faces`` (all with more than 3 corners) that are not convex: a
+    corner turns the other way about the face's Newell normal. Vectorised over faces."""
+    if not len(faces):
+        return faces
+    k = counts[faces]
+    first = np.repeat(starts[faces], k)
+    local = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
+    kk = np.repeat(k, k)
+    here = points[indices[first + local]]
+    nxt = points[indices[first + (local + 1) % kk]]
+    prev = points[indices[first + (local - 1) % kk]]
+    offsets = np.concatenate([[0], np.cumsum(k)[:-1]])
+    newell = np.stack([(here[:, 1] - nxt[:, 1]) * (here[:, 2] + nxt[:, 2]),
+                       (here[:, 2] - nxt[:, 2]) * (here[:, 0] + nxt[:, 0]),
+                       (here[:, 0] - nxt[:, 0]) * (here[:, 1] + nxt[:, 1])], axis=1)
+    normal = np.add.reduceat(newell, offsets, axis=0)
+    turns = np.einsum("ij,ij->i", np.cross(here - prev, nxt - here), np.repeat(normal, k, axis=0))
+    scale = np.maximum(np.maximum.reduceat(np.abs(turns), offsets), 1e-30)
+    return faces[np.minimum.reduceat(turns, offsets) < -1e-12 * scale]
 
 
 def triangulate(counts: np.ndarray, indices: np.ndarray, points: np.ndarray,
@@ -157,22 +161,11 @@ def triangulate(counts: np.ndarray, indices: np.ndarray, points: np.ndarray,
     base = starts[face_of_tri]
     corner = np.stack([base, base + local + 1, base + local + 2], axis=1)
 
-    # Concave faces: a fan is wrong there. A face is convex when every corner turns
-    # the same way about its Newell normal.
-    big = faces[counts[faces] > 3]
-    concave = []
+    # Concave faces: a fan is wrong there. Ear clipping also gives n - 2 triangles:
+    # overwrite the fan rows of those faces.
     pts = np.asarray(points, dtype=np.float64)
-    for face in big:  # loops only over n-gons with n > 3, vectorised per face
-        ids = indices[starts[face]:starts[face] + counts[face]]
-        poly = pts[ids]
-        normal = _newell_normal(poly)
-        prev = poly - np.roll(poly, 1, axis=0)
-        nxt = np.roll(poly, -1, axis=0) - poly
-        turns = np.cross(prev, nxt) @ normal
-        if np.any(turns < -1e-12 * max(np.abs(turns).max(), 1e-30)):
-            concave.append(face)
-    if concave:
-        # ear clipping also gives n - 2 triangles: overwrite the fan rows of those faces
+    concave = concave_faces(faces[counts[faces] > 3], counts, starts, indices, pts)
+    if len(concave):
         tri_start = np.concatenate([[0], np.cumsum(tri_per_face)])
         for face in concave:
             row = tri_start[np.searchsorted(faces, face)]
@@ -207,7 +200,8 @@ def build_topology(counts, indices, points, hole_indices=None,
     src = np.concatenate([a, b]).astype(np.int64)
     dst = np.concatenate([b, a]).astype(np.int64)
     ok = src != dst
-    pairs = np.unique(src[ok] * n + dst[ok]) if ok.any() else np.zeros(0, np.int64)
+    pairs = np.sort(src[ok] * n + dst[ok])  # unique by sorting (np.unique hashes: slower)
+    pairs = pairs[np.concatenate([[True], pairs[1:] != pairs[:-1]])] if len(pairs) else pairs
     nb_off, nb_idx = _csr(pairs // max(n, 1), pairs % max(n, 1), n)
     tri_src = triangles.reshape(-1).astype(np.int64)
     tri_ids = np.repeat(np.arange(m, dtype=np.int64), 3)
