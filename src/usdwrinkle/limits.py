@@ -16,8 +16,10 @@ MAX_RELAX_ITERATIONS = 10_000
 MAX_POINTS = 1 << 24
 #: |profile sample|: profiles are shapes of order 1, scaled by the amplitude
 MAX_PROFILE_VALUE = 1e3
-#: |coordinate| in world space: the GPU works in float32, and squares of lengths must
-#: stay finite (3.4e38)
+#: wrinkle:amplitudeScale (a multiplier of the physical amplitude, normally about 1)
+MAX_AMPLITUDE_SCALE = 1e3
+#: |coordinate| in world space, and the largest wrinkle width: the GPU works in float32,
+#: and squares of lengths must stay finite (3.4e38)
 MAX_WORLD_COORDINATE = 1e15
 #: texture width or height (the GL 4.5 minimum of GL_MAX_TEXTURE_SIZE)
 MAX_TEXTURE_SIZE = 16384

@@ -14,7 +14,12 @@ from pxr import Usd, UsdGeom
 
 from . import schema
 from .errors import UsdWrinkleError
-from .limits import MAX_PROFILE_VALUE, MAX_RELAX_ITERATIONS
+from .limits import (
+    MAX_AMPLITUDE_SCALE,
+    MAX_PROFILE_VALUE,
+    MAX_RELAX_ITERATIONS,
+    MAX_WORLD_COORDINATE,
+)
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"
@@ -110,6 +115,9 @@ def check_width(values, point_count: int | None, path: str) -> list[Finding]:
                                                f"point ({point_count})"))
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         out.append(Finding(path, schema.WIDTH, "width must be finite and > 0"))
+    elif np.any(arr > MAX_WORLD_COORDINATE):
+        out.append(Finding(path, schema.WIDTH,
+                           f"width must be at most {MAX_WORLD_COORDINATE:g} scene units"))
     return out
 
 
@@ -139,6 +147,9 @@ def check_amplitude_scale(value, path: str) -> list[Finding]:
         return []
     if not np.isfinite(value) or value < 0:
         return [Finding(path, schema.AMPLITUDE_SCALE, "amplitude scale must be finite and >= 0")]
+    if value > MAX_AMPLITUDE_SCALE:
+        return [Finding(path, schema.AMPLITUDE_SCALE,
+                        f"amplitude scale must be at most {MAX_AMPLITUDE_SCALE:g}")]
     return []
 
 
@@ -199,10 +210,10 @@ def register_validators() -> None:
         metadata = UsdValidation.ValidatorMetadata(
             name=VALIDATOR_NAME,
             doc="WrinkleAPI values: on a Mesh; q of the points' length, vertex, finite, "
-                "|q| <= 1; width finite > 0, constant or per point; profiles with >= 2 finite "
-                "samples within +-1000; primvars:rest of the points' length; amplitude scale "
-                "finite >= 0; relax iterations in 0..10,000; every attribute of its schema "
-                "type.",
+                "|q| <= 1; width finite, > 0 and <= 1e15, constant or per point; profiles "
+                "with >= 2 finite samples within +-1000; primvars:rest of the points' length; "
+                "amplitude scale in 0..1000; relax iterations in 0..10,000; every attribute "
+                "of its schema type.",
             keywords=[VALIDATOR_KEYWORD])
 
         def task(prim, time_range):

@@ -56,6 +56,7 @@ def open_stage(path: str, warn=None) -> Usd.Stage:
                               f"{usd_error_text(exc)}") from None
     if stage is None:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
+    inputs.layers = []  # the stage holds what it uses; a cache must not keep stale layers
     _INPUTS[root.identifier] = inputs
     return stage
 
@@ -65,8 +66,9 @@ def stage_inputs(stage: Usd.Stage) -> StageInputs:
     root = stage.GetRootLayer()
     if root.identifier not in _INPUTS:
         _INPUTS[root.identifier] = scan_inputs(root.realPath) if root.realPath and \
-            "[" not in root.realPath else StageInputs(layers=[root])
+            "[" not in root.realPath else StageInputs()
     inputs = _INPUTS[root.identifier]
+    inputs.layers = []
     for layer in stage.GetUsedLayers():  # also what a session layer brought in
         if layer.realPath:
             inputs.add_file(package_file(layer.realPath))
