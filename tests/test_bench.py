@@ -52,7 +52,11 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
             "readback_330k_rgba32f_ms"} <= set(floors)
     assert floors["copy_points"] == result["skin_baseline"][-1]["vertices"]
     text = out_md.read_text()
+    tri = result["triangulation"]
+    assert tri["polygon"]["triangles"] == 10_000 - 2 and tri["polygon"]["ms"] > 0
+    assert tri["quads"]["triangles"] == 2 * tri["quads"]["faces"] and tri["quads"]["ms"] > 0
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
-                    "## End to end", "## What the rasteriser costs by itself", "## Farms"):
+                    "## End to end", "## What the rasteriser costs by itself", "## Farms",
+                    "## Triangulation of hostile meshes"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text

@@ -2,8 +2,8 @@
 
 Whatever it draws, within a fixed budget: exit 3 ("internal error") never happens, no
 call outlives its deadline, and no temporary file is left. Sizes and frame ranges are
-drawn either small (they render in well under a second) or hostile (refused before
-any work), so that the deadline tests for hangs, not for honest long renders.
+drawn either small (at most a few hundred small frames) or hostile (refused before any
+work), so that the deadline tests for hangs, not for honest long renders.
 
 ``USDWRINKLE_FUZZ_EXAMPLES`` raises the budget for a longer local run.
 """
@@ -13,6 +13,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
@@ -23,6 +24,7 @@ from usdwrinkle import schema
 
 from conftest import grid_sheet
 from helpers import point_cache_stage
+from test_hostile import scratch_frames_since
 
 #: seconds one CLI call may take (a small stage: start-up plus a few frames)
 DEADLINE = 90
@@ -36,7 +38,7 @@ frame_spec = st.one_of(
     number_text,
     st.builds(lambda a, b: f"{a}:{b}", small_int, small_int),
     st.builds(lambda a, b, s: f"{a}:{b}x{s}", small_int, small_int,
-              st.sampled_from(["1", "2", "0.5", "0", "-1", "0.0001", "nan", "inf"])),
+              st.sampled_from(["1", "2", "0.5", "0.25", "0", "-1", "nan", "inf"])),
     st.lists(number_text, min_size=1, max_size=4).map(",".join),
     st.sampled_from(["", ",", "1:", ":5", "1:100000x0.001", "1:200000", "1.0004,1.0001",
                      "1.0004,1.9996", "a", "1e309", "1:2:3"]),
@@ -101,6 +103,7 @@ commands = st.sampled_from(["render", "render", "render", "bake", "check", "appl
 def test_the_cli_never_fails_internally_hangs_or_leaves_temporaries(
         command, start, end, amplitude, width, iterations, up_axis, fps, frames, width_px,
         height_px, samples, relax, history, extension, flags, apply_option):
+    started = time.time()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         stage = folder / "shot.usda"
@@ -140,4 +143,4 @@ def test_the_cli_never_fails_internally_hangs_or_leaves_temporaries(
         assert "Traceback" not in result.stderr, (args, result.stderr)
         temporaries = [p.name for p in folder.rglob(".*") if p.is_file()]
         assert not temporaries, (args, temporaries)
-    assert not list(Path("/dev/shm").glob(".usdwrinkle-frame.*"))
+    assert not scratch_frames_since(started)

@@ -11,7 +11,7 @@ def add_stage_args(parser) -> None:
     parser.add_argument("--all-meshes", action="store_true",
                         help="wrinkle every Mesh, as if WrinkleAPI were applied (with fallbacks)")
     parser.add_argument("--relax-iterations", type=int, metavar="N",
-                        help="phase relaxation iterations per frame (overrides "
+                        help="phase relaxation iterations per frame, 0..10,000 (overrides "
                              "wrinkle:relaxIterations)")
     parser.add_argument("--history-start", type=float, metavar="FRAME",
                         help="first frame of the shot's phase history (default: the stage's "

@@ -65,7 +65,8 @@ def parse_frame_spec(spec: str) -> list[float]:
 def add_frame_args(parser) -> None:
     parser.add_argument("--frames", metavar="SPEC",
                         help="frames to process, as usdrecord's FrameSpec: 1:48, 101:109x2, "
-                             "1,5,10 (default: the stage's start..end, or the default time)")
+                             "1,5,10; at most 100,000 frames within +-1e9 (default: the "
+                             "stage's start..end, or the default time)")
 
 
 #: decimals of a sub-frame in a file name (frame 1.25 -> 0001.250)

@@ -60,6 +60,15 @@ def read_float_image(path: str, max_size: int | None = None) -> tuple[np.ndarray
         raise OSError(f"cannot read image '{path}': no such file") from None
     if not stat.S_ISREG(mode):
         raise OSError(f"cannot read image '{path}': not a regular file")
+    from ..scene.diagnostics import usd_diagnostics
+
+    # libpng and libjpeg print their warnings on stderr themselves: keep them off the
+    # user's terminal (a failure still reports OpenImageIO's reason)
+    with usd_diagnostics():
+        return _decode(oiio, path, max_size)
+
+
+def _decode(oiio, path: str, max_size: int | None) -> tuple[np.ndarray, bool]:
     image = oiio.ImageInput.open(path)
     if image is None:
         raise OSError(f"cannot read image '{path}': {one_line(oiio.geterror()) or 'unreadable'}")
@@ -97,6 +106,31 @@ def _scratch_folder() -> str:
     if os.path.isdir(shm) and os.access(shm, os.W_OK | os.X_OK):
         return shm
     return tempfile.gettempdir()
+
+
+SCRATCH_PREFIX = ".usdwrinkle-frame."
+_swept = {"done": False}
+
+
+def _sweep_scratch(folder: str) -> None:
+    """Remove scratch frames of processes that no longer run (a SIGKILLed farm worker
+    never reaches its cleanup, and /dev/shm is memory). Once per process."""
+    if _swept["done"]:
+        return
+    _swept["done"] = True
+    for name in os.listdir(folder):
+        if not name.startswith(SCRATCH_PREFIX):
+            continue
+        pid = name[len(SCRATCH_PREFIX):].split(".", 1)[0]
+        if not pid.isdigit():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            with contextlib.suppress(OSError):
+                os.unlink(os.path.join(folder, name))
+        except OSError:
+            pass  # alive, but another user's
 
 
 def _check_finite(buffers: dict, aovs) -> None:
@@ -162,8 +196,10 @@ def write_image(path: str, buffers: dict) -> None:
         if pixels.shape[2] == 4:
             spec.alpha_channel = 3
             spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
-    fd, scratch = tempfile.mkstemp(prefix=".usdwrinkle-frame.", suffix=ext,
-                                   dir=_scratch_folder())
+    folder = _scratch_folder()
+    _sweep_scratch(folder)
+    fd, scratch = tempfile.mkstemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}.", suffix=ext,
+                                   dir=folder)
     os.close(fd)
     try:
         _encode(scratch, spec, pixels, path)

@@ -304,7 +304,12 @@ class StageSceneDelegate:
                              active, baked)
         points = None
         if record.point_cached:
-            value = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
+            attr = UsdGeom.Mesh(prim).GetPointsAttr()
+            value = attr.Get(time)
+            if value is None and time.IsDefault() and attr.GetNumTimeSamples():
+                value = attr.Get(attr.GetTimeSamples()[0])  # only samples: the first one
+            if value is None:
+                raise UsdWrinkleError("points have no value", path, "points", frame)
             points = _finite_points(value, path, "points", time)
             if len(points) != len(record.rest_points):
                 raise UsdWrinkleError(
