@@ -34,7 +34,6 @@ layout(r32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;
 uniform int u_num_points;
 uniform int u_num_triangles;
 uniform float u_amplitude_scale;    // s
-uniform float u_min_ratio;          // floor of r for the wave vector (|k| <= 2pi/(W r_min))
 
 #if defined FACE_NORMALS
 
@@ -147,7 +146,7 @@ void main() {
     if (lead < 0.0) { d = -d; d3 = -d3; }
 
     // r in [r_min, 1]: a ring crushed flat still has a finite wavelength W r_min
-    float r = usable || q_len > 0.0 ? clamp(sqrt(lambda), u_min_ratio, 1.0) : 1.0;
+    float r = usable || q_len > 0.0 ? clamp(sqrt(lambda), MIN_RATIO, 1.0) : 1.0;
     float amplitude = u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r * r, 0.0));
 
     // k = M^-T (2pi/W) d. With M = U S V^T and d the smallest right singular vector,
@@ -156,8 +155,8 @@ void main() {
     vec2 md = M * d;
     float sigma = length(md);
     vec2 k2 = sigma > 1e-12
-        ? (TWO_PI / W) * (md / sigma) / max(sigma, u_min_ratio)
-        : (TWO_PI / (W * u_min_ratio)) * d;
+        ? (TWO_PI / W) * (md / sigma) / max(sigma, MIN_RATIO)
+        : (TWO_PI / (W * MIN_RATIO)) * d;
     vec3 k = k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
 
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));

@@ -71,7 +71,6 @@ layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
 uniform vec4 u_texture_bias;
 
-#define MAX_LIGHTS 8
 uniform int u_num_lights;
 uniform int u_light_kind[MAX_LIGHTS];      // 0 distant, 1 sphere
 uniform vec3 u_light_radiance[MAX_LIGHTS];

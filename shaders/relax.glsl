@@ -23,8 +23,8 @@ layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // below 2^24 points). One fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
-// A tiny floor on the weights keeps arg() defined where no vertex is wrinkled.
-const float WEIGHT_FLOOR = 1e-7;
+// WEIGHT_FLOOR (contract.py): a tiny floor on the weights keeps arg() defined where no
+// vertex is wrinkled.
 
 vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x); }
 

@@ -15,7 +15,6 @@ layout(local_size_x = LOCAL_SIZE) in;
 //   4     DQS rotation quaternion (xyz, w)
 //   5     DQS dual part (xyz, w)
 //   6..8  DQS scale/shear remainder, row-vector 3x3 rows, applied by LBS
-#define JOINT_TEXELS 9
 #define JOINT(j, k) fetch(joints, JOINT_TEXELS * (j) + (k))
 
 layout(binding = SKIN_REST_POINTS) uniform sampler2D rest_points;

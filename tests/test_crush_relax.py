@@ -18,7 +18,7 @@ def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
     engine = WrinkleEngine(stage, ctx=ctx, warn=lambda m: None)
     try:
         engine.compute_frame(frame)
-        return engine.read_fields(path), engine.scene.meshes[path]
+        return engine.read_fields(path).arrays(), engine.scene.meshes[path]
     finally:
         engine.release()
 
@@ -78,7 +78,7 @@ def test_relax_matches_numpy_reference(gl_context):
     engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
     try:
         engine.compute_frame(3.0)  # replays frames 1 and 2 first
-        ours = engine.read_fields("/Sheet")
+        ours = engine.read_fields("/Sheet").arrays()
         record = engine.scene.meshes["/Sheet"]
     finally:
         engine.release()

@@ -19,7 +19,7 @@ def fields_at(ctx, stage, frames):
     try:
         for frame in frames:
             engine.compute_frame(frame)
-            out.append(engine.read_fields(path))
+            out.append(engine.read_fields(path).arrays())
     finally:
         engine.release()
     return out

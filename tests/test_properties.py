@@ -44,7 +44,7 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
     engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
     try:
         engine.compute_frame(1.0)
-        fields = engine.read_fields("/Sheet")
+        fields = engine.read_fields("/Sheet").arrays()
         image = engine.render_frame(1.0, 48, 48)
     finally:
         engine.release()

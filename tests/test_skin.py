@@ -26,7 +26,7 @@ def test_skin_matches_pixar_baseline(gl_context, corpus, name, frames):
         for frame in frames:
             engine.compute_frame(float(frame))
             for path in skinned:
-                ours = engine.read_fields(path)["points"]
+                ours = engine.read_fields(path).points
                 theirs = np.asarray(UsdGeom.Mesh(baseline.GetPrimAtPath(path))
                                     .GetPointsAttr().Get(frame), np.float64)
                 extent = float(np.max(theirs.max(0) - theirs.min(0)))
@@ -68,7 +68,7 @@ def test_skin_matches_usdskel(gl_context, corpus, name, frames):
                 skel_query, skinning_query = engine.scene.skel.get(mesh_path)
                 mapper = skinning_query.GetJointMapper()
                 mapped += int(mapper is not None and not mapper.IsIdentity())
-                ours = engine.read_fields(mesh_path)["points"]
+                ours = engine.read_fields(mesh_path).points
                 prim = stage.GetPrimAtPath(mesh_path)
                 points = UsdGeom.Mesh(prim).GetPointsAttr().Get(t)
                 xforms = skel_query.ComputeSkinningTransforms(t)

@@ -14,14 +14,11 @@ const float TWO_PI = 6.28318530717958647692;
 vec4 fetch(sampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 0); }
 ivec4 fetch(isampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 0); }
 
-// Per-vertex wrinkle fields written by crush, read by relax and draw: three texels of
-// the fields table per vertex.
-//   normal     xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
-//   wave       xyz: wave vector k (local space, posed); w: amplitude h
-//   direction  xyz: rest-space unit direction d of strongest compression; w: r
-#define FIELD_NORMAL(i) (3 * (i))
-#define FIELD_WAVE(i) (3 * (i) + 1)
-#define FIELD_DIRECTION(i) (3 * (i) + 2)
+// Per-vertex wrinkle fields written by crush, read by relax and draw: FIELD_TEXELS texels
+// of the fields table per vertex (layout and constants: src/usdwrinkle/contract.py).
+#define FIELD_NORMAL(i) (FIELD_TEXELS * (i) + FIELD_NORMAL_TEXEL)
+#define FIELD_WAVE(i) (FIELD_TEXELS * (i) + FIELD_WAVE_TEXEL)
+#define FIELD_DIRECTION(i) (FIELD_TEXELS * (i) + FIELD_DIRECTION_TEXEL)
 
 vec3 safe_normalize(vec3 v, vec3 fallback) {
     float len = length(v);

@@ -290,10 +290,10 @@ def numpy_baseline(quick: bool, ctx) -> dict:
         numpy_times = []
         for _ in range(3):
             started = time.perf_counter()
-            reference = crush(record.rest_points, fields["points"], record.topology,
+            reference = crush(record.rest_points, fields.points, record.topology,
                               record.params.q, record.params.width,
                               record.params.amplitude_scale)
-            relax(fields["points"], reference["wave_vector"], reference["amplitude"],
+            relax(fields.points, reference["wave_vector"], reference["amplitude"],
                   reference["phase"], record.topology, iterations)
             numpy_times.append((time.perf_counter() - started) * 1e3)
     finally:

@@ -13,6 +13,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
 
 from .. import __version__
+from ..contract import MIN_RATIO
 from ..errors import UsdWrinkleError
 from .atomic import atomic_path
 
@@ -49,8 +50,8 @@ def display_values(field: str, fields: dict, params) -> np.ndarray:
     """The [0, 1] quantity shown by --display-color."""
     if field == "amplitude":
         full = np.maximum(params.amplitude_scale * params.width / 4.0, 1e-30)
-        return fields["amplitude"] / full
-    return (1.0 - fields["compression"]) / 0.95  # r in [0.05, 1] -> [1, 0]
+        return fields.amplitude / full
+    return (1.0 - fields.compression) / (1.0 - MIN_RATIO)  # r in [MIN_RATIO, 1] -> [1, 0]
 
 
 def check_layer_path(path: str) -> str:
@@ -141,7 +142,7 @@ class LayerBaker:
     def add_frame(self, frame: float, fields_by_path: dict) -> None:
         """Record one frame: ``fields_by_path[path]`` as returned by read_fields()."""
         for path, fields in fields_by_path.items():
-            for name, values in fields.items():  # no NaN or Inf reaches a layer
+            for name, values in fields.arrays().items():  # no NaN or Inf reaches a layer
                 if isinstance(values, np.ndarray) and values.dtype.kind == "f" and \
                         not np.all(np.isfinite(values)):
                     raise UsdWrinkleError(
@@ -153,7 +154,7 @@ class LayerBaker:
             if path in self.wrinkled:
                 for name, (field, type_name) in PRIMVARS.items():
                     attr = self._attr(path, name, type_name, UsdGeom.Tokens.vertex)
-                    self._set(attr, frame, _array(fields[field], type_name))
+                    self._set(attr, frame, _array(getattr(fields, field), type_name))
                 if self.display_color:
                     colors = viridis(display_values(self.display_color, fields,
                                                     self.wrinkled[path].params))
@@ -161,10 +162,10 @@ class LayerBaker:
                                       Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.vertex)
                     self._set(attr, frame, Vt.Vec3fArray.FromNumpy(colors))
             if path in self.point_meshes:
-                points = np.ascontiguousarray(fields["points"], np.float32)
+                points = np.ascontiguousarray(fields.points, np.float32)
                 self._set(self._attr(path, "points", Sdf.ValueTypeNames.Point3fArray), frame,
                           Vt.Vec3fArray.FromNumpy(points))
-                normals = np.ascontiguousarray(fields["normals"], np.float32)
+                normals = np.ascontiguousarray(fields.normals, np.float32)
                 self._set(self._attr(path, "normals", Sdf.ValueTypeNames.Normal3fArray,
                                      UsdGeom.Tokens.vertex), frame,
                           Vt.Vec3fArray.FromNumpy(normals))

@@ -3,10 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contract import MIN_RATIO
 from ..render.resources import rest_tangents
 from ..scene.topology import Topology, vertex_normals
-
-MIN_RATIO = 0.05
 
 
 def minimal_rotation(a, b, v, flip_axis):

@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contract import COLD_START_FACTOR, WEIGHT_FLOOR
 from ..scene.topology import Topology
-
-WEIGHT_FLOOR = 1e-7
 
 
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
@@ -63,7 +62,8 @@ def seed(wave_vector, previous_wave_vector, previous_phase):
     return np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
 
 
-def relax_shot(frames: list, topology: Topology, iterations: int, cold_start_factor: int = 4):
+def relax_shot(frames: list, topology: Topology, iterations: int,
+               cold_start_factor: int = COLD_START_FACTOR):
     """Phase history over a shot, as the engine computes it.
 
     ``frames``: per frame, a dict with points, wave_vector, amplitude and phase (the

@@ -8,6 +8,8 @@ no stage needs more than 8 image units or 16 texture units (the GL 4.5 minimums)
 """
 from __future__ import annotations
 
+from ..contract import SHADER_DEFINES
+
 #: Work group size of every compute pass.
 LOCAL_SIZE = 64
 
@@ -16,9 +18,9 @@ LOCAL_SIZE = 64
 TABLE_WIDTH_LOG2 = 11
 TABLE_WIDTH = 1 << TABLE_WIDTH_LOG2
 
-#: Defines every shader gets.
+#: Defines every shader gets: these, and the constants of the contract (contract.py).
 COMMON = {"LOCAL_SIZE": LOCAL_SIZE, "TABLE_WIDTH": TABLE_WIDTH,
-          "TABLE_WIDTH_LOG2": TABLE_WIDTH_LOG2}
+          "TABLE_WIDTH_LOG2": TABLE_WIDTH_LOG2, **SHADER_DEFINES}
 
 # texture units (reads)
 SKIN = {"SKIN_REST_POINTS": 0, "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,

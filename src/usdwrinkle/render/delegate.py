@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+from ..contract import COLD_START_FACTOR
 from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer
 from .passes.crush import CrushPass
@@ -19,7 +20,6 @@ from .passes.skin import SkinPass
 from .resources import MeshResources
 
 #: Relaxation from the anchored start (a shot's first frame) runs this many times longer.
-COLD_START_FACTOR = 4
 
 
 class DirtyBits:

@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contract import FIELD_FLOATS, JOINT_TEXELS, WrinkleFields
 from ..errors import UsdWrinkleError
 from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
 from .bindings import TABLE_WIDTH
 
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
-FIELD_FLOATS = 12  # per vertex: normal, wave, direction (3 texels of 4 floats)
-JOINT_TEXELS = 9  # Joint: 3 LBS matrix columns, 1 unused, real, dual, 3 scale rows
 
 
 def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
@@ -261,16 +260,11 @@ class MeshResources:
     def previous_fields(self) -> Table:
         return self.field_tables[1 - self.current_fields]
 
-    def read_fields(self) -> dict:
+    def read_fields(self) -> WrinkleFields:
         """Read back what the passes computed (the bake's single source of truth)."""
-        n = self.num_points
-        fields = self.fields.read().reshape(n, FIELD_FLOATS)
-        posed = self.posed_points.read()
-        return {"points": posed[:, :3].copy(), "normals": fields[:, 0:3].copy(),
-                "usable": fields[:, 3] > 0.5, "wave_vector": fields[:, 4:7].copy(),
-                "amplitude": fields[:, 7].copy(), "direction": fields[:, 8:11].copy(),
-                "compression": fields[:, 11].copy(), "phase": self.phase.read().copy(),
-                "anchor_phase": self.anchor_phase.read().copy()}
+        fields = self.fields.read().reshape(self.num_points, FIELD_FLOATS)
+        return WrinkleFields.from_tables(self.posed_points.read(), fields, self.phase.read(),
+                                         self.anchor_phase.read())
 
     def release(self) -> None:
         for buf in self.buffers:

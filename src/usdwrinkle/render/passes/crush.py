@@ -10,9 +10,6 @@ from ..resources import MeshResources
 from ..shaders import compute_shader
 from . import bind, groups, set_uniforms
 
-#: Floor of the compression ratio used for the wave vector: |k| <= 2 pi / (W r_min).
-MIN_RATIO = 0.05
-
 
 class CrushPass:
     def __init__(self, ctx):
@@ -40,7 +37,7 @@ class CrushPass:
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
-                                   "u_min_ratio": MIN_RATIO, **res.topology_uniforms})
+                                   **res.topology_uniforms})
         self._face_normals(res)
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,

@@ -3,13 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...contract import MAX_LIGHTS
 from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import program
 from . import bind, gl_matrix, set_uniforms
 
-MAX_LIGHTS = 8
 FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
 
 

@@ -3,10 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...contract import JOINT_TEXELS
 from ...scene.records import MeshFrame
 from ...scene.skel import dual_quaternions
 from .. import bindings
-from ..resources import JOINT_TEXELS, MeshResources, vec4
+from ..resources import MeshResources, vec4
 from ..shaders import compute_shader
 from . import bind, gl_matrix, groups, set_uniforms
 

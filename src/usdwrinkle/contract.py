@@ -1,0 +1,111 @@
+"""The Python <-> GLSL contract: every constant that both sides use, written once.
+
+The shaders get these as ``#define``s (``SHADER_DEFINES``, injected by render/shaders.py
+with the binding units of render/bindings.py); the numpy references, the GPU resources
+and the layer writer import the same names. ``tests/test_contract.py`` fails when a
+shader uses a name that neither defines.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Floor of the compression ratio r: |k| <= 2 pi / (W * MIN_RATIO) (crush).
+MIN_RATIO = 0.05
+#: A tiny floor on the relax weights keeps arg() defined where no vertex is wrinkled.
+WEIGHT_FLOOR = 1e-7
+#: A frame with no phase history starts from the material-anchored phase and relaxes
+#: this many times longer (render/delegate.py, reference/relax.py).
+COLD_START_FACTOR = 4
+#: Lights the draw pass sums (more are ignored, with a warning).
+MAX_LIGHTS = 8
+#: Texels per joint in the joints table (skin.glsl documents the layout).
+JOINT_TEXELS = 9
+
+#: Per-vertex fields table (crush writes it; relax and draw read it): FIELD_TEXELS RGBA
+#: texels per vertex, in this order:
+#:   normal     xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
+#:   wave       xyz: wave vector k (local space, posed); w: amplitude h
+#:   direction  xyz: rest-space unit direction d of strongest compression; w: r
+FIELD_TEXELS = 3
+FIELD_NORMAL_TEXEL = 0
+FIELD_WAVE_TEXEL = 1
+FIELD_DIRECTION_TEXEL = 2
+#: floats per vertex in the fields table
+FIELD_FLOATS = 4 * FIELD_TEXELS
+
+
+def glsl_literal(value) -> str:
+    """A Python number as a GLSL literal (floats keep their decimal point)."""
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, int):
+        return str(value)
+    text = repr(float(value))
+    return text if any(c in text for c in ".en") else text + ".0"
+
+
+#: What every shader gets as #defines.
+SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
+    ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
+    ("JOINT_TEXELS", JOINT_TEXELS), ("FIELD_TEXELS", FIELD_TEXELS),
+    ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
+    ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL))}
+
+
+@dataclass(frozen=True)
+class WrinkleFields:
+    """One mesh's computed wrinkle fields, read back from the GPU (``read_fields``): what
+    the bake writes and the tests compare with the numpy references.
+
+    Attributes
+    ----------
+    points : (n, 3) float32
+        Posed points (local space).
+    normals : (n, 3) float32
+        Posed unit normals (local space).
+    usable : (n,) bool
+        The vertex's 1-ring could be fitted.
+    wave_vector : (n, 3) float32
+        Wave vector k (local space, posed).
+    amplitude : (n,) float32
+        Amplitude h (scene units).
+    direction : (n, 3) float32
+        Rest-space unit direction of strongest compression.
+    compression : (n,) float32
+        Compression ratio r in [MIN_RATIO, 1].
+    phase : (n,) float32
+        Relaxed phase (radians).
+    anchor_phase : (n,) float32
+        The material-anchored phase crush starts relax from.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    usable: np.ndarray
+    wave_vector: np.ndarray
+    amplitude: np.ndarray
+    direction: np.ndarray
+    compression: np.ndarray
+    phase: np.ndarray
+    anchor_phase: np.ndarray
+
+    @classmethod
+    def from_tables(cls, posed: np.ndarray, fields: np.ndarray, phase: np.ndarray,
+                    anchor_phase: np.ndarray) -> WrinkleFields:
+        """From the read-back tables: posed (n, 4), fields (n * FIELD_TEXELS, 4), phases."""
+        texels = np.asarray(fields, np.float32).reshape(-1, FIELD_TEXELS, 4)
+        normal = texels[:, FIELD_NORMAL_TEXEL]
+        wave = texels[:, FIELD_WAVE_TEXEL]
+        direction = texels[:, FIELD_DIRECTION_TEXEL]
+        return cls(points=posed[:, :3].copy(), normals=normal[:, :3].copy(),
+                   usable=normal[:, 3] > 0.5, wave_vector=wave[:, :3].copy(),
+                   amplitude=wave[:, 3].copy(), direction=direction[:, :3].copy(),
+                   compression=direction[:, 3].copy(), phase=phase.copy(),
+                   anchor_phase=anchor_phase.copy())
+
+    def arrays(self) -> dict:
+        """Name -> array, in field order."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}

@@ -1,0 +1,75 @@
+"""The Python <-> GLSL contract is written once (src/usdwrinkle/contract.py and
+render/bindings.py): every upper-case name a shader uses is defined by Python or by the
+shader itself, and no shader re-types a Python constant."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from usdwrinkle import contract
+from usdwrinkle.contract import FIELD_TEXELS, WrinkleFields
+from usdwrinkle.render import bindings
+
+SHADERS = Path(__file__).resolve().parents[1] / "shaders"
+NAME = re.compile(r"\b([A-Z][A-Z0-9_]*[A-Z0-9])\b")
+DEFINE = re.compile(r"^\s*#\s*(?:define|ifndef|ifdef)\s+([A-Za-z_]\w*)", re.M)
+CONST = re.compile(r"\bconst\s+\w+\s+([A-Z][A-Z0-9_]*)\s*=")
+#: upper-case local variables and parameters (N0, T1: the method's symbols)
+LOCAL = re.compile(r"\b(?:float|int|uint|bool|[iu]?vec[234]|mat[234](?:x[234])?)\s+"
+                   r"([A-Z][A-Z0-9_]*)\b(?!\s*\()")
+#: what the shaders use without defining: GLSL's own names and the stage switches
+#: that render/shaders.py and the passes add per program
+GLSL = {"GL_ARB_shader_draw_parameters"}
+STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
+                  "STEP"}
+PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.CRUSH, bindings.RELAX,
+                             bindings.DRAW) for name in table}
+
+
+def shader_files():
+    return sorted(SHADERS.rglob("*.glsl"))
+
+
+def strip_comments(text: str) -> str:
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    return re.sub(r"//[^\n]*", "", text)
+
+
+def test_every_shader_name_is_defined_once():
+    own = set()
+    for path in shader_files():
+        text = strip_comments(path.read_text())
+        own |= set(DEFINE.findall(text)) | set(CONST.findall(text)) | set(LOCAL.findall(text))
+    retyped = own & PYTHON
+    assert not retyped, f"shaders define names that Python injects: {sorted(retyped)}"
+    for path in shader_files():
+        text = strip_comments(path.read_text())
+        used = set(NAME.findall(text)) - own - PYTHON - GLSL - STAGE_SWITCHES
+        assert not used, f"{path.name} uses names that nothing defines: {sorted(used)}"
+
+
+def test_the_contract_reaches_every_shader():
+    for name in ("MIN_RATIO", "WEIGHT_FLOOR", "MAX_LIGHTS", "JOINT_TEXELS", "FIELD_TEXELS"):
+        assert name in bindings.COMMON
+        assert float(bindings.COMMON[name]) == float(getattr(contract, name))
+    assert contract.glsl_literal(0.05) == "0.05" and contract.glsl_literal(1e-7) == "1e-07"
+    assert contract.glsl_literal(4.0) == "4.0" and contract.glsl_literal(8) == "8"
+
+
+def test_fields_follow_the_layout():
+    n = 5
+    table = np.arange(n * FIELD_TEXELS * 4, dtype=np.float32).reshape(-1, 4)
+    posed = np.arange(n * 4, dtype=np.float32).reshape(n, 4)
+    fields = WrinkleFields.from_tables(posed, table, np.zeros(n, np.float32),
+                                       np.ones(n, np.float32))
+    texel = table.reshape(n, FIELD_TEXELS, 4)
+    np.testing.assert_array_equal(fields.wave_vector, texel[:, contract.FIELD_WAVE_TEXEL, :3])
+    np.testing.assert_array_equal(fields.amplitude, texel[:, contract.FIELD_WAVE_TEXEL, 3])
+    np.testing.assert_array_equal(fields.compression,
+                                  texel[:, contract.FIELD_DIRECTION_TEXEL, 3])
+    np.testing.assert_array_equal(fields.normals, texel[:, contract.FIELD_NORMAL_TEXEL, :3])
+    np.testing.assert_array_equal(fields.points, posed[:, :3])
+    assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
+                                     "direction", "compression", "phase", "anchor_phase"]
