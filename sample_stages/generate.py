@@ -17,6 +17,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from usdwrinkle import WrinkleAPI, profile_preset
 from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
+from usdwrinkle.colour import srgb_encode
 
 FRAMES = (1, 24)
 
@@ -159,7 +160,7 @@ def make_texture(path):
     img = base * (1 - 0.45 * stripe_a) * (1 - 0.45 * stripe_b)
     img = img + np.array([0.9, 0.85, 0.6]) * ((np.abs(np.sin(u * 2 * np.pi * 32)) > 0.97)
                                               [..., None] * 0.5)
-    img = np.clip(img, 0, 1) ** (1 / 2.2)
+    img = srgb_encode(img)
     spec = oiio.ImageSpec(size, size, 3, "uint8")
     out = oiio.ImageOutput.create(path)
     out.open(path, spec)

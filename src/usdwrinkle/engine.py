@@ -10,13 +10,13 @@ import time
 
 import numpy as np
 
-from .errors import UsdWrinkleError
+from .errors import UsdWrinkleError, print_warning
 from .limits import MAX_HISTORY_FRAMES
 from .render.buffers import AOVS
 from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
 from .scene.records import FrameRecord
-from .scene.stage import StageSceneDelegate, _warn_stderr
+from .scene.stage import StageSceneDelegate
 
 AOV_NAMES = tuple(AOVS)
 
@@ -45,7 +45,7 @@ class WrinkleEngine:
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 camera: str | None = None, warn=_warn_stderr, ctx=None, profile: bool = False,
+                 camera: str | None = None, warn=print_warning, ctx=None, profile: bool = False,
                  history_start: float | None = None, use_baked: bool = True):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, warn=warn,
@@ -195,7 +195,3 @@ def image_size(scene, camera: str | None, width: int, height: int | None,
     aspect = scene.camera_aspect(camera, frame) or 16.0 / 9.0
     return width, max(1, int(round(width / aspect)))
 
-
-def format_frame(frame: float) -> str:
-    return "default" if math.isnan(frame) else (f"{int(frame)}" if float(frame).is_integer()
-                                                else f"{frame:g}")

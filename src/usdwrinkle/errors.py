@@ -25,10 +25,20 @@ class UsdWrinkleError(Exception):
             if self.attribute:
                 where += "." + self.attribute
         if self.frame is not None:
-            frame = int(self.frame) if float(self.frame).is_integer() else self.frame
+            from .timecode import format_frame
+
+            frame = format_frame(self.frame)
             where = f"{where} at frame {frame}" if where else f"at frame {frame}"
         what = " ".join(str(self.what).split())  # one line, whatever a library said
         return f"{what} ({where})" if where else what
+
+
+def print_warning(message: str) -> None:
+    """The one way a warning reaches the user: ``usdwrinkle: warning: <message>`` on stderr
+    (cli/common.Reporter adds de-duplication and --quiet on top)."""
+    import sys
+
+    print(f"usdwrinkle: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
 
 class GLContextError(UsdWrinkleError):

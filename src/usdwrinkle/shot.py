@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .errors import UsdWrinkleError
+from .timecode import format_frame
 
 
 @dataclass(frozen=True)
@@ -120,5 +121,5 @@ def frame_spec_text(frames: list[float]) -> str:
     """The frames of a bake for its layer's metadata, when no --frames named them:
     ``first:last``, or ``default``."""
     if not frames or math.isnan(frames[0]):
-        return "default"
-    return f"{frames[0]:g}:{frames[-1]:g}"
+        return format_frame(float("nan"))
+    return f"{format_frame(frames[0])}:{format_frame(frames[-1])}"

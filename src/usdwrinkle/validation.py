@@ -20,6 +20,7 @@ from .limits import (
     MAX_RELAX_ITERATIONS,
     MAX_WORLD_COORDINATE,
 )
+from .scene.values import static_value
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"
@@ -79,12 +80,7 @@ def refuse(findings: list[Finding]) -> None:
 
 def point_count(prim, time=None) -> int | None:
     """The mesh's point count at ``time`` (default time, else its first sample)."""
-    time = Usd.TimeCode.Default() if time is None else time
-    points = UsdGeom.Mesh(prim).GetPointsAttr().Get(time)
-    if points is None:
-        attr = UsdGeom.Mesh(prim).GetPointsAttr()
-        samples = attr.GetTimeSamples()
-        points = attr.Get(samples[0]) if samples else None
+    points = static_value(UsdGeom.Mesh(prim).GetPointsAttr(), time)
     return None if points is None else len(points)
 
 

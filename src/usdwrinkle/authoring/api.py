@@ -16,7 +16,7 @@ from pxr import Sdf, Usd, UsdGeom, Vt
 
 from .. import schema
 from ..errors import UsdWrinkleError
-from ..scene.params import derive_gradient
+from ..profiles import derive_gradient
 from ..validation import (
     check_amplitude_scale,
     check_profile,

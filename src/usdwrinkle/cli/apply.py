@@ -93,8 +93,8 @@ def parse_q(text: str):
 
 
 def read_profile(spec: str) -> np.ndarray:
-    from ..authoring.profiles import PRESETS, profile_from_curve, profile_preset
     from ..errors import UsdWrinkleError
+    from ..profiles import PRESETS, profile_from_curve, profile_preset
 
     if spec in PRESETS:
         return profile_preset(spec)

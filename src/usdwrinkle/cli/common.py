@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 import sys
 
-from ..errors import UsdWrinkleError
+from ..errors import UsdWrinkleError, print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -61,7 +61,7 @@ class Reporter:
         if message in self.seen:
             return
         self.seen.add(message)
-        print(f"usdwrinkle: warning: {message}", file=sys.stderr)
+        print_warning(message)
 
     def progress(self, items, desc: str):
         if self.quiet or len(items) < 2:

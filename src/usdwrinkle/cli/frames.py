@@ -8,6 +8,7 @@ from pxr import UsdUtils
 
 from ..errors import UsdWrinkleError
 from ..limits import MAX_FRAMES, MAX_TIME_CODE
+from ..timecode import format_frame
 
 _HASHES = re.compile(r"#+")
 
@@ -77,7 +78,7 @@ def frame_text(frame: float, width: int = 4) -> str:
     """A frame number as it appears in a file name: zero-padded, sub-frames to
     SUBFRAME_DECIMALS decimals (rounded, so 1.9996 names 0002.000), NaN as 'default'."""
     if math.isnan(frame):
-        return "default"
+        return format_frame(frame)
     rounded = round(frame, SUBFRAME_DECIMALS)
     sign = "-" if rounded < 0 else ""
     whole, fraction = divmod(abs(rounded), 1.0)

@@ -50,9 +50,10 @@ def _one_line_warnings() -> None:
     """Python warnings (numpy's RuntimeWarning and the like) as our one-line warnings."""
     import warnings
 
+    from ..errors import print_warning
+
     def show(message, category, filename, lineno, file=None, line=None):
-        print(f"usdwrinkle: warning: {' '.join(str(message).split())} "
-              f"({category.__name__})", file=sys.stderr)
+        print_warning(f"{message} ({category.__name__})")
 
     warnings.showwarning = show
 

@@ -81,7 +81,7 @@ def check_render_args(args) -> None:
 def summary(written: int, width: int, height: int, output: str, frames: list[float],
             elapsed: float, baked: list[str], extra: str = "") -> str:
     """The closing line of a render, serial or on a farm."""
-    from ..engine import format_frame
+    from ..timecode import format_frame
 
     last = f" .. {format_frame(frames[-1])}" if len(frames) > 1 else ""
     text = (f"usdwrinkle: wrote {written} frame(s) {width}x{height} to "

@@ -1,1 +1,2 @@
-"""Outputs: images (OpenImageIO) and, later, USD layers. Every file is written atomically."""
+"""Outputs: images (OpenImageIO) and USD layers of baked wrinkle fields. Every file is
+written atomically (atomic.py), and only once it is complete."""

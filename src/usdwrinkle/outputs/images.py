@@ -12,6 +12,7 @@ import tempfile
 
 import numpy as np
 
+from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
 from .atomic import atomic_path
 
@@ -23,11 +24,6 @@ EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 def one_line(text: str) -> str:
     """A library's message (libpng, OpenEXR: often several lines) as one line."""
     return " ".join(str(text).split())
-
-
-def srgb_encode(linear: np.ndarray) -> np.ndarray:
-    c = np.clip(linear, 0.0, 1.0)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
 
 
 def aovs_for(path: str) -> tuple:

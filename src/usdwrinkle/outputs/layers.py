@@ -13,6 +13,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
 
 from .. import __version__
+from ..colour import srgb_decode
 from ..contract import MIN_RATIO
 from ..errors import UsdWrinkleError
 from .atomic import atomic_path
@@ -38,12 +39,12 @@ _VIRIDIS = np.array([
 
 
 def viridis(values: np.ndarray) -> np.ndarray:
-    """Map [0, 1] to viridis (linear-ish sRGB stops, as displayColor expects)."""
+    """Map [0, 1] to viridis: sRGB stops, decoded to linear as displayColor expects."""
     t = np.clip(np.nan_to_num(np.asarray(values, np.float64)), 0, 1) * (len(_VIRIDIS) - 1)
     low = np.floor(t).astype(int).clip(0, len(_VIRIDIS) - 2)
     frac = (t - low)[:, None]
     rgb = _VIRIDIS[low] * (1 - frac) + _VIRIDIS[low + 1] * frac
-    return (rgb ** 2.2).astype(np.float32)  # displayColor is linear
+    return srgb_decode(rgb).astype(np.float32)  # displayColor is linear
 
 
 def display_values(field: str, fields: dict, params) -> np.ndarray:

@@ -4,8 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import MIN_RATIO
-from ..render.resources import rest_tangents
-from ..scene.topology import Topology, vertex_normals
+from ..scene.topology import Topology, rest_tangents, vertex_normals
 
 
 def minimal_rotation(a, b, v, flip_axis):

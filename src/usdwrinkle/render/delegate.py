@@ -162,11 +162,10 @@ class RenderDelegate:
 
     def framebuffer(self, width: int, height: int, samples: int = 4) -> Framebuffer:
         fb = self._framebuffer
-        if fb is None or fb.size != (width, height) or fb.requested_samples != samples:
+        if fb is None or fb.size != (width, height) or fb.samples != max(1, samples):
             if fb is not None:
                 fb.release()
             fb = self._framebuffer = Framebuffer(self.ctx, width, height, samples)
-            fb.requested_samples = samples
         return fb
 
     def release(self) -> None:

@@ -18,6 +18,7 @@ from ..contract import FIELD_FLOATS, JOINT_TEXELS, WrinkleFields
 from ..errors import UsdWrinkleError
 from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
+from ..scene.topology import rest_tangents
 from .bindings import TABLE_WIDTH
 
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
@@ -29,18 +30,6 @@ def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
     out[:, :3] = points
     out[:, 3] = w
     return out
-
-
-def rest_tangents(normals: np.ndarray) -> np.ndarray:
-    """A deterministic unit tangent orthogonal to each rest normal, (n, 3) float32."""
-    normals = np.asarray(normals, np.float64)
-    axis = np.zeros_like(normals)
-    use_x = np.abs(normals[:, 0]) < 0.9
-    axis[use_x, 0] = 1.0
-    axis[~use_x, 1] = 1.0
-    tangent = axis - np.sum(axis * normals, axis=1, keepdims=True) * normals
-    length = np.linalg.norm(tangent, axis=1, keepdims=True)
-    return np.where(length > 1e-12, tangent / np.maximum(length, 1e-12), axis).astype(np.float32)
 
 
 def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:

@@ -23,6 +23,7 @@ import numpy as np
 from pxr import Usd
 
 from ..errors import UsdWrinkleError
+from ..timecode import format_frame
 
 #: baked primvar -> (field, components). The first three are required.
 BAKED_PRIMVARS = {
@@ -61,10 +62,6 @@ class BakedFields:
     compression: np.ndarray
 
 
-def _frame_text(frame: float) -> str:
-    return f"{int(frame)}" if float(frame).is_integer() else f"{frame:g}"
-
-
 class BakedSource:
     """The baked fields of one mesh prim, read frame by frame.
 
@@ -99,7 +96,7 @@ class BakedSource:
     def range_text(self) -> str:
         if self.static:
             return "default time"
-        return f"{_frame_text(self.times[0])}..{_frame_text(self.times[-1])}"
+        return f"{format_frame(self.times[0])}..{format_frame(self.times[-1])}"
 
     def covers(self, frame: float) -> bool:
         return self.static or (not math.isnan(frame) and float(frame) in self._sampled)

@@ -5,6 +5,7 @@ import numpy as np
 from pxr import Usd, UsdGeom
 
 from .. import schema
+from ..profiles import cosine_profile, derive_gradient
 from ..validation import (
     check_amplitude_scale,
     check_profile,
@@ -16,18 +17,6 @@ from ..validation import (
 )
 from .records import WrinkleParams
 from .topology import Topology, mean_edge_length
-
-
-def cosine_profile(samples: int = schema.PROFILE_SAMPLES) -> np.ndarray:
-    theta = np.arange(samples) * (2 * np.pi / samples)
-    return np.cos(theta).astype(np.float32)
-
-
-def derive_gradient(height: np.ndarray) -> np.ndarray:
-    """dH/dtheta of a periodic profile sampled uniformly over [0, 2pi)."""
-    height = np.asarray(height, dtype=np.float64)
-    step = 2 * np.pi / len(height)
-    return ((np.roll(height, -1) - np.roll(height, 1)) / (2 * step)).astype(np.float32)
 
 
 def _get(prim: Usd.Prim, name: str, time):

@@ -78,7 +78,6 @@ class MaterialRecord:
     corner_st: np.ndarray | None = None
     texture_scale: np.ndarray = field(default_factory=lambda: np.ones(4, np.float32))
     texture_bias: np.ndarray = field(default_factory=lambda: np.zeros(4, np.float32))
-    wrap_repeat: bool = True
 
 
 @dataclass(frozen=True)
@@ -94,7 +93,6 @@ class MeshRecord:
     wrinkled: bool
     params: WrinkleParams
     material: MaterialRecord
-    double_sided: bool = True
     #: the frames of the mesh's baked wave fields ("1..24", "default time"), or None:
     #: a render draws them instead of running crush and relax (scene/baked.py)
     baked_range: str | None = None

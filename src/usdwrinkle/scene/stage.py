@@ -10,13 +10,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import sys
 
 import numpy as np
 from pxr import Tf, Usd, UsdGeom
 
 from .. import schema
-from ..errors import UsdWrinkleError
+from ..errors import UsdWrinkleError, print_warning
 from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE, MAX_WORLD_COORDINATE
 from . import camera as camera_mod
 from .baked import BakedSource, find_baked
@@ -28,12 +27,9 @@ from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
 from .skel import SkelBindings, sample_skin, skin_data
 from .topology import Topology, build_topology, vertex_normals
+from .values import static_value
 
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
-
-
-def _warn_stderr(message: str) -> None:
-    print(f"usdwrinkle: warning: {message}", file=sys.stderr)
 
 
 #: root layer identifier -> the StageInputs of stages opened by open_stage
@@ -49,7 +45,7 @@ def open_stage(path: str, warn=None) -> Usd.Stage:
     inputs = scan_inputs(path)
     root = inputs.layers[0]
     try:
-        with usd_diagnostics(warn or _warn_stderr):
+        with usd_diagnostics(warn or print_warning):
             stage = Usd.Stage.Open(root)
     except Tf.ErrorException as exc:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: "
@@ -89,10 +85,7 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
     point_cached = not skinned and (points_attr.GetNumTimeSamples() > 0 or has_rest)
     if has_rest:
         return point_cached, rest_primvar.ComputeFlattened(default), "primvars:rest"
-    value = points_attr.Get(default)
-    if value is None and points_attr.GetNumTimeSamples():
-        value = points_attr.Get(points_attr.GetTimeSamples()[0])
-    return point_cached, value, "points"
+    return point_cached, static_value(points_attr), "points"
 
 
 def stage_frames(stage: Usd.Stage) -> list[float]:
@@ -124,14 +117,8 @@ def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
     mesh = UsdGeom.Mesh(prim)
     path = str(prim.GetPath())
 
-    def first(attr):
-        value = attr.Get(Usd.TimeCode.Default())
-        if value is None and attr.GetNumTimeSamples():
-            value = attr.Get(attr.GetTimeSamples()[0])
-        return value
-
-    counts = first(mesh.GetFaceVertexCountsAttr())
-    indices = first(mesh.GetFaceVertexIndicesAttr())
+    counts = static_value(mesh.GetFaceVertexCountsAttr())
+    indices = static_value(mesh.GetFaceVertexIndicesAttr())
     if counts is None or indices is None or len(counts) == 0:
         return None
     holes = mesh.GetHoleIndicesAttr().Get(Usd.TimeCode.Default())
@@ -189,7 +176,7 @@ class StageSceneDelegate:
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 warn=_warn_stderr, use_baked: bool = True):
+                 warn=print_warning, use_baked: bool = True):
         self.stage = open_stage(stage) if isinstance(stage, (str, os.PathLike)) else stage
         self.all_meshes = all_meshes
         self.warn = warn
@@ -227,8 +214,7 @@ class StageSceneDelegate:
                                   f"handles fewer than {MAX_POINTS:,} per mesh", path,
                                   rest_attr_name)
         rest = _finite_points(rest_value, path, rest_attr_name)
-        first_points = points_attr.Get(points_attr.GetTimeSamples()[0]) \
-            if points_attr.GetNumTimeSamples() else points_attr.Get(default)
+        first_points = static_value(points_attr)
         if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
                                   "primvars:rest")
@@ -253,11 +239,10 @@ class StageSceneDelegate:
         wrinkled = self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None
         params = read_params(prim, rest, topology, default, relax_iterations)
         material = read_material(prim, topology, default, self.warn)
-        double_sided = bool(mesh.GetDoubleSidedAttr().Get())
         if baked is not None:
             self.baked[path] = baked
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
-                          point_cached, wrinkled, params, material, double_sided,
+                          point_cached, wrinkled, params, material,
                           baked.range_text() if baked is not None else None)
 
     # -- time ---------------------------------------------------------------------------
@@ -305,9 +290,7 @@ class StageSceneDelegate:
         points = None
         if record.point_cached:
             attr = UsdGeom.Mesh(prim).GetPointsAttr()
-            value = attr.Get(time)
-            if value is None and time.IsDefault() and attr.GetNumTimeSamples():
-                value = attr.Get(attr.GetTimeSamples()[0])  # only samples: the first one
+            value = static_value(attr) if time.IsDefault() else attr.Get(time)
             if value is None:
                 raise UsdWrinkleError("points have no value", path, "points", frame)
             points = _finite_points(value, path, "points", time)

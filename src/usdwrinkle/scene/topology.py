@@ -222,6 +222,18 @@ def vertex_normals(points: np.ndarray, topology: Topology) -> np.ndarray:
     return np.where(length > 1e-30, normals / np.maximum(length, 1e-30), 0.0).astype(np.float32)
 
 
+def rest_tangents(normals: np.ndarray) -> np.ndarray:
+    """A deterministic unit tangent orthogonal to each rest normal, (n, 3) float32."""
+    normals = np.asarray(normals, np.float64)
+    axis = np.zeros_like(normals)
+    use_x = np.abs(normals[:, 0]) < 0.9
+    axis[use_x, 0] = 1.0
+    axis[~use_x, 1] = 1.0
+    tangent = axis - np.sum(axis * normals, axis=1, keepdims=True) * normals
+    length = np.linalg.norm(tangent, axis=1, keepdims=True)
+    return np.where(length > 1e-12, tangent / np.maximum(length, 1e-12), axis).astype(np.float32)
+
+
 def mean_edge_length(points: np.ndarray, topology: Topology) -> float:
     """Mean length of the unique edges; 0 for a mesh without edges."""
     edges = topology.edges

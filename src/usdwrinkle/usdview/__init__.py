@@ -99,6 +99,7 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
     from ..outputs.images import write_image
+    from ..timecode import format_frame
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
@@ -106,7 +107,7 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     camera = str(camera_prim.GetPath()) if camera_prim else None
     outdir = outdir or tempfile.gettempdir()
     stem = os.path.splitext(os.path.basename(stage.GetRootLayer().identifier))[0] or "stage"
-    tag = "default" if math.isnan(frame) else f"{frame:g}"
+    tag = format_frame(frame)
     paths = [os.path.join(outdir, f"usdwrinkle_{stem}.{tag}{ext}") for ext in (".exr", ".png")]
     try:
         engine = WrinkleEngine(stage, camera=camera, warn=lambda m: None, ctx=ctx)

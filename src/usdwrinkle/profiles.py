@@ -1,4 +1,8 @@
-"""Wrinkle profile presets: one period of the height profile H over [0, 2pi).
+"""Wrinkle profiles: one period of the height profile H over [0, 2pi), and its gradient.
+
+The one profiles module: the scene delegate's default (the cosine), the presets that
+``apply --profile`` and the Python API author, curves resampled to profiles, and the
+gradient derived from a height profile.
 
 Every preset peaks at 1 and dips to -1 like the cosine, so the amplitude keeps its
 meaning (h = s (W/4) sqrt(1 - r^2) is the crest height). Gradients are derived.
@@ -7,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..schema import PROFILE_SAMPLES
+from .errors import UsdWrinkleError
+from .schema import PROFILE_SAMPLES
 
 _THETA = np.arange(PROFILE_SAMPLES) * (2 * np.pi / PROFILE_SAMPLES)
 
@@ -22,6 +26,18 @@ def _normalise(values: np.ndarray) -> np.ndarray:
 
 def _cosine():
     return np.cos(_THETA)
+
+
+def cosine_profile() -> np.ndarray:
+    """The default height profile (no wrinkle:heightProfile): (PROFILE_SAMPLES,) float32."""
+    return _cosine().astype(np.float32)
+
+
+def derive_gradient(height: np.ndarray) -> np.ndarray:
+    """dH/dtheta of a periodic profile sampled uniformly over [0, 2pi)."""
+    height = np.asarray(height, dtype=np.float64)
+    step = 2 * np.pi / len(height)
+    return ((np.roll(height, -1) - np.roll(height, 1)) / (2 * step)).astype(np.float32)
 
 
 def _sharp():
