@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import fnmatch
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -133,10 +134,79 @@ def open_override_layer(path: str):
     return layer
 
 
-def run(args) -> int:
-    from pxr import Usd, UsdGeom
+@dataclass
+class MeshEdit:
+    """What ``apply`` will author on one mesh (every value already checked)."""
 
-    from ..authoring import WrinkleAPI
+    prim: object
+    q: np.ndarray | None = None
+    width: np.ndarray | None = None
+    clear_q: bool = False
+    amplitude_scale: float | None = None
+    profile: np.ndarray | None = None
+
+
+def check_args(args) -> None:
+    """Refuse option combinations before the stage is read."""
+    from ..errors import UsdWrinkleError
+
+    q_sources = [args.q, args.q_from_texture, args.q_from_primvar, args.clear_q]
+    if sum(bool(s) for s in q_sources) > 1:
+        raise UsdWrinkleError("choose one of --q, --q-from-texture, --q-from-primvar, --clear-q")
+    if args.width_from_texture and args.width is None:
+        raise UsdWrinkleError("--width-from-texture scales --width: give --width too")
+
+
+def edit_target(args, stage):
+    """(stage to edit, layer that receives the edits): the root layer, or the -o layer."""
+    from pxr import Usd
+
+    from ..errors import UsdWrinkleError
+    from ..outputs.layers import check_layer_path
+    from .common import refuse_overwriting_inputs
+
+    if not args.output:
+        target = stage.GetRootLayer()
+        if not target.realPath or target.realPath.lower().endswith(".usdz"):
+            raise UsdWrinkleError(f"cannot edit '{args.stage}' in place (a .usdz package); "
+                                  "use -o LAYER")
+        return stage, target
+    check_layer_path(args.output)
+    try:
+        refuse_overwriting_inputs(args.stage, [args.output], stage)
+    except UsdWrinkleError:
+        raise UsdWrinkleError(f"-o '{args.output}' is an input of the stage; leave -o out "
+                              "to edit the root layer") from None
+    override = open_override_layer(args.output)
+    stage = Usd.Stage.Open(stage.GetRootLayer(), override)
+    stage.SetEditTarget(Usd.EditTarget(override))
+    return stage, override
+
+
+def target_meshes(stage, patterns: list[str]) -> list:
+    """The Mesh prims named by ``patterns``; an error for a non-mesh named literally, or a
+    mesh inside an instance."""
+    from pxr import UsdGeom
+
+    from ..errors import UsdWrinkleError
+
+    prims = match_prims(stage, patterns)
+    meshes = [p for p in prims if p.IsA(UsdGeom.Mesh)]
+    if not meshes:
+        raise UsdWrinkleError(f"no Mesh among the prims named ({', '.join(patterns)})")
+    literal = [p for p in prims if not p.IsA(UsdGeom.Mesh) and str(p.GetPath()) in patterns]
+    if literal:
+        raise UsdWrinkleError("WrinkleAPI applies to Mesh prims only", str(literal[0].GetPath()))
+    for prim in meshes:
+        if prim.IsInstanceProxy():
+            raise UsdWrinkleError("a mesh inside an instance cannot be edited; edit its "
+                                  "prototype's source", str(prim.GetPath()))
+    return meshes
+
+
+def plan_edits(args, meshes: list) -> list[MeshEdit]:
+    """Compute and check every value before the first edit (nothing is authored here), so
+    that a refusal writes nothing."""
     from ..authoring.paint import (
         MeshSurface,
         q_from_flow_map,
@@ -144,104 +214,86 @@ def run(args) -> int:
         q_uniform,
         width_from_texture,
     )
-    from ..errors import UsdWrinkleError
-    from ..outputs.atomic import atomic_path, check_writable
-    from ..outputs.layers import check_layer_path
-    from ..scene.stage import open_stage
-    from ..schema import require_schema
     from ..validation import check_amplitude_scale, check_q, check_width, point_count, refuse
-    from .common import refuse_overwriting_inputs
 
-    require_schema()
-    q_sources = [args.q, args.q_from_texture, args.q_from_primvar, args.clear_q]
-    if sum(bool(s) for s in q_sources) > 1:
-        raise UsdWrinkleError("choose one of --q, --q-from-texture, --q-from-primvar, --clear-q")
-    if args.width_from_texture and args.width is None:
-        raise UsdWrinkleError("--width-from-texture scales --width: give --width too")
     q_spec = parse_q(args.q) if args.q else None
     profile = read_profile(args.profile) if args.profile else None
-
-    stage = open_stage(args.stage)
-    if args.output:
-        check_layer_path(args.output)
-        try:
-            refuse_overwriting_inputs(args.stage, [args.output], stage)
-        except UsdWrinkleError:
-            raise UsdWrinkleError(f"-o '{args.output}' is an input of the stage; leave -o out "
-                                  "to edit the root layer") from None
-        override = open_override_layer(args.output)
-        stage = Usd.Stage.Open(stage.GetRootLayer(), override)
-        stage.SetEditTarget(Usd.EditTarget(override))
-        target = override
-    else:
-        target = stage.GetRootLayer()
-        if not target.realPath or target.realPath.lower().endswith(".usdz"):
-            raise UsdWrinkleError(f"cannot edit '{args.stage}' in place (a .usdz package); "
-                                  "use -o LAYER")
-
-    prims = match_prims(stage, args.prim_paths)
-    meshes = [p for p in prims if p.IsA(UsdGeom.Mesh)]
-    if not meshes:
-        raise UsdWrinkleError(f"no Mesh among the prims named ({', '.join(args.prim_paths)})")
-    literal = [p for p in prims if not p.IsA(UsdGeom.Mesh) and str(p.GetPath())
-               in args.prim_paths]
-    if literal:
-        raise UsdWrinkleError("WrinkleAPI applies to Mesh prims only", str(literal[0].GetPath()))
-    for prim in meshes:
-        if prim.IsInstanceProxy():
-            raise UsdWrinkleError("a mesh inside an instance cannot be edited; edit its "
-                                  "prototype's source", str(prim.GetPath()))
-
-    # Compute and check every value before the first edit, so that a refusal writes nothing.
+    needs_surface = q_spec is not None or args.q_from_texture or args.q_from_primvar \
+        or args.width_from_texture
     plans = []
     for prim in meshes:
-        surface = MeshSurface(prim) if (q_spec is not None or args.q_from_texture
-                                        or args.q_from_primvar or args.width_from_texture) \
-            else None
-        plan = {"prim": prim}
+        surface = MeshSurface(prim) if needs_surface else None
+        plan = MeshEdit(prim, clear_q=bool(args.clear_q),
+                        amplitude_scale=args.amplitude_scale, profile=profile)
         if q_spec is not None:
-            plan["q"] = q_uniform(surface, *q_spec)
+            plan.q = q_uniform(surface, *q_spec)
         elif args.q_from_texture:
-            plan["q"] = q_from_flow_map(surface, args.q_from_texture, args.uv,
-                                        args.amount_channel)
+            plan.q = q_from_flow_map(surface, args.q_from_texture, args.uv, args.amount_channel)
         elif args.q_from_primvar:
-            plan["q"] = q_from_primvar(surface, args.q_from_primvar)
+            plan.q = q_from_primvar(surface, args.q_from_primvar)
         if args.width_from_texture:
-            plan["width"] = width_from_texture(surface, args.width_from_texture, args.width,
-                                               args.uv)
+            plan.width = width_from_texture(surface, args.width_from_texture, args.width,
+                                            args.uv)
         elif args.width is not None:
-            plan["width"] = np.array([args.width], np.float32)
-        plans.append(plan)
-    for plan in plans:
-        path = str(plan["prim"].GetPath())
-        count = point_count(plan["prim"])
+            plan.width = np.array([args.width], np.float32)
+        path, count = str(prim.GetPath()), point_count(prim)
         findings = []
-        if "q" in plan:
-            findings += check_q(plan["q"], "vertex", count, path)
-        if "width" in plan:
-            findings += check_width(plan["width"], count, path)
-        if args.amplitude_scale is not None:
-            findings += check_amplitude_scale(args.amplitude_scale, path)
+        if plan.q is not None:
+            findings += check_q(plan.q, "vertex", count, path)
+        if plan.width is not None:
+            findings += check_width(plan.width, count, path)
+        if plan.amplitude_scale is not None:
+            findings += check_amplitude_scale(plan.amplitude_scale, path)
         refuse(findings)
+        plans.append(plan)
+    return plans
+
+
+def author(plans: list[MeshEdit]) -> None:
+    """Author the planned edits on the stage's edit target (in memory)."""
+    from ..authoring import WrinkleAPI
 
     for plan in plans:
-        api = WrinkleAPI.Apply(plan["prim"])
-        if "q" in plan:
-            api.set_q(plan["q"])
-        if args.clear_q:
+        api = WrinkleAPI.Apply(plan.prim)
+        if plan.q is not None:
+            api.set_q(plan.q)
+        if plan.clear_q:
             api.clear_q()
-        if "width" in plan:
-            api.CreateWidthPrimvar(plan["width"])
-        if args.amplitude_scale is not None:
-            api.CreateAmplitudeScaleAttr(args.amplitude_scale)
-        if profile is not None:
-            api.set_profile(profile)
+        if plan.width is not None:
+            api.CreateWidthPrimvar(plan.width)
+        if plan.amplitude_scale is not None:
+            api.CreateAmplitudeScaleAttr(plan.amplitude_scale)
+        if plan.profile is not None:
+            api.set_profile(plan.profile)
 
-    # a stage reached through a symlink is edited in its real file; the link stays
-    destination = os.path.realpath(args.output or target.realPath)
+
+def export(layer, destination: str) -> None:
+    """Write the edited layer atomically; a symlinked stage is edited in its real file."""
+    from ..errors import UsdWrinkleError
+    from ..outputs.atomic import atomic_path, check_writable
+
+    destination = os.path.realpath(destination)
     check_writable([destination])
     with atomic_path(destination) as tmp:
-        if not target.Export(tmp):
+        if not layer.Export(tmp):
             raise UsdWrinkleError(f"cannot write '{destination}'")
-    print(f"usdwrinkle: applied WrinkleAPI to {len(meshes)} mesh(es) in {destination}")
+
+
+def run(args) -> int:
+    from ..scene.stage import open_stage
+    from ..schema import require_schema
+
+    require_schema()
+    check_args(args)
+    if args.q:
+        parse_q(args.q)  # a malformed --q is refused before the stage is read
+    if args.profile:
+        read_profile(args.profile)
+    stage, target = edit_target(args, open_stage(args.stage))
+    plans = plan_edits(args, target_meshes(stage, args.prim_paths))
+    author(plans)
+    destination = args.output or target.realPath
+    export(target, destination)
+    print(f"usdwrinkle: applied WrinkleAPI to {len(plans)} mesh(es) in "
+          f"{os.path.realpath(destination)}")
     return 0

@@ -86,69 +86,72 @@ def corner_values(primvar: UsdGeom.Primvar, topology: Topology, time) -> np.ndar
     return None
 
 
-def _input_value(shader: UsdShade.Shader, name: str, time):
+def _resolve(shader: UsdShade.Shader, name: str, time):
+    """An input's value, or the shader whose output feeds it: (value, source shader).
+
+    UsdShade.Input.GetValueProducingAttributes follows connections through node-graph
+    and material interface inputs to what really produces the value."""
     inp = shader.GetInput(name)
     if not inp:
         return None, None
-    sources = inp.GetConnectedSources()[0] if inp.HasConnectedSource() else []
-    if sources:
-        return None, sources[0]
-    return inp.Get(time), None
+    for attr in inp.GetValueProducingAttributes():
+        if UsdShade.Output.IsOutput(attr):
+            return None, UsdShade.Shader(attr.GetPrim())
+        return attr.Get(time), None
+    return None, None
+
+
+def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, warn):
+    """(texture pixels, corner st, scale, bias) of a UsdUVTexture, or Nones when it cannot
+    be used (with a warning: the mesh then renders untextured)."""
+    scale, _ = _resolve(tex, "scale", time)
+    bias, _ = _resolve(tex, "bias", time)
+    scale = np.ones(4, np.float32) if scale is None else np.asarray(scale, np.float32)
+    bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float32)
+    varname = "st"
+    _, reader = _resolve(tex, "st", time)
+    if reader is not None:
+        name, _ = _resolve(reader, "varname", time)
+        varname = str(name) if name else varname
+    file_value, _ = _resolve(tex, "file", time)
+    if file_value is None:
+        return None, None, scale, bias
+    if not file_value.resolvedPath:
+        warn(f"texture '{file_value.path}' not found; rendering untextured ({prim.GetPath()})")
+        return None, None, scale, bias
+    try:
+        texture = load_texture(file_value.resolvedPath)
+    except OSError as exc:
+        warn(f"{exc}; rendering untextured ({prim.GetPath()})")
+        return None, None, scale, bias
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
+    st = corner_values(primvar, topology, time) if primvar else None
+    if st is None or st.shape[-1] < 2:
+        warn(f"texture coordinates '{varname}' missing; rendering untextured "
+             f"({prim.GetPath()})")
+        return None, None, scale, bias
+    return texture, np.ascontiguousarray(st[..., :2]), scale, bias
+
+
+def _display_color(prim: Usd.Prim, time) -> np.ndarray:
+    display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
+    value = display.ComputeFlattened(time) if display and display.HasValue() else None
+    return np.asarray(value[0], np.float32) if value is not None and len(value) else \
+        DEFAULT_COLOR
 
 
 def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
-    """Resolve the bound material of a mesh into a MaterialRecord."""
-    color = None
-    texture = None
-    st = None
-    scale = np.ones(4, np.float32)
-    bias = np.zeros(4, np.float32)
+    """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
+    diffuseColor, constant or from a UsdUVTexture; else displayColor."""
     material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
-    if material:
-        shader, _, _ = material.ComputeSurfaceSource()
-        if shader and shader.GetIdAttr().Get() == "UsdPreviewSurface":
-            value, source = _input_value(shader, "diffuseColor", time)
-            if value is not None:
-                color = np.asarray(value, np.float32)
-            elif source is not None:
-                tex = UsdShade.Shader(source.source.GetPrim())
-                file_value, _ = _input_value(tex, "file", time)
-                sc, _ = _input_value(tex, "scale", time)
-                bi, _ = _input_value(tex, "bias", time)
-                scale = np.asarray(sc, np.float32) if sc is not None else scale
-                bias = np.asarray(bi, np.float32) if bi is not None else bias
-                varname = "st"
-                _, st_source = _input_value(tex, "st", time)
-                if st_source is not None:
-                    reader = UsdShade.Shader(st_source.source.GetPrim())
-                    name, _ = _input_value(reader, "varname", time)
-                    varname = str(name) if name else varname
-                resolved = file_value.resolvedPath if file_value is not None else ""
-                if file_value is not None and not resolved:
-                    warn(f"texture '{file_value.path}' not found; rendering untextured "
-                         f"({prim.GetPath()})")
-                elif resolved:
-                    try:
-                        texture = load_texture(resolved)
-                    except OSError as exc:
-                        warn(f"{exc}; rendering untextured ({prim.GetPath()})")
-                if texture is None:
-                    # Untextured means a neutral clay, not the (often black) texture fallback.
-                    color = DEFAULT_COLOR
-                if texture is not None:
-                    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
-                    st = corner_values(primvar, topology, time) if primvar else None
-                    if st is None or st.shape[-1] < 2:
-                        warn(f"texture coordinates '{varname}' missing; rendering untextured "
-                             f"({prim.GetPath()})")
-                        texture, st = None, None
-                    else:
-                        st = np.ascontiguousarray(st[..., :2])
-                if texture is not None and color is None:
-                    color = np.ones(3, np.float32)
-    if color is None:
-        display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
-        value = display.ComputeFlattened(time) if display and display.HasValue() else None
-        color = np.asarray(value[0], np.float32) if value is not None and len(value) else \
-            DEFAULT_COLOR
+    shader = material.ComputeSurfaceSource()[0] if material else None
+    if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
+        return MaterialRecord(np.asarray(_display_color(prim, time), np.float32)[:3])
+    value, source = _resolve(shader, "diffuseColor", time)
+    if source is None:
+        color = _display_color(prim, time) if value is None else value
+        return MaterialRecord(np.asarray(color, np.float32)[:3])
+    texture, st, scale, bias = _texture(prim, source, topology, time, warn)
+    # untextured means a neutral clay, not the (often black) texture fallback
+    color = DEFAULT_COLOR if texture is None else np.ones(3, np.float32)
     return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias)
