@@ -16,6 +16,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from usdwrinkle import WrinkleAPI, profile_preset
+from usdwrinkle.authoring.builders import grid_faces
 from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
 from usdwrinkle.colour import srgb_encode
 
@@ -134,18 +135,6 @@ def rig(stage, root_path, mesh, joints, bind_xforms, joint_indices, joint_weight
         Vt.FloatArray.FromNumpy(np.asarray(joint_weights, np.float32).ravel()))
     binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1.0))
     return skel, anim
-
-
-def grid_faces(rows, cols, wrap_cols=False):
-    faces = []
-    cc = cols if wrap_cols else cols - 1
-    for r in range(rows - 1):
-        for c in range(cc):
-            a = r * cols + c
-            b = r * cols + (c + 1) % cols
-            faces.append([a, b, b + cols, a + cols])
-    faces = np.array(faces, np.int32)
-    return np.full(len(faces), 4, np.int32), faces.ravel()
 
 
 def make_texture(path):

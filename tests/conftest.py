@@ -4,10 +4,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 import usdwrinkle  # noqa: F401  (registers the schema before any other USD use)
+from usdwrinkle.authoring.builders import grid_sheet  # noqa: F401  (the tests' sheets)
 
 REPO = Path(__file__).resolve().parents[1]
 CORPUS = Path(os.environ.get("USDWRINKLE_CORPUS", REPO.parent / "shared" / "corpus"))
@@ -34,18 +34,3 @@ def corpus() -> Path:
 @pytest.fixture
 def regenerate_goldens(request) -> bool:
     return request.config.getoption("--regenerate-goldens")
-
-
-def grid_sheet(nx: int = 21, ny: int = 21, size: float = 2.0):
-    """A flat sheet in the XY plane: points (n,3), faceVertexCounts, faceVertexIndices."""
-    xs = np.linspace(-size / 2, size / 2, nx)
-    ys = np.linspace(-size / 2, size / 2, ny)
-    gx, gy = np.meshgrid(xs, ys)
-    points = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], 1).astype(np.float32)
-    quads = []
-    for j in range(ny - 1):
-        for i in range(nx - 1):
-            a = j * nx + i
-            quads.append([a, a + 1, a + nx + 1, a + nx])
-    quads = np.array(quads, np.int32)
-    return points, np.full(len(quads), 4, np.int32), quads.ravel()

@@ -22,10 +22,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, Vt
+from pxr import Usd, UsdGeom, Vt
 
 from . import __version__
 from ._resources import resource_dir
+from .authoring.builders import sleeve_stage
 
 PAPER = [  # case, vertices, pixels, paper figure, unit
     ("shirt", 455, 330_000, 328.0, "fps"),
@@ -35,75 +36,6 @@ PAPER = [  # case, vertices, pixels, paper figure, unit
     ("B", 50_000, 55_000, 8.90, "ms"),
 ]
 PASSES = ("skin", "crush", "relax", "draw", "readback")
-
-
-# -- synthetic stages ----------------------------------------------------------------------
-
-def sleeve_stage(vertices: int) -> Usd.Stage:
-    """An in-memory skinned sleeve of about ``vertices`` points that bends at its middle.
-
-    LBS with two joints, WrinkleAPI applied, a camera that frames it: the shape of the
-    shirt sample at any size.
-    """
-    import usdwrinkle  # noqa: F401  (the schema)
-
-    around = max(8, int(round(math.sqrt(vertices / 3.0))))
-    along = max(2, int(round(vertices / around)))
-    length, radius = 3.0, 0.4
-    theta = np.arange(around) * 2 * np.pi / around
-    xs = np.linspace(0, length, along)
-    gx, gt = np.meshgrid(xs, theta, indexing="ij")
-    points = np.stack([gx.ravel(), radius * np.cos(gt).ravel(), radius * np.sin(gt).ravel()],
-                      1).astype(np.float32)
-    r, c = np.meshgrid(np.arange(along - 1), np.arange(around), indexing="ij")
-    a = (r * around + c).ravel()
-    b = (r * around + (c + 1) % around).ravel()
-    quads = np.stack([a, b, b + around, a + around], 1)
-    stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
-    stage.SetStartTimeCode(1)
-    stage.SetEndTimeCode(24)
-    UsdSkel.Root.Define(stage, "/Arm")
-    mesh = UsdGeom.Mesh.Define(stage, "/Arm/Sleeve")
-    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
-    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(quads), 4, np.int32)))
-    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.ravel().astype(np.int32)))
-    mesh.GetPrim().ApplyAPI("WrinkleAPI")
-    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
-        "wrinkle:width", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.constant).Set(
-        Vt.FloatArray([0.25]))
-    skel = UsdSkel.Skeleton.Define(stage, "/Arm/Skel")
-    skel.CreateJointsAttr(["shoulder", "shoulder/elbow"])
-    bind = [Gf.Matrix4d(1), Gf.Matrix4d(1).SetTranslate(Gf.Vec3d(1.5, 0, 0))]
-    skel.CreateBindTransformsAttr(Vt.Matrix4dArray(bind))
-    skel.CreateRestTransformsAttr(Vt.Matrix4dArray([bind[0], bind[1]]))
-    anim = UsdSkel.Animation.Define(stage, "/Arm/Skel/Anim")
-    anim.CreateJointsAttr(["shoulder", "shoulder/elbow"])
-    anim.CreateTranslationsAttr().Set(Vt.Vec3fArray([Gf.Vec3f(0), Gf.Vec3f(1.5, 0, 0)]))
-    anim.CreateScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)] * 2))
-    rotations = anim.CreateRotationsAttr()
-    for frame in range(1, 25):
-        angle = 100.0 * (frame - 1) / 23
-        rotations.Set(Vt.QuatfArray([Gf.Quatf(1, 0, 0, 0), Gf.Quatf(
-            Gf.Rotation(Gf.Vec3d(0, 0, 1), angle).GetQuat())]), frame)
-    UsdSkel.BindingAPI.Apply(skel.GetPrim()).CreateAnimationSourceRel().SetTargets(
-        [anim.GetPath()])
-    binding = UsdSkel.BindingAPI.Apply(mesh.GetPrim())
-    binding.CreateSkeletonRel().SetTargets([skel.GetPath()])
-    w = np.clip((points[:, 0] - 1.2) / 0.6, 0, 1)
-    binding.CreateJointIndicesPrimvar(False, 2).Set(
-        Vt.IntArray.FromNumpy(np.tile([0, 1], len(points)).astype(np.int32)))
-    binding.CreateJointWeightsPrimvar(False, 2).Set(
-        Vt.FloatArray.FromNumpy(np.stack([1 - w, w], 1).ravel().astype(np.float32)))
-    binding.CreateGeomBindTransformAttr(Gf.Matrix4d(1))
-    cam = UsdGeom.Camera.Define(stage, "/main_cam")
-    cam.CreateHorizontalApertureAttr(36.0)
-    cam.CreateVerticalApertureAttr(36.0)
-    cam.CreateFocalLengthAttr(30.0)
-    look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(1.6, 1.2, 4.5), Gf.Vec3d(1.4, 0.6, 0),
-                                   Gf.Vec3d(0, 1, 0))
-    cam.AddTransformOp().Set(look.GetInverse())
-    return stage
 
 
 # -- measuring -----------------------------------------------------------------------------

@@ -16,18 +16,15 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, UsdSkel, Vt
 
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
+from usdwrinkle.authoring.builders import grid_sheet
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES: dict = {}
 
 
 def grid(nx=5, ny=5, size=1.0):
-    xs, ys = np.linspace(0, size, nx), np.linspace(0, size, ny)
-    gx, gy = np.meshgrid(xs, ys)
-    points = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], 1).astype(np.float32)
-    faces = [[j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i]
-             for j in range(ny - 1) for i in range(nx - 1)]
-    return points, [4] * len(faces), np.asarray(faces).ravel().tolist()
+    points, counts, indices = grid_sheet(nx, ny, size, centered=False)
+    return points, counts.tolist(), indices.tolist()
 
 
 def stage_with_mesh(name, points=None, counts=None, indices=None, wrinkle=True, frames=3,
