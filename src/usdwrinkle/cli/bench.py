@@ -1,20 +1,56 @@
-"""usdwrinkle bench: the paper's table, scaling and baselines (see usdwrinkle.bench)."""
+"""usdwrinkle bench: a thin entry point to the benchmarks of a source checkout.
+
+The benchmarks (the top-level ``benchmarks/`` package) are not installed with the wheel:
+they need the checkout's sample stages, docs/ and the shared corpus. This command finds
+the checkout this package was installed from (an editable install) and runs them.
+"""
 from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+#: the checkout's top level, for an editable install (src/usdwrinkle/cli/bench.py)
+CHECKOUT = Path(__file__).resolve().parents[3]
+
+
+def benchmarks():
+    """The benchmarks package of the checkout, or a one-line error."""
+    from ..errors import UsdWrinkleError
+
+    if not (CHECKOUT / "benchmarks" / "__init__.py").is_file():
+        raise UsdWrinkleError("usdwrinkle bench runs from a source checkout (pip install -e "
+                              ".): the benchmarks/ folder is not part of the installed wheel")
+    if str(CHECKOUT) not in sys.path:
+        sys.path.insert(0, str(CHECKOUT))
+    import benchmarks as package
+
+    return package
 
 
 def add_parser(subparsers) -> None:
-    from ..bench import add_arguments
-
     p = subparsers.add_parser(
-        "bench", help="measure speed: the paper's table, scaling and baselines",
+        "bench", help="measure speed: the paper's table, scaling and baselines (checkout)",
         description="Measure the real pipeline: the paper's five cases, scaling in vertices "
                     "and pixels, UsdSkel's CPU skinning and a numpy crush+relax as baselines, "
-                    "and CesiumMan end to end. Writes a markdown report (and JSON).")
-    add_arguments(p)
+                    "CesiumMan end to end, the farm rows, triangulation of hostile meshes and "
+                    "the rasteriser's floors. Writes a markdown report (and JSON). Runs from "
+                    "a source checkout (benchmarks/).")
+    p.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    p.add_argument("--markdown", metavar="PATH", default="docs/benchmarks.md",
+                   help="markdown report (default docs/benchmarks.md; '-' for stdout)")
+    p.add_argument("--quick", action="store_true",
+                   help="reduced sizes and frames: a smoke test, not figures to quote")
+    p.add_argument("--label", metavar="TEXT",
+                   help="name this run in the JSON (kept in docs/bench/ for before/after)")
+    p.add_argument("--history", metavar="DIR", default="docs/bench",
+                   help="folder of labelled JSON runs to tabulate (docs/bench)")
+    p.add_argument("--from-json", metavar="PATH",
+                   help="measure nothing: rewrite the markdown report from a saved run")
+    p.add_argument("--corpus", metavar="DIR",
+                   help="folder with usd-wg/CesiumMan.usdz (default ../shared/corpus or "
+                        "$USDWRINKLE_CORPUS)")
     p.set_defaults(run=run)
 
 
 def run(args) -> int:
-    from ..bench import run as run_bench
-
-    return run_bench(args)
+    return benchmarks().run(args)

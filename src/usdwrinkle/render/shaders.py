@@ -53,6 +53,8 @@ class ShaderSource:
                 raise ShaderError(name, line_no, f"#include nested deeper than {MAX_INCLUDE_DEPTH}")
             target = match.group(1)
             path = self.root / target
+            if not path.is_file():  # then the package's own shaders/ (include/common.glsl)
+                path = resource_dir("shaders") / target
             if not path.is_file():
                 raise ShaderError(name, line_no, f"#include \"{target}\" not found")
             if target in seen:
@@ -81,8 +83,9 @@ class ShaderSource:
         return ShaderError(self.name, 0, message.strip())
 
 
-def compute_shader(ctx, name: str, defines: dict):
-    source = ShaderSource(name, defines)
+def compute_shader(ctx, name: str, defines: dict, root: Path | None = None):
+    """A compute shader from ``root`` (default: the package's shaders/)."""
+    source = ShaderSource(name, defines, root)
     try:
         return ctx.compute_shader(source.text())
     except Exception as exc:

@@ -17,8 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from .._resources import resource_dir
-from ..render.context import is_software_renderer
+from usdwrinkle._resources import resource_dir
+from usdwrinkle.render.context import is_software_renderer
 
 
 def _cli(*args, env: dict | None = None) -> tuple[float, float]:
@@ -41,8 +41,8 @@ def preroll(quick: bool, ctx) -> dict:
     bake, and computed directly with the phase-history preroll."""
     from pxr import Sdf
 
-    from ..engine import WrinkleEngine
-    from ..shot import bake_layer
+    from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.shot import bake_layer
 
     late = 90 if quick else 900
     repeats = 3 if quick else 7
