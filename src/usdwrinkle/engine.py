@@ -13,8 +13,9 @@ import numpy as np
 from .errors import UsdWrinkleError, print_warning
 from .limits import MAX_HISTORY_FRAMES
 from .render.buffers import AOVS
-from .render.delegate import DirtyBits, RenderDelegate, RenderPass, RenderPassState
+from .render.delegate import RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
+from .scene.changes import DirtyBits
 from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate
 
@@ -118,13 +119,28 @@ class WrinkleEngine:
         self._sync()
         self.render_pass.compute(wrinkles, None, history, skip=frozenset(self.scene.baked))
 
+    def pull_changes(self) -> None:
+        """Turn the stage's edits since the last frame into dirty bits (scene/changes.py):
+        rprims for meshes that appeared or went, and the parts of each mesh to sync. An
+        edit of topology or wrinkle parameters restarts the phase history (the shot is
+        replayed from its start, so the frame is the one a fresh run would give)."""
+        bits, added, removed = self.scene.process_changes()
+        for path in removed:
+            self.render_delegate.destroy_rprim(path)
+            self._dirty.pop(path, None)
+        for path in added:
+            self.render_delegate.create_rprim(path)
+            self._dirty[path] = DirtyBits.ALL
+        for path, value in bits.items():
+            self._dirty[path] = self._dirty.get(path, DirtyBits.CLEAN) | value
+        if removed or any(value & (DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_PRIMVAR)
+                          for value in self._dirty.values()):
+            self._history_frame = None
+
     def _sync(self) -> None:
         for path, mesh in self.render_delegate.rprims.items():
-            bits = self._dirty[path] | DirtyBits.DIRTY_POINTS | DirtyBits.DIRTY_TRANSFORM \
-                | DirtyBits.DIRTY_VISIBILITY
-            if bits & DirtyBits.DIRTY_TOPOLOGY:
-                self._history_frame = None  # new GPU resources hold no phases
-            self._dirty[path] = mesh.sync(self.scene, bits)
+            # a new frame dirties the time-varying state; edits add their own bits
+            self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME)
 
     def compute_frame(self, frame: float, aspect: float = 16.0 / 9.0, wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
@@ -133,13 +149,12 @@ class WrinkleEngine:
         are computed first (see :meth:`_history_plan`), so that the result does not
         depend on which frames were rendered before.
         """
+        self.pull_changes()
         history = False
         steps: list[float] = []
         # meshes drawn from a bake need no history; the others replay the shot's start
         needs_history = any(p not in self.scene.baked for p in self.wrinkled_paths)
         if wrinkles and needs_history:
-            if any(self._dirty.values()):
-                self._history_frame = None
             steps, history = self._history_plan(frame)
             for index, step in enumerate(self.preroll_progress(steps)):
                 step_history = index > 0 or self._history_frame is not None
@@ -183,6 +198,7 @@ class WrinkleEngine:
         return self.render_delegate.rprims[path].resources.read_fields()
 
     def release(self) -> None:
+        self.scene.tracker.revoke()
         self.render_delegate.release()
 
 

@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass, field
 
 from ..contract import COLD_START_FACTOR
+from ..scene.changes import DirtyBits
 from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer
 from .passes.crush import CrushPass
@@ -18,20 +19,6 @@ from .passes.draw import DrawPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
 from .resources import MeshResources
-
-#: Relaxation from the anchored start (a shot's first frame) runs this many times longer.
-
-
-class DirtyBits:
-    """As in pxr/imaging/hd/changeTracker.h."""
-
-    CLEAN = 0
-    DIRTY_VISIBILITY = 1 << 3
-    DIRTY_POINTS = 1 << 5
-    DIRTY_PRIMVAR = 1 << 6
-    DIRTY_TOPOLOGY = 1 << 8
-    DIRTY_TRANSFORM = 1 << 9
-    ALL = DIRTY_VISIBILITY | DIRTY_POINTS | DIRTY_PRIMVAR | DIRTY_TOPOLOGY | DIRTY_TRANSFORM
 
 
 class Mesh:
@@ -43,21 +30,33 @@ class Mesh:
         self.resources: MeshResources | None = None
         self.frame = None
         self.timings: dict[str, float] = {}
+        #: how often each part was synced: "resources" (all GPU resources built),
+        #: "params" (wrinkle parameters re-uploaded), "material", "frame" (per frame)
+        self.sync_counts = {"resources": 0, "params": 0, "material": 0, "frame": 0}
 
     def sync(self, scene_delegate, dirty_bits: int) -> int:
         """Pull what is dirty from the scene delegate; returns the bits left dirty.
 
         ``scene_delegate`` provides ``meshes[path]`` (MeshRecord) and
-        ``current_frame.meshes[path]`` (MeshFrame).
+        ``current_frame.meshes[path]`` (MeshFrame). Topology rebuilds every resource;
+        wrinkle parameters and the material re-upload only their own tables.
         """
-        if dirty_bits & (DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_PRIMVAR) \
-                or self.resources is None:
+        record = scene_delegate.meshes[self.path]
+        if dirty_bits & DirtyBits.DIRTY_TOPOLOGY or self.resources is None:
             if self.resources is not None:
                 self.resources.release()
-            self.resources = MeshResources(self.delegate.ctx, scene_delegate.meshes[self.path])
-        if dirty_bits & (DirtyBits.DIRTY_POINTS | DirtyBits.DIRTY_TRANSFORM
-                         | DirtyBits.DIRTY_VISIBILITY):
+            self.resources = MeshResources(self.delegate.ctx, record)
+            self.sync_counts["resources"] += 1
+        else:
+            if dirty_bits & DirtyBits.DIRTY_PRIMVAR:
+                self.resources.update_params(record)
+                self.sync_counts["params"] += 1
+            if dirty_bits & DirtyBits.DIRTY_MATERIAL:
+                self.resources.update_material(record)
+                self.sync_counts["material"] += 1
+        if dirty_bits & DirtyBits.FRAME:
             self.frame = scene_delegate.current_frame.meshes[self.path]
+            self.sync_counts["frame"] += 1
         return DirtyBits.CLEAN
 
     def compute(self, wrinkles: bool, timer=None, history: bool = False) -> None:

@@ -186,12 +186,7 @@ class MeshResources:
             self.uploaded_subshapes: set[int] = set()
         # textures join self.textures as they are made, so release() frees them on failure
         self.texture = None
-        if record.material.texture is not None:
-            tex = record.material.texture
-            self.texture = ctx.texture((tex.shape[1], tex.shape[0]), 4, _bytes(tex), dtype="f4")
-            self.textures.append(self.texture)
-            self.texture.build_mipmaps()
-            self.texture.repeat_x = self.texture.repeat_y = True
+        self._upload_texture(record)
         self.profiles = []
         for table in (record.params.height_profile, record.params.gradient_profile):
             tex = ctx.texture((len(table), 1), 1, _bytes(table.astype(np.float32)), dtype="f4")
@@ -199,6 +194,46 @@ class MeshResources:
             tex.repeat_x = True
             tex.repeat_y = False
             self.profiles.append(tex)
+
+    def update_params(self, record: MeshRecord) -> None:
+        """Re-upload the wrinkle parameters (q, width, profiles) of an edited record; the
+        rest of the resources, and the phase tables, stay."""
+        self.record = record
+        self.q_width.write(vec4(record.params.q, record.params.width))
+        for index, table in enumerate((record.params.height_profile,
+                                       record.params.gradient_profile)):
+            data = table.astype(np.float32)
+            old = self.profiles[index]
+            if old.size == (len(data), 1):
+                old.write(_bytes(data))
+                continue
+            tex = self.ctx.texture((len(data), 1), 1, _bytes(data), dtype="f4")
+            tex.repeat_x, tex.repeat_y = True, False
+            self.textures[self.textures.index(old)] = tex
+            self.profiles[index] = tex
+            old.release()
+
+    def update_material(self, record: MeshRecord) -> None:
+        """Re-upload the material (texture, texture coordinates) of an edited record."""
+        self.record = record
+        corner = np.zeros((self.num_triangles * 3, 2), np.float32)
+        if record.material.corner_st is not None:
+            corner[:] = record.material.corner_st.reshape(-1, 2)
+        self.corner_st.write(corner)
+        if self.texture is not None:
+            self.textures.remove(self.texture)
+            self.texture.release()
+            self.texture = None
+        self._upload_texture(record)
+
+    def _upload_texture(self, record: MeshRecord) -> None:
+        if record.material.texture is None:
+            return
+        tex = record.material.texture
+        self.texture = self.ctx.texture((tex.shape[1], tex.shape[0]), 4, _bytes(tex), dtype="f4")
+        self.textures.append(self.texture)
+        self.texture.build_mipmaps()
+        self.texture.repeat_x = self.texture.repeat_y = True
 
     def write_baked(self, baked) -> None:
         """Upload one frame's baked fields (scene.baked.BakedFields): waves into the baked

@@ -12,13 +12,14 @@ import math
 import os
 
 import numpy as np
-from pxr import Tf, Usd, UsdGeom
+from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from .. import schema
 from ..errors import UsdWrinkleError, print_warning
 from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE, MAX_WORLD_COORDINATE
 from . import camera as camera_mod
 from .baked import BakedSource, find_baked
+from .changes import ChangeTracker, DirtyBits, classify
 from .diagnostics import usd_diagnostics, usd_error_text
 from .inputs import StageInputs, package_file, scan_inputs
 from .lights import default_lights, read_lights
@@ -185,17 +186,139 @@ class StageSceneDelegate:
         self.baked: dict[str, BakedSource] = {}
         self.up_axis = UsdGeom.GetStageUpAxis(self.stage)
         self.skel = SkelBindings(self.stage)
+        self._relax_override = relax_iterations
         self._prims: dict[str, Usd.Prim] = {}
         self.meshes: dict[str, MeshRecord] = {}
-        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
-            if not prim.IsA(UsdGeom.Mesh):
-                continue
-            if UsdGeom.Imageable(prim).ComputePurpose() not in RENDERED_PURPOSES:
-                continue
-            record = self._mesh_record(prim, relax_iterations)
-            if record is not None:
-                self.meshes[record.path] = record
-                self._prims[record.path] = prim
+        for prim in self._rendered_meshes(self.stage.GetPseudoRoot()):
+            self._add_mesh(prim)
+        #: edits of the stage from now on (process_changes)
+        self.tracker = ChangeTracker(self.stage)
+
+    @staticmethod
+    def _rendered_meshes(root: Usd.Prim):
+        """The Mesh prims at or under ``root`` that a render draws (purpose default or
+        render), instance proxies included."""
+        for prim in Usd.PrimRange(root, Usd.TraverseInstanceProxies()):
+            if prim.IsA(UsdGeom.Mesh) and \
+                    UsdGeom.Imageable(prim).ComputePurpose() in RENDERED_PURPOSES:
+                yield prim
+
+    def _add_mesh(self, prim: Usd.Prim) -> bool:
+        path = str(prim.GetPath())
+        self.baked.pop(path, None)
+        record = self._mesh_record(prim, self._relax_override)
+        if record is None:
+            self.meshes.pop(path, None)
+            self._prims.pop(path, None)
+            return False
+        self.meshes[path] = record
+        self._prims[path] = prim
+        return True
+
+    # -- change tracking ---------------------------------------------------------------
+    def process_changes(self) -> tuple[dict[str, int], list[str], list[str]]:
+        """Bring the records up to date with the stage's edits since the last call.
+
+        Returns ({mesh path: dirty bits}, added mesh paths, removed mesh paths). Only
+        what an edit touches is read again: a wrinkle parameter re-reads the parameters,
+        a material the material, topology (faces, rest pose, skinning) the whole mesh;
+        an edit elsewhere (a light, a camera, an unrelated prim) dirties no mesh.
+        """
+        resynced, changed = self.tracker.take()
+        bits: dict[str, int] = {}
+        if not resynced and not changed:
+            return bits, [], []
+
+        def mark(path: str, value: int) -> None:
+            if value:
+                bits[path] = bits.get(path, DirtyBits.CLEAN) | value
+
+        before = set(self.meshes)
+        rebuild_skel = shading = False
+        structural: set[str] = set()
+        for path in resynced | changed:
+            prim_path = path.GetPrimPath()
+            prim = self.stage.GetPrimAtPath(prim_path)
+            if not path.IsPropertyPath():
+                structural.add(str(prim_path))  # a prim added, removed or re-composed
+            elif str(prim_path) in self.meshes:
+                mark(str(prim_path), classify(path.name))
+                if path.name == "purpose":
+                    structural.add(str(prim_path))
+            elif prim and prim.IsA(UsdSkel.Skeleton) or prim and prim.IsA(UsdSkel.Animation) \
+                    or prim and prim.IsA(UsdSkel.BlendShape):
+                rebuild_skel = True
+            elif prim and (prim.IsA(UsdShade.Material) or prim.IsA(UsdShade.Shader)
+                           or prim.IsA(UsdShade.NodeGraph)):
+                shading = True
+            elif path.name in ("visibility", "purpose") or path.name.startswith("xformOp"):
+                # an ancestor's transform or visibility: sampled per frame; purpose decides
+                # which meshes are drawn
+                if path.name == "purpose":
+                    structural.add(str(prim_path))
+                for mesh in self.meshes:
+                    if Sdf.Path(mesh).HasPrefix(prim_path):
+                        mark(mesh, classify(path.name))
+        for root in structural:
+            prim = self.stage.GetPrimAtPath(root)
+            if prim and (prim.IsA(UsdSkel.Skeleton) or prim.IsA(UsdSkel.Animation)
+                         or prim.IsA(UsdSkel.Root)):
+                rebuild_skel = True
+            if prim and (prim.IsA(UsdShade.Material) or prim.IsA(UsdShade.Shader)):
+                shading = True
+            inside = {m for m in self.meshes if Sdf.Path(m).HasPrefix(Sdf.Path(root))}
+            present = {str(p.GetPath()): p for p in self._rendered_meshes(prim)} if prim \
+                else {}
+            for mesh in inside - set(present):
+                self.meshes.pop(mesh)
+                self._prims.pop(mesh)
+                self.baked.pop(mesh, None)
+            for mesh in present:
+                mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
+        if rebuild_skel:
+            self.skel = SkelBindings(self.stage)
+            for mesh, prim in self._prims.items():
+                if prim.HasAPI(UsdSkel.BindingAPI):
+                    mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
+        if shading:
+            for mesh in self.meshes:
+                mark(mesh, DirtyBits.DIRTY_MATERIAL)
+        for mesh, value in list(bits.items()):
+            if not self._refresh(mesh, value):
+                bits.pop(mesh)
+        after = set(self.meshes)
+        added = sorted(after - before)
+        for mesh in added:
+            bits[mesh] = DirtyBits.ALL
+        moved = DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_TRANSFORM
+        if added or before - after or any(value & moved for value in bits.values()):
+            self.__dict__.pop("_bounds", None)  # the automatic framing sees the new shapes
+        return bits, added, sorted(before - after)
+
+    def _refresh(self, path: str, bits: int) -> bool:
+        """Re-read what ``bits`` say changed; False when the mesh is no longer drawn."""
+        if bits & DirtyBits.DIRTY_TOPOLOGY:
+            return self._add_mesh(self.stage.GetPrimAtPath(path))
+        record = self.meshes.get(path)
+        if record is None:
+            return False
+        prim = self._prims[path]
+        default = Usd.TimeCode.Default()
+        if bits & DirtyBits.DIRTY_PRIMVAR:
+            baked = find_baked(prim, len(record.rest_points)) if self.use_baked else None
+            self.baked.pop(path, None)
+            if baked is not None:
+                self.baked[path] = baked
+            record = dataclasses.replace(
+                record, params=read_params(prim, record.rest_points, record.topology, default,
+                                           self._relax_override),
+                wrinkled=self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None,
+                baked_range=baked.range_text() if baked is not None else None)
+        if bits & DirtyBits.DIRTY_MATERIAL:
+            record = dataclasses.replace(
+                record, material=read_material(prim, record.topology, default, self.warn))
+        self.meshes[path] = record
+        return True
 
     # -- static data -------------------------------------------------------------------
     def _mesh_record(self, prim: Usd.Prim, relax_iterations) -> MeshRecord | None:
