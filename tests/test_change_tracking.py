@@ -32,6 +32,15 @@ def squeezed_sheet() -> Usd.Stage:
     return stage
 
 
+@pytest.fixture
+def tracked(gl_context):
+    """(stage, engine) of the squeezed sheet; the engine is released after the test."""
+    stage = squeezed_sheet()
+    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    yield stage, engine
+    engine.release()
+
+
 def render(engine, frame=3.0):
     buffers = engine.render_frame(frame, WIDTH, HEIGHT, samples=1)
     return {name: buf.pixels.copy() for name, buf in buffers.items()}
@@ -56,117 +65,97 @@ def assert_same(a, b):
         np.testing.assert_allclose(a[name], b[name], atol=1e-5, err_msg=name)
 
 
-def test_width_edit_reuploads_parameters_only(gl_context):
-    stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
-    try:
-        before = render(engine)
-        resources = engine.render_delegate.rprims["/Sheet"].resources
-        synced = counts(engine)
-        UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).GetPrimvar("wrinkle:width").Set(
-            Vt.FloatArray([0.25]))
-        after = render(engine)
-        now = counts(engine)
-        assert engine.render_delegate.rprims["/Sheet"].resources is resources  # not rebuilt
-        assert now["resources"] == synced["resources"]
-        assert now["params"] == synced["params"] + 1
-        assert now["material"] == synced["material"]
-        assert engine.scene.meshes["/Sheet"].params.width[0] == pytest.approx(0.25)
-        # the image changes, and is the one a fresh engine renders from the edited stage
-        assert np.abs(after["wrinkle.height"] - before["wrinkle.height"]).max() > 1e-3
-        assert_same(after, fresh_render(stage))
-    finally:
-        engine.release()
+def test_width_edit_reuploads_parameters_only(tracked):
+    stage, engine = tracked
+    before = render(engine)
+    resources = engine.render_delegate.rprims["/Sheet"].resources
+    synced = counts(engine)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).GetPrimvar("wrinkle:width").Set(
+        Vt.FloatArray([0.25]))
+    after = render(engine)
+    now = counts(engine)
+    assert engine.render_delegate.rprims["/Sheet"].resources is resources  # not rebuilt
+    assert now["resources"] == synced["resources"]
+    assert now["params"] == synced["params"] + 1
+    assert now["material"] == synced["material"]
+    assert engine.scene.meshes["/Sheet"].params.width[0] == pytest.approx(0.25)
+    # the image changes, and is the one a fresh engine renders from the edited stage
+    assert np.abs(after["wrinkle.height"] - before["wrinkle.height"]).max() > 1e-3
+    assert_same(after, fresh_render(stage))
 
 
-def test_topology_edit_rebuilds_the_mesh_and_restarts_history(gl_context):
-    stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
-    try:
-        render(engine, 2.0)
-        render(engine, 3.0)
-        assert engine._history_frame == 3.0
-        resources = engine.render_delegate.rprims["/Sheet"].resources
-        synced = counts(engine)
-        mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
-        # the same quads, each split into two triangles: new faces, same surface
-        quads = np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 4)
-        triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], axis=1)
-        mesh.GetFaceVertexCountsAttr().Set(Vt.IntArray([3] * (2 * len(quads))))
-        mesh.GetFaceVertexIndicesAttr().Set(Vt.IntArray(triangles.ravel().tolist()))
-        engine.pull_changes()
-        assert engine._history_frame is None  # the phase history restarts
-        after = render(engine, 3.0)
-        assert engine.render_delegate.rprims["/Sheet"].resources is not resources
-        assert counts(engine)["resources"] == synced["resources"] + 1
-        assert len(engine.scene.meshes["/Sheet"].topology.triangles) == 2 * len(quads)
-        assert_same(after, fresh_render(stage, 3.0))
-    finally:
-        engine.release()
+def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
+    stage, engine = tracked
+    render(engine, 2.0)
+    render(engine, 3.0)
+    assert engine._history_frame == 3.0
+    resources = engine.render_delegate.rprims["/Sheet"].resources
+    synced = counts(engine)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
+    # the same quads, each split into two triangles: new faces, same surface
+    quads = np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 4)
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], axis=1)
+    mesh.GetFaceVertexCountsAttr().Set(Vt.IntArray([3] * (2 * len(quads))))
+    mesh.GetFaceVertexIndicesAttr().Set(Vt.IntArray(triangles.ravel().tolist()))
+    engine.pull_changes()
+    assert engine._history_frame is None  # the phase history restarts
+    after = render(engine, 3.0)
+    assert engine.render_delegate.rprims["/Sheet"].resources is not resources
+    assert counts(engine)["resources"] == synced["resources"] + 1
+    assert len(engine.scene.meshes["/Sheet"].topology.triangles) == 2 * len(quads)
+    assert_same(after, fresh_render(stage, 3.0))
 
 
-def test_unrelated_edits_resync_nothing(gl_context):
-    stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
-    try:
-        render(engine, 2.0)
-        render(engine, 3.0)
-        synced = counts(engine)
-        stage.GetPrimAtPath("/Props").CreateAttribute("userNote", Sdf.ValueTypeNames.String) \
-            .Set("moved")
-        UsdGeom.Xformable(stage.GetPrimAtPath("/Props")).GetOrderedXformOps()[0].Set(
-            Gf.Vec3d(7, 0, 0))
-        UsdLux.DistantLight(stage.GetPrimAtPath("/Key")).GetIntensityAttr().Set(2.0)
-        UsdGeom.Xform.Define(stage, "/Props/New")
-        bits, added, removed = engine.scene.process_changes()
-        assert (bits, added, removed) == ({}, [], [])
-        render(engine, 4.0)
-        now = counts(engine)
-        assert {k: now[k] for k in ("resources", "params", "material")} == \
-               {k: synced[k] for k in ("resources", "params", "material")}
-        assert now["frame"] == synced["frame"] + 1  # the new frame only
-        assert engine._history_frame == 4.0  # the history went on
-    finally:
-        engine.release()
+def test_unrelated_edits_resync_nothing(tracked):
+    stage, engine = tracked
+    render(engine, 2.0)
+    render(engine, 3.0)
+    synced = counts(engine)
+    stage.GetPrimAtPath("/Props").CreateAttribute("userNote", Sdf.ValueTypeNames.String) \
+        .Set("moved")
+    UsdGeom.Xformable(stage.GetPrimAtPath("/Props")).GetOrderedXformOps()[0].Set(
+        Gf.Vec3d(7, 0, 0))
+    UsdLux.DistantLight(stage.GetPrimAtPath("/Key")).GetIntensityAttr().Set(2.0)
+    UsdGeom.Xform.Define(stage, "/Props/New")
+    bits, added, removed = engine.scene.process_changes()
+    assert (bits, added, removed) == ({}, [], [])
+    render(engine, 4.0)
+    now = counts(engine)
+    assert {k: now[k] for k in ("resources", "params", "material")} == \
+           {k: synced[k] for k in ("resources", "params", "material")}
+    assert now["frame"] == synced["frame"] + 1  # the new frame only
+    assert engine._history_frame == 4.0  # the history went on
 
 
-def test_material_edit_and_new_mesh(gl_context):
-    stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
-    try:
-        render(engine)
-        synced = counts(engine)
-        UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet")).CreateDisplayColorPrimvar().Set(
-            Vt.Vec3fArray([Gf.Vec3f(0.9, 0.1, 0.1)]))
-        points, counts_, indices = grid_sheet(5, 5, 0.5)
-        other = UsdGeom.Mesh.Define(stage, "/Other")
-        other.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points + [0, 0, 0.3]))
-        other.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts_))
-        other.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
-        after = render(engine)
-        now = counts(engine)
-        assert now["material"] == synced["material"] + 1
-        assert now["resources"] == synced["resources"] and now["params"] == synced["params"]
-        assert "/Other" in engine.render_delegate.rprims
-        assert_same(after, fresh_render(stage))
-        stage.RemovePrim("/Other")
-        render(engine)
-        assert "/Other" not in engine.render_delegate.rprims
-    finally:
-        engine.release()
+def test_material_edit_and_new_mesh(tracked):
+    stage, engine = tracked
+    render(engine)
+    synced = counts(engine)
+    UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet")).CreateDisplayColorPrimvar().Set(
+        Vt.Vec3fArray([Gf.Vec3f(0.9, 0.1, 0.1)]))
+    points, counts_, indices = grid_sheet(5, 5, 0.5)
+    other = UsdGeom.Mesh.Define(stage, "/Other")
+    other.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points + [0, 0, 0.3]))
+    other.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts_))
+    other.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
+    after = render(engine)
+    now = counts(engine)
+    assert now["material"] == synced["material"] + 1
+    assert now["resources"] == synced["resources"] and now["params"] == synced["params"]
+    assert "/Other" in engine.render_delegate.rprims
+    assert_same(after, fresh_render(stage))
+    stage.RemovePrim("/Other")
+    render(engine)
+    assert "/Other" not in engine.render_delegate.rprims
 
 
-def test_wrinkle_api_attribute_change_is_a_parameter_edit(gl_context):
-    stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
-    try:
-        render(engine)
-        synced = counts(engine)
-        stage.GetPrimAtPath("/Sheet").CreateAttribute(
-            schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(0.5)
-        after = render(engine)
-        assert counts(engine)["params"] == synced["params"] + 1
-        assert counts(engine)["resources"] == synced["resources"]
-        assert_same(after, fresh_render(stage))
-    finally:
-        engine.release()
+def test_wrinkle_api_attribute_change_is_a_parameter_edit(tracked):
+    stage, engine = tracked
+    render(engine)
+    synced = counts(engine)
+    stage.GetPrimAtPath("/Sheet").CreateAttribute(
+        schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float).Set(0.5)
+    after = render(engine)
+    assert counts(engine)["params"] == synced["params"] + 1
+    assert counts(engine)["resources"] == synced["resources"]
+    assert_same(after, fresh_render(stage))

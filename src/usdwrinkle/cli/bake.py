@@ -5,12 +5,12 @@ import time
 
 from .common import (
     Reporter,
-    add_stage_args,
+    add_shot_args,
     check_stage_args,
     refuse_overwriting_inputs,
     start_engine,
 )
-from .frames import add_frame_args, parse_frame_spec
+from .frames import parse_frame_spec
 
 
 def add_parser(subparsers) -> None:
@@ -21,10 +21,7 @@ def add_parser(subparsers) -> None:
                     "interpolation vertex) with a time sample per frame. By default the "
                     "output layer sublayers the input, so 'usdview OUTPUT_LAYER' shows the "
                     "shot with the baked data.")
-    p.add_argument("stage", help="the USD stage")
-    p.add_argument("output", help="the layer to write (.usda, .usdc or .usd)")
-    add_frame_args(p)
-    add_stage_args(p)
+    add_shot_args(p, "the layer to write (.usda, .usdc or .usd)")
     p.add_argument("--with-points", action="store_true",
                    help="also write the posed points, normals and extent in each mesh's local "
                         "space (as UsdSkelBakeSkinning), and retype the affected SkelRoots to "

@@ -20,6 +20,16 @@ def add_stage_args(parser) -> None:
                              "from here on; every chunk of a shot must use the same value")
 
 
+def add_shot_args(parser, output_help: str) -> None:
+    """What render and bake both take: STAGE OUTPUT, --frames and the stage options."""
+    from .frames import add_frame_args
+
+    parser.add_argument("stage", help="the USD stage (.usd, .usda, .usdc, .usdz)")
+    parser.add_argument("output", help=output_help)
+    add_frame_args(parser)
+    add_stage_args(parser)
+
+
 def check_stage_args(args) -> None:
     """Refuse stage options out of range (add_stage_args), before any stage is read."""
     from ..limits import MAX_RELAX_ITERATIONS

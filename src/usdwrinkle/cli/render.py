@@ -5,12 +5,12 @@ import time
 
 from .common import (
     Reporter,
-    add_stage_args,
+    add_shot_args,
     check_stage_args,
     refuse_overwriting_inputs,
     start_engine,
 )
-from .frames import add_frame_args, frame_path, frame_paths, parse_frame_spec
+from .frames import frame_path, frame_paths, parse_frame_spec
 
 
 def add_parser(subparsers) -> None:
@@ -23,9 +23,7 @@ def add_parser(subparsers) -> None:
                     "('usdwrinkle bake') are in the stage are drawn from them, with no crush, "
                     "relax or preroll; a frame the bake does not hold (outside its range, or "
                     "missing inside it) is an error: bake it, or pass --recompute.")
-    p.add_argument("stage", help="the USD stage (.usd, .usda, .usdc, .usdz)")
-    p.add_argument("output", help="output image path with '#' frame placeholder")
-    add_frame_args(p)
+    add_shot_args(p, "output image path with '#' frame placeholder")
     p.add_argument("--camera", metavar="PRIM",
                    help="camera prim path or name (default: the primary camera, then the first "
                         "camera, then an automatic framing of the bounds)")
@@ -34,7 +32,6 @@ def add_parser(subparsers) -> None:
                    help="image height (default: from the camera's aspect ratio)")
     p.add_argument("--samples", type=int, default=4, metavar="N",
                    help="multisamples per pixel for anti-aliased edges (4; 1 turns it off)")
-    add_stage_args(p)
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
