@@ -360,6 +360,8 @@ def test_check_reports_the_relax_cap(tmp_path, capsys):
     ("1e308", "is not a finite time code within +-1e+09"),
     ("1:100000x0.001", "names more than 100,000 frames"),
     ("1:200000", "names more than 100,000 frames"),
+    ("1:", "bad FrameSpec '1:'"),  # crashed the process inside UsdUtils (found by fuzzing)
+    ("1:5x-1", "stride -1 does not lead from 1 to 5"),
 ])
 def test_frame_specs_are_bounded_before_they_are_listed(tmp_path, capsys, spec, fragment):
     stage = sheet_stage(tmp_path / "s.usda")

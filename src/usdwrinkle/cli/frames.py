@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 import re
 
-from pxr import UsdUtils
+from pxr import Usd, UsdUtils
 
 from ..errors import UsdWrinkleError
 from ..limits import MAX_FRAMES, MAX_TIME_CODE
@@ -26,6 +26,33 @@ def range_count(start: float, end: float, stride: float) -> int:
     return int(math.floor((end - start) / stride + 1e-9)) + 1
 
 
+_SPEC_ITEM = re.compile(r"^([^:x]+)(?::([^:x]+)(?:x([^:x]+))?)?$")
+
+
+def _time_code_range(part: str, spec: str):
+    """One FrameSpec item (``start``, ``start:end`` or ``start:endxstride``) as a
+    UsdUtils.TimeCodeRange. Parsed here, not by TimeCodeRange.CreateFromFrameSpec, which
+    crashes the process on some malformed items (``1:``)."""
+    bad = UsdWrinkleError(f"bad FrameSpec '{spec}' (use e.g. 1:48, 101:109x2 or 1,5,10)")
+    match = _SPEC_ITEM.match(part.replace(" ", ""))
+    if match is None:
+        raise bad
+    try:
+        values = [None if text is None else float(text) for text in match.groups()]
+    except ValueError:
+        raise bad from None
+    start, end, stride = values
+    end = start if end is None else end
+    for value in (start, end):
+        check_time_code(value, f"--frames '{part}': frame")
+    if stride is None:
+        stride = 1.0 if end >= start else -1.0
+    if not math.isfinite(stride) or stride == 0 or (end - start) * stride < 0:
+        raise UsdWrinkleError(f"--frames '{part}': stride {stride:g} does not lead from "
+                              f"{start:g} to {end:g}")
+    return UsdUtils.TimeCodeRange(Usd.TimeCode(start), Usd.TimeCode(end), stride)
+
+
 def parse_frame_spec(spec: str) -> list[float]:
     """'1:48', '101:109x2', '1,5,10' -> frames, in order, without duplicates.
 
@@ -38,19 +65,8 @@ def parse_frame_spec(spec: str) -> list[float]:
         part = part.strip()
         if not part:
             raise UsdWrinkleError(f"bad FrameSpec '{spec}': empty item")
-        try:
-            tcr = UsdUtils.TimeCodeRange.CreateFromFrameSpec(part)
-            valid = tcr.IsValid()
-        except Exception:
-            valid = False
-        if not valid:
-            raise UsdWrinkleError(
-                f"bad FrameSpec '{spec}' (use e.g. 1:48, 101:109x2 or 1,5,10)")
+        tcr = _time_code_range(part, spec)
         start, end = tcr.startTimeCode.GetValue(), tcr.endTimeCode.GetValue()
-        for value in (start, end):
-            check_time_code(value, f"--frames '{part}': frame")
-        if not math.isfinite(tcr.stride) or tcr.stride == 0:
-            raise UsdWrinkleError(f"--frames '{part}': bad stride {tcr.stride:g}")
         total += range_count(start, end, tcr.stride)
         if total > MAX_FRAMES:
             raise UsdWrinkleError(f"--frames '{spec}' names more than {MAX_FRAMES:,} frames "
