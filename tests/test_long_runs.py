@@ -103,3 +103,56 @@ def test_interrupted_render_leaves_only_whole_frames(gl_context, tmp_path, sig, 
     finite = np.isfinite(a) & np.isfinite(b)
     assert np.array_equal(np.isfinite(a), np.isfinite(b))
     assert np.max(np.abs(a[finite] - b[finite])) <= 1e-5
+
+
+def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
+    """The overlapped writer (outputs/writer.py) holds at most two frames: memory stays
+    flat over a long shot, and every frame is written whole."""
+    from usdwrinkle.shot import ImageOptions, render_frames
+
+    engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context, warn=lambda m: None)
+    marks = {}
+
+    def progress(items):
+        for index, item in enumerate(items):
+            if index in (20, 199):
+                marks[index] = rss_bytes()
+            yield item
+
+    frames = [float(f) for f in range(1, 201)]
+    paths = [str(tmp_path / f"z.{int(f):04d}.png") for f in frames]
+    try:
+        written = render_frames(engine, ImageOptions(96, 64, samples=1, write_threads=1),
+                                frames, paths, progress=progress)
+    finally:
+        engine.release()
+    assert written == frames
+    assert marks[199] < marks[20] * 1.05, marks
+    assert len(whole_frames(tmp_path, 96)) == 200
+
+
+def test_a_failing_write_is_reported_and_earlier_frames_stay(tmp_path):
+    """A write error on the writer thread reaches the caller; frames handed over before
+    it are complete, and nothing after the in-flight window is started."""
+    from usdwrinkle.errors import UsdWrinkleError
+    from usdwrinkle.outputs.writer import FrameWriter
+
+    started = []
+
+    def write(path, buffers):
+        started.append(path)
+        if path.endswith("3"):
+            raise UsdWrinkleError(f"cannot write image '{path}': disk full")
+        time.sleep(0.01)
+        Path(path).write_text("whole")
+
+    with pytest.raises(UsdWrinkleError, match="disk full"):
+        with FrameWriter(write, threads=1, max_in_flight=2) as writer:
+            for index in range(1, 10):
+                writer.submit(float(index), str(tmp_path / f"f{index}"), {})
+    assert writer.written == [1.0, 2.0]
+    names = {p.name for p in tmp_path.iterdir()}
+    # frames in flight behind frame 3 (4, perhaps 5) are finished whole; none after them
+    assert {"f1", "f2"} <= names <= {"f1", "f2", "f4", "f5"}, names
+    assert all(p.read_text() == "whole" for p in tmp_path.iterdir())
+    assert len(started) <= 5

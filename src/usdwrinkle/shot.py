@@ -46,6 +46,9 @@ class ImageOptions:
     height: int
     samples: int = 4
     wrinkles: bool = True
+    #: writer threads: frame f is encoded while f + 1 renders (outputs/writer.py); 0 encodes
+    #: in the render loop
+    write_threads: int = 1
 
 
 @contextlib.contextmanager
@@ -69,17 +72,17 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
     ``progress``: wraps the list of (frame, path) pairs (a progress bar).
     """
     from .outputs.images import aovs_for, write_image
+    from .outputs.writer import FrameWriter
 
-    written = []
-    for frame, path in progress(list(zip(frames, paths, strict=True))):
-        if skip(path):
-            continue
-        with at_frame(frame):
-            buffers = engine.render_frame(frame, image.width, image.height, image.wrinkles,
-                                          image.samples, aovs_for(path))
-        write_image(path, buffers)
-        written.append(frame)
-    return written
+    with FrameWriter(write_image, image.write_threads) as writer:
+        for frame, path in progress(list(zip(frames, paths, strict=True))):
+            if skip(path):
+                continue
+            with at_frame(frame):
+                buffers = engine.render_frame(frame, image.width, image.height,
+                                              image.wrinkles, image.samples, aovs_for(path))
+            writer.submit(frame, path, buffers)
+    return writer.written
 
 
 def bakeable_meshes(engine, warn) -> dict:

@@ -32,6 +32,10 @@ def add_parser(subparsers) -> None:
                    help="image height (default: from the camera's aspect ratio)")
     p.add_argument("--samples", type=int, default=4, metavar="N",
                    help="multisamples per pixel for anti-aliased edges (4; 1 turns it off)")
+    p.add_argument("--write-threads", type=int, default=1, metavar="N",
+                   help="threads that encode and write frames while the next ones render "
+                        "(1; at most 2 frames in flight; 0 writes each frame before the next "
+                        "is rendered)")
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
@@ -68,6 +72,8 @@ def check_render_args(args) -> None:
         raise UsdWrinkleError("--width and --height must be positive")
     if args.samples < 1:
         raise UsdWrinkleError("--samples must be at least 1")
+    if not 0 <= args.write_threads <= 8:
+        raise UsdWrinkleError("--write-threads must be in 0..8")
     check_stage_args(args)
     if args.chunk is not None and args.chunk < 1:
         raise UsdWrinkleError("--chunk must be at least 1")
@@ -116,7 +122,8 @@ def run(args) -> int:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                           "(use --all-meshes to wrinkle every mesh)")
         width, height = engine.resolution(args.width, args.height, frames[0])
-        image = ImageOptions(width, height, args.samples, not args.no_wrinkles)
+        image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
+                             args.write_threads)
         started = time.perf_counter()
         written = render_frames(
             engine, image, frames, outputs,

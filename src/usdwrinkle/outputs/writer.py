@@ -1,0 +1,71 @@
+"""Encode frame f while frame f + 1 renders: a bounded writer thread.
+
+OpenImageIO releases the GIL while it encodes, and llvmpipe renders on its own threads,
+so the encode of one frame overlaps the next frame's USD read, compute and draw. At most
+``max_in_flight`` frames wait or encode at once, which bounds memory. Every write stays
+atomic and complete (images.write_image). A write that fails reaches the caller as its
+one-line error at the next submit or at the end; frames submitted before it are whole.
+On any exit, also Ctrl-C or SIGTERM in the main thread, the frames already handed over
+are finished (or their temporary files removed) before the exception goes on.
+"""
+from __future__ import annotations
+
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
+
+
+class FrameWriter:
+    """``with FrameWriter(write) as writer: writer.submit(frame, path, buffers)``.
+
+    ``write(path, buffers)`` runs on the writer thread; ``threads=0`` writes in the
+    caller's thread (the serial path). ``written`` lists the frames whose files are
+    complete, in order.
+    """
+
+    def __init__(self, write, threads: int = 1, max_in_flight: int = 2):
+        self.write = write
+        self.max_in_flight = max(1, max_in_flight)
+        self.pool = ThreadPoolExecutor(threads, thread_name_prefix="usdwrinkle-writer") \
+            if threads > 0 else None
+        self.pending: deque[tuple[float, Future]] = deque()
+        self.written: list[float] = []
+        #: seconds the caller waited for the writer (the part of encoding not hidden)
+        self.waited = 0.0
+
+    def submit(self, frame: float, path: str, buffers: dict) -> None:
+        if self.pool is None:
+            self.write(path, buffers)
+            self.written.append(frame)
+            return
+        while len(self.pending) >= self.max_in_flight:
+            self._finish_oldest()
+        self.pending.append((frame, self.pool.submit(self.write, path, buffers)))
+
+    def _finish_oldest(self) -> None:
+        import time
+
+        frame, future = self.pending.popleft()
+        started = time.perf_counter()
+        try:
+            future.result()  # raises the writer's error here, in the caller's thread
+        finally:
+            self.waited += time.perf_counter() - started
+        self.written.append(frame)
+
+    def close(self) -> None:
+        """Wait for every frame handed over; raise the first write error."""
+        while self.pending:
+            self._finish_oldest()
+
+    def __enter__(self) -> FrameWriter:
+        return self
+
+    def __exit__(self, kind, value, traceback) -> None:
+        try:
+            if kind is None:
+                self.close()
+        finally:
+            if self.pool is not None:
+                # finish (or clean up) what was handed over, whatever happened here
+                self.pool.shutdown(wait=True)
+                self.pending.clear()
