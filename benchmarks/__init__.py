@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+from .cpu_nodes import cpu_nodes
 from .floors import floors
 from .measure import (
     end_to_end,
@@ -46,6 +47,8 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
     result["preroll"] = farm_bench.preroll(quick, ctx)
     progress("bench: farm")
     result["farm"] = farm_bench.farm(quick, corpus)
+    progress("bench: cpu render nodes")
+    result["cpu_nodes"] = cpu_nodes(quick, corpus)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

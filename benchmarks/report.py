@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from .cpu_nodes import markdown as cpu_nodes_report
 from .paper import paper_figure
 
 
@@ -188,6 +189,7 @@ def markdown(result: dict) -> str:
                       "passes gather in registers."]
     from . import farm as farm_bench
     lines += farm_bench.markdown(result)
+    lines += cpu_nodes_report(result)
     tri = result.get("triangulation")
     if tri:
         lines += ["", "## Triangulation of hostile meshes", "",

@@ -52,11 +52,16 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
             "readback_330k_rgba32f_ms"} <= set(floors)
     assert floors["copy_points"] == result["skin_baseline"][-1]["vertices"]
     text = out_md.read_text()
+    nodes = result["cpu_nodes"]
+    assert set(nodes["rows"]) == {"exr_serial", "exr_overlapped", "png_serial",
+                                  "png_overlapped"}
+    for row in nodes["rows"].values():
+        assert row["fps"] > 0 and row["split_ms"]["encode"] > 0 and row["startup_s"] >= 0
     tri = result["triangulation"]
     assert tri["polygon"]["triangles"] == 10_000 - 2 and tri["polygon"]["ms"] > 0
     assert tri["quads"]["triangles"] == 2 * tri["quads"]["faces"] and tri["quads"]["ms"] > 0
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
                     "## End to end", "## What the rasteriser costs by itself", "## Farms",
-                    "## Triangulation of hostile meshes"):
+                    "## Triangulation of hostile meshes", "## CPU render nodes"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text

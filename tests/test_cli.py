@@ -144,3 +144,39 @@ def test_cesium_man_48_frames(gl_context, corpus, tmp_path):
         image = read_exr(path)
         assert np.abs(image["wrinkle.height"]).max() > 0
         assert np.all(np.isfinite(image["R"]))
+
+
+def test_exr_half_and_compression_keep_names_and_values(gl_context, tmp_path):
+    """--exr-half stores colour and normals as half float (within half precision of the
+    float file), depth and the wrinkle fields unchanged, with the same channel names
+    (piz: lossless); --write-threads 0 and 1 write the same pixels."""
+    stage = str(SAMPLES / "shirt.usda")
+    base = ["render", stage, "--frames", "24", "--width", "96", "--quiet"]
+    assert main([*base[:2], str(tmp_path / "float.exr"), *base[2:]]) == 0
+    assert main([*base[:2], str(tmp_path / "half.exr"), *base[2:], "--exr-half",
+                 "--exr-compression", "piz"]) == 0
+    assert main([*base[:2], str(tmp_path / "serial.exr"), *base[2:], "--write-threads",
+                 "0"]) == 0
+    full = oiio.ImageBuf(str(tmp_path / "float.exr"))
+    half = oiio.ImageBuf(str(tmp_path / "half.exr"))
+    assert half.spec().get_string_attribute("compression") == "piz"
+    names = list(full.spec().channelnames)
+    assert sorted(names) == sorted(half.spec().channelnames)
+    formats = dict(zip(half.spec().channelnames,
+                       (str(f) for f in half.spec().channelformats), strict=True))
+    assert {formats[n] for n in ("R", "G", "B", "A", "N.X", "N.Y", "N.Z")} == {"half"}
+    assert {formats[n] for n in ("Z", "wrinkle.height", "wrinkle.amplitude")} == {"float"}
+    a = full.get_pixels(oiio.FLOAT)
+    b = half.get_pixels(oiio.FLOAT)
+    order = [list(half.spec().channelnames).index(n) for n in names]
+    b = b[..., order]
+    for index, name in enumerate(names):
+        x, y = a[..., index], b[..., index]
+        finite = np.isfinite(x)
+        if formats[name] == "half":  # 10-bit mantissa: relative error <= 2^-11
+            np.testing.assert_allclose(y[finite], x[finite], rtol=2 ** -11, atol=1e-7,
+                                       err_msg=name)
+        else:  # still float: unchanged
+            np.testing.assert_array_equal(y, x, err_msg=name)
+    serial = oiio.ImageBuf(str(tmp_path / "serial.exr")).get_pixels(oiio.FLOAT)
+    assert np.array_equal(np.nan_to_num(serial, posinf=1e30), np.nan_to_num(a, posinf=1e30))

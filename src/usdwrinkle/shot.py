@@ -25,6 +25,8 @@ class EngineOptions:
     camera: str | None = None
     history_start: float | None = None
     use_baked: bool = True
+    #: time every pass (GL timer queries, or the wall clock between glFinish calls)
+    profile: bool = False
 
     def create(self, stage=None, warn=None):
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``."""
@@ -35,7 +37,7 @@ class EngineOptions:
                              all_meshes=self.all_meshes,
                              relax_iterations=self.relax_iterations, camera=self.camera,
                              history_start=self.history_start, use_baked=self.use_baked,
-                             **kwargs)
+                             profile=self.profile, **kwargs)
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,9 @@ class ImageOptions:
     #: writer threads: frame f is encoded while f + 1 renders (outputs/writer.py); 0 encodes
     #: in the render loop
     write_threads: int = 1
+    #: EXR compression and half-float colour and normals (outputs/images.py)
+    exr_compression: str = "zip"
+    exr_half: bool = False
 
 
 @contextlib.contextmanager
@@ -65,23 +70,46 @@ def at_frame(frame: float):
 
 def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[str],
                   skip: Callable[[str], bool] = lambda path: False,
-                  progress: Callable = lambda items: items) -> list[float]:
+                  progress: Callable = lambda items: items,
+                  stats: dict | None = None) -> list[float]:
     """Render each frame to its path (atomically); returns the frames written.
 
     ``skip(path)``: leave that frame alone (``--skip-existing``, a farm retry).
     ``progress``: wraps the list of (frame, path) pairs (a progress bar).
+    ``stats``: filled with per-frame timings in ms (the engine's ``last_timings``, with
+    ``profile`` on for the per-pass split, and ``encode`` on the writer), the seconds the
+    loop waited for the writer, and the loop's wall time (``render --stats``).
     """
+    import time
+
     from .outputs.images import aovs_for, write_image
     from .outputs.writer import FrameWriter
 
-    with FrameWriter(write_image, image.write_threads) as writer:
+    rows: dict[str, dict] = {}
+
+    def write(path: str, buffers: dict) -> None:
+        started = time.perf_counter()
+        write_image(path, buffers, image.exr_compression, image.exr_half)
+        if stats is not None:
+            rows[path]["encode"] = (time.perf_counter() - started) * 1e3
+
+    loop_started = time.perf_counter()
+    with FrameWriter(write, image.write_threads) as writer:
         for frame, path in progress(list(zip(frames, paths, strict=True))):
             if skip(path):
                 continue
+            started = time.perf_counter()
             with at_frame(frame):
                 buffers = engine.render_frame(frame, image.width, image.height,
                                               image.wrinkles, image.samples, aovs_for(path))
+            if stats is not None:
+                rows[path] = {"frame": frame, **engine.last_timings,
+                              "render": (time.perf_counter() - started) * 1e3}
             writer.submit(frame, path, buffers)
+    if stats is not None:
+        stats.update({"frames": list(rows.values()), "waited_s": writer.waited,
+                      "loop_s": time.perf_counter() - loop_started,
+                      "write_threads": image.write_threads})
     return writer.written
 
 

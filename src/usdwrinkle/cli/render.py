@@ -36,6 +36,15 @@ def add_parser(subparsers) -> None:
                    help="threads that encode and write frames while the next ones render "
                         "(1; at most 2 frames in flight; 0 writes each frame before the next "
                         "is rendered)")
+    exr = p.add_mutually_exclusive_group()
+    exr.add_argument("--exr-half", dest="exr_half", action="store_true",
+                     help="EXR: colour and normals as half float (files about 40%% smaller; "
+                          "depth and the wrinkle fields stay float)")
+    exr.add_argument("--exr-float", dest="exr_half", action="store_false",
+                     help="EXR: every channel as 32-bit float (the default)")
+    p.add_argument("--exr-compression", choices=("zip", "zips", "piz", "dwaa", "none"),
+                   default="zip", help="EXR compression (zip: the fastest compressed "
+                                       "encode measured, docs/benchmarks.md)")
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
@@ -57,6 +66,10 @@ def add_parser(subparsers) -> None:
                            "that every worker gets at least two chunks)")
     farm.add_argument("--workers", type=int, metavar="N",
                       help="worker processes of the local cluster (default: the CPU cores)")
+    p.add_argument("--stats", metavar="FILE.json",
+                   help="write per-frame timings (USD read, skin, crush, relax, draw, readback, "
+                        "encode; ms) and the time waited for the writer to this JSON file; "
+                        "each pass is then timed with glFinish between passes")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(run=run)
 
@@ -94,6 +107,16 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
     return text
 
 
+def write_stats(path: str, stats: dict) -> None:
+    """--stats: the timings as JSON, written atomically."""
+    import json
+
+    from ..outputs.atomic import atomic_path
+
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as handle:
+        json.dump(stats, handle, indent=1)
+
+
 def run(args) -> int:
     from ..outputs.atomic import check_writable
     from ..outputs.images import is_complete_image
@@ -106,9 +129,12 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     outputs = frame_paths(args.output, frames)
-    refuse_overwriting_inputs(args.stage, outputs, stage)
-    check_writable(outputs)
+    extra = [args.stats] if args.stats else []
+    refuse_overwriting_inputs(args.stage, outputs + extra, stage)
+    check_writable(outputs + extra)
     if args.dask is not None:
+        if args.stats:
+            reporter.warn("--stats applies to a serial render; ignored with --dask")
         from ..farm.client import render_on_dask
         return render_on_dask(args, reporter, stage, frames, outputs)
     if args.chunk is not None or args.workers is not None:
@@ -123,13 +149,16 @@ def run(args) -> int:
                           "(use --all-meshes to wrinkle every mesh)")
         width, height = engine.resolution(args.width, args.height, frames[0])
         image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
-                             args.write_threads)
+                             args.write_threads, args.exr_compression, args.exr_half)
         started = time.perf_counter()
+        stats = {} if args.stats else None
         written = render_frames(
             engine, image, frames, outputs,
             skip=(lambda path: is_complete_image(path, width, height)) if args.skip_existing
             else (lambda path: False),
-            progress=lambda items: reporter.progress(items, "render"))
+            progress=lambda items: reporter.progress(items, "render"), stats=stats)
+        if stats is not None:
+            write_stats(args.stats, stats)
         if not args.quiet:
             print(summary(len(written), width, height, args.output, frames,
                           time.perf_counter() - started, engine.baked_paths), flush=True)

@@ -124,7 +124,8 @@ def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str
         reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                       "(use --all-meshes to wrinkle every mesh)")
     width, height = image_size(scene, args.camera, args.width, args.height, frames[0])
-    image = ImageOptions(width, height, args.samples, wrinkles, args.write_threads)
+    image = ImageOptions(width, height, args.samples, wrinkles, args.write_threads,
+                         args.exr_compression, args.exr_half)
 
     started = time.perf_counter()
     client = cluster = None

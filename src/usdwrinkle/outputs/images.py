@@ -19,6 +19,10 @@ from .atomic import atomic_path
 FLOAT_FORMATS = (".exr",)
 EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
+#: EXR compressions offered by --exr-compression (OpenEXR's names)
+EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
+#: the AOVs that --exr-half stores as half float; depth and the wrinkle fields stay float
+HALF_AOVS = ("color", "normal")
 
 
 def one_line(text: str) -> str:
@@ -154,8 +158,11 @@ def _encode(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
         raise UsdWrinkleError(f"cannot write image '{path}': {reason}")
 
 
-def write_image(path: str, buffers: dict) -> None:
+def write_image(path: str, buffers: dict, compression: str = "zip", half: bool = False) -> None:
     """Write one frame's render buffers to ``path``, atomically and completely.
+
+    EXR: ``compression`` (EXR_COMPRESSIONS) and ``half`` (colour and normals as half
+    float, as compositing usually keeps them; depth and the wrinkle fields stay float).
 
     The frame is encoded in memory, copied beside ``path`` and renamed only once the
     copy has the encoded size: a full disk or a failing close is an error, and never
@@ -176,7 +183,11 @@ def write_image(path: str, buffers: dict) -> None:
         spec.channelnames = tuple(names)
         spec.alpha_channel = 3
         spec.z_channel = names.index("Z")
-        spec.attribute("compression", "zip")
+        if half:
+            half_names = {n for aov in HALF_AOVS for n in buffers[aov].channel_names}
+            spec.channelformats = tuple(oiio.TypeDesc("half" if n in half_names else "float")
+                                        for n in names)
+        spec.attribute("compression", compression)
     else:
         color = buffers["color"].pixels  # premultiplied by alpha
         alpha = np.clip(color[..., 3:4], 0, 1)
