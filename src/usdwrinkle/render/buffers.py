@@ -88,7 +88,6 @@ class Framebuffer:
         check_frame_size(ctx, width, height, int(samples))
         self.samples = max(1, int(samples))
         self.textures = [ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
-        self.resolved = ctx.framebuffer(color_attachments=self.textures)
         multisample = self.samples if self.samples > 1 else 0  # 0: a plain renderbuffer
         self.depth = ctx.depth_renderbuffer((width, height), samples=multisample)
         if self.samples > 1:
@@ -97,6 +96,13 @@ class Framebuffer:
         else:
             self.targets = self.textures
         self.fbo = ctx.framebuffer(color_attachments=self.targets, depth_attachment=self.depth)
+        # one (resolved, multisampled) framebuffer pair per attachment: a frame resolves
+        # only the attachments its file stores (a PNG: colour alone)
+        self.resolve_pairs = [(ctx.framebuffer(color_attachments=[texture]),
+                               ctx.framebuffer(color_attachments=[target]))
+                              for texture, target in zip(self.textures, self.targets,
+                                                         strict=True)] \
+            if self.samples > 1 else []
         self._planes: list[np.ndarray | None] = [None] * 3
         self._unshared_refs = 0
 
@@ -109,10 +115,12 @@ class Framebuffer:
         """Read back the requested AOVs: only the attachments they need, each straight into
         a new array (the draw pass flips y in clip space, so GL's bottom-up rows already
         come out top-down). AOVs that need no arithmetic are views of those arrays."""
-        if self.samples > 1:
-            self.ctx.copy_framebuffer(self.resolved, self.fbo)
         width, height = self.size
         needed = {AOVS[name][0] for name in aovs} | {0}  # colour's alpha is the coverage
+        for index in sorted(needed):
+            if self.resolve_pairs:
+                resolved, multisampled = self.resolve_pairs[index]
+                self.ctx.copy_framebuffer(resolved, multisampled)
         planes = {}
         for index in sorted(needed):
             planes[index] = self._plane(index)
@@ -153,8 +161,11 @@ class Framebuffer:
 
     def release(self) -> None:
         self._planes = [None] * 3
+        for pair in self.resolve_pairs:
+            for fbo in pair:
+                fbo.release()
+        self.resolve_pairs = []
         self.fbo.release()
-        self.resolved.release()
         self.depth.release()
         for tex in self.textures:
             tex.release()

@@ -13,7 +13,7 @@ from functools import lru_cache
 import numpy as np
 from pxr import Ar, Usd, UsdGeom, UsdShade
 
-from ..colour import srgb_decode
+from ..colour import srgb_decode, srgb_decode_8bit
 from ..limits import MAX_TEXTURE_SIZE
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord
@@ -62,7 +62,7 @@ def load_texture(resolved_path: str) -> np.ndarray:
         rgba[..., 3] = pixels[..., -1]
     if encoded_srgb:  # 8-bit images are sRGB encoded (UsdUVTexture sourceColorSpace auto)
         c = rgba[..., :3]
-        rgba[..., :3] = srgb_decode(c)
+        rgba[..., :3] = srgb_decode_8bit(c) if eight_bit else srgb_decode(c)
     return np.ascontiguousarray(rgba[::-1])
 
 
