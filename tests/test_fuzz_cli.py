@@ -5,7 +5,9 @@ call outlives its deadline, and no temporary file is left. Sizes and frame range
 drawn either small (at most a few hundred small frames) or hostile (refused before any
 work), so that the deadline tests for hangs, not for honest long renders.
 
-``USDWRINKLE_FUZZ_EXAMPLES`` raises the budget for a longer local run.
+The default run draws its examples from a fixed seed, so that CI is reproducible;
+``USDWRINKLE_FUZZ_EXAMPLES=N`` runs N examples from a fresh seed (exploration: 900
+examples passed before this test landed).
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from test_hostile import scratch_frames_since
 #: seconds one CLI call may take (a small stage: start-up plus a few frames)
 DEADLINE = 90
 EXAMPLES = int(os.environ.get("USDWRINKLE_FUZZ_EXAMPLES", "16"))
+EXPLORE = "USDWRINKLE_FUZZ_EXAMPLES" in os.environ
 
 HOSTILE_NUMBERS = ["nan", "inf", "-inf", "1e308", "-1e308", "1e12", "-5e8", "5e8", "0",
                    "-0", "1e-300", "3.5", "-1"]
@@ -79,7 +82,7 @@ def write_stage(path: Path, start, end, amplitude, width, iterations, up_axis, f
 commands = st.sampled_from(["render", "render", "render", "bake", "check", "apply"])
 
 
-@settings(max_examples=EXAMPLES, deadline=None, database=None,
+@settings(max_examples=EXAMPLES, deadline=None, database=None, derandomize=not EXPLORE,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(command=commands,
        start=metadata_value, end=metadata_value,

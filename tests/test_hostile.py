@@ -297,16 +297,19 @@ def test_sub_frames_that_share_a_name_are_refused(gl_context, tmp_path, capsys):
 @pytest.mark.parametrize("args,fragment", [
     (["--width", "1073741824", "--height", "2"], "GL_MAX_TEXTURE_SIZE"),
     (["--width", "64", "--samples", "4096"], "GL_MAX_SAMPLES"),
-    (["--width", "16000", "--height", "16000", "--samples", "4"], None),
+    (["--width", "16384", "--height", "16384", "--samples", "4"],
+     "GiB of memory are available"),
 ])
 def test_frame_sizes_beyond_the_limits_are_refused(tmp_path, args, fragment):
+    from usdwrinkle.render.buffers import available_memory
+
+    if fragment.startswith("GiB"):  # the largest frame GL 4.5 guarantees, 4 samples
+        needed = 16384 * 16384 * (52 * 5 + 96)
+        available = available_memory()
+        if available is None or available > needed:
+            pytest.skip("this machine has the memory for the largest frame GL allows")
     stage = shirt_copy(tmp_path)
     result = cli(["render", stage, tmp_path / "f.####.png", "--frames", "1", *args])
-    if fragment is None:  # within GL's limits: only memory can refuse it, or it renders
-        assert result.returncode in (0, 2), result.stderr
-        if result.returncode == 2:
-            assert "GiB of memory are available" in one_error(result.stderr)
-        return
     assert result.returncode == 2, result.stderr
     assert fragment in one_error(result.stderr)
 
