@@ -204,9 +204,9 @@ def target_meshes(stage, patterns: list[str]) -> list:
     return meshes
 
 
-def plan_edits(args, meshes: list) -> list[MeshEdit]:
+def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
     """Compute and check every value before the first edit (nothing is authored here), so
-    that a refusal writes nothing."""
+    that a refusal writes nothing. ``q_spec``: parse_q(--q); ``profile``: read_profile."""
     from ..authoring.paint import (
         MeshSurface,
         q_from_flow_map,
@@ -216,8 +216,6 @@ def plan_edits(args, meshes: list) -> list[MeshEdit]:
     )
     from ..validation import check_amplitude_scale, check_q, check_width, point_count, refuse
 
-    q_spec = parse_q(args.q) if args.q else None
-    profile = read_profile(args.profile) if args.profile else None
     needs_surface = q_spec is not None or args.q_from_texture or args.q_from_primvar \
         or args.width_from_texture
     plans = []
@@ -285,12 +283,11 @@ def run(args) -> int:
 
     require_schema()
     check_args(args)
-    if args.q:
-        parse_q(args.q)  # a malformed --q is refused before the stage is read
-    if args.profile:
-        read_profile(args.profile)
+    # a malformed --q or --profile is refused before the stage is read
+    q_spec = parse_q(args.q) if args.q else None
+    profile = read_profile(args.profile) if args.profile else None
     stage, target = edit_target(args, open_stage(args.stage))
-    plans = plan_edits(args, target_meshes(stage, args.prim_paths))
+    plans = plan_edits(args, target_meshes(stage, args.prim_paths), q_spec, profile)
     author(plans)
     destination = args.output or target.realPath
     export(target, destination)

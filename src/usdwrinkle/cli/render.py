@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import time
 
+from ..outputs.images import EXR_COMPRESSIONS
 from .common import (
     Reporter,
     add_shot_args,
@@ -42,7 +43,7 @@ def add_parser(subparsers) -> None:
                           "depth and the wrinkle fields stay float)")
     exr.add_argument("--exr-float", dest="exr_half", action="store_false",
                      help="EXR: every channel as 32-bit float (the default)")
-    p.add_argument("--exr-compression", choices=("zip", "zips", "piz", "dwaa", "none"),
+    p.add_argument("--exr-compression", choices=EXR_COMPRESSIONS,
                    default="zip", help="EXR compression (zip: the fastest compressed "
                                        "encode measured, docs/benchmarks.md)")
     p.add_argument("--no-wrinkles", action="store_true",

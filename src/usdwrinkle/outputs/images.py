@@ -6,6 +6,7 @@ PNG/JPEG/TIFF: the 8-bit sRGB beauty (RGBA; RGB over black for JPEG).
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import shutil
 import tempfile
@@ -14,6 +15,7 @@ import numpy as np
 
 from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
+from ..scene.diagnostics import one_line, usd_diagnostics
 from .atomic import atomic_path
 
 FLOAT_FORMATS = (".exr",)
@@ -23,11 +25,6 @@ EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
 #: the AOVs that --exr-half stores as half float; depth and the wrinkle fields stay float
 HALF_AOVS = ("color", "normal")
-
-
-def one_line(text: str) -> str:
-    """A library's message (libpng, OpenEXR: often several lines) as one line."""
-    return " ".join(str(text).split())
 
 
 def aovs_for(path: str) -> tuple:
@@ -60,8 +57,6 @@ def read_float_image(path: str, max_size: int | None = None) -> tuple[np.ndarray
         raise OSError(f"cannot read image '{path}': no such file") from None
     if not stat.S_ISREG(mode):
         raise OSError(f"cannot read image '{path}': not a regular file")
-    from ..scene.diagnostics import usd_diagnostics
-
     # libpng and libjpeg print their warnings on stderr themselves: keep them off the
     # user's terminal (a failure still reports OpenImageIO's reason)
     with usd_diagnostics():
@@ -98,26 +93,25 @@ def is_complete_image(path: str, width: int, height: int) -> bool:
     return pixels.shape[:2] == (height, width)
 
 
+SCRATCH_PREFIX = ".usdwrinkle-frame."
+
+
+@functools.cache
 def _scratch_folder() -> str:
     """Where frames are encoded before they are copied to their output: memory (/dev/shm)
     where there is one, so that a full output disk fails in our copy, with an error,
-    never inside an image library."""
+    never inside an image library. Found once per process, when scratch frames of
+    processes that no longer run are removed too."""
     shm = "/dev/shm"
-    if os.path.isdir(shm) and os.access(shm, os.W_OK | os.X_OK):
-        return shm
-    return tempfile.gettempdir()
-
-
-SCRATCH_PREFIX = ".usdwrinkle-frame."
-_swept = {"done": False}
+    folder = shm if os.path.isdir(shm) and os.access(shm, os.W_OK | os.X_OK) \
+        else tempfile.gettempdir()
+    _sweep_scratch(folder)
+    return folder
 
 
 def _sweep_scratch(folder: str) -> None:
     """Remove scratch frames of processes that no longer run (a SIGKILLed farm worker
-    never reaches its cleanup, and /dev/shm is memory). Once per process."""
-    if _swept["done"]:
-        return
-    _swept["done"] = True
+    never reaches its cleanup, and /dev/shm is memory)."""
     for name in os.listdir(folder):
         if not name.startswith(SCRATCH_PREFIX):
             continue
@@ -203,10 +197,8 @@ def write_image(path: str, buffers: dict, compression: str = "zip", half: bool =
         if pixels.shape[2] == 4:
             spec.alpha_channel = 3
             spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
-    folder = _scratch_folder()
-    _sweep_scratch(folder)
     fd, scratch = tempfile.mkstemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}.", suffix=ext,
-                                   dir=folder)
+                                   dir=_scratch_folder())
     os.close(fd)
     try:
         _encode(scratch, spec, pixels, path)

@@ -130,7 +130,6 @@ class MeshResources:
             raise
 
     def _create(self, record: MeshRecord) -> None:
-        ctx = self.ctx
         n = self.num_points
         self.rest_points = self._table(n, 4, data=vec4(record.rest_points))
         self.posed_points = self._table(n, 4, data=vec4(record.rest_points))
@@ -161,11 +160,8 @@ class MeshResources:
         self.phasors = [self._table(n, 2) for _ in range(2)]
         self.edge_rotations = self._table(self.num_edges, 4)
         self.baked_waves: Table | None = None  # write_baked() makes it
-        st = record.material.corner_st
-        corner = np.zeros((self.num_triangles * 3, 2), np.float32)
-        if st is not None:
-            corner[:] = st.reshape(-1, 2)
-        self.corner_st = self._table(3 * self.num_triangles, 2, data=corner)  # [3t + c]
+        self.corner_st = self._table(3 * self.num_triangles, 2,
+                                     data=self._corner_st(record))  # [3t + c]
         self.face_normals = self._table(self.num_triangles, 4)
         skin = record.skin
         if skin is not None:
@@ -187,13 +183,23 @@ class MeshResources:
         # textures join self.textures as they are made, so release() frees them on failure
         self.texture = None
         self._upload_texture(record)
-        self.profiles = []
-        for table in (record.params.height_profile, record.params.gradient_profile):
-            tex = ctx.texture((len(table), 1), 1, _bytes(table.astype(np.float32)), dtype="f4")
-            self.textures.append(tex)
-            tex.repeat_x = True
-            tex.repeat_y = False
-            self.profiles.append(tex)
+        self.profiles = [self._profile_texture(table) for table in
+                         (record.params.height_profile, record.params.gradient_profile)]
+
+    def _profile_texture(self, table: np.ndarray):
+        """A profile (height or gradient) as an N x 1 texture, repeating along the period."""
+        tex = self.ctx.texture((len(table), 1), 1, _bytes(table.astype(np.float32)), dtype="f4")
+        self.textures.append(tex)
+        tex.repeat_x = True
+        tex.repeat_y = False
+        return tex
+
+    def _corner_st(self, record: MeshRecord) -> np.ndarray:
+        """Texture coordinates per triangle corner ([3t + c]); zeros without a texture."""
+        corner = np.zeros((self.num_triangles * 3, 2), np.float32)
+        if record.material.corner_st is not None:
+            corner[:] = record.material.corner_st.reshape(-1, 2)
+        return corner
 
     def update_params(self, record: MeshRecord) -> None:
         """Re-upload the wrinkle parameters (q, width, profiles) of an edited record; the
@@ -202,24 +208,18 @@ class MeshResources:
         self.q_width.write(vec4(record.params.q, record.params.width))
         for index, table in enumerate((record.params.height_profile,
                                        record.params.gradient_profile)):
-            data = table.astype(np.float32)
             old = self.profiles[index]
-            if old.size == (len(data), 1):
-                old.write(_bytes(data))
+            if old.size == (len(table), 1):
+                old.write(_bytes(table.astype(np.float32)))
                 continue
-            tex = self.ctx.texture((len(data), 1), 1, _bytes(data), dtype="f4")
-            tex.repeat_x, tex.repeat_y = True, False
-            self.textures[self.textures.index(old)] = tex
-            self.profiles[index] = tex
+            self.profiles[index] = self._profile_texture(table)
+            self.textures.remove(old)
             old.release()
 
     def update_material(self, record: MeshRecord) -> None:
         """Re-upload the material (texture, texture coordinates) of an edited record."""
         self.record = record
-        corner = np.zeros((self.num_triangles * 3, 2), np.float32)
-        if record.material.corner_st is not None:
-            corner[:] = record.material.corner_st.reshape(-1, 2)
-        self.corner_st.write(corner)
+        self.corner_st.write(self._corner_st(record))
         if self.texture is not None:
             self.textures.remove(self.texture)
             self.texture.release()

@@ -13,6 +13,7 @@ from pxr import Gf, Usd, UsdGeom, UsdUtils
 
 from ..errors import UsdWrinkleError
 from .records import CameraRecord
+from .values import finite_in_float32, frame_of
 
 
 def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
@@ -47,7 +48,7 @@ def check_camera(prim: Usd.Prim, gf_cam: Gf.Camera, time) -> None:
     """Refuse camera values that give no image (a NaN focal length, a zero aperture, a
     transform that is not finite), naming the attribute."""
     path = str(prim.GetPath())
-    frame = None if time.IsDefault() else time.GetValue()
+    frame = frame_of(time)
     near, far = gf_cam.clippingRange.min, gf_cam.clippingRange.max
     checks = (
         ("focalLength", gf_cam.focalLength, gf_cam.focalLength > 0, "finite and > 0"),
@@ -62,10 +63,7 @@ def check_camera(prim: Usd.Prim, gf_cam: Gf.Camera, time) -> None:
     for name, value, ok, rule in checks:
         if not (ok and np.all(np.isfinite(value))):
             raise UsdWrinkleError(f"camera {name} {value} must be {rule}", path, name, frame)
-    transform = np.asarray(gf_cam.transform, np.float64)
-    with np.errstate(over="ignore"):
-        as_float32 = transform.astype(np.float32)
-    if not np.all(np.isfinite(as_float32)):
+    if not finite_in_float32(gf_cam.transform):
         raise UsdWrinkleError("camera transform is not finite", path, "xformOp", frame)
 
 

@@ -8,6 +8,7 @@ from pxr import Usd, UsdGeom, UsdLux
 
 from ..errors import UsdWrinkleError
 from .records import LightRecord
+from .values import finite_in_float32, frame_of
 
 #: radiance beyond this is refused: the draw sums lights in float32 (max 3.4e38)
 MAX_RADIANCE = 1e30
@@ -17,7 +18,7 @@ def _radiance(light, time) -> np.ndarray:
     """color * intensity * 2^exposure; a value that is not finite (or that overflows
     float32) is refused, naming the light and the attribute."""
     path = str(light.GetPrim().GetPath())
-    frame = None if time.IsDefault() else time.GetValue()
+    frame = frame_of(time)
     color = light.GetColorAttr().Get(time)
     intensity = light.GetIntensityAttr().Get(time)
     exposure = light.GetExposureAttr().Get(time)
@@ -40,11 +41,9 @@ def _radiance(light, time) -> np.ndarray:
 
 def _transform(prim, time, xform_cache) -> np.ndarray:
     xf = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
-    with np.errstate(over="ignore"):
-        as_float32 = xf.astype(np.float32)
-    if not np.all(np.isfinite(as_float32)):
+    if not finite_in_float32(xf):
         raise UsdWrinkleError("light transform is not finite", str(prim.GetPath()), "xformOp",
-                              None if time.IsDefault() else time.GetValue())
+                              frame_of(time))
     return xf
 
 
@@ -66,8 +65,7 @@ def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache) -> list
             radius = light.GetRadiusAttr().Get(time)
             if radius is not None and not (math.isfinite(radius) and radius >= 0):
                 raise UsdWrinkleError("light radius must be finite and >= 0",
-                                      str(prim.GetPath()), "inputs:radius",
-                                      None if time.IsDefault() else time.GetValue())
+                                      str(prim.GetPath()), "inputs:radius", frame_of(time))
             lights.append(LightRecord("sphere", _radiance(light, time), position=xf[3, :3].copy(),
                                       radius=0.5 if radius is None else float(radius)))
         elif prim.IsA(UsdLux.DomeLight):

@@ -28,9 +28,17 @@ from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
 from .skel import SkelBindings, sample_skin, skin_data
 from .topology import Topology, build_topology, vertex_normals
-from .values import static_value
+from .values import finite_in_float32, frame_of, static_value
 
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+#: prims whose edits change the skinning of the meshes bound to them
+SKEL_TYPES = (UsdSkel.Root, UsdSkel.Skeleton, UsdSkel.Animation, UsdSkel.BlendShape)
+#: prims whose edits change the materials of the meshes bound to them
+SHADING_TYPES = (UsdShade.Material, UsdShade.NodeGraph, UsdShade.Shader)
+
+
+def _is_a(prim: Usd.Prim, types) -> bool:
+    return bool(prim) and any(prim.IsA(kind) for kind in types)
 
 
 #: root layer identifier -> the StageInputs of stages opened by open_stage
@@ -137,9 +145,7 @@ def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -
     """Refuse a transform that is not finite, or that takes a mesh of half-size ``extent``
     beyond MAX_WORLD_COORDINATE (where float32 squares of lengths overflow on the GPU)."""
     matrix = np.asarray(matrix, np.float64)
-    with np.errstate(over="ignore"):
-        as_float32 = matrix.astype(np.float32)
-    if not np.all(np.isfinite(as_float32)):
+    if not finite_in_float32(matrix):
         raise UsdWrinkleError("transform is not finite in float32 (NaN, Inf or beyond 3.4e38)",
                               path, "xformOp", frame)
     scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
@@ -153,7 +159,7 @@ def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -
 def _finite_points(points, path, attribute, time=None):
     arr = np.asarray(points, dtype=np.float32).reshape(-1, 3)
     if not np.all(np.isfinite(arr)):
-        frame = None if time is None or time.IsDefault() else time.GetValue()
+        frame = frame_of(time)
         raise UsdWrinkleError("points are not finite (NaN or Inf)", path, attribute, frame)
     return arr
 
@@ -205,15 +211,27 @@ class StageSceneDelegate:
 
     def _add_mesh(self, prim: Usd.Prim) -> bool:
         path = str(prim.GetPath())
-        self.baked.pop(path, None)
+        self._forget(path)
         record = self._mesh_record(prim, self._relax_override)
         if record is None:
-            self.meshes.pop(path, None)
-            self._prims.pop(path, None)
             return False
         self.meshes[path] = record
         self._prims[path] = prim
         return True
+
+    def _forget(self, path: str) -> None:
+        self.meshes.pop(path, None)
+        self._prims.pop(path, None)
+        self.baked.pop(path, None)
+
+    def _wrinkle_source(self, prim: Usd.Prim, num_points: int):
+        """(baked fields or None, wrinkled?) of a mesh; the baked fields are registered."""
+        path = str(prim.GetPath())
+        baked = find_baked(prim, num_points) if self.use_baked else None
+        self.baked.pop(path, None)
+        if baked is not None:
+            self.baked[path] = baked
+        return baked, self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None
 
     # -- change tracking ---------------------------------------------------------------
     def process_changes(self) -> tuple[dict[str, int], list[str], list[str]]:
@@ -245,11 +263,9 @@ class StageSceneDelegate:
                 mark(str(prim_path), classify(path.name))
                 if path.name == "purpose":
                     structural.add(str(prim_path))
-            elif prim and prim.IsA(UsdSkel.Skeleton) or prim and prim.IsA(UsdSkel.Animation) \
-                    or prim and prim.IsA(UsdSkel.BlendShape):
+            elif _is_a(prim, SKEL_TYPES):
                 rebuild_skel = True
-            elif prim and (prim.IsA(UsdShade.Material) or prim.IsA(UsdShade.Shader)
-                           or prim.IsA(UsdShade.NodeGraph)):
+            elif _is_a(prim, SHADING_TYPES):
                 shading = True
             elif path.name in ("visibility", "purpose") or path.name.startswith("xformOp"):
                 # an ancestor's transform or visibility: sampled per frame; purpose decides
@@ -261,18 +277,13 @@ class StageSceneDelegate:
                         mark(mesh, classify(path.name))
         for root in structural:
             prim = self.stage.GetPrimAtPath(root)
-            if prim and (prim.IsA(UsdSkel.Skeleton) or prim.IsA(UsdSkel.Animation)
-                         or prim.IsA(UsdSkel.Root)):
-                rebuild_skel = True
-            if prim and (prim.IsA(UsdShade.Material) or prim.IsA(UsdShade.Shader)):
-                shading = True
+            rebuild_skel = rebuild_skel or _is_a(prim, SKEL_TYPES)
+            shading = shading or _is_a(prim, SHADING_TYPES)
             inside = {m for m in self.meshes if Sdf.Path(m).HasPrefix(Sdf.Path(root))}
             present = {str(p.GetPath()): p for p in self._rendered_meshes(prim)} if prim \
                 else {}
             for mesh in inside - set(present):
-                self.meshes.pop(mesh)
-                self._prims.pop(mesh)
-                self.baked.pop(mesh, None)
+                self._forget(mesh)
             for mesh in present:
                 mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
         if rebuild_skel:
@@ -305,15 +316,11 @@ class StageSceneDelegate:
         prim = self._prims[path]
         default = Usd.TimeCode.Default()
         if bits & DirtyBits.DIRTY_PRIMVAR:
-            baked = find_baked(prim, len(record.rest_points)) if self.use_baked else None
-            self.baked.pop(path, None)
-            if baked is not None:
-                self.baked[path] = baked
+            baked, wrinkled = self._wrinkle_source(prim, len(record.rest_points))
             record = dataclasses.replace(
                 record, params=read_params(prim, record.rest_points, record.topology, default,
                                            self._relax_override),
-                wrinkled=self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None,
-                baked_range=baked.range_text() if baked is not None else None)
+                wrinkled=wrinkled, baked_range=baked.range_text() if baked is not None else None)
         if bits & DirtyBits.DIRTY_MATERIAL:
             record = dataclasses.replace(
                 record, material=read_material(prim, record.topology, default, self.warn))
@@ -358,12 +365,9 @@ class StageSceneDelegate:
             if targets:
                 self.warn(f"skel binding to a missing or unusable skeleton; treated as "
                           f"static ({path})")
-        baked = find_baked(prim, len(rest)) if self.use_baked else None
-        wrinkled = self.all_meshes or schema.has_wrinkle_api(prim) or baked is not None
+        baked, wrinkled = self._wrinkle_source(prim, len(rest))
         params = read_params(prim, rest, topology, default, relax_iterations)
         material = read_material(prim, topology, default, self.warn)
-        if baked is not None:
-            self.baked[path] = baked
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
                           point_cached, wrinkled, params, material,
                           baked.range_text() if baked is not None else None)
@@ -387,7 +391,7 @@ class StageSceneDelegate:
         """One mesh at ``time``; ``with_baked``: also its baked fields, if it has any."""
         record = self.meshes[path]
         prim = self._prims[path]
-        frame = None if time.IsDefault() else time.GetValue()
+        frame = frame_of(time)
         baked = None
         if with_baked and path in self.baked:
             baked = self.baked[path].at(float("nan") if frame is None else frame)

@@ -1,6 +1,8 @@
-"""Reading authored values: one rule for "the value" of an attribute outside a frame."""
+"""Reading authored values: one rule for "the value" of an attribute outside a frame,
+the frame a message names, and what the GPU's float32 can hold."""
 from __future__ import annotations
 
+import numpy as np
 from pxr import Usd
 
 
@@ -11,3 +13,15 @@ def static_value(attr: Usd.Attribute, time: Usd.TimeCode | None = None):
     if value is None and attr.GetNumTimeSamples():
         value = attr.Get(attr.GetTimeSamples()[0])
     return value
+
+
+def frame_of(time: Usd.TimeCode) -> float | None:
+    """The frame a message names for ``time`` (None: the default time)."""
+    return None if time is None or time.IsDefault() else time.GetValue()
+
+
+def finite_in_float32(values) -> bool:
+    """True when every value survives the GPU's float32: not NaN, not Inf, and not beyond
+    3.4e38 (a double 1e39 becomes Inf there)."""
+    with np.errstate(over="ignore"):
+        return bool(np.all(np.isfinite(np.asarray(values, np.float64).astype(np.float32))))
