@@ -38,18 +38,19 @@ class Finding:
         return f"{self.message} ({where})"
 
 
-_NUMBERS = {"float", "double", "half", "int", "uint", "int64", "uint64", "uchar"}
-_VECTORS3 = {f"{role}3{kind}" for role in ("float", "double", "half") for kind in ("",)} | \
+_INTEGERS = {"int", "uint", "int64", "uint64", "uchar"}
+_NUMBERS = {"float", "double", "half", "int", "uint", "int64", "uint64"}
+_VECTORS3 = {"float3", "double3", "half3"} | \
     {f"{role}3{kind}" for role in ("vector", "normal", "point", "color") for kind in "fdh"}
 #: attribute -> (accepted scalar types, array?, what the message calls it). q and the
 #: profiles are arrays; width may be a constant scalar; the others are scalars.
 EXPECTED_TYPES = {
     schema.Q: (_VECTORS3, (True,), "a vector3f[] array"),
-    schema.WIDTH: (_NUMBERS - {"uchar"}, (True, False), "a float[] array or a float"),
-    schema.AMPLITUDE_SCALE: (_NUMBERS - {"uchar"}, (False,), "a float"),
-    schema.HEIGHT_PROFILE: (_NUMBERS - {"uchar"}, (True,), "a float[] array"),
-    schema.GRADIENT_PROFILE: (_NUMBERS - {"uchar"}, (True,), "a float[] array"),
-    schema.RELAX_ITERATIONS: ({"int", "uint", "int64", "uint64", "uchar"}, (False,), "an int"),
+    schema.WIDTH: (_NUMBERS, (True, False), "a float[] array or a float"),
+    schema.AMPLITUDE_SCALE: (_NUMBERS, (False,), "a float"),
+    schema.HEIGHT_PROFILE: (_NUMBERS, (True,), "a float[] array"),
+    schema.GRADIENT_PROFILE: (_NUMBERS, (True,), "a float[] array"),
+    schema.RELAX_ITERATIONS: (_INTEGERS, (False,), "an int"),
 }
 
 

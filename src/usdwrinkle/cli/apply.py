@@ -112,26 +112,15 @@ def read_profile(spec: str) -> np.ndarray:
 
 def open_override_layer(path: str):
     """The -o layer: an existing USD layer to update, or a new anonymous one."""
-    from pxr import Sdf, Tf
+    from pxr import Sdf
 
-    from ..errors import UsdWrinkleError
-    from ..scene.diagnostics import usd_diagnostics, usd_error_text
-    from ..scene.inputs import require_regular_file
+    from ..scene.inputs import open_layer, require_regular_file
 
     if not os.path.exists(path):
         return Sdf.Layer.CreateAnonymous(os.path.splitext(path)[1])
     require_regular_file(path, "override layer")
-    try:
-        with usd_diagnostics() as messages:
-            layer = Sdf.Layer.FindOrOpen(path)
-    except Tf.ErrorException as exc:
-        raise UsdWrinkleError(f"cannot open override layer '{path}' (an existing file that "
-                              f"is not a USD layer?): {usd_error_text(exc)}") from None
-    if layer is None:
-        detail = f": {messages[-1]}" if messages else ""
-        raise UsdWrinkleError(f"cannot open override layer '{path}' (an existing file that "
-                              f"is not a USD layer?){detail}")
-    return layer
+    return open_layer(path, f"cannot open override layer '{path}' (an existing file that is "
+                            "not a USD layer?)")
 
 
 @dataclass

@@ -79,15 +79,16 @@ class StageInputs:
         return (st.st_dev, st.st_ino) in self.inodes
 
 
-def _open_layer(identifier: str, referrer: str | None):
-    what = f"cannot read layer '{package_file(identifier)}' (used by '{referrer}')" \
-        if referrer else f"cannot open '{identifier}' as a USD stage"
+def open_layer(identifier: str, what: str, required: bool = True):
+    """Sdf.Layer.FindOrOpen with USD's errors as one line after ``what`` (a syntax error
+    keeps its file:line); a layer that cannot be opened is an error when ``required``,
+    else None (USD then warns about it when the stage is composed)."""
     try:
         with usd_diagnostics() as messages:
             layer = Sdf.Layer.FindOrOpen(identifier)
     except Tf.ErrorException as exc:
         raise UsdWrinkleError(f"{what}: {usd_error_text(exc)}") from None
-    if layer is None and referrer is None:
+    if layer is None and required:
         detail = f": {messages[-1]}" if messages else ""
         raise UsdWrinkleError(f"{what}{detail}")
     return layer
@@ -97,7 +98,8 @@ def scan_inputs(stage_path: str) -> StageInputs:
     """Open the stage's layers (not the stage) and list every file it reads."""
     inputs = StageInputs()
     require_regular_file(stage_path, "stage")
-    root = _open_layer(os.path.abspath(stage_path), None)
+    root = open_layer(os.path.abspath(stage_path),
+                      f"cannot open '{os.path.abspath(stage_path)}' as a USD stage")
     inputs.layers.append(root)
     inputs.add_file(stage_path)
     if root.realPath:
@@ -129,7 +131,8 @@ def scan_inputs(stage_path: str) -> StageInputs:
                 Sdf.FileFormat.FindByExtension(extension) is not None
             if is_layer and resolved not in seen:
                 seen.add(resolved)
-                child = _open_layer(resolved, layer.identifier)
+                child = open_layer(resolved, f"cannot read layer '{disk}' (used by "
+                                             f"'{layer.identifier}')", required=False)
                 if child is not None:
                     seen.add(child.identifier)
                     inputs.layers.append(child)
