@@ -82,7 +82,8 @@ def add_material(stage, name, color=None, texture=None):
     return material
 
 
-def define_mesh(stage, path, points, counts, indices, st=None):
+def define_mesh(stage, path, points, counts, indices, st=None,
+                st_interpolation=UsdGeom.Tokens.vertex):
     mesh = UsdGeom.Mesh.Define(stage, path)
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(points, np.float32)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.asarray(counts, np.int32)))
@@ -93,7 +94,7 @@ def define_mesh(stage, path, points, counts, indices, st=None):
     mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))
     if st is not None:
         UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
-            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, st_interpolation).Set(
             Vt.Vec2fArray.FromNumpy(np.asarray(st, np.float32)))
     return mesh
 
@@ -137,12 +138,13 @@ def rig(stage, root_path, mesh, joints, bind_xforms, joint_indices, joint_weight
     return skel, anim
 
 
-def make_texture(path):
-    """A woven plaid so the texture deformation shows where the cloth folds."""
+def make_texture(path, repeats=(1, 1)):
+    """A woven plaid so the texture deformation shows where the cloth folds; ``repeats``
+    tiles of 256 x 256 texels across and up."""
     import OpenImageIO as oiio
 
     size = 256
-    u, v = np.meshgrid(np.arange(size) / size, np.arange(size) / size)
+    u, v = np.meshgrid(np.arange(size * repeats[0]) / size, np.arange(size * repeats[1]) / size)
     base = np.array([0.72, 0.18, 0.16])
     stripe_a = (np.sin(u * 2 * np.pi * 8) > 0.55)[..., None]
     stripe_b = (np.sin(v * 2 * np.pi * 8) > 0.55)[..., None]
@@ -150,7 +152,7 @@ def make_texture(path):
     img = img + np.array([0.9, 0.85, 0.6]) * ((np.abs(np.sin(u * 2 * np.pi * 32)) > 0.97)
                                               [..., None] * 0.5)
     img = srgb_encode(img)
-    spec = oiio.ImageSpec(size, size, 3, "uint8")
+    spec = oiio.ImageSpec(img.shape[1], img.shape[0], 3, "uint8")
     out = oiio.ImageOutput.create(path)
     out.open(path, spec)
     out.write_image(np.ascontiguousarray((img * 255).astype(np.uint8)))
@@ -166,11 +168,18 @@ def shirt(outdir):
     gx, gt = np.meshgrid(xs, theta, indexing="ij")
     points = np.stack([gx.ravel(), radius * np.cos(gt).ravel(), radius * np.sin(gt).ravel()], 1)
     counts, indices = grid_faces(along, around, wrap_cols=True)
-    st = np.stack([(gt / (2 * np.pi)).ravel() * 2, (gx / length).ravel() * 3], 1)
+    # face-varying UVs in the 0-1 tile with a seam where the sleeve closes (u = 0 and
+    # u = 1), so that baked wrinkle maps have one non-overlapping island; the plaid
+    # repeats 2 x 3 times inside its texture
+    corner = indices.reshape(-1, 4)
+    row, col = corner // around, corner % around
+    col[:, 1:3] = np.where(col[:, 1:3] < col[:, [0, 3]], col[:, 1:3] + around, col[:, 1:3])
+    st = np.stack([col / around, row / (along - 1)], -1).reshape(-1, 2)
     os.makedirs(os.path.join(outdir, "textures"), exist_ok=True)
-    make_texture(os.path.join(outdir, "textures", "plaid.png"))
+    make_texture(os.path.join(outdir, "textures", "plaid.png"), repeats=(2, 3))
     UsdSkel.Root.Define(stage, "/World/Arm")
-    mesh = define_mesh(stage, "/World/Arm/Sleeve", points, counts, indices, st)
+    mesh = define_mesh(stage, "/World/Arm/Sleeve", points, counts, indices, st,
+                       UsdGeom.Tokens.faceVarying)
     material = add_material(stage, "Plaid", texture="./textures/plaid.png")
     UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
     elbow = 1.5

@@ -3,14 +3,12 @@
 // shading normal and deform the texture coordinates (Loviscach 2006, sec. 5).
 // One file, two stages: the loader defines VERTEX_SHADER or FRAGMENT_SHADER.
 #include "include/common.glsl"
-#include "include/topology.glsl"
+#include "include/wave.glsl"
 
-layout(binding = DRAW_POSED_POINTS) uniform sampler2D posed_points;  // local space
-layout(binding = DRAW_FIELDS) uniform sampler2D fields;
-layout(binding = DRAW_PHASE) uniform sampler2D phase;
-// Texture coordinates per triangle corner: [3t + c].xy
+// Texture coordinates per triangle corner: [3t + c].xy, of the diffuse texture and of
+// the normal map (the same primvar, or each its own)
 layout(binding = DRAW_CORNER_ST) uniform sampler2D corner_st;
-layout(binding = DRAW_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
+layout(binding = DRAW_NORMAL_ST) uniform sampler2D normal_st;
 
 uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
 uniform mat4 u_world_to_clip;    // view * projection, same convention
@@ -29,6 +27,7 @@ centroid out vec3 v_world;
 centroid out vec3 v_normal_local;
 centroid out vec3 v_bary;
 centroid out vec2 v_st;
+centroid out vec2 v_normal_st;
 
 void main() {
     // Not indexed: 3 corners per triangle, each run on its own, because the barycentric
@@ -45,6 +44,7 @@ void main() {
     v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_st = fetch(corner_st, corner).xy;
+    v_normal_st = fetch(normal_st, corner).xy;
     gl_Position = u_world_to_clip * world;         // world -> clip
 }
 
@@ -55,21 +55,25 @@ centroid in vec3 v_world;
 centroid in vec3 v_normal_local;
 centroid in vec3 v_bary;
 centroid in vec2 v_st;
+centroid in vec2 v_normal_st;
 
 layout(location = 0) out vec4 out_color;    // linear RGB, alpha
 layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z
 layout(location = 2) out vec4 out_normal;   // world-space shading normal
 
-// 1D tables stored as N x 1 2D textures (moderngl has no 1D textures); repeat, linear
-layout(binding = DRAW_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
-layout(binding = DRAW_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
-uniform float u_profile_samples;
 uniform int u_wrinkles;                // 0: same shading, no wrinkles
 uniform vec3 u_diffuse_color;
 uniform int u_has_texture;
 layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
 uniform vec4 u_texture_bias;
+// UsdPreviewSurface inputs:normal from a UsdUVTexture: a tangent-space normal map, tiles
+// of a UDIM set in the layers of an array (u_udim_layer[10 v + u]: the layer, or -1)
+uniform int u_has_normal_map;
+layout(binding = DRAW_NORMAL_TEXTURE) uniform sampler2DArray u_normal_map;
+uniform int u_udim_layer[UDIM_TILES];
+uniform vec4 u_normal_scale;
+uniform vec4 u_normal_bias;
 
 uniform int u_num_lights;
 uniform int u_light_kind[MAX_LIGHTS];      // 0 distant, 1 sphere
@@ -77,40 +81,36 @@ uniform vec3 u_light_radiance[MAX_LIGHTS];
 uniform vec4 u_light_vector[MAX_LIGHTS];   // distant: direction of travel; sphere: position, radius
 uniform vec3 u_ambient;                    // dome lights
 
-float profile(sampler2D table, float theta) {
-    // sample s sits at theta = 2 pi s / N; texel centres are at (s + 0.5) / N
-    return texture(table, vec2(theta / TWO_PI + 0.5 / u_profile_samples, 0.5)).r;
+// The tangent-space normal of the normal map at st, or nothing (false) outside its tiles
+bool normal_map(vec2 st, out vec3 n_tangent) {
+    vec2 tile = floor(st);
+    int layer = 0;
+    if (u_udim_layer[0] != -2) {  // -2: one texture that repeats, not a UDIM set
+        bool inside = tile.x >= 0.0 && tile.x < 10.0 && tile.y >= 0.0 && tile.y < 10.0;
+        layer = inside ? u_udim_layer[int(tile.y) * 10 + int(tile.x)] : -1;
+        if (layer < 0) return false;
+    }
+    vec4 texel = texture(u_normal_map, vec3(st - tile, float(layer)));
+    n_tangent = (texel * u_normal_scale + u_normal_bias).xyz;
+    return true;
 }
 
 void main() {
     int t = gl_PrimitiveID;
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
-    float h = 0.0;
-    float amplitude = 0.0;
-    vec3 g = vec3(0.0);
-    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
-    vec3 bary = clamp(v_bary, 0.0, 1.0);
-    bary /= max(bary.x + bary.y + bary.z, 1e-20);
-    ivec3 corners = fetch(triangles, t).xyz;
+    Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
-        vec3 k0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
-        for (int c = 0; c < 3; ++c) {
-            int i = corners[c];
-            vec4 wave = fetch(fields, FIELD_WAVE(i));
-            float a = wave.w;
-            if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
-            vec3 k = wave.xyz;
-            float phi = fetch(phase, i).x;
-            if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
-            float theta = phi + dot(k, v_local - fetch(posed_points, i).xyz);  // local space
-            float b = bary[c];
-            h += b * a * profile(u_height_profile, theta);
-            g += b * a * profile(u_gradient_profile, theta) * k;
-            amplitude += b * a;
-        }
-        g -= dot(g, n) * n;  // keep the gradient in the tangent plane
+        wave = wave_blend(t, v_bary, v_local, n);
     }
-    vec3 shading_local = safe_normalize(n - g, n);
+    float h = wave.height;
+    vec3 shading_local = safe_normalize(n - wave.gradient, n);
+    vec3 n_tangent;
+    if (u_has_normal_map != 0 && normal_map(v_normal_st, n_tangent)) {
+        // the map's frame about the (wrinkled) shading normal: maps and wrinkles compose
+        mat3 frame = tangent_frame(t, normal_st, shading_local);
+        shading_local = safe_normalize(frame * n_tangent, shading_local);
+    }
+    ivec3 corners = fetch(triangles, t).xyz;
 
     // texture deformation: the point seen through the wrinkle, dx = (v/(v.n') - n') h
     vec2 st = v_st;
@@ -168,7 +168,7 @@ void main() {
 
     vec4 eye = u_world_to_eye * vec4(v_world, 1.0);
     out_color = vec4(radiance, 1.0);
-    out_wrinkle = vec4(h, amplitude, -eye.z, 1.0);
+    out_wrinkle = vec4(h, wave.amplitude, -eye.z, 1.0);
     out_normal = vec4(N, 1.0);
 }
 

@@ -25,7 +25,7 @@ GLSL = {"GL_ARB_shader_draw_parameters"}
 STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
                   "STEP"}
 PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.CRUSH, bindings.RELAX,
-                             bindings.DRAW) for name in table}
+                             bindings.DRAW, bindings.MAPS) for name in table}
 
 
 def shader_files():
@@ -73,3 +73,19 @@ def test_fields_follow_the_layout():
     np.testing.assert_array_equal(fields.points, posed[:, :3])
     assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
                                      "direction", "compression", "phase", "anchor_phase"]
+
+
+def test_the_wave_blend_is_written_once():
+    """Draw and the wrinkle maps evaluate the waves through include/wave.glsl's
+    wave_blend: no other shader samples the profiles or sums the corner waves itself."""
+    users = []
+    for path in shader_files():
+        text = strip_comments(path.read_text())
+        if path.name == "wave.glsl":
+            assert "Wave wave_blend(" in text
+            continue
+        assert "u_height_profile" not in text and "u_gradient_profile" not in text, path.name
+        if '#include "include/wave.glsl"' in text:
+            assert "wave_blend(" in text, path.name
+            users.append(path.name)
+    assert {"draw.glsl", "maps.glsl"} <= set(users)

@@ -23,6 +23,9 @@ COLD_START_FACTOR = 4
 MAX_LIGHTS = 8
 #: Texels per joint in the joints table (skin.glsl documents the layout).
 JOINT_TEXELS = 9
+#: UDIM tiles a normal map may have: u and v in 0..9, tiles 1001..1100 (draw.glsl
+#: looks each tile's texture layer up in a table of this many entries).
+UDIM_TILES = 100
 
 #: Per-vertex fields table (crush writes it; relax and draw read it): FIELD_TEXELS RGBA
 #: texels per vertex, in this order:
@@ -50,7 +53,7 @@ def glsl_literal(value) -> str:
 #: What every shader gets as #defines.
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
-    ("JOINT_TEXELS", JOINT_TEXELS), ("FIELD_TEXELS", FIELD_TEXELS),
+    ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
     ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL))}
 

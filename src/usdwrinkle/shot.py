@@ -127,9 +127,13 @@ def bakeable_meshes(engine, warn) -> dict:
 def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_spec: str,
                with_points: bool = False, display_color: str | None = None,
                sparse: bool = False, warn=lambda message: None,
-               progress: Callable = lambda items: items) -> int:
+               progress: Callable = lambda items: items, maps=None) -> int:
     """Compute every frame in order (the phase history is sequential in time) and write
-    the wrinkle fields to ``output`` atomically; returns the number of meshes baked."""
+    the wrinkle fields to ``output`` atomically; returns the number of meshes baked.
+
+    ``maps`` (maps.bake.MapOptions): also render each frame's wrinkle maps and bind them
+    in a material per mesh; the maps are moved into their folder just before the layer
+    is renamed into place, so an error leaves neither."""
     from .outputs.layers import LayerBaker
 
     wrinkled = bakeable_meshes(engine, warn)
@@ -140,11 +144,27 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
                        with_points=with_points, display_color=display_color, sparse=sparse,
                        warn=warn)
     wanted = set(wrinkled) | set(baker.point_meshes)
-    for frame in progress(frames):
-        with at_frame(frame):
-            engine.compute_frame(frame)
-        baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
-    baker.save(output, frame_spec)
+    map_bake = None
+    if maps is not None:
+        from .maps.bake import MapBake
+
+        map_bake = MapBake(engine, wrinkled, maps, output, warn, frames)
+    try:
+        for frame in progress(frames):
+            with at_frame(frame):
+                engine.compute_frame(frame)
+                baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
+                if map_bake is not None:
+                    map_bake.add_frame(frame)
+        if map_bake is None:
+            baker.save(output, frame_spec)
+        else:
+            map_bake.author(baker.layer, engine.scene.stage)
+            baker.save(output, frame_spec, before_rename=map_bake.commit,
+                       extra_metadata={"maps": map_bake.metadata()})
+    finally:
+        if map_bake is not None:
+            map_bake.release()
     return len(wrinkled)
 
 

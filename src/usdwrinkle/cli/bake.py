@@ -1,7 +1,10 @@
 """usdwrinkle bake STAGE OUTPUT_LAYER: write the wrinkle fields back to USD."""
 from __future__ import annotations
 
+import os
 import time
+
+from ..errors import UsdWrinkleError
 
 from .common import (
     Reporter,
@@ -29,12 +32,63 @@ def add_parser(subparsers) -> None:
     p.add_argument("--display-color", choices=("amplitude", "compression"),
                    help="also write primvars:displayColor (vertex) as a viridis ramp of that "
                         "field, for usdview's default shading")
+    maps = p.add_argument_group(
+        "wrinkle maps", "per-frame texture maps of the wrinkles, bound in a UsdPreviewSurface "
+                        "material per mesh, for renderers that read textures (README: maps)")
+    maps.add_argument("--maps", metavar="KINDS",
+                      help="comma-separated: normal (tangent-space normal, 0.5n+0.5), height "
+                           "(signed height in scene units, float EXR), amplitude (amplitude "
+                           "over s*W/4, a [0, 1] mask)")
+    maps.add_argument("--map-size", type=int, default=2048,
+                      help="texels per side of each map (per UDIM tile); default 2048")
+    maps.add_argument("--map-dir", metavar="DIR",
+                      help="where the maps go (default: <layer name>_maps beside the layer); "
+                           "the layer names them relative to itself")
+    maps.add_argument("--map-format", choices=("png", "exr"), default="png",
+                      help="normal and amplitude maps as 16-bit PNG (default) or float EXR; "
+                           "the height map is always float EXR")
+    maps.add_argument("--map-padding", type=int, default=8,
+                      help="texels by which UV islands are grown, so that filtering at their "
+                           "borders does not reach the background; default 8")
+    maps.add_argument("--uv", default="st",
+                      help="the texture coordinates (primvar) the maps are laid out in; "
+                           "default st")
     p.add_argument("--sparse", action="store_true",
                    help="write the overs alone, without sublayering the input")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     # The bake is one process on purpose: each frame's phases start from the previous
     # frame's (phase history), so its frames cannot be computed apart (README, farms).
     p.set_defaults(run=run)
+
+
+def map_options(args):
+    """MapOptions from --maps and its options (None without --maps)."""
+    if args.maps is None:
+        given = [flag for flag, value, default in (
+            ("--map-size", args.map_size, 2048), ("--map-dir", args.map_dir, None),
+            ("--map-format", args.map_format, "png"), ("--map-padding", args.map_padding, 8),
+            ("--uv", args.uv, "st")) if value != default]
+        if given:
+            raise UsdWrinkleError(f"{', '.join(given)} need --maps")
+        return None
+    from ..maps.bake import MapOptions, check_map_options
+    from ..maps.files import parse_map_kinds
+
+    options = MapOptions(parse_map_kinds(args.maps), args.map_size, args.map_dir,
+                         args.map_format, args.map_padding, args.uv)
+    check_map_options(options)
+    return options
+
+
+def check_map_folder(folder: str) -> None:
+    """Refuse a map folder that cannot be written, before any work; one that does not
+    exist yet is made only when the maps are committed (a failed bake leaves none)."""
+    from ..outputs.atomic import check_writable
+
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise UsdWrinkleError(f"cannot write maps to '{folder}': it is a file, not a folder")
+    probe = folder if os.path.isdir(folder) else os.path.dirname(os.path.abspath(folder))
+    check_writable([os.path.join(probe, ".usdwrinkle-maps-probe")])
 
 
 def run(args) -> int:
@@ -44,6 +98,7 @@ def run(args) -> int:
     from ..shot import bake_layer, frame_spec_text
 
     check_stage_args(args)
+    maps = map_options(args)
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
     reporter = Reporter(args.quiet)
@@ -51,16 +106,22 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     refuse_overwriting_inputs(args.stage, [args.output], stage)
     check_writable([args.output])
+    if maps is not None:
+        check_map_folder(maps.folder_for(args.output))
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     # a bake always computes: fields already baked into the input are not its input
     engine = start_engine(args, reporter, stage, use_baked=False)
     try:
+        if maps is not None:
+            from ..maps.bake import check_map_options
+
+            check_map_options(maps, engine.render_delegate.max_texture_size)
         started = time.perf_counter()
         count = bake_layer(engine, args.stage, args.output, frames,
                            args.frames or frame_spec_text(frames),
                            with_points=args.with_points, display_color=args.display_color,
                            sparse=args.sparse, warn=reporter.warn,
-                           progress=lambda items: reporter.progress(items, "bake"))
+                           progress=lambda items: reporter.progress(items, "bake"), maps=maps)
         if not args.quiet:
             print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
                   f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)

@@ -8,7 +8,7 @@ from pxr import Usd, UsdUtils
 
 from ..errors import UsdWrinkleError
 from ..limits import MAX_FRAMES, MAX_TIME_CODE
-from ..timecode import format_frame
+from ..timecode import SUBFRAME_DECIMALS, format_frame, frame_text  # noqa: F401
 
 _HASHES = re.compile(r"#+")
 
@@ -87,25 +87,6 @@ def add_frame_args(parser) -> None:
 
 
 #: decimals of a sub-frame in a file name (frame 1.25 -> 0001.250)
-SUBFRAME_DECIMALS = 3
-
-
-def frame_text(frame: float, width: int = 4) -> str:
-    """A frame number as it appears in a file name: zero-padded, sub-frames to
-    SUBFRAME_DECIMALS decimals (rounded, so 1.9996 names 0002.000), NaN as 'default'."""
-    if math.isnan(frame):
-        return format_frame(frame)
-    rounded = round(frame, SUBFRAME_DECIMALS)
-    sign = "-" if rounded < 0 else ""
-    whole, fraction = divmod(abs(rounded), 1.0)
-    text = f"{sign}{int(whole):0{width}d}"
-    if round(fraction, SUBFRAME_DECIMALS):
-        text += f"{fraction:.{SUBFRAME_DECIMALS}f}"[1:]
-    elif not float(frame).is_integer():
-        text += "." + "0" * SUBFRAME_DECIMALS
-    return text
-
-
 def frame_path(pattern: str, frame: float) -> str:
     """Replace the first run of '#' by the zero-padded frame number."""
     match = _HASHES.search(pattern)

@@ -138,7 +138,9 @@ def _check_finite(buffers: dict, aovs) -> None:
                 "transform or wrinkle value of the scene is out of range")
 
 
-def _encode(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
+def encode_file(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
+    """Encode ``pixels`` to the file ``scratch`` with OpenImageIO; errors name ``path``,
+    the output it stands in for."""
     import OpenImageIO as oiio
 
     out = oiio.ImageOutput.create(scratch)
@@ -201,7 +203,7 @@ def write_image(path: str, buffers: dict, compression: str = "zip", half: bool =
                                    dir=_scratch_folder())
     os.close(fd)
     try:
-        _encode(scratch, spec, pixels, path)
+        encode_file(scratch, spec, pixels, path)
         size = os.path.getsize(scratch)
 
         def complete(tmp: str) -> None:

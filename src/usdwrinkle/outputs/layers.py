@@ -202,14 +202,24 @@ class LayerBaker:
             "withPoints": self.with_points, "displayColor": self.display_color or "",
             "sparse": self.sparse}}
 
-    def save(self, output_path: str, frame_spec: str) -> None:
+    def save(self, output_path: str, frame_spec: str, before_rename=None,
+             extra_metadata: dict | None = None) -> None:
+        """Write the layer atomically; ``before_rename()`` runs once it is written under
+        its temporary name (the wrinkle maps are moved into place there, so that an error
+        leaves neither a layer naming missing maps nor maps without their layer)."""
         ext = check_layer_path(output_path)
         self._metadata(output_path, frame_spec)
+        if extra_metadata:
+            data = dict(self.layer.customLayerData)
+            data["usdwrinkle"] = {**data["usdwrinkle"], **extra_metadata}
+            self.layer.customLayerData = data
         with atomic_path(output_path) as tmp:
             # Export picks the file format from the extension; .usd is written as crate
             args = {"format": "usdc"} if ext == ".usd" else {}
             if not self.layer.Export(tmp, args=args):
                 raise UsdWrinkleError(f"cannot write layer '{output_path}'")
+            if before_rename is not None:
+                before_rename()
 
 
 def _ancestors(prim: Usd.Prim):

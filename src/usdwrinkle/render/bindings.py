@@ -37,6 +37,13 @@ RELAX = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
          "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_EDGES": 5, "RELAX_Z_IN": 6,
          # image units
          "RELAX_PHASE": 0, "RELAX_Z_OUT": 1, "RELAX_EDGES_OUT": 2}
-DRAW = {"DRAW_HEIGHT_PROFILE": 0, "DRAW_GRADIENT_PROFILE": 1, "DRAW_DIFFUSE_TEXTURE": 2,
-        "DRAW_POSED_POINTS": 3, "DRAW_FIELDS": 4, "DRAW_PHASE": 5, "TOPOLOGY_TABLE": 6,
-        "DRAW_CORNER_ST": 7, "DRAW_TRIANGLES": 8}
+#: the wave blend (include/wave.glsl): the same units in every pass that includes it
+WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS": 3,
+        "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
+DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "TOPOLOGY_TABLE": 6, "DRAW_CORNER_ST": 7,
+        "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10}
+#: wrinkle maps (maps/): the blend rasterised in UV space, then dilated
+MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9,
+        # image units of the dilation
+        "DILATE_NORMAL_IN": 0, "DILATE_WRINKLE_IN": 1, "DILATE_NORMAL_OUT": 2,
+        "DILATE_WRINKLE_OUT": 3}

@@ -56,6 +56,8 @@ class Mesh:
                 self.sync_counts["material"] += 1
         if dirty_bits & DirtyBits.FRAME:
             self.frame = scene_delegate.current_frame.meshes[self.path]
+            if self.frame.normal_map is not None:  # a time-sampled normal map
+                self.resources.set_normal_map(self.frame.normal_map)
             self.sync_counts["frame"] += 1
         return DirtyBits.CLEAN
 
@@ -148,6 +150,11 @@ class RenderDelegate:
         self.draw = DrawPass(self.ctx)
         self.rprims: dict[str, Mesh] = {}
         self._framebuffer: Framebuffer | None = None
+
+    @property
+    def max_texture_size(self) -> int:
+        """GL_MAX_TEXTURE_SIZE of this context (the largest map or image side)."""
+        return int(self.ctx.info.get("GL_MAX_TEXTURE_SIZE", 16384) or 16384)
 
     def create_rprim(self, path: str) -> Mesh:
         mesh = Mesh(self, path)

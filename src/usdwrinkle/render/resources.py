@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import FIELD_FLOATS, JOINT_TEXELS, WrinkleFields
+from ..contract import FIELD_FLOATS, JOINT_TEXELS, UDIM_TILES, WrinkleFields
 from ..errors import UsdWrinkleError
 from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
@@ -162,6 +162,12 @@ class MeshResources:
         self.baked_waves: Table | None = None  # write_baked() makes it
         self.corner_st = self._table(3 * self.num_triangles, 2,
                                      data=self._corner_st(record))  # [3t + c]
+        #: the normal map's texture coordinates ([3t + c]), its tiles (a texture array)
+        #: and their layers by UDIM tile (set_normal_map)
+        self.normal_st = self._table(3 * self.num_triangles, 2)
+        self.normal_map = None
+        self.normal_map_record = None
+        self.udim_layers = np.full(UDIM_TILES, -1, np.int32)
         self.face_normals = self._table(self.num_triangles, 4)
         skin = record.skin
         if skin is not None:
@@ -183,6 +189,7 @@ class MeshResources:
         # textures join self.textures as they are made, so release() frees them on failure
         self.texture = None
         self._upload_texture(record)
+        self.set_normal_map(record.material.normal_map)
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
 
@@ -225,6 +232,38 @@ class MeshResources:
             self.texture.release()
             self.texture = None
         self._upload_texture(record)
+        self.set_normal_map(record.material.normal_map)
+
+    def set_normal_map(self, normal_map) -> None:
+        """Upload a NormalMapRecord (or drop the map: None); the same files as the
+        uploaded ones (its key) cost nothing, so a per-frame map uploads once a frame."""
+        if normal_map is self.normal_map_record or (
+                normal_map is not None and self.normal_map_record is not None
+                and normal_map.key == self.normal_map_record.key):
+            return
+        if self.normal_map is not None:
+            self.textures.remove(self.normal_map)
+            self.normal_map.release()
+            self.normal_map = None
+        self.normal_map_record = normal_map
+        self.udim_layers[:] = -1
+        if normal_map is None:
+            return
+        self.normal_st.write(normal_map.corner_st.reshape(-1, 2))
+        height, width = normal_map.tiles[0][1].shape[:2]
+        layers = np.stack([pixels for _, pixels in normal_map.tiles])
+        self.normal_map = self.ctx.texture_array((width, height, len(layers)), 4,
+                                                 _bytes(layers), dtype="f4")
+        self.textures.append(self.normal_map)
+        self.normal_map.build_mipmaps()
+        for layer, (tile, _) in enumerate(normal_map.tiles):
+            if tile == -1:  # one texture that repeats (draw.glsl: normal_map)
+                self.udim_layers[:] = -2
+                break
+            self.udim_layers[tile] = layer
+        # a UDIM tile is clamped at its edges (its neighbour is another file); one texture
+        # repeats, as UsdUVTexture's wrap modes default to
+        self.normal_map.repeat_x = self.normal_map.repeat_y = bool(self.udim_layers[0] == -2)
 
     def _upload_texture(self, record: MeshRecord) -> None:
         if record.material.texture is None:

@@ -1,4 +1,6 @@
-"""Materials: UsdPreviewSurface diffuseColor, constant or through UsdUVTexture.
+"""Materials: UsdPreviewSurface diffuseColor, constant or through UsdUVTexture, and
+inputs:normal through a UsdUVTexture (a tangent-space normal map, one file or a UDIM set,
+its file name possibly time-sampled: per-frame wrinkle maps).
 
 Textures are opened through Ar, so a texture inside a .usdz package works; the
 bytes are decoded by OpenImageIO. Texture coordinates become one value per
@@ -14,19 +16,23 @@ import numpy as np
 from pxr import Ar, Usd, UsdGeom, UsdShade
 
 from ..colour import srgb_decode, srgb_decode_8bit
+from ..contract import UDIM_TILES
 from ..limits import MAX_TEXTURE_SIZE
 from .inputs import package_file, require_regular_file
-from .records import MaterialRecord
+from .records import MaterialRecord, NormalMapRecord
 from .topology import Topology
 
 DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
 
 
 @lru_cache(maxsize=32)
-def load_texture(resolved_path: str) -> np.ndarray:
-    """Decode an image asset into (h, w, 4) float32 linear RGBA, row 0 at the bottom.
+def load_texture(resolved_path: str, color_space: str = "auto") -> np.ndarray:
+    """Decode an image asset into (h, w, 4) float32 RGBA, row 0 at the bottom.
 
-    Raises OSError when the asset cannot be read or decoded.
+    ``color_space``: UsdUVTexture's sourceColorSpace. ``sRGB`` decodes to linear, ``raw``
+    keeps the values (normal maps), ``auto`` decodes 8-bit images only, as the
+    UsdPreviewSurface specification says. Raises OSError when the asset cannot be read or
+    decoded.
     """
     from ..outputs.images import read_float_image
 
@@ -51,7 +57,7 @@ def load_texture(resolved_path: str) -> np.ndarray:
                       f"{str(exc).split(': ', 1)[-1]}") from None
     finally:
         os.unlink(tmp)
-    encoded_srgb = eight_bit or suffix.lower() in (".jpg", ".jpeg", ".png")
+    encoded_srgb = color_space == "sRGB" or (color_space != "raw" and eight_bit)
     rgba = np.ones((pixels.shape[0], pixels.shape[1], 4), np.float32)
     channels = pixels.shape[2]
     if channels >= 3:
@@ -60,7 +66,7 @@ def load_texture(resolved_path: str) -> np.ndarray:
         rgba[..., :3] = pixels[..., :1]
     if channels in (2, 4):
         rgba[..., 3] = pixels[..., -1]
-    if encoded_srgb:  # 8-bit images are sRGB encoded (UsdUVTexture sourceColorSpace auto)
+    if encoded_srgb:
         c = rgba[..., :3]
         rgba[..., :3] = srgb_decode_8bit(c) if eight_bit else srgb_decode(c)
     return np.ascontiguousarray(rgba[::-1])
@@ -101,18 +107,38 @@ def _resolve(shader: UsdShade.Shader, name: str, time):
     return None, None
 
 
-def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, warn):
-    """(texture pixels, corner st, scale, bias) of a UsdUVTexture, or Nones when it cannot
-    be used (with a warning: the mesh then renders untextured)."""
-    scale, _ = _resolve(tex, "scale", time)
-    bias, _ = _resolve(tex, "bias", time)
-    scale = np.ones(4, np.float32) if scale is None else np.asarray(scale, np.float32)
-    bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float32)
+def _coordinates(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time):
+    """(primvar name, corner values or None) of the texture coordinates a UsdUVTexture
+    reads through its inputs:st (a UsdPrimvarReader_float2; ``st`` when unconnected)."""
     varname = "st"
     _, reader = _resolve(tex, "st", time)
     if reader is not None:
         name, _ = _resolve(reader, "varname", time)
         varname = str(name) if name else varname
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
+    st = corner_values(primvar, topology, time) if primvar else None
+    if st is None or st.shape[-1] < 2:
+        return varname, None
+    return varname, np.ascontiguousarray(st[..., :2])
+
+
+def _scale_bias(tex: UsdShade.Shader, time) -> tuple[np.ndarray, np.ndarray]:
+    scale, _ = _resolve(tex, "scale", time)
+    bias, _ = _resolve(tex, "bias", time)
+    scale = np.ones(4, np.float32) if scale is None else np.asarray(scale, np.float32)
+    bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float32)
+    return scale, bias
+
+
+def _color_space(tex: UsdShade.Shader, time) -> str:
+    value, _ = _resolve(tex, "sourceColorSpace", time)
+    return str(value) if value in ("raw", "sRGB") else "auto"
+
+
+def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, warn):
+    """(texture pixels, corner st, scale, bias) of a UsdUVTexture, or Nones when it cannot
+    be used (with a warning: the mesh then renders untextured)."""
+    scale, bias = _scale_bias(tex, time)
     file_value, _ = _resolve(tex, "file", time)
     if file_value is None:
         return None, None, scale, bias
@@ -120,17 +146,101 @@ def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, war
         warn(f"texture '{file_value.path}' not found; rendering untextured ({prim.GetPath()})")
         return None, None, scale, bias
     try:
-        texture = load_texture(file_value.resolvedPath)
+        texture = load_texture(file_value.resolvedPath, _color_space(tex, time))
     except OSError as exc:
         warn(f"{exc}; rendering untextured ({prim.GetPath()})")
         return None, None, scale, bias
-    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(varname)
-    st = corner_values(primvar, topology, time) if primvar else None
-    if st is None or st.shape[-1] < 2:
+    varname, st = _coordinates(prim, tex, topology, time)
+    if st is None:
         warn(f"texture coordinates '{varname}' missing; rendering untextured "
              f"({prim.GetPath()})")
         return None, None, scale, bias
-    return texture, np.ascontiguousarray(st[..., :2]), scale, bias
+    return texture, st, scale, bias
+
+
+def _file_attribute(tex: UsdShade.Shader):
+    """The attribute that produces a UsdUVTexture's inputs:file (through material
+    interface inputs), or None."""
+    inp = tex.GetInput("file")
+    if not inp:
+        return None
+    for attr in inp.GetValueProducingAttributes():
+        return None if UsdShade.Output.IsOutput(attr) else attr
+    return None
+
+
+def _anchor_layer(attr: Usd.Attribute, time):
+    """The layer whose opinion gives ``attr`` its value at ``time`` (relative asset
+    paths, and UDIM patterns, are anchored there)."""
+    for spec in attr.GetPropertyStack(time):
+        if spec.HasDefaultValue() or spec.layer.ListTimeSamplesForPath(spec.path):
+            return spec.layer
+    return None
+
+
+def _tiles(file_value, attr, time) -> list[tuple[int, str]]:
+    """[(tile, resolved path)] of a texture file: one (tile -1) or a UDIM set's tiles."""
+    if not UsdShade.UdimUtils.IsUdimIdentifier(file_value.path):
+        return [(-1, file_value.resolvedPath)] if file_value.resolvedPath else []
+    layer = _anchor_layer(attr, time)
+    if layer is None:
+        return []
+    tiles = []
+    for resolved, number in UsdShade.UdimUtils.ResolveUdimTilePaths(file_value.path, layer):
+        tiles.append((int(number) - 1001, str(resolved)))
+    return tiles
+
+
+def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
+                    shader: UsdShade.Shader | None = None) -> tuple:
+    """(NormalMapRecord or None, whether its file is time-sampled) of a mesh's bound
+    UsdPreviewSurface inputs:normal, when a UsdUVTexture feeds it."""
+    if shader is None:
+        shader = surface_shader(prim)
+    if not shader:
+        return None, False
+    _, tex = _resolve(shader, "normal", time)
+    if tex is None:
+        return None, False
+    where = prim.GetPath()
+    if tex.GetIdAttr().Get() != "UsdUVTexture":
+        warn(f"inputs:normal comes from a {tex.GetIdAttr().Get()} shader, not a UsdUVTexture; "
+             f"the normal map is ignored ({where})")
+        return None, False
+    attr = _file_attribute(tex)
+    file_value = attr.Get(time) if attr else None
+    if file_value is None or not file_value.path:
+        return None, False
+    varies = attr.ValueMightBeTimeVarying()
+    tiles = _tiles(file_value, attr, time)
+    if not tiles:
+        warn(f"normal map '{file_value.path}' not found; rendered without it ({where})")
+        return None, varies
+    outside = [tile for tile, _ in tiles if not -1 <= tile < UDIM_TILES]
+    if outside:
+        warn(f"normal map '{file_value.path}': UDIM tiles beyond "
+             f"{1000 + UDIM_TILES} are not drawn ({where})")
+    color_space = _color_space(tex, time)
+    loaded = []
+    try:
+        for tile, resolved in tiles:
+            if -1 <= tile < UDIM_TILES:
+                loaded.append((tile, load_texture(resolved, color_space)))
+    except OSError as exc:
+        warn(f"{exc}; rendered without the normal map ({where})")
+        return None, varies
+    if len({pixels.shape for _, pixels in loaded}) > 1:
+        warn(f"normal map '{file_value.path}': its UDIM tiles differ in size; rendered "
+             f"without it ({where})")
+        return None, varies
+    varname, st = _coordinates(prim, tex, topology, time)
+    if st is None:
+        warn(f"texture coordinates '{varname}' of the normal map missing; rendered without "
+             f"it ({where})")
+        return None, varies
+    scale, bias = _scale_bias(tex, time)
+    key = "|".join(resolved for _, resolved in tiles) + f"|{color_space}"
+    return NormalMapRecord(tuple(loaded), st, scale, bias, key), varies
 
 
 def _display_color(prim: Usd.Prim, time) -> np.ndarray:
@@ -140,18 +250,29 @@ def _display_color(prim: Usd.Prim, time) -> np.ndarray:
         DEFAULT_COLOR
 
 
-def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
-    """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
-    diffuseColor, constant or from a UsdUVTexture; else displayColor."""
+def surface_shader(prim: Usd.Prim) -> UsdShade.Shader | None:
+    """The UsdPreviewSurface of the mesh's bound material, or None."""
     material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
     shader = material.ComputeSurfaceSource()[0] if material else None
     if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
+        return None
+    return shader
+
+
+def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
+    """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
+    diffuseColor, constant or from a UsdUVTexture, and its normal map; else displayColor."""
+    shader = surface_shader(prim)
+    if shader is None:
         return MaterialRecord(np.asarray(_display_color(prim, time), np.float32)[:3])
+    normal_map, varies = read_normal_map(prim, topology, time, warn, shader)
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
         color = _display_color(prim, time) if value is None else value
-        return MaterialRecord(np.asarray(color, np.float32)[:3])
+        return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
+                              normal_map_varies=varies)
     texture, st, scale, bias = _texture(prim, source, topology, time, warn)
     # untextured means a neutral clay, not the (often black) texture fallback
     color = DEFAULT_COLOR if texture is None else np.ones(3, np.float32)
-    return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias)
+    return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias,
+                          normal_map, varies)

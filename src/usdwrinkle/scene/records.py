@@ -66,11 +66,35 @@ class WrinkleParams:
 
 
 @dataclass(frozen=True)
+class NormalMapRecord:
+    """UsdPreviewSurface ``inputs:normal`` from a UsdUVTexture: a tangent-space normal map.
+
+    tiles : tuple of (tile, (h, w, 4) float32 pixels, row 0 at t = 0)
+        One texture (tile -1: it repeats), or the tiles of a UDIM set (tile
+        u + 10 v for file 1001 + u + 10 v), all of one size.
+    corner_st : (m, 3, 2) float32 texture coordinates per triangle corner.
+    scale, bias : the texture's inputs:scale and inputs:bias (the decoded normal is
+        texel * scale + bias).
+    key : what was read (the resolved file names): a frame that names the same files
+        re-uses the uploaded textures.
+    """
+
+    tiles: tuple
+    corner_st: np.ndarray
+    scale: np.ndarray
+    bias: np.ndarray
+    key: str
+
+
+@dataclass(frozen=True)
 class MaterialRecord:
-    """UsdPreviewSurface diffuse colour, constant or from a texture.
+    """UsdPreviewSurface diffuse colour, constant or from a texture, and a normal map.
 
     texture : (h, w, 4) float32 linear, row 0 at t = 0 (bottom), or None.
     corner_st : (m, 3, 2) float32 texture coordinates per triangle corner, or None.
+    normal_map : the normal map at the default time (or the first frame's), or None.
+    normal_map_varies : its file is time-sampled (per-frame wrinkle maps): each frame
+        reads its own (MeshFrame.normal_map).
     """
 
     diffuse_color: np.ndarray
@@ -78,6 +102,8 @@ class MaterialRecord:
     corner_st: np.ndarray | None = None
     texture_scale: np.ndarray = field(default_factory=lambda: np.ones(4, np.float32))
     texture_bias: np.ndarray = field(default_factory=lambda: np.zeros(4, np.float32))
+    normal_map: NormalMapRecord | None = None
+    normal_map_varies: bool = False
 
 
 @dataclass(frozen=True)
@@ -115,6 +141,7 @@ class MeshFrame:
     subshape_weights: np.ndarray | None = None  # (S,) float32 dense over sub-shapes
     active_subshapes: tuple = ()                # ((blend_shape, sub_shape), ...)
     baked: object | None = None                 # scene.baked.BakedFields at this frame
+    normal_map: NormalMapRecord | None = None   # this frame's, when its file is time-sampled
 
 
 @dataclass(frozen=True)

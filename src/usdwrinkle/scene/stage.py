@@ -23,7 +23,7 @@ from .changes import ChangeTracker, DirtyBits, classify
 from .diagnostics import usd_diagnostics, usd_error_text
 from .inputs import StageInputs, package_file, scan_inputs
 from .lights import default_lights, read_lights
-from .material import read_material
+from .material import read_material, read_normal_map
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
 from .skel import SkelBindings, sample_skin, skin_data
@@ -413,7 +413,7 @@ class StageSceneDelegate:
             check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
                             record.extent)
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
-                             active, baked)
+                             active, baked, self._frame_normal_map(record, prim, time))
         points = None
         if record.point_cached:
             attr = UsdGeom.Mesh(prim).GetPointsAttr()
@@ -426,7 +426,14 @@ class StageSceneDelegate:
                     f"point count changes over time ({len(points)} != "
                     f"{len(record.rest_points)})", path, "points", frame)
             check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
-        return MeshFrame(local_to_world, visible, points, baked=baked)
+        return MeshFrame(local_to_world, visible, points, baked=baked,
+                         normal_map=self._frame_normal_map(record, prim, time))
+
+    def _frame_normal_map(self, record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
+        """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""
+        if not record.material.normal_map_varies:
+            return None
+        return read_normal_map(prim, record.topology, time, self.warn)[0]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World bounds of the rendered meshes over the stage's range (at most 9 samples).
@@ -456,6 +463,16 @@ class StageSceneDelegate:
                     lo = np.minimum(lo, np.asarray(box.GetMin()))
                     hi = np.maximum(hi, np.asarray(box.GetMax()))
         return lo, hi
+
+    def corner_primvar(self, path: str, name: str) -> np.ndarray | None:
+        """A primvar of a mesh as one value per triangle corner, (m, 3, c), at its
+        default time (or first sample); None when the mesh has no usable such primvar."""
+        from .material import corner_values
+
+        primvar = UsdGeom.PrimvarsAPI(self._prims[path]).GetPrimvar(name)
+        if not primvar or not primvar.HasValue():
+            return None
+        return corner_values(primvar, self.meshes[path].topology, Usd.TimeCode.EarliestTime())
 
     def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
         prim = camera_mod.find_camera(self.stage, camera_spec)

@@ -32,6 +32,14 @@ def bind(units: dict, reads: dict | None = None, writes: dict | None = None,
         buffer.bind_to_storage_buffer(units[name])
 
 
+def bind_wave(units: dict, res) -> None:
+    """Bind what the wave blend reads (include/wave.glsl; the WAVE units of bindings.py)."""
+    res.profiles[0].use(location=units["WAVE_HEIGHT_PROFILE"])
+    res.profiles[1].use(location=units["WAVE_GRADIENT_PROFILE"])
+    bind(units, reads={"WAVE_POSED_POINTS": res.posed_points, "WAVE_FIELDS": res.fields,
+                       "WAVE_PHASE": res.phase, "WAVE_TRIANGLES": res.triangles})
+
+
 def groups(count: int, local_size: int) -> int:
     return max((count + local_size - 1) // local_size, 1)
 

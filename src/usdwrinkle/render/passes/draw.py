@@ -8,7 +8,7 @@ from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..resources import MeshResources
 from ..shaders import program
-from . import bind, gl_matrix, set_uniforms
+from . import bind, bind_wave, gl_matrix, set_uniforms
 
 FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
 
@@ -35,6 +35,15 @@ def light_uniforms(lights) -> dict:
         count += 1
     return {"u_num_lights": count, "u_light_kind": kinds, "u_light_radiance": radiance,
             "u_light_vector": vectors, "u_ambient": tuple(float(a) for a in ambient)}
+
+
+def normal_map_uniforms(res: MeshResources) -> dict:
+    record = res.normal_map_record
+    if record is None:
+        return {"u_has_normal_map": 0}
+    return {"u_has_normal_map": 1, "u_udim_layer": res.udim_layers,
+            "u_normal_scale": tuple(float(v) for v in record.scale[:4]),
+            "u_normal_bias": tuple(float(v) for v in record.bias[:4])}
 
 
 class DrawPass:
@@ -82,15 +91,15 @@ class DrawPass:
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
             "u_profile_samples": float(len(record.params.height_profile)),
+            **normal_map_uniforms(res),
             **res.topology_uniforms,
         })
         units = bindings.DRAW
-        res.profiles[0].use(location=units["DRAW_HEIGHT_PROFILE"])
-        res.profiles[1].use(location=units["DRAW_GRADIENT_PROFILE"])
+        bind_wave(units, res)
         if res.texture is not None:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
-        bind(units, reads={
-            "DRAW_POSED_POINTS": res.posed_points, "DRAW_FIELDS": res.fields,
-            "DRAW_PHASE": res.phase, "TOPOLOGY_TABLE": res.topology,
-            "DRAW_CORNER_ST": res.corner_st, "DRAW_TRIANGLES": res.triangles})
+        if res.normal_map is not None:
+            res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
+        bind(units, reads={"TOPOLOGY_TABLE": res.topology, "DRAW_CORNER_ST": res.corner_st,
+                           "DRAW_NORMAL_ST": res.normal_st})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)

@@ -1,0 +1,83 @@
+// The wave blend (Loviscach 2006, sec. 5): at a point of a triangle, the three corner
+// waves, each evaluated at the point and weighted by its barycentric coordinate. One
+// function for every consumer: the draw pass (per pixel), the wrinkle maps (per texel
+// of UV space) and the displaced geometry (per fine vertex).
+//
+// The including shader defines the units WAVE_POSED_POINTS, WAVE_FIELDS, WAVE_PHASE,
+// WAVE_TRIANGLES, WAVE_HEIGHT_PROFILE and WAVE_GRADIENT_PROFILE (render/bindings.py:
+// WAVE) and sets u_profile_samples.
+#ifndef USDWRINKLE_WAVE_GLSL
+#define USDWRINKLE_WAVE_GLSL
+
+layout(binding = WAVE_POSED_POINTS) uniform sampler2D posed_points;  // local space
+layout(binding = WAVE_FIELDS) uniform sampler2D fields;
+layout(binding = WAVE_PHASE) uniform sampler2D phase;
+layout(binding = WAVE_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
+// 1D tables stored as N x 1 2D textures (moderngl has no 1D textures); repeat, linear
+layout(binding = WAVE_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
+layout(binding = WAVE_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
+uniform float u_profile_samples;
+
+float profile(sampler2D table, float theta) {
+    // sample s sits at theta = 2 pi s / N; texel centres are at (s + 0.5) / N
+    return texture(table, vec2(theta / TWO_PI + 0.5 / u_profile_samples, 0.5)).r;
+}
+
+struct Wave {
+    float height;     // h, along the coarse normal (scene units)
+    vec3 gradient;    // dh/dx in the tangent plane of n (local space)
+    float amplitude;  // the blended amplitude sum(b_c a_c)
+};
+
+// The blend at local-space point p of triangle t, barycentric weights bary, interpolated
+// coarse unit normal n. The surface P + h n has the normal normalize(n - gradient).
+Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n) {
+    Wave w = Wave(0.0, vec3(0.0), 0.0);
+    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
+    bary = clamp(bary, 0.0, 1.0);
+    bary /= max(bary.x + bary.y + bary.z, 1e-20);
+    ivec3 corners = fetch(triangles, t).xyz;
+    vec3 k0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
+    for (int c = 0; c < 3; ++c) {
+        int i = corners[c];
+        vec4 wave = fetch(fields, FIELD_WAVE(i));
+        float a = wave.w;
+        if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
+        vec3 k = wave.xyz;
+        float phi = fetch(phase, i).x;
+        if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
+        float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
+        float b = bary[c];
+        w.height += b * a * profile(u_height_profile, theta);
+        w.gradient += b * a * profile(u_gradient_profile, theta) * k;
+        w.amplitude += b * a;
+    }
+    w.gradient -= dot(w.gradient, n) * n;  // keep the gradient in the tangent plane
+    return w;
+}
+
+// The tangent frame of triangle t for a texture-coordinate table: T along dP/ds and B
+// along dP/dt (local space, from the posed corners), made orthonormal about the unit
+// normal n (Gram-Schmidt), B's sign from the triangle's UV winding (a mirrored island
+// flips it), as MikkTSpace does per vertex. A triangle with degenerate UVs gets an
+// arbitrary frame about n. Columns: T, B, n.
+mat3 tangent_frame(int t, sampler2D corner_uv, vec3 n) {
+    ivec3 corners = fetch(triangles, t).xyz;
+    vec3 p0 = fetch(posed_points, corners.x).xyz;
+    vec3 e1 = fetch(posed_points, corners.y).xyz - p0;
+    vec3 e2 = fetch(posed_points, corners.z).xyz - p0;
+    vec2 s0 = fetch(corner_uv, 3 * t).xy;
+    vec2 d1 = fetch(corner_uv, 3 * t + 1).xy - s0;
+    vec2 d2 = fetch(corner_uv, 3 * t + 2).xy - s0;
+    float det = d1.x * d2.y - d2.x * d1.y;
+    vec3 dp_ds = (e1 * d2.y - e2 * d1.y) * sign(det);   // dP/ds, dP/dt times |det|
+    vec3 dp_dt = (e2 * d1.x - e1 * d2.x) * sign(det);
+    vec3 fallback = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    vec3 T = safe_normalize(dp_ds - dot(dp_ds, n) * n,
+                            safe_normalize(fallback - dot(fallback, n) * n, fallback));
+    vec3 B = cross(n, T);
+    if (det != 0.0 && dot(B, dp_dt) < 0.0) B = -B;
+    return mat3(T, B, n);
+}
+
+#endif

@@ -1,0 +1,64 @@
+#version 430
+// Wrinkle maps: the wave blend rasterised in texture space (maps/raster.py). Each
+// triangle is drawn at its texture coordinates (one UDIM tile at a time); every texel
+// gets the wrinkle of the surface point it maps to, from the same wave_blend as the
+// draw pass. One file, two stages: the loader defines VERTEX_SHADER or FRAGMENT_SHADER.
+#include "include/common.glsl"
+#include "include/wave.glsl"
+
+layout(binding = MAPS_UV) uniform sampler2D corner_uv;   // [3t + c].xy, the baked UV set
+layout(binding = MAPS_Q_WIDTH) uniform sampler2D q_width;  // .w: rest wavelength W
+uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
+
+#if defined VERTEX_SHADER
+
+out vec3 v_local;
+out vec3 v_normal_local;
+out vec3 v_bary;
+out float v_width;
+
+void main() {
+    int corner = gl_VertexID;
+    int t = corner / 3;
+    int c = corner - 3 * t;
+    int i = fetch(triangles, t)[c];
+    v_local = fetch(posed_points, i).xyz;             // posed, local space
+    v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
+    v_bary = vec3(c == 0, c == 1, c == 2);
+    v_width = fetch(q_width, i).w;
+    vec2 uv = fetch(corner_uv, corner).xy - u_tile;   // [0, 1] inside the tile
+    gl_Position = vec4(uv * 2.0 - 1.0, 0.0, 1.0);     // row 0 of the target is t = 0
+}
+
+#elif defined FRAGMENT_SHADER
+
+in vec3 v_local;
+in vec3 v_normal_local;
+in vec3 v_bary;
+in float v_width;
+
+uniform float u_amplitude_scale;  // s
+uniform int u_count;              // 1: count the triangles over each texel (overlaps)
+
+layout(location = 0) out vec4 out_normal;   // xyz: tangent-space unit normal; w: coverage
+// x: height h; y: a / (s W / 4); z: 1 where a triangle covers the texel (not padding);
+// w: coverage, padding included
+layout(location = 1) out vec4 out_wrinkle;
+
+void main() {
+    if (u_count != 0) {  // additive blending sums these
+        out_normal = vec4(1.0);
+        out_wrinkle = vec4(1.0);
+        return;
+    }
+    int t = gl_PrimitiveID;
+    vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
+    Wave wave = wave_blend(t, v_bary, v_local, n);
+    vec3 shading = safe_normalize(n - wave.gradient, n);
+    mat3 frame = tangent_frame(t, corner_uv, n);   // orthonormal: its transpose inverts it
+    float full = u_amplitude_scale * v_width / 4.0;
+    out_normal = vec4(transpose(frame) * shading, 1.0);
+    out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 1.0, 1.0);
+}
+
+#endif

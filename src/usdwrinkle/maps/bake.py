@@ -1,0 +1,206 @@
+"""``bake --maps``: per frame, each wrinkled mesh's wrinkle maps, and the materials that
+bind them (maps/raster.py on the GPU, maps/files.py for the files, maps/material.py for
+the layer). The frames come from the bake's loop (shot.bake_layer), so a map is made
+from exactly the fields the bake writes as primvars.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UsdWrinkleError
+from ..render.buffers import available_memory
+from ..scene.stage import stage_inputs
+from .files import (
+    MAP_KINDS,
+    MapStaging,
+    encode_map,
+    frame_token,
+    map_file_name,
+    mesh_file_names,
+    relative_asset,
+    tile_file_name,
+    udim_number,
+    uv_tiles,
+)
+from .raster import MapRasterizer
+
+#: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
+MIN_MAP_SIZE = 16
+MAX_PADDING = 256
+#: bytes per texel: two float targets ping-ponged (4 textures), their read-back copies and
+#: the encoded planes
+BYTES_PER_TEXEL = 4 * 16 + 2 * 16 + 16
+#: a texel covered more than once over this fraction of a tile's islands gets a warning
+OVERLAP_WARNING = 0.002
+
+
+@dataclass(frozen=True)
+class MapOptions:
+    """What ``--maps`` and its options ask for."""
+
+    kinds: tuple = ("normal",)
+    size: int = 2048
+    #: the map folder (default: ``<layer name>_maps`` beside the layer)
+    folder: str | None = None
+    fmt: str = "png"
+    padding: int = 8
+    uv: str = "st"
+
+    def folder_for(self, layer_path: str) -> str:
+        if self.folder:
+            return self.folder
+        stem = os.path.splitext(os.path.basename(layer_path))[0]
+        return os.path.join(os.path.dirname(os.path.abspath(layer_path)), f"{stem}_maps")
+
+
+def check_map_options(options: MapOptions, max_texture_size: int | None = None) -> None:
+    """Refuse sizes and paddings out of range, and maps the memory cannot hold."""
+    limit = max_texture_size or 16384
+    if not MIN_MAP_SIZE <= options.size <= limit:
+        raise UsdWrinkleError(f"--map-size must be in {MIN_MAP_SIZE}..{limit} "
+                              f"(got {options.size})")
+    if not 0 <= options.padding <= MAX_PADDING:
+        raise UsdWrinkleError(f"--map-padding must be in 0..{MAX_PADDING} "
+                              f"(got {options.padding})")
+    needed = options.size * options.size * BYTES_PER_TEXEL
+    available = available_memory()
+    if available is not None and needed > available:
+        raise UsdWrinkleError(f"{options.size}x{options.size} maps need about "
+                              f"{needed / 2**30:.1f} GiB, but {available / 2**30:.1f} GiB "
+                              "of memory are available; lower --map-size")
+
+
+@dataclass
+class MeshMaps:
+    """One mesh's map plan: its file stem, UVs per triangle corner and UDIM tiles."""
+
+    path: str
+    stem: str
+    corner_uv: np.ndarray
+    tiles: list
+
+    @property
+    def udim(self) -> bool:
+        return self.tiles != [(0, 0)]
+
+
+class MapBake:
+    """Renders and stages the maps of ``meshes`` frame by frame; :meth:`finish` writes
+    the materials into the layer and moves the maps into their folder."""
+
+    def __init__(self, engine, meshes: dict, options: MapOptions, layer_path: str, warn,
+                 frames: list[float]):
+        self.engine = engine
+        self.options = options
+        self.layer_path = layer_path
+        self.warn = warn
+        self.folder = options.folder_for(layer_path)
+        self.plans: dict[str, MeshMaps] = {}
+        stems = mesh_file_names(meshes)
+        for path in meshes:
+            corner_uv = engine.scene.corner_primvar(path, options.uv)
+            if corner_uv is None or corner_uv.shape[-1] < 2:
+                warn(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
+                     f"maps for it ({path})")
+                continue
+            corner_uv = np.ascontiguousarray(corner_uv[..., :2], np.float32)
+            tiles, outside = uv_tiles(corner_uv)
+            if outside:
+                warn(f"{outside} triangle(s) have texture coordinates outside the UDIM tiles "
+                     f"1001..1100; their wrinkle maps are not written ({path})")
+            self.plans[path] = MeshMaps(path, stems[path], corner_uv, tiles)
+        #: path -> kind -> [(frame, asset path)]
+        self.files: dict[str, dict[str, list]] = {p: {k: [] for k in options.kinds}
+                                                  for p in self.plans}
+        self._rasterizer: MapRasterizer | None = None
+        self._staging: MapStaging | None = None
+        self._checked_overlap: set[str] = set()
+        inputs = stage_inputs(engine.scene.stage)
+        for name in self.file_names(frames):
+            if inputs.protects(name):
+                raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
+                                      "reads (choose another --map-dir)")
+
+    def file_names(self, frames: list[float]) -> list[str]:
+        """Every map file the bake will write (to refuse overwriting an input)."""
+        names = []
+        for plan in self.plans.values():
+            for kind in self.options.kinds:
+                for frame in frames:
+                    name = map_file_name(plan.stem, kind, frame_token(frame), self.options.fmt,
+                                         plan.udim)
+                    names += [os.path.join(self.folder, tile_file_name(name, tile))
+                              for tile in plan.tiles]
+        return names
+
+    def _start(self) -> None:
+        if self._rasterizer is None:
+            self._staging = MapStaging(self.folder)
+            self._rasterizer = MapRasterizer(self.engine.render_delegate.ctx,
+                                             self.options.size)
+
+    def add_frame(self, frame: float) -> None:
+        """Render, encode and stage the maps of the frame the engine computed last."""
+        if not self.plans:
+            return
+        self._start()
+        token = frame_token(frame)
+        for path, plan in self.plans.items():
+            res = self.engine.render_delegate.rprims[path].resources
+            if path not in self._checked_overlap:
+                self._check_overlap(plan, res)
+            for kind in self.options.kinds:
+                name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
+                self.files[path][kind].append(
+                    (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            for tile in plan.tiles:
+                pixels = self._rasterizer.render(res, plan.corner_uv, tile,
+                                                 self.options.padding)
+                for kind in self.options.kinds:
+                    name = tile_file_name(
+                        map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
+                    encode_map(self._staging.path(name), kind, getattr(pixels, kind),
+                               self._staging.final(name))
+
+    def _check_overlap(self, plan: MeshMaps, res) -> None:
+        self._checked_overlap.add(plan.path)
+        for tile in plan.tiles:
+            fraction = self._rasterizer.overlap(res, plan.corner_uv, tile)
+            if fraction > OVERLAP_WARNING:
+                where = f" in UDIM tile {udim_number(tile)}" if plan.udim else ""
+                self.warn(f"texture coordinates '{self.options.uv}' overlap{where}: "
+                          f"{100 * fraction:.1f}% of the map's texels lie under more than one "
+                          f"triangle, and hold the wrinkles of only one of them ({plan.path})")
+
+    def author(self, layer, stage) -> None:
+        """Write each mesh's material and binding into ``layer`` (maps/material.py)."""
+        from .material import author_material, material_path
+
+        for path, plan in self.plans.items():
+            author_material(layer, stage, path, material_path(stage, path, plan.stem),
+                            self.files[path], self.options.uv, self.warn)
+
+    def commit(self) -> None:
+        """Move the staged maps into the map folder (before the layer is renamed)."""
+        if self._staging is not None:
+            self._staging.commit()
+
+    def metadata(self) -> dict:
+        return {"kinds": ",".join(self.options.kinds), "size": self.options.size,
+                "folder": relative_asset(self.folder, self.layer_path),
+                "format": self.options.fmt, "padding": self.options.padding,
+                "uv": self.options.uv, "meshes": ",".join(sorted(self.plans))}
+
+    def release(self) -> None:
+        """Free the GPU targets; staged maps not committed are removed."""
+        if self._staging is not None:
+            self._staging.discard()
+        if self._rasterizer is not None:
+            self._rasterizer.release()
+            self._rasterizer = None
+
+
+__all__ = ["MAP_KINDS", "MapBake", "MapOptions", "check_map_options"]

@@ -1,0 +1,203 @@
+"""Wrinkle map files: names, UDIM tiles, encoding, and the all-or-nothing commit.
+
+Every frame has its own files (``DIR/<mesh>.normal.0024.png``; with UDIM tiles
+``DIR/<mesh>.normal.<UDIM>.0024.png``): renderers notice a changed texture by its name,
+not by its time stamp. Maps are encoded into a staging folder beside the map folder and
+moved into it only when every frame is done (:class:`MapStaging`), so an error or an
+interrupt leaves no partial map set, and the layer that names them is written after.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import re
+import shutil
+
+import numpy as np
+
+from ..errors import UsdWrinkleError
+from ..outputs.atomic import signals_held, write_error
+from ..outputs.images import encode_file
+from ..timecode import frame_text
+
+#: the maps ``bake --maps`` can write
+MAP_KINDS = ("normal", "height", "amplitude")
+MAP_FORMATS = ("png", "exr")
+UDIM_TOKEN = "<UDIM>"
+#: UDIM tiles are 1001 + u + 10 v, u in 0..9; v in 0..9 here (draw.glsl's tile table)
+UDIM_COLUMNS = 10
+UDIM_ROWS = 10
+STAGING_PREFIX = ".usdwrinkle-maps."
+
+
+def parse_map_kinds(text: str) -> tuple[str, ...]:
+    """``normal,height`` -> ('normal', 'height'), in MAP_KINDS order; refuses unknowns."""
+    kinds = [part.strip() for part in text.split(",") if part.strip()]
+    unknown = [kind for kind in kinds if kind not in MAP_KINDS]
+    if unknown or not kinds:
+        raise UsdWrinkleError(f"--maps takes a comma-separated list of {', '.join(MAP_KINDS)}"
+                              f" (got '{text}')")
+    return tuple(kind for kind in MAP_KINDS if kind in kinds)
+
+
+def extension(kind: str, fmt: str) -> str:
+    """The height map is always float EXR (signed scene units); the others follow
+    ``--map-format``."""
+    return ".exr" if kind == "height" or fmt == "exr" else ".png"
+
+
+def mesh_file_names(paths) -> dict[str, str]:
+    """Mesh prim path -> a file-name stem, unique among ``paths``: the prim's name, with
+    as many parent names as it takes to tell meshes of the same name apart."""
+    parts = {path: [p for p in path.split("/") if p] for path in paths}
+    names = {}
+    for path, segments in parts.items():
+        depth = 1
+        while True:
+            name = "_".join(segments[-depth:])
+            clash = [other for other, o in parts.items() if other != path and
+                     "_".join(o[-depth:]) == name]
+            if not clash or depth >= len(segments):
+                break
+            depth += 1
+        names[path] = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
+    return names
+
+
+def uv_tiles(corner_uv: np.ndarray) -> tuple[list[tuple[int, int]], int]:
+    """(the UDIM tiles (u, v) the triangles lie in, by their UV centroid; the number of
+    triangles outside tiles 1001..1100). [(0, 0)] alone means no UDIM set."""
+    if len(corner_uv) == 0:
+        return [(0, 0)], 0
+    centroid = np.asarray(corner_uv, np.float64).reshape(-1, 3, 2).mean(axis=1)
+    tile = np.floor(centroid).astype(np.int64)
+    finite = np.all(np.isfinite(centroid), axis=1)
+    inside = finite & (tile[:, 0] >= 0) & (tile[:, 0] < UDIM_COLUMNS) & \
+        (tile[:, 1] >= 0) & (tile[:, 1] < UDIM_ROWS)
+    tiles = sorted({(int(u), int(v)) for u, v in tile[inside]}, key=lambda t: (t[1], t[0]))
+    return tiles or [(0, 0)], int(np.count_nonzero(~inside))
+
+
+def udim_number(tile: tuple[int, int]) -> int:
+    return 1001 + tile[0] + UDIM_COLUMNS * tile[1]
+
+
+def map_file_name(stem: str, kind: str, frame_text: str | None, fmt: str, udim: bool) -> str:
+    """``Shirt.normal.0024.png``; with UDIM tiles ``Shirt.normal.<UDIM>.0024.png``;
+    without a frame (a stage with no time samples) ``Shirt.normal.png``."""
+    parts = [stem, kind] + ([UDIM_TOKEN] if udim else []) + \
+        ([frame_text] if frame_text else [])
+    return ".".join(parts) + extension(kind, fmt)
+
+
+def tile_file_name(name: str, tile: tuple[int, int]) -> str:
+    return name.replace(UDIM_TOKEN, str(udim_number(tile)))
+
+
+def _spec(width: int, height: int, channels: int, data_format: str, names=None):
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageSpec(width, height, channels, data_format)
+    if names:
+        spec.channelnames = tuple(names)
+    return spec
+
+
+def encode_map(path: str, kind: str, pixels: np.ndarray, final_path: str) -> None:
+    """Encode one map (row 0 at t = 0) to ``path``: the normal as 0.5 n + 0.5 (16-bit PNG
+    or float EXR, read back with scale 2 and bias -1), the height as float EXR, the
+    amplitude as a 16-bit grey PNG or a float EXR."""
+    image = np.ascontiguousarray(pixels[::-1])  # files store the top row first
+    if kind == "normal":
+        image = 0.5 * image + 0.5
+    if image.ndim == 2:
+        image = image[..., None]
+    height, width, channels = image.shape
+    names = ("R", "G", "B") if channels == 3 else ("Y",)
+    if path.endswith(".exr"):
+        spec = _spec(width, height, channels, "float", names)
+        spec.attribute("compression", "zip")
+        data = np.ascontiguousarray(image, np.float32)
+    else:
+        spec = _spec(width, height, channels, "uint16", names)
+        data = np.ascontiguousarray(np.round(np.clip(image, 0.0, 1.0) * 65535), np.uint16)
+    encode_file(path, spec, data, final_path)
+
+
+class MapStaging:
+    """Map files encoded into a staging folder beside ``folder``, moved into ``folder``
+    by :meth:`commit`; :meth:`discard` (or leaving the ``with`` block by an exception)
+    removes them. Staging folders of processes that no longer run are swept."""
+
+    def __init__(self, folder: str):
+        self.folder = os.path.abspath(folder)
+        parent = os.path.dirname(self.folder)
+        self._sweep(parent)
+        try:
+            os.makedirs(parent, exist_ok=True)
+            self.staging = os.path.join(
+                parent, f"{STAGING_PREFIX}{os.getpid()}.{os.path.basename(self.folder)}")
+            shutil.rmtree(self.staging, ignore_errors=True)
+            os.makedirs(self.staging)
+        except OSError as exc:
+            raise write_error(self.folder, exc) from None
+        self.names: list[str] = []
+
+    @staticmethod
+    def _sweep(parent: str) -> None:
+        with contextlib.suppress(OSError):
+            for name in os.listdir(parent):
+                if not name.startswith(STAGING_PREFIX):
+                    continue
+                pid = name[len(STAGING_PREFIX):].split(".", 1)[0]
+                if not pid.isdigit():
+                    continue
+                try:
+                    os.kill(int(pid), 0)
+                except ProcessLookupError:
+                    shutil.rmtree(os.path.join(parent, name), ignore_errors=True)
+                except OSError:
+                    pass
+
+    def path(self, name: str) -> str:
+        """Where a map is encoded; ``name`` is its file name in the map folder."""
+        self.names.append(name)
+        return os.path.join(self.staging, name)
+
+    def final(self, name: str) -> str:
+        return os.path.join(self.folder, name)
+
+    def commit(self) -> None:
+        """Move every staged map into the map folder (stop signals held back)."""
+        try:
+            os.makedirs(self.folder, exist_ok=True)
+            with signals_held():
+                for name in self.names:
+                    os.replace(os.path.join(self.staging, name), self.final(name))
+        except OSError as exc:
+            raise write_error(self.folder, exc) from None
+        self.discard()
+
+    def discard(self) -> None:
+        with signals_held():
+            shutil.rmtree(self.staging, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, traceback):
+        self.discard()
+        return False
+
+
+def relative_asset(path: str, layer_path: str) -> str:
+    """``path`` relative to the layer's folder, as an asset path (``./maps/x.png``)."""
+    folder = os.path.dirname(os.path.abspath(layer_path))
+    relative = os.path.relpath(os.path.abspath(path), folder).replace(os.sep, "/")
+    return relative if relative.startswith("../") else "./" + relative
+
+
+def frame_token(frame: float) -> str | None:
+    """A frame as it appears in a map's file name, or None for the default time."""
+    return None if math.isnan(frame) else frame_text(frame)

@@ -1,0 +1,265 @@
+"""bake --maps: wrinkle maps against the analytic sheet, tangent space under rigid motion,
+UDIM tiles, the material that binds them, and our renderer reading them back (the oracle:
+the baked layer drawn with --no-wrinkles looks like the shot drawn with wrinkles)."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+
+from usdwrinkle.cli.main import main
+from usdwrinkle.scene.material import load_texture
+
+from conftest import grid_sheet
+from helpers import point_cache_stage, rotation_matrix
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+SHIRT = str(SAMPLES / "shirt.usda")
+WIDTH = 0.3
+SIZE = 256
+
+
+def read(path) -> np.ndarray:
+    pixels = oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)
+    assert pixels.size, f"cannot read {path}"
+    return pixels
+
+
+def sheet_stage(tmp_path, ratio, rotation=None, st=None, frames=(1,), name="sheet.usda",
+                **kwargs):
+    """The analytic sheet compressed by ``ratio`` along x, UVs (x, y) -> [0, 1]^2."""
+    rest, counts, indices = grid_sheet(31, 31, 2.0)
+    posed = rest * np.array([ratio, 1, 1], np.float32)
+    if rotation is not None:
+        posed = posed @ rotation.T.astype(np.float32) + np.array([0.3, -2.0, 1.0], np.float32)
+    stage = point_cache_stage(rest, {f: posed for f in frames}, counts, indices, width=WIDTH,
+                              **kwargs)
+    if st is None:
+        st = (rest[:, :2] + 1.0) / 2.0
+    if st is not False:
+        UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+            Vt.Vec2fArray.FromNumpy(np.asarray(st, np.float32)))
+    path = tmp_path / name
+    stage.GetRootLayer().Export(str(path))
+    return path
+
+
+def bake_maps(source, layer, *args, kinds="normal,height,amplitude", size=SIZE):
+    return main(["bake", str(source), str(layer), "--quiet", "--maps", kinds,
+                 "--map-size", str(size), *args])
+
+
+def sheet_maps(tmp_path, ratio, rotation=None):
+    source = sheet_stage(tmp_path, ratio, rotation)
+    layer = tmp_path / "maps.usda"
+    assert bake_maps(source, layer) == 0
+    folder = tmp_path / "maps_maps"
+    normal = read(folder / "Sheet.normal.0001.png") * 2.0 - 1.0
+    height = read(folder / "Sheet.height.0001.exr")[..., 0]
+    amplitude = read(folder / "Sheet.amplitude.0001.png")[..., 0]
+    inner = slice(SIZE // 8, SIZE - SIZE // 8)  # away from the sheet's free border
+    return normal[inner, inner], height[inner, inner], amplitude[inner, inner]
+
+
+@pytest.mark.parametrize("ratio", [0.6, 0.85])
+def test_maps_of_the_analytic_sheet(gl_context, tmp_path, ratio):
+    normal, height, amplitude = sheet_maps(tmp_path, ratio)
+    a = WIDTH / 4 * np.sqrt(1 - ratio ** 2)   # the amplitude law (docs/method.md)
+    k = 2 * np.pi / (ratio * WIDTH)
+    tilt = np.arccos(np.clip(normal[..., 2] / np.linalg.norm(normal, axis=2), -1, 1))
+    # the largest tilt, on the flanks halfway between crest and trough: atan(a |k|)
+    np.testing.assert_allclose(tilt.max(), np.arctan(a * k), rtol=0.03)
+    np.testing.assert_allclose(np.abs(height).max(), a, rtol=0.02)
+    np.testing.assert_allclose(amplitude, np.sqrt(1 - ratio ** 2), rtol=0.02)
+    # the wave runs along x (s): no tilt along t
+    assert np.abs(normal[..., 1]).max() < 1e-3
+    # the map holds the wave itself: its slope along s matches the height map's
+    texel = 2.0 * ratio / SIZE  # posed length of one texel along s
+    slope = np.gradient(height, texel, axis=1)
+    flank = np.abs(slope) > 0.5 * np.abs(slope).max()
+    np.testing.assert_allclose((-normal[..., 0] / normal[..., 2])[flank], slope[flank],
+                               atol=0.05 * a * k)
+
+
+def test_maps_are_in_tangent_space(gl_context, tmp_path):
+    """A rigid rotation (and shift) of the posed sheet leaves every map unchanged."""
+    for name in ("plain", "moved"):
+        (tmp_path / name).mkdir()
+    plain = sheet_maps(tmp_path / "plain", 0.7)
+    moved = sheet_maps(tmp_path / "moved", 0.7, rotation_matrix([0.3, -0.5, 0.8], 1.1))
+    a = WIDTH / 4 * np.sqrt(1 - 0.7 ** 2)
+    assert np.abs(moved[0] - plain[0]).max() < 0.01        # unit normals
+    assert np.abs(moved[1] - plain[1]).max() < 0.01 * a    # heights
+    assert np.abs(moved[2] - plain[2]).max() < 0.01        # normalised amplitude
+
+
+def file_samples(stage, material_path, name):
+    attr = UsdShade.Material(stage.GetPrimAtPath(material_path)).GetInput(name).GetAttr()
+    values = [attr.Get()] + [attr.Get(t) for t in attr.GetTimeSamples()]
+    return attr, values
+
+
+def test_udim_tiles_are_written_and_read_back(gl_context, tmp_path):
+    """UVs over two tiles: one file per tile (1001, 1002) named through <UDIM>, each with
+    its half of the sheet; our renderer reads the set back."""
+    rest, _, _ = grid_sheet(31, 31, 2.0)
+    st = np.stack([rest[:, 0] + 1.0, (rest[:, 1] + 1.0) / 2.0], 1)  # u in [0, 2]
+    source = sheet_stage(tmp_path, 0.7, st=st)
+    layer = tmp_path / "udim.usda"
+    assert bake_maps(source, layer) == 0
+    folder = tmp_path / "udim_maps"
+    assert sorted(os.listdir(folder)) == sorted(
+        f"Sheet.{kind}.{tile}.0001.{ext}" for kind, ext in
+        (("normal", "png"), ("height", "exr"), ("amplitude", "png")) for tile in (1001, 1002))
+    for tile in (1001, 1002):
+        amplitude = read(folder / f"Sheet.amplitude.{tile}.0001.png")[..., 0]
+        inner = amplitude[SIZE // 8:-SIZE // 8, SIZE // 8:-SIZE // 8]
+        np.testing.assert_allclose(inner, np.sqrt(1 - 0.7 ** 2), rtol=0.02)
+    stage = Usd.Stage.Open(str(layer))
+    _, values = file_samples(stage, "/WrinkleMaterials/Sheet", "wrinkleNormalFile")
+    assert all("<UDIM>" in value.path for value in values)
+    wrinkled, from_maps, plain = (tmp_path / f"{n}.exr" for n in ("w", "m", "p"))
+    for stage_path, out, extra in ((source, wrinkled, []), (layer, from_maps, ["--no-wrinkles"]),
+                                   (source, plain, ["--no-wrinkles"])):
+        assert main(["render", str(stage_path), str(out), "--frames", "1", "--width", "200",
+                     "--quiet", *extra]) == 0
+    w, m, p = (read(path)[..., :3] for path in (wrinkled, from_maps, plain))
+    assert np.abs(m - w).mean() < 0.3 * np.abs(p - w).mean()
+
+
+@pytest.fixture(scope="module")
+def shirt_maps(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("shirt")
+    layer = folder / "shirt_maps.usda"
+    assert bake_maps(SHIRT, layer, "--frames", "21:24", kinds="normal,height",
+                     size=512) == 0
+    return layer
+
+
+def test_shirt_maps_render_like_the_wrinkles(gl_context, tmp_path, shirt_maps):
+    """The oracle: the baked layer drawn with --no-wrinkles (our renderer reading the
+    UsdPreviewSurface normal maps) against the shot drawn with wrinkles, on the sleeve's
+    pixels. What is left is the texture-coordinate parallax, which maps cannot carry, and
+    the maps' filtering."""
+    images = {}
+    for name, stage, extra in (("wrinkled", SHIRT, []), ("maps", shirt_maps, ["--no-wrinkles"]),
+                               ("plain", SHIRT, ["--no-wrinkles"])):
+        out = tmp_path / f"{name}.png"
+        assert main(["render", str(stage), str(out), "--frames", "24", "--width", "480",
+                     "--quiet", *extra]) == 0
+        images[name] = read(out)
+    sleeve = images["wrinkled"][..., 3] > 0.99
+    maps = np.abs(images["maps"] - images["wrinkled"])[..., :3][sleeve].mean()
+    plain = np.abs(images["plain"] - images["wrinkled"])[..., :3][sleeve].mean()
+    print(f"sleeve pixels: maps vs wrinkles {maps:.4f}, plain vs wrinkles {plain:.4f}")
+    assert maps < 0.75 * plain
+
+
+def test_shirt_layer_is_clean_and_complete(gl_context, shirt_maps, capsys):
+    assert main(["check", str(shirt_maps)]) == 0
+    stage = Usd.Stage.Open(str(shirt_maps))
+    sleeve = stage.GetPrimAtPath("/World/Arm/Sleeve")
+    material, _ = UsdShade.MaterialBindingAPI(sleeve).ComputeBoundMaterial()
+    assert str(material.GetPath()) == "/World/WrinkleMaterials/Sleeve"
+    surface = material.ComputeSurfaceSource()[0]
+    assert surface.GetIdAttr().Get() == "UsdPreviewSurface"
+    # the rest of the look is the original material's (its plaid and roughness)
+    diffuse = surface.GetInput("diffuseColor").GetConnectedSources()[0][0].source
+    assert "plaid.png" in UsdShade.Shader(diffuse.GetPrim()).GetInput("file").Get().path
+    assert surface.GetInput("roughness").Get() == pytest.approx(0.6)
+    normal = UsdShade.Shader(surface.GetInput("normal").GetConnectedSources()[0][0]
+                             .source.GetPrim())
+    assert normal.GetInput("sourceColorSpace").Get() == "raw"
+    assert tuple(normal.GetInput("scale").Get()) == (2, 2, 2, 1)
+    assert tuple(normal.GetInput("bias").Get()) == (-1, -1, -1, 0)
+    assert surface.GetInput("displacement").HasConnectedSource()
+    folder = os.path.dirname(str(shirt_maps))
+    for name in ("wrinkleNormalFile", "wrinkleHeightFile"):
+        attr, values = file_samples(stage, material.GetPath(), name)
+        assert attr.GetTimeSamples() == [21.0, 22.0, 23.0, 24.0]
+        assert values[0].path == values[1].path  # the default is the first frame's file
+        for value in values:
+            assert not os.path.isabs(value.path)  # relative: layer and maps move together
+            assert os.path.isfile(os.path.join(folder, value.path)), value.path
+            assert value.resolvedPath
+
+
+def test_mesh_without_uvs_is_skipped_with_a_warning(gl_context, tmp_path, capsys):
+    source = sheet_stage(tmp_path, 0.7, st=False)
+    layer = tmp_path / "out.usda"
+    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64"]) == 0
+    err = capsys.readouterr().err
+    assert "no texture coordinates 'st'" in err and "/Sheet" in err
+    stage = Usd.Stage.Open(str(layer))
+    assert not stage.GetPrimAtPath("/WrinkleMaterials")
+    assert stage.GetPrimAtPath("/Sheet").GetAttribute("primvars:wrinkle:amplitude").Get(1)
+
+
+def test_overlapping_uvs_warn_and_the_bake_goes_on(gl_context, tmp_path, capsys):
+    rest, _, _ = grid_sheet(31, 31, 2.0)
+    st = np.stack([np.abs(rest[:, 0]), (rest[:, 1] + 1) / 2], 1)  # mirrored halves
+    source = sheet_stage(tmp_path, 0.7, st=st)
+    layer = tmp_path / "out.usda"
+    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64"]) == 0
+    err = capsys.readouterr().err
+    assert "overlap" in err and "/Sheet" in err
+    assert (tmp_path / "out_maps" / "Sheet.normal.0001.png").is_file()
+
+
+def test_a_failed_bake_leaves_neither_maps_nor_layer(gl_context, tmp_path, capsys):
+    """A frame that fails in the middle: exit 2, one line, no map, no staging folder and
+    no layer (nothing half written that names missing maps)."""
+    rest, counts, indices = grid_sheet(11, 11, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    bad = posed.copy()
+    bad[3] = np.nan
+    stage = point_cache_stage(rest, {1: posed, 2: posed, 3: bad}, counts, indices,
+                              width=WIDTH)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+        Vt.Vec2fArray.FromNumpy(((rest[:, :2] + 1) / 2).astype(np.float32)))
+    source = tmp_path / "bad.usda"
+    stage.GetRootLayer().Export(str(source))
+    out = tmp_path / "out" / "layer.usda"
+    assert main(["bake", str(source), str(out), "--quiet", "--maps", "normal",
+                 "--map-size", "32"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "frame 3" in err[0]
+    assert not out.exists()
+    leftovers = os.listdir(tmp_path / "out") if (tmp_path / "out").exists() else []
+    assert leftovers == []
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--maps", "normal,wrinkles"], "--maps takes"),
+    (["--maps", "normal", "--map-size", "8"], "--map-size must be in"),
+    (["--maps", "normal", "--map-padding", "-1"], "--map-padding must be in"),
+    (["--map-dir", "x"], "--map-dir need --maps"),
+])
+def test_map_options_are_checked(tmp_path, capsys, args, fragment):
+    source = sheet_stage(tmp_path, 0.7)
+    assert main(["bake", str(source), str(tmp_path / "o.usda"), "--quiet", *args]) == 2
+    assert fragment in capsys.readouterr().err
+
+
+def test_source_color_space_follows_usd_preview_surface(tmp_path):
+    """auto decodes 8-bit images from sRGB and keeps 16-bit ones (a normal map) as they
+    are; raw never decodes; sRGB always does."""
+    for bits, value in (("uint8", 128), ("uint16", 32768)):
+        path = str(tmp_path / f"grey{bits}.png")
+        spec = oiio.ImageSpec(4, 4, 3, bits)
+        out = oiio.ImageOutput.create(path)
+        out.open(path, spec)
+        out.write_image(np.full((4, 4, 3), value, np.uint8 if bits == "uint8" else np.uint16))
+        out.close()
+        stored = value / (255.0 if bits == "uint8" else 65535.0)
+        decoded = ((stored + 0.055) / 1.055) ** 2.4
+        expected_auto = decoded if bits == "uint8" else stored
+        np.testing.assert_allclose(load_texture(path, "auto")[..., 0], expected_auto, rtol=1e-3)
+        np.testing.assert_allclose(load_texture(path, "raw")[..., 0], stored, rtol=1e-4)
+        np.testing.assert_allclose(load_texture(path, "sRGB")[..., 0], decoded, rtol=1e-3)
