@@ -69,9 +69,12 @@ def _connect(distributed, address: str, workers: int | None):
     if address == "local":
         count = workers or os.cpu_count() or 1
         dashboard = ":0" if _has_bokeh() else None
+        # CRITICAL: a local worker's "failed to communicate with scheduler during
+        # heartbeat" when the machine is loaded, or at shutdown, is not the user's error
+        # (task errors reach the user as the one-line error, not through these logs)
         cluster = distributed.LocalCluster(
             n_workers=count, threads_per_worker=1, processes=True,
-            silence_logs=logging.ERROR, dashboard_address=dashboard)
+            silence_logs=logging.CRITICAL, dashboard_address=dashboard)
         return distributed.Client(cluster), cluster, count
     try:
         client = distributed.Client(address, timeout="20s")
