@@ -49,6 +49,9 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
     result["farm"] = farm_bench.farm(quick, corpus)
     progress("bench: cpu render nodes")
     result["cpu_nodes"] = cpu_nodes(quick, corpus)
+    progress("bench: wrinkle maps")
+    from .renderers import wrinkle_maps
+    result["wrinkle_maps"] = wrinkle_maps(quick, ctx)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .cpu_nodes import markdown as cpu_nodes_report
 from .paper import paper_figure
+from .renderers import markdown as renderers_report
 
 
 def history(folder: Path) -> list[dict]:
@@ -190,6 +191,7 @@ def markdown(result: dict) -> str:
     from . import farm as farm_bench
     lines += farm_bench.markdown(result)
     lines += cpu_nodes_report(result)
+    lines += renderers_report(result)
     tri = result.get("triangulation")
     if tri:
         lines += ["", "## Triangulation of hostile meshes", "",

@@ -41,9 +41,7 @@ uniform float u_amplitude_scale;  // s
 uniform int u_count;              // 1: count the triangles over each texel (overlaps)
 
 layout(location = 0) out vec4 out_normal;   // xyz: tangent-space unit normal; w: coverage
-// x: height h; y: a / (s W / 4); z: 1 where a triangle covers the texel (not padding);
-// w: coverage, padding included
-layout(location = 1) out vec4 out_wrinkle;
+layout(location = 1) out vec4 out_wrinkle;  // x: height h; y: a / (s W / 4); w: coverage
 
 void main() {
     if (u_count != 0) {  // additive blending sums these
@@ -58,7 +56,7 @@ void main() {
     mat3 frame = tangent_frame(t, corner_uv, n);   // orthonormal: its transpose inverts it
     float full = u_amplitude_scale * v_width / 4.0;
     out_normal = vec4(transpose(frame) * shading, 1.0);
-    out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 1.0, 1.0);
+    out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 0.0, 1.0);
 }
 
 #endif

@@ -263,3 +263,42 @@ def test_source_color_space_follows_usd_preview_surface(tmp_path):
         np.testing.assert_allclose(load_texture(path, "auto")[..., 0], expected_auto, rtol=1e-3)
         np.testing.assert_allclose(load_texture(path, "raw")[..., 0], stored, rtol=1e-4)
         np.testing.assert_allclose(load_texture(path, "sRGB")[..., 0], decoded, rtol=1e-3)
+
+
+def test_a_static_normal_map_tilts_the_rendered_normal(gl_context, tmp_path):
+    """Any mesh's UsdPreviewSurface normal map: a constant map of the tangent-space normal
+    (sin a, 0, cos a) on a flat sheet with st along (x, y) gives the world normal
+    (sin a, 0, cos a) in the normal AOV (tangent = dP/ds = x, bitangent = y, n = z)."""
+    angle = 0.4
+    path = str(tmp_path / "tilt.png")
+    encoded = 0.5 * np.array([np.sin(angle), 0.0, np.cos(angle)]) + 0.5
+    spec = oiio.ImageSpec(8, 8, 3, "uint16")
+    out = oiio.ImageOutput.create(path)
+    out.open(path, spec)
+    out.write_image(np.full((8, 8, 3), np.round(encoded * 65535), np.uint16))
+    out.close()
+    source = sheet_stage(tmp_path, 1.0, apply_api=False)
+    stage = Usd.Stage.Open(str(source))
+    material = UsdShade.Material.Define(stage, "/Looks/Tilt")
+    surface = UsdShade.Shader.Define(stage, "/Looks/Tilt/Surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    texture = UsdShade.Shader.Define(stage, "/Looks/Tilt/Normal")
+    texture.CreateIdAttr("UsdUVTexture")
+    texture.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("./tilt.png")
+    texture.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((2, 2, 2, 1))
+    texture.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set((-1, -1, -1, 0))
+    surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(
+        texture.ConnectableAPI().CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+    UsdShade.MaterialBindingAPI.Apply(stage.GetPrimAtPath("/Sheet")).Bind(material)
+    stage.Save()
+    out_path = tmp_path / "tilt.exr"
+    assert main(["render", str(source), str(out_path), "--frames", "1", "--width", "64",
+                 "--quiet"]) == 0
+    spec_in = oiio.ImageInput.open(str(out_path)).spec()
+    names = list(spec_in.channelnames)
+    pixels = read(out_path)
+    centre = pixels[pixels.shape[0] // 2, pixels.shape[1] // 2]
+    assert centre[names.index("A")] == 1.0
+    normal = centre[[names.index(f"N.{c}") for c in "XYZ"]]
+    np.testing.assert_allclose(normal, [np.sin(angle), 0.0, np.cos(angle)], atol=2e-3)

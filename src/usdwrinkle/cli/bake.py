@@ -5,7 +5,6 @@ import os
 import time
 
 from ..errors import UsdWrinkleError
-
 from .common import (
     Reporter,
     add_shot_args,

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UsdWrinkleError
+from ..outputs.writer import FrameWriter
 from ..render.buffers import available_memory
 from ..scene.stage import stage_inputs
 from .files import (
@@ -117,6 +118,7 @@ class MapBake:
                                                   for p in self.plans}
         self._rasterizer: MapRasterizer | None = None
         self._staging: MapStaging | None = None
+        self._writer: FrameWriter | None = None
         self._checked_overlap: set[str] = set()
         inputs = stage_inputs(engine.scene.stage)
         for name in self.file_names(frames):
@@ -141,6 +143,11 @@ class MapBake:
             self._staging = MapStaging(self.folder)
             self._rasterizer = MapRasterizer(self.engine.render_delegate.ctx,
                                              self.options.size)
+            # frame f's maps encode while frame f + 1 computes and rasterises
+            # (outputs/writer.py: OpenImageIO releases the GIL while it encodes)
+            self._writer = FrameWriter(
+                lambda path, item: encode_map(path, item[0], item[1], item[2]), threads=1,
+                max_in_flight=2 * len(MAP_KINDS))
 
     def add_frame(self, frame: float) -> None:
         """Render, encode and stage the maps of the frame the engine computed last."""
@@ -162,8 +169,8 @@ class MapBake:
                 for kind in self.options.kinds:
                     name = tile_file_name(
                         map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
-                    encode_map(self._staging.path(name), kind, getattr(pixels, kind),
-                               self._staging.final(name))
+                    self._writer.submit(frame, self._staging.path(name),
+                                        (kind, getattr(pixels, kind), self._staging.final(name)))
 
     def _check_overlap(self, plan: MeshMaps, res) -> None:
         self._checked_overlap.add(plan.path)
@@ -184,8 +191,10 @@ class MapBake:
                             self.files[path], self.options.uv, self.warn)
 
     def commit(self) -> None:
-        """Move the staged maps into the map folder (before the layer is renamed)."""
+        """Finish the encodes and move the staged maps into the map folder (before the
+        layer is renamed)."""
         if self._staging is not None:
+            self._writer.close()
             self._staging.commit()
 
     def metadata(self) -> dict:
@@ -196,6 +205,8 @@ class MapBake:
 
     def release(self) -> None:
         """Free the GPU targets; staged maps not committed are removed."""
+        if self._writer is not None:
+            self._writer.shutdown()  # before the staging folder goes
         if self._staging is not None:
             self._staging.discard()
         if self._rasterizer is not None:

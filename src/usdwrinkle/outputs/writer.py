@@ -60,12 +60,15 @@ class FrameWriter:
     def __enter__(self) -> FrameWriter:
         return self
 
+    def shutdown(self) -> None:
+        """Finish (or clean up) what was handed over, without raising its errors."""
+        if self.pool is not None:
+            self.pool.shutdown(wait=True)
+            self.pending.clear()
+
     def __exit__(self, kind, value, traceback) -> None:
         try:
             if kind is None:
                 self.close()
         finally:
-            if self.pool is not None:
-                # finish (or clean up) what was handed over, whatever happened here
-                self.pool.shutdown(wait=True)
-                self.pending.clear()
+            self.shutdown()

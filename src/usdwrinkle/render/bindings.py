@@ -42,8 +42,5 @@ WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS
         "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
 DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "TOPOLOGY_TABLE": 6, "DRAW_CORNER_ST": 7,
         "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10}
-#: wrinkle maps (maps/): the blend rasterised in UV space, then dilated
-MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9,
-        # image units of the dilation
-        "DILATE_NORMAL_IN": 0, "DILATE_WRINKLE_IN": 1, "DILATE_NORMAL_OUT": 2,
-        "DILATE_WRINKLE_OUT": 3}
+#: wrinkle maps (maps/): the blend rasterised in UV space
+MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}

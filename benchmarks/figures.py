@@ -1,0 +1,83 @@
+"""The README's figures of the other-renderer outputs, made by the commands they show.
+
+    python -m benchmarks.figures [OUTDIR]      (default docs/images)
+
+- ``maps_shirt.png``: frame 24 of the shirt drawn with wrinkles, next to the normal map
+  that ``bake --maps`` wrote for that frame (the sleeve's UVs: around the arm across,
+  shoulder to cuff upwards).
+"""
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIRT = ROOT / "sample_stages" / "shirt.usda"
+
+
+def _cli(*args: str) -> None:
+    from usdwrinkle.cli.main import main
+
+    code = main([*args, "--quiet"])
+    if code:
+        raise SystemExit(f"usdwrinkle {' '.join(args)} failed ({code})")
+
+
+def _read(path) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    return oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)
+
+
+def _resize(path, size: tuple[int, int]) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBufAlgo.resize(oiio.ImageBuf(str(path)),
+                                   roi=oiio.ROI(0, size[0], 0, size[1], 0, 1, 0, 3))
+    return buf.get_pixels(oiio.FLOAT)
+
+
+def _write(path, pixels: np.ndarray) -> None:
+    import OpenImageIO as oiio
+
+    rgb = np.clip(pixels[..., :3], 0, 1)
+    data = np.ascontiguousarray(np.round(rgb * 255), np.uint8)
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], 3, "uint8")
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), spec)
+    out.write_image(data)
+    out.close()
+
+
+def maps_figure(outdir: Path) -> Path:
+    with tempfile.TemporaryDirectory() as folder:
+        layer = os.path.join(folder, "shirt_maps.usda")
+        _cli("bake", str(SHIRT), layer, "--maps", "normal", "--map-size", "1024")
+        frame = os.path.join(folder, "frame.png")
+        _cli("render", str(SHIRT), frame, "--frames", "24", "--width", "640", "--height",
+             "480")
+        image = _read(frame)
+        alpha = image[..., 3:4]
+        image = image[..., :3] * alpha + (1 - alpha)  # over white, as the README shows
+        normal = _resize(os.path.join(folder, "shirt_maps_maps", "Sleeve.normal.0024.png"),
+                         (480, 480))
+    gap = np.ones((480, 16, 3), np.float32)
+    path = outdir / "maps_shirt.png"
+    _write(path, np.concatenate([image, gap, normal], axis=1))
+    return path
+
+
+def main(argv=None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    outdir = Path(args[0]) if args else ROOT / "docs" / "images"
+    outdir.mkdir(parents=True, exist_ok=True)
+    print(maps_figure(outdir))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
