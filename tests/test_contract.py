@@ -25,7 +25,8 @@ GLSL = {"GL_ARB_shader_draw_parameters"}
 STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
                   "STEP"}
 PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.CRUSH, bindings.RELAX,
-                             bindings.DRAW, bindings.MAPS) for name in table}
+                             bindings.DRAW, bindings.MAPS,
+                             bindings.GEOMETRY) for name in table}
 
 
 def shader_files():
@@ -88,4 +89,4 @@ def test_the_wave_blend_is_written_once():
         if '#include "include/wave.glsl"' in text:
             assert "wave_blend(" in text, path.name
             users.append(path.name)
-    assert {"draw.glsl", "maps.glsl"} <= set(users)
+    assert {"draw.glsl", "maps.glsl", "geometry.glsl"} <= set(users)

@@ -127,13 +127,17 @@ def bakeable_meshes(engine, warn) -> dict:
 def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_spec: str,
                with_points: bool = False, display_color: str | None = None,
                sparse: bool = False, warn=lambda message: None,
-               progress: Callable = lambda items: items, maps=None) -> int:
+               progress: Callable = lambda items: items, maps=None, geometry=None,
+               survey_progress: Callable | None = None) -> int:
     """Compute every frame in order (the phase history is sequential in time) and write
     the wrinkle fields to ``output`` atomically; returns the number of meshes baked.
 
     ``maps`` (maps.bake.MapOptions): also render each frame's wrinkle maps and bind them
     in a material per mesh; the maps are moved into their folder just before the layer
-    is renamed into place, so an error leaves neither."""
+    is renamed into place, so an error leaves neither.
+    ``geometry`` (geometry.bake.GeometryOptions): also write a displaced render mesh per
+    wrinkled mesh, with the coarse mesh as its proxy; without ``levels``, every frame's
+    waves are surveyed first (``survey_progress`` wraps those frames)."""
     from .outputs.layers import LayerBaker
 
     wrinkled = bakeable_meshes(engine, warn)
@@ -144,27 +148,45 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
                        with_points=with_points, display_color=display_color, sparse=sparse,
                        warn=warn)
     wanted = set(wrinkled) | set(baker.point_meshes)
-    map_bake = None
+    extras = {}
+    map_bake = geometry_bake = None
     if maps is not None:
         from .maps.bake import MapBake
 
         map_bake = MapBake(engine, wrinkled, maps, output, warn, frames)
+    if geometry is not None:
+        from .geometry.bake import GeometryBake
+
+        geometry_bake = GeometryBake(engine, wrinkled, geometry, baker.layer, frames, warn)
     try:
+        if geometry_bake is not None:
+            if geometry_bake.needs_survey:
+                for frame in (survey_progress or progress)(frames):
+                    with at_frame(frame):
+                        engine.compute_frame(frame)
+                        geometry_bake.survey({p: engine.read_fields(p) for p in wrinkled})
+            geometry_bake.plan()
         for frame in progress(frames):
             with at_frame(frame):
                 engine.compute_frame(frame)
                 baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
                 if map_bake is not None:
                     map_bake.add_frame(frame)
-        if map_bake is None:
-            baker.save(output, frame_spec)
-        else:
+                if geometry_bake is not None:
+                    geometry_bake.add_frame(frame)
+        commit = None
+        if map_bake is not None:
             map_bake.author(baker.layer, engine.scene.stage)
-            baker.save(output, frame_spec, before_rename=map_bake.commit,
-                       extra_metadata={"maps": map_bake.metadata()})
+            extras["maps"] = map_bake.metadata()
+            commit = map_bake.commit
+        if geometry_bake is not None:
+            extras["geometry"] = geometry_bake.metadata()
+        baker.save(output, frame_spec, before_rename=commit, extra_metadata=extras)
     finally:
         if map_bake is not None:
             map_bake.release()
+        if geometry_bake is not None:
+            geometry_bake.release()
     return len(wrinkled)
 
 

@@ -52,6 +52,21 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--uv", default="st",
                       help="the texture coordinates (primvar) the maps are laid out in; "
                            "default st")
+    geometry = p.add_argument_group(
+        "displaced geometry", "a finer render mesh per wrinkled mesh that carries the "
+                              "wrinkles as real displacement, with the coarse mesh as its "
+                              "proxy (README: displaced geometry)")
+    geometry.add_argument("--geometry", action="store_true",
+                          help="write <mesh>_wrinkled (purpose render; the coarse mesh "
+                               "becomes purpose proxy)")
+    levels = geometry.add_mutually_exclusive_group()
+    levels.add_argument("--levels", type=int,
+                        help="midpoint subdivision levels (each splits every triangle in 4); "
+                             "default: the fewest that give every wave "
+                             "--samples-per-wavelength samples over the shot")
+    levels.add_argument("--samples-per-wavelength", type=float, default=6.0,
+                        help="fine vertices per wavelength the default levels aim for "
+                             "(default 6)")
     p.add_argument("--sparse", action="store_true",
                    help="write the overs alone, without sublayering the input")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -79,6 +94,22 @@ def map_options(args):
     return options
 
 
+def geometry_options(args):
+    """GeometryOptions from --geometry and its options (None without --geometry)."""
+    if not args.geometry:
+        given = [flag for flag, value, default in (
+            ("--levels", args.levels, None),
+            ("--samples-per-wavelength", args.samples_per_wavelength, 6.0)) if value != default]
+        if given:
+            raise UsdWrinkleError(f"{', '.join(given)} need --geometry")
+        return None
+    from ..geometry.bake import GeometryOptions, check_geometry_options
+
+    options = GeometryOptions(args.levels, args.samples_per_wavelength)
+    check_geometry_options(options)
+    return options
+
+
 def check_map_folder(folder: str) -> None:
     """Refuse a map folder that cannot be written, before any work; one that does not
     exist yet is made only when the maps are committed (a failed bake leaves none)."""
@@ -98,6 +129,7 @@ def run(args) -> int:
 
     check_stage_args(args)
     maps = map_options(args)
+    geometry = geometry_options(args)
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
     reporter = Reporter(args.quiet)
@@ -120,7 +152,9 @@ def run(args) -> int:
                            args.frames or frame_spec_text(frames),
                            with_points=args.with_points, display_color=args.display_color,
                            sparse=args.sparse, warn=reporter.warn,
-                           progress=lambda items: reporter.progress(items, "bake"), maps=maps)
+                           progress=lambda items: reporter.progress(items, "bake"), maps=maps,
+                           geometry=geometry,
+                           survey_progress=lambda items: reporter.progress(items, "survey"))
         if not args.quiet:
             print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
                   f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)

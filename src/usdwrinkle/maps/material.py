@@ -22,6 +22,8 @@ import math
 
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
+from ..outputs.layers import bind_material
+
 SCOPE = "WrinkleMaterials"
 #: map kind -> (material interface input, texture shader name, its output, surface input)
 TEXTURES = {
@@ -149,16 +151,4 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
         type_name = VALUE_TYPES.Normal3f if input_type == "normal3f" else VALUE_TYPES.Float
         _attribute(surface_spec, f"inputs:{input_name}", type_name,
                    connect=texture.AppendProperty(f"outputs:{output_name}"))
-    _bind(layer, mesh_path, path)
-
-
-def _bind(layer: Sdf.Layer, mesh_path: str, material: Sdf.Path) -> None:
-    spec = Sdf.CreatePrimInLayer(layer, mesh_path)
-    schemas = spec.GetInfo("apiSchemas") if spec.HasInfo("apiSchemas") else Sdf.TokenListOp()
-    prepended = list(schemas.prependedItems)
-    if "MaterialBindingAPI" not in prepended:
-        schemas.prependedItems = prepended + ["MaterialBindingAPI"]
-        spec.SetInfo("apiSchemas", schemas)
-    rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
-        spec, "material:binding", custom=False)
-    rel.targetPathList.explicitItems = [material]
+    bind_material(layer, mesh_path, path)

@@ -227,3 +227,17 @@ def _ancestors(prim: Usd.Prim):
     while prim and not prim.IsPseudoRoot():
         yield prim
         prim = prim.GetParent()
+
+
+def bind_material(layer: Sdf.Layer, prim_path, material_path) -> None:
+    """Author a direct material binding of ``prim_path`` to ``material_path`` in
+    ``layer`` (MaterialBindingAPI applied, ``material:binding`` targeting it)."""
+    spec = Sdf.CreatePrimInLayer(layer, prim_path)
+    schemas = spec.GetInfo("apiSchemas") if spec.HasInfo("apiSchemas") else Sdf.TokenListOp()
+    prepended = list(schemas.prependedItems)
+    if "MaterialBindingAPI" not in prepended:
+        schemas.prependedItems = prepended + ["MaterialBindingAPI"]
+        spec.SetInfo("apiSchemas", schemas)
+    rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
+        spec, "material:binding", custom=False)
+    rel.targetPathList.explicitItems = [Sdf.Path(str(material_path))]

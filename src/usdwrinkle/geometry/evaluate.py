@@ -1,0 +1,83 @@
+"""The GPU half of the displaced geometry: geometry.glsl at every fine vertex.
+
+Per mesh, the fine vertices' (coarse triangle, barycentrics) are uploaded once; each
+frame one compute dispatch evaluates the wave blend of the frame the engine computed
+(include/wave.glsl, as the draw pass does per pixel) and the displaced points and
+normals are read back. No Usd objects here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..render import bindings
+from ..render.passes import bind, bind_wave, groups, set_uniforms
+from ..render.resources import MeshResources, Table
+from ..render.shaders import compute_shader
+from .subdivide import FineMesh
+
+
+@dataclass
+class FineFrame:
+    """One frame of a fine mesh, in the coarse mesh's local space.
+
+    points : (n, 3) float32 displaced points.
+    normals : (n, 3) float32 unit normals from the wrinkle gradient.
+    height : (n,) float32 the displacement h along the interpolated coarse normal.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    height: np.ndarray
+
+
+class GeometryEvaluator:
+    """The compute program and, per mesh, its fine-vertex table and output tables."""
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self.program = compute_shader(ctx, "geometry.glsl",
+                                      {**bindings.COMMON, **bindings.GEOMETRY})
+        self.tables: dict[str, tuple[Table, Table, Table]] = {}
+
+    def _tables(self, res: MeshResources, fine: FineMesh):
+        path = res.record.path
+        tables = self.tables.get(path)
+        count = len(fine.points)
+        if tables is None or tables[0].count != count:
+            self._release(path)
+            rows = np.empty((count, 4), np.float32)
+            rows[:, 0] = fine.vertex_triangle
+            rows[:, 1:] = fine.vertex_bary
+            tables = (Table(self.ctx, count, 4, data=rows, what="fine vertex table", path=path),
+                      Table(self.ctx, count, 4, path=path), Table(self.ctx, count, 4, path=path))
+            self.tables[path] = tables
+        return tables
+
+    def evaluate(self, res: MeshResources, fine: FineMesh, wrinkles: bool = True) -> FineFrame:
+        """The fine mesh at the frame ``res`` holds (synced and computed)."""
+        vertices, points, normals = self._tables(res, fine)
+        set_uniforms(self.program, {
+            "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
+            "u_profile_samples": float(len(res.record.params.height_profile))})
+        units = bindings.GEOMETRY
+        bind_wave(units, res)
+        bind(units, reads={"GEOMETRY_VERTICES": vertices},
+             writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
+        self.program.run(groups(len(fine.points), bindings.LOCAL_SIZE))
+        self.ctx.memory_barrier()
+        out_points = points.read()
+        out_normals = normals.read()
+        return FineFrame(np.ascontiguousarray(out_points[:, :3]),
+                         np.ascontiguousarray(out_normals[:, :3]),
+                         np.ascontiguousarray(out_points[:, 3]))
+
+    def _release(self, path: str) -> None:
+        for table in self.tables.pop(path, ()):
+            table.release()
+
+    def release(self) -> None:
+        for path in list(self.tables):
+            self._release(path)
+        self.program.release()

@@ -1,0 +1,115 @@
+"""The fine render topology: N levels of midpoint (1-to-4) subdivision of the rest mesh.
+
+trimesh does the subdivision (``trimesh.remesh.subdivide``: shared edges get one
+midpoint, so the fine mesh is as watertight as the coarse one) and the barycentric
+coordinates (``trimesh.triangles.points_to_barycentric``). Every fine vertex is tied to
+one coarse triangle and its barycentric position there: what the GPU evaluates the wave
+blend at (geometry.glsl). Every fine face corner has its barycentrics in its own coarse
+triangle too, so face-varying data (UVs) is carried across seams exactly.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UsdWrinkleError
+
+#: fine points above which a mesh is refused (``--levels`` lowers the count)
+MAX_FINE_POINTS = 4_000_000
+#: samples per wavelength the default level count aims for
+DEFAULT_SAMPLES_PER_WAVELENGTH = 6.0
+MAX_LEVELS = 10
+
+
+@dataclass(frozen=True)
+class FineMesh:
+    """A subdivided mesh.
+
+    points : (n, 3) float32 fine rest points.
+    faces : (m, 3) int32 fine triangles.
+    vertex_triangle : (n,) int32 the coarse triangle of each fine vertex.
+    vertex_bary : (n, 3) float32 its barycentric coordinates there.
+    face_triangle : (m,) int32 the coarse triangle of each fine face.
+    corner_bary : (m, 3, 3) float32 each fine face corner's barycentrics in that triangle.
+    levels : int.
+    """
+
+    points: np.ndarray
+    faces: np.ndarray
+    vertex_triangle: np.ndarray
+    vertex_bary: np.ndarray
+    face_triangle: np.ndarray
+    corner_bary: np.ndarray
+    levels: int
+
+
+def fine_point_count(num_points: int, triangles: np.ndarray, levels: int) -> int:
+    """Points after ``levels`` subdivisions, before any is made: every level adds one
+    point per edge, and the edges and faces multiply as 1-to-4 splits do."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                    triangles[:, [2, 0]]]), axis=1)
+    count_edges = len(np.unique(edges, axis=0)) if len(edges) else 0
+    points, faces = num_points, len(triangles)
+    for _ in range(levels):
+        points, count_edges, faces = points + count_edges, 2 * count_edges + 3 * faces, \
+            4 * faces
+    return int(points)
+
+
+def levels_for(phase_step: float, samples_per_wavelength: float) -> int:
+    """The fewest levels for which a fine edge advances a wave's phase by at most
+    2 pi / S (S samples per wavelength): ``phase_step`` is the advance |e . k| along a
+    coarse edge that must be resolved (geometry/bake.py: its survey)."""
+    needed = samples_per_wavelength * phase_step / (2 * math.pi)
+    return 0 if needed <= 1 else min(int(math.ceil(math.log2(needed))), MAX_LEVELS)
+
+
+def check_size(path: str, num_points: int, triangles: np.ndarray, levels: int) -> int:
+    count = fine_point_count(num_points, triangles, levels)
+    if count > MAX_FINE_POINTS:
+        raise UsdWrinkleError(
+            f"{levels} subdivision level(s) would make {count:,} fine points, more than "
+            f"{MAX_FINE_POINTS:,}; pass fewer --levels (or a lower --samples-per-wavelength)",
+            path)
+    return count
+
+
+def subdivide(rest: np.ndarray, triangles: np.ndarray, levels: int) -> FineMesh:
+    """``levels`` midpoint subdivisions of the rest mesh's triangles."""
+    import trimesh
+
+    rest = np.asarray(rest, np.float64)
+    faces = np.asarray(triangles, np.int64)
+    face_triangle = np.arange(len(faces))
+    vertices = rest
+    for _ in range(levels):
+        vertices, faces, index = trimesh.remesh.subdivide(vertices, faces, return_index=True)
+        parent = np.empty(len(faces), np.int64)
+        for old, new in index.items():
+            parent[new] = old
+        face_triangle = face_triangle[parent]
+    coarse = rest[np.asarray(triangles, np.int64)[face_triangle]]      # (m, 3, 3)
+    corners = vertices[faces]                                            # (m, 3, 3)
+    bary = np.empty((len(faces), 3, 3))
+    for corner in range(3):
+        with np.errstate(all="ignore"):
+            bary[:, corner] = trimesh.triangles.points_to_barycentric(coarse, corners[:, corner])
+    # a degenerate coarse triangle has no barycentrics: its centre stands in
+    bary = np.where(np.isfinite(bary).all(axis=2, keepdims=True), bary, 1.0 / 3.0)
+    bary = np.clip(bary, 0.0, 1.0)
+    bary /= np.maximum(bary.sum(axis=2, keepdims=True), 1e-30)
+    # each fine vertex takes its first face's coarse triangle
+    flat = faces.ravel()
+    first = np.full(len(vertices), -1, np.int64)
+    order = np.arange(len(flat))[::-1]
+    first[flat[order]] = order  # the last write per vertex is its first occurrence
+    used = first >= 0
+    vertex_triangle = np.zeros(len(vertices), np.int64)
+    vertex_bary = np.tile([1.0, 0.0, 0.0], (len(vertices), 1))
+    vertex_triangle[used] = face_triangle[first[used] // 3]
+    vertex_bary[used] = bary.reshape(-1, 3)[first[used]]
+    return FineMesh(vertices.astype(np.float32), faces.astype(np.int32),
+                    vertex_triangle.astype(np.int32), vertex_bary.astype(np.float32),
+                    face_triangle.astype(np.int32), bary.astype(np.float32), int(levels))
