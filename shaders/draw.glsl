@@ -100,7 +100,7 @@ void main() {
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
-        wave = wave_blend(t, v_bary, v_local, n);
+        wave = wave_blend(t, v_bary, v_local, n, false);
     }
     float h = wave.height;
     vec3 shading_local = safe_normalize(n - wave.gradient, n);

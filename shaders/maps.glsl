@@ -51,7 +51,7 @@ void main() {
     }
     int t = gl_PrimitiveID;
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
-    Wave wave = wave_blend(t, v_bary, v_local, n);
+    Wave wave = wave_blend(t, v_bary, v_local, n, false);
     vec3 shading = safe_normalize(n - wave.gradient, n);
     mat3 frame = tangent_frame(t, corner_uv, n);   // orthonormal: its transpose inverts it
     float full = u_amplitude_scale * v_width / 4.0;

@@ -29,15 +29,35 @@ struct Wave {
     float amplitude;  // the blended amplitude sum(b_c a_c)
 };
 
+// The gradient of barycentric weight c over triangle (p0, p1, p2): constant, pointing from
+// the opposite edge towards corner c, 1 / (its distance) long.
+vec3 weight_gradient(int c, vec3 p0, vec3 p1, vec3 p2) {
+    vec3 normal = cross(p1 - p0, p2 - p0);
+    float area2 = dot(normal, normal);
+    if (area2 < 1e-30) return vec3(0.0);
+    vec3 opposite = c == 0 ? p2 - p1 : (c == 1 ? p0 - p2 : p1 - p0);
+    return cross(normal, opposite) / area2;
+}
+
 // The blend at local-space point p of triangle t, barycentric weights bary, interpolated
 // coarse unit normal n. The surface P + h n has the normal normalize(n - gradient).
-Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n) {
+// The gradient is the paper's sum(b_c a_c H'(theta_c) k_c) in the tangent plane of n,
+// which shading uses. With exact_gradient it is the true 3D gradient of h over the flat
+// coarse triangle instead: the blend weights' own slope sum(a_c H(theta_c) grad b_c)
+// added, and not projected (displaced geometry differentiates its surface with it).
+Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
     bary = clamp(bary, 0.0, 1.0);
     bary /= max(bary.x + bary.y + bary.z, 1e-20);
     ivec3 corners = fetch(triangles, t).xyz;
     vec3 k0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
+    vec3 p0 = vec3(0.0), p1 = vec3(0.0), p2 = vec3(0.0);
+    if (exact_gradient) {
+        p0 = fetch(posed_points, corners.x).xyz;
+        p1 = fetch(posed_points, corners.y).xyz;
+        p2 = fetch(posed_points, corners.z).xyz;
+    }
     for (int c = 0; c < 3; ++c) {
         int i = corners[c];
         vec4 wave = fetch(fields, FIELD_WAVE(i));
@@ -48,11 +68,17 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n) {
         if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
         float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
         float b = bary[c];
-        w.height += b * a * profile(u_height_profile, theta);
+        float height = profile(u_height_profile, theta);
+        w.height += b * a * height;
         w.gradient += b * a * profile(u_gradient_profile, theta) * k;
         w.amplitude += b * a;
+        if (exact_gradient) {
+            w.gradient += a * height * weight_gradient(c, p0, p1, p2);
+        }
     }
-    w.gradient -= dot(w.gradient, n) * n;  // keep the gradient in the tangent plane
+    if (!exact_gradient) {
+        w.gradient -= dot(w.gradient, n) * n;  // keep the gradient in the tangent plane
+    }
     return w;
 }
 

@@ -24,8 +24,8 @@ def _normalise(values: np.ndarray) -> np.ndarray:
     return (values / span if span > 0 else values).astype(np.float32)
 
 
-def _cosine():
-    return np.cos(_THETA)
+def _cosine(theta=_THETA):
+    return np.cos(theta)
 
 
 def cosine_profile() -> np.ndarray:
@@ -40,31 +40,58 @@ def derive_gradient(height: np.ndarray) -> np.ndarray:
     return ((np.roll(height, -1) - np.roll(height, 1)) / (2 * step)).astype(np.float32)
 
 
-def _sharp():
+def _sharp(theta=_THETA):
     # narrow folded ridges, broad valleys: a crest that is sharp on top
-    return _normalise(np.exp(4.0 * (np.cos(_THETA) - 1.0)))
+    return _normalise(np.exp(4.0 * (np.cos(theta) - 1.0)))
 
 
-def _rounded():
+def _rounded(theta=_THETA):
     # broad rounded crests, narrow creases between them
-    return _normalise(-np.exp(4.0 * (-np.cos(_THETA) - 1.0)))
+    return _normalise(-np.exp(4.0 * (-np.cos(theta) - 1.0)))
 
 
-def _box():
+def _box(theta=_THETA):
     # pleats: flat tops and bottoms, steep (but smooth) sides
-    return _normalise(np.tanh(6.0 * np.cos(_THETA)))
+    return _normalise(np.tanh(6.0 * np.cos(theta)))
 
 
-PRESETS = {"cosine": _cosine, "sharp": _sharp, "rounded": _rounded, "box": _box}
+def _triangle(theta=_THETA):
+    # straight flanks between sharp crests and creases: 1 - 2|theta|/pi over (-pi, pi],
+    # the profile whose length the amplitude law restores exactly (docs/method.md)
+    return (2.0 / np.pi) * np.arcsin(np.cos(theta))
+
+
+PRESETS = {"cosine": _cosine, "sharp": _sharp, "rounded": _rounded, "box": _box,
+           "triangle": _triangle}
 
 
 def profile_preset(name: str) -> np.ndarray:
-    """One of ``cosine``, ``sharp``, ``rounded``, ``box``: (256,) float32."""
+    """One of ``cosine``, ``sharp``, ``rounded``, ``box``, ``triangle``: (256,) float32."""
     try:
         return np.asarray(PRESETS[name](), np.float32)
     except KeyError:
         raise UsdWrinkleError(f"unknown profile '{name}' (presets: {', '.join(PRESETS)})") \
             from None
+
+
+def preset_at(name: str, theta: np.ndarray) -> np.ndarray:
+    """A preset evaluated at any phases (float64): what docs/method.md integrates."""
+    return np.asarray(PRESETS[name](np.asarray(theta, np.float64)), np.float64)
+
+
+def length_ratio(name: str, ratio: float, amplitude_scale: float = 1.0,
+                 samples: int = 1 << 16) -> float:
+    """Arc length over rest length of a sheet compressed by ``ratio`` and displaced by the
+    preset's wave with the amplitude law a = s (W/4) sqrt(1 - r^2), |k| = 2 pi / (r W):
+
+        L / L0 = r * mean_theta sqrt(1 + (a |k| H'(theta))^2),
+        a |k| = s (pi / 2) sqrt(1 - r^2) / r.
+
+    W cancels. The triangle (|H'| = 2/pi) gives exactly 1 at s = 1."""
+    theta = np.arange(samples) * (2 * np.pi / samples)
+    slope = np.gradient(preset_at(name, theta), theta, edge_order=2)
+    ak = amplitude_scale * (np.pi / 2) * np.sqrt(1 - ratio ** 2) / ratio
+    return float(ratio * np.mean(np.sqrt(1 + (ak * slope) ** 2)))
 
 
 def profile_from_curve(points, samples: int = PROFILE_SAMPLES) -> np.ndarray:

@@ -39,31 +39,34 @@ class GeometryEvaluator:
         self.ctx = ctx
         self.program = compute_shader(ctx, "geometry.glsl",
                                       {**bindings.COMMON, **bindings.GEOMETRY})
-        self.tables: dict[str, tuple[Table, Table, Table]] = {}
+        self.tables: dict[str, tuple[Table, Table, Table, Table]] = {}
 
     def _tables(self, res: MeshResources, fine: FineMesh):
         path = res.record.path
         tables = self.tables.get(path)
         count = len(fine.points)
-        if tables is None or tables[0].count != count:
+        if tables is None or tables[2].count != count:
             self._release(path)
-            rows = np.empty((count, 4), np.float32)
-            rows[:, 0] = fine.vertex_triangle
-            rows[:, 1:] = fine.vertex_bary
-            tables = (Table(self.ctx, count, 4, data=rows, what="fine vertex table", path=path),
+            ranges = np.stack([fine.entry_offsets[:-1], fine.entry_offsets[1:]], 1)
+            entries = np.empty((len(fine.entry_triangle), 4), np.float32)
+            entries[:, 0] = fine.entry_triangle
+            entries[:, 1:] = fine.entry_bary
+            tables = (Table(self.ctx, count, 2, "i4", ranges, "fine vertex table", path),
+                      Table(self.ctx, len(entries), 4, data=entries, what="fine vertex table",
+                            path=path),
                       Table(self.ctx, count, 4, path=path), Table(self.ctx, count, 4, path=path))
             self.tables[path] = tables
         return tables
 
     def evaluate(self, res: MeshResources, fine: FineMesh, wrinkles: bool = True) -> FineFrame:
         """The fine mesh at the frame ``res`` holds (synced and computed)."""
-        vertices, points, normals = self._tables(res, fine)
+        ranges, entries, points, normals = self._tables(res, fine)
         set_uniforms(self.program, {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_profile_samples": float(len(res.record.params.height_profile))})
         units = bindings.GEOMETRY
         bind_wave(units, res)
-        bind(units, reads={"GEOMETRY_VERTICES": vertices},
+        bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries},
              writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
         self.program.run(groups(len(fine.points), bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

@@ -34,6 +34,11 @@ class FineMesh:
     face_triangle : (m,) int32 the coarse triangle of each fine face.
     corner_bary : (m, 3, 3) float32 each fine face corner's barycentrics in that triangle.
     levels : int.
+    entry_offsets : (n + 1,) int32; entries entry_offsets[v] .. entry_offsets[v + 1] - 1
+        are every coarse triangle fine vertex v lies in (one inside a coarse triangle, two
+        on a coarse edge, the valence at a coarse vertex), the first being
+        vertex_triangle[v]: its normal is averaged over them, as the surface's is.
+    entry_triangle : (e,) int32; entry_bary : (e, 3) float32.
     """
 
     points: np.ndarray
@@ -43,6 +48,9 @@ class FineMesh:
     face_triangle: np.ndarray
     corner_bary: np.ndarray
     levels: int
+    entry_offsets: np.ndarray
+    entry_triangle: np.ndarray
+    entry_bary: np.ndarray
 
 
 def fine_point_count(num_points: int, triangles: np.ndarray, levels: int) -> int:
@@ -100,16 +108,32 @@ def subdivide(rest: np.ndarray, triangles: np.ndarray, levels: int) -> FineMesh:
     bary = np.where(np.isfinite(bary).all(axis=2, keepdims=True), bary, 1.0 / 3.0)
     bary = np.clip(bary, 0.0, 1.0)
     bary /= np.maximum(bary.sum(axis=2, keepdims=True), 1e-30)
-    # each fine vertex takes its first face's coarse triangle
+    # every (fine vertex, coarse triangle) pair once, in vertex order; a vertex's first
+    # entry is its first face's coarse triangle
     flat = faces.ravel()
-    first = np.full(len(vertices), -1, np.int64)
-    order = np.arange(len(flat))[::-1]
-    first[flat[order]] = order  # the last write per vertex is its first occurrence
-    used = first >= 0
+    corner_triangle = np.repeat(face_triangle, 3)
+    order = np.lexsort((np.arange(len(flat)), corner_triangle, flat))
+    pairs = np.stack([flat[order], corner_triangle[order]], 1)
+    keep = np.ones(len(order), bool)
+    keep[1:] = np.any(pairs[1:] != pairs[:-1], axis=1)
+    entries = order[keep]
+    entry_vertex = flat[entries]
+    # the first entry of each vertex: the coarse triangle of its first face
+    first_corner = np.full(len(vertices), len(flat), np.int64)
+    np.minimum.at(first_corner, flat, np.arange(len(flat)))
+    first_entry = corner_triangle[np.minimum(first_corner, len(flat) - 1)][entry_vertex] == \
+        corner_triangle[entries]
+    entries = entries[np.lexsort((~first_entry, entry_vertex))]
+    entry_vertex = flat[entries]
+    offsets = np.searchsorted(entry_vertex, np.arange(len(vertices) + 1)).astype(np.int32)
+    entry_triangle = corner_triangle[entries]
+    entry_bary = bary.reshape(-1, 3)[entries]
+    used = np.diff(offsets) > 0
     vertex_triangle = np.zeros(len(vertices), np.int64)
     vertex_bary = np.tile([1.0, 0.0, 0.0], (len(vertices), 1))
-    vertex_triangle[used] = face_triangle[first[used] // 3]
-    vertex_bary[used] = bary.reshape(-1, 3)[first[used]]
+    vertex_triangle[used] = entry_triangle[offsets[:-1][used]]
+    vertex_bary[used] = entry_bary[offsets[:-1][used]]
     return FineMesh(vertices.astype(np.float32), faces.astype(np.int32),
                     vertex_triangle.astype(np.int32), vertex_bary.astype(np.float32),
-                    face_triangle.astype(np.int32), bary.astype(np.float32), int(levels))
+                    face_triangle.astype(np.int32), bary.astype(np.float32), int(levels),
+                    offsets, entry_triangle.astype(np.int32), entry_bary.astype(np.float32))

@@ -45,6 +45,6 @@ DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "TOPOLOGY_TABLE": 6, "DRAW_CORNER_ST"
 #: wrinkle maps (maps/): the blend rasterised in UV space
 MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}
 #: displaced geometry (geometry/): the blend at every fine vertex
-GEOMETRY = {**WAVE, "GEOMETRY_VERTICES": 9,
+GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
             # image units
             "GEOMETRY_POINTS": 0, "GEOMETRY_NORMALS": 1}

@@ -1,0 +1,198 @@
+"""bake --geometry: the displaced fine mesh against the analytic plane wave and the length
+derivation, its normals against its own surface, rigid motion, frame independence,
+UsdSkel not skinning it twice, proxy/render purposes, and CesiumMan."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from benchmarks.lengths import sheet_lengths
+from pxr import Usd, UsdGeom, UsdSkel
+
+from usdwrinkle.cli.main import main
+from usdwrinkle.profiles import PRESETS
+
+from conftest import grid_sheet
+from helpers import point_cache_stage, rotation_matrix
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
+SHIRT = str(SAMPLES / "shirt.usda")
+SLEEVE = "/World/Arm/Sleeve"
+FINE = "/World/Arm/Sleeve_wrinkled"
+
+
+def bake(source, layer, *args) -> None:
+    assert main(["bake", str(source), str(layer), "--quiet", "--geometry", *args]) == 0
+    return Usd.Stage.Open(str(layer))
+
+
+def fine_points(stage, path, frame):
+    return np.asarray(UsdGeom.Mesh(stage.GetPrimAtPath(path)).GetPointsAttr().Get(frame),
+                      np.float64)
+
+
+@pytest.mark.parametrize("preset", sorted(PRESETS))
+def test_plane_wave_and_length_restoration(gl_context, tmp_path, preset):
+    """Uniform compression r along x: along the middle row the fine mesh's height is the
+    plane wave (amplitude a, wavelength rW, within 3%), and its arc length over whole
+    wavelengths over the rest length matches docs/method.md's derivation within 2%."""
+    row = sheet_lengths(preset, 0.7, str(tmp_path))
+    np.testing.assert_allclose(row["amplitude"], row["expected_amplitude"], rtol=0.03)
+    np.testing.assert_allclose(row["wavelength"], row["expected_wavelength"], rtol=0.03)
+    np.testing.assert_allclose(row["measured"], row["derived"], rtol=0.02)
+    if preset == "triangle":
+        assert abs(row["measured"] - 1.0) < 0.01  # the law restores the length exactly
+
+
+@pytest.fixture(scope="module")
+def shirt(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("geometry")
+    return bake(SHIRT, folder / "shirt_geometry.usdc", "--with-points"), folder
+
+
+def face_normals_at_vertices(points, faces):
+    """Area-weighted face normals averaged at the vertices: the surface's own normals."""
+    tri = points[faces]
+    face = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normals = np.zeros_like(points)
+    for corner in range(3):
+        np.add.at(normals, faces[:, corner], face)
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+
+
+def test_shirt_layer_has_proxy_and_render_meshes(gl_context, shirt):
+    stage, _ = shirt
+    fine = stage.GetPrimAtPath(FINE)
+    coarse = stage.GetPrimAtPath(SLEEVE)
+    assert UsdGeom.Imageable(fine).ComputePurpose() == UsdGeom.Tokens.render
+    assert UsdGeom.Imageable(coarse).ComputePurpose() == UsdGeom.Tokens.proxy
+    assert UsdGeom.Imageable(fine).GetProxyPrimRel().GetTargets() == [coarse.GetPath()]
+    mesh = UsdGeom.Mesh(fine)
+    assert mesh.GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none
+    assert len(mesh.GetPointsAttr().GetTimeSamples()) == 24
+    assert len(mesh.GetNormalsAttr().GetTimeSamples()) == 24
+    assert mesh.GetNormalsInterpolation() == UsdGeom.Tokens.vertex
+    st = UsdGeom.PrimvarsAPI(fine).GetPrimvar("st")
+    assert st.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
+    assert np.all(counts == 3) and len(st.Get()) == counts.sum()
+    from pxr import UsdShade
+    bound, _ = UsdShade.MaterialBindingAPI(fine).ComputeBoundMaterial()
+    assert str(bound.GetPath()) == "/World/Looks/Plaid"
+    # the two line up: the same local-to-world at every frame, points in the same space
+    for frame in (1, 12, 24):
+        cache = UsdGeom.XformCache(frame)
+        np.testing.assert_allclose(np.asarray(cache.GetLocalToWorldTransform(fine)),
+                                   np.asarray(cache.GetLocalToWorldTransform(coarse)))
+    # --with-points retypes the SkelRoot (as UsdSkelBakeSkinning): nothing is skinned
+    assert not UsdSkel.Root.Find(coarse)
+
+
+def skinned_prims(stage, root_path):
+    """The prims UsdSkel skins under a SkelRoot (its skinning targets)."""
+    root = UsdSkel.Root(stage.GetPrimAtPath(root_path))
+    cache = UsdSkel.Cache()
+    cache.Populate(root, Usd.PrimDefaultPredicate)
+    return {str(query.GetPrim().GetPath())
+            for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate)
+            for query in binding.GetSkinningTargets()}
+
+
+def test_fine_mesh_is_not_skinned_inside_a_skel_root(gl_context, tmp_path):
+    """Without --with-points the SkelRoot stays and skins the coarse mesh; the fine mesh
+    beside it holds posed points and has no joint influences: UsdSkel leaves it alone."""
+    stage = bake(SHIRT, tmp_path / "g.usdc", "--levels", "1", "--frames", "1:3")
+    assert skinned_prims(stage, "/World/Arm") == {SLEEVE}
+
+
+def test_normals_follow_the_displaced_surface(gl_context, shirt):
+    """The gradient's normals against the fine mesh's own (averaged face normals): within
+    5 degrees at 95% of the vertices, at the most wrinkled frame."""
+    stage, _ = shirt
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath(FINE))
+    faces = np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3)
+    points = fine_points(stage, FINE, 24)
+    normals = np.asarray(mesh.GetNormalsAttr().Get(24), np.float64)
+    own = face_normals_at_vertices(points, faces)
+    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+        own = -own
+    angle = np.degrees(np.arccos(np.clip(np.abs(np.sum(normals * own, axis=1)), -1, 1)))
+    assert np.percentile(angle, 95) < 5.0, np.percentile(angle, 95)
+
+
+def test_rigid_motion_moves_the_fine_points_with_it(gl_context, tmp_path):
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    rotation = rotation_matrix([0.2, 0.9, -0.4], 0.8)
+    shift = np.array([1.0, -0.5, 2.0])
+    layers = {}
+    for name, points in (("plain", posed), ("moved", posed @ rotation.T + shift)):
+        stage = point_cache_stage(rest, {1: np.asarray(points, np.float32)}, counts, indices,
+                                  width=0.3)
+        source = tmp_path / f"{name}.usda"
+        stage.GetRootLayer().Export(str(source))
+        layers[name] = bake(source, tmp_path / f"{name}_g.usdc", "--levels", "2")
+    plain = fine_points(layers["plain"], "/Sheet_wrinkled", 1)
+    moved = fine_points(layers["moved"], "/Sheet_wrinkled", 1)
+    extent = np.abs(plain).max()
+    np.testing.assert_allclose(moved, plain @ rotation.T + shift, atol=1e-5 * extent * 10)
+    assert np.abs(moved - (plain @ rotation.T + shift)).max() <= 1e-5 * max(
+        extent, np.abs(moved).max())
+
+
+def test_frame_independence(gl_context, tmp_path):
+    """Frame 24 alone equals frame 24 of 1..24 (the phase history is replayed)."""
+    whole = bake(SHIRT, tmp_path / "whole.usdc", "--levels", "2")
+    alone = bake(SHIRT, tmp_path / "alone.usdc", "--levels", "2", "--frames", "24")
+    a, b = fine_points(whole, FINE, 24), fine_points(alone, FINE, 24)
+    assert np.abs(a - b).max() <= 1e-5 * np.abs(a).max()
+
+
+def test_render_of_the_layer_shows_wrinkles_on_the_silhouette(gl_context, shirt, tmp_path):
+    """Drawn with --no-wrinkles, the render purpose (the fine mesh) changes the elbow's
+    outline: coverage differs from the coarse mesh's plain render along the silhouette."""
+    stage, folder = shirt
+    layer = stage.GetRootLayer().realPath
+    outs = {}
+    for name, source in (("fine", layer), ("coarse", SHIRT)):
+        out = tmp_path / f"{name}.exr"
+        assert main(["render", str(source), str(out), "--frames", "24", "--width", "320",
+                     "--no-wrinkles", "--quiet"]) == 0
+        from test_maps import read
+        outs[name] = read(out)[..., 3]
+    changed = np.abs(outs["fine"] - outs["coarse"]) > 0.5
+    assert changed.sum() > 50  # pixels in or out of the outline: a bumpy silhouette
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--levels", "11"], "--levels must be in 0..10"),
+    (["--levels", "10"], "would make"),
+])
+def test_geometry_limits(gl_context, tmp_path, capsys, args, fragment):
+    assert main(["bake", SHIRT, str(tmp_path / "o.usdc"), "--quiet", "--geometry",
+                 *args]) == 2
+    err = capsys.readouterr().err
+    assert fragment in err
+    if fragment == "would make":
+        assert SLEEVE in err and "--levels" in err
+
+
+def test_levels_need_geometry(tmp_path, capsys):
+    assert main(["bake", SHIRT, str(tmp_path / "o.usdc"), "--levels", "2"]) == 2
+    assert "--levels need --geometry" in capsys.readouterr().err
+
+
+def test_cesium_man_doubles_every_mesh(gl_context, corpus, tmp_path):
+    """CesiumMan, --all-meshes --geometry, 48 frames: every mesh is doubled as proxy and
+    render, and the render mesh holds a time sample per frame."""
+    source = corpus / "usd-wg" / "CesiumMan.usdz"
+    stage = bake(source, tmp_path / "cesium.usdc", "--all-meshes")
+    meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    proxies = [p for p in meshes if UsdGeom.Imageable(p).ComputePurpose() == "proxy"]
+    renders = [p for p in meshes if UsdGeom.Imageable(p).ComputePurpose() == "render"]
+    assert proxies and len(proxies) == len(renders) == len(meshes) // 2
+    for prim in renders:
+        assert UsdGeom.Imageable(prim).GetProxyPrimRel().GetTargets()[0] in \
+            [p.GetPath() for p in proxies]
+        assert len(UsdGeom.Mesh(prim).GetPointsAttr().GetTimeSamples()) == 48
