@@ -50,8 +50,10 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
     progress("bench: cpu render nodes")
     result["cpu_nodes"] = cpu_nodes(quick, corpus)
     progress("bench: wrinkle maps")
-    from .renderers import wrinkle_maps
+    from .renderers import displaced_geometry, wrinkle_maps
     result["wrinkle_maps"] = wrinkle_maps(quick, ctx)
+    progress("bench: displaced geometry")
+    result["displaced_geometry"] = displaced_geometry(quick, ctx, corpus)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

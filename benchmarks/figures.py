@@ -5,6 +5,9 @@
 - ``maps_shirt.png``: frame 24 of the shirt drawn with wrinkles, next to the normal map
   that ``bake --maps`` wrote for that frame (the sleeve's UVs: around the arm across,
   shoulder to cuff upwards).
+- ``geometry_elbow.png``: the shirt's elbow at frame 24, cropped: shading-only wrinkles
+  (``render shirt.usda``) next to the displaced render mesh of ``bake --geometry``
+  (``render LAYER --no-wrinkles``), whose outline carries the folds.
 """
 from __future__ import annotations
 
@@ -71,11 +74,30 @@ def maps_figure(outdir: Path) -> Path:
     return path
 
 
+def geometry_figure(outdir: Path) -> Path:
+    with tempfile.TemporaryDirectory() as folder:
+        layer = os.path.join(folder, "shirt_geometry.usdc")
+        _cli("bake", str(SHIRT), layer, "--geometry")
+        images = []
+        for stage, extra in ((str(SHIRT), []), (layer, ["--no-wrinkles"])):
+            out = os.path.join(folder, f"frame{len(images)}.png")
+            _cli("render", stage, out, "--frames", "24", "--width", "1280", "--height",
+                 "960", *extra)
+            image = _read(out)
+            alpha = image[..., 3:4]
+            images.append((image[..., :3] * alpha + (1 - alpha))[380:900, 360:880])
+    gap = np.ones((images[0].shape[0], 16, 3), np.float32)
+    path = outdir / "geometry_elbow.png"
+    _write(path, np.concatenate([images[0], gap, images[1]], axis=1))
+    return path
+
+
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     outdir = Path(args[0]) if args else ROOT / "docs" / "images"
     outdir.mkdir(parents=True, exist_ok=True)
     print(maps_figure(outdir))
+    print(geometry_figure(outdir))
     return 0
 
 
