@@ -189,6 +189,25 @@ def test_shirt_layer_is_clean_and_complete(gl_context, shirt_maps, capsys):
             assert value.resolvedPath
 
 
+def test_a_mesh_without_material_gets_a_plain_preview_surface(gl_context, tmp_path):
+    """No bound material: the wrinkle material is a plain UsdPreviewSurface with the mesh's
+    displayColor, and the normal map on it."""
+    source = sheet_stage(tmp_path, 0.7)
+    stage = Usd.Stage.Open(str(source))
+    UsdGeom.Gprim(stage.GetPrimAtPath("/Sheet")).CreateDisplayColorAttr([(0.2, 0.4, 0.6)])
+    stage.Save()
+    layer = tmp_path / "plain.usda"
+    assert bake_maps(source, layer, kinds="normal") == 0
+    baked = Usd.Stage.Open(str(layer))
+    material, _ = UsdShade.MaterialBindingAPI(baked.GetPrimAtPath("/Sheet")) \
+        .ComputeBoundMaterial()
+    surface = material.ComputeSurfaceSource()[0]
+    assert surface.GetIdAttr().Get() == "UsdPreviewSurface"
+    assert tuple(surface.GetInput("diffuseColor").Get()) == pytest.approx((0.2, 0.4, 0.6))
+    assert surface.GetInput("normal").HasConnectedSource()
+    assert not surface.GetInput("displacement")  # no height map asked for
+
+
 def test_mesh_without_uvs_is_skipped_with_a_warning(gl_context, tmp_path, capsys):
     source = sheet_stage(tmp_path, 0.7, st=False)
     layer = tmp_path / "out.usda"

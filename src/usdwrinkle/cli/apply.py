@@ -25,8 +25,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--width", type=float, metavar="W", help="rest wavelength W (scene units)")
     p.add_argument("--amplitude-scale", type=float, metavar="S", help="amplitude scale s")
     p.add_argument("--profile", metavar="NAME|FILE",
-                   help="height profile: cosine, sharp, rounded, box, or a text file of heights "
-                        "over one period (or 'theta height' pairs)")
+                   help="height profile: cosine, sharp, rounded, box, triangle, or a text file "
+                        "of heights over one period (or 'theta height' pairs)")
     p.add_argument("--q", metavar="X,Y,Z:AMOUNT",
                    help="uniform rest-space direction, projected onto each vertex's tangent "
                         "plane, with |q| = AMOUNT")
