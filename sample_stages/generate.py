@@ -16,7 +16,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from usdwrinkle import WrinkleAPI, profile_preset
-from usdwrinkle.authoring.builders import grid_faces
+from usdwrinkle.authoring.builders import grid_faces, grid_sheet
 from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
 from usdwrinkle.colour import srgb_encode
 
@@ -373,12 +373,108 @@ def flag(outdir):
     return len(points)
 
 
+def point_cache(mesh, rest, posed_at):
+    """Time-sampled points (``posed_at(s)``, s from 0 to 1 over the frames) with the rest
+    pose as primvars:rest."""
+    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+        "rest", Sdf.ValueTypeNames.Point3fArray, UsdGeom.Tokens.vertex).Set(
+        Vt.Vec3fArray.FromNumpy(np.asarray(rest, np.float32)))
+    points = mesh.GetPointsAttr()
+    extent = mesh.GetExtentAttr()
+    for f in range(FRAMES[0], FRAMES[1] + 1):
+        s = (f - FRAMES[0]) / (FRAMES[1] - FRAMES[0])
+        posed = np.asarray(posed_at(s * s * (3 - 2 * s)), np.float32)
+        points.Set(Vt.Vec3fArray.FromNumpy(posed), f)
+        lo, hi = posed.min(0), posed.max(0)
+        extent.Set(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]), f)
+
+
+def pillow(outdir):
+    """A pillow (48 x 25 = 1,200 vertices) squeezed from its four sides: its top and bottom
+    are compressed along both axes at once (wrinkle:biaxial = 1: crossing wrinkles)."""
+    stage = new_stage(os.path.join(outdir, "pillow.usda"))
+    around, rings = 48, 27
+    theta = np.arange(around) * 2 * np.pi / around
+    phi = np.linspace(0, np.pi, rings)[1:-1]
+    gp, gt = np.meshgrid(phi, theta, indexing="ij")
+    # a squashed superellipsoid: broad flat faces, rounded edges
+    def shape(angle, power):
+        return np.sign(np.cos(angle)) * np.abs(np.cos(angle)) ** power
+    x = 1.1 * np.sin(gp) ** 0.35 * shape(gt, 0.35)
+    z = 0.75 * np.sin(gp) ** 0.35 * np.sign(np.sin(gt)) * np.abs(np.sin(gt)) ** 0.35
+    y = 0.28 * shape(gp, 0.6)
+    body = np.stack([x.ravel(), y.ravel(), z.ravel()], 1)
+    points = np.concatenate([body, [[0, 0.28, 0], [0, -0.28, 0]]])
+    counts, indices = grid_faces(rings - 2, around, wrap_cols=True)
+    top, bottom = len(body), len(body) + 1
+    caps = []
+    last = (rings - 3) * around
+    for c in range(around):
+        caps.append([top, (c + 1) % around, c])
+        caps.append([bottom, last + c, last + (c + 1) % around])
+    counts = np.concatenate([counts, np.full(len(caps), 3, np.int32)])
+    indices = np.concatenate([indices, np.array(caps, np.int32).ravel()])
+    mesh = define_mesh(stage, "/World/Pillow", points, counts, indices)
+    material = add_material(stage, "Linen", color=(0.86, 0.82, 0.74))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+
+    def squeeze(s):
+        # hands press the sides in: x to 72%, z to 80% near the middle; the filling swells
+        bulge = np.exp(-(points[:, 0] ** 2 / 1.2 + points[:, 2] ** 2 / 0.6))
+        sx = 1 - 0.28 * s * (0.6 + 0.4 * bulge)
+        sz = 1 - 0.2 * s * (0.6 + 0.4 * bulge)
+        sy = 1 + 0.9 * s * bulge
+        return points * np.stack([sx, sy, sz], 1)
+
+    point_cache(mesh, points, squeeze)
+    api = apply_wrinkles(mesh, width=0.2)
+    api.CreateBiaxialAttr(1.0)
+    add_camera(stage, eye=(0.0, 2.4, 2.6), target=(0.0, 0.0, 0.0))
+    add_lights(stage, direction_euler=(-55.0, 20.0, 0.0))
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
+def pull(outdir):
+    """A sheet (31 x 31 = 961 vertices) pinned at two opposite corners and pulled apart
+    along the diagonal: a band of tension along it, where the cloth is stretched but not
+    narrowed (wrinkle:tension = 1: crests along the pull)."""
+    stage = new_stage(os.path.join(outdir, "pull.usda"))
+    points, counts, indices = grid_sheet(31, 31, 2.0)
+    points = points[:, [0, 2, 1]] * np.array([1, 1, -1])  # in the XZ plane, y up
+    mesh = define_mesh(stage, "/World/Sheet", points, counts, indices,
+                       (points[:, [0, 2]] * np.array([1, -1]) + 1) / 2)
+    material = add_material(stage, "Cotton", color=(0.55, 0.7, 0.82))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    diagonal = np.array([1.0, 0.0, 1.0]) / np.sqrt(2)
+    across = np.array([-1.0, 0.0, 1.0]) / np.sqrt(2)
+
+    def stretch(s):
+        u = points @ diagonal            # along the pull, -sqrt 2 .. sqrt 2
+        v = points @ across              # across it
+        band = np.exp(-(v / 0.45) ** 2)  # the pull is carried by a band between the pins
+        # the band lengthens by up to 22% (the pins move apart); its width stays
+        du = 0.22 * s * band * u
+        sag = -0.12 * s * (1 - band) * (1 - (u / np.sqrt(2)) ** 2)
+        return points + du[:, None] * diagonal + np.stack(
+            [np.zeros(len(u)), sag, np.zeros(len(u))], 1)
+
+    point_cache(mesh, points, stretch)
+    api = apply_wrinkles(mesh, width=0.16)
+    api.CreateTensionAttr(1.0)
+    api.CreateTensionThresholdAttr(0.02)
+    add_camera(stage, eye=(0.0, 2.6, 2.2), target=(0.0, -0.1, 0.0))
+    add_lights(stage, direction_euler=(-60.0, 35.0, 0.0))
+    stage.GetRootLayer().Save()
+    return len(points)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     outdir = argv[0] if argv else os.path.dirname(os.path.abspath(__file__))
     os.makedirs(outdir, exist_ok=True)
     os.makedirs(os.path.join(outdir, "textures"), exist_ok=True)
-    for make in (shirt, zeppelin, curtain, flag):
+    for make in (shirt, zeppelin, curtain, flag, pillow, pull):
         count = make(outdir)
         print(f"{make.__name__}.usda: {count} vertices")
     return 0

@@ -2,7 +2,9 @@
 // Crush pass (Loviscach 2006, sec. 3): per vertex, fit the 2x2 map M of the local
 // deformation over the 1-ring, bias it with the painted q, and turn the strongest
 // compression into a plane wave (amplitude, wave vector, rest direction) and a
-// material-anchored initial phase.
+// material-anchored initial phase. Beyond the paper (docs/method.md), both off by default:
+// a second wave along the other principal direction where it is compressed too
+// (wrinkle:biaxial), and tension wrinkles across a stretch (wrinkle:tension).
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
@@ -16,7 +18,8 @@ layout(binding = CRUSH_TRIANGLES) uniform highp isampler2D triangles;  // corner
 // area-weighted face normal of each triangle (posed, local space)
 layout(rgba32f, binding = CRUSH_FACE_NORMALS_OUT) writeonly uniform image2D face_normals;
 #elif defined FROM_BAKE
-// Baked wave fields (scene/baked.py): [2i] = (k, amplitude), [2i+1] = (direction, r).
+// Baked wave fields (scene/baked.py): [4i] = (k, amplitude), [4i+1] = (direction, r),
+// [4i+2], [4i+3]: the same for the second system.
 layout(binding = CRUSH_BAKED) uniform sampler2D baked;
 layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
 layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
@@ -28,12 +31,15 @@ layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
 layout(binding = CRUSH_Q_WIDTH) uniform sampler2D q_width;
 layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
 layout(rgba32f, binding = CRUSH_FIELDS) writeonly uniform image2D fields;
-layout(r32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;
+layout(rg32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;  // x, y: systems 1, 2
 #endif
 
 uniform int u_num_points;
 uniform int u_num_triangles;
 uniform float u_amplitude_scale;    // s
+uniform float u_biaxial;            // wrinkle:biaxial, the second system's weight (0: off)
+uniform float u_tension;            // wrinkle:tension, the tension wave's factor (0: off)
+uniform float u_tension_threshold;  // wrinkle:tensionThreshold, the onset strain
 
 #if defined FACE_NORMALS
 
@@ -73,11 +79,35 @@ void main() {
     bool usable;
     vec3 n = posed_normal(i, fetch(rest_frame, 2 * i).xyz, usable);
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
-    STORE(fields, FIELD_WAVE(i), fetch(baked, 2 * i));
-    STORE(fields, FIELD_DIRECTION(i), fetch(baked, 2 * i + 1));
+    STORE(fields, FIELD_WAVE(i), fetch(baked, 4 * i));
+    STORE(fields, FIELD_DIRECTION(i), fetch(baked, 4 * i + 1));
+    STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, fetch(baked, 4 * i + 2));
+    STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 4 * i + 3));
 }
 
 #else
+
+// A rest tangent direction (2D, in T1, T2) in local space, with a deterministic sign:
+// its largest component positive.
+vec3 rest_direction(vec2 d, vec3 T1, vec3 T2) {
+    vec3 d3 = d.x * T1 + d.y * T2;
+    vec3 ad = abs(d3);
+    float lead = ad.x >= ad.y && ad.x >= ad.z ? d3.x : (ad.y >= ad.z ? d3.y : d3.z);
+    return lead < 0.0 ? -d3 : d3;
+}
+
+// The posed wave vector of a wave of rest wavelength L along rest direction d:
+// k = M^-T (2pi/L) d. With M = U S V^T and d a right singular vector, M^-T d = u / sigma
+// where u = M d / sigma: the direction of M d, length 1/sigma. sigma is floored at r_min
+// so that |k| <= 2pi/(L r_min) stays finite.
+vec3 wave_vector(mat2 M, vec2 d, float L, vec3 t1, vec3 t2) {
+    vec2 md = M * d;
+    float sigma = length(md);
+    vec2 k2 = sigma > 1e-12
+        ? (TWO_PI / L) * (md / sigma) / max(sigma, MIN_RATIO)
+        : (TWO_PI / (L * MIN_RATIO)) * d;
+    return k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
+}
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
@@ -125,12 +155,14 @@ void main() {
     if (q_len > 1.0) q /= q_len;
     M = M * (mat2(1.0) - outerProduct(q, q));
 
-    // smallest eigenpair of the symmetric S = M^T M
+    // eigenpairs of the symmetric S = M^T M: the smallest (the strongest compression) and,
+    // at right angles in the rest tangent plane, the largest
     mat2 S = transpose(M) * M;
     float sa = S[0][0], sb = S[1][0], sc = S[1][1];
     float mean = 0.5 * (sa + sc);
     float radius = sqrt(max(0.25 * (sa - sc) * (sa - sc) + sb * sb, 0.0));
     float lambda = max(mean - radius, 0.0);
+    float lambda2 = mean + radius;
     vec2 d;
     vec2 v1 = vec2(lambda - sc, sb);
     vec2 v2 = vec2(sb, lambda - sa);
@@ -139,31 +171,48 @@ void main() {
     } else {
         d = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
     }
-    // deterministic sign: the rest direction's largest component is positive
-    vec3 d3 = d.x * T1 + d.y * T2;
-    vec3 ad = abs(d3);
-    float lead = ad.x >= ad.y && ad.x >= ad.z ? d3.x : (ad.y >= ad.z ? d3.y : d3.z);
-    if (lead < 0.0) { d = -d; d3 = -d3; }
+    vec3 d3 = rest_direction(d, T1, T2);
+    if (dot(d3, d.x * T1 + d.y * T2) < 0.0) d = -d;
+    vec2 e = vec2(-d.y, d.x);  // the other principal direction
+    vec3 e3 = rest_direction(e, T1, T2);
+    if (dot(e3, e.x * T1 + e.y * T2) < 0.0) e = -e;
 
     // r in [r_min, 1]: a ring crushed flat still has a finite wavelength W r_min
-    float r = usable || q_len > 0.0 ? clamp(sqrt(lambda), MIN_RATIO, 1.0) : 1.0;
+    bool any_wave = usable || q_len > 0.0;
+    float r = any_wave ? clamp(sqrt(lambda), MIN_RATIO, 1.0) : 1.0;
     float amplitude = u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r * r, 0.0));
+    float wavelength = W;  // rest space
 
-    // k = M^-T (2pi/W) d. With M = U S V^T and d the smallest right singular vector,
-    // M^-T d = u / sigma where u = M d / sigma: the direction of M d, length 1/sigma.
-    // sigma is floored at r_min so that |k| <= 2pi/(W r_min) stays finite.
-    vec2 md = M * d;
-    float sigma = length(md);
-    vec2 k2 = sigma > 1e-12
-        ? (TWO_PI / W) * (md / sigma) / max(sigma, MIN_RATIO)
-        : (TWO_PI / (W * MIN_RATIO)) * d;
-    vec3 k = k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
+    // Tension (docs/method.md): across the largest stretch s1 = sqrt(lambda2) beyond the
+    // onset, crests along the pull. It shares the direction d (the other principal
+    // direction) with the compression wave; the larger amplitude wins.
+    float stretch = sqrt(max(lambda2, 0.0));
+    float strain = stretch - 1.0 - u_tension_threshold;
+    if (u_tension > 0.0 && usable && strain > 0.0) {
+        float tension_wavelength = W * pow(strain / TENSION_REFERENCE_STRAIN, -0.25);
+        float tension_amplitude = u_amplitude_scale * u_tension * TENSION_SLOPE
+            * sqrt(strain) * tension_wavelength;
+        if (tension_amplitude > amplitude) {
+            amplitude = tension_amplitude;
+            wavelength = tension_wavelength;
+        }
+    }
+    vec3 k = wave_vector(M, d, wavelength, t1, t2);
+
+    // The second system: the other principal direction, where it is compressed too
+    float r2 = any_wave ? clamp(sqrt(lambda2), MIN_RATIO, 1.0) : 1.0;
+    float amplitude2 = u_biaxial > 0.0
+        ? u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2 * r2, 0.0)) : 0.0;
+    vec3 k2 = wave_vector(M, e, W, t1, t2);
 
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
     STORE(fields, FIELD_WAVE(i), vec4(k, amplitude));
     STORE(fields, FIELD_DIRECTION(i), vec4(d3, r));
+    STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));
+    STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
     // material-anchored start: crests ride with the cloth, frames stay independent
-    STORE(phase, i, vec4((TWO_PI / W) * dot(d3, X_i)));
+    STORE(phase, i, vec4((TWO_PI / wavelength) * dot(d3, X_i), (TWO_PI / W) * dot(e3, X_i),
+                         0.0, 0.0));
 }
 
 #endif

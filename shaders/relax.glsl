@@ -5,10 +5,16 @@
 //   phi_i <- arg( a_i e^{i phi_i} + sum_j a_j e^{i (phi~_j - kbar_ij . (x_j - x_i))} )
 //   e^{i (phi~_j - d_ij)} = z~_j * e^{-i d_ij},  z~_j = conj(z_j) when (k, phi) flips
 //
+// Each vertex has u_systems wave systems (1, or 2 with wrinkle:biaxial or tension): each
+// relaxes on its own, against the neighbour's partner system matched by direction
+// (partner_system in common.glsl), since the two eigenvectors can swap between
+// neighbours and between frames. Phasors are RGBA (xy: system 1, zw: system 2), phases
+// RG.
+//
 // Entry points, selected by the loader's defines:
-//   SEED      per vertex: the start phasor (previous frame's phase, sign-aligned, or the
-//             material-anchored phase on a shot's first frame) and, per outgoing edge,
-//             the rotation e^{-i d_ij}, the flip and the neighbour's weight.
+//   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, or the
+//             material-anchored phases on a shot's first frame) and, per outgoing edge and
+//             system, the rotation e^{-i d_ij}, the flip, the neighbour's weight and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi.
 #include "include/common.glsl"
 #include "include/topology.glsl"
@@ -16,11 +22,13 @@
 layout(local_size_x = LOCAL_SIZE) in;
 
 uniform int u_num_points;
+uniform int u_systems;
 
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
-// Per directed edge (CSR order): xy = e^{-i d_ij}, z = flip * a_j (the neighbour's weight,
-// negative where its wave is flipped; a_j > 0 thanks to the floor), w = j as a float (exact
-// below 2^24 points). One fetch per edge: the step needs no topology lookup for j.
+// Per directed edge e (CSR order) and system s, texel 2e + s: xy = e^{-i d_ij},
+// z = flip * a_j (the partner's weight, negative where its wave is flipped; a_j > 0
+// thanks to the floor), w = j as a float (exact below 2^24 points), -(j + 1) when the
+// partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
 // WEIGHT_FLOOR (contract.py): a tiny floor on the weights keeps arg() defined where no
@@ -28,15 +36,17 @@ layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 
 vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x); }
 
+vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(i, s)); }
+
 #if defined SEED
 
 layout(binding = RELAX_PREVIOUS_FIELDS) uniform sampler2D previous_fields;
 layout(binding = RELAX_ANCHOR) uniform sampler2D anchor_phase;
-// in place: each vertex reads its own last-frame phase and writes its seed (the result
+// in place: each vertex reads its own last-frame phases and writes its seeds (the result
 // when there are no iterations)
-layout(r32f, binding = RELAX_PHASE) uniform image2D phase;
+layout(rg32f, binding = RELAX_PHASE) uniform image2D phase;
 layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
-layout(rg32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(rgba32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rgba32f, binding = RELAX_EDGES_OUT) writeonly uniform image2D edges;
 
 uniform int u_has_history;
@@ -44,51 +54,75 @@ uniform int u_has_history;
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
-    vec3 k_i = fetch(fields, FIELD_WAVE(i)).xyz;
-    float start = fetch(anchor_phase, i).x;
-    if (u_has_history != 0) {
-        // keep last frame's phase; flip it where the wave vector flipped
-        float flip = dot(k_i, fetch(previous_fields, FIELD_WAVE(i)).xyz) < 0.0 ? -1.0 : 1.0;
-        start = flip * imageLoad(phase, TABLE_TEXEL(i)).x;
-    }
-    STORE(phase, i, vec4(start));
-    STORE(z_out, i, vec4(cos(start), sin(start), 0.0, 0.0));
+    vec2 anchor = fetch(anchor_phase, i).xy;
+    vec2 previous = imageLoad(phase, TABLE_TEXEL(i)).xy;
+    vec4 before0 = wave_of(previous_fields, i, 0);
+    vec4 before1 = wave_of(previous_fields, i, 1);
+    vec2 start = anchor;
+    vec4 z = vec4(0.0);
     vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
-    for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
-        int j = NEIGHBOR(e);
-        vec4 wave_j = fetch(fields, FIELD_WAVE(j));
-        float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
-        vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
-        float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
-        STORE(edges, e, vec4(cos(drift), -sin(drift), flip * (wave_j.w + WEIGHT_FLOOR),
-                             float(j)));
+    for (int s = 0; s < u_systems; ++s) {
+        vec3 k_i = wave_of(fields, i, s).xyz;
+        if (u_has_history != 0) {
+            // keep last frame's phase of the partner system; flip it where k flipped
+            int was = u_systems > 1 ? partner_system(k_i, s, before0, before1) : 0;
+            vec3 k_before = was == 0 ? before0.xyz : before1.xyz;
+            float flip = dot(k_i, k_before) < 0.0 ? -1.0 : 1.0;
+            start[s] = flip * previous[was];
+        }
+        z[2 * s] = cos(start[s]);
+        z[2 * s + 1] = sin(start[s]);
+        for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+            int j = NEIGHBOR(e);
+            vec4 wave0 = wave_of(fields, j, 0);
+            int partner = u_systems > 1 ? partner_system(k_i, s, wave0, wave_of(fields, j, 1))
+                                        : 0;
+            vec4 wave_j = partner == 0 ? wave0 : wave_of(fields, j, 1);
+            float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
+            vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
+            float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
+            STORE(edges, 2 * e + s, vec4(cos(drift), -sin(drift),
+                                         flip * (wave_j.w + WEIGHT_FLOOR),
+                                         partner == 0 ? float(j) : -float(j) - 1.0));
+        }
     }
+    STORE(phase, i, vec4(start, 0.0, 0.0));
+    STORE(z_out, i, z);
 }
 
 #else
 
 layout(binding = RELAX_EDGES) uniform sampler2D edges;
 layout(binding = RELAX_Z_IN) uniform sampler2D z_in;
-layout(rg32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
-layout(r32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
+layout(rgba32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 
 uniform int u_write_phase;  // the last iteration also stores phi = arg z
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
-    vec2 z_i = fetch(z_in, i).xy;
-    vec2 sum = (fetch(fields, FIELD_WAVE(i)).w + WEIGHT_FLOOR) * z_i;
-    for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
-        vec4 edge = fetch(edges, e);
-        vec2 z_j = fetch(z_in, int(edge.w)).xy;
-        if (edge.z < 0.0) z_j.y = -z_j.y;  // conjugate when the neighbour's wave is flipped
-        sum += abs(edge.z) * complex_mul(z_j, edge.xy);
+    vec4 z_i = fetch(z_in, i);
+    vec4 z = z_i;
+    for (int s = 0; s < u_systems; ++s) {
+        vec2 own = s == 0 ? z_i.xy : z_i.zw;
+        vec2 sum = (wave_of(fields, i, s).w + WEIGHT_FLOOR) * own;
+        for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+            vec4 edge = fetch(edges, 2 * e + s);
+            int j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
+            vec4 z_all = fetch(z_in, j);
+            vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
+            if (edge.z < 0.0) z_j.y = -z_j.y;  // conjugate when the partner's wave is flipped
+            sum += abs(edge.z) * complex_mul(z_j, edge.xy);
+        }
+        float len2 = dot(sum, sum);
+        vec2 next = len2 > 0.0 ? sum * inversesqrt(len2) : own;
+        if (s == 0) z.xy = next; else z.zw = next;
     }
-    float len2 = dot(sum, sum);
-    vec2 z = len2 > 0.0 ? sum * inversesqrt(len2) : z_i;
-    STORE(z_out, i, vec4(z, 0.0, 0.0));
-    if (u_write_phase != 0) STORE(phase, i, vec4(atan(z.y, z.x)));
+    STORE(z_out, i, z);
+    if (u_write_phase != 0) {
+        STORE(phase, i, vec4(atan(z.y, z.x), u_systems > 1 ? atan(z.w, z.z) : 0.0, 0.0, 0.0));
+    }
 }
 
 #endif

@@ -63,8 +63,8 @@ def test_fields_follow_the_layout():
     n = 5
     table = np.arange(n * FIELD_TEXELS * 4, dtype=np.float32).reshape(-1, 4)
     posed = np.arange(n * 4, dtype=np.float32).reshape(n, 4)
-    fields = WrinkleFields.from_tables(posed, table, np.zeros(n, np.float32),
-                                       np.ones(n, np.float32))
+    phases = np.arange(2 * n, dtype=np.float32).reshape(n, 2)
+    fields = WrinkleFields.from_tables(posed, table, phases, phases + 100)
     texel = table.reshape(n, FIELD_TEXELS, 4)
     np.testing.assert_array_equal(fields.wave_vector, texel[:, contract.FIELD_WAVE_TEXEL, :3])
     np.testing.assert_array_equal(fields.amplitude, texel[:, contract.FIELD_WAVE_TEXEL, 3])
@@ -72,8 +72,17 @@ def test_fields_follow_the_layout():
                                   texel[:, contract.FIELD_DIRECTION_TEXEL, 3])
     np.testing.assert_array_equal(fields.normals, texel[:, contract.FIELD_NORMAL_TEXEL, :3])
     np.testing.assert_array_equal(fields.points, posed[:, :3])
+    np.testing.assert_array_equal(fields.wave_vector2, texel[:, contract.FIELD_WAVE2_TEXEL, :3])
+    np.testing.assert_array_equal(fields.amplitude2, texel[:, contract.FIELD_WAVE2_TEXEL, 3])
+    np.testing.assert_array_equal(fields.compression2,
+                                  texel[:, contract.FIELD_DIRECTION2_TEXEL, 3])
+    np.testing.assert_array_equal(fields.phase, phases[:, 0])       # system 1: x
+    np.testing.assert_array_equal(fields.phase2, phases[:, 1])      # system 2: y
+    np.testing.assert_array_equal(fields.anchor_phase2, phases[:, 1] + 100)
     assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
-                                     "direction", "compression", "phase", "anchor_phase"]
+                                     "direction", "compression", "phase", "anchor_phase",
+                                     "wave_vector2", "amplitude2", "direction2",
+                                     "compression2", "phase2", "anchor_phase2"]
 
 
 def test_the_wave_blend_is_written_once():

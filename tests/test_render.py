@@ -34,7 +34,7 @@ def save(path: Path, pixels: np.ndarray) -> None:
 
 
 @pytest.mark.parametrize("stage_name,frame", [("shirt", 24), ("zeppelin", 24), ("curtain", 24),
-                                              ("flag", 1)])
+                                              ("flag", 1), ("pillow", 24), ("pull", 24)])
 def test_golden_frames(gl_context, regenerate_goldens, stage_name, frame):
     if not reference_rasterizer(gl_context):
         pytest.skip("goldens are defined on Mesa llvmpipe only (pygfx's convention)")

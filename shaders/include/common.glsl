@@ -19,6 +19,22 @@ ivec4 fetch(isampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 
 #define FIELD_NORMAL(i) (FIELD_TEXELS * (i) + FIELD_NORMAL_TEXEL)
 #define FIELD_WAVE(i) (FIELD_TEXELS * (i) + FIELD_WAVE_TEXEL)
 #define FIELD_DIRECTION(i) (FIELD_TEXELS * (i) + FIELD_DIRECTION_TEXEL)
+// wave system s (0: the strongest compression or tension, 1: the second compression)
+#define FIELD_WAVE_OF(i, s) (FIELD_TEXELS * (i) + ((s) == 0 ? FIELD_WAVE_TEXEL : FIELD_WAVE2_TEXEL))
+
+// Which wave system of a vertex partners system ``own`` (wave vector k) of another: the
+// one with an amplitude whose wave vector is most parallel to k (the two eigenvectors can
+// swap between neighbours and between frames). With none within 60 degrees, the same
+// index: a partner with no amplitude, which couples with the weight floor only.
+int partner_system(vec3 k, int own, vec4 wave0, vec4 wave1) {
+    float k_len = max(length(k), 1e-30);
+    float c0 = wave0.w > 0.0 ? abs(dot(k, wave0.xyz)) / (k_len * max(length(wave0.xyz), 1e-30))
+                             : -1.0;
+    float c1 = wave1.w > 0.0 ? abs(dot(k, wave1.xyz)) / (k_len * max(length(wave1.xyz), 1e-30))
+                             : -1.0;
+    if (max(c0, c1) < 0.5) return own;
+    return c1 > c0 ? 1 : 0;
+}
 
 vec3 safe_normalize(vec3 v, vec3 fallback) {
     float len = length(v);

@@ -17,10 +17,16 @@ layout(binding = WAVE_TRIANGLES) uniform highp isampler2D triangles;  // corners
 layout(binding = WAVE_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
 layout(binding = WAVE_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
 uniform float u_profile_samples;
+uniform int u_systems;  // wave systems per vertex: 1, or 2 (wrinkle:biaxial)
 
 float profile(sampler2D table, float theta) {
     // sample s sits at theta = 2 pi s / N; texel centres are at (s + 0.5) / N
     return texture(table, vec2(theta / TWO_PI + 0.5 / u_profile_samples, 0.5)).r;
+}
+
+vec3 normalize_or_zero(vec3 v) {
+    float len = length(v);
+    return len > 1e-30 ? v / len : vec3(0.0);
 }
 
 struct Wave {
@@ -51,29 +57,45 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
     bary = clamp(bary, 0.0, 1.0);
     bary /= max(bary.x + bary.y + bary.z, 1e-20);
     ivec3 corners = fetch(triangles, t).xyz;
-    vec3 k0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
+    vec4 reference[2];
+    reference[0] = fetch(fields, FIELD_WAVE(corners.x));
+    reference[1] = u_systems > 1 ? fetch(fields, FIELD_WAVE_OF(corners.x, 1)) : vec4(0.0);
+    // two systems: a corner whose eigenvectors are swapped against corner 0's (matched by
+    // direction) adds its system 2 to corner 0's system 1, and the other way round
+    bool swapped[3] = bool[3](false, false, false);
+    for (int c = 1; c < 3 && u_systems > 1; ++c) {
+        vec3 k0 = normalize_or_zero(fetch(fields, FIELD_WAVE_OF(corners[c], 0)).xyz);
+        vec3 k1 = normalize_or_zero(fetch(fields, FIELD_WAVE_OF(corners[c], 1)).xyz);
+        vec3 r0 = normalize_or_zero(reference[0].xyz);
+        vec3 r1 = normalize_or_zero(reference[1].xyz);
+        swapped[c] = abs(dot(r0, k1)) + abs(dot(r1, k0)) > abs(dot(r0, k0)) + abs(dot(r1, k1));
+    }
     vec3 p0 = vec3(0.0), p1 = vec3(0.0), p2 = vec3(0.0);
     if (exact_gradient) {
         p0 = fetch(posed_points, corners.x).xyz;
         p1 = fetch(posed_points, corners.y).xyz;
         p2 = fetch(posed_points, corners.z).xyz;
     }
-    for (int c = 0; c < 3; ++c) {
-        int i = corners[c];
-        vec4 wave = fetch(fields, FIELD_WAVE(i));
-        float a = wave.w;
-        if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
-        vec3 k = wave.xyz;
-        float phi = fetch(phase, i).x;
-        if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
-        float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
-        float b = bary[c];
-        float height = profile(u_height_profile, theta);
-        w.height += b * a * height;
-        w.gradient += b * a * profile(u_gradient_profile, theta) * k;
-        w.amplitude += b * a;
-        if (exact_gradient) {
-            w.gradient += a * height * weight_gradient(c, p0, p1, p2);
+    for (int s = 0; s < u_systems; ++s) {
+        vec3 k0 = reference[s].xyz;
+        for (int c = 0; c < 3; ++c) {
+            int i = corners[c];
+            int system = swapped[c] ? 1 - s : s;
+            vec4 wave = fetch(fields, FIELD_WAVE_OF(i, system));
+            float a = wave.w;
+            if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
+            vec3 k = wave.xyz;
+            float phi = fetch(phase, i)[system];
+            if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
+            float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
+            float b = bary[c];
+            float height = profile(u_height_profile, theta);
+            w.height += b * a * height;
+            w.gradient += b * a * profile(u_gradient_profile, theta) * k;
+            w.amplitude += b * a;
+            if (exact_gradient) {
+                w.gradient += a * height * weight_gradient(c, p0, p1, p2);
+            }
         }
     }
     if (!exact_gradient) {

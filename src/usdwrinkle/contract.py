@@ -32,12 +32,28 @@ UDIM_TILES = 100
 #:   normal     xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
 #:   wave       xyz: wave vector k (local space, posed); w: amplitude h
 #:   direction  xyz: rest-space unit direction d of strongest compression; w: r
-FIELD_TEXELS = 3
+#:   wave2      the second wave system (biaxial compression): k2, h2 (h2 = 0: none)
+#:   direction2 xyz: rest-space direction of the other principal stretch; w: r2
+#: Phases are per system too: the phase tables are RG (x: system 1, y: system 2).
+FIELD_TEXELS = 5
 FIELD_NORMAL_TEXEL = 0
 FIELD_WAVE_TEXEL = 1
 FIELD_DIRECTION_TEXEL = 2
+FIELD_WAVE2_TEXEL = 3
+FIELD_DIRECTION2_TEXEL = 4
 #: floats per vertex in the fields table
 FIELD_FLOATS = 4 * FIELD_TEXELS
+#: wave systems per vertex: the strongest compression (or tension), and the second
+#: compression of a biaxially compressed patch
+WAVE_SYSTEMS = 2
+
+#: Tension wrinkles (Cerda, Ravi-Chandar & Mahadevan, Nature 2002; Cerda & Mahadevan,
+#: PRL 2003): wavelength ~ gamma^(-1/4), amplitude / wavelength = sqrt(2 nu) / pi *
+#: sqrt(gamma). W is the wavelength at the reference strain (docs/method.md).
+TENSION_REFERENCE_STRAIN = 0.1
+#: Poisson ratio of the law (a knitted or woven cloth's in-plane response)
+TENSION_POISSON = 0.5
+TENSION_SLOPE = (2.0 * TENSION_POISSON) ** 0.5 / 3.141592653589793
 
 
 def glsl_literal(value) -> str:
@@ -55,7 +71,9 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
-    ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL))}
+    ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL), ("FIELD_WAVE2_TEXEL", FIELD_WAVE2_TEXEL),
+    ("FIELD_DIRECTION2_TEXEL", FIELD_DIRECTION2_TEXEL), ("WAVE_SYSTEMS", WAVE_SYSTEMS),
+    ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE))}
 
 
 @dataclass(frozen=True)
@@ -83,6 +101,8 @@ class WrinkleFields:
         Relaxed phase (radians).
     anchor_phase : (n,) float32
         The material-anchored phase crush starts relax from.
+    wave_vector2, amplitude2, direction2, compression2, phase2, anchor_phase2
+        The second wave system (biaxial compression; amplitude2 = 0 where there is none).
     """
 
     points: np.ndarray
@@ -94,20 +114,34 @@ class WrinkleFields:
     compression: np.ndarray
     phase: np.ndarray
     anchor_phase: np.ndarray
+    wave_vector2: np.ndarray
+    amplitude2: np.ndarray
+    direction2: np.ndarray
+    compression2: np.ndarray
+    phase2: np.ndarray
+    anchor_phase2: np.ndarray
 
     @classmethod
     def from_tables(cls, posed: np.ndarray, fields: np.ndarray, phase: np.ndarray,
                     anchor_phase: np.ndarray) -> WrinkleFields:
-        """From the read-back tables: posed (n, 4), fields (n * FIELD_TEXELS, 4), phases."""
+        """From the read-back tables: posed (n, 4), fields (n * FIELD_TEXELS, 4), phases
+        (n, WAVE_SYSTEMS)."""
         texels = np.asarray(fields, np.float32).reshape(-1, FIELD_TEXELS, 4)
         normal = texels[:, FIELD_NORMAL_TEXEL]
         wave = texels[:, FIELD_WAVE_TEXEL]
         direction = texels[:, FIELD_DIRECTION_TEXEL]
+        wave2 = texels[:, FIELD_WAVE2_TEXEL]
+        direction2 = texels[:, FIELD_DIRECTION2_TEXEL]
+        phase = np.asarray(phase, np.float32).reshape(-1, WAVE_SYSTEMS)
+        anchor = np.asarray(anchor_phase, np.float32).reshape(-1, WAVE_SYSTEMS)
         return cls(points=posed[:, :3].copy(), normals=normal[:, :3].copy(),
                    usable=normal[:, 3] > 0.5, wave_vector=wave[:, :3].copy(),
                    amplitude=wave[:, 3].copy(), direction=direction[:, :3].copy(),
-                   compression=direction[:, 3].copy(), phase=phase.copy(),
-                   anchor_phase=anchor_phase.copy())
+                   compression=direction[:, 3].copy(), phase=phase[:, 0].copy(),
+                   anchor_phase=anchor[:, 0].copy(), wave_vector2=wave2[:, :3].copy(),
+                   amplitude2=wave2[:, 3].copy(), direction2=direction2[:, :3].copy(),
+                   compression2=direction2[:, 3].copy(), phase2=phase[:, 1].copy(),
+                   anchor_phase2=anchor[:, 1].copy())
 
     def arrays(self) -> dict:
         """Name -> array, in field order."""

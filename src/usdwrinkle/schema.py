@@ -21,6 +21,13 @@ AMPLITUDE_SCALE = "wrinkle:amplitudeScale"
 HEIGHT_PROFILE = "wrinkle:heightProfile"
 GRADIENT_PROFILE = "wrinkle:gradientProfile"
 RELAX_ITERATIONS = "wrinkle:relaxIterations"
+BIAXIAL = "wrinkle:biaxial"
+TENSION = "wrinkle:tension"
+TENSION_THRESHOLD = "wrinkle:tensionThreshold"
+#: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain
+DEFAULT_BIAXIAL = 0.0
+DEFAULT_TENSION = 0.0
+DEFAULT_TENSION_THRESHOLD = 0.02
 
 #: Fallback width: this multiple of the mean rest edge length of the mesh.
 WIDTH_EDGE_MULTIPLE = 4.0

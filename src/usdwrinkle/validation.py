@@ -51,6 +51,9 @@ EXPECTED_TYPES = {
     schema.HEIGHT_PROFILE: (_NUMBERS, (True,), "a float[] array"),
     schema.GRADIENT_PROFILE: (_NUMBERS, (True,), "a float[] array"),
     schema.RELAX_ITERATIONS: (_INTEGERS, (False,), "an int"),
+    schema.BIAXIAL: (_NUMBERS, (False,), "a float"),
+    schema.TENSION: (_NUMBERS, (False,), "a float"),
+    schema.TENSION_THRESHOLD: (_NUMBERS, (False,), "a float"),
 }
 
 
@@ -150,6 +153,29 @@ def check_amplitude_scale(value, path: str) -> list[Finding]:
     return []
 
 
+def _in_range(value, name: str, what: str, low: float, high: float, path: str):
+    if value is None:
+        return []
+    if not np.isfinite(value) or not low <= value <= high:
+        return [Finding(path, name, f"{what} must be in {low:g}..{high:g}")]
+    return []
+
+
+def check_biaxial(value, path: str) -> list[Finding]:
+    """wrinkle:biaxial: the second wave system's weight, in [0, 1]."""
+    return _in_range(value, schema.BIAXIAL, "biaxial weight", 0.0, 1.0, path)
+
+
+def check_tension(value, path: str) -> list[Finding]:
+    """wrinkle:tension: an amplitude factor, >= 0 (at most the amplitude scale's maximum)."""
+    return _in_range(value, schema.TENSION, "tension factor", 0.0, MAX_AMPLITUDE_SCALE, path)
+
+
+def check_tension_threshold(value, path: str) -> list[Finding]:
+    """wrinkle:tensionThreshold: a strain, in [0, 1]."""
+    return _in_range(value, schema.TENSION_THRESHOLD, "tension threshold", 0.0, 1.0, path)
+
+
 def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
     """Every rule of ``usdwrinkle check`` on one prim with WrinkleAPI (else no findings)."""
     if not schema.has_wrinkle_api(prim):
@@ -172,6 +198,10 @@ def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
                                                                   attr.GetName(), path),
         schema.AMPLITUDE_SCALE: lambda attr, time: check_amplitude_scale(attr.Get(time), path),
         schema.RELAX_ITERATIONS: lambda attr, time: check_relax_iterations(attr.Get(time), path),
+        schema.BIAXIAL: lambda attr, time: check_biaxial(attr.Get(time), path),
+        schema.TENSION: lambda attr, time: check_tension(attr.Get(time), path),
+        schema.TENSION_THRESHOLD: lambda attr, time: check_tension_threshold(attr.Get(time),
+                                                                             path),
     }
     for name, check in checks.items():
         attr = prim.GetAttribute(name)

@@ -19,8 +19,11 @@ from ..errors import UsdWrinkleError
 from ..profiles import derive_gradient
 from ..validation import (
     check_amplitude_scale,
+    check_biaxial,
     check_profile,
     check_q,
+    check_tension,
+    check_tension_threshold,
     check_width,
     point_count,
     refuse,
@@ -75,7 +78,8 @@ class WrinkleAPI:
     @staticmethod
     def GetSchemaAttributeNames(includeInherited: bool = True) -> list[str]:  # noqa: N802, N803
         return [schema.Q, schema.WIDTH, schema.AMPLITUDE_SCALE, schema.HEIGHT_PROFILE,
-                schema.GRADIENT_PROFILE, schema.RELAX_ITERATIONS]
+                schema.GRADIENT_PROFILE, schema.RELAX_ITERATIONS, schema.BIAXIAL,
+                schema.TENSION, schema.TENSION_THRESHOLD]
 
     # -- attributes -------------------------------------------------------------------
     def _primvars(self) -> UsdGeom.PrimvarsAPI:
@@ -133,6 +137,30 @@ class WrinkleAPI:
         return self._create(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float,
                             None if default_value is None else float(default_value),
                             lambda v: check_amplitude_scale(v, self._path()))
+
+    def GetBiaxialAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.BIAXIAL)
+
+    def CreateBiaxialAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.BIAXIAL, Sdf.ValueTypeNames.Float,
+                            None if default_value is None else float(default_value),
+                            lambda v: check_biaxial(v, self._path()))
+
+    def GetTensionAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.TENSION)
+
+    def CreateTensionAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.TENSION, Sdf.ValueTypeNames.Float,
+                            None if default_value is None else float(default_value),
+                            lambda v: check_tension(v, self._path()))
+
+    def GetTensionThresholdAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.TENSION_THRESHOLD)
+
+    def CreateTensionThresholdAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.TENSION_THRESHOLD, Sdf.ValueTypeNames.Float,
+                            None if default_value is None else float(default_value),
+                            lambda v: check_tension_threshold(v, self._path()))
 
     def GetHeightProfileAttr(self) -> Usd.Attribute:  # noqa: N802
         return self._attr(schema.HEIGHT_PROFILE)

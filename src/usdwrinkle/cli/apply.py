@@ -24,6 +24,15 @@ def add_parser(subparsers) -> None:
                         "of the root layer")
     p.add_argument("--width", type=float, metavar="W", help="rest wavelength W (scene units)")
     p.add_argument("--amplitude-scale", type=float, metavar="S", help="amplitude scale s")
+    p.add_argument("--biaxial", type=float, metavar="WEIGHT",
+                   help="wrinkle:biaxial in [0, 1]: a second wave where the cloth is "
+                        "compressed both ways (0: off, the default)")
+    p.add_argument("--tension", type=float, metavar="FACTOR",
+                   help="wrinkle:tension >= 0: tension wrinkles along a pull (0: off, the "
+                        "default)")
+    p.add_argument("--tension-threshold", type=float, metavar="STRAIN",
+                   help="wrinkle:tensionThreshold in [0, 1]: the strain where tension "
+                        "wrinkles begin (fallback 0.02)")
     p.add_argument("--profile", metavar="NAME|FILE",
                    help="height profile: cosine, sharp, rounded, box, triangle, or a text file "
                         "of heights over one period (or 'theta height' pairs)")
@@ -133,6 +142,9 @@ class MeshEdit:
     clear_q: bool = False
     amplitude_scale: float | None = None
     profile: np.ndarray | None = None
+    biaxial: float | None = None
+    tension: float | None = None
+    tension_threshold: float | None = None
 
 
 def check_args(args) -> None:
@@ -203,7 +215,16 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
         q_uniform,
         width_from_texture,
     )
-    from ..validation import check_amplitude_scale, check_q, check_width, point_count, refuse
+    from ..validation import (
+        check_amplitude_scale,
+        check_biaxial,
+        check_q,
+        check_tension,
+        check_tension_threshold,
+        check_width,
+        point_count,
+        refuse,
+    )
 
     needs_surface = q_spec is not None or args.q_from_texture or args.q_from_primvar \
         or args.width_from_texture
@@ -211,7 +232,9 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
     for prim in meshes:
         surface = MeshSurface(prim) if needs_surface else None
         plan = MeshEdit(prim, clear_q=bool(args.clear_q),
-                        amplitude_scale=args.amplitude_scale, profile=profile)
+                        amplitude_scale=args.amplitude_scale, profile=profile,
+                        biaxial=args.biaxial, tension=args.tension,
+                        tension_threshold=args.tension_threshold)
         if q_spec is not None:
             plan.q = q_uniform(surface, *q_spec)
         elif args.q_from_texture:
@@ -229,8 +252,10 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
             findings += check_q(plan.q, "vertex", count, path)
         if plan.width is not None:
             findings += check_width(plan.width, count, path)
-        if plan.amplitude_scale is not None:
-            findings += check_amplitude_scale(plan.amplitude_scale, path)
+        findings += check_amplitude_scale(plan.amplitude_scale, path)
+        findings += check_biaxial(plan.biaxial, path)
+        findings += check_tension(plan.tension, path)
+        findings += check_tension_threshold(plan.tension_threshold, path)
         refuse(findings)
         plans.append(plan)
     return plans
@@ -252,6 +277,12 @@ def author(plans: list[MeshEdit]) -> None:
             api.CreateAmplitudeScaleAttr(plan.amplitude_scale)
         if plan.profile is not None:
             api.set_profile(plan.profile)
+        if plan.biaxial is not None:
+            api.CreateBiaxialAttr(plan.biaxial)
+        if plan.tension is not None:
+            api.CreateTensionAttr(plan.tension)
+        if plan.tension_threshold is not None:
+            api.CreateTensionThresholdAttr(plan.tension_threshold)
 
 
 def export(layer, destination: str) -> None:

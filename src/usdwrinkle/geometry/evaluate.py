@@ -65,7 +65,7 @@ class GeometryEvaluator:
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_profile_samples": float(len(res.record.params.height_profile))})
         units = bindings.GEOMETRY
-        bind_wave(units, res)
+        bind_wave(units, res, self.program)
         bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries},
              writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
         self.program.run(groups(len(fine.points), bindings.LOCAL_SIZE))

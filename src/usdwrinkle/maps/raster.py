@@ -111,10 +111,9 @@ class MapRasterizer:
             "u_tile": (float(tile[0]), float(tile[1])),
             "u_count": int(count),
             "u_amplitude_scale": float(res.record.params.amplitude_scale),
-            "u_profile_samples": float(len(res.record.params.height_profile)),
         })
         units = bindings.MAPS
-        bind_wave(units, res)
+        bind_wave(units, res, self.program)
         bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width})
         self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:

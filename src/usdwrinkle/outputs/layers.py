@@ -28,6 +28,12 @@ PRIMVARS = {
     "primvars:wrinkle:phase": ("phase", Sdf.ValueTypeNames.FloatArray),
     "primvars:wrinkle:direction": ("direction", Sdf.ValueTypeNames.Vector3fArray),
 }
+#: the second wave system, baked for meshes with wrinkle:biaxial on
+SECOND_SYSTEM_PRIMVARS = {
+    "primvars:wrinkle:amplitude2": ("amplitude2", Sdf.ValueTypeNames.FloatArray),
+    "primvars:wrinkle:waveVector2": ("wave_vector2", Sdf.ValueTypeNames.Vector3fArray),
+    "primvars:wrinkle:phase2": ("phase2", Sdf.ValueTypeNames.FloatArray),
+}
 DISPLAY_COLOR_FIELDS = ("amplitude", "compression")
 
 # viridis at 9 stops: perceptually uniform, readable by colour-blind viewers
@@ -153,7 +159,10 @@ class LayerBaker:
         self.frames.append(frame)
         for path, fields in fields_by_path.items():
             if path in self.wrinkled:
-                for name, (field, type_name) in PRIMVARS.items():
+                primvars = dict(PRIMVARS)
+                if self.wrinkled[path].params.biaxial > 0:
+                    primvars.update(SECOND_SYSTEM_PRIMVARS)
+                for name, (field, type_name) in primvars.items():
                     attr = self._attr(path, name, type_name, UsdGeom.Tokens.vertex)
                     self._set(attr, frame, _array(getattr(fields, field), type_name))
                 if self.display_color:

@@ -14,7 +14,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import FIELD_FLOATS, JOINT_TEXELS, UDIM_TILES, WrinkleFields
+from ..contract import (
+    FIELD_FLOATS,
+    FIELD_TEXELS,
+    JOINT_TEXELS,
+    UDIM_TILES,
+    WAVE_SYSTEMS,
+    WrinkleFields,
+)
 from ..errors import UsdWrinkleError
 from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
@@ -149,16 +156,22 @@ class MeshResources:
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         # Two field tables alternate: crush writes this frame's, the seed step reads the
         # previous frame's wave vectors to carry its phases over (phase history).
-        # [3i] = normal, [3i + 1] = wave, [3i + 2] = direction (common.glsl)
-        self.field_tables = [self._table(3 * n, 4, data=np.zeros((3 * n, 4), np.float32))
+        # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2 (contract.py)
+        self.field_tables = [self._table(FIELD_TEXELS * n, 4,
+                                         data=np.zeros((FIELD_TEXELS * n, 4), np.float32))
                              for _ in range(2)]
         self.current_fields = 0
-        self.anchor_phase = self._table(n, 1, data=np.zeros(n, np.float32))
-        #: relaxed phase per vertex (what draw and the bake read)
-        self.phase = self._table(n, 1, data=np.zeros(n, np.float32))
-        #: unit phasors during relaxation (ping-pong) and the per-edge rotations
-        self.phasors = [self._table(n, 2) for _ in range(2)]
-        self.edge_rotations = self._table(self.num_edges, 4)
+        #: phases per vertex and wave system (RG: systems 1, 2): crush's anchored start,
+        #: and the relaxed phase that draw and the bake read
+        self.anchor_phase = self._table(n, WAVE_SYSTEMS,
+                                        data=np.zeros((n, WAVE_SYSTEMS), np.float32))
+        self.phase = self._table(n, WAVE_SYSTEMS, data=np.zeros((n, WAVE_SYSTEMS), np.float32))
+        #: unit phasors during relaxation (ping-pong; xy, zw: systems 1, 2) and the
+        #: per-edge rotations (texel 2e + system)
+        self.phasors = [self._table(n, 4) for _ in range(2)]
+        self.edge_rotations = self._table(WAVE_SYSTEMS * self.num_edges, 4)
+        #: wave systems the passes run and draw: 2 with wrinkle:biaxial (or a bake of it)
+        self.systems = 1
         self.baked_waves: Table | None = None  # write_baked() makes it
         self.corner_st = self._table(3 * self.num_triangles, 2,
                                      data=self._corner_st(record))  # [3t + c]
@@ -276,17 +289,28 @@ class MeshResources:
 
     def write_baked(self, baked) -> None:
         """Upload one frame's baked fields (scene.baked.BakedFields): waves into the baked
-        table ([2i] = (k, amplitude), [2i + 1] = (direction, r)), phases into the phase
-        table that draw reads. The baked table is made on first use."""
+        table ([4i] = (k, amplitude), [4i + 1] = (direction, r), [4i + 2], [4i + 3]: the
+        second system's), phases into the phase table that draw reads. The baked table is
+        made on first use."""
         if self.baked_waves is None:
-            self.baked_waves = self._table(2 * self.num_points, 4)
-        block = np.empty((self.num_points, 2, 4), np.float32)
+            self.baked_waves = self._table(4 * self.num_points, 4)
+        block = np.zeros((self.num_points, 4, 4), np.float32)
         block[:, 0, :3] = baked.wave_vector
         block[:, 0, 3] = baked.amplitude
         block[:, 1, :3] = baked.direction
         block[:, 1, 3] = baked.compression
+        phases = np.zeros((self.num_points, WAVE_SYSTEMS), np.float32)
+        phases[:, 0] = baked.phase
+        self.systems = 1
+        if baked.amplitude2 is not None:
+            block[:, 2, :3] = baked.wave_vector2
+            block[:, 2, 3] = baked.amplitude2
+            block[:, 3, :3] = baked.direction2
+            block[:, 3, 3] = baked.compression2
+            phases[:, 1] = baked.phase2
+            self.systems = 2
         self.baked_waves.write(block)
-        self.phase.write(baked.phase)
+        self.phase.write(phases)
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
         table = Table(self.ctx, count, components, dtype, data, path=self.record.path)

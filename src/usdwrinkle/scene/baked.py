@@ -32,9 +32,15 @@ BAKED_PRIMVARS = {
     "primvars:wrinkle:phase": ("phase", 1),
     "primvars:wrinkle:direction": ("direction", 3),
     "primvars:wrinkle:compression": ("compression", 1),
+    # the second wave system (wrinkle:biaxial): all three, or none
+    "primvars:wrinkle:amplitude2": ("amplitude2", 1),
+    "primvars:wrinkle:waveVector2": ("wave_vector2", 3),
+    "primvars:wrinkle:phase2": ("phase2", 1),
 }
 REQUIRED = ("primvars:wrinkle:amplitude", "primvars:wrinkle:waveVector",
             "primvars:wrinkle:phase")
+SECOND_SYSTEM = ("primvars:wrinkle:amplitude2", "primvars:wrinkle:waveVector2",
+                 "primvars:wrinkle:phase2")
 
 
 @dataclass(frozen=True)
@@ -53,6 +59,8 @@ class BakedFields:
         rest-space direction of strongest compression (zeros when not baked).
     compression : (n,) float32
         r (ones when not baked).
+    amplitude2, wave_vector2, phase2 : the second wave system, or None (one system).
+    direction2, compression2 : zeros and ones (not baked; nothing draws them).
     """
 
     amplitude: np.ndarray
@@ -60,6 +68,11 @@ class BakedFields:
     phase: np.ndarray
     direction: np.ndarray
     compression: np.ndarray
+    amplitude2: np.ndarray | None = None
+    wave_vector2: np.ndarray | None = None
+    phase2: np.ndarray | None = None
+    direction2: np.ndarray | None = None
+    compression2: np.ndarray | None = None
 
 
 class BakedSource:
@@ -87,6 +100,11 @@ class BakedSource:
                     f"baked fields disagree on their frames ({len(times)} samples, "
                     f"{REQUIRED[0]} has {len(self.times)})", self.path, name)
         self._sampled = set(self.times.tolist())
+        second = [name for name in SECOND_SYSTEM if name in self.attrs]
+        if second and len(second) < len(SECOND_SYSTEM):
+            missing = next(name for name in SECOND_SYSTEM if name not in self.attrs)
+            raise UsdWrinkleError("incomplete second wave system: this primvar is missing "
+                                  "(re-bake, or pass --recompute)", self.path, missing)
 
     @property
     def static(self) -> bool:
@@ -148,6 +166,9 @@ class BakedSource:
             values[field] = array.reshape(n, components) if components == 3 else array
         values.setdefault("direction", np.zeros((n, 3), np.float32))
         values.setdefault("compression", np.ones(n, np.float32))
+        if "amplitude2" in values:
+            values["direction2"] = np.zeros((n, 3), np.float32)
+            values["compression2"] = np.ones(n, np.float32)
         return BakedFields(**values)
 
 

@@ -8,9 +8,12 @@ from .. import schema
 from ..profiles import cosine_profile, derive_gradient
 from ..validation import (
     check_amplitude_scale,
+    check_biaxial,
     check_profile,
     check_q,
     check_relax_iterations,
+    check_tension,
+    check_tension_threshold,
     check_type,
     check_width,
     refuse,
@@ -87,4 +90,14 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         iterations = relax_override  # the CLI checked it
     refuse(check_relax_iterations(iterations, path))
     iterations = schema.DEFAULT_RELAX_ITERATIONS if iterations is None else int(iterations)
-    return WrinkleParams(q, width, scale, height, gradient, iterations)
+
+    controls = []
+    for name, check, fallback in (
+            (schema.BIAXIAL, check_biaxial, schema.DEFAULT_BIAXIAL),
+            (schema.TENSION, check_tension, schema.DEFAULT_TENSION),
+            (schema.TENSION_THRESHOLD, check_tension_threshold,
+             schema.DEFAULT_TENSION_THRESHOLD)):
+        value = _get(prim, name, time)
+        refuse(check(value, path))
+        controls.append(fallback if value is None else float(value))
+    return WrinkleParams(q, width, scale, height, gradient, iterations, *controls)

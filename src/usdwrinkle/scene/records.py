@@ -55,6 +55,9 @@ class WrinkleParams:
     amplitude_scale : float, s.
     height_profile, gradient_profile : (p,) float32 over one period [0, 2pi).
     relax_iterations : int.
+    biaxial : float, the second wave system's weight in [0, 1] (0: one system).
+    tension : float, the tension wave's amplitude factor (0: no tension wrinkles).
+    tension_threshold : float, the strain below which no tension wrinkle appears.
     """
 
     q: np.ndarray
@@ -63,6 +66,9 @@ class WrinkleParams:
     height_profile: np.ndarray
     gradient_profile: np.ndarray
     relax_iterations: int
+    biaxial: float = 0.0
+    tension: float = 0.0
+    tension_threshold: float = 0.02
 
 
 @dataclass(frozen=True)

@@ -32,8 +32,11 @@ def bind(units: dict, reads: dict | None = None, writes: dict | None = None,
         buffer.bind_to_storage_buffer(units[name])
 
 
-def bind_wave(units: dict, res) -> None:
-    """Bind what the wave blend reads (include/wave.glsl; the WAVE units of bindings.py)."""
+def bind_wave(units: dict, res, program) -> None:
+    """Bind what the wave blend reads (include/wave.glsl; the WAVE units of bindings.py)
+    and set its uniforms on ``program``."""
+    set_uniforms(program, {"u_profile_samples": float(len(res.record.params.height_profile)),
+                           "u_systems": res.systems})
     res.profiles[0].use(location=units["WAVE_HEIGHT_PROFILE"])
     res.profiles[1].use(location=units["WAVE_GRADIENT_PROFILE"])
     bind(units, reads={"WAVE_POSED_POINTS": res.posed_points, "WAVE_FIELDS": res.fields,

@@ -90,12 +90,11 @@ class DrawPass:
             "u_has_texture": int(res.texture is not None),
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
-            "u_profile_samples": float(len(record.params.height_profile)),
             **normal_map_uniforms(res),
             **res.topology_uniforms,
         })
         units = bindings.DRAW
-        bind_wave(units, res)
+        bind_wave(units, res, self.program)
         if res.texture is not None:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
         if res.normal_map is not None:

@@ -24,6 +24,7 @@ class RelaxPass:
         units = bindings.RELAX
         count = groups(res.num_points, bindings.LOCAL_SIZE)
         set_uniforms(self.seed_shader, {"u_num_points": res.num_points,
+                                        "u_systems": res.systems,
                                         "u_has_history": int(with_history),
                                         **res.topology_uniforms})
         bind(units, reads={
@@ -36,7 +37,8 @@ class RelaxPass:
         self.ctx.memory_barrier()
         if iterations <= 0:
             return  # the seed wrote the phase
-        set_uniforms(self.shader, {"u_num_points": res.num_points, **res.topology_uniforms})
+        set_uniforms(self.shader, {"u_num_points": res.num_points, "u_systems": res.systems,
+                                   **res.topology_uniforms})
         bind(units, reads={"RELAX_EDGES": res.edge_rotations})
         for step in range(iterations):
             src = step % 2
