@@ -54,6 +54,9 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
     result["wrinkle_maps"] = wrinkle_maps(quick, ctx)
     progress("bench: displaced geometry")
     result["displaced_geometry"] = displaced_geometry(quick, ctx, corpus)
+    progress("bench: beyond the paper")
+    from .beyond import overhead
+    result["beyond"] = overhead(quick, ctx)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

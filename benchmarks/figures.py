@@ -8,6 +8,10 @@
 - ``geometry_elbow.png``: the shirt's elbow at frame 24, cropped: shading-only wrinkles
   (``render shirt.usda``) next to the displaced render mesh of ``bake --geometry``
   (``render LAYER --no-wrinkles``), whose outline carries the folds.
+- ``beyond_pillow.png``, ``beyond_pull.png``: frame 24 of the pillow with
+  ``wrinkle:biaxial = 1`` next to the paper's one system, and of the pulled sheet with
+  ``wrinkle:tension = 1`` next to tension off (the features switched in the stage's
+  session layer, as benchmarks/beyond.py does).
 """
 from __future__ import annotations
 
@@ -92,12 +96,43 @@ def geometry_figure(outdir: Path) -> Path:
     return path
 
 
+def _render_stage(stage, width: int, height: int) -> np.ndarray:
+    """Frame 24 of an open stage, over white."""
+    from usdwrinkle.colour import srgb_encode
+    from usdwrinkle.engine import WrinkleEngine
+
+    engine = WrinkleEngine(stage, warn=lambda m: None)
+    try:
+        color = engine.render_frame(24.0, width, height)["color"].pixels
+    finally:
+        engine.release()
+    alpha = np.clip(color[..., 3:4], 0, 1)
+    straight = np.divide(color[..., :3], alpha, out=np.zeros_like(color[..., :3]),
+                         where=alpha > 0)
+    return srgb_encode(np.clip(straight, 0, 1)) * alpha + (1 - alpha)
+
+
+def beyond_figures(outdir: Path) -> list[Path]:
+    from .beyond import _stage
+
+    paths = []
+    for name in ("pillow", "pull"):
+        images = [_render_stage(_stage(name, on), 560, 400) for on in (True, False)]
+        gap = np.ones((400, 16, 3), np.float32)
+        path = outdir / f"beyond_{name}.png"
+        _write(path, np.concatenate([images[0], gap, images[1]], axis=1))
+        paths.append(path)
+    return paths
+
+
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     outdir = Path(args[0]) if args else ROOT / "docs" / "images"
     outdir.mkdir(parents=True, exist_ok=True)
     print(maps_figure(outdir))
     print(geometry_figure(outdir))
+    for path in beyond_figures(outdir):
+        print(path)
     return 0
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from .beyond import markdown as beyond_report
 from .cpu_nodes import markdown as cpu_nodes_report
 from .paper import paper_figure
 from .renderers import markdown as renderers_report
@@ -192,6 +193,7 @@ def markdown(result: dict) -> str:
     lines += farm_bench.markdown(result)
     lines += cpu_nodes_report(result)
     lines += renderers_report(result)
+    lines += beyond_report(result)
     tri = result.get("triangulation")
     if tri:
         lines += ["", "## Triangulation of hostile meshes", "",
