@@ -110,24 +110,14 @@ void main() {
         mat3 frame = tangent_frame(t, normal_st, shading_local);
         shading_local = safe_normalize(frame * n_tangent, shading_local);
     }
-    ivec3 corners = fetch(triangles, t).xyz;
-
     // texture deformation: the point seen through the wrinkle, dx = (v/(v.n') - n') h
     vec2 st = v_st;
     if (u_has_texture != 0 && u_wrinkles != 0 && h != 0.0) {
         vec3 v = safe_normalize(u_eye_local - v_local, n);
         float vn = max(abs(dot(v, shading_local)), 0.25);
         vec3 dx = (v / vn - shading_local) * h;
-        vec3 p0 = fetch(posed_points, corners.x).xyz;
-        vec3 e1 = fetch(posed_points, corners.y).xyz - p0;
-        vec3 e2 = fetch(posed_points, corners.z).xyz - p0;
-        vec2 s0 = fetch(corner_st, 3 * t).xy;
-        vec2 d1 = fetch(corner_st, 3 * t + 1).xy - s0;
-        vec2 d2 = fetch(corner_st, 3 * t + 2).xy - s0;
-        float det = d1.x * d2.y - d2.x * d1.y;
-        if (abs(det) > 1e-20) {
-            vec3 dp_du = (e1 * d2.y - e2 * d1.y) / det;   // dP/dUV, local space
-            vec3 dp_dv = (e2 * d1.x - e1 * d2.x) / det;
+        vec3 dp_du, dp_dv;  // dP/dUV, local space
+        if (uv_derivatives(t, corner_st, dp_du, dp_dv)) {
             mat2 gram = mat2(dot(dp_du, dp_du), dot(dp_du, dp_dv),
                              dot(dp_du, dp_dv), dot(dp_dv, dp_dv));
             if (abs(determinant(gram)) > 1e-30) {

@@ -104,12 +104,9 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
     return w;
 }
 
-// The tangent frame of triangle t for a texture-coordinate table: T along dP/ds and B
-// along dP/dt (local space, from the posed corners), made orthonormal about the unit
-// normal n (Gram-Schmidt), B's sign from the triangle's UV winding (a mirrored island
-// flips it), as MikkTSpace does per vertex. A triangle with degenerate UVs gets an
-// arbitrary frame about n. Columns: T, B, n.
-mat3 tangent_frame(int t, sampler2D corner_uv, vec3 n) {
+// dP/ds and dP/dt of triangle t (posed, local space) for a table of texture coordinates
+// per triangle corner ([3t + c]); false where the triangle's UVs are degenerate.
+bool uv_derivatives(int t, sampler2D corner_uv, out vec3 dp_ds, out vec3 dp_dt) {
     ivec3 corners = fetch(triangles, t).xyz;
     vec3 p0 = fetch(posed_points, corners.x).xyz;
     vec3 e1 = fetch(posed_points, corners.y).xyz - p0;
@@ -118,13 +115,28 @@ mat3 tangent_frame(int t, sampler2D corner_uv, vec3 n) {
     vec2 d1 = fetch(corner_uv, 3 * t + 1).xy - s0;
     vec2 d2 = fetch(corner_uv, 3 * t + 2).xy - s0;
     float det = d1.x * d2.y - d2.x * d1.y;
-    vec3 dp_ds = (e1 * d2.y - e2 * d1.y) * sign(det);   // dP/ds, dP/dt times |det|
-    vec3 dp_dt = (e2 * d1.x - e1 * d2.x) * sign(det);
+    if (abs(det) <= 1e-20) {
+        dp_ds = dp_dt = vec3(0.0);
+        return false;
+    }
+    dp_ds = (e1 * d2.y - e2 * d1.y) / det;
+    dp_dt = (e2 * d1.x - e1 * d2.x) / det;
+    return true;
+}
+
+// The tangent frame of triangle t for a texture-coordinate table: T along dP/ds and B
+// along dP/dt (local space, from the posed corners), made orthonormal about the unit
+// normal n (Gram-Schmidt), B's sign from the triangle's UV winding (a mirrored island
+// flips it), as MikkTSpace does per vertex. A triangle with degenerate UVs gets an
+// arbitrary frame about n. Columns: T, B, n.
+mat3 tangent_frame(int t, sampler2D corner_uv, vec3 n) {
+    vec3 dp_ds, dp_dt;
+    bool usable = uv_derivatives(t, corner_uv, dp_ds, dp_dt);
     vec3 fallback = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
     vec3 T = safe_normalize(dp_ds - dot(dp_ds, n) * n,
                             safe_normalize(fallback - dot(fallback, n) * n, fallback));
     vec3 B = cross(n, T);
-    if (det != 0.0 && dot(B, dp_dt) < 0.0) B = -B;
+    if (usable && dot(B, dp_dt) < 0.0) B = -B;
     return mat3(T, B, n);
 }
 

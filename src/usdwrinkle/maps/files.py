@@ -8,7 +8,6 @@ interrupt leaves no partial map set, and the layer that names them is written af
 """
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 import re
@@ -17,7 +16,7 @@ import shutil
 import numpy as np
 
 from ..errors import UsdWrinkleError
-from ..outputs.atomic import signals_held, write_error
+from ..outputs.atomic import signals_held, sweep_dead, write_error
 from ..outputs.images import encode_file
 from ..timecode import frame_text
 
@@ -150,19 +149,7 @@ class MapStaging:
 
     @staticmethod
     def _sweep(parent: str) -> None:
-        with contextlib.suppress(OSError):
-            for name in os.listdir(parent):
-                if not name.startswith(STAGING_PREFIX):
-                    continue
-                pid = name[len(STAGING_PREFIX):].split(".", 1)[0]
-                if not pid.isdigit():
-                    continue
-                try:
-                    os.kill(int(pid), 0)
-                except ProcessLookupError:
-                    shutil.rmtree(os.path.join(parent, name), ignore_errors=True)
-                except OSError:
-                    pass
+        sweep_dead(parent, STAGING_PREFIX, lambda path: shutil.rmtree(path, ignore_errors=True))
 
     def path(self, name: str) -> str:
         """Where a map is encoded; ``name`` is its file name in the map folder."""

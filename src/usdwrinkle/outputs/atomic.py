@@ -37,6 +37,29 @@ def remove_temporaries(path: str) -> None:
             os.unlink(tmp)
 
 
+def sweep_dead(folder: str, prefix: str, remove) -> None:
+    """Call ``remove(path)`` for every entry of ``folder`` named ``<prefix><pid>.*`` whose
+    process no longer runs (a SIGKILLed run never reaches its cleanup); the entries of
+    processes that run, also other users', stay."""
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return
+    for name in names:
+        if not name.startswith(prefix):
+            continue
+        pid = name[len(prefix):].split(".", 1)[0]
+        if not pid.isdigit():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            with contextlib.suppress(OSError):
+                remove(os.path.join(folder, name))
+        except OSError:
+            pass  # alive, but another user's
+
+
 def write_error(path: str, exc: OSError) -> UsdWrinkleError:
     """An OSError of an output write as the one-line error (full disk, permissions, ...)."""
     reason = exc.strerror or str(exc)

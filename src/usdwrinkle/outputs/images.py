@@ -16,7 +16,7 @@ import numpy as np
 from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
 from ..scene.diagnostics import one_line, usd_diagnostics
-from .atomic import atomic_path
+from .atomic import atomic_path, sweep_dead
 
 FLOAT_FORMATS = (".exr",)
 EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -112,19 +112,7 @@ def _scratch_folder() -> str:
 def _sweep_scratch(folder: str) -> None:
     """Remove scratch frames of processes that no longer run (a SIGKILLed farm worker
     never reaches its cleanup, and /dev/shm is memory)."""
-    for name in os.listdir(folder):
-        if not name.startswith(SCRATCH_PREFIX):
-            continue
-        pid = name[len(SCRATCH_PREFIX):].split(".", 1)[0]
-        if not pid.isdigit():
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
-            with contextlib.suppress(OSError):
-                os.unlink(os.path.join(folder, name))
-        except OSError:
-            pass  # alive, but another user's
+    sweep_dead(folder, SCRATCH_PREFIX, os.unlink)
 
 
 def _check_finite(buffers: dict, aovs) -> None:
