@@ -5,10 +5,13 @@
 #include "include/common.glsl"
 #include "include/wave.glsl"
 
-// Texture coordinates per triangle corner: [3t + c].xy, of the diffuse texture and of
-// the normal map (the same primvar, or each its own)
+// Texture coordinates per triangle corner: [3t + c].xy, of the diffuse texture and, in
+// the NORMAL_MAP variant (a mesh with a UsdPreviewSurface normal map), of the normal map
+// (the same primvar, or each its own)
 layout(binding = DRAW_CORNER_ST) uniform sampler2D corner_st;
+#if defined NORMAL_MAP
 layout(binding = DRAW_NORMAL_ST) uniform sampler2D normal_st;
+#endif
 
 uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
 uniform mat4 u_world_to_clip;    // view * projection, same convention
@@ -27,7 +30,9 @@ centroid out vec3 v_world;
 centroid out vec3 v_normal_local;
 centroid out vec3 v_bary;
 centroid out vec2 v_st;
+#if defined NORMAL_MAP
 centroid out vec2 v_normal_st;
+#endif
 
 void main() {
     // Not indexed: 3 corners per triangle, each run on its own, because the barycentric
@@ -44,7 +49,9 @@ void main() {
     v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_st = fetch(corner_st, corner).xy;
+#if defined NORMAL_MAP
     v_normal_st = fetch(normal_st, corner).xy;
+#endif
     gl_Position = u_world_to_clip * world;         // world -> clip
 }
 
@@ -55,7 +62,9 @@ centroid in vec3 v_world;
 centroid in vec3 v_normal_local;
 centroid in vec3 v_bary;
 centroid in vec2 v_st;
+#if defined NORMAL_MAP
 centroid in vec2 v_normal_st;
+#endif
 
 layout(location = 0) out vec4 out_color;    // linear RGB, alpha
 layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z
@@ -67,13 +76,14 @@ uniform int u_has_texture;
 layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
 uniform vec4 u_texture_bias;
+#if defined NORMAL_MAP
 // UsdPreviewSurface inputs:normal from a UsdUVTexture: a tangent-space normal map, tiles
 // of a UDIM set in the layers of an array (u_udim_layer[10 v + u]: the layer, or -1)
-uniform int u_has_normal_map;
 layout(binding = DRAW_NORMAL_TEXTURE) uniform sampler2DArray u_normal_map;
 uniform int u_udim_layer[UDIM_TILES];
 uniform vec4 u_normal_scale;
 uniform vec4 u_normal_bias;
+#endif
 
 uniform int u_num_lights;
 uniform int u_light_kind[MAX_LIGHTS];      // 0 distant, 1 sphere
@@ -81,6 +91,7 @@ uniform vec3 u_light_radiance[MAX_LIGHTS];
 uniform vec4 u_light_vector[MAX_LIGHTS];   // distant: direction of travel; sphere: position, radius
 uniform vec3 u_ambient;                    // dome lights
 
+#if defined NORMAL_MAP
 // The tangent-space normal of the normal map at st, or nothing (false) outside its tiles
 bool normal_map(vec2 st, out vec3 n_tangent) {
     vec2 tile = floor(st);
@@ -94,6 +105,7 @@ bool normal_map(vec2 st, out vec3 n_tangent) {
     n_tangent = (texel * u_normal_scale + u_normal_bias).xyz;
     return true;
 }
+#endif
 
 void main() {
     int t = gl_PrimitiveID;
@@ -104,12 +116,14 @@ void main() {
     }
     float h = wave.height;
     vec3 shading_local = safe_normalize(n - wave.gradient, n);
+#if defined NORMAL_MAP
     vec3 n_tangent;
-    if (u_has_normal_map != 0 && normal_map(v_normal_st, n_tangent)) {
+    if (normal_map(v_normal_st, n_tangent)) {
         // the map's frame about the (wrinkled) shading normal: maps and wrinkles compose
         mat3 frame = tangent_frame(t, normal_st, shading_local);
         shading_local = safe_normalize(frame * n_tangent, shading_local);
     }
+#endif
     // texture deformation: the point seen through the wrinkle, dx = (v/(v.n') - n') h
     vec2 st = v_st;
     if (u_has_texture != 0 && u_wrinkles != 0 && h != 0.0) {

@@ -5,7 +5,7 @@
 //   phi_i <- arg( a_i e^{i phi_i} + sum_j a_j e^{i (phi~_j - kbar_ij . (x_j - x_i))} )
 //   e^{i (phi~_j - d_ij)} = z~_j * e^{-i d_ij},  z~_j = conj(z_j) when (k, phi) flips
 //
-// Each vertex has u_systems wave systems (1, or 2 with wrinkle:biaxial or tension): each
+// Each vertex has u_systems wave systems (1, or 2 with wrinkle:biaxial): each
 // relaxes on its own, against the neighbour's partner system matched by direction
 // (partner_system in common.glsl), since the two eigenvectors can swap between
 // neighbours and between frames. Phasors are RGBA (xy: system 1, zw: system 2), phases
@@ -22,10 +22,25 @@
 layout(local_size_x = LOCAL_SIZE) in;
 
 uniform int u_num_points;
+// the TWO_SYSTEMS variant loops over u_systems (wrinkle:biaxial); the default one is the
+// paper's single system (as in wave.glsl)
+// (phasors RGBA, one edge texel per edge and system) or the paper's single system (as in
+// wave.glsl: phasors RG, one edge texel per edge, as before the second system existed)
+#if defined TWO_SYSTEMS
 uniform int u_systems;
+#define SYSTEMS u_systems
+#define PARTNER(k, s, j) partner_system(k, s, wave_of(fields, j, 0), wave_of(fields, j, 1))
+#define EDGE(e, s) (2 * (e) + (s))
+#define Z_FORMAT rgba32f
+#else
+#define SYSTEMS 1
+#define PARTNER(k, s, j) 0
+#define EDGE(e, s) (e)
+#define Z_FORMAT rg32f
+#endif
 
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
-// Per directed edge e (CSR order) and system s, texel 2e + s: xy = e^{-i d_ij},
+// Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
 // z = flip * a_j (the partner's weight, negative where its wave is flipped; a_j > 0
 // thanks to the floor), w = j as a float (exact below 2^24 points), -(j + 1) when the
 // partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
@@ -46,7 +61,7 @@ layout(binding = RELAX_ANCHOR) uniform sampler2D anchor_phase;
 // when there are no iterations)
 layout(rg32f, binding = RELAX_PHASE) uniform image2D phase;
 layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
-layout(rgba32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rgba32f, binding = RELAX_EDGES_OUT) writeonly uniform image2D edges;
 
 uniform int u_has_history;
@@ -57,16 +72,23 @@ void main() {
     vec2 anchor = fetch(anchor_phase, i).xy;
     vec2 previous = imageLoad(phase, TABLE_TEXEL(i)).xy;
     vec4 before0 = wave_of(previous_fields, i, 0);
+#if defined TWO_SYSTEMS
     vec4 before1 = wave_of(previous_fields, i, 1);
+#endif
     vec2 start = anchor;
     vec4 z = vec4(0.0);
     vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
-    for (int s = 0; s < u_systems; ++s) {
+    for (int s = 0; s < SYSTEMS; ++s) {
         vec3 k_i = wave_of(fields, i, s).xyz;
         if (u_has_history != 0) {
             // keep last frame's phase of the partner system; flip it where k flipped
-            int was = u_systems > 1 ? partner_system(k_i, s, before0, before1) : 0;
+#if defined TWO_SYSTEMS
+            int was = partner_system(k_i, s, before0, before1);
             vec3 k_before = was == 0 ? before0.xyz : before1.xyz;
+#else
+            int was = 0;
+            vec3 k_before = before0.xyz;
+#endif
             float flip = dot(k_i, k_before) < 0.0 ? -1.0 : 1.0;
             start[s] = flip * previous[was];
         }
@@ -74,14 +96,12 @@ void main() {
         z[2 * s + 1] = sin(start[s]);
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             int j = NEIGHBOR(e);
-            vec4 wave0 = wave_of(fields, j, 0);
-            int partner = u_systems > 1 ? partner_system(k_i, s, wave0, wave_of(fields, j, 1))
-                                        : 0;
-            vec4 wave_j = partner == 0 ? wave0 : wave_of(fields, j, 1);
+            int partner = PARTNER(k_i, s, j);
+            vec4 wave_j = wave_of(fields, j, partner);
             float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
             vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
             float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
-            STORE(edges, 2 * e + s, vec4(cos(drift), -sin(drift),
+            STORE(edges, EDGE(e, s), vec4(cos(drift), -sin(drift),
                                          flip * (wave_j.w + WEIGHT_FLOOR),
                                          partner == 0 ? float(j) : -float(j) - 1.0));
         }
@@ -94,7 +114,7 @@ void main() {
 
 layout(binding = RELAX_EDGES) uniform sampler2D edges;
 layout(binding = RELAX_Z_IN) uniform sampler2D z_in;
-layout(rgba32f, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
+layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 
 uniform int u_write_phase;  // the last iteration also stores phi = arg z
@@ -104,11 +124,11 @@ void main() {
     if (i >= u_num_points) return;
     vec4 z_i = fetch(z_in, i);
     vec4 z = z_i;
-    for (int s = 0; s < u_systems; ++s) {
+    for (int s = 0; s < SYSTEMS; ++s) {
         vec2 own = s == 0 ? z_i.xy : z_i.zw;
         vec2 sum = (wave_of(fields, i, s).w + WEIGHT_FLOOR) * own;
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
-            vec4 edge = fetch(edges, 2 * e + s);
+            vec4 edge = fetch(edges, EDGE(e, s));
             int j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
             vec4 z_all = fetch(z_in, j);
             vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
@@ -121,7 +141,11 @@ void main() {
     }
     STORE(z_out, i, z);
     if (u_write_phase != 0) {
+#if defined TWO_SYSTEMS
         STORE(phase, i, vec4(atan(z.y, z.x), u_systems > 1 ? atan(z.w, z.z) : 0.0, 0.0, 0.0));
+#else
+        STORE(phase, i, vec4(atan(z.y, z.x), 0.0, 0.0, 0.0));
+#endif
     }
 }
 

@@ -23,7 +23,7 @@ LOCAL = re.compile(r"\b(?:float|int|uint|bool|[iu]?vec[234]|mat[234](?:x[234])?)
 #: that render/shaders.py and the passes add per program
 GLSL = {"GL_ARB_shader_draw_parameters"}
 STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
-                  "STEP"}
+                  "STEP", "TWO_SYSTEMS", "NORMAL_MAP"}
 PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.CRUSH, bindings.RELAX,
                              bindings.DRAW, bindings.MAPS,
                              bindings.GEOMETRY) for name in table}

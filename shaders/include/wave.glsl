@@ -17,7 +17,16 @@ layout(binding = WAVE_TRIANGLES) uniform highp isampler2D triangles;  // corners
 layout(binding = WAVE_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
 layout(binding = WAVE_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
 uniform float u_profile_samples;
-uniform int u_systems;  // wave systems per vertex: 1, or 2 (wrinkle:biaxial)
+// Wave systems per vertex: the program variant with TWO_SYSTEMS defined (wrinkle:biaxial,
+// or a bake of it) loops over u_systems; the default variant is the paper's one system,
+// compiled without the second system's code (on llvmpipe the general loop cost a third
+// more draw time even with one system).
+#if defined TWO_SYSTEMS
+uniform int u_systems;
+#define SYSTEMS u_systems
+#else
+#define SYSTEMS 1
+#endif
 
 float profile(sampler2D table, float theta) {
     // sample s sits at theta = 2 pi s / N; texel centres are at (s + 0.5) / N
@@ -57,35 +66,45 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
     bary = clamp(bary, 0.0, 1.0);
     bary /= max(bary.x + bary.y + bary.z, 1e-20);
     ivec3 corners = fetch(triangles, t).xyz;
-    vec4 reference[2];
-    reference[0] = fetch(fields, FIELD_WAVE(corners.x));
-    reference[1] = u_systems > 1 ? fetch(fields, FIELD_WAVE_OF(corners.x, 1)) : vec4(0.0);
-    // two systems: a corner whose eigenvectors are swapped against corner 0's (matched by
-    // direction) adds its system 2 to corner 0's system 1, and the other way round
+    vec3 reference0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
+#if defined TWO_SYSTEMS
+    vec3 reference1 = fetch(fields, FIELD_WAVE_OF(corners.x, 1)).xyz;
+    // a corner whose eigenvectors are swapped against corner 0's (matched by direction)
+    // adds its system 2 to corner 0's system 1, and the other way round
     bool swapped[3] = bool[3](false, false, false);
-    for (int c = 1; c < 3 && u_systems > 1; ++c) {
+    for (int c = 1; c < 3; ++c) {
         vec3 k0 = normalize_or_zero(fetch(fields, FIELD_WAVE_OF(corners[c], 0)).xyz);
         vec3 k1 = normalize_or_zero(fetch(fields, FIELD_WAVE_OF(corners[c], 1)).xyz);
-        vec3 r0 = normalize_or_zero(reference[0].xyz);
-        vec3 r1 = normalize_or_zero(reference[1].xyz);
+        vec3 r0 = normalize_or_zero(reference0);
+        vec3 r1 = normalize_or_zero(reference1);
         swapped[c] = abs(dot(r0, k1)) + abs(dot(r1, k0)) > abs(dot(r0, k0)) + abs(dot(r1, k1));
     }
+#endif
     vec3 p0 = vec3(0.0), p1 = vec3(0.0), p2 = vec3(0.0);
     if (exact_gradient) {
         p0 = fetch(posed_points, corners.x).xyz;
         p1 = fetch(posed_points, corners.y).xyz;
         p2 = fetch(posed_points, corners.z).xyz;
     }
-    for (int s = 0; s < u_systems; ++s) {
-        vec3 k0 = reference[s].xyz;
+    for (int s = 0; s < SYSTEMS; ++s) {
+#if defined TWO_SYSTEMS
+        vec3 k0 = s == 0 ? reference0 : reference1;
+#else
+        vec3 k0 = reference0;
+#endif
         for (int c = 0; c < 3; ++c) {
             int i = corners[c];
+#if defined TWO_SYSTEMS
             int system = swapped[c] ? 1 - s : s;
             vec4 wave = fetch(fields, FIELD_WAVE_OF(i, system));
+            float phi = fetch(phase, i)[system];
+#else
+            vec4 wave = fetch(fields, FIELD_WAVE(i));
+            float phi = fetch(phase, i).x;
+#endif
             float a = wave.w;
             if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
             vec3 k = wave.xyz;
-            float phi = fetch(phase, i)[system];
             if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
             float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
             float b = bary[c];

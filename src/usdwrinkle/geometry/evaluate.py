@@ -14,7 +14,7 @@ import numpy as np
 from ..render import bindings
 from ..render.passes import bind, bind_wave, groups, set_uniforms
 from ..render.resources import MeshResources, Table
-from ..render.shaders import compute_shader
+from ..render.shaders import Variants, compute_shader
 from .subdivide import FineMesh
 
 
@@ -37,8 +37,9 @@ class GeometryEvaluator:
 
     def __init__(self, ctx):
         self.ctx = ctx
-        self.program = compute_shader(ctx, "geometry.glsl",
-                                      {**bindings.COMMON, **bindings.GEOMETRY})
+        defines = {**bindings.COMMON, **bindings.GEOMETRY}
+        self.variants = Variants(
+            lambda extra: compute_shader(ctx, "geometry.glsl", {**defines, **extra}))
         self.tables: dict[str, tuple[Table, Table, Table, Table]] = {}
 
     def _tables(self, res: MeshResources, fine: FineMesh):
@@ -61,14 +62,15 @@ class GeometryEvaluator:
     def evaluate(self, res: MeshResources, fine: FineMesh, wrinkles: bool = True) -> FineFrame:
         """The fine mesh at the frame ``res`` holds (synced and computed)."""
         ranges, entries, points, normals = self._tables(res, fine)
-        set_uniforms(self.program, {
+        shader = self.variants(TWO_SYSTEMS=res.systems > 1)
+        set_uniforms(shader, {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_profile_samples": float(len(res.record.params.height_profile))})
         units = bindings.GEOMETRY
-        bind_wave(units, res, self.program)
+        bind_wave(units, res, shader)
         bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries},
              writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
-        self.program.run(groups(len(fine.points), bindings.LOCAL_SIZE))
+        shader.run(groups(len(fine.points), bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
         out_points = points.read()
         out_normals = normals.read()
@@ -83,4 +85,4 @@ class GeometryEvaluator:
     def release(self) -> None:
         for path in list(self.tables):
             self._release(path)
-        self.program.release()
+        self.variants.release()

@@ -19,7 +19,7 @@ import numpy as np
 from ..render import bindings
 from ..render.passes import bind, bind_wave, set_uniforms
 from ..render.resources import MeshResources, Table
-from ..render.shaders import program
+from ..render.shaders import DrawableProgram, Variants, program
 
 #: neighbour offsets of one dilation step: edge neighbours first, so that islands grow
 #: round rather than square
@@ -72,8 +72,9 @@ class MapRasterizer:
 
         self.ctx = ctx
         self.size = int(size)
-        self.program = program(ctx, "maps.glsl", {**bindings.COMMON, **bindings.MAPS})
-        self.vao = ctx.vertex_array(self.program, [])
+        defines = {**bindings.COMMON, **bindings.MAPS}
+        self.variants = Variants(lambda extra: DrawableProgram(
+            ctx, program(ctx, "maps.glsl", {**defines, **extra})))
         self.mode = moderngl.TRIANGLES
         shape = (self.size, self.size)
         self.targets = [ctx.texture(shape, 4, dtype="f4") for _ in range(2)]  # normal, wrinkle
@@ -107,15 +108,16 @@ class MapRasterizer:
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         else:
             self.ctx.disable(moderngl.BLEND)
-        set_uniforms(self.program, {
+        variant = self.variants(TWO_SYSTEMS=res.systems > 1)
+        set_uniforms(variant.program, {
             "u_tile": (float(tile[0]), float(tile[1])),
             "u_count": int(count),
             "u_amplitude_scale": float(res.record.params.amplitude_scale),
         })
         units = bindings.MAPS
-        bind_wave(units, res, self.program)
+        bind_wave(units, res, variant.program)
         bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width})
-        self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
+        variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
 
@@ -165,5 +167,5 @@ class MapRasterizer:
         self.framebuffer.release()
         for tex in self.targets:
             tex.release()
-        self.vao.release()
-        self.program.release()
+        self.variants.release()
+

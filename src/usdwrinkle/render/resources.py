@@ -166,12 +166,13 @@ class MeshResources:
         self.anchor_phase = self._table(n, WAVE_SYSTEMS,
                                         data=np.zeros((n, WAVE_SYSTEMS), np.float32))
         self.phase = self._table(n, WAVE_SYSTEMS, data=np.zeros((n, WAVE_SYSTEMS), np.float32))
-        #: unit phasors during relaxation (ping-pong; xy, zw: systems 1, 2) and the
-        #: per-edge rotations (texel 2e + system)
-        self.phasors = [self._table(n, 4) for _ in range(2)]
-        self.edge_rotations = self._table(WAVE_SYSTEMS * self.num_edges, 4)
+        #: unit phasors during relaxation (ping-pong) and the per-edge rotations, laid
+        #: out for the wave systems relaxed (set_systems)
+        self.phasors: list[Table] = []
+        self.edge_rotations: Table | None = None
         #: wave systems the passes run and draw: 2 with wrinkle:biaxial (or a bake of it)
-        self.systems = 1
+        self.systems = 0
+        self.set_systems(1)
         self.baked_waves: Table | None = None  # write_baked() makes it
         self.corner_st = self._table(3 * self.num_triangles, 2,
                                      data=self._corner_st(record))  # [3t + c]
@@ -205,6 +206,20 @@ class MeshResources:
         self.set_normal_map(record.material.normal_map)
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
+
+    def set_systems(self, systems: int) -> None:
+        """Lay the relax tables out for 1 or 2 wave systems: phasors RG (one system, as
+        in the paper) or RGBA (xy, zw: systems 1, 2), and one edge texel per edge and
+        system (relax.glsl). A change re-makes them (an edit of wrinkle:biaxial)."""
+        if systems == self.systems:
+            return
+        for table in [*self.phasors, self.edge_rotations]:
+            if table is not None:
+                self.tables.remove(table)
+                table.release()
+        self.systems = systems
+        self.phasors = [self._table(self.num_points, 2 * systems) for _ in range(2)]
+        self.edge_rotations = self._table(systems * self.num_edges, 4)
 
     def _profile_texture(self, table: np.ndarray):
         """A profile (height or gradient) as an N x 1 texture, repeating along the period."""
@@ -301,14 +316,13 @@ class MeshResources:
         block[:, 1, 3] = baked.compression
         phases = np.zeros((self.num_points, WAVE_SYSTEMS), np.float32)
         phases[:, 0] = baked.phase
-        self.systems = 1
+        self.set_systems(2 if baked.amplitude2 is not None else 1)
         if baked.amplitude2 is not None:
             block[:, 2, :3] = baked.wave_vector2
             block[:, 2, 3] = baked.amplitude2
             block[:, 3, :3] = baked.direction2
             block[:, 3, 3] = baked.compression2
             phases[:, 1] = baked.phase2
-            self.systems = 2
         self.baked_waves.write(block)
         self.phase.write(phases)
 

@@ -36,7 +36,7 @@ class CrushPass:
         res.current_fields = 1 - res.current_fields
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
-        res.systems = 2 if params.biaxial > 0 else 1
+        res.set_systems(2 if params.biaxial > 0 else 1)
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
                                    "u_biaxial": float(params.biaxial),
                                    "u_tension": float(params.tension),

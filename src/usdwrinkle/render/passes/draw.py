@@ -7,7 +7,7 @@ from ...contract import MAX_LIGHTS
 from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..resources import MeshResources
-from ..shaders import program
+from ..shaders import DrawableProgram, Variants, program
 from . import bind, bind_wave, gl_matrix, set_uniforms
 
 FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
@@ -40,8 +40,8 @@ def light_uniforms(lights) -> dict:
 def normal_map_uniforms(res: MeshResources) -> dict:
     record = res.normal_map_record
     if record is None:
-        return {"u_has_normal_map": 0}
-    return {"u_has_normal_map": 1, "u_udim_layer": res.udim_layers,
+        return {}
+    return {"u_udim_layer": res.udim_layers,
             "u_normal_scale": tuple(float(v) for v in record.scale[:4]),
             "u_normal_bias": tuple(float(v) for v in record.bias[:4])}
 
@@ -52,8 +52,12 @@ class DrawPass:
 
         self.ctx = ctx
         self.mode = moderngl.TRIANGLES
-        self.program = program(ctx, "draw.glsl", {**bindings.COMMON, **bindings.DRAW})
-        self.vao = ctx.vertex_array(self.program, [])
+        defines = {**bindings.COMMON, **bindings.DRAW}
+        # (program, vertex array) per wave-system count
+        self.variants = Variants(lambda extra: DrawableProgram(
+            ctx, program(ctx, "draw.glsl", {**defines, **extra})))
+        self.variants()  # the paper's variant always; the other on first use
+        self.frame_uniforms: dict = {}
 
     def begin(self, camera: CameraRecord, lights, wrinkles: bool) -> None:
         # row-vector: view, projection, then y flipped so that GL's first row (the bottom)
@@ -61,12 +65,15 @@ class DrawPass:
         # winding around, so front faces are clockwise
         world_to_clip = camera.view @ camera.projection @ FLIP_Y
         self.ctx.front_face = "cw"
-        set_uniforms(self.program, {
+        self.frame_uniforms = {
             "u_world_to_clip": gl_matrix(world_to_clip),
             "u_world_to_eye": gl_matrix(camera.view),
             "u_wrinkles": int(wrinkles),
             **light_uniforms(lights),
-        })
+        }
+        for variant in self.variants.programs.values():
+            set_uniforms(variant.program, self.frame_uniforms)
+            variant.frame_uniforms = self.frame_uniforms
 
     def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord) -> None:
         if res.num_triangles == 0 or not frame.visible:
@@ -81,7 +88,12 @@ class DrawPass:
             normal_matrix = np.eye(3)
         eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
         material = record.material
-        set_uniforms(self.program, {
+        variant = self.variants(TWO_SYSTEMS=res.systems > 1,
+                                NORMAL_MAP=res.normal_map is not None)
+        if variant.frame_uniforms is not self.frame_uniforms:  # a variant made this frame
+            set_uniforms(variant.program, self.frame_uniforms)
+            variant.frame_uniforms = self.frame_uniforms
+        set_uniforms(variant.program, {
             "u_local_to_world": gl_matrix(local_to_world),
             "u_normal_to_world": np.ascontiguousarray(normal_matrix.T, np.float32),
             "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
@@ -94,11 +106,13 @@ class DrawPass:
             **res.topology_uniforms,
         })
         units = bindings.DRAW
-        bind_wave(units, res, self.program)
+        bind_wave(units, res, variant.program)
         if res.texture is not None:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
         if res.normal_map is not None:
             res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
-        bind(units, reads={"TOPOLOGY_TABLE": res.topology, "DRAW_CORNER_ST": res.corner_st,
-                           "DRAW_NORMAL_ST": res.normal_st})
-        self.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
+        bind(units, reads={"TOPOLOGY_TABLE": res.topology, "DRAW_CORNER_ST": res.corner_st})
+        if res.normal_map is not None:
+            bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
+        variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
+

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from .. import bindings
 from ..resources import MeshResources
-from ..shaders import compute_shader
+from ..shaders import Variants, compute_shader
 from . import bind, groups, set_uniforms
 
 
@@ -17,13 +17,20 @@ class RelaxPass:
     def __init__(self, ctx):
         self.ctx = ctx
         defines = {**bindings.COMMON, **bindings.RELAX}
-        self.shader = compute_shader(ctx, "relax.glsl", defines)
-        self.seed_shader = compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1})
+        # per wave-system count (render/shaders.py: Variants)
+        self.steps = Variants(
+            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, **extra}))
+        self.seeds = Variants(
+            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1, **extra}))
+        self.steps()
+        self.seeds()
 
     def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
         units = bindings.RELAX
         count = groups(res.num_points, bindings.LOCAL_SIZE)
-        set_uniforms(self.seed_shader, {"u_num_points": res.num_points,
+        seed_shader, shader = self.seeds(TWO_SYSTEMS=res.systems > 1), self.steps(
+            TWO_SYSTEMS=res.systems > 1)
+        set_uniforms(seed_shader, {"u_num_points": res.num_points,
                                         "u_systems": res.systems,
                                         "u_has_history": int(with_history),
                                         **res.topology_uniforms})
@@ -33,17 +40,17 @@ class RelaxPass:
             "RELAX_ANCHOR": res.anchor_phase},
             writes={"RELAX_Z_OUT": res.phasors[0], "RELAX_EDGES_OUT": res.edge_rotations},
             read_writes={"RELAX_PHASE": res.phase})
-        self.seed_shader.run(count)
+        seed_shader.run(count)
         self.ctx.memory_barrier()
         if iterations <= 0:
             return  # the seed wrote the phase
-        set_uniforms(self.shader, {"u_num_points": res.num_points, "u_systems": res.systems,
-                                   **res.topology_uniforms})
+        set_uniforms(shader, {"u_num_points": res.num_points, "u_systems": res.systems,
+                              **res.topology_uniforms})
         bind(units, reads={"RELAX_EDGES": res.edge_rotations})
         for step in range(iterations):
             src = step % 2
             bind(units, reads={"RELAX_Z_IN": res.phasors[src]},
                  writes={"RELAX_Z_OUT": res.phasors[1 - src]})
-            set_uniforms(self.shader, {"u_write_phase": int(step == iterations - 1)})
-            self.shader.run(count)
+            set_uniforms(shader, {"u_write_phase": int(step == iterations - 1)})
+            shader.run(count)
             self.ctx.memory_barrier()
