@@ -279,9 +279,12 @@ def test_source_color_space_follows_usd_preview_surface(tmp_path):
         stored = value / (255.0 if bits == "uint8" else 65535.0)
         decoded = ((stored + 0.055) / 1.055) ** 2.4
         expected_auto = decoded if bits == "uint8" else stored
-        np.testing.assert_allclose(load_texture(path, "auto")[..., 0], expected_auto, rtol=1e-3)
-        np.testing.assert_allclose(load_texture(path, "raw")[..., 0], stored, rtol=1e-4)
-        np.testing.assert_allclose(load_texture(path, "sRGB")[..., 0], decoded, rtol=1e-3)
+        for space, expected, rtol in (("auto", expected_auto, 1e-3), ("raw", stored, 1e-4),
+                                      ("sRGB", decoded, 1e-3)):
+            image = load_texture(path, space)
+            np.testing.assert_allclose(image.linear()[..., 0], expected, rtol=rtol)
+            # 8-bit files keep their codes; the sampler decodes sRGB (GL_SRGB8_ALPHA8)
+            assert image.pixels.dtype == (np.uint8 if bits == "uint8" else np.float32)
 
 
 def test_a_static_normal_map_tilts_the_rendered_normal(gl_context, tmp_path):

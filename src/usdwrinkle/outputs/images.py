@@ -40,8 +40,10 @@ def check_format(path: str) -> str:
     return ext
 
 
-def read_float_image(path: str, max_size: int | None = None) -> tuple[np.ndarray, bool]:
-    """Decode an image file: ((h, w, c) float32 with row 0 at the top, is 8-bit).
+def read_float_image(path: str, max_size: int | None = None,
+                     keep_8bit: bool = False) -> tuple[np.ndarray, bool]:
+    """Decode an image file: ((h, w, c) float32 with row 0 at the top, is 8-bit). With
+    ``keep_8bit``, an 8-bit file comes back as its uint8 codes instead.
 
     Raises OSError with OpenImageIO's reason when it cannot be read, when it is not a
     regular file, or when its header declares more than ``max_size`` pixels a side
@@ -60,10 +62,10 @@ def read_float_image(path: str, max_size: int | None = None) -> tuple[np.ndarray
     # libpng and libjpeg print their warnings on stderr themselves: keep them off the
     # user's terminal (a failure still reports OpenImageIO's reason)
     with usd_diagnostics():
-        return _decode(oiio, path, max_size)
+        return _decode(oiio, path, max_size, keep_8bit)
 
 
-def _decode(oiio, path: str, max_size: int | None) -> tuple[np.ndarray, bool]:
+def _decode(oiio, path: str, max_size: int | None, keep_8bit: bool) -> tuple[np.ndarray, bool]:
     image = oiio.ImageInput.open(path)
     if image is None:
         raise OSError(f"cannot read image '{path}': {one_line(oiio.geterror()) or 'unreadable'}")
@@ -74,13 +76,16 @@ def _decode(oiio, path: str, max_size: int | None) -> tuple[np.ndarray, bool]:
                           f"than {max_size} pixels a side")
         if spec.width <= 0 or spec.height <= 0 or spec.nchannels <= 0:
             raise OSError(f"cannot read image '{path}': empty image")
-        pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
+        eight_bit = spec.format.basetype == oiio.UINT8
+        codes = keep_8bit and eight_bit
+        pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.UINT8 if codes else oiio.FLOAT)
         if pixels is None:
             raise OSError(f"cannot read image '{path}': {one_line(image.geterror())}")
     finally:
         image.close()
-    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-    return pixels, spec.format.basetype == oiio.UINT8
+    pixels = np.asarray(pixels, np.uint8 if codes else np.float32).reshape(
+        spec.height, spec.width, spec.nchannels)
+    return pixels, eight_bit
 
 
 def is_complete_image(path: str, width: int, height: int) -> bool:

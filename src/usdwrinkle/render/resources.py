@@ -31,6 +31,10 @@ from .bindings import TABLE_WIDTH
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 
 
+#: the sized internal format of 8-bit sRGB textures with alpha
+GL_SRGB8_ALPHA8 = 0x8C43
+
+
 def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
     """(n, 3) -> (n, 4) float32 (tables have 1, 2 or 4 components, never 3)."""
     out = np.empty((len(points), 4), np.float32)
@@ -279,9 +283,13 @@ class MeshResources:
             return
         self.normal_st.write(normal_map.corner_st.reshape(-1, 2))
         height, width = normal_map.tiles[0][1].shape[:2]
-        layers = np.stack([pixels for _, pixels in normal_map.tiles])
+        images = [image for _, image in normal_map.tiles]
+        if all(image.pixels.dtype == np.uint8 and not image.srgb for image in images):
+            layers, dtype = np.stack([image.pixels for image in images]), "f1"  # raw codes
+        else:
+            layers, dtype = np.stack([image.linear() for image in images]), "f4"
         self.normal_map = self.ctx.texture_array((width, height, len(layers)), 4,
-                                                 _bytes(layers), dtype="f4")
+                                                 _bytes(layers), dtype=dtype)
         self.textures.append(self.normal_map)
         self.normal_map.build_mipmaps()
         for layer, (tile, _) in enumerate(normal_map.tiles):
@@ -296,8 +304,16 @@ class MeshResources:
     def _upload_texture(self, record: MeshRecord) -> None:
         if record.material.texture is None:
             return
-        tex = record.material.texture
-        self.texture = self.ctx.texture((tex.shape[1], tex.shape[0]), 4, _bytes(tex), dtype="f4")
+        image = record.material.texture
+        size = (image.shape[1], image.shape[0])
+        if image.pixels.dtype == np.uint8:
+            # 8-bit codes as they are; an sRGB texture decodes in the sampler, before
+            # filtering (GL_SRGB8_ALPHA8), as the float path decoded before filtering
+            self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f1",
+                                            internal_format=GL_SRGB8_ALPHA8 if image.srgb
+                                            else None)
+        else:
+            self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f4")
         self.textures.append(self.texture)
         self.texture.build_mipmaps()
         self.texture.repeat_x = self.texture.repeat_y = True

@@ -72,10 +72,38 @@ class WrinkleParams:
 
 
 @dataclass(frozen=True)
+class TextureImage:
+    """Decoded texture pixels, (h, w, 4), row 0 at t = 0 (the bottom of the image).
+
+    pixels : uint8 codes of an 8-bit file (uploaded as they are: the GPU decodes sRGB
+        when ``srgb``, before filtering), or float32 values (linear, or raw data).
+    srgb : the uint8 codes are sRGB encoded.
+    """
+
+    pixels: np.ndarray
+    srgb: bool = False
+
+    @property
+    def shape(self) -> tuple:
+        return self.pixels.shape
+
+    def linear(self) -> np.ndarray:
+        """(h, w, 4) float32: what the shaders sample."""
+        from ..colour import srgb_decode_8bit
+
+        if self.pixels.dtype != np.uint8:
+            return self.pixels
+        values = self.pixels.astype(np.float32) / 255.0
+        if self.srgb:
+            values[..., :3] = srgb_decode_8bit(values[..., :3])
+        return values
+
+
+@dataclass(frozen=True)
 class NormalMapRecord:
     """UsdPreviewSurface ``inputs:normal`` from a UsdUVTexture: a tangent-space normal map.
 
-    tiles : tuple of (tile, (h, w, 4) float32 pixels, row 0 at t = 0)
+    tiles : tuple of (tile, TextureImage)
         One texture (tile -1: it repeats), or the tiles of a UDIM set (tile
         u + 10 v for file 1001 + u + 10 v), all of one size.
     corner_st : (m, 3, 2) float32 texture coordinates per triangle corner.
@@ -96,7 +124,7 @@ class NormalMapRecord:
 class MaterialRecord:
     """UsdPreviewSurface diffuse colour, constant or from a texture, and a normal map.
 
-    texture : (h, w, 4) float32 linear, row 0 at t = 0 (bottom), or None.
+    texture : TextureImage (row 0 at t = 0, the bottom), or None.
     corner_st : (m, 3, 2) float32 texture coordinates per triangle corner, or None.
     normal_map : the normal map at the default time (or the first frame's), or None.
     normal_map_varies : its file is time-sampled (per-frame wrinkle maps): each frame
@@ -104,7 +132,7 @@ class MaterialRecord:
     """
 
     diffuse_color: np.ndarray
-    texture: np.ndarray | None = None
+    texture: TextureImage | None = None
     corner_st: np.ndarray | None = None
     texture_scale: np.ndarray = field(default_factory=lambda: np.ones(4, np.float32))
     texture_bias: np.ndarray = field(default_factory=lambda: np.zeros(4, np.float32))
