@@ -31,9 +31,9 @@ from .raster import MapRasterizer
 #: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
 MIN_MAP_SIZE = 16
 MAX_PADDING = 256
-#: bytes per texel: two float targets ping-ponged (4 textures), their read-back copies and
-#: the encoded planes
-BYTES_PER_TEXEL = 4 * 16 + 2 * 16 + 16
+#: bytes per texel: two float targets, their read-back copies, the planes handed to the
+#: writer (up to two frames in flight) and the encoded ones
+BYTES_PER_TEXEL = 2 * 16 + 2 * 16 + 2 * 16 + 16
 #: a texel covered more than once over this fraction of a tile's islands gets a warning
 OVERLAP_WARNING = 0.002
 
@@ -89,8 +89,8 @@ class MeshMaps:
 
 
 class MapBake:
-    """Renders and stages the maps of ``meshes`` frame by frame; :meth:`finish` writes
-    the materials into the layer and moves the maps into their folder."""
+    """Renders and stages the maps of ``meshes`` frame by frame; :meth:`author` writes the
+    materials into the layer and :meth:`commit` moves the maps into their folder."""
 
     def __init__(self, engine, meshes: dict, options: MapOptions, layer_path: str, warn,
                  frames: list[float]):
