@@ -20,9 +20,12 @@ def add_parser(subparsers) -> None:
         "bake", help="bake the wrinkle fields of every frame into a USD layer",
         description="Compute the wrinkles of a stage and write them as per-vertex primvars "
                     "(primvars:wrinkle:amplitude, compression, waveVector, phase, direction; "
+                    "with wrinkle:biaxial also amplitude2, waveVector2, phase2; "
                     "interpolation vertex) with a time sample per frame. By default the "
                     "output layer sublayers the input, so 'usdview OUTPUT_LAYER' shows the "
-                    "shot with the baked data.")
+                    "shot with the baked data. --maps adds per-frame wrinkle maps bound in a "
+                    "UsdPreviewSurface material per mesh; --geometry adds a displaced render "
+                    "mesh per wrinkled mesh, with the coarse mesh as its proxy.")
     add_shot_args(p, "the layer to write (.usda, .usdc or .usd)")
     p.add_argument("--with-points", action="store_true",
                    help="also write the posed points, normals and extent in each mesh's local "
@@ -38,7 +41,7 @@ def add_parser(subparsers) -> None:
                       help="comma-separated: normal (tangent-space normal, 0.5n+0.5), height "
                            "(signed height in scene units, float EXR), amplitude (amplitude "
                            "over s*W/4, a [0, 1] mask)")
-    maps.add_argument("--map-size", type=int, default=2048,
+    maps.add_argument("--map-size", type=int, default=2048, metavar="N",
                       help="texels per side of each map (per UDIM tile); default 2048")
     maps.add_argument("--map-dir", metavar="DIR",
                       help="where the maps go (default: <layer name>_maps beside the layer); "
@@ -46,10 +49,10 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--map-format", choices=("png", "exr"), default="png",
                       help="normal and amplitude maps as 16-bit PNG (default) or float EXR; "
                            "the height map is always float EXR")
-    maps.add_argument("--map-padding", type=int, default=8,
+    maps.add_argument("--map-padding", type=int, default=8, metavar="N",
                       help="texels by which UV islands are grown, so that filtering at their "
                            "borders does not reach the background; default 8")
-    maps.add_argument("--uv", default="st",
+    maps.add_argument("--uv", default="st", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in; "
                            "default st")
     geometry = p.add_argument_group(
@@ -60,11 +63,11 @@ def add_parser(subparsers) -> None:
                           help="write <mesh>_wrinkled (purpose render; the coarse mesh "
                                "becomes purpose proxy)")
     levels = geometry.add_mutually_exclusive_group()
-    levels.add_argument("--levels", type=int,
+    levels.add_argument("--levels", type=int, metavar="N",
                         help="midpoint subdivision levels (each splits every triangle in 4); "
                              "default: the fewest that give every wave "
                              "--samples-per-wavelength samples over the shot")
-    levels.add_argument("--samples-per-wavelength", type=float, default=6.0,
+    levels.add_argument("--samples-per-wavelength", type=float, default=6.0, metavar="S",
                         help="fine vertices per wavelength the default levels aim for "
                              "(default 6)")
     p.add_argument("--sparse", action="store_true",
