@@ -324,3 +324,14 @@ def test_a_static_normal_map_tilts_the_rendered_normal(gl_context, tmp_path):
     assert centre[names.index("A")] == 1.0
     normal = centre[[names.index(f"N.{c}") for c in "XYZ"]]
     np.testing.assert_allclose(normal, [np.sin(angle), 0.0, np.cos(angle)], atol=2e-3)
+
+
+def test_drawing_wrinkles_over_baked_maps_warns(gl_context, tmp_path, shirt_maps, capsys):
+    """The maps layer drawn with wrinkles would show them twice: a warning says so."""
+    out = tmp_path / "twice.png"
+    assert main(["render", str(shirt_maps), str(out), "--frames", "24", "--width", "64"]) == 0
+    err = capsys.readouterr().err
+    assert "baked wrinkle maps" in err and "--no-wrinkles" in err and "/World/Arm/Sleeve" in err
+    assert main(["render", str(shirt_maps), str(out), "--frames", "24", "--width", "64",
+                 "--no-wrinkles"]) == 0
+    assert "baked wrinkle maps" not in capsys.readouterr().err

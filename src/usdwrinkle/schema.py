@@ -24,6 +24,9 @@ RELAX_ITERATIONS = "wrinkle:relaxIterations"
 BIAXIAL = "wrinkle:biaxial"
 TENSION = "wrinkle:tension"
 TENSION_THRESHOLD = "wrinkle:tensionThreshold"
+#: the Material interface inputs that ``bake --maps`` writes: map kind -> input name
+MAP_INPUTS = {"normal": "wrinkleNormalFile", "height": "wrinkleHeightFile",
+              "amplitude": "wrinkleAmplitudeFile"}
 #: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain
 DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0

@@ -148,6 +148,12 @@ def run(args) -> int:
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                           "(use --all-meshes to wrinkle every mesh)")
+        mapped = [path for path in engine.wrinkled_paths
+                  if engine.scene.meshes[path].material.wrinkle_maps]
+        if mapped and not args.no_wrinkles:
+            reporter.warn(f"{len(mapped)} mesh(es) have baked wrinkle maps in their material "
+                          f"and are drawn with wrinkles too, so their wrinkles show twice; "
+                          f"pass --no-wrinkles to draw the maps alone ({mapped[0]})")
         width, height = engine.resolution(args.width, args.height, frames[0])
         image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
                              args.write_threads, args.exr_compression, args.exr_half)

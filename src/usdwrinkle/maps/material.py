@@ -23,15 +23,16 @@ import math
 from pxr import Sdf, Usd, UsdGeom, UsdShade
 
 from ..outputs.layers import bind_material
+from ..schema import MAP_INPUTS
 
 SCOPE = "WrinkleMaterials"
 #: map kind -> (material interface input, texture shader name, its output, surface input)
 TEXTURES = {
-    "normal": ("wrinkleNormalFile", "WrinkleNormalTexture", ("rgb", "float3"),
+    "normal": (MAP_INPUTS["normal"], "WrinkleNormalTexture", ("rgb", "float3"),
                ("normal", "normal3f")),
-    "height": ("wrinkleHeightFile", "WrinkleHeightTexture", ("r", "float"),
+    "height": (MAP_INPUTS["height"], "WrinkleHeightTexture", ("r", "float"),
                ("displacement", "float")),
-    "amplitude": ("wrinkleAmplitudeFile", None, None, None),
+    "amplitude": (MAP_INPUTS["amplitude"], None, None, None),
 }
 READER = "WrinkleUV"
 VALUE_TYPES = Sdf.ValueTypeNames

@@ -18,6 +18,7 @@ from pxr import Ar, Usd, UsdGeom, UsdShade
 from ..colour import srgb_decode
 from ..contract import UDIM_TILES
 from ..limits import MAX_TEXTURE_SIZE
+from ..schema import MAP_INPUTS
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, TextureImage
 from .topology import Topology
@@ -271,13 +272,15 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
     if shader is None:
         return MaterialRecord(np.asarray(_display_color(prim, time), np.float32)[:3])
     normal_map, varies = read_normal_map(prim, topology, time, warn, shader)
+    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    maps = bool(material and material.GetInput(MAP_INPUTS["normal"]))
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
         color = _display_color(prim, time) if value is None else value
         return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
-                              normal_map_varies=varies)
+                              normal_map_varies=varies, wrinkle_maps=maps)
     texture, st, scale, bias = _texture(prim, source, topology, time, warn)
     # untextured means a neutral clay, not the (often black) texture fallback
     color = DEFAULT_COLOR if texture is None else np.ones(3, np.float32)
     return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias,
-                          normal_map, varies)
+                          normal_map, varies, maps)

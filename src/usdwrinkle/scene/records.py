@@ -129,6 +129,8 @@ class MaterialRecord:
     normal_map : the normal map at the default time (or the first frame's), or None.
     normal_map_varies : its file is time-sampled (per-frame wrinkle maps): each frame
         reads its own (MeshFrame.normal_map).
+    wrinkle_maps : the material is one that ``bake --maps`` wrote (its normal map holds
+        the wrinkles already).
     """
 
     diffuse_color: np.ndarray
@@ -138,6 +140,7 @@ class MaterialRecord:
     texture_bias: np.ndarray = field(default_factory=lambda: np.zeros(4, np.float32))
     normal_map: NormalMapRecord | None = None
     normal_map_varies: bool = False
+    wrinkle_maps: bool = False
 
 
 @dataclass(frozen=True)
