@@ -194,3 +194,22 @@ def test_cesium_man_doubles_every_mesh(gl_context, corpus, tmp_path):
         assert UsdGeom.Imageable(prim).GetProxyPrimRel().GetTargets()[0] in \
             [p.GetPath() for p in proxies]
         assert len(UsdGeom.Mesh(prim).GetPointsAttr().GetTimeSamples()) == 48
+
+
+def test_default_levels_keep_fine_edges_within_w_over_s(gl_context, shirt):
+    """The default levels: every fine edge at most W/S long in the rest pose (S = 6), and
+    the survey's stricter count where the posed waves need it (the shirt: 4 levels)."""
+    from usdwrinkle.engine import WrinkleEngine
+
+    stage, _ = shirt
+    levels = int(stage.GetRootLayer().customLayerData["usdwrinkle"]["geometry"]["levels"]
+                 .split("=")[-1])
+    engine = WrinkleEngine(SHIRT, warn=lambda m: None)
+    try:
+        record = engine.scene.meshes[SLEEVE]
+    finally:
+        engine.release()
+    rest = record.rest_points[record.topology.triangles]
+    longest = np.linalg.norm(rest[:, [1, 2, 0]] - rest, axis=2).max()
+    assert longest / 2 ** levels <= record.params.width.min() / 6
+    assert levels == 4 and longest / 2 ** 3 <= record.params.width.min() / 6  # (a) alone: 3

@@ -2,9 +2,11 @@
 real displacement, with the coarse mesh as its proxy (geometry/subdivide.py for the
 topology, geometry/evaluate.py on the GPU, geometry/layer.py for the layer).
 
-The level count, unless ``--levels`` gives it, is the fewest for which fine edges advance
-a wave's phase by at most 2 pi / S (S samples per wavelength, default 6) on 99% of the
-wrinkled triangles of every frame: the bake then surveys every frame's wave fields first
+The level count, unless ``--levels`` gives it, is the fewest for which (a) every fine
+edge is at most W/S long in the rest pose (S samples per wavelength, default 6: under
+uniform compression the wave and the edges shrink together), and (b) fine edges advance
+a wave's phase by at most 2 pi / S on 99% of the wrinkled triangles of every frame (the
+posed waves, painted q included): the bake then surveys every frame's wave fields first
 (shot.bake_layer). The last 1% are the pinches (the shirt's inner elbow) where the
 relaxation has already given up on a coherent wave inside one coarse triangle; sampling
 those at 6 per wavelength took the shirt from 4 to 6 levels (1.7 M points instead of
@@ -49,6 +51,19 @@ def check_geometry_options(options: GeometryOptions) -> None:
     if not 1.0 <= options.samples_per_wavelength <= 64.0:
         raise UsdWrinkleError("--samples-per-wavelength must be in 1..64 "
                               f"(got {options.samples_per_wavelength:g})")
+
+
+def rest_phase_step(record) -> float:
+    """The phase 2 pi |e| / W a wave of rest wavelength W advances along the longest rest
+    edge e (W the smaller of its two ends'): rule (a) of the level count."""
+    triangles = record.topology.triangles
+    if len(triangles) == 0:
+        return 0.0
+    rest = record.rest_points[triangles]
+    lengths = np.linalg.norm(rest[:, [1, 2, 0]] - rest, axis=2)        # edge c: c -> c + 1
+    width = np.asarray(record.params.width, np.float64)[triangles]
+    ends = np.minimum(width, width[:, [1, 2, 0]])
+    return float(2 * np.pi * np.max(lengths / np.maximum(ends, 1e-30)))
 
 
 def phase_advance(points: np.ndarray, triangles: np.ndarray, wave_vector: np.ndarray,
@@ -108,7 +123,9 @@ class GeometryBake:
         for path, record in self.meshes.items():
             levels = self.options.levels
             if levels is None:
-                levels = levels_for(self.phase_step(path), self.options.samples_per_wavelength)
+                samples = self.options.samples_per_wavelength
+                levels = max(levels_for(rest_phase_step(record), samples),
+                             levels_for(self.phase_step(path), samples))
             counts[path] = check_size(path, len(record.rest_points),
                                       record.topology.triangles, levels)
             self.levels[path] = levels
