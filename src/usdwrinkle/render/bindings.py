@@ -40,7 +40,7 @@ RELAX = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
 #: the wave blend (include/wave.glsl): the same units in every pass that includes it
 WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS": 3,
         "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
-DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "TOPOLOGY_TABLE": 6, "DRAW_CORNER_ST": 7,
+DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
         "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10}
 #: wrinkle maps (maps/): the blend rasterised in UV space
 MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}

@@ -103,7 +103,6 @@ class DrawPass:
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
             **normal_map_uniforms(res),
-            **res.topology_uniforms,
         })
         units = bindings.DRAW
         bind_wave(units, res, variant.program)
@@ -111,7 +110,7 @@ class DrawPass:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
         if res.normal_map is not None:
             res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
-        bind(units, reads={"TOPOLOGY_TABLE": res.topology, "DRAW_CORNER_ST": res.corner_st})
+        bind(units, reads={"DRAW_CORNER_ST": res.corner_st})
         if res.normal_map is not None:
             bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
