@@ -1,10 +1,13 @@
 """usdwrinkle bake STAGE OUTPUT_LAYER: write the wrinkle fields back to USD."""
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 
 from ..errors import UsdWrinkleError
+from ..geometry.bake import GeometryOptions
+from ..maps.bake import MapOptions
 from .common import (
     Reporter,
     add_shot_args,
@@ -13,6 +16,9 @@ from .common import (
     start_engine,
 )
 from .frames import parse_frame_spec
+
+MAP_DEFAULTS = MapOptions()
+GEOMETRY_DEFAULTS = GeometryOptions()
 
 
 def add_parser(subparsers) -> None:
@@ -41,20 +47,22 @@ def add_parser(subparsers) -> None:
                       help="comma-separated: normal (tangent-space normal, 0.5n+0.5), height "
                            "(signed height in scene units, float EXR), amplitude (amplitude "
                            "over s*W/4, a [0, 1] mask)")
-    maps.add_argument("--map-size", type=int, default=2048, metavar="N",
-                      help="texels per side of each map (per UDIM tile); default 2048")
+    maps.add_argument("--map-size", type=int, metavar="N",
+                      help="texels per side of each map (per UDIM tile); default "
+                           f"{MAP_DEFAULTS.size}")
     maps.add_argument("--map-dir", metavar="DIR",
                       help="where the maps go (default: <layer name>_maps beside the layer); "
                            "the layer names them relative to itself")
-    maps.add_argument("--map-format", choices=("png", "exr"), default="png",
+    maps.add_argument("--map-format", choices=("png", "exr"),
                       help="normal and amplitude maps as 16-bit PNG (default) or float EXR; "
                            "the height map is always float EXR")
-    maps.add_argument("--map-padding", type=int, default=8, metavar="N",
+    maps.add_argument("--map-padding", type=int, metavar="N",
                       help="texels by which UV islands are grown, so that filtering at their "
-                           "borders does not reach the background; default 8")
-    maps.add_argument("--uv", default="st", metavar="NAME",
+                           f"borders does not reach the background; default "
+                           f"{MAP_DEFAULTS.padding}")
+    maps.add_argument("--uv", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in; "
-                           "default st")
+                           f"default {MAP_DEFAULTS.uv}")
     geometry = p.add_argument_group(
         "displaced geometry", "a finer render mesh per wrinkled mesh that carries the "
                               "wrinkles as real displacement, with the coarse mesh as its "
@@ -67,9 +75,9 @@ def add_parser(subparsers) -> None:
                         help="midpoint subdivision levels (each splits every triangle in 4); "
                              "default: the fewest that give every wave "
                              "--samples-per-wavelength samples over the shot")
-    levels.add_argument("--samples-per-wavelength", type=float, default=6.0, metavar="S",
+    levels.add_argument("--samples-per-wavelength", type=float, metavar="S",
                         help="fine vertices per wavelength the default levels aim for "
-                             "(default 6)")
+                             f"(default {GEOMETRY_DEFAULTS.samples_per_wavelength:g})")
     p.add_argument("--sparse", action="store_true",
                    help="write the overs alone, without sublayering the input")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -78,21 +86,36 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
+def _given(args, flags: dict) -> dict:
+    """{field: value} of the options in ``flags`` (flag -> field) that were given."""
+    return {field: getattr(args, flag.lstrip("-").replace("-", "_"))
+            for flag, field in flags.items()
+            if getattr(args, flag.lstrip("-").replace("-", "_")) is not None}
+
+
+MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
+             "--map-padding": "padding", "--uv": "uv"}
+GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
+
+
+def _refuse_without(args, flags: dict, needed: str) -> None:
+    given = [flag for flag in flags if getattr(args, flag.lstrip("-").replace("-", "_"))
+             is not None]
+    if given:
+        raise UsdWrinkleError(f"{', '.join(given)} need {needed}")
+
+
 def map_options(args):
-    """MapOptions from --maps and its options (None without --maps)."""
+    """MapOptions from --maps and its options (None without --maps); what is not given
+    keeps MapOptions' default."""
     if args.maps is None:
-        given = [flag for flag, value, default in (
-            ("--map-size", args.map_size, 2048), ("--map-dir", args.map_dir, None),
-            ("--map-format", args.map_format, "png"), ("--map-padding", args.map_padding, 8),
-            ("--uv", args.uv, "st")) if value != default]
-        if given:
-            raise UsdWrinkleError(f"{', '.join(given)} need --maps")
+        _refuse_without(args, MAP_FLAGS, "--maps")
         return None
-    from ..maps.bake import MapOptions, check_map_options
+    from ..maps.bake import check_map_options
     from ..maps.files import parse_map_kinds
 
-    options = MapOptions(parse_map_kinds(args.maps), args.map_size, args.map_dir,
-                         args.map_format, args.map_padding, args.uv)
+    options = dataclasses.replace(MAP_DEFAULTS, kinds=parse_map_kinds(args.maps),
+                                  **_given(args, MAP_FLAGS))
     check_map_options(options)
     return options
 
@@ -100,15 +123,11 @@ def map_options(args):
 def geometry_options(args):
     """GeometryOptions from --geometry and its options (None without --geometry)."""
     if not args.geometry:
-        given = [flag for flag, value, default in (
-            ("--levels", args.levels, None),
-            ("--samples-per-wavelength", args.samples_per_wavelength, 6.0)) if value != default]
-        if given:
-            raise UsdWrinkleError(f"{', '.join(given)} need --geometry")
+        _refuse_without(args, GEOMETRY_FLAGS, "--geometry")
         return None
-    from ..geometry.bake import GeometryOptions, check_geometry_options
+    from ..geometry.bake import check_geometry_options
 
-    options = GeometryOptions(args.levels, args.samples_per_wavelength)
+    options = dataclasses.replace(GEOMETRY_DEFAULTS, **_given(args, GEOMETRY_FLAGS))
     check_geometry_options(options)
     return options
 
