@@ -73,8 +73,9 @@ def add_parser(subparsers) -> None:
     levels = geometry.add_mutually_exclusive_group()
     levels.add_argument("--levels", type=int, metavar="N",
                         help="midpoint subdivision levels (each splits every triangle in 4); "
-                             "default: the fewest that give every wave "
-                             "--samples-per-wavelength samples over the shot")
+                             "default: the fewest that keep fine rest edges within W/S and "
+                             "give the shot's waves S samples per wavelength "
+                             "(S: --samples-per-wavelength)")
     levels.add_argument("--samples-per-wavelength", type=float, metavar="S",
                         help="fine vertices per wavelength the default levels aim for "
                              f"(default {GEOMETRY_DEFAULTS.samples_per_wavelength:g})")
