@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
-from ..outputs.layers import bind_material
+from ..outputs.layers import attribute_spec, bind_material, define_prim
 from ..scene.material import corner_values
 from .subdivide import FineMesh
 
@@ -40,20 +40,6 @@ def fine_path(stage: Usd.Stage, coarse: str) -> Sdf.Path:
         candidate = path.GetParentPath().AppendChild(f"{path.name}{SUFFIX}{index}")
         index += 1
     return candidate
-
-
-def _uniform(spec: Sdf.PrimSpec, name: str, type_name, value):
-    attr = spec.attributes.get(name) or Sdf.AttributeSpec(spec, name, type_name,
-                                                          Sdf.VariabilityUniform)
-    attr.default = value
-    return attr
-
-
-def _varying(spec: Sdf.PrimSpec, name: str, type_name, interpolation: str | None = None):
-    attr = spec.attributes.get(name) or Sdf.AttributeSpec(spec, name, type_name)
-    if interpolation:
-        attr.SetInfo("interpolation", interpolation)
-    return attr
 
 
 def _array(type_name, values: np.ndarray):
@@ -87,31 +73,30 @@ class FineMeshWriter:
 
     def define(self) -> None:
         layer, fine = self.layer, self.fine
-        spec = Sdf.CreatePrimInLayer(layer, self.path)
-        spec.specifier = Sdf.SpecifierDef
-        spec.typeName = "Mesh"
-        _varying(spec, "faceVertexCounts", VT.IntArray).default = Vt.IntArray.FromNumpy(
-            np.full(len(fine.faces), 3, np.int32))
-        _varying(spec, "faceVertexIndices", VT.IntArray).default = Vt.IntArray.FromNumpy(
-            np.ascontiguousarray(fine.faces.ravel(), np.int32))
-        _uniform(spec, "subdivisionScheme", VT.Token, UsdGeom.Tokens.none)
-        _uniform(spec, "purpose", VT.Token, UsdGeom.Tokens.render)
+        spec = define_prim(layer, self.path, "Mesh")
+        attribute_spec(spec, "faceVertexCounts", VT.IntArray,
+                       Vt.IntArray.FromNumpy(np.full(len(fine.faces), 3, np.int32)))
+        attribute_spec(spec, "faceVertexIndices", VT.IntArray, Vt.IntArray.FromNumpy(
+            np.ascontiguousarray(fine.faces.ravel(), np.int32)))
+        attribute_spec(spec, "subdivisionScheme", VT.Token, UsdGeom.Tokens.none, uniform=True)
+        attribute_spec(spec, "purpose", VT.Token, UsdGeom.Tokens.render, uniform=True)
         mesh = UsdGeom.Mesh(self.prim)
         for attr, type_name in ((mesh.GetDoubleSidedAttr(), VT.Bool),
                                 (mesh.GetOrientationAttr(), VT.Token)):
             if attr.HasAuthoredValue():
-                _uniform(spec, attr.GetName(), type_name, attr.Get())
+                attribute_spec(spec, attr.GetName(), type_name, attr.Get(), uniform=True)
         proxy = Sdf.RelationshipSpec(spec, "proxyPrim", custom=False)
         proxy.targetPathList.explicitItems = [Sdf.Path(self.coarse)]
         coarse = Sdf.CreatePrimInLayer(layer, self.coarse)
-        _uniform(coarse, "purpose", VT.Token, UsdGeom.Tokens.proxy)
+        attribute_spec(coarse, "purpose", VT.Token, UsdGeom.Tokens.proxy, uniform=True)
         if self.xformable.GetOrderedXformOps() or self.xformable.GetResetXformStack():
             order = (["!resetXformStack!"] if self.xformable.GetResetXformStack() else []) + \
                 ["xformOp:transform"]
-            _uniform(spec, "xformOpOrder", VT.TokenArray, Vt.TokenArray(order))
+            attribute_spec(spec, "xformOpOrder", VT.TokenArray, Vt.TokenArray(order),
+                           uniform=True)
             if not self.moves:
-                _varying(spec, "xformOp:transform", VT.Matrix4d).default = \
-                    self.xformable.GetLocalTransformation(Usd.TimeCode.Default())
+                attribute_spec(spec, "xformOp:transform", VT.Matrix4d,
+                               self.xformable.GetLocalTransformation(Usd.TimeCode.Default()))
         material, _ = UsdShade.MaterialBindingAPI(self.prim).ComputeBoundMaterial()
         if material:
             bind_material(layer, self.path, material.GetPath())
@@ -128,8 +113,8 @@ class FineMeshWriter:
                 continue
             type_name = primvar.GetTypeName()
             if primvar.GetInterpolation() == UsdGeom.Tokens.constant:
-                attr = _varying(spec, name, type_name, UsdGeom.Tokens.constant)
-                attr.default = primvar.ComputeFlattened(time)
+                attribute_spec(spec, name, type_name, primvar.ComputeFlattened(time),
+                               interpolation=UsdGeom.Tokens.constant)
                 continue
             corners = corner_values(primvar, self.topology, time) if type_name.isArray \
                 else None
@@ -142,7 +127,8 @@ class FineMeshWriter:
                 self.warn(f"primvar {name} ({type_name}) cannot be interpolated onto the "
                           f"wrinkled mesh; not carried ({self.coarse})")
                 continue
-            _varying(spec, name, type_name, UsdGeom.Tokens.faceVarying).default = value
+            attribute_spec(spec, name, type_name, value,
+                           interpolation=UsdGeom.Tokens.faceVarying)
 
     def add_frame(self, frame: float, points: np.ndarray, normals: np.ndarray) -> None:
         layer = self.layer
@@ -160,7 +146,7 @@ class FineMeshWriter:
             values["xformOp:transform"] = (VT.Matrix4d, None,
                                            self.xformable.GetLocalTransformation(time))
         for name, (type_name, interpolation, value) in values.items():
-            attr = _varying(spec, name, type_name, interpolation)
+            attr = attribute_spec(spec, name, type_name, interpolation=interpolation)
             if np.isnan(frame):
                 attr.default = value
             else:

@@ -20,9 +20,10 @@ from __future__ import annotations
 
 import math
 
-from pxr import Sdf, Usd, UsdGeom, UsdShade
+from pxr import Sdf, Usd, UsdShade
 
-from ..outputs.layers import bind_material
+from ..outputs.layers import attribute_spec, bind_material, define_prim
+from ..scene.material import bound_surface, display_color
 from ..schema import MAP_INPUTS
 
 SCOPE = "WrinkleMaterials"
@@ -48,48 +49,20 @@ def material_path(stage: Usd.Stage, mesh_path: str, stem: str) -> Sdf.Path:
     return Sdf.Path.absoluteRootPath.AppendChild(SCOPE).AppendChild(stem)
 
 
-def _define(layer: Sdf.Layer, path: Sdf.Path, type_name: str) -> Sdf.PrimSpec:
-    spec = Sdf.CreatePrimInLayer(layer, path)
-    spec.specifier = Sdf.SpecifierDef
-    spec.typeName = type_name
-    return spec
-
-
-def _attribute(prim_spec: Sdf.PrimSpec, name: str, type_name, value=None, connect=None):
-    spec = prim_spec.attributes.get(name) or Sdf.AttributeSpec(prim_spec, name, type_name)
-    if value is not None:
-        spec.default = value
-    if connect is not None:
-        spec.connectionPathList.explicitItems = [connect]
-    return spec
-
-
 def _shader(layer: Sdf.Layer, path: Sdf.Path, shader_id: str) -> Sdf.PrimSpec:
-    spec = _define(layer, path, "Shader")
-    _attribute(spec, "info:id", VALUE_TYPES.Token, shader_id).SetInfo("variability",
-                                                                       Sdf.VariabilityUniform)
+    spec = define_prim(layer, path, "Shader")
+    attribute_spec(spec, "info:id", VALUE_TYPES.Token, shader_id, uniform=True)
     return spec
 
 
 def _source_surface(prim: Usd.Prim):
     """(bound material path, its UsdPreviewSurface's path inside it) or Nones."""
-    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    material, shader = bound_surface(prim)
     if not material:
         return None, None
-    shader = material.ComputeSurfaceSource()[0]
-    if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
-        return material.GetPath(), None
-    if not shader.GetPath().HasPrefix(material.GetPath()):
+    if shader is None or not shader.GetPath().HasPrefix(material.GetPath()):
         return material.GetPath(), None
     return material.GetPath(), shader.GetPath()
-
-
-def _display_color(prim: Usd.Prim):
-    display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
-    value = display.ComputeFlattened(Usd.TimeCode.Default()) if display and \
-        display.HasValue() else None
-    return tuple(float(c) for c in value[0]) if value is not None and len(value) else \
-        (0.6, 0.6, 0.6)
 
 
 def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sdf.Path,
@@ -104,7 +77,7 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
     if not scope.typeName:
         scope.specifier = Sdf.SpecifierDef
         scope.typeName = "Scope"
-    material = _define(layer, path, "Material")
+    material = define_prim(layer, path, "Material")
     if source_surface is not None:
         material.referenceList.Prepend(Sdf.Reference(primPath=source_material))
         surface = path.AppendPath(source_surface.MakeRelativePath(source_material))
@@ -119,18 +92,18 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
                  f"wrinkle material is a plain UsdPreviewSurface ({mesh_path})")
         surface = path.AppendChild("PreviewSurface")
         surface_spec = _shader(layer, surface, "UsdPreviewSurface")
-        _attribute(surface_spec, "inputs:diffuseColor", VALUE_TYPES.Color3f,
-                   _display_color(prim))
-        _attribute(surface_spec, "outputs:surface", VALUE_TYPES.Token)
-        _attribute(material, "outputs:surface", VALUE_TYPES.Token,
+        attribute_spec(surface_spec, "inputs:diffuseColor", VALUE_TYPES.Color3f,
+                   tuple(float(c) for c in display_color(prim, Usd.TimeCode.Default())))
+        attribute_spec(surface_spec, "outputs:surface", VALUE_TYPES.Token)
+        attribute_spec(material, "outputs:surface", VALUE_TYPES.Token,
                    connect=surface.AppendProperty("outputs:surface"))
     reader = path.AppendChild(READER)
     reader_spec = _shader(layer, reader, "UsdPrimvarReader_float2")
-    _attribute(reader_spec, "inputs:varname", VALUE_TYPES.String, uv_name)
-    _attribute(reader_spec, "outputs:result", VALUE_TYPES.Float2)
+    attribute_spec(reader_spec, "inputs:varname", VALUE_TYPES.String, uv_name)
+    attribute_spec(reader_spec, "outputs:result", VALUE_TYPES.Float2)
     for kind, frames in files.items():
         input_name, shader_name, output, surface_input = TEXTURES[kind]
-        file_input = _attribute(material, f"inputs:{input_name}", VALUE_TYPES.Asset)
+        file_input = attribute_spec(material, f"inputs:{input_name}", VALUE_TYPES.Asset)
         file_input.default = Sdf.AssetPath(frames[0][1])  # readers that ignore time samples
         for frame, asset in frames:
             if not math.isnan(frame):
@@ -139,17 +112,17 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
             continue
         texture = path.AppendChild(shader_name)
         spec = _shader(layer, texture, "UsdUVTexture")
-        _attribute(spec, "inputs:file", VALUE_TYPES.Asset, connect=file_input.path)
-        _attribute(spec, "inputs:st", VALUE_TYPES.Float2,
+        attribute_spec(spec, "inputs:file", VALUE_TYPES.Asset, connect=file_input.path)
+        attribute_spec(spec, "inputs:st", VALUE_TYPES.Float2,
                    connect=reader.AppendProperty("outputs:result"))
-        _attribute(spec, "inputs:sourceColorSpace", VALUE_TYPES.Token, "raw")
+        attribute_spec(spec, "inputs:sourceColorSpace", VALUE_TYPES.Token, "raw")
         if kind == "normal":  # stored as 0.5 n + 0.5
-            _attribute(spec, "inputs:scale", VALUE_TYPES.Float4, (2.0, 2.0, 2.0, 1.0))
-            _attribute(spec, "inputs:bias", VALUE_TYPES.Float4, (-1.0, -1.0, -1.0, 0.0))
+            attribute_spec(spec, "inputs:scale", VALUE_TYPES.Float4, (2.0, 2.0, 2.0, 1.0))
+            attribute_spec(spec, "inputs:bias", VALUE_TYPES.Float4, (-1.0, -1.0, -1.0, 0.0))
         output_name, output_type = output
-        _attribute(spec, f"outputs:{output_name}", getattr(VALUE_TYPES, output_type.title()))
+        attribute_spec(spec, f"outputs:{output_name}", getattr(VALUE_TYPES, output_type.title()))
         input_name, input_type = surface_input
         type_name = VALUE_TYPES.Normal3f if input_type == "normal3f" else VALUE_TYPES.Float
-        _attribute(surface_spec, f"inputs:{input_name}", type_name,
+        attribute_spec(surface_spec, f"inputs:{input_name}", type_name,
                    connect=texture.AppendProperty(f"outputs:{output_name}"))
     bind_material(layer, mesh_path, path)

@@ -134,9 +134,7 @@ class LayerBaker:
         if spec is None:
             prim_spec = self.layer.GetPrimAtPath(prim_path) or Sdf.CreatePrimInLayer(
                 self.layer, prim_path)
-            spec = prim_spec.attributes.get(name) or Sdf.AttributeSpec(prim_spec, name, type_name)
-            if interpolation:
-                spec.SetInfo("interpolation", interpolation)
+            spec = attribute_spec(prim_spec, name, type_name, interpolation=interpolation)
             self._specs[key] = spec
         return spec.path
 
@@ -236,6 +234,32 @@ def _ancestors(prim: Usd.Prim):
     while prim and not prim.IsPseudoRoot():
         yield prim
         prim = prim.GetParent()
+
+
+def define_prim(layer: Sdf.Layer, path, type_name: str) -> Sdf.PrimSpec:
+    """A ``def`` prim spec of ``type_name`` at ``path`` (its ancestors as ``over``s)."""
+    spec = Sdf.CreatePrimInLayer(layer, path)
+    spec.specifier = Sdf.SpecifierDef
+    spec.typeName = type_name
+    return spec
+
+
+def attribute_spec(prim_spec: Sdf.PrimSpec, name: str, type_name, value=None, *,
+                   uniform: bool = False, interpolation: str | None = None,
+                   connect=None) -> Sdf.AttributeSpec:
+    """The attribute spec ``name`` of ``prim_spec`` (made when missing; ``uniform``
+    variability then), with its default ``value``, primvar ``interpolation`` and a
+    connection to ``connect`` where given."""
+    spec = prim_spec.attributes.get(name) or Sdf.AttributeSpec(
+        prim_spec, name, type_name,
+        Sdf.VariabilityUniform if uniform else Sdf.VariabilityVarying)
+    if value is not None:
+        spec.default = value
+    if interpolation:
+        spec.SetInfo("interpolation", interpolation)
+    if connect is not None:
+        spec.connectionPathList.explicitItems = [connect]
+    return spec
 
 
 def bind_material(layer: Sdf.Layer, prim_path, material_path) -> None:

@@ -202,7 +202,7 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
     """(NormalMapRecord or None, whether its file is time-sampled) of a mesh's bound
     UsdPreviewSurface inputs:normal, when a UsdUVTexture feeds it."""
     if shader is None:
-        shader = surface_shader(prim)
+        shader = bound_surface(prim)[1]
     if not shader:
         return None, False
     _, tex = _resolve(shader, "normal", time)
@@ -249,34 +249,36 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
     return NormalMapRecord(tuple(loaded), st, scale, bias, key), varies
 
 
-def _display_color(prim: Usd.Prim, time) -> np.ndarray:
+def display_color(prim: Usd.Prim, time) -> np.ndarray:
+    """The mesh's first displayColor (linear), or the neutral clay DEFAULT_COLOR."""
     display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
     value = display.ComputeFlattened(time) if display and display.HasValue() else None
     return np.asarray(value[0], np.float32) if value is not None and len(value) else \
         DEFAULT_COLOR
 
 
-def surface_shader(prim: Usd.Prim) -> UsdShade.Shader | None:
-    """The UsdPreviewSurface of the mesh's bound material, or None."""
+def bound_surface(prim: Usd.Prim):
+    """(the mesh's bound Material or None, its UsdPreviewSurface or None)."""
     material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
-    shader = material.ComputeSurfaceSource()[0] if material else None
+    if not material:
+        return None, None
+    shader = material.ComputeSurfaceSource()[0]
     if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
-        return None
-    return shader
+        return material, None
+    return material, shader
 
 
 def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
     """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
     diffuseColor, constant or from a UsdUVTexture, and its normal map; else displayColor."""
-    shader = surface_shader(prim)
+    material, shader = bound_surface(prim)
     if shader is None:
-        return MaterialRecord(np.asarray(_display_color(prim, time), np.float32)[:3])
+        return MaterialRecord(np.asarray(display_color(prim, time), np.float32)[:3])
     normal_map, varies = read_normal_map(prim, topology, time, warn, shader)
-    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
-    maps = bool(material and material.GetInput(MAP_INPUTS["normal"]))
+    maps = bool(material.GetInput(MAP_INPUTS["normal"]))
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
-        color = _display_color(prim, time) if value is None else value
+        color = display_color(prim, time) if value is None else value
         return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
                               normal_map_varies=varies, wrinkle_maps=maps)
     texture, st, scale, bias = _texture(prim, source, topology, time, warn)
