@@ -147,19 +147,22 @@ def test_cesium_man_48_frames(gl_context, corpus, tmp_path):
 
 
 def test_exr_half_and_compression_keep_names_and_values(gl_context, tmp_path):
-    """--exr-half stores colour and normals as half float (within half precision of the
-    float file), depth and the wrinkle fields unchanged, with the same channel names
-    (piz: lossless); --write-threads 0 and 1 write the same pixels."""
+    """By default colour and normals are half float (within half precision of the
+    --exr-float file), depth and the wrinkle fields float and unchanged, with the same
+    channel names (piz: lossless); --write-threads 0 and 1 write the same pixels."""
     stage = str(SAMPLES / "shirt.usda")
     base = ["render", stage, "--frames", "24", "--width", "96", "--quiet"]
-    assert main([*base[:2], str(tmp_path / "float.exr"), *base[2:]]) == 0
-    assert main([*base[:2], str(tmp_path / "half.exr"), *base[2:], "--exr-half",
+    assert main([*base[:2], str(tmp_path / "float.exr"), *base[2:], "--exr-float"]) == 0
+    assert main([*base[:2], str(tmp_path / "half.exr"), *base[2:],
                  "--exr-compression", "piz"]) == 0
     assert main([*base[:2], str(tmp_path / "serial.exr"), *base[2:], "--write-threads",
-                 "0"]) == 0
+                 "0", "--exr-half"]) == 0
     full = oiio.ImageBuf(str(tmp_path / "float.exr"))
     half = oiio.ImageBuf(str(tmp_path / "half.exr"))
     assert half.spec().get_string_attribute("compression") == "piz"
+    assert full.spec().get_string_attribute("compression") == "zip"
+    assert {str(f) for f in full.spec().channelformats} <= {"float"}
+    assert full.spec().format == oiio.FLOAT
     names = list(full.spec().channelnames)
     assert sorted(names) == sorted(half.spec().channelnames)
     formats = dict(zip(half.spec().channelnames,
@@ -178,5 +181,8 @@ def test_exr_half_and_compression_keep_names_and_values(gl_context, tmp_path):
                                        err_msg=name)
         else:  # still float: unchanged
             np.testing.assert_array_equal(y, x, err_msg=name)
+    # the serial run wrote the same (half) file as the overlapped one
     serial = oiio.ImageBuf(str(tmp_path / "serial.exr")).get_pixels(oiio.FLOAT)
-    assert np.array_equal(np.nan_to_num(serial, posinf=1e30), np.nan_to_num(a, posinf=1e30))
+    overlapped = half.get_pixels(oiio.FLOAT)
+    assert np.array_equal(np.nan_to_num(serial, posinf=1e30),
+                          np.nan_to_num(overlapped, posinf=1e30))

@@ -186,12 +186,21 @@ class WrinkleEngine:
         ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
         ``aovs``: the render buffers to read back (an 8-bit image needs only colour).
         """
+        return self._render(frame, width, height, wrinkles, samples, tuple(aovs), None)
+
+    def render_image(self, frame: float, width: int, height: int, layout,
+                     wrinkles: bool = True, samples: int = 4):
+        """Compute and draw ``frame``; returns it as an image file stores it
+        (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for)."""
+        return self._render(frame, width, height, wrinkles, samples, (), layout)
+
+    def _render(self, frame, width, height, wrinkles, samples, aovs, layout):
         record = self.compute_frame(frame, width / height, wrinkles)
         state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples,
-                                tuple(aovs))
-        buffers = self.render_pass.execute(state)
+                                aovs, image=layout)
+        result = self.render_pass.execute(state)
         self.last_timings.update(state.timings)
-        return buffers
+        return result
 
     def read_fields(self, path: str) -> dict:
         """Per-vertex fields of ``path`` as computed for the last frame (numpy)."""

@@ -53,7 +53,7 @@ class ImageOptions:
     write_threads: int = 1
     #: EXR compression and half-float colour and normals (outputs/images.py)
     exr_compression: str = "zip"
-    exr_half: bool = False
+    exr_half: bool = True
 
 
 @contextlib.contextmanager
@@ -82,14 +82,14 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
     """
     import time
 
-    from .outputs.images import aovs_for, write_image
+    from .outputs.images import layout_for, write_image
     from .outputs.writer import FrameWriter
 
     rows: dict[str, dict] = {}
 
     def write(path: str, buffers: dict) -> None:
         started = time.perf_counter()
-        write_image(path, buffers, image.exr_compression, image.exr_half)
+        write_image(path, buffers, image.exr_compression)
         if stats is not None:
             rows[path]["encode"] = (time.perf_counter() - started) * 1e3
 
@@ -100,8 +100,9 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
                 continue
             started = time.perf_counter()
             with at_frame(frame):
-                buffers = engine.render_frame(frame, image.width, image.height,
-                                              image.wrinkles, image.samples, aovs_for(path))
+                buffers = engine.render_image(frame, image.width, image.height,
+                                              layout_for(path, image.exr_half),
+                                              image.wrinkles, image.samples)
             if stats is not None:
                 rows[path] = {"frame": frame, **engine.last_timings,
                               "render": (time.perf_counter() - started) * 1e3}

@@ -39,10 +39,11 @@ def add_parser(subparsers) -> None:
                         "is rendered)")
     exr = p.add_mutually_exclusive_group()
     exr.add_argument("--exr-half", dest="exr_half", action="store_true",
-                     help="EXR: colour and normals as half float (files about 40%% smaller; "
-                          "depth and the wrinkle fields stay float)")
+                     help="EXR: colour and normals as half float, as compositing keeps them; "
+                          "depth and the wrinkle fields stay float (the default)")
     exr.add_argument("--exr-float", dest="exr_half", action="store_false",
-                     help="EXR: every channel as 32-bit float (the default)")
+                     help="EXR: every channel as 32-bit float (files about 60%% larger)")
+    p.set_defaults(exr_half=True)
     p.add_argument("--exr-compression", choices=EXR_COMPRESSIONS,
                    default="zip", help="EXR compression (zip: the fastest compressed "
                                        "encode measured, docs/benchmarks.md)")

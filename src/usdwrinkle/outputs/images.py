@@ -1,7 +1,14 @@
-"""Write render buffers with OpenImageIO.
+"""Write rendered frames: EXR with OpenEXR's own binding, 8-bit formats with OpenImageIO.
 
-EXR: float channels R,G,B,A, wrinkle.height, wrinkle.amplitude, N.X,N.Y,N.Z, Z.
+EXR: channels R,G,B,A, wrinkle.height, wrinkle.amplitude, N.X,N.Y,N.Z, Z; colour and
+normals half float by default, the rest float.
 PNG/JPEG/TIFF: the 8-bit sRGB beauty (RGBA; RGB over black for JPEG).
+
+A frame arrives as a render.resolve.ResolvedImage, already in the file's layout (the
+resolve pass made it on the GPU: layout_for); image_from_buffers makes the same from
+float RenderBuffers in numpy. OpenEXR's binding writes the planes as they are; through
+OpenImageIO, mixed half/float channels took 55 ms to encode a 640x360 CesiumMan frame on
+one core against 18 ms (docs/benchmarks.md, "EXR encoders").
 """
 from __future__ import annotations
 
@@ -15,6 +22,7 @@ import numpy as np
 
 from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
+from ..render.resolve import ImageLayout, ResolvedImage
 from ..scene.diagnostics import one_line, usd_diagnostics
 from .atomic import atomic_path, sweep_dead
 
@@ -23,13 +31,53 @@ EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 #: EXR compressions offered by --exr-compression (OpenEXR's names)
 EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
-#: the AOVs that --exr-half stores as half float; depth and the wrinkle fields stay float
+#: the AOVs that half float stores as half; depth and the wrinkle fields stay float
 HALF_AOVS = ("color", "normal")
+#: OpenEXR's own encode threads per file: 0 encodes in the writer thread alone, which
+#: leaves the other core to llvmpipe (docs/benchmarks.md, "EXR encoders")
+EXR_THREADS = 0
 
 
 def aovs_for(path: str) -> tuple:
     """The render buffers a file format stores."""
     return EXR_ORDER if check_format(path) in FLOAT_FORMATS else ("color",)
+
+
+def layout_for(path: str, half: bool = True) -> ImageLayout:
+    """The layout a frame written to ``path`` is read back in: an EXR's planes (colour
+    and normals half float with ``half``), else 8-bit codes."""
+    ext = check_format(path)
+    if ext in FLOAT_FORMATS:
+        return ImageLayout("exr", half=half)
+    return ImageLayout("8bit", over_black=ext in (".jpg", ".jpeg"))
+
+
+def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:
+    """The frame of float RenderBuffers in ``layout``, in numpy: what the resolve pass
+    makes on the GPU (for a caller that holds RenderBuffers, and as its test oracle)."""
+    color = buffers["color"].pixels  # premultiplied by alpha
+    height, width = color.shape[:2]
+    if layout.kind == "exr":
+        planes = {}
+        for aov in EXR_ORDER:
+            buf = buffers[aov]
+            for index, name in enumerate(buf.channel_names):
+                plane = np.ascontiguousarray(buf.pixels[..., index], np.float32)
+                planes[name] = plane.astype(np.float16) \
+                    if layout.half and aov in HALF_AOVS else plane
+        bad = sum(int(np.count_nonzero(np.isnan(p) if name == "Z" else ~np.isfinite(p)))
+                  for name, p in planes.items())
+    else:
+        alpha = np.clip(color[..., 3:4], 0, 1)
+        if layout.over_black:
+            rgba = np.concatenate([srgb_encode(color[..., :3]), np.ones_like(alpha)], axis=2)
+        else:  # straight (unassociated) alpha, as PNG and TIFF store it
+            straight = np.divide(color[..., :3], alpha, out=np.zeros_like(color[..., :3]),
+                                 where=alpha > 0)
+            rgba = np.concatenate([srgb_encode(straight), alpha], axis=2)
+        planes = {"RGBA": np.round(rgba * 255).astype(np.uint8)}
+        bad = int(np.count_nonzero(~np.isfinite(color)))
+    return ResolvedImage(layout, width, height, planes, bad)
 
 
 def check_format(path: str) -> str:
@@ -120,15 +168,13 @@ def _sweep_scratch(folder: str) -> None:
     sweep_dead(folder, SCRATCH_PREFIX, os.unlink)
 
 
-def _check_finite(buffers: dict, aovs) -> None:
+def _check_finite(image: ResolvedImage) -> None:
     """No NaN or Inf reaches an image (Z may be +Inf where nothing was hit)."""
-    for aov in aovs:
-        pixels = buffers[aov].pixels
-        bad = np.isnan(pixels) if aov == "depth" else ~np.isfinite(pixels)
-        if bad.any():
-            raise UsdWrinkleError(
-                f"the frame's {aov} has non-finite pixels (NaN or Inf); a camera, light, "
-                "transform or wrinkle value of the scene is out of range")
+    if image.bad:
+        values = "value" if image.bad == 1 else "values"
+        raise UsdWrinkleError(
+            f"the frame has {image.bad} non-finite {values} (NaN or Inf); a camera, light, "
+            "transform or wrinkle value of the scene is out of range")
 
 
 def encode_file(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
@@ -147,56 +193,65 @@ def encode_file(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
         raise UsdWrinkleError(f"cannot write image '{path}': {reason}")
 
 
-def write_image(path: str, buffers: dict, compression: str = "zip", half: bool = False) -> None:
-    """Write one frame's render buffers to ``path``, atomically and completely.
+def encode_frame(scratch: str, image: ResolvedImage, path: str,
+                 compression: str = "zip") -> None:
+    """Encode one frame to the file ``scratch``: EXR with OpenEXR, 8-bit formats with
+    OpenImageIO."""
+    if image.layout.kind == "exr":
+        _encode_exr(scratch, image, path, compression)
+        return
+    import OpenImageIO as oiio
 
-    EXR: ``compression`` (EXR_COMPRESSIONS) and ``half`` (colour and normals as half
-    float, as compositing usually keeps them; depth and the wrinkle fields stay float).
+    pixels = image.planes["RGBA"]
+    if image.layout.over_black:
+        pixels = np.ascontiguousarray(pixels[..., :3])
+    spec = oiio.ImageSpec(image.width, image.height, pixels.shape[2], "uint8")
+    if pixels.shape[2] == 4:
+        spec.alpha_channel = 3
+        spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
+    encode_file(scratch, spec, pixels, path)
+
+
+def _encode_exr(scratch: str, image: ResolvedImage, path: str, compression: str) -> None:
+    import OpenEXR
+
+    from .. import __version__
+
+    header = {"compression": getattr(OpenEXR, _EXR_COMPRESSION[compression]),
+              "type": OpenEXR.scanlineimage, "software": f"usdwrinkle {__version__}"}
+    try:
+        with OpenEXR.File(header, dict(image.planes), EXR_THREADS) as exr:
+            exr.write(scratch)
+    except (RuntimeError, ValueError, TypeError) as exc:  # the binding's, with the reason
+        raise UsdWrinkleError(f"cannot write image '{path}': {one_line(str(exc))}") from None
+
+
+#: --exr-compression -> the OpenEXR binding's constant
+_EXR_COMPRESSION = {"zip": "ZIP_COMPRESSION", "zips": "ZIPS_COMPRESSION",
+                    "piz": "PIZ_COMPRESSION", "dwaa": "DWAA_COMPRESSION",
+                    "none": "NO_COMPRESSION"}
+
+
+def write_image(path: str, image, compression: str = "zip", half: bool = True) -> None:
+    """Write one frame to ``path``, atomically and completely.
+
+    ``image``: a ResolvedImage in ``layout_for(path)``'s kind, or a dict of float
+    RenderBuffers (converted here, colour and normals of an EXR half float with
+    ``half``). EXR: ``compression`` (EXR_COMPRESSIONS).
 
     The frame is encoded in memory, copied beside ``path`` and renamed only once the
     copy has the encoded size: a full disk or a failing close is an error, and never
     leaves a truncated frame under the output name.
     """
-    import OpenImageIO as oiio
-
     ext = check_format(path)
-    _check_finite(buffers, EXR_ORDER if ext in FLOAT_FORMATS else ("color",))
-    if ext in FLOAT_FORMATS:
-        planes, names = [], []
-        for aov in EXR_ORDER:
-            buf = buffers[aov]
-            planes.append(buf.pixels)
-            names.extend(buf.channel_names)
-        pixels = np.ascontiguousarray(np.concatenate(planes, axis=2), np.float32)
-        spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], "float")
-        spec.channelnames = tuple(names)
-        spec.alpha_channel = 3
-        spec.z_channel = names.index("Z")
-        if half:
-            half_names = {n for aov in HALF_AOVS for n in buffers[aov].channel_names}
-            spec.channelformats = tuple(oiio.TypeDesc("half" if n in half_names else "float")
-                                        for n in names)
-        spec.attribute("compression", compression)
-    else:
-        color = buffers["color"].pixels  # premultiplied by alpha
-        alpha = np.clip(color[..., 3:4], 0, 1)
-        if ext in (".jpg", ".jpeg"):
-            pixels = srgb_encode(color[..., :3])  # over black
-        else:
-            # PNG and TIFF store straight (unassociated) alpha
-            straight = np.divide(color[..., :3], alpha, out=np.zeros_like(color[..., :3]),
-                                 where=alpha > 0)
-            pixels = np.concatenate([srgb_encode(straight), alpha], axis=2)
-        pixels = np.ascontiguousarray(np.round(pixels * 255), np.uint8)
-        spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], "uint8")
-        if pixels.shape[2] == 4:
-            spec.alpha_channel = 3
-            spec.attribute("oiio:UnassociatedAlpha", 1)  # already straight: leave it
+    if isinstance(image, dict):
+        image = image_from_buffers(image, layout_for(path, half))
+    _check_finite(image)
     fd, scratch = tempfile.mkstemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}.", suffix=ext,
                                    dir=_scratch_folder())
     os.close(fd)
     try:
-        encode_file(scratch, spec, pixels, path)
+        encode_frame(scratch, image, path, compression)
         size = os.path.getsize(scratch)
 
         def complete(tmp: str) -> None:

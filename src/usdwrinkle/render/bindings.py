@@ -48,3 +48,7 @@ MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}
 GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
             # image units
             "GEOMETRY_POINTS": 0, "GEOMETRY_NORMALS": 1}
+#: the resolve pass (render/resolve.py): the three colour attachments (texture units) and
+#: the output words and the count of non-finite values (storage buffers)
+RESOLVE = {"RESOLVE_COLOR": 0, "RESOLVE_WRINKLE": 1, "RESOLVE_NORMAL": 2,
+           "RESOLVE_OUT": 0, "RESOLVE_BAD": 1}

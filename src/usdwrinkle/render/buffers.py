@@ -1,19 +1,11 @@
 """Render buffers (AOVs) and the offscreen framebuffer they are read from."""
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 
 import numpy as np
 
-#: AOV name -> (attachment, first channel, channel names in image files)
-AOVS = {
-    "color": (0, 0, ("R", "G", "B", "A")),
-    "wrinkle.height": (1, 0, ("wrinkle.height",)),
-    "wrinkle.amplitude": (1, 1, ("wrinkle.amplitude",)),
-    "normal": (2, 0, ("N.X", "N.Y", "N.Z")),
-    "depth": (1, 2, ("Z",)),
-}
+from .resolve import AOVS, ImageLayout, ResolvedImage, ResolvePass
 
 
 @dataclass
@@ -29,7 +21,7 @@ class RenderBuffer:
     pixels: np.ndarray
 
 
-#: bytes per pixel: three RGBA float attachments, and depth
+#: bytes per pixel and sample: three RGBA float attachments, and depth
 _ATTACHMENT_BYTES = 3 * 16 + 4
 
 
@@ -64,8 +56,9 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
     if samples > max_samples:
         raise UsdWrinkleError(f"--samples {samples} exceeds this GL implementation's "
                               f"GL_MAX_SAMPLES of {max_samples}")
-    # multisampled targets, the resolved textures, and the read-back copies
-    needed = width * height * (_ATTACHMENT_BYTES * (samples + 1) + 3 * 16 * 2)
+    # the targets, the resolve pass's output and the read-back copies (the writer may
+    # hold a few)
+    needed = width * height * (_ATTACHMENT_BYTES * samples + 10 * 4 * 4)
     available = available_memory()
     if available is not None and needed > available:
         raise UsdWrinkleError(f"a {width}x{height} frame with {samples} samples needs about "
@@ -76,99 +69,47 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
 class Framebuffer:
     """Three float RGBA attachments plus depth, at one resolution.
 
-    With ``samples`` > 1 the meshes are drawn multisampled (edges anti-aliased) and
-    resolved into single-sample textures. The resolve averages coverage: colour stays
-    premultiplied by alpha (the EXR convention), the other AOVs are divided by alpha so
-    that an edge pixel holds the average over the samples that hit the surface.
+    With ``samples`` > 1 the meshes are drawn multisampled (edges anti-aliased) into
+    multisample textures, which the resolve pass (render/resolve.py) reads directly: it
+    averages coverage, so colour stays premultiplied by alpha (the EXR convention) and
+    the other AOVs are divided by alpha, so that an edge pixel holds the average over the
+    samples that hit the surface.
     """
 
-    def __init__(self, ctx, width: int, height: int, samples: int = 4):
+    def __init__(self, ctx, width: int, height: int, samples: int = 4,
+                 resolve: ResolvePass | None = None):
         self.ctx = ctx
         self.size = (width, height)
         check_frame_size(ctx, width, height, int(samples))
         self.samples = max(1, int(samples))
-        self.textures = [ctx.texture((width, height), 4, dtype="f4") for _ in range(3)]
-        multisample = self.samples if self.samples > 1 else 0  # 0: a plain renderbuffer
+        multisample = self.samples if self.samples > 1 else 0  # 0: single-sample
+        self.targets = [ctx.texture((width, height), 4, samples=multisample, dtype="f4")
+                        for _ in range(3)]
         self.depth = ctx.depth_renderbuffer((width, height), samples=multisample)
-        if self.samples > 1:
-            self.targets = [ctx.renderbuffer((width, height), 4, samples=self.samples, dtype="f4")
-                            for _ in range(3)]
-        else:
-            self.targets = self.textures
         self.fbo = ctx.framebuffer(color_attachments=self.targets, depth_attachment=self.depth)
-        # one (resolved, multisampled) framebuffer pair per attachment: a frame resolves
-        # only the attachments its file stores (a PNG: colour alone)
-        self.resolve_pairs = [(ctx.framebuffer(color_attachments=[texture]),
-                               ctx.framebuffer(color_attachments=[target]))
-                              for texture, target in zip(self.textures, self.targets,
-                                                         strict=True)] \
-            if self.samples > 1 else []
-        self._planes: list[np.ndarray | None] = [None] * 3
-        self._unshared_refs = 0
+        self._own_resolve = resolve is None
+        self.resolve = resolve or ResolvePass(ctx)
 
     def begin(self) -> None:
         self.fbo.use()
         self.ctx.viewport = (0, 0, *self.size)
         self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
 
-    def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
-        """Read back the requested AOVs: only the attachments they need, each straight into
-        a new array (the draw pass flips y in clip space, so GL's bottom-up rows already
-        come out top-down). AOVs that need no arithmetic are views of those arrays."""
-        width, height = self.size
-        needed = {AOVS[name][0] for name in aovs} | {0}  # colour's alpha is the coverage
-        for index in sorted(needed):
-            if self.resolve_pairs:
-                resolved, multisampled = self.resolve_pairs[index]
-                self.ctx.copy_framebuffer(resolved, multisampled)
-        planes = {}
-        for index in sorted(needed):
-            planes[index] = self._plane(index)
-            self.textures[index].read_into(planes[index])
-        alpha = planes[0][..., 3:4]
-        covered = alpha > 0.0
-        inverse = None
-        if self.samples > 1 and any(AOVS[name][0] != 0 for name in aovs):
-            # resolved AOVs are coverage-weighted sums: divide by the coverage
-            inverse = np.zeros((height, width, 1), np.float32)
-            np.divide(1.0, alpha, out=inverse, where=covered)
-        out = {}
-        for name in aovs:
-            attachment, first, channels = AOVS[name]
-            pixels = planes[attachment][..., first:first + len(channels)]
-            if inverse is not None and attachment != 0:
-                pixels = pixels * inverse
-            if name == "depth":
-                pixels = np.where(covered, pixels, np.float32(np.inf))  # nothing hit: far
-            if name == "normal" and self.samples > 1:
-                length = np.sqrt(np.einsum("...i,...i->...", pixels, pixels))[..., None]
-                np.divide(pixels, length, out=pixels, where=length > 0)
-            out[name] = RenderBuffer(name, channels, pixels)
-        return out
+    def read_image(self, layout: ImageLayout) -> ResolvedImage:
+        """The frame as ``layout`` says (an image file's planes or codes): only the
+        attachments it needs are read, at the precision it is stored at."""
+        return self.resolve.run(self.targets, self.size, self.samples, layout)
 
-    def _plane(self, index: int) -> np.ndarray:
-        """The array attachment ``index`` is read into: last frame's when nobody holds it
-        (or a view of it) any more, else a new one, so buffers handed out are never
-        overwritten. Reusing it saves the page faults of fresh memory (2 ms per 330 kpixel
-        plane here, ten times the copy itself)."""
-        # Only the list holds it when the count is what it was right after allocation
-        # (measured with the same expression, so it holds on any Python version).
-        if self._planes[index] is None or \
-                sys.getrefcount(self._planes[index]) != self._unshared_refs:
-            self._planes[index] = np.empty((self.size[1], self.size[0], 4), np.float32)
-            self._unshared_refs = sys.getrefcount(self._planes[index])
-        return self._planes[index]
+    def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
+        """The requested AOVs as float RenderBuffers, views of one array that is never
+        written again while a view of it is held."""
+        image = self.read_image(ImageLayout("aovs", tuple(aovs)))
+        return {name: RenderBuffer(name, AOVS[name][2], image.planes[name]) for name in aovs}
 
     def release(self) -> None:
-        self._planes = [None] * 3
-        for pair in self.resolve_pairs:
-            for fbo in pair:
-                fbo.release()
-        self.resolve_pairs = []
+        if self._own_resolve:
+            self.resolve.release()
         self.fbo.release()
         self.depth.release()
-        for tex in self.textures:
-            tex.release()
-        if self.samples > 1:
-            for rb in self.targets:
-                rb.release()
+        for target in self.targets:
+            target.release()

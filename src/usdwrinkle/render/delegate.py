@@ -18,6 +18,7 @@ from .passes.crush import CrushPass
 from .passes.draw import DrawPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
+from .resolve import ImageLayout, ResolvedImage, ResolvePass
 from .resources import MeshResources
 
 
@@ -136,6 +137,8 @@ class RenderPassState:
     samples: int = 4
     aovs: tuple = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
     timings: dict = field(default_factory=dict)
+    #: read the frame back as an image file stores it instead of as float AOVs
+    image: ImageLayout | None = None
 
 
 class RenderDelegate:
@@ -148,6 +151,7 @@ class RenderDelegate:
         self.crush = CrushPass(self.ctx)
         self.relax = RelaxPass(self.ctx)
         self.draw = DrawPass(self.ctx)
+        self.resolve = ResolvePass(self.ctx)
         self.rprims: dict[str, Mesh] = {}
         self._framebuffer: Framebuffer | None = None
 
@@ -171,7 +175,8 @@ class RenderDelegate:
         if fb is None or fb.size != (width, height) or fb.samples != max(1, samples):
             if fb is not None:
                 fb.release()
-            fb = self._framebuffer = Framebuffer(self.ctx, width, height, samples)
+            fb = self._framebuffer = Framebuffer(self.ctx, width, height, samples,
+                                                 self.resolve)
         return fb
 
     def release(self) -> None:
@@ -180,6 +185,7 @@ class RenderDelegate:
         if self._framebuffer is not None:
             self._framebuffer.release()
             self._framebuffer = None
+        self.resolve.release()
 
 
 class RenderPass:
@@ -203,7 +209,9 @@ class RenderPass:
                     timings[key] = value if isinstance(value, str) else \
                         timings.get(key, 0.0) + value
 
-    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer]:
+    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage:
+        """Draw every rprim; returns the AOVs, or with ``state.image`` the frame as an
+        image file stores it."""
         d = self.delegate
         ctx = d.ctx
         fb = d.framebuffer(state.width, state.height, state.samples)
@@ -216,7 +224,7 @@ class RenderPass:
             for mesh in d.rprims.values():
                 d.draw.draw(mesh.resources, mesh.frame, state.camera)
         started = time.perf_counter()
-        buffers = fb.read(state.aovs)
+        buffers = fb.read_image(state.image) if state.image is not None else fb.read(state.aovs)
         if d.profile:
             state.timings["readback"] = (time.perf_counter() - started) * 1e3
         return buffers
