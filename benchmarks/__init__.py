@@ -29,7 +29,8 @@ from .report import history, markdown, targets
 from .stages import default_corpus
 
 
-def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -> dict:
+def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
+              before: str | None = None) -> dict:
     from usdwrinkle.render.context import create_context
 
     ctx = create_context()
@@ -48,7 +49,7 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print) -
     progress("bench: farm")
     result["farm"] = farm_bench.farm(quick, corpus)
     progress("bench: cpu render nodes")
-    result["cpu_nodes"] = cpu_nodes(quick, corpus)
+    result["cpu_nodes"] = cpu_nodes(quick, corpus, ctx, before)
     progress("bench: wrinkle maps")
     from .renderers import displaced_geometry, wrinkle_maps
     result["wrinkle_maps"] = wrinkle_maps(quick, ctx)
@@ -73,10 +74,12 @@ def run(args) -> int:
     else:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
         result = run_bench(args.quick, corpus,
-                           progress=lambda m: print(m, file=sys.stderr, flush=True))
+                           progress=lambda m: print(m, file=sys.stderr, flush=True),
+                           before=args.before)
         result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
             f" --json {args.json}" if args.json else "") + (
-            f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "")
+            f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "") + (
+            " --before CHECKOUT" if args.before else "")
         if args.label:
             result["label"] = args.label
     result["history"] = history(Path(args.history))

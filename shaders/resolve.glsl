@@ -10,8 +10,8 @@
 //                N.Z Z), colour and normals as half float with HALF_COLOR_NORMAL;
 //   OUTPUT_8BIT  RGBA8 sRGB codes per pixel: straight alpha, or with OVER_BLACK the
 //                premultiplied colour over black and alpha 255 (JPEG).
-// Each invocation resolves two neighbouring pixels, so that a half plane's words hold
-// whole pairs. Rows come out top-down already (the draw pass flips y in clip space).
+// An EXR invocation resolves two neighbouring pixels, so that a half plane's words hold
+// whole pairs; the others one. Rows come out top-down already (the draw pass flips y in clip space).
 // Every value written that is NaN or infinite (depth: NaN only) counts in u_bad.
 #include "include/common.glsl"
 
@@ -117,6 +117,8 @@ bool is_half(int c) { return false; }
 #endif
 #endif
 
+#if defined OUTPUT_EXR
+// Two neighbouring pixels per invocation, so that a half plane's words hold whole pairs.
 void main() {
     int n = u_size.x * u_size.y;
     int pair = int(gl_GlobalInvocationID.x);
@@ -126,24 +128,6 @@ void main() {
     Pixel a = resolve(first);
     Pixel b = resolve(second ? first + 1 : first);
     uint bad = 0u;
-#if defined OUTPUT_AOVS
-    for (int k = 0; k < (second ? 2 : 1); ++k) {
-        Pixel px = k == 0 ? a : b;
-        int i = first + k;
-        for (int c = 0; c < 4; ++c) words[u_offset[0] + 4 * i + c] = floatBitsToUint(px.color[c]);
-        bad += bad_values(px.color);
-#if defined NEED_FIELDS
-        words[u_offset[1] + i] = floatBitsToUint(px.wrinkle.x);
-        words[u_offset[2] + i] = floatBitsToUint(px.wrinkle.y);
-        words[u_offset[4] + i] = floatBitsToUint(px.wrinkle.z);
-        bad += bad_values(vec4(px.wrinkle.xy, 0.0, 0.0)) + uint(isnan(px.wrinkle.z));
-#endif
-#if defined NEED_NORMAL
-        for (int c = 0; c < 3; ++c) words[u_offset[3] + 3 * i + c] = floatBitsToUint(px.normal[c]);
-        bad += bad_values(vec4(px.normal, 0.0));
-#endif
-    }
-#elif defined OUTPUT_EXR
     for (int c = 0; c < 10; ++c) {
         vec2 v = vec2(channel(a, c), channel(b, c));
         if (is_half(c)) {
@@ -156,10 +140,30 @@ void main() {
         }
         bad += c == 9 ? uint(any(isnan(v))) : bad_values(vec4(v, 0.0, 0.0));
     }
+    if (bad > 0u) atomicAdd(u_bad, bad);
+}
+#else
+// One pixel per invocation.
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_size.x * u_size.y) return;
+    Pixel px = resolve(i);
+    uint bad = bad_values(px.color);
+#if defined OUTPUT_AOVS
+    for (int c = 0; c < 4; ++c) words[u_offset[0] + 4 * i + c] = floatBitsToUint(px.color[c]);
+#if defined NEED_FIELDS
+    words[u_offset[1] + i] = floatBitsToUint(px.wrinkle.x);
+    words[u_offset[2] + i] = floatBitsToUint(px.wrinkle.y);
+    words[u_offset[4] + i] = floatBitsToUint(px.wrinkle.z);
+    bad += bad_values(vec4(px.wrinkle.xy, 0.0, 0.0)) + uint(isnan(px.wrinkle.z));
+#endif
+#if defined NEED_NORMAL
+    for (int c = 0; c < 3; ++c) words[u_offset[3] + 3 * i + c] = floatBitsToUint(px.normal[c]);
+    bad += bad_values(vec4(px.normal, 0.0));
+#endif
 #elif defined OUTPUT_8BIT
-    words[first] = codes(a);
-    if (second) words[first + 1] = codes(b);
-    bad += bad_values(a.color) + bad_values(b.color);
+    words[i] = codes(px);
 #endif
     if (bad > 0u) atomicAdd(u_bad, bad);
 }
+#endif

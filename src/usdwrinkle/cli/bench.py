@@ -44,6 +44,10 @@ def add_parser(subparsers) -> None:
                    help="name this run in the JSON (kept in docs/bench/ for before/after)")
     p.add_argument("--history", metavar="DIR", default="docs/bench",
                    help="folder of labelled JSON runs to tabulate (docs/bench)")
+    p.add_argument("--before", metavar="CHECKOUT",
+                   help="a checkout of an earlier usdwrinkle (e.g. a git worktree): the CPU "
+                        "render nodes section also runs its default EXR render, in turn with "
+                        "this one's, as the before row")
     p.add_argument("--from-json", metavar="PATH",
                    help="measure nothing: rewrite the markdown report from a saved run")
     p.add_argument("--corpus", metavar="DIR",

@@ -145,7 +145,8 @@ class ResolvePass:
         if "u_offset" in shader:  # the compiler keeps the elements the variant reads
             kept = shader["u_offset"].array_length
             shader["u_offset"] = offsets[:kept] if kept > 1 else offsets[0]
-        shader.run(((n + 1) // 2 + bindings.LOCAL_SIZE - 1) // bindings.LOCAL_SIZE)
+        invocations = (n + 1) // 2 if layout.kind == "exr" else n  # EXR: pixel pairs
+        shader.run((invocations + bindings.LOCAL_SIZE - 1) // bindings.LOCAL_SIZE)
         array = self._array(words)
         self.out.read_into(array, size=words * 4)
         bad = int(np.frombuffer(self.bad.read(), np.uint32)[0])
