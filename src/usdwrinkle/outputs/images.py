@@ -7,8 +7,8 @@ PNG/JPEG/TIFF: the 8-bit sRGB beauty (RGBA; RGB over black for JPEG).
 A frame arrives as a render.resolve.ResolvedImage, already in the file's layout (the
 resolve pass made it on the GPU: layout_for); image_from_buffers makes the same from
 float RenderBuffers in numpy. OpenEXR's binding writes the planes as they are; through
-OpenImageIO, mixed half/float channels took 55 ms to encode a 640x360 CesiumMan frame on
-one core against 18 ms (docs/benchmarks.md, "EXR encoders").
+OpenImageIO, mixed half/float channels took 79 ms to encode a 640x360 CesiumMan frame on
+one core against 14 ms (docs/benchmarks.md, "EXR encoders").
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
-from ..render.resolve import ImageLayout, ResolvedImage
+from ..render.resolve import HALF_CHANNELS, ImageLayout, ResolvedImage
 from ..scene.diagnostics import one_line, usd_diagnostics
 from .atomic import atomic_path, sweep_dead
 
@@ -31,16 +31,10 @@ EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
 EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 #: EXR compressions offered by --exr-compression (OpenEXR's names)
 EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
-#: the AOVs that half float stores as half; depth and the wrinkle fields stay float
-HALF_AOVS = ("color", "normal")
-#: OpenEXR's own encode threads per file: 0 encodes in the writer thread alone, which
-#: leaves the other core to llvmpipe (docs/benchmarks.md, "EXR encoders")
+#: OpenEXR's own encode threads per file: 0 encodes in the writer thread alone and leaves
+#: the other core to llvmpipe; 2 was no faster (24 CesiumMan EXR frames, alternating
+#: processes: median 1.64 s with 0, 1.72 s with 2)
 EXR_THREADS = 0
-
-
-def aovs_for(path: str) -> tuple:
-    """The render buffers a file format stores."""
-    return EXR_ORDER if check_format(path) in FLOAT_FORMATS else ("color",)
 
 
 def layout_for(path: str, half: bool = True) -> ImageLayout:
@@ -64,7 +58,7 @@ def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:
             for index, name in enumerate(buf.channel_names):
                 plane = np.ascontiguousarray(buf.pixels[..., index], np.float32)
                 planes[name] = plane.astype(np.float16) \
-                    if layout.half and aov in HALF_AOVS else plane
+                    if layout.half and name in HALF_CHANNELS else plane
         bad = sum(int(np.count_nonzero(np.isnan(p) if name == "Z" else ~np.isfinite(p)))
                   for name, p in planes.items())
     else:
