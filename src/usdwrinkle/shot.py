@@ -11,6 +11,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from . import schema
 from .errors import UsdWrinkleError
 from .timecode import format_frame
 
@@ -85,11 +86,15 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
     from .outputs.images import layout_for, write_image
     from .outputs.writer import FrameWriter
 
+    engine.check_relax_work(frames, image.wrinkles)
     rows: dict[str, dict] = {}
 
-    def write(path: str, buffers: dict) -> None:
+    def write(path: str, frame_image) -> None:
         started = time.perf_counter()
-        write_image(path, buffers, image.exr_compression)
+        try:
+            write_image(path, frame_image, image.exr_compression)
+        finally:
+            frame_image.release()  # its memory may now hold a later frame, not before
         if stats is not None:
             rows[path]["encode"] = (time.perf_counter() - started) * 1e3
 
@@ -100,13 +105,13 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
                 continue
             started = time.perf_counter()
             with at_frame(frame):
-                buffers = engine.render_image(frame, image.width, image.height,
-                                              layout_for(path, image.exr_half),
-                                              image.wrinkles, image.samples)
+                frame_image = engine.render_image(frame, image.width, image.height,
+                                                  layout_for(path, image.exr_half),
+                                                  image.wrinkles, image.samples)
             if stats is not None:
                 rows[path] = {"frame": frame, **engine.last_timings,
                               "render": (time.perf_counter() - started) * 1e3}
-            writer.submit(frame, path, buffers)
+            writer.submit(frame, path, frame_image)
     if stats is not None:
         stats.update({"frames": list(rows.values()), "waited_s": writer.waited,
                       "loop_s": time.perf_counter() - loop_started,
@@ -141,10 +146,19 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
     waves are surveyed first (``survey_progress`` wraps those frames)."""
     from .outputs.layers import LayerBaker
 
+    engine.check_relax_work(frames)
     wrinkled = bakeable_meshes(engine, warn)
-    if not wrinkled:
-        warn("no mesh has WrinkleAPI applied; the layer holds no wrinkle data "
-             "(use --all-meshes to wrinkle every mesh)")
+    if not wrinkled:  # a layer without wrinkle data is never what a bake is run for
+        if engine.wrinkled_paths:
+            raise UsdWrinkleError("every wrinkled mesh is inside an instance and cannot be "
+                                  "overridden, so the layer would hold no wrinkle data (make "
+                                  "those prims not instanceable)")
+        if any(schema.has_wrinkle_api(prim) for prim in engine.scene.stage.Traverse()):
+            raise UsdWrinkleError("no mesh with WrinkleAPI can be wrinkled (each was skipped: "
+                                  "see the warnings), so the layer would hold no wrinkle data")
+        raise UsdWrinkleError("no mesh has WrinkleAPI applied, so the layer would hold no "
+                              "wrinkle data: pass --all-meshes to wrinkle every mesh, or apply "
+                              "WrinkleAPI to the cloth (usdwrinkle apply)")
     baker = LayerBaker(engine.scene.stage, stage_path, wrinkled, engine.scene.meshes,
                        with_points=with_points, display_color=display_color, sparse=sparse,
                        warn=warn)

@@ -76,10 +76,15 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
             result["skipped"].append(path)
         return done
 
+    from ..render.context import create_context
+
     with _lock:
         try:
-            engine = _engine(options, warnings)
-            with engine.render_delegate.ctx:  # current on this thread for the chunk
+            # current on this thread for the whole chunk: the previous chunk's exit made it
+            # not current, and replacing the engine (a new job on a long-running worker)
+            # releases and compiles GL objects
+            with create_context():
+                engine = _engine(options, warnings)
                 result["written"] = render_frames(engine, image, frames, paths, skip=skip)
             result["baked"] = engine.baked_paths
         except UsdWrinkleError as exc:

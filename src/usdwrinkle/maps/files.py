@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import UsdWrinkleError
 from ..outputs.atomic import signals_held, sweep_dead, write_error
-from ..outputs.images import encode_file
+from ..outputs.images import copy_complete, encode_file, memory_file
 from ..timecode import frame_text
 
 #: the maps ``bake --maps`` can write
@@ -125,7 +125,10 @@ def encode_map(path: str, kind: str, pixels: np.ndarray, final_path: str) -> Non
         # for files 29% larger (docs/benchmarks.md)
         spec.attribute("png:compressionLevel", PNG_COMPRESSION)
         data = np.ascontiguousarray(np.round(np.clip(image, 0.0, 1.0) * 65535), np.uint16)
-    encode_file(path, spec, data, final_path)
+    # encoded in memory, then copied and checked: libpng truncates silently on a full disk
+    with memory_file(os.path.splitext(path)[1]) as scratch:
+        encode_file(scratch, spec, data, final_path)
+        copy_complete(scratch, path, atomic=False, shown=final_path)
 
 
 class MapStaging:

@@ -24,7 +24,7 @@ from ..colour import srgb_encode
 from ..errors import UsdWrinkleError
 from ..render.resolve import HALF_CHANNELS, ImageLayout, ResolvedImage
 from ..scene.diagnostics import one_line, usd_diagnostics
-from .atomic import atomic_path, sweep_dead
+from .atomic import atomic_path, sweep_dead, write_error
 
 FLOAT_FORMATS = (".exr",)
 EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
@@ -83,13 +83,15 @@ def check_format(path: str) -> str:
 
 
 def read_float_image(path: str, max_size: int | None = None,
-                     keep_8bit: bool = False) -> tuple[np.ndarray, bool]:
+                     keep_8bit: bool = False, strict: bool = False) -> tuple[np.ndarray, bool]:
     """Decode an image file: ((h, w, c) float32 with row 0 at the top, is 8-bit). With
     ``keep_8bit``, an 8-bit file comes back as its uint8 codes instead.
 
     Raises OSError with OpenImageIO's reason when it cannot be read, when it is not a
     regular file, or when its header declares more than ``max_size`` pixels a side
-    (checked before the pixels are allocated).
+    (checked before the pixels are allocated). With ``strict``, also when the decoder
+    reported any error on the way: libjpeg fills a truncated JPEG with grey and only
+    says so (a texture is still used; a frame to resume is not trusted).
     """
     import stat
 
@@ -104,10 +106,11 @@ def read_float_image(path: str, max_size: int | None = None,
     # libpng and libjpeg print their warnings on stderr themselves: keep them off the
     # user's terminal (a failure still reports OpenImageIO's reason)
     with usd_diagnostics():
-        return _decode(oiio, path, max_size, keep_8bit)
+        return _decode(oiio, path, max_size, keep_8bit, strict)
 
 
-def _decode(oiio, path: str, max_size: int | None, keep_8bit: bool) -> tuple[np.ndarray, bool]:
+def _decode(oiio, path: str, max_size: int | None, keep_8bit: bool,
+            strict: bool) -> tuple[np.ndarray, bool]:
     image = oiio.ImageInput.open(path)
     if image is None:
         raise OSError(f"cannot read image '{path}': {one_line(oiio.geterror()) or 'unreadable'}")
@@ -121,8 +124,9 @@ def _decode(oiio, path: str, max_size: int | None, keep_8bit: bool) -> tuple[np.
         eight_bit = spec.format.basetype == oiio.UINT8
         codes = keep_8bit and eight_bit
         pixels = image.read_image(0, 0, 0, spec.nchannels, oiio.UINT8 if codes else oiio.FLOAT)
-        if pixels is None:
-            raise OSError(f"cannot read image '{path}': {one_line(image.geterror())}")
+        error = image.geterror()
+        if pixels is None or (strict and error):
+            raise OSError(f"cannot read image '{path}': {one_line(error) or 'unreadable'}")
     finally:
         image.close()
     pixels = np.asarray(pixels, np.uint8 if codes else np.float32).reshape(
@@ -134,7 +138,7 @@ def is_complete_image(path: str, width: int, height: int) -> bool:
     """True when ``path`` decodes whole at width x height (``--skip-existing`` trusts only
     such a file; a truncated or foreign one is rendered again)."""
     try:
-        pixels, _ = read_float_image(path)
+        pixels, _ = read_float_image(path, strict=True)
     except OSError:
         return False
     return pixels.shape[:2] == (height, width)
@@ -143,23 +147,68 @@ def is_complete_image(path: str, width: int, height: int) -> bool:
 SCRATCH_PREFIX = ".usdwrinkle-frame."
 
 
+@contextlib.contextmanager
+def memory_file(suffix: str):
+    """Yield the path of an empty file that lives in memory, for an image library to
+    encode into; removed when the block ends.
+
+    On Linux it is an anonymous memory file (memfd_create, opened by its /proc/self/fd
+    path): no file system holds it, so neither a small /dev/shm nor a full output disk
+    can cut an encode short. That matters because the libraries do not all say so when
+    a write fails: libpng leaves a truncated PNG and reports success, and libjpeg ends
+    the process. Elsewhere it is a temporary file in the system's temporary folder.
+    """
+    if hasattr(os, "memfd_create") and os.path.isdir(f"/proc/{os.getpid()}/fd"):
+        fd = os.memfd_create(f"usdwrinkle-frame{suffix}", os.MFD_CLOEXEC)
+        try:
+            yield f"/proc/{os.getpid()}/fd/{fd}"
+        finally:
+            os.close(fd)
+        return
+    folder = _scratch_folder()
+    fd, scratch = tempfile.mkstemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}.", suffix=suffix,
+                                   dir=folder)
+    os.close(fd)
+    try:
+        yield scratch
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(scratch)
+
+
 @functools.cache
 def _scratch_folder() -> str:
-    """Where frames are encoded before they are copied to their output: memory (/dev/shm)
-    where there is one, so that a full output disk fails in our copy, with an error,
-    never inside an image library. Found once per process, when scratch frames of
-    processes that no longer run are removed too."""
-    shm = "/dev/shm"
-    folder = shm if os.path.isdir(shm) and os.access(shm, os.W_OK | os.X_OK) \
-        else tempfile.gettempdir()
-    _sweep_scratch(folder)
+    """Where memory_file encodes where there are no anonymous memory files: the system's
+    temporary folder, found once per process, when scratch files of processes that no
+    longer run are removed too (a SIGKILLed farm worker never reaches its cleanup)."""
+    folder = tempfile.gettempdir()
+    sweep_dead(folder, SCRATCH_PREFIX, os.unlink)
     return folder
 
 
-def _sweep_scratch(folder: str) -> None:
-    """Remove scratch frames of processes that no longer run (a SIGKILLed farm worker
-    never reaches its cleanup, and /dev/shm is memory)."""
-    sweep_dead(folder, SCRATCH_PREFIX, os.unlink)
+def copy_complete(source: str, path: str, atomic: bool = True, shown: str | None = None) -> None:
+    """Copy the encoded file ``source`` to ``path``; the copy is checked for its full size
+    before it takes the name ``path`` (atomically, a temporary file beside it renamed,
+    unless ``atomic`` is off for a file in a staging folder), so a full disk is the
+    one-line error and never a truncated file under the output's name. Errors name
+    ``shown`` (default ``path``): a staged file's final path."""
+    size = os.path.getsize(source)
+
+    def complete(tmp: str) -> None:
+        if os.path.getsize(tmp) != size:
+            raise OSError(28, f"only {os.path.getsize(tmp)} of {size} bytes were written")
+
+    if atomic:
+        with atomic_path(path, verify=complete) as tmp:
+            shutil.copyfile(source, tmp)
+        return
+    try:
+        shutil.copyfile(source, path)
+        complete(path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+        raise write_error(shown or path, exc) from None
 
 
 def _check_finite(image: ResolvedImage) -> None:
@@ -176,7 +225,8 @@ def encode_file(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
     the output it stands in for."""
     import OpenImageIO as oiio
 
-    out = oiio.ImageOutput.create(scratch)
+    # the format is the output's: ``scratch`` may be a memory file with no extension
+    out = oiio.ImageOutput.create(os.path.splitext(path)[1].lstrip(".").lower())
     if out is None or not out.open(scratch, spec):
         raise UsdWrinkleError(f"cannot write image '{path}': {one_line(oiio.geterror())}")
     ok = out.write_image(pixels)
@@ -233,27 +283,14 @@ def write_image(path: str, image, compression: str = "zip", half: bool = True) -
     RenderBuffers (converted here, colour and normals of an EXR half float with
     ``half``). EXR: ``compression`` (EXR_COMPRESSIONS).
 
-    The frame is encoded in memory, copied beside ``path`` and renamed only once the
-    copy has the encoded size: a full disk or a failing close is an error, and never
-    leaves a truncated frame under the output name.
+    The frame is encoded in memory (memory_file), copied beside ``path`` and renamed
+    only once the copy has the encoded size: a full disk or a failing close is an
+    error, and never leaves a truncated frame under the output name.
     """
     ext = check_format(path)
     if isinstance(image, dict):
         image = image_from_buffers(image, layout_for(path, half))
     _check_finite(image)
-    fd, scratch = tempfile.mkstemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}.", suffix=ext,
-                                   dir=_scratch_folder())
-    os.close(fd)
-    try:
+    with memory_file(ext) as scratch:
         encode_frame(scratch, image, path, compression)
-        size = os.path.getsize(scratch)
-
-        def complete(tmp: str) -> None:
-            if os.path.getsize(tmp) != size:
-                raise OSError(28, f"only {os.path.getsize(tmp)} of {size} bytes were written")
-
-        with atomic_path(path, verify=complete) as tmp:
-            shutil.copyfile(scratch, tmp)
-    finally:
-        with contextlib.suppress(OSError):
-            os.unlink(scratch)
+        copy_complete(scratch, path)

@@ -221,12 +221,39 @@ class LayerBaker:
             data["usdwrinkle"] = {**data["usdwrinkle"], **extra_metadata}
             self.layer.customLayerData = data
         with atomic_path(output_path) as tmp:
-            # Export picks the file format from the extension; .usd is written as crate
-            args = {"format": "usdc"} if ext == ".usd" else {}
-            if not self.layer.Export(tmp, args=args):
-                raise UsdWrinkleError(f"cannot write layer '{output_path}'")
+            export_layer(self.layer, tmp, output_path, ext)
             if before_rename is not None:
                 before_rename()
+
+
+def export_layer(layer: Sdf.Layer, tmp: str, output_path: str, ext: str | None = None) -> None:
+    """Export ``layer`` to ``tmp`` (the temporary file of an atomic write of
+    ``output_path``): the format from ``ext`` (``.usd`` is written as crate), and a
+    failed write (a full disk, a read-only folder) as the one-line error with USD's
+    reason, not the exception text USD repeats for every failed buffer."""
+    from pxr import Tf
+
+    from ..scene.diagnostics import usd_diagnostics, usd_error_text
+
+    ext = ext or os.path.splitext(output_path)[1].lower()
+    args = {"format": "usdc"} if ext == ".usd" else {}
+    try:
+        with usd_diagnostics() as messages:
+            ok = layer.Export(tmp, args=args)
+    except Tf.ErrorException as exc:
+        reason = _first_write_error(str(exc)) or usd_error_text(exc)
+        raise UsdWrinkleError(f"cannot write layer '{output_path}': {reason}") from None
+    if not ok:
+        detail = f": {messages[-1]}" if messages else ""
+        raise UsdWrinkleError(f"cannot write layer '{output_path}'{detail}")
+
+
+def _first_write_error(text: str) -> str | None:
+    """The operating system's reason in USD's write errors ('No space left on device')."""
+    import re
+
+    match = re.search(r"Error occurred writing file: ([^'\n]+)", text)
+    return match.group(1).strip() if match else None
 
 
 def _ancestors(prim: Usd.Prim):

@@ -15,9 +15,9 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 
 class FrameWriter:
-    """``with FrameWriter(write) as writer: writer.submit(frame, path, buffers)``.
+    """``with FrameWriter(write) as writer: writer.submit(frame, path, image)``.
 
-    ``write(path, buffers)`` runs on the writer thread; ``threads=0`` writes in the
+    ``write(path, image)`` runs on the writer thread; ``threads=0`` writes in the
     caller's thread (the serial path). ``written`` lists the frames whose files are
     complete, in order.
     """
@@ -32,14 +32,14 @@ class FrameWriter:
         #: seconds the caller waited for the writer (the part of encoding not hidden)
         self.waited = 0.0
 
-    def submit(self, frame: float, path: str, buffers: dict) -> None:
+    def submit(self, frame: float, path: str, image) -> None:
         if self.pool is None:
-            self.write(path, buffers)
+            self.write(path, image)
             self.written.append(frame)
             return
         while len(self.pending) >= self.max_in_flight:
             self._finish_oldest()
-        self.pending.append((frame, self.pool.submit(self.write, path, buffers)))
+        self.pending.append((frame, self.pool.submit(self.write, path, image)))
 
     def _finish_oldest(self) -> None:
         import time

@@ -37,6 +37,14 @@ def available_memory() -> int | None:
     return None
 
 
+def check_samples(samples: int) -> None:
+    """Multisample counts are powers of two (moderngl and GL drivers take no others)."""
+    from ..errors import UsdWrinkleError
+
+    if samples < 1 or samples & (samples - 1):
+        raise UsdWrinkleError(f"--samples {samples} is not a power of two (1, 2, 4, 8, ...)")
+
+
 def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
     """Refuse a frame the GL implementation or the memory cannot hold, naming the limit,
     before anything is allocated (a driver may crash instead of failing cleanly)."""
@@ -52,6 +60,7 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
         if limit and value > int(limit):
             raise UsdWrinkleError(f"image size {width}x{height} exceeds this GL "
                                   f"implementation's {name} of {int(limit)}")
+    check_samples(samples)
     max_samples = int(ctx.info.get("GL_MAX_SAMPLES", 1) or 1)
     if samples > max_samples:
         raise UsdWrinkleError(f"--samples {samples} exceeds this GL implementation's "
@@ -101,8 +110,8 @@ class Framebuffer:
         return self.resolve.run(self.targets, self.size, self.samples, layout)
 
     def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
-        """The requested AOVs as float RenderBuffers, views of one array that is never
-        written again while a view of it is held."""
+        """The requested AOVs as float RenderBuffers, views of one array of their own
+        (never released, so no later frame writes into it)."""
         image = self.read_image(ImageLayout("aovs", tuple(aovs)))
         return {name: RenderBuffer(name, AOVS[name][2], image.planes[name]) for name in aovs}
 

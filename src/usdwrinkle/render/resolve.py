@@ -9,8 +9,8 @@ frame comes back as the planes its file stores, a PNG frame as its 8-bit codes.
 """
 from __future__ import annotations
 
-import sys
-from dataclasses import dataclass
+import threading
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -70,6 +70,17 @@ class ResolvedImage:
     height: int
     planes: dict
     bad: int
+    #: hands the planes' memory back to the pass that made them (see :meth:`release`)
+    _recycle: object = field(default=None, repr=False, compare=False)
+
+    def release(self) -> None:
+        """Say that nobody reads these planes any more: their memory may then hold a
+        later frame. Only the writer calls it, after the file is written; an image that
+        is never released keeps its own memory (nothing else ever writes into it)."""
+        recycle, self._recycle = self._recycle, None
+        self.planes = {}
+        if recycle is not None:
+            recycle()
 
 
 def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
@@ -105,9 +116,10 @@ class ResolvePass:
         self.variants: dict[int, Variants] = {}
         self.bad = ctx.buffer(reserve=4)
         self.out = None
-        #: readback arrays, reused once nobody holds a view of them any more
-        self._arrays: list[np.ndarray] = []
-        self._unshared_refs = None
+        #: readback arrays handed back by ResolvedImage.release, ready for a later
+        #: frame (the writer thread releases, the render loop takes: hence the lock)
+        self._free: list[np.ndarray] = []
+        self._free_lock = threading.Lock()
 
     def _shader(self, layout: ImageLayout, samples: int):
         attachments = layout.attachments
@@ -147,7 +159,7 @@ class ResolvePass:
             shader["u_offset"] = offsets[:kept] if kept > 1 else offsets[0]
         invocations = (n + 1) // 2 if layout.kind == "exr" else n  # EXR: pixel pairs
         shader.run((invocations + bindings.LOCAL_SIZE - 1) // bindings.LOCAL_SIZE)
-        array = self._array(words)
+        array = self._take_array(words)
         self.out.read_into(array, size=words * 4)
         bad = int(np.frombuffer(self.bad.read(), np.uint32)[0])
         planes = {}
@@ -157,26 +169,29 @@ class ResolvePass:
             flat = array.view(np.uint8)[first * 4:first * 4 + count * itemsize].view(dtype)
             planes[name] = flat.reshape((height, width, channels) if channels > 1 or
                                         layout.kind != "exr" else (height, width))
-        return ResolvedImage(layout, width, height, planes, bad)
+        return ResolvedImage(layout, width, height, planes, bad,
+                             _recycle=lambda: self._give_back(array))
 
-    def _array(self, words: int) -> np.ndarray:
-        """A uint32 array of ``words``: one whose views nobody holds any more (the writer
-        may still hold the last frames), else a new one. Reusing saves the page faults of
-        fresh memory (2 ms per 330 kpixel float RGBA plane here, ten times the copy)."""
-        for array in self._arrays:
-            # only this list and the loop hold it when the count is what it was just after
-            # allocation (measured with the same expression, so it holds on any Python)
-            if array.size == words and sys.getrefcount(array) == self._unshared_refs:
-                return array
-        array = np.empty(words, np.uint32)
-        self._arrays = [a for a in self._arrays if a.size == words][-3:] + [array]
-        for candidate in self._arrays:
-            if candidate is array:
-                self._unshared_refs = sys.getrefcount(candidate)
-        return array
+    def _take_array(self, words: int) -> np.ndarray:
+        """A uint32 array of ``words``: one that a released image handed back, else a new
+        one. Reusing saves the page faults of fresh memory (2 ms per 330 kpixel float
+        RGBA plane here, ten times the copy). An array is reused only after its image's
+        explicit release (the writer's, once the file is written), never on a guess of
+        who still holds it: an 8-bit frame still being encoded keeps its own pixels."""
+        with self._free_lock:
+            for index, array in enumerate(self._free):
+                if array.size == words:
+                    return self._free.pop(index)
+        return np.empty(words, np.uint32)
+
+    def _give_back(self, array: np.ndarray) -> None:
+        with self._free_lock:
+            # a few frames in flight at most; arrays of another size are of an old layout
+            self._free = [a for a in self._free if a.size == array.size][-3:] + [array]
 
     def release(self) -> None:
-        self._arrays = []
+        with self._free_lock:
+            self._free = []
         for variants in self.variants.values():
             variants.release()
         self.variants = {}
