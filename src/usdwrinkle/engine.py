@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from .errors import UsdWrinkleError, print_warning
-from .limits import MAX_HISTORY_FRAMES
+from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
@@ -77,6 +77,28 @@ class WrinkleEngine:
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (or 16:9 without a camera)."""
         return image_size(self.scene, self.camera, width, height, frame)
+
+    def check_relax_work(self, frames: list[float], wrinkles: bool = True) -> None:
+        """Refuse a run whose relax iterations times computed frames (preroll included)
+        exceed MAX_RELAX_WORK: each is within its own limit, but not their product."""
+        iterations = max((self.scene.meshes[path].params.relax_iterations
+                          for path in self.wrinkled_paths if path not in self.scene.baked),
+                         default=0)
+        finite = [f for f in frames if not math.isnan(f)]
+        if not wrinkles or not iterations or not finite:
+            return
+        start = self.history_start()
+        preroll = max(0.0, math.ceil(min(finite) - start)) if start is not None else 0.0
+        if preroll > MAX_HISTORY_FRAMES:
+            return  # the phase history refuses it, with its own bound (_history_plan)
+        computed = len(frames) + preroll
+        if iterations * computed > MAX_RELAX_WORK:
+            raise UsdWrinkleError(
+                f"this run would relax {iterations:,} iterations x {computed:,.0f} frames "
+                f"({preroll:,.0f} of them phase-history preroll) = "
+                f"{iterations * computed:,.0f} iterations; at most {MAX_RELAX_WORK:,} are "
+                "accepted (lower wrinkle:relaxIterations or --relax-iterations, render fewer "
+                "frames, or pass --history-start nearer the first frame)")
 
     # -- phase history --------------------------------------------------------------
     def history_start(self) -> float | None:

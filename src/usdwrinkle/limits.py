@@ -23,3 +23,14 @@ MAX_AMPLITUDE_SCALE = 1e3
 MAX_WORLD_COORDINATE = 1e15
 #: texture width or height (the GL 4.5 minimum of GL_MAX_TEXTURE_SIZE)
 MAX_TEXTURE_SIZE = 16384
+#: corners of one face: concave faces are ear-clipped (mapbox-earcut), whose time grows
+#: faster than the corner count (0.7-1.0 s at 50,000 corners, 4-6 s at 100,000, 26 s at
+#: 200,000 here), and no signal interrupts it
+MAX_FACE_CORNERS = 50_000
+#: relax iterations times the frames a run computes (preroll included): each limit above
+#: is reasonable alone, their product is not (10^9 iterations). A relax iteration costs
+#: 0.26 ms for the shirt and 0.65 ms for CesiumMan on llvmpipe, so this bound is about 9
+#: and 22 minutes of relaxation; it admits 100,000 frames at 20 iterations
+MAX_RELAX_WORK = 2_000_000
+#: worker processes of a local Dask cluster per CPU core (each holds a GL context)
+LOCAL_WORKERS_PER_CORE = 4

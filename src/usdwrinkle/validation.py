@@ -7,6 +7,7 @@ tools that run USD's validators find them.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,7 +21,17 @@ from .limits import (
     MAX_RELAX_ITERATIONS,
     MAX_WORLD_COORDINATE,
 )
-from .scene.values import static_value
+from .scene.values import (
+    FLOAT3_TYPES,
+    INT_TYPES,
+    finite_in_float32,
+    frame_of,
+    static_flattened,
+    static_time,
+    static_value,
+    type_problem,
+)
+from .timecode import format_frame
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"
@@ -32,16 +43,17 @@ class Finding:
     attribute: str | None
     message: str
     severity: str = "error"
+    #: the time sample that breaks the rule (None: the default time)
+    frame: float | None = None
 
     def one_line(self) -> str:
-        where = self.prim_path + (f".{self.attribute}" if self.attribute else "")
-        return f"{self.message} ({where})"
+        return UsdWrinkleError(self.message, self.prim_path, self.attribute,
+                               self.frame).one_line()
 
 
-_INTEGERS = {"int", "uint", "int64", "uint64", "uchar"}
+_INTEGERS = INT_TYPES
 _NUMBERS = {"float", "double", "half", "int", "uint", "int64", "uint64"}
-_VECTORS3 = {"float3", "double3", "half3"} | \
-    {f"{role}3{kind}" for role in ("vector", "normal", "point", "color") for kind in "fdh"}
+_VECTORS3 = FLOAT3_TYPES
 #: attribute -> (accepted scalar types, array?, what the message calls it). q and the
 #: profiles are arrays; width may be a constant scalar; the others are scalars.
 EXPECTED_TYPES = {
@@ -60,13 +72,8 @@ EXPECTED_TYPES = {
 def check_type(attr, path: str) -> list[Finding]:
     """A WrinkleAPI attribute authored with a type its readers cannot use."""
     name = attr.GetName()
-    scalars, arrays, wanted = EXPECTED_TYPES[name]
-    # the type the layers author (the schema's own type wins in GetTypeName)
-    specs = attr.GetPropertyStack(Usd.TimeCode.Default())
-    type_name = next((spec.typeName for spec in specs if spec.typeName), attr.GetTypeName())
-    if str(type_name.scalarType) in scalars and type_name.isArray in arrays:
-        return []
-    return [Finding(path, name, f"{name} must be {wanted}, not {str(type_name) or 'untyped'}")]
+    problem = type_problem(attr, *EXPECTED_TYPES[name])
+    return [Finding(path, name, problem)] if problem else []
 
 
 def _times(attr) -> list:
@@ -79,7 +86,7 @@ def refuse(findings: list[Finding]) -> None:
     """Raise the first finding as a UsdWrinkleError (the scene delegate and authoring)."""
     if findings:
         first = findings[0]
-        raise UsdWrinkleError(first.message, first.prim_path, first.attribute)
+        raise UsdWrinkleError(first.message, first.prim_path, first.attribute, first.frame)
 
 
 def point_count(prim, time=None) -> int | None:
@@ -176,6 +183,101 @@ def check_tension_threshold(value, path: str) -> list[Finding]:
     return _in_range(value, schema.TENSION_THRESHOLD, "tension threshold", 0.0, 1.0, path)
 
 
+def _value_check(name: str, path: str, count: int | None):
+    """check(attr, time) -> findings for the value of WrinkleAPI attribute ``name``."""
+    def primvar_value(attr, time):
+        return UsdGeom.Primvar(attr).ComputeFlattened(time)
+
+    return {
+        schema.Q: lambda attr, time: check_q(primvar_value(attr, time),
+                                             UsdGeom.Primvar(attr).GetInterpolation(), count,
+                                             path),
+        schema.WIDTH: lambda attr, time: check_width(primvar_value(attr, time), count, path),
+        schema.HEIGHT_PROFILE: lambda attr, time: check_profile(attr.Get(time), name, path),
+        schema.GRADIENT_PROFILE: lambda attr, time: check_profile(attr.Get(time), name, path),
+        schema.AMPLITUDE_SCALE: lambda attr, time: check_amplitude_scale(attr.Get(time), path),
+        schema.RELAX_ITERATIONS: lambda attr, time: check_relax_iterations(attr.Get(time), path),
+        schema.BIAXIAL: lambda attr, time: check_biaxial(attr.Get(time), path),
+        schema.TENSION: lambda attr, time: check_tension(attr.Get(time), path),
+        schema.TENSION_THRESHOLD: lambda attr, time: check_tension_threshold(attr.Get(time),
+                                                                             path),
+    }[name]
+
+
+def _differs(first, other) -> bool:
+    a, b = np.asarray(first), np.asarray(other)
+    return a.shape != b.shape or not np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+
+
+def attribute_findings(attr: Usd.Attribute, path: str, count: int | None) -> list[Finding]:
+    """Every rule for one authored WrinkleAPI attribute: its type, then its value at the
+    default time and at every time sample (a value that breaks a rule at frame 30 is
+    refused before frame 1 is drawn). WrinkleAPI values do not animate: a value that
+    changes over time gets a warning that says which one applies."""
+    name = attr.GetName()
+    wrong_type = check_type(attr, path)
+    if wrong_type:
+        return wrong_type
+    check = _value_check(name, path, count)
+    findings: list[Finding] = []
+    values = []
+    for time in _times(attr):
+        findings += [dataclasses.replace(f, frame=frame_of(time)) for f in check(attr, time)]
+        value = UsdGeom.Primvar(attr).ComputeFlattened(time) if name in (schema.Q, schema.WIDTH) \
+            else attr.Get(time)
+        if value is not None:
+            values.append(value)
+    if not findings and any(_differs(values[0], other) for other in values[1:]):
+        when = "the default time" if static_time(attr).IsDefault() else \
+            f"its first time sample ({attr.GetTimeSamples()[0]:g})"
+        findings.append(Finding(path, name, f"{name} changes over time, but WrinkleAPI values "
+                                            f"do not animate: its value at {when} applies "
+                                            "to every frame", "warning"))
+    # one finding per distinct problem (at its first time), even when samples repeat it
+    first = {}
+    for finding in findings:
+        first.setdefault((finding.attribute, finding.message), finding)
+    return list(first.values())
+
+
+#: the WrinkleAPI attributes, in the order their findings are reported
+ATTRIBUTES = (schema.Q, schema.WIDTH, schema.HEIGHT_PROFILE, schema.GRADIENT_PROFILE,
+              schema.AMPLITUDE_SCALE, schema.RELAX_ITERATIONS, schema.BIAXIAL, schema.TENSION,
+              schema.TENSION_THRESHOLD)
+
+
+def parameter_findings(prim: Usd.Prim, count: int | None) -> list[Finding]:
+    """attribute_findings of every authored WrinkleAPI attribute of ``prim``."""
+    path = str(prim.GetPath())
+    findings: list[Finding] = []
+    for name in ATTRIBUTES:
+        attr = prim.GetAttribute(name)
+        if attr and attr.HasAuthoredValue():
+            findings += attribute_findings(attr, path, count)
+    return findings
+
+
+def rest_findings(prim: Usd.Prim, count: int | None) -> list[Finding]:
+    """primvars:rest: its type, its length against the points, finite values."""
+    path = str(prim.GetPath())
+    rest = UsdGeom.PrimvarsAPI(prim).GetPrimvar("rest")
+    if not rest or not rest.HasAuthoredValue():
+        return []
+    problem = type_problem(rest.GetAttr(), FLOAT3_TYPES, (True,), "a point3f[] array")
+    if problem:
+        return [Finding(path, "primvars:rest", problem)]
+    value = static_flattened(rest)
+    if value is None:
+        return []
+    findings = []
+    if count is not None and len(value) != count:
+        findings.append(Finding(path, "primvars:rest",
+                                f"primvars:rest has {len(value)} values for {count} points"))
+    if not finite_in_float32(value):
+        findings.append(Finding(path, "primvars:rest", "points are not finite (NaN or Inf)"))
+    return findings
+
+
 def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
     """Every rule of ``usdwrinkle check`` on one prim with WrinkleAPI (else no findings)."""
     if not schema.has_wrinkle_api(prim):
@@ -184,43 +286,8 @@ def wrinkle_findings(prim: Usd.Prim) -> list[Finding]:
     if not prim.IsA(UsdGeom.Mesh):
         return [Finding(path, None, f"WrinkleAPI is applied to a {prim.GetTypeName() or 'typeless'}"
                                     " prim, not a Mesh")]
-    findings: list[Finding] = []
     count = point_count(prim)
-    checks = {
-        schema.Q: lambda attr, time: check_q(UsdGeom.Primvar(attr).ComputeFlattened(time),
-                                             UsdGeom.Primvar(attr).GetInterpolation(), count,
-                                             path),
-        schema.WIDTH: lambda attr, time: check_width(UsdGeom.Primvar(attr).ComputeFlattened(time),
-                                                     count, path),
-        schema.HEIGHT_PROFILE: lambda attr, time: check_profile(attr.Get(time), attr.GetName(),
-                                                                path),
-        schema.GRADIENT_PROFILE: lambda attr, time: check_profile(attr.Get(time),
-                                                                  attr.GetName(), path),
-        schema.AMPLITUDE_SCALE: lambda attr, time: check_amplitude_scale(attr.Get(time), path),
-        schema.RELAX_ITERATIONS: lambda attr, time: check_relax_iterations(attr.Get(time), path),
-        schema.BIAXIAL: lambda attr, time: check_biaxial(attr.Get(time), path),
-        schema.TENSION: lambda attr, time: check_tension(attr.Get(time), path),
-        schema.TENSION_THRESHOLD: lambda attr, time: check_tension_threshold(attr.Get(time),
-                                                                             path),
-    }
-    for name, check in checks.items():
-        attr = prim.GetAttribute(name)
-        if not attr or not attr.HasAuthoredValue():
-            continue
-        wrong_type = check_type(attr, path)
-        if wrong_type:
-            findings += wrong_type
-            continue
-        for time in _times(attr):
-            findings += check(attr, time)
-    rest = UsdGeom.PrimvarsAPI(prim).GetPrimvar("rest")
-    if rest and rest.HasAuthoredValue():
-        value = rest.ComputeFlattened(Usd.TimeCode.Default())
-        if value is not None and count is not None and len(value) != count:
-            findings.append(Finding(path, "primvars:rest",
-                                    f"primvars:rest has {len(value)} values for {count} points"))
-    # one finding per distinct problem, even when several time samples repeat it
-    return list(dict.fromkeys(findings))
+    return parameter_findings(prim, count) + rest_findings(prim, count)
 
 
 _registered = {"done": False}
@@ -249,10 +316,13 @@ def register_validators() -> None:
                 site_path = prim.GetPath()
                 if finding.attribute:
                     site_path = site_path.AppendProperty(finding.attribute)
+                kind = UsdValidation.ValidationErrorType.Warn if finding.severity == "warning" \
+                    else UsdValidation.ValidationErrorType.Error
                 errors.append(UsdValidation.ValidationError(
-                    "WrinkleAPIValue", UsdValidation.ValidationErrorType.Error,
+                    "WrinkleAPIValue", kind,
                     [UsdValidation.ValidationErrorSite(prim.GetStage(), site_path)],
-                    finding.message))
+                    finding.message if finding.frame is None else
+                    f"{finding.message} (at frame {format_frame(finding.frame)})"))
             return errors
 
         registry.RegisterPrimValidator(metadata, task)

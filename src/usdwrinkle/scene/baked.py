@@ -185,3 +185,10 @@ def find_baked(prim: Usd.Prim, num_points: int) -> BakedSource | None:
         raise UsdWrinkleError("incomplete baked wave fields: this primvar is missing "
                               "(re-bake, or pass --recompute)", str(prim.GetPath()), missing)
     return BakedSource(prim, num_points)
+
+
+def holds_bake(stage: Usd.Stage) -> bool:
+    """True when a layer of the stage was written by ``usdwrinkle bake`` (its
+    customLayerData has a "usdwrinkle" entry): rendering it is rendering a bake."""
+    return any("usdwrinkle" in layer.customLayerData
+               for layer in stage.GetLayerStack(includeSessionLayers=False))

@@ -94,6 +94,22 @@ def open_layer(identifier: str, what: str, required: bool = True):
     return layer
 
 
+def _would_resolve_to(layer, asset: str, absolute: str) -> set[str]:
+    """Where an asset that does not exist yet would be found once a file appears there:
+    the real paths an output must not take. A search path (``@later.usda@``, neither
+    anchored nor absolute) is looked up beside the layer first, then in the default
+    resolver's search path (PXR_AR_DEFAULT_SEARCH_PATH); ComputeAbsolutePath leaves it
+    bare when nothing is found, so it is anchored here, never at the working folder."""
+    if not absolute or "[" in absolute:
+        return set()
+    if os.path.isabs(absolute):
+        return {os.path.realpath(absolute)}
+    folders = [os.path.dirname(layer.realPath)] if layer.realPath else []
+    folders += [folder for folder in os.environ.get("PXR_AR_DEFAULT_SEARCH_PATH", "")
+                .split(os.pathsep) if folder]
+    return {os.path.realpath(os.path.join(folder, absolute)) for folder in folders}
+
+
 def scan_inputs(stage_path: str) -> StageInputs:
     """Open the stage's layers (not the stage) and list every file it reads."""
     inputs = StageInputs()
@@ -120,8 +136,7 @@ def scan_inputs(stage_path: str) -> StageInputs:
             absolute = layer.ComputeAbsolutePath(asset)
             resolved = str(resolver.Resolve(absolute)) if absolute else ""
             if not resolved:
-                if absolute and "[" not in absolute:
-                    inputs.missing.add(os.path.realpath(absolute))
+                inputs.missing.update(_would_resolve_to(layer, asset, absolute))
                 continue
             disk = package_file(resolved)
             require_regular_file(disk, "input", layer.identifier)

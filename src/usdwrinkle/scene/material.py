@@ -22,6 +22,7 @@ from ..schema import MAP_INPUTS
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, TextureImage
 from .topology import Topology
+from .values import static_flattened, static_value
 
 DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
 
@@ -80,7 +81,7 @@ def load_texture(resolved_path: str, color_space: str = "auto") -> TextureImage:
 
 def corner_values(primvar: UsdGeom.Primvar, topology: Topology, time) -> np.ndarray | None:
     """A primvar as one value per triangle corner, (m, 3, c); None if unusable."""
-    values = primvar.ComputeFlattened(time)
+    values = static_flattened(primvar, time)
     if values is None or len(values) == 0:
         return None
     arr = np.asarray(values, dtype=np.float32)
@@ -109,7 +110,7 @@ def _resolve(shader: UsdShade.Shader, name: str, time):
     for attr in inp.GetValueProducingAttributes():
         if UsdShade.Output.IsOutput(attr):
             return None, UsdShade.Shader(attr.GetPrim())
-        return attr.Get(time), None
+        return static_value(attr, time), None
     return None, None
 
 
@@ -214,7 +215,7 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
              f"the normal map is ignored ({where})")
         return None, False
     attr = _file_attribute(tex)
-    file_value = attr.Get(time) if attr else None
+    file_value = static_value(attr, time) if attr else None
     if file_value is None or not file_value.path:
         return None, False
     varies = attr.ValueMightBeTimeVarying()
@@ -252,7 +253,7 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
 def display_color(prim: Usd.Prim, time) -> np.ndarray:
     """The mesh's first displayColor (linear), or the neutral clay DEFAULT_COLOR."""
     display = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
-    value = display.ComputeFlattened(time) if display and display.HasValue() else None
+    value = static_flattened(display, time) if display and display.HasValue() else None
     return np.asarray(value[0], np.float32) if value is not None and len(value) else \
         DEFAULT_COLOR
 

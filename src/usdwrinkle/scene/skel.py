@@ -10,7 +10,10 @@ import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
 from ..errors import UsdWrinkleError
+from ..limits import MAX_WORLD_COORDINATE
+from .diagnostics import usd_diagnostics
 from .records import SkinData
+from .values import finite_in_float32
 
 
 def gf_matrices(xforms) -> np.ndarray:
@@ -19,12 +22,20 @@ def gf_matrices(xforms) -> np.ndarray:
 
 
 class SkelBindings:
-    """All skel bindings of a stage: mesh path -> (skel query, skinning query)."""
+    """All skel bindings of a stage: mesh path -> (skel query, skinning query).
 
-    def __init__(self, stage: Usd.Stage):
+    UsdSkel prints its own complaints about bindings (``ComputeJointInfluences``,
+    ``UsdSkelBlendShapeQuery``) on stderr; they reach ``warn`` as one line each.
+    """
+
+    def __init__(self, stage: Usd.Stage, warn=None):
         self.cache = UsdSkel.Cache()
         self.by_mesh: dict[str, tuple] = {}
         self.blend_queries: dict[str, UsdSkel.BlendShapeQuery] = {}
+        with usd_diagnostics(warn):
+            self._populate(stage)
+
+    def _populate(self, stage: Usd.Stage) -> None:
         for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
             if not prim.IsA(UsdSkel.Root):
                 continue
@@ -77,15 +88,57 @@ def skin_data(path: str, skel_query, skinning_query, num_points: int,
         raise UsdWrinkleError(f"joint indices out of range [0, {num_joints})", path,
                               "primvars:skel:jointIndices")
     geom_bind = np.asarray(skinning_query.GetGeomBindTransform(), dtype=np.float64)
+    if not finite_in_float32(geom_bind):
+        raise UsdWrinkleError("geomBindTransform is not finite in float32 (NaN, Inf or "
+                              "beyond 3.4e38)", path, "primvars:skel:geomBindTransform")
     point_indices: list = []
     offsets: list = []
     if blend_query is not None:
-        for ids in blend_query.ComputeBlendShapePointIndices():
-            ids = np.asarray(ids, dtype=np.int32)
-            point_indices.append(ids if ids.size else None)
-        offsets = [np.asarray(o, dtype=np.float32).reshape(-1, 3)
-                   for o in blend_query.ComputeSubShapePointOffsets()]
+        point_indices, offsets = _blend_shapes(path, blend_query, num_points)
     return SkinData(method, geom_bind, indices, weights, num_joints, point_indices, offsets)
+
+
+def _blend_shapes(path: str, blend_query, num_points: int) -> tuple[list, list]:
+    """(point indices per blend shape, offsets per sub-shape), validated: every target a
+    BlendShape, indices within the mesh's points, offsets finite."""
+    shapes = [blend_query.GetBlendShape(i) for i in range(blend_query.GetNumBlendShapes())]
+    for shape in shapes:
+        if not shape:
+            raise UsdWrinkleError("a blend shape target is not a valid BlendShape prim", path,
+                                  "skel:blendShapeTargets")
+    point_indices = []
+    for shape, ids in zip(shapes, blend_query.ComputeBlendShapePointIndices(), strict=True):
+        ids = np.asarray(ids, dtype=np.int64)
+        if ids.size and (ids.min() < 0 or ids.max() >= num_points):
+            raise UsdWrinkleError(f"blend shape point indices out of range [0, {num_points})",
+                                  str(shape.GetPrim().GetPath()), "pointIndices")
+        point_indices.append(ids.astype(np.int32) if ids.size else None)
+    offsets = []
+    for sub, values in enumerate(blend_query.ComputeSubShapePointOffsets()):
+        values = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+        if not finite_in_float32(values):
+            shape = shapes[blend_query.GetBlendShapeIndex(sub)]
+            inbetween = blend_query.GetInbetween(sub)
+            raise UsdWrinkleError("blend shape offsets are not finite in float32 (NaN, Inf or "
+                                  "beyond 3.4e38)", str(shape.GetPrim().GetPath()),
+                                  inbetween.GetAttr().GetName() if inbetween else "offsets")
+        offsets.append(values.astype(np.float32))
+    return point_indices, offsets
+
+
+def check_blend_weights(path: str, skin: SkinData, weights: np.ndarray, frame,
+                        extent: float) -> None:
+    """Refuse sub-shape weights that are not finite, or that move points beyond
+    +-MAX_WORLD_COORDINATE (where the GPU's float32 squares of lengths overflow)."""
+    if not np.all(np.isfinite(weights)):
+        raise UsdWrinkleError("blend shape weights are not finite", path, "skel:blendShapes",
+                              frame)
+    reach = extent + sum(abs(float(w)) * float(np.abs(o).max(initial=0.0))
+                         for w, o in zip(weights, skin.subshape_offsets, strict=False))
+    if reach > MAX_WORLD_COORDINATE:
+        raise UsdWrinkleError(f"blend shape weights move points {reach:.3g} scene units, "
+                              f"beyond +-{MAX_WORLD_COORDINATE:g} (the GPU's float32 range)",
+                              path, "skel:blendShapes", frame)
 
 
 def sample_skin(path: str, skel_query, skinning_query, blend_query, time: Usd.TimeCode,

@@ -26,9 +26,15 @@ from .lights import default_lights, read_lights
 from .material import read_material, read_normal_map
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
-from .skel import SkelBindings, sample_skin, skin_data
+from .skel import SkelBindings, check_blend_weights, sample_skin, skin_data
 from .topology import Topology, build_topology, vertex_normals
-from .values import finite_in_float32, frame_of, static_value
+from .values import (
+    finite_in_float32,
+    frame_of,
+    require_mesh_array,
+    static_flattened,
+    static_value,
+)
 
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
 #: prims whose edits change the skinning of the meshes bound to them
@@ -87,13 +93,16 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
     their points are time-sampled or ``primvars:rest`` is authored; their rest pose is
     ``primvars:rest`` when authored, else the default-time points, else the first sample.
     """
-    default = Usd.TimeCode.Default()
+    path = str(prim.GetPath())
     points_attr = UsdGeom.Mesh(prim).GetPointsAttr()
     rest_primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("rest")
+    require_mesh_array(points_attr, path)
+    if rest_primvar:
+        require_mesh_array(rest_primvar.GetAttr(), path)
     has_rest = not skinned and bool(rest_primvar) and rest_primvar.HasAuthoredValue()
     point_cached = not skinned and (points_attr.GetNumTimeSamples() > 0 or has_rest)
     if has_rest:
-        return point_cached, rest_primvar.ComputeFlattened(default), "primvars:rest"
+        return point_cached, static_flattened(rest_primvar), "primvars:rest"
     return point_cached, static_value(points_attr), "points"
 
 
@@ -120,20 +129,40 @@ def stage_frames(stage: Usd.Stage) -> list[float]:
     return [float(f) for f in np.arange(start, end + 0.5)]
 
 
+def inherited_range_note(stage: Usd.Stage) -> str | None:
+    """When the root layer authors no time range but a layer under it does (a shot that
+    sublayers an animated asset: USD takes the range from the root layer alone), a note
+    that says the default time is rendered and which --frames would give the asset's."""
+    if stage.HasAuthoredTimeCodeRange():
+        return None
+    for layer in stage.GetLayerStack(includeSessionLayers=False)[1:]:
+        if layer.HasStartTimeCode() and layer.HasEndTimeCode():
+            start, end = layer.startTimeCode, layer.endTimeCode
+            if math.isfinite(start) and math.isfinite(end) and end >= start:
+                return (f"the stage's root layer authors no startTimeCode/endTimeCode, so only "
+                        f"the default time is processed; its sublayer "
+                        f"'{os.path.basename(layer.identifier)}' spans {start:g}..{end:g} "
+                        f"(pass --frames {start:g}:{end:g}, or author the range on the root "
+                        "layer)")
+    return None
+
+
 def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
     """Triangulated topology of a mesh (None without faces); time-sampled topology is
     read at its first sample."""
     mesh = UsdGeom.Mesh(prim)
     path = str(prim.GetPath())
 
+    require_mesh_array(mesh.GetFaceVertexCountsAttr(), path)
+    require_mesh_array(mesh.GetFaceVertexIndicesAttr(), path)
     counts = static_value(mesh.GetFaceVertexCountsAttr())
     indices = static_value(mesh.GetFaceVertexIndicesAttr())
     if counts is None or indices is None or len(counts) == 0:
         return None
-    holes = mesh.GetHoleIndicesAttr().Get(Usd.TimeCode.Default())
+    holes = static_value(mesh.GetHoleIndicesAttr())
     topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
                               None if holes is None else np.asarray(holes), path)
-    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+    if static_value(mesh.GetOrientationAttr()) == UsdGeom.Tokens.leftHanded:
         # Flip the triangles' winding, not the faces, so faceVarying corners still map.
         topology = dataclasses.replace(
             topology, triangles=np.ascontiguousarray(topology.triangles[:, [0, 2, 1]]),
@@ -191,7 +220,7 @@ class StageSceneDelegate:
         #: mesh path -> its baked wave fields
         self.baked: dict[str, BakedSource] = {}
         self.up_axis = UsdGeom.GetStageUpAxis(self.stage)
-        self.skel = SkelBindings(self.stage)
+        self.skel = SkelBindings(self.stage, warn)
         self._relax_override = relax_iterations
         self._prims: dict[str, Usd.Prim] = {}
         self.meshes: dict[str, MeshRecord] = {}
@@ -287,7 +316,7 @@ class StageSceneDelegate:
             for mesh in present:
                 mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
         if rebuild_skel:
-            self.skel = SkelBindings(self.stage)
+            self.skel = SkelBindings(self.stage, self.warn)
             for mesh, prim in self._prims.items():
                 if prim.HasAPI(UsdSkel.BindingAPI):
                     mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
@@ -318,8 +347,8 @@ class StageSceneDelegate:
         if bits & DirtyBits.DIRTY_PRIMVAR:
             baked, wrinkled = self._wrinkle_source(prim, len(record.rest_points))
             record = dataclasses.replace(
-                record, params=read_params(prim, record.rest_points, record.topology, default,
-                                           self._relax_override),
+                record, params=read_params(prim, record.rest_points, record.topology,
+                                           self._relax_override, self.warn),
                 wrinkled=wrinkled, baked_range=baked.range_text() if baked is not None else None)
         if bits & DirtyBits.DIRTY_MATERIAL:
             record = dataclasses.replace(
@@ -358,15 +387,16 @@ class StageSceneDelegate:
             if not skel_query:
                 self.warn(f"skel binding without a valid skeleton; treated as static ({path})")
             else:
-                skin = skin_data(path, skel_query, skinning_query, len(rest),
-                                 self.skel.blend_queries.get(path))
+                with usd_diagnostics(self.warn):  # ComputeJointInfluences' complaints
+                    skin = skin_data(path, skel_query, skinning_query, len(rest),
+                                     self.skel.blend_queries.get(path))
         elif prim.HasAPI("SkelBindingAPI") and prim.GetRelationship("skel:skeleton"):
             targets = prim.GetRelationship("skel:skeleton").GetTargets()
             if targets:
                 self.warn(f"skel binding to a missing or unusable skeleton; treated as "
                           f"static ({path})")
         baked, wrinkled = self._wrinkle_source(prim, len(rest))
-        params = read_params(prim, rest, topology, default, relax_iterations)
+        params = read_params(prim, rest, topology, relax_iterations, self.warn)
         material = read_material(prim, topology, default, self.warn)
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
                           point_cached, wrinkled, params, material,
@@ -410,6 +440,7 @@ class StageSceneDelegate:
             if not np.all(np.isfinite(joints)):
                 raise UsdWrinkleError("skinning transforms are not finite", path,
                                       "skel:skeleton", frame)
+            check_blend_weights(path, record.skin, weights, frame, record.extent)
             check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
                             record.extent)
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UsdWrinkleError
+from ..limits import MAX_FACE_CORNERS
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,11 @@ def validate_faces(counts: np.ndarray, indices: np.ndarray, num_points: int,
     if indices.size and (indices.min() < 0 or indices.max() >= num_points):
         raise UsdWrinkleError(
             f"faceVertexIndices out of range [0, {num_points})", prim_path, "faceVertexIndices")
+    if counts.size and counts.max() > MAX_FACE_CORNERS:
+        raise UsdWrinkleError(
+            f"a face has {int(counts.max()):,} corners; usdwrinkle triangulates faces of at "
+            f"most {MAX_FACE_CORNERS:,} (split it into smaller faces)", prim_path,
+            "faceVertexCounts")
 
 
 def _newell_normal(poly: np.ndarray) -> np.ndarray:

@@ -5,14 +5,73 @@ from __future__ import annotations
 import numpy as np
 from pxr import Usd
 
+from ..errors import UsdWrinkleError
+
+
+def static_time(attr: Usd.Attribute) -> Usd.TimeCode:
+    """The time at which "the value" of ``attr`` outside a frame is read: the default
+    time where a default is authored, else its first time sample (EarliestTime resolves
+    to it; an attribute authored only with samples has no value at the default time)."""
+    source = attr.GetResolveInfo(Usd.TimeCode.Default()).GetSource()
+    return Usd.TimeCode.Default() if source == Usd.ResolveInfoSourceDefault \
+        else Usd.TimeCode.EarliestTime()
+
 
 def static_value(attr: Usd.Attribute, time: Usd.TimeCode | None = None):
-    """The value at ``time`` (default: the default time), else at the attribute's first
-    time sample (an attribute authored only with samples), else None."""
-    value = attr.Get(Usd.TimeCode.Default() if time is None else time)
-    if value is None and attr.GetNumTimeSamples():
-        value = attr.Get(attr.GetTimeSamples()[0])
-    return value
+    """The value at ``time``; at the default time (or without ``time``) the value outside
+    a frame (static_time): the default, else the first time sample, else None."""
+    if time is None or time.IsDefault():
+        time = static_time(attr)
+    return attr.Get(time)
+
+
+def static_flattened(primvar, time: Usd.TimeCode | None = None):
+    """A primvar's flattened value by static_value's rule (None when it has none)."""
+    if time is None or time.IsDefault():
+        time = static_time(primvar.GetAttr())
+    return primvar.ComputeFlattened(time)
+
+
+#: float triples any point reader takes
+FLOAT3_TYPES = frozenset({"float3", "double3", "half3"} |
+                         {f"{role}3{kind}" for role in ("vector", "normal", "point", "color")
+                          for kind in "fdh"})
+#: integer scalars
+INT_TYPES = frozenset({"int", "uint", "int64", "uint64", "uchar"})
+#: the mesh attributes every reader needs, with the types they may be authored with
+MESH_ARRAYS = {
+    "points": (FLOAT3_TYPES, "a point3f[] array"),
+    "primvars:rest": (FLOAT3_TYPES, "a point3f[] array"),
+    "faceVertexCounts": (INT_TYPES, "an int[] array"),
+    "faceVertexIndices": (INT_TYPES, "an int[] array"),
+}
+
+
+def authored_type(attr: Usd.Attribute):
+    """The type the layers author for ``attr`` (GetTypeName returns the schema's own
+    type for a schema attribute, whatever a layer says)."""
+    specs = attr.GetPropertyStack(Usd.TimeCode.Default())
+    return next((spec.typeName for spec in specs if spec.typeName), attr.GetTypeName())
+
+
+def type_problem(attr: Usd.Attribute, scalars, arrays, wanted: str) -> str | None:
+    """'<name> must be <wanted>, not <type>' when ``attr`` is authored with a scalar type
+    not in ``scalars`` or an arrayness not in ``arrays`` (True: array); else None."""
+    type_name = authored_type(attr)
+    if str(type_name.scalarType) in scalars and type_name.isArray in arrays:
+        return None
+    return f"{attr.GetName()} must be {wanted}, not {str(type_name) or 'untyped'}"
+
+
+def require_mesh_array(attr: Usd.Attribute, path: str) -> None:
+    """Refuse points, primvars:rest, faceVertexCounts or faceVertexIndices authored with a
+    type their readers cannot use (a string, a scalar): one line, not a numpy error."""
+    if not attr or not attr.HasAuthoredValue():
+        return
+    scalars, wanted = MESH_ARRAYS[attr.GetName()]
+    problem = type_problem(attr, scalars, (True,), wanted)
+    if problem:
+        raise UsdWrinkleError(problem, path, attr.GetName())
 
 
 def frame_of(time: Usd.TimeCode) -> float | None:
