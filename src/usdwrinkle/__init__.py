@@ -8,14 +8,29 @@ import warnings
 
 __version__ = "0.1.0"
 
-from . import schema as _schema
+from ._address_space import lean_usd as _lean_usd  # noqa: E402
+from ._address_space import prepare as _prepare_address_space  # noqa: E402
 
-if not _schema.register():
-    warnings.warn(
-        "usdwrinkle was imported after USD built its schema registry, so WrinkleAPI is "
-        "unknown in this process; import usdwrinkle first or set PXR_PLUGINPATH_NAME="
-        + _schema.schema_dir(), stacklevel=2)
-
-from .authoring import WrinkleAPI, profile_from_curve, profile_preset  # noqa: E402
+#: why usdwrinkle cannot run in this process (None: it can); checked before USD loads
+UNUSABLE = _prepare_address_space()
 
 __all__ = ["WrinkleAPI", "__version__", "profile_from_curve", "profile_preset"]
+
+if UNUSABLE is None:
+    _lean_usd()
+    from . import schema as _schema
+
+    if not _schema.register():
+        warnings.warn(
+            "usdwrinkle was imported after USD built its schema registry, so WrinkleAPI is "
+            "unknown in this process; import usdwrinkle first or set PXR_PLUGINPATH_NAME="
+            + _schema.schema_dir(), stacklevel=2)
+
+    from .authoring import WrinkleAPI, profile_from_curve, profile_preset  # noqa: E402
+else:
+    def __getattr__(name: str):
+        if name in __all__:
+            from .errors import UsdWrinkleError
+
+            raise UsdWrinkleError(UNUSABLE)
+        raise AttributeError(name)

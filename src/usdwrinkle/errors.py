@@ -33,12 +33,60 @@ class UsdWrinkleError(Exception):
         return f"{what} ({where})" if where else what
 
 
+class _SafeStderr:
+    """sys.stderr for messages about a run (warnings, errors, progress): a write that
+    fails (a closed or full stderr, ``2>/dev/full``) is dropped, and stderr becomes
+    /dev/null for the rest of the process, so that a message that cannot be shown never
+    fails the run it reports on, nor Python's final flush (exit 120)."""
+
+    def write(self, text: str) -> int:
+        import sys
+
+        try:
+            written = sys.stderr.write(text)
+            sys.stderr.flush()
+            return written
+        except (OSError, ValueError):
+            self._silence()
+            return len(text)
+
+    def flush(self) -> None:
+        import sys
+
+        try:
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            self._silence()
+
+    def isatty(self) -> bool:
+        import sys
+
+        try:
+            return sys.stderr.isatty()
+        except (OSError, ValueError):
+            return False
+
+    @staticmethod
+    def _silence() -> None:
+        import os
+        import sys
+
+        sys.stderr = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 (process-wide)
+
+
+#: where usdwrinkle writes everything it says on stderr
+STDERR = _SafeStderr()
+
+
+def print_stderr(text: str) -> None:
+    """One line on stderr (STDERR: never fails)."""
+    STDERR.write(text + "\n")
+
+
 def print_warning(message: str) -> None:
     """The one way a warning reaches the user: ``usdwrinkle: warning: <message>`` on stderr
     (cli/common.Reporter adds de-duplication and --quiet on top)."""
-    import sys
-
-    print(f"usdwrinkle: warning: {' '.join(str(message).split())}", file=sys.stderr)
+    print_stderr(f"usdwrinkle: warning: {' '.join(str(message).split())}")
 
 
 class GLContextError(UsdWrinkleError):

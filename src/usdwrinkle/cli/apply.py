@@ -287,14 +287,13 @@ def author(plans: list[MeshEdit]) -> None:
 
 def export(layer, destination: str) -> None:
     """Write the edited layer atomically; a symlinked stage is edited in its real file."""
-    from ..errors import UsdWrinkleError
     from ..outputs.atomic import atomic_path, check_writable
+    from ..outputs.layers import export_layer
 
     destination = os.path.realpath(destination)
     check_writable([destination])
     with atomic_path(destination) as tmp:
-        if not layer.Export(tmp):
-            raise UsdWrinkleError(f"cannot write '{destination}'")
+        export_layer(layer, tmp, destination)
 
 
 def run(args) -> int:

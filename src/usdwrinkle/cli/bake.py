@@ -147,7 +147,7 @@ def check_map_folder(folder: str) -> None:
 def run(args) -> int:
     from ..outputs.atomic import check_writable
     from ..outputs.layers import check_layer_path
-    from ..scene.stage import open_stage, stage_frames
+    from ..scene.stage import inherited_range_note, open_stage, stage_frames
     from ..shot import bake_layer, frame_spec_text
 
     check_stage_args(args)
@@ -163,6 +163,8 @@ def run(args) -> int:
     if maps is not None:
         check_map_folder(maps.folder_for(args.output))
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
+    if not args.frames and (note := inherited_range_note(stage)):
+        reporter.warn(note)
     # a bake always computes: fields already baked into the input are not its input
     engine = start_engine(args, reporter, stage, use_baked=False)
     try:

@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import os
-import sys
 
-from ..errors import UsdWrinkleError, print_warning
+from ..errors import STDERR, UsdWrinkleError, print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -77,7 +76,7 @@ class Reporter:
         if self.quiet or len(items) < 2:
             return items
         from tqdm import tqdm
-        return tqdm(items, desc=desc, unit="frame", file=sys.stderr, dynamic_ncols=True)
+        return tqdm(items, desc=desc, unit="frame", file=STDERR, dynamic_ncols=True)
 
 
 def engine_options(args, stage_path: str | None = None, camera: str | None = None,

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import os
 
+from ..errors import UsdWrinkleError
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("demo", help="render the bundled shirt sample stage to PNGs")
@@ -18,7 +20,9 @@ def run(args) -> int:
     from . import render
 
     stage = str(resource_dir("sample_stages") / "shirt.usda")
-    os.makedirs(args.outdir, exist_ok=True)
+    if os.path.exists(args.outdir) and not os.path.isdir(args.outdir):
+        raise UsdWrinkleError(f"cannot write the demo into '{args.outdir}': it is a file, "
+                              "not a folder")
     # the render subcommand's own parser fills in every option's default, so the demo
     # stays in step with render's options
     from .main import build_parser

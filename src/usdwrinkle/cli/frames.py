@@ -67,7 +67,8 @@ def parse_frame_spec(spec: str) -> list[float]:
             raise UsdWrinkleError(f"bad FrameSpec '{spec}': empty item")
         tcr = _time_code_range(part, spec)
         start, end = tcr.startTimeCode.GetValue(), tcr.endTimeCode.GetValue()
-        total += range_count(start, end, tcr.stride)
+        steps = (end - start) / tcr.stride  # a tiny stride: inf, never listed
+        total += range_count(start, end, tcr.stride) if steps <= MAX_FRAMES else MAX_FRAMES + 1
         if total > MAX_FRAMES:
             raise UsdWrinkleError(f"--frames '{spec}' names more than {MAX_FRAMES:,} frames "
                                   "(the most one run renders; split the shot into chunks)")
@@ -104,7 +105,7 @@ def frame_paths(pattern: str, frames: list[float]) -> list[str]:
     first: dict[str, float] = {}
     for frame, path in zip(frames, paths, strict=True):
         other = first.setdefault(path, frame)
-        if other != frame:
+        if other != frame and not (math.isnan(other) and math.isnan(frame)):  # NaN: default
             raise UsdWrinkleError(
                 f"frames {other:g} and {frame:g} would both be written to '{path}' (sub-frames "
                 f"are named to {SUBFRAME_DECIMALS} decimals); choose frames that differ there")

@@ -12,12 +12,26 @@ import threading
 import traceback
 
 from .. import __version__
+from ..errors import STDERR, print_stderr
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with usdwrinkle's error contract: a usage error is one line,
+    ``usdwrinkle: error: <what> (see 'usdwrinkle COMMAND --help')``, and exit 2, not
+    argparse's usage block followed by its own error line."""
+
+    def error(self, message: str):
+        from ..errors import print_stderr
+
+        print_stderr(f"usdwrinkle: error: {' '.join(message.split())} "
+                     f"(see '{self.prog} --help')")
+        sys.exit(2)
 
 
 def build_parser() -> argparse.ArgumentParser:
     from . import apply, bake, bench, check, demo, info, render
 
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="usdwrinkle",
         description="Plausible cloth wrinkles on coarse animated USD meshes "
                     "(Loviscach 2006: skin, crush, relax, render on the GPU).")
@@ -26,7 +40,34 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in (render, bake, apply, check, bench, info, demo):
         module.add_parser(sub)
+    for command in sub.choices.values():
+        # also after the subcommand; SUPPRESS: unset here must not undo it given before
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                             help="show tracebacks on errors")
     return parser
+
+
+#: options whose value may start with '-' (a negative frame): argparse takes such a
+#: value for an option of its own unless it is attached with '='
+_SIGNED_VALUES = ("--frames", "--history-start")
+
+
+def _attach_signed_values(argv: list[str]) -> list[str]:
+    """``--frames -5:-3`` -> ``--frames=-5:-3`` (and the same for --history-start)."""
+    out: list[str] = []
+    items = iter(argv)
+    for item in items:
+        if item in _SIGNED_VALUES:
+            value = next(items, None)
+            if value is not None and value.startswith("-") and value[1:2].isdigit():
+                out.append(f"{item}={value}")
+                continue
+            out.append(item)
+            if value is not None:
+                out.append(value)
+            continue
+        out.append(item)
+    return out
 
 
 class Terminated(BaseException):
@@ -34,8 +75,29 @@ class Terminated(BaseException):
     session): unwind like Ctrl-C, so that no temporary file is left behind."""
 
 
-def _on_sigterm(signum, frame):
+def _stop_signals() -> list:
+    return [getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
+            if hasattr(signal, name)]
+
+
+def _on_stop(signum, frame):
+    """The first stop signal unwinds the run (its cleanup removes temporary files and
+    finishes the frames handed to the writer). Later ones are ignored until the process
+    exits: a second Ctrl-C a few milliseconds after the first used to land in the middle
+    of that cleanup, or in the GL and thread teardown after it, and abort the process
+    (SIGABRT) instead of exit 130."""
+    for other in _stop_signals():
+        signal.signal(other, signal.SIG_IGN)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt()
     raise Terminated()
+
+
+def _install_stop_handlers() -> dict:
+    """Our stop handlers on the main thread; returns the previous ones."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {sig: signal.signal(sig, _on_stop) for sig in _stop_signals()}
 
 
 #: what an interrupted command leaves behind (every output is written atomically)
@@ -59,50 +121,75 @@ def _one_line_warnings() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _on_sigterm)
-        if hasattr(signal, "SIGHUP"):
-            signal.signal(signal.SIGHUP, _on_sigterm)
+    previous = _install_stop_handlers()
+    code = _main(argv)
+    if code not in (130, 143):  # after a stop, the process exits: stay deaf to more
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    return code
+
+
+def _main(argv: list[str] | None) -> int:
+    from .. import UNUSABLE
+
+    if UNUSABLE is not None:  # before USD, Mesa or numpy reserves anything
+        print_stderr(f"usdwrinkle: error: {UNUSABLE}")
+        return 2
+    import os
+
+    try:
+        os.getcwd()
+    except FileNotFoundError:  # relative paths (and USD's anchoring) need it
+        print_stderr("usdwrinkle: error: the current folder no longer exists (it was deleted "
+                     "or moved); change to an existing folder")
+        return 2
     _one_line_warnings()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_attach_signed_values(sys.argv[1:] if argv is None else argv))
     if not getattr(args, "command", None):
-        parser.print_help(sys.stderr)
+        parser.print_help(STDERR)
         return 2
     from ..errors import UsdWrinkleError
 
     try:
         return int(args.run(args) or 0)
+    except BrokenPipeError:
+        # stdout closed by its reader (usdwrinkle info | head): what it read is what it
+        # wanted; no traceback, and no failing flush at exit
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
     except UsdWrinkleError as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"usdwrinkle: error: {exc.one_line()}", file=sys.stderr)
+        print_stderr(f"usdwrinkle: error: {exc.one_line()}")
         return 2
     except KeyboardInterrupt:
-        print(f"usdwrinkle: interrupted{_AFTER_INTERRUPT.get(args.command, '')}",
-              file=sys.stderr)
+        print_stderr(f"usdwrinkle: interrupted{_AFTER_INTERRUPT.get(args.command, '')}")
         return 130
     except Terminated:
-        print(f"usdwrinkle: terminated{_AFTER_INTERRUPT.get(args.command, '')}",
-              file=sys.stderr)
+        print_stderr(f"usdwrinkle: terminated{_AFTER_INTERRUPT.get(args.command, '')}")
         return 143
     except MemoryError:
-        print("usdwrinkle: error: out of memory (lower --width/--height, --samples or the "
-              "number of meshes, or free memory)", file=sys.stderr)
+        print_stderr("usdwrinkle: error: out of memory (lower --width/--height, --samples or "
+                     "the number of meshes, or free memory)")
         return 2
     except Exception as exc:  # a bug in usdwrinkle: still one line, unless --debug
         if args.debug:
             traceback.print_exc()
-        print(f"usdwrinkle: internal error: {type(exc).__name__}: {exc} (rerun with --debug "
-              "for a traceback, and please report it)", file=sys.stderr)
+        print_stderr(f"usdwrinkle: internal error: {type(exc).__name__}: {exc} (rerun with "
+                     "--debug for a traceback, and please report it)")
         return 3
 
 
 def entry_point() -> None:
     code = main()
-    from ..render.context import release_context
+    if "usdwrinkle.render.context" in sys.modules:
+        from ..render.context import release_context
 
-    release_context()  # the one GL context of the process, released cleanly
+        release_context()  # the one GL context of the process, released cleanly
     sys.exit(code)
 
 

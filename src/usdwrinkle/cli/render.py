@@ -1,8 +1,11 @@
 """usdwrinkle render STAGE OUTPUT: render frames headlessly to images."""
 from __future__ import annotations
 
+import os
 import time
 
+from ..errors import UsdWrinkleError
+from ..limits import LOCAL_WORKERS_PER_CORE
 from ..outputs.images import EXR_COMPRESSIONS
 from .common import (
     Reporter,
@@ -32,7 +35,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--height", type=int, metavar="PX",
                    help="image height (default: from the camera's aspect ratio)")
     p.add_argument("--samples", type=int, default=4, metavar="N",
-                   help="multisamples per pixel for anti-aliased edges (4; 1 turns it off)")
+                   help="multisamples per pixel for anti-aliased edges, a power of two (4; 1 "
+                        "turns it off)")
     p.add_argument("--write-threads", type=int, default=1, metavar="N",
                    help="threads that encode and write frames while the next ones render "
                         "(1; at most 2 frames in flight; 0 writes each frame before the next "
@@ -78,22 +82,26 @@ def add_parser(subparsers) -> None:
 
 def check_render_args(args) -> None:
     """Refuse bad options before any stage is read."""
-    from ..errors import UsdWrinkleError
     from ..outputs.images import check_format
+    from ..render.buffers import check_samples
 
     refuse_overwriting_inputs(args.stage, [args.output])
     check_format(args.output)
     if args.width <= 0 or (args.height is not None and args.height <= 0):
         raise UsdWrinkleError("--width and --height must be positive")
-    if args.samples < 1:
-        raise UsdWrinkleError("--samples must be at least 1")
+    check_samples(args.samples)
     if not 0 <= args.write_threads <= 8:
         raise UsdWrinkleError("--write-threads must be in 0..8")
     check_stage_args(args)
     if args.chunk is not None and args.chunk < 1:
         raise UsdWrinkleError("--chunk must be at least 1")
-    if args.workers is not None and args.workers < 1:
-        raise UsdWrinkleError("--workers must be at least 1")
+    if args.workers is not None:
+        cores = os.cpu_count() or 1
+        most = LOCAL_WORKERS_PER_CORE * cores
+        if not 1 <= args.workers <= most:
+            raise UsdWrinkleError(f"--workers must be in 1..{most} ({LOCAL_WORKERS_PER_CORE} "
+                                  f"worker processes per CPU core, {cores} here: each holds "
+                                  "its own GL context)")
 
 
 def summary(written: int, width: int, height: int, output: str, frames: list[float],
@@ -119,10 +127,29 @@ def write_stats(path: str, stats: dict) -> None:
         json.dump(stats, handle, indent=1)
 
 
+def _warn_unbaked(engine, reporter, args) -> None:
+    """A farm chunk that renders a bake but finds wrinkled meshes without baked fields
+    (a bake made without --all-meshes, say) computes them itself, with a preroll: say
+    so, since that is what the farm recipe's bake exists to avoid."""
+    from ..scene.baked import holds_bake
+
+    if args.recompute or args.no_wrinkles or not holds_bake(engine.scene.stage):
+        return
+    unbaked = [path for path in engine.wrinkled_paths if path not in engine.scene.baked]
+    if unbaked:
+        start = engine.history_start()
+        preroll = f", with a phase-history preroll from frame {start:g}" \
+            if start is not None else ""
+        reporter.warn(f"the stage holds a usdwrinkle bake, but {len(unbaked)} wrinkled "
+                      f"mesh(es) have no baked wave fields in it; computing them here{preroll} "
+                      "(other machines may compute them slightly differently: bake with the "
+                      f"options the render uses, e.g. --all-meshes) ({unbaked[0]})")
+
+
 def run(args) -> int:
     from ..outputs.atomic import check_writable
     from ..outputs.images import is_complete_image
-    from ..scene.stage import open_stage, stage_frames
+    from ..scene.stage import inherited_range_note, open_stage, stage_frames
     from ..shot import ImageOptions, render_frames
 
     check_render_args(args)
@@ -130,8 +157,13 @@ def run(args) -> int:
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
+    if not args.frames and (note := inherited_range_note(stage)):
+        reporter.warn(note)
     outputs = frame_paths(args.output, frames)
     extra = [args.stats] if args.stats else []
+    if args.stats and os.path.realpath(args.stats) in {os.path.realpath(o) for o in outputs}:
+        raise UsdWrinkleError(f"--stats '{args.stats}' is the path of a frame this run "
+                              "writes; choose another file for the timings")
     refuse_overwriting_inputs(args.stage, outputs + extra, stage)
     check_writable(outputs + extra)
     if args.dask is not None:
@@ -146,6 +178,7 @@ def run(args) -> int:
                           use_baked=not (args.recompute or args.no_wrinkles))
     try:
         engine.scene.check_baked(frames)
+        _warn_unbaked(engine, reporter, args)
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                           "(use --all-meshes to wrinkle every mesh)")

@@ -22,11 +22,12 @@ import contextlib
 import logging
 import math
 import os
-import sys
+import shutil
+import tempfile
 import time
 import uuid
 
-from ..errors import UsdWrinkleError
+from ..errors import STDERR, UsdWrinkleError
 from ..outputs.atomic import remove_temporaries
 from ..shot import ImageOptions, bake_layer, frame_spec_text
 from .worker import file_identity, render_chunk
@@ -72,9 +73,14 @@ def _connect(distributed, address: str, workers: int | None):
         # CRITICAL: a local worker's "failed to communicate with scheduler during
         # heartbeat" when the machine is loaded, or at shutdown, is not the user's error
         # (task errors reach the user as the one-line error, not through these logs)
+        # the workers' spill folder: a temporary folder of ours, not dask-scratch-space in
+        # the user's working folder (removed with the cluster, _close)
+        scratch = tempfile.mkdtemp(prefix="usdwrinkle-dask-")
         cluster = distributed.LocalCluster(
             n_workers=count, threads_per_worker=1, processes=True,
-            silence_logs=logging.CRITICAL, dashboard_address=dashboard)
+            silence_logs=logging.CRITICAL, dashboard_address=dashboard,
+            local_directory=scratch)
+        cluster.usdwrinkle_scratch = scratch
         return distributed.Client(cluster), cluster, count
     try:
         client = distributed.Client(address, timeout="20s")
@@ -183,6 +189,7 @@ def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str
         if cluster is not None:
             with contextlib.suppress(Exception):
                 cluster.close()
+            shutil.rmtree(cluster.usdwrinkle_scratch, ignore_errors=True)
         for path in outputs:  # killed workers never reach atomic_path's cleanup
             remove_temporaries(path)
     return 0
@@ -194,7 +201,7 @@ def _gather(distributed, futures, total: int, chunk: int, reporter) -> tuple[int
     if not reporter.quiet and total > 1:
         from tqdm import tqdm
         bar = tqdm(total=total, desc="render", unit="frame", dynamic_ncols=True,
-                   file=sys.stderr)
+                   file=STDERR)
     written = 0
     baked: set[str] = set()
     try:
