@@ -59,11 +59,17 @@ def test_render(gl_context, tmp_path, capsys, name):
         finite = np.isfinite(pixels)
         finite[..., z] = True  # Z is inf where nothing was hit
         assert finite.all(), frame.name
+        if expected["visible"]:  # drawn, not silently dropped
+            alpha = pixels[..., list(spec.channelnames).index("A")]
+            assert np.count_nonzero(alpha > 0) > 10, frame.name
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_bake(gl_context, tmp_path, capsys, name):
     expected = CASES[name]
+    if expected["bake"]:
+        expected = {**expected, "outcome": expected["bake"][0],
+                    "fragment": expected["bake"][1]}
     out = tmp_path / "baked.usda"
     code = main(["bake", str(BAD / name), str(out), "--quiet"])
     if expected["outcome"] == "error":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -21,7 +22,7 @@ from usdwrinkle.cli.frames import frame_path, parse_frame_spec
 from usdwrinkle.cli.main import main
 
 from conftest import grid_sheet
-from helpers import point_cache_stage
+from helpers import point_cache_stage, read_until
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 SHIRT_MESH = "/World/Arm/Sleeve"
@@ -559,11 +560,14 @@ def test_sighup_during_a_bake_leaves_no_temporary_file(tmp_path):
     stage = shirt_copy(tmp_path)
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "usdwrinkle", "bake", str(stage),
-                             str(out / "b.usdc"), "--frames", "1:2000", "--quiet"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(4.0)  # inside the bake's frame loop
+                             str(out / "b.usdc"), "--frames", "1:2000"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # signal on an observed event, not after a guessed delay: the progress report says
+    # that frames of the bake's loop are done
+    seen = read_until(proc.stderr, re.compile(rb"[^0-9][1-9][0-9]*/2000 "), timeout=300)
     proc.send_signal(signal.SIGHUP)
-    _, err = proc.communicate(timeout=120)
+    _, rest = proc.communicate(timeout=120)
+    err = (seen + rest).decode("utf-8", "replace")
     assert proc.returncode == 143, err
     assert "usdwrinkle: terminated; the layer was not written" in err
     assert not out.exists() or not list(out.iterdir())
