@@ -49,13 +49,22 @@ def add_camera(stage, eye, target, focal=35.0):
 
 
 def add_lights(stage, direction_euler=(-40.0, 30.0, 0.0)):
+    """A warm key and a cool fill, in UsdLux's units: a DistantLight's intensity is the
+    radiance of its disc (inputs:angle, 0.53 degrees by default), so the key at the
+    schema's own 50,000 (the sun's disc) gives an irradiance of 3.36, and a white
+    UsdPreviewSurface facing it shows 3.36 x albedo / pi: about its albedo. The fill
+    comes from the other side, low, at a sixth of that."""
     key = UsdLux.DistantLight.Define(stage, "/World/Lights/key")
-    key.CreateIntensityAttr(1.15)
+    key.CreateIntensityAttr(50000.0)
+    key.CreateAngleAttr(0.53)
     key.CreateColorAttr(Gf.Vec3f(1.0, 0.97, 0.92))
     key.AddRotateXYZOp().Set(Gf.Vec3f(*direction_euler))
-    dome = UsdLux.DomeLight.Define(stage, "/World/Lights/fill")
-    dome.CreateIntensityAttr(0.22)
-    dome.CreateColorAttr(Gf.Vec3f(0.8, 0.85, 1.0))
+    fill = UsdLux.DistantLight.Define(stage, "/World/Lights/fill")
+    fill.CreateIntensityAttr(8000.0)
+    fill.CreateAngleAttr(0.53)
+    fill.CreateColorAttr(Gf.Vec3f(0.8, 0.85, 1.0))
+    fill.AddRotateXYZOp().Set(Gf.Vec3f(-direction_euler[0] * 0.25,
+                                       direction_euler[1] - 150.0, 0.0))
 
 
 def add_material(stage, name, color=None, texture=None):
@@ -88,7 +97,9 @@ def define_mesh(stage, path, points, counts, indices, st=None,
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(points, np.float32)))
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.asarray(counts, np.int32)))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(indices, np.int32)))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    # a subdivision surface (USD's fallback scheme): renderers shade it with smooth
+    # normals of the posed cage (usdview's default complexity draws the cage itself)
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.catmullClark)
     mesh.CreateDoubleSidedAttr(True)
     lo, hi = np.min(points, 0), np.max(points, 0)
     mesh.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*lo.tolist()), Gf.Vec3f(*hi.tolist())]))

@@ -5,6 +5,10 @@
 #include "include/common.glsl"
 #include "include/wave.glsl"
 
+// the shading normals of this frame (normals pass) and each triangle corner's entry
+layout(binding = DRAW_SHADING_NORMALS) uniform sampler2D shading_normals;
+layout(binding = DRAW_NORMAL_CORNERS) uniform isampler2D normal_corners;
+
 // Texture coordinates per triangle corner: [3t + c].xy, of the diffuse texture and, in
 // the NORMAL_MAP variant (a mesh with a UsdPreviewSurface normal map), of the normal map
 // (the same primvar, or each its own)
@@ -46,7 +50,9 @@ void main() {
     v_local = p;
     vec4 world = u_local_to_world * vec4(p, 1.0);  // local -> world
     v_world = world.xyz / world.w;
-    v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
+    // the shading normal; the wave physics' own where it degenerates
+    vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
+    v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_st = fetch(corner_st, corner).xy;
 #if defined NORMAL_MAP
@@ -70,8 +76,23 @@ layout(location = 0) out vec4 out_color;    // linear RGB, alpha
 layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z
 layout(location = 2) out vec4 out_normal;   // world-space shading normal
 
+#include "include/surface.glsl"
+
 uniform int u_wrinkles;                // 0: same shading, no wrinkles
-uniform vec3 u_diffuse_color;
+uniform int u_double_sided;            // back faces shaded with the flipped normal
+uniform int u_fallback_surface;        // no UsdPreviewSurface: Storm's fallback surface
+uniform vec3 u_diffuse_color;          // UsdPreviewSurface diffuseColor, or displayColor
+uniform vec3 u_emissive_color;
+uniform int u_use_specular_workflow;
+uniform vec3 u_specular_color;
+uniform float u_metallic;
+uniform float u_roughness;
+uniform float u_clearcoat;
+uniform float u_clearcoat_roughness;
+uniform float u_opacity;               // or displayOpacity
+uniform float u_opacity_threshold;     // > 0: masked (cut out below it, else opaque)
+uniform float u_ior;
+uniform float u_occlusion;
 uniform int u_has_texture;
 layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
@@ -85,11 +106,6 @@ uniform vec4 u_normal_scale;
 uniform vec4 u_normal_bias;
 #endif
 
-uniform int u_num_lights;
-uniform int u_light_kind[MAX_LIGHTS];      // 0 distant, 1 sphere
-uniform vec3 u_light_radiance[MAX_LIGHTS];
-uniform vec4 u_light_vector[MAX_LIGHTS];   // distant: direction of travel; sphere: position, radius
-uniform vec3 u_ambient;                    // dome lights
 
 #if defined NORMAL_MAP
 // The tangent-space normal of the normal map at st, or nothing (false) outside its tiles
@@ -146,32 +162,33 @@ void main() {
         base *= texel.rgb;
     }
 
-    // local -> world shading normal, facing the camera on double-sided meshes
+    // local -> world shading normal; a double-sided mesh's back faces see it flipped, a
+    // single-sided mesh's back faces keep it (unlit, as Storm draws them)
     vec3 N = safe_normalize(u_normal_to_world * shading_local, vec3(0.0, 0.0, 1.0));
     vec3 V = safe_normalize(u_eye_world - v_world, N);
-    if (!gl_FrontFacing) N = -N;
+    if (!gl_FrontFacing && u_double_sided != 0) N = -N;
 
-    vec3 radiance = u_ambient * base;
-    for (int l = 0; l < u_num_lights && l < MAX_LIGHTS; ++l) {
-        vec3 L;
-        vec3 E = u_light_radiance[l];
-        if (u_light_kind[l] == 0) {
-            L = -u_light_vector[l].xyz;
-        } else {
-            vec3 to_light = u_light_vector[l].xyz - v_world;
-            float dist2 = max(dot(to_light, to_light), 1e-12);
-            L = to_light * inversesqrt(dist2);
-            float r = u_light_vector[l].w;
-            E *= PI * r * r / dist2;   // small sphere: irradiance ~ L pi r^2 / d^2
+    vec3 radiance;
+    float alpha;
+    if (u_fallback_surface != 0) {
+        radiance = fallback_surface(base, v_world, N);
+        alpha = u_opacity;
+    } else {
+        float opacity = u_opacity;
+        if (u_opacity_threshold > 0.0) {  // masked: cut out, else opaque
+            if (opacity < u_opacity_threshold) discard;
+            opacity = 1.0;
         }
-        float ndl = max(dot(N, L), 0.0);
-        vec3 H = safe_normalize(L + V, N);
-        float spec = pow(max(dot(N, H), 0.0), 48.0) * 0.12 * float(ndl > 0.0);
-        radiance += E * (base * ndl + spec);  // Lambert diffuse plus a faint Blinn lobe
+        PreviewSurface surface = PreviewSurface(
+            base * opacity, u_emissive_color, u_use_specular_workflow != 0, u_specular_color,
+            u_metallic, u_roughness, u_clearcoat, u_clearcoat_roughness, opacity, u_ior,
+            u_occlusion);
+        radiance = preview_surface(surface, v_world, N, V);
+        alpha = opacity;
     }
 
     vec4 eye = u_world_to_eye * vec4(v_world, 1.0);
-    out_color = vec4(radiance, 1.0);
+    out_color = vec4(radiance, alpha);
     out_wrinkle = vec4(h, wave.amplitude, -eye.z, 1.0);
     out_normal = vec4(N, 1.0);
 }

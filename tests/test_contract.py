@@ -24,10 +24,13 @@ LOCAL = re.compile(r"\b(?:float|int|uint|bool|[iu]?vec[234]|mat[234](?:x[234])?)
 GLSL = {"GL_ARB_shader_draw_parameters"}
 STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
                   "STEP", "TWO_SYSTEMS", "NORMAL_MAP",
+                  # the normals pass's (render/passes/normals.py)
+                  "SMOOTH", "FACETED", "SKINNED",
                   # the resolve pass's (render/resolve.py)
                   "SAMPLES", "NEED_FIELDS", "NEED_NORMAL", "OUTPUT_AOVS", "OUTPUT_EXR",
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK"}
-PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.CRUSH, bindings.RELAX,
+PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.NORMALS, bindings.CRUSH,
+                             bindings.RELAX,
                              bindings.DRAW, bindings.MAPS,
                              bindings.GEOMETRY, bindings.RESOLVE) for name in table}
 

@@ -162,7 +162,9 @@ NON_FINITE_SCENES = {
                             "light intensity is not finite (/World/Key.inputs:intensity"),
     "light intensity inf": (lambda s: add_light(s, **{"inputs:intensity": float("inf")}),
                             "light intensity is not finite (/World/Key.inputs:intensity"),
-    "light exposure 1024": (lambda s: add_light(s, **{"inputs:exposure": 1024.0}),
+    # Storm clamps exposure to +-50 stops: with intensity 1e25 that still overflows
+    "light exposure 1024": (lambda s: add_light(s, **{"inputs:exposure": 1024.0,
+                                                      "inputs:intensity": 1e25}),
                             "exceeds 1e+30"),
     "transform nan": (lambda s: UsdGeom.Xformable(s.GetPrimAtPath("/World")).AddTranslateOp()
                       .Set(Gf.Vec3d(float("nan"), 0, 0)), "transform is not finite"),

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 import pytest
-from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 from usdwrinkle.cli.main import main
 from usdwrinkle.scene.material import load_texture
@@ -110,6 +110,10 @@ def test_udim_tiles_are_written_and_read_back(gl_context, tmp_path):
     rest, _, _ = grid_sheet(31, 31, 2.0)
     st = np.stack([rest[:, 0] + 1.0, (rest[:, 1] + 1.0) / 2.0], 1)  # u in [0, 2]
     source = sheet_stage(tmp_path, 0.7, st=st)
+    lit = Usd.Stage.Open(str(source))  # an oblique key: the camera light shows no relief
+    key = UsdLux.DistantLight.Define(lit, "/Key")
+    key.AddRotateXYZOp().Set(Gf.Vec3f(-30.0, 60.0, 0.0))
+    lit.Save()
     layer = tmp_path / "udim.usda"
     assert bake_maps(source, layer) == 0
     folder = tmp_path / "udim_maps"

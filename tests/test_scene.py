@@ -97,15 +97,19 @@ def test_camera_selection():
 
 
 def test_lights_are_read():
+    """The sample's two distant lights (UsdLux units) and an added sphere light; the
+    formulas themselves are checked in tests/test_lights.py."""
     stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
     UsdLux.SphereLight.Define(stage, "/World/Lights/bulb").CreateIntensityAttr(3.0)
     scene = StageSceneDelegate(stage)
     frame = scene.sample(1.0, 1.5)
     kinds = sorted(light.kind for light in frame.lights)
-    assert kinds == ["distant", "dome", "sphere"]
-    distant = next(light for light in frame.lights if light.kind == "distant")
-    assert np.linalg.norm(distant.direction) == pytest.approx(1.0)
-    assert distant.radiance[0] == pytest.approx(1.15)
+    assert kinds == ["directional", "directional", "positional"]
+    key = max((light for light in frame.lights if light.kind == "directional"),
+              key=lambda light: light.color[0])
+    assert np.linalg.norm(key.vector) == pytest.approx(1.0)
+    solid_angle = 2 * np.pi * (1 - np.cos(np.radians(0.53) / 2))
+    assert key.color[0] == pytest.approx(50000 * solid_angle)
 
 
 def test_texture_inside_usdz_is_read_through_ar(corpus):

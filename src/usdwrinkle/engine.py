@@ -20,6 +20,8 @@ from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate
 
 AOV_NAMES = tuple(AOVS)
+#: the image aspect of the automatic framing (a stage without a camera)
+FRAMING_ASPECT = 16.0 / 9.0
 
 
 class WrinkleEngine:
@@ -75,7 +77,7 @@ class WrinkleEngine:
         return list(self.scene.baked)
 
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
-        """Fill in ``--height`` from the camera's aspect ratio (or 16:9 without a camera)."""
+        """Fill in ``--height`` from the camera's aspect ratio (image_size)."""
         return image_size(self.scene, self.camera, width, height, frame)
 
     def check_relax_work(self, frames: list[float], wrinkles: bool = True) -> None:
@@ -164,7 +166,7 @@ class WrinkleEngine:
             # a new frame dirties the time-varying state; edits add their own bits
             self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME)
 
-    def compute_frame(self, frame: float, aspect: float = 16.0 / 9.0, wrinkles: bool = True):
+    def compute_frame(self, frame: float, aspect: float | None = None, wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
 
         With wrinkles, earlier frames of the shot that this engine has not computed yet
@@ -184,6 +186,8 @@ class WrinkleEngine:
                 self._history_frame = step
         profile = self.render_delegate.profile
         started = time.perf_counter()
+        if aspect is None:
+            aspect = FRAMING_ASPECT
         record = self.scene.sample(frame, aspect, self.camera)
         read = time.perf_counter()
         self.scene.current_frame = record
@@ -236,9 +240,11 @@ class WrinkleEngine:
 def image_size(scene, camera: str | None, width: int, height: int | None,
                frame: float) -> tuple[int, int]:
     """``--width`` and ``--height``, the height from the camera's aspect ratio when not
-    given (16:9 without a camera). Needs only the scene delegate, no GL."""
+    given (16:9 without a camera), rounded down as usdrecord does. Needs only the scene
+    delegate, no GL."""
     if height:
         return width, height
-    aspect = scene.camera_aspect(camera, frame) or 16.0 / 9.0
-    return width, max(1, int(round(width / aspect)))
+    aspect = scene.camera_aspect(camera, frame) or FRAMING_ASPECT
+    # usdrecord: static_cast<size_t>(float(width) / aspectRatio), in single precision
+    return width, max(1, int(np.float32(width) / np.float32(aspect)))
 

@@ -28,6 +28,12 @@ SKIN = {"SKIN_REST_POINTS": 0, "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,
         "SKIN_POSED_POINTS": 0,
         # storage buffers: blend shapes (only the sub-shapes with a weight are read)
         "SKIN_SUBSHAPE_OFFSETS": 0, "SKIN_SUBSHAPE_WEIGHTS": 1}
+#: the normals pass (shaders/normals.glsl); its skinned variant also reads the SKIN units
+#: of include/skinning.glsl (influences 1, joints 3)
+NORMALS = {"NORMALS_PLAN": 0, "NORMALS_POSED_POINTS": 2, "NORMALS_AUTHORED": 4,
+           "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,
+           # image units
+           "NORMALS_OUT": 0}
 CRUSH = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "TOPOLOGY_TABLE": 2,
          "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FACE_NORMALS": 5,
          "CRUSH_TRIANGLES": 6, "CRUSH_BAKED": 7,
@@ -41,7 +47,8 @@ RELAX = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
 WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS": 3,
         "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
 DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
-        "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10}
+        "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10, "DRAW_SHADING_NORMALS": 11,
+        "DRAW_NORMAL_CORNERS": 12}
 #: wrinkle maps (maps/): the blend rasterised in UV space
 MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}
 #: displaced geometry (geometry/): the blend at every fine vertex

@@ -16,6 +16,7 @@ from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer
 from .passes.crush import CrushPass
 from .passes.draw import DrawPass
+from .passes.normals import NormalsPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
 from .resolve import ImageLayout, ResolvedImage, ResolvePass
@@ -73,6 +74,7 @@ class Mesh:
         res = self.resources
         with _timed(timer, "skin", self.timings):
             d.skin.run(res, self.frame)
+            d.normals.run(res, self.frame)
         if wrinkles and self.frame.baked is not None:
             # baked wave fields: normals only, no fit and no relax (scene/baked.py)
             with _timed(timer, "crush", self.timings):
@@ -148,6 +150,7 @@ class RenderDelegate:
         self.ctx = ctx or create_context()
         self.profile = profile
         self.skin = SkinPass(self.ctx)
+        self.normals = NormalsPass(self.ctx)
         self.crush = CrushPass(self.ctx)
         self.relax = RelaxPass(self.ctx)
         self.draw = DrawPass(self.ctx)

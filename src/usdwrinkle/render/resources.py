@@ -31,6 +31,10 @@ from .bindings import TABLE_WIDTH
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 
 
+#: anisotropic filtering of textures: Hydra's samplers default to 16 (HdSamplerParameters),
+#: so a texture seen at a grazing angle is as sharp as in usdview
+TEXTURE_ANISOTROPY = 16.0
+
 #: the sized internal format of 8-bit sRGB textures with alpha
 GL_SRGB8_ALPHA8 = 0x8C43
 
@@ -187,6 +191,7 @@ class MeshResources:
         self.normal_map_record = None
         self.udim_layers = np.full(UDIM_TILES, -1, np.int32)
         self.face_normals = self._table(self.num_triangles, 4)
+        self._create_shading_normals(record)
         skin = record.skin
         if skin is not None:
             self.influences = skin.joint_indices.shape[1]
@@ -199,6 +204,10 @@ class MeshResources:
             packed[:, 0] = np.where(valid, indices, -1).reshape(-1)
             packed[:, 1] = np.asarray(skin.joint_weights, np.float32).reshape(-1)
             self.influence_table = self._table(count, 2, data=packed)
+            #: a joint moves the points (else blend shapes alone, or nothing)
+            self.skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
+            #: DQS: a joint of this frame scales or shears (the skin pass sets it)
+            self.has_scale = False
             self.joints = self._table(max(skin.num_joints, 1) * JOINT_TEXELS, 4)
             subshapes = max(skin.num_subshapes, 1)
             self.subshape_offsets = self._buffer(np.zeros((subshapes * n, 4), np.float32))
@@ -210,6 +219,20 @@ class MeshResources:
         self.set_normal_map(record.material.normal_map)
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
+
+    def _create_shading_normals(self, record: MeshRecord) -> None:
+        """The shading normals (scene/normals.py): a table of ``entries`` normals made per
+        frame by the normals pass (or uploaded), and each triangle corner's entry."""
+        plan = record.normals
+        self.normal_plan = plan
+        self.shading_normals = self._table(plan.entries, 4, data=vec4(
+            plan.authored if plan.authored is not None else np.zeros((plan.entries, 3)), 1.0))
+        self.normal_corners = self._table(3 * self.num_triangles, 1, "i4",
+                                          plan.corner_entry.reshape(-1))
+        self.normal_plan_table = self._table(len(plan.csr), 1, "i4", plan.csr)
+        #: the authored normals a skinned mesh's pass skins (rest values)
+        self.authored_normals = self._table(plan.entries, 4, data=vec4(plan.authored, 0.0)) \
+            if plan.authored is not None and record.skin is not None else None
 
     def set_systems(self, systems: int) -> None:
         """Lay the relax tables out for 1 or 2 wave systems: phasors RG (one system, as
@@ -292,6 +315,7 @@ class MeshResources:
                                                  _bytes(layers), dtype=dtype)
         self.textures.append(self.normal_map)
         self.normal_map.build_mipmaps()
+        self.normal_map.anisotropy = TEXTURE_ANISOTROPY
         for layer, (tile, _) in enumerate(normal_map.tiles):
             if tile == -1:  # one texture that repeats (draw.glsl: normal_map)
                 self.udim_layers[:] = -2
@@ -316,6 +340,7 @@ class MeshResources:
             self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f4")
         self.textures.append(self.texture)
         self.texture.build_mipmaps()
+        self.texture.anisotropy = TEXTURE_ANISOTROPY
         self.texture.repeat_x = self.texture.repeat_y = True
 
     def write_baked(self, baked) -> None:

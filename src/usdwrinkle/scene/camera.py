@@ -68,9 +68,17 @@ def check_camera(prim: Usd.Prim, gf_cam: Gf.Camera, time) -> None:
 
 
 def usd_camera(prim: Usd.Prim, time, aspect: float) -> CameraRecord:
-    """A UsdGeom.Camera at ``time`` as view and projection matrices."""
+    """A UsdGeom.Camera at ``time`` as view and projection matrices (its clippingRange
+    is the projection's near and far planes)."""
     gf_cam = UsdGeom.Camera(prim).GetCamera(time)
     check_camera(prim, gf_cam, time)
+    return camera_record(str(prim.GetPath()), gf_cam, aspect)
+
+
+def camera_record(path: str, gf_cam: Gf.Camera, aspect: float) -> CameraRecord:
+    """A Gf.Camera as view and projection: the horizontal field of view kept, the
+    vertical one fitted to the image's ``aspect`` (as usdrecord's default --height
+    does, the aspects agree anyway)."""
     frustum = gf_cam.frustum
     window = frustum.window
     width = window.GetMax()[0] - window.GetMin()[0]
@@ -81,12 +89,14 @@ def usd_camera(prim: Usd.Prim, time, aspect: float) -> CameraRecord:
     view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
     projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
     position = np.asarray(frustum.position, dtype=np.float64)
-    return CameraRecord(str(prim.GetPath()), view, projection, position, aspect)
+    return CameraRecord(path, view, projection, position, aspect)
 
 
 def framing_camera(bounds_min, bounds_max, up_axis: str, aspect: float,
                    fov_degrees: float = 30.0) -> CameraRecord:
-    """A perspective camera that frames an axis-aligned box from the front, 3/4 high."""
+    """A perspective camera that frames an axis-aligned box from the front, 3/4 high
+    (usdrecord looks straight down -Z, or along +Y for Z up, which shows a sheet lying
+    in the ground plane edge-on; this view shows any shape)."""
     lo, hi = np.asarray(bounds_min, float), np.asarray(bounds_max, float)
     if not np.all(np.isfinite(lo)) or not np.all(np.isfinite(hi)) or np.any(hi < lo):
         lo, hi = -np.ones(3), np.ones(3)
@@ -109,3 +119,15 @@ def framing_camera(bounds_min, bounds_max, up_axis: str, aspect: float,
     view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
     projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
     return CameraRecord("<framing>", view, projection, eye, aspect)
+
+
+def framing_gf_camera(bounds_min, bounds_max, up_axis: str, aspect: float) -> Gf.Camera:
+    """framing_camera as a Gf.Camera (a real client can look through the same view)."""
+    record = framing_camera(bounds_min, bounds_max, up_axis, aspect)
+    camera = Gf.Camera()
+    camera.transform = Gf.Matrix4d(*np.linalg.inv(record.view).reshape(-1).tolist())
+    camera.SetPerspectiveFromAspectRatioAndFieldOfView(aspect, 30.0, Gf.Camera.FOVVertical)
+    near = float(record.projection[3, 2] / (record.projection[2, 2] - 1.0))
+    far = float(record.projection[3, 2] / (record.projection[2, 2] + 1.0))
+    camera.clippingRange = Gf.Range1f(near, far)
+    return camera

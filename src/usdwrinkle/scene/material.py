@@ -20,11 +20,15 @@ from ..contract import UDIM_TILES
 from ..limits import MAX_TEXTURE_SIZE
 from ..schema import MAP_INPUTS
 from .inputs import package_file, require_regular_file
-from .records import MaterialRecord, NormalMapRecord, TextureImage
+from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
 from .topology import Topology
 from .values import static_flattened, static_value
 
 DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
+#: Storm's displayColor where a mesh authors none (measured: 0.5 grey)
+FALLBACK_DISPLAY_COLOR = np.array([0.5, 0.5, 0.5], np.float32)
+#: UsdPreviewSurface's inputs:diffuseColor fallback
+PREVIEW_DIFFUSE_FALLBACK = np.array([0.18, 0.18, 0.18], np.float32)
 
 
 @lru_cache(maxsize=32)
@@ -258,6 +262,45 @@ def display_color(prim: Usd.Prim, time) -> np.ndarray:
         DEFAULT_COLOR
 
 
+def display_opacity(prim: Usd.Prim, time) -> float:
+    """The mesh's first displayOpacity, else 1."""
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayOpacity")
+    value = static_flattened(primvar, time) if primvar and primvar.HasValue() else None
+    return float(value[0]) if value is not None and len(value) else 1.0
+
+
+#: UsdPreviewSurface inputs read as constants -> SurfaceParams field
+SURFACE_INPUTS = {"emissiveColor": "emissive_color",
+                  "useSpecularWorkflow": "use_specular_workflow",
+                  "specularColor": "specular_color", "metallic": "metallic",
+                  "roughness": "roughness", "clearcoat": "clearcoat",
+                  "clearcoatRoughness": "clearcoat_roughness", "opacity": "opacity",
+                  "opacityThreshold": "opacity_threshold", "ior": "ior",
+                  "occlusion": "occlusion"}
+
+
+def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time, warn) -> SurfaceParams:
+    """A UsdPreviewSurface's constant inputs; one that a texture (or another shader)
+    drives keeps its fallback, with a warning naming it."""
+    values = {}
+    for name, field in SURFACE_INPUTS.items():
+        value, source = _resolve(shader, name, time)
+        if source is not None:
+            warn(f"inputs:{name} comes from a {source.GetIdAttr().Get() or 'shader'}; "
+                 f"usdwrinkle reads it as the constant {getattr(SurfaceParams, field)} "
+                 f"({prim.GetPath()})")
+            continue
+        if value is None:
+            continue
+        if isinstance(getattr(SurfaceParams, field), tuple):
+            values[field] = tuple(float(v) for v in value)
+        elif field == "use_specular_workflow":
+            values[field] = bool(int(value))
+        else:
+            values[field] = float(value)
+    return SurfaceParams(**values)
+
+
 def bound_surface(prim: Usd.Prim):
     """(the mesh's bound Material or None, its UsdPreviewSurface or None)."""
     material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
@@ -271,19 +314,26 @@ def bound_surface(prim: Usd.Prim):
 
 def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
     """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
-    diffuseColor, constant or from a UsdUVTexture, and its normal map; else displayColor."""
+    diffuseColor, constant or from a UsdUVTexture, its normal map and its other inputs;
+    without a UsdPreviewSurface, displayColor and displayOpacity for Storm's fallback
+    surface (an empty displayColor is Storm's 0.5 grey)."""
     material, shader = bound_surface(prim)
     if shader is None:
-        return MaterialRecord(np.asarray(display_color(prim, time), np.float32)[:3])
+        color = display_color(prim, time)
+        if color is DEFAULT_COLOR:
+            color = FALLBACK_DISPLAY_COLOR
+        return MaterialRecord(np.asarray(color, np.float32)[:3],
+                              opacity=display_opacity(prim, time))
+    surface = surface_params(shader, prim, time, warn)
     normal_map, varies = read_normal_map(prim, topology, time, warn, shader)
     maps = bool(material.GetInput(MAP_INPUTS["normal"]))
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
-        color = display_color(prim, time) if value is None else value
+        color = PREVIEW_DIFFUSE_FALLBACK if value is None else value
         return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
-                              normal_map_varies=varies, wrinkle_maps=maps)
+                              normal_map_varies=varies, wrinkle_maps=maps, surface=surface)
     texture, st, scale, bias = _texture(prim, source, topology, time, warn)
     # untextured means a neutral clay, not the (often black) texture fallback
     color = DEFAULT_COLOR if texture is None else np.ones(3, np.float32)
     return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias,
-                          normal_map, varies, maps)
+                          normal_map, varies, maps, surface)

@@ -121,8 +121,31 @@ class NormalMapRecord:
 
 
 @dataclass(frozen=True)
+class SurfaceParams:
+    """UsdPreviewSurface's inputs other than diffuseColor and normal, constant, with the
+    specification's fallbacks (a texture-driven input is read as its fallback)."""
+
+    emissive_color: tuple = (0.0, 0.0, 0.0)
+    use_specular_workflow: bool = False
+    specular_color: tuple = (0.0, 0.0, 0.0)
+    metallic: float = 0.0
+    roughness: float = 0.5
+    clearcoat: float = 0.0
+    clearcoat_roughness: float = 0.01
+    opacity: float = 1.0
+    opacity_threshold: float = 0.0
+    ior: float = 1.5
+    occlusion: float = 1.0
+
+
+@dataclass(frozen=True)
 class MaterialRecord:
     """UsdPreviewSurface diffuse colour, constant or from a texture, and a normal map.
+
+    surface : the other UsdPreviewSurface inputs, or None: no UsdPreviewSurface is bound,
+        and the mesh is drawn as Storm draws it then (its fallback surface: displayColor
+        and displayOpacity, lit by Lambert and a faint Blinn lobe).
+    opacity : displayOpacity, for the fallback surface.
 
     texture : TextureImage (row 0 at t = 0, the bottom), or None.
     corner_st : (m, 3, 2) float32 texture coordinates per triangle corner, or None.
@@ -141,6 +164,8 @@ class MaterialRecord:
     normal_map: NormalMapRecord | None = None
     normal_map_varies: bool = False
     wrinkle_maps: bool = False
+    surface: SurfaceParams | None = None
+    opacity: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -159,6 +184,10 @@ class MeshRecord:
     #: the frames of the mesh's baked wave fields ("1..24", "default time"), or None:
     #: a render draws them instead of running crush and relax (scene/baked.py)
     baked_range: str | None = None
+    #: how the shading normals are made (scene/normals.py); None: smooth
+    normals: object | None = None
+    #: back faces are shaded with the flipped normal (else as Storm: unlit)
+    double_sided: bool = False
 
     @functools.cached_property
     def extent(self) -> float:
@@ -179,6 +208,7 @@ class MeshFrame:
     active_subshapes: tuple = ()                # ((blend_shape, sub_shape), ...)
     baked: object | None = None                 # scene.baked.BakedFields at this frame
     normal_map: NormalMapRecord | None = None   # this frame's, when its file is time-sampled
+    normals: np.ndarray | None = None           # (K, 3) authored normals, when time-sampled
 
 
 @dataclass(frozen=True)
@@ -194,13 +224,34 @@ class CameraRecord:
 
 @dataclass(frozen=True)
 class LightRecord:
-    """kind: distant | sphere | dome. radiance = colour * intensity * 2^exposure."""
+    """A light as Storm lights a surface (scene/lights.py, docs/method.md "Lights").
+
+    kind : "directional", "positional" or "dome".
+    color : (3,) the colour c: inputs:color x blackbody(colorTemperature) x intensity x
+        2^exposure x the light's area (solid angle for a distant light) unless
+        inputs:normalize; times inputs:diffuse (``specular`` times inputs:specular).
+    vector : (3,) world space; directional: the unit vector towards the light;
+        positional: its position.
+    attenuate : 1/d^2 falloff (every positional light but usdview's camera light).
+    spot_direction, spot_cutoff, spot_falloff : rect and disk lights emit into the
+        cone of inputs:shaping:cone:angle (degrees; 180: everywhere) about their -Z,
+        weighted cos^falloff (inputs:shaping:focus).
+    ambient : (3,) the ambient colour (usdview's camera light: 0.01), used by the
+        fallback surface only.
+    dome_sh : (9, 3) dome lights: the SH9 coefficients of the environment's radiance
+        (times c) in world directions, or None.
+    """
 
     kind: str
-    radiance: np.ndarray
-    direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
-    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    radius: float = 0.5
+    color: np.ndarray
+    specular: np.ndarray
+    vector: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    attenuate: bool = False
+    spot_direction: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+    spot_cutoff: float = 180.0
+    spot_falloff: float = 0.0
+    ambient: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    dome_sh: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from .diagnostics import usd_diagnostics, usd_error_text
 from .inputs import StageInputs, package_file, scan_inputs
 from .lights import default_lights, read_lights
 from .material import read_material, read_normal_map
+from .normals import plan_normals, sample_normals
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
 from .skel import SkelBindings, check_blend_weights, sample_skin, skin_data
@@ -147,22 +148,31 @@ def inherited_range_note(stage: Usd.Stage) -> str | None:
     return None
 
 
-def read_topology(prim: Usd.Prim, rest: np.ndarray) -> Topology | None:
-    """Triangulated topology of a mesh (None without faces); time-sampled topology is
-    read at its first sample."""
+def read_faces(prim: Usd.Prim):
+    """(faceVertexCounts, faceVertexIndices, holeIndices or None, left-handed) of a mesh,
+    read by the static rule (time-sampled topology at its first sample); counts and
+    indices are None when it has no faces."""
     mesh = UsdGeom.Mesh(prim)
     path = str(prim.GetPath())
-
     require_mesh_array(mesh.GetFaceVertexCountsAttr(), path)
     require_mesh_array(mesh.GetFaceVertexIndicesAttr(), path)
     counts = static_value(mesh.GetFaceVertexCountsAttr())
     indices = static_value(mesh.GetFaceVertexIndicesAttr())
-    if counts is None or indices is None or len(counts) == 0:
-        return None
     holes = static_value(mesh.GetHoleIndicesAttr())
-    topology = build_topology(np.asarray(counts), np.asarray(indices), rest,
-                              None if holes is None else np.asarray(holes), path)
-    if static_value(mesh.GetOrientationAttr()) == UsdGeom.Tokens.leftHanded:
+    left_handed = static_value(mesh.GetOrientationAttr()) == UsdGeom.Tokens.leftHanded
+    if counts is None or indices is None or len(counts) == 0:
+        return None, None, None, left_handed
+    return (np.asarray(counts), np.asarray(indices),
+            None if holes is None else np.asarray(holes), left_handed)
+
+
+def read_topology(prim: Usd.Prim, rest: np.ndarray, faces=None) -> Topology | None:
+    """Triangulated topology of a mesh (None without faces); ``faces``: read_faces'."""
+    counts, indices, holes, left_handed = faces or read_faces(prim)
+    if counts is None:
+        return None
+    topology = build_topology(counts, indices, rest, holes, str(prim.GetPath()))
+    if left_handed:
         # Flip the triangles' winding, not the faces, so faceVarying corners still map.
         topology = dataclasses.replace(
             topology, triangles=np.ascontiguousarray(topology.triangles[:, [0, 2, 1]]),
@@ -377,10 +387,13 @@ class StageSceneDelegate:
         if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
                                   "primvars:rest")
-        topology = read_topology(prim, rest)
+        faces = read_faces(prim)
+        topology = read_topology(prim, rest, faces)
         if topology is None:
             self.warn(f"mesh has no faces; skipped ({path})")
             return None
+        normals = plan_normals(prim, topology, faces[0], faces[1], faces[2], faces[3],
+                               self.warn)
         skin = None
         if binding is not None:
             skel_query, skinning_query = binding
@@ -400,7 +413,8 @@ class StageSceneDelegate:
         material = read_material(prim, topology, default, self.warn)
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
                           point_cached, wrinkled, params, material,
-                          baked.range_text() if baked is not None else None)
+                          baked.range_text() if baked is not None else None, normals,
+                          bool(static_value(mesh.GetDoubleSidedAttr())))
 
     # -- time ---------------------------------------------------------------------------
     def frame_range(self) -> list[float]:
@@ -445,6 +459,8 @@ class StageSceneDelegate:
                             record.extent)
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
                              active, baked, self._frame_normal_map(record, prim, time))
+        normals = sample_normals(prim, record.normals, time, frame) \
+            if not time.IsDefault() else None
         points = None
         if record.point_cached:
             attr = UsdGeom.Mesh(prim).GetPointsAttr()
@@ -458,7 +474,8 @@ class StageSceneDelegate:
                     f"{len(record.rest_points)})", path, "points", frame)
             check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
         return MeshFrame(local_to_world, visible, points, baked=baked,
-                         normal_map=self._frame_normal_map(record, prim, time))
+                         normal_map=self._frame_normal_map(record, prim, time),
+                         normals=normals)
 
     def _frame_normal_map(self, record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
         """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""
@@ -534,7 +551,8 @@ class StageSceneDelegate:
             if not hasattr(self, "_bounds"):
                 self._bounds = self.bounds()
             cam = camera_mod.framing_camera(*self._bounds, self.up_axis, aspect)
-        lights = read_lights(self.stage, time, xform_cache) or default_lights(cam.view)
+        lights = read_lights(self.stage, time, xform_cache, self.warn) or \
+            default_lights(cam.view)
         return FrameRecord(frame, cam, tuple(lights), meshes)
 
 

@@ -14,27 +14,55 @@ FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
 
 
 def light_uniforms(lights) -> dict:
-    kinds = np.zeros(MAX_LIGHTS, np.int32)
-    radiance = np.zeros((MAX_LIGHTS, 3), np.float32)
-    vectors = np.zeros((MAX_LIGHTS, 4), np.float32)
-    ambient = np.zeros(3, np.float32)
+    """The uniforms of include/surface.glsl for scene/lights.py's LightRecords: up to
+    MAX_LIGHTS points and directions, and one dome (the last, as Storm keeps only one)."""
+    position = np.zeros((MAX_LIGHTS, 4), np.float32)
+    diffuse = np.zeros((MAX_LIGHTS, 3), np.float32)
+    specular = np.zeros((MAX_LIGHTS, 3), np.float32)
+    ambient = np.zeros((MAX_LIGHTS, 3), np.float32)
+    attenuate = np.zeros(MAX_LIGHTS, np.int32)
+    spot = np.zeros((MAX_LIGHTS, 4), np.float32)
+    falloff = np.zeros(MAX_LIGHTS, np.float32)
+    dome_sh = np.zeros((9, 3), np.float32)
+    dome = 0
     count = 0
     for light in lights:
         if light.kind == "dome":
-            ambient += np.asarray(light.radiance, np.float32)
+            dome, dome_sh = 1, np.asarray(light.dome_sh, np.float32)
             continue
         if count == MAX_LIGHTS:
             continue
-        radiance[count] = light.radiance
-        if light.kind == "distant":
-            vectors[count, :3] = light.direction
-        else:
-            kinds[count] = 1
-            vectors[count, :3] = light.position
-            vectors[count, 3] = light.radius
+        position[count, :3] = light.vector
+        position[count, 3] = 0.0 if light.kind == "directional" else 1.0
+        diffuse[count] = light.color
+        specular[count] = light.specular
+        ambient[count] = light.ambient
+        attenuate[count] = int(light.attenuate)
+        spot[count, :3] = light.spot_direction
+        spot[count, 3] = light.spot_cutoff
+        falloff[count] = light.spot_falloff
         count += 1
-    return {"u_num_lights": count, "u_light_kind": kinds, "u_light_radiance": radiance,
-            "u_light_vector": vectors, "u_ambient": tuple(float(a) for a in ambient)}
+    return {"u_num_lights": count, "u_light_position": position, "u_light_diffuse": diffuse,
+            "u_light_specular": specular, "u_light_ambient": ambient,
+            "u_light_attenuate": attenuate, "u_light_spot": spot,
+            "u_light_spot_falloff": falloff, "u_dome": dome, "u_dome_sh": dome_sh}
+
+
+def material_uniforms(material) -> dict:
+    """UsdPreviewSurface's inputs, or the fallback surface's displayColor and opacity."""
+    surface = material.surface
+    if surface is None:
+        return {"u_fallback_surface": 1, "u_opacity": float(material.opacity),
+                "u_opacity_threshold": 0.0}
+    return {"u_fallback_surface": 0,
+            "u_emissive_color": tuple(float(c) for c in surface.emissive_color),
+            "u_use_specular_workflow": int(surface.use_specular_workflow),
+            "u_specular_color": tuple(float(c) for c in surface.specular_color),
+            "u_metallic": surface.metallic, "u_roughness": surface.roughness,
+            "u_clearcoat": surface.clearcoat,
+            "u_clearcoat_roughness": surface.clearcoat_roughness,
+            "u_opacity": surface.opacity, "u_opacity_threshold": surface.opacity_threshold,
+            "u_ior": surface.ior, "u_occlusion": surface.occlusion}
 
 
 def normal_map_uniforms(res: MeshResources) -> dict:
@@ -69,6 +97,8 @@ class DrawPass:
             "u_world_to_clip": gl_matrix(world_to_clip),
             "u_world_to_eye": gl_matrix(camera.view),
             "u_wrinkles": int(wrinkles),
+            # eye space +Z in world: the directional viewer of Storm's fallback surface
+            "u_viewer_direction": tuple(float(v) for v in np.linalg.inv(camera.view)[2, :3]),
             **light_uniforms(lights),
         }
         for variant in self.variants.programs.values():
@@ -99,6 +129,8 @@ class DrawPass:
             "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
             "u_eye_world": tuple(float(v) for v in camera.position[:3]),
             "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),
+            "u_double_sided": int(record.double_sided),
+            **material_uniforms(material),
             "u_has_texture": int(res.texture is not None),
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
@@ -110,7 +142,9 @@ class DrawPass:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
         if res.normal_map is not None:
             res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
-        bind(units, reads={"DRAW_CORNER_ST": res.corner_st})
+        bind(units, reads={"DRAW_CORNER_ST": res.corner_st,
+                           "DRAW_SHADING_NORMALS": res.shading_normals,
+                           "DRAW_NORMAL_CORNERS": res.normal_corners})
         if res.normal_map is not None:
             bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)

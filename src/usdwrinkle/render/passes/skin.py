@@ -32,6 +32,12 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
         # coordinate c = dot(column c, (p, 1)); the fourth column of an affine matrix is
         # (0, 0, 0, 1) and is not needed
         block[:count, :12] = combined.transpose(0, 2, 1)[:, :3, :].reshape(count, 12)
+        # texels 4..6: the rows of the 3x3 inverse, the normals' matrix (skinning.glsl)
+        linear = combined[:, :3, :3]
+        singular = np.abs(np.linalg.det(linear)) < 1e-300
+        linear = np.where(singular[:, None, None], np.eye(3), linear)
+        block[:count, 16:28] = np.concatenate(
+            [np.linalg.inv(linear), np.zeros((count, 3, 1))], axis=2).reshape(count, 12)
     has_scale = False
     if method == "dualQuaternion":
         real, dual, scale, has_scale = dual_quaternions(joint_transforms)
@@ -41,6 +47,21 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
         rows[:, :, :3] = scale
         block[:count, 24:36] = rows.reshape(count, 12)
     return block, has_scale
+
+
+def skinning_uniforms(res: MeshResources, frame: MeshFrame) -> dict:
+    """The uniforms of include/skinning.glsl for this frame (its joints are uploaded)."""
+    from .normals import normal_matrix
+
+    skin = res.record.skin
+    skel_to_local = frame.skel_to_local if res.skinned else np.eye(4)
+    return {"u_influences": res.influences,
+            "u_num_joints": min(skin.num_joints, len(frame.joint_transforms)),
+            "u_has_scale": int(res.has_scale),
+            "u_geom_bind": gl_matrix(skin.geom_bind),
+            "u_skel_to_local": gl_matrix(skel_to_local),
+            "u_geom_bind_normal": normal_matrix(skin.geom_bind),
+            "u_skel_to_local_normal": normal_matrix(skel_to_local)}
 
 
 class SkinPass:
@@ -63,16 +84,11 @@ class SkinPass:
         block, has_scale = joint_block(frame.joint_transforms, skin.method, skin.geom_bind,
                                        frame.skel_to_local)
         res.joints.write(block)
-        skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
+        res.has_scale = has_scale
         set_uniforms(self.shader, {
-            "u_num_points": res.num_points, "u_influences": res.influences,
-            "u_num_joints": min(skin.num_joints, len(frame.joint_transforms)),
-            "u_num_subshapes": skin.num_subshapes,
-            "u_method": METHODS[skin.method] if skinned else 0,
-            "u_has_scale": int(has_scale),
-            "u_geom_bind": gl_matrix(skin.geom_bind),
-            "u_skel_to_local": gl_matrix(frame.skel_to_local if skinned else np.eye(4)),
-        })
+            "u_num_points": res.num_points, "u_num_subshapes": skin.num_subshapes,
+            "u_method": METHODS[skin.method] if res.skinned else 0,
+            **skinning_uniforms(res, frame)})
         bind(bindings.SKIN, reads={
             "SKIN_REST_POINTS": res.rest_points, "SKIN_INFLUENCES": res.influence_table,
             "SKIN_JOINTS": res.joints},
