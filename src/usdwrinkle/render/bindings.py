@@ -48,7 +48,7 @@ WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS
         "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
 DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
         "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10, "DRAW_SHADING_NORMALS": 11,
-        "DRAW_NORMAL_CORNERS": 12}
+        "DRAW_NORMAL_CORNERS": 12, "DRAW_DOME_TEXTURE": 13}
 #: wrinkle maps (maps/): the blend rasterised in UV space
 MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9}
 #: displaced geometry (geometry/): the blend at every fine vertex

@@ -189,6 +189,15 @@ class RenderDelegate:
             self._framebuffer.release()
             self._framebuffer = None
         self.resolve.release()
+        self.draw.release()
+
+
+def is_translucent(material) -> bool:
+    """A surface that lets what is behind it show: opacity (or displayOpacity) below 1,
+    and no opacityThreshold (a threshold cuts out instead: masked, opaque)."""
+    if material.surface is None:
+        return material.opacity < 1.0
+    return material.surface.opacity < 1.0 and material.surface.opacity_threshold <= 0.0
 
 
 class RenderPass:
@@ -212,6 +221,34 @@ class RenderPass:
                     timings[key] = value if isinstance(value, str) else \
                         timings.get(key, 0.0) + value
 
+    def _draw_translucent(self, meshes: list, fb, camera) -> None:
+        """Translucent meshes after the opaque ones, farthest first, each composited
+        "over" what is drawn (its colour is premultiplied by its opacity, as Storm's);
+        they write neither depth nor the other AOVs, which keep the surface behind.
+        Storm sorts fragments (order-independent transparency); this sorts meshes."""
+        import moderngl
+        import numpy as np
+
+        ctx = self.delegate.ctx
+
+        def distance(mesh) -> float:
+            centre = np.append(mesh.resources.record.rest_points.mean(axis=0), 1.0)
+            return float(np.linalg.norm((centre @ mesh.frame.local_to_world)[:3] -
+                                        camera.position))
+
+        masks = fb.fbo.color_mask
+        fb.fbo.color_mask = [(True,) * 4] + [(False,) * 4] * (len(masks) - 1)
+        fb.fbo.depth_mask = False
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+        try:
+            for mesh in sorted(meshes, key=distance, reverse=True):
+                self.delegate.draw.draw(mesh.resources, mesh.frame, camera)
+        finally:
+            ctx.disable(moderngl.BLEND)
+            fb.fbo.color_mask = masks
+            fb.fbo.depth_mask = True
+
     def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage:
         """Draw every rprim; returns the AOVs, or with ``state.image`` the frame as an
         image file stores it."""
@@ -224,8 +261,13 @@ class RenderPass:
             ctx.enable(ctx.DEPTH_TEST)
             ctx.disable(ctx.CULL_FACE)
             d.draw.begin(state.camera, state.lights, state.wrinkles)
+            translucent = [mesh for mesh in d.rprims.values() if mesh.resources is not None
+                           and is_translucent(mesh.resources.record.material)]
             for mesh in d.rprims.values():
-                d.draw.draw(mesh.resources, mesh.frame, state.camera)
+                if mesh not in translucent:
+                    d.draw.draw(mesh.resources, mesh.frame, state.camera)
+            if translucent:
+                self._draw_translucent(translucent, fb, state.camera)
         started = time.perf_counter()
         buffers = fb.read_image(state.image) if state.image is not None else fb.read(state.aovs)
         if d.profile:

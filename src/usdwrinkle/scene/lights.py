@@ -147,8 +147,10 @@ def _light(prim: Usd.Prim, time, xform_cache, warn) -> LightRecord:
     specular = float(_value(api.GetSpecularAttr(), time, 1.0))
     xf = _transform(prim, time, xform_cache)
     if prim.IsA(UsdLux.DomeLight):
-        sh = dome_sh(UsdLux.DomeLight(prim), time, xf, warn) * color
-        return LightRecord("dome", color * diffuse, color * specular, dome_sh=sh)
+        sh, texture, key = dome_environment(UsdLux.DomeLight(prim), time, xf, warn)
+        return LightRecord("dome", color * diffuse, color * specular, dome_sh=sh * color,
+                           dome_texture=texture, world_to_dome=_rotation(xf).T,
+                           dome_key=key)
     if not _value(api.GetNormalizeAttr(), time, False):
         color = color * _area(prim, time, path)
     if prim.IsA(UsdLux.DistantLight):
@@ -260,26 +262,37 @@ CONSTANT_SH = np.zeros((9, 3))
 CONSTANT_SH[0] = 1.0 / 0.282095
 
 
-def dome_sh(light: UsdLux.DomeLight, time, xf: np.ndarray, warn) -> np.ndarray:
-    """The dome's radiance as SH9 (9, 3) in world directions (without its colour)."""
+def _rotation(xf: np.ndarray) -> np.ndarray:
+    """The rotation of a row-vector transform (its rows normalised)."""
+    rotation = np.asarray(xf[:3, :3], np.float64)
+    return rotation / np.maximum(np.linalg.norm(rotation, axis=1, keepdims=True), 1e-30)
+
+
+def dome_environment(light: UsdLux.DomeLight, time, xf: np.ndarray, warn):
+    """(SH9 (9, 3) of the dome's radiance in world directions, its texture or None, the
+    texture's key), without the light's colour. A dome without a texture (or with one
+    that cannot be read: a warning) is a constant radiance of 1."""
     attr = light.GetTextureFileAttr()
     asset = attr.Get(time) if attr else None
     if asset is None or not asset.path:
-        return CONSTANT_SH
+        return CONSTANT_SH, None, None
     path = str(light.GetPrim().GetPath())
     if not asset.resolvedPath:
         if warn is not None:
             warn(f"dome light texture '{asset.path}' not found; lit as a constant dome "
                  f"({path})")
-        return CONSTANT_SH
-    rotation = np.asarray(xf[:3, :3], np.float64)
-    rotation = rotation / np.maximum(np.linalg.norm(rotation, axis=1, keepdims=True), 1e-30)
+        return CONSTANT_SH, None, None
+    rotation = _rotation(xf)
+    from .material import load_texture
+
     try:
-        return _texture_sh(asset.resolvedPath, rotation.tobytes())
+        texture = load_texture(asset.resolvedPath, "auto")
+        sh = _texture_sh(asset.resolvedPath, rotation.tobytes())
     except OSError as exc:
         if warn is not None:
             warn(f"{exc}; lit as a constant dome ({path})")
-        return CONSTANT_SH
+        return CONSTANT_SH, None, None
+    return sh, texture, asset.resolvedPath
 
 
 @lru_cache(maxsize=16)

@@ -239,7 +239,7 @@ class LightRecord:
     ambient : (3,) the ambient colour (usdview's camera light: 0.01), used by the
         fallback surface only.
     dome_sh : (9, 3) dome lights: the SH9 coefficients of the environment's radiance
-        (times c) in world directions, or None.
+        (times c) in world directions, or None: its diffuse irradiance.
     """
 
     kind: str
@@ -252,6 +252,11 @@ class LightRecord:
     spot_falloff: float = 0.0
     ambient: np.ndarray = field(default_factory=lambda: np.zeros(3))
     dome_sh: np.ndarray | None = None
+    #: a textured dome's environment (TextureImage, lat-long, rows bottom-up) and the
+    #: rotation from world to dome directions (row-vector 3x3): its specular reflections
+    dome_texture: object | None = None
+    world_to_dome: np.ndarray | None = None
+    dome_key: str | None = None
 
 
 @dataclass(frozen=True)

@@ -86,6 +86,8 @@ class DrawPass:
             ctx, program(ctx, "draw.glsl", {**defines, **extra})))
         self.variants()  # the paper's variant always; the other on first use
         self.frame_uniforms: dict = {}
+        #: a textured dome's environment, uploaded once per file: (key, texture, levels)
+        self.dome = (None, None, 0)
 
     def begin(self, camera: CameraRecord, lights, wrinkles: bool) -> None:
         # row-vector: view, projection, then y flipped so that GL's first row (the bottom)
@@ -101,9 +103,38 @@ class DrawPass:
             "u_viewer_direction": tuple(float(v) for v in np.linalg.inv(camera.view)[2, :3]),
             **light_uniforms(lights),
         }
+        self.frame_uniforms.update(self._dome_texture(lights))
         for variant in self.variants.programs.values():
             set_uniforms(variant.program, self.frame_uniforms)
             variant.frame_uniforms = self.frame_uniforms
+
+    def _dome_texture(self, lights) -> dict:
+        """Upload a textured dome's environment (mip-mapped) when it is new; its uniforms."""
+        import moderngl
+
+        dome = next((light for light in reversed(lights) if light.kind == "dome"), None)
+        if dome is None or dome.dome_texture is None:
+            return {"u_dome_textured": 0}
+        key, texture, levels = self.dome
+        if key != dome.dome_key:
+            if texture is not None:
+                texture.release()
+            pixels = np.ascontiguousarray(dome.dome_texture.linear(), np.float32)
+            height, width = pixels.shape[:2]
+            texture = self.ctx.texture((width, height), 4, pixels.tobytes(), dtype="f4")
+            texture.build_mipmaps()
+            texture.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            texture.repeat_x, texture.repeat_y = True, False  # longitude wraps
+            levels = int(np.floor(np.log2(max(width, height))))
+            self.dome = (dome.dome_key, texture, levels)
+        return {"u_dome_textured": 1, "u_dome_levels": float(levels),
+                "u_world_to_dome": np.ascontiguousarray(dome.world_to_dome, np.float32),
+                "u_dome_specular": tuple(float(c) for c in dome.specular)}
+
+    def release(self) -> None:
+        if self.dome[1] is not None:
+            self.dome[1].release()
+        self.dome = (None, None, 0)
 
     def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord) -> None:
         if res.num_triangles == 0 or not frame.visible:
@@ -140,6 +171,8 @@ class DrawPass:
         bind_wave(units, res, variant.program)
         if res.texture is not None:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
+        if self.dome[1] is not None:
+            self.dome[1].use(location=units["DRAW_DOME_TEXTURE"])
         if res.normal_map is not None:
             res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
         bind(units, reads={"DRAW_CORNER_ST": res.corner_st,
