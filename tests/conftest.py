@@ -16,6 +16,52 @@ CORPUS = Path(os.environ.get("USDWRINKLE_CORPUS", REPO.parent / "shared" / "corp
 def pytest_addoption(parser):
     parser.addoption("--regenerate-goldens", action="store_true",
                      help="rewrite tests/goldens/*.exr from the current renderer")
+    parser.addoption("--require-realclients", action="store_true",
+                     help="fail, instead of skip, the real-client tier (Storm, Cycles) "
+                          "where no Python with Blender's bpy is found (also "
+                          "USDWRINKLE_REQUIRE_REALCLIENTS=1, which .ci/run sets)")
+
+
+#: why the real-client tier cannot run here (None: it can); found once per session
+_REALCLIENT = {}
+
+
+def realclient_problem() -> str | None:
+    if "problem" not in _REALCLIENT:
+        import sys
+
+        sys.path.insert(0, str(REPO))
+        from realclients import NoClient, bpy_python
+
+        try:
+            _REALCLIENT["python"] = bpy_python()
+            _REALCLIENT["problem"] = None
+        except NoClient as exc:
+            _REALCLIENT["problem"] = str(exc)
+    return _REALCLIENT["problem"]
+
+
+@pytest.fixture(scope="session")
+def realclient(request, gl_context):
+    """The real-client tier (marker ``realclient``): skipped, saying why, where no Python
+    with bpy is found; an error with --require-realclients."""
+    problem = realclient_problem()
+    if problem is not None:
+        if request.config.getoption("--require-realclients") or \
+                os.environ.get("USDWRINKLE_REQUIRE_REALCLIENTS") == "1":
+            pytest.fail(f"the real-client tier cannot run: {problem}")
+        pytest.skip(f"real-client tier not run: {problem}")
+    return _REALCLIENT["python"]
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    """Say so, at the end of every run, when the real-client tier did not run."""
+    skipped = [report for report in terminalreporter.stats.get("skipped", [])
+               if "real-client tier not run" in str(report.longrepr)]
+    if skipped:
+        terminalreporter.write_line(
+            f"REAL-CLIENT TIER NOT RUN ({len(skipped)} tests): {realclient_problem()}",
+            yellow=True, bold=True)
 
 
 @pytest.fixture(scope="session")

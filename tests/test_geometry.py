@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from benchmarks.lengths import sheet_lengths
 from pxr import Usd, UsdGeom, UsdSkel
 
+from benchmarks.lengths import sheet_lengths
 from usdwrinkle.cli.main import main
 from usdwrinkle.profiles import PRESETS
 
