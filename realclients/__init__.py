@@ -45,8 +45,13 @@ def bpy_python() -> str:
                    "(or set USDWRINKLE_BPY_PYTHON)")
 
 
+#: seconds each job's render took in the client, by output path (the last run's)
+SECONDS: dict[str, float] = {}
+
+
 def _run(script: str, jobs: list[dict], timeout: float) -> dict[str, str]:
-    """Run a client on ``jobs``; returns {out path: "ok" or the failure}."""
+    """Run a client on ``jobs``; returns {out path: "ok" or the failure}. The time each
+    render took inside the client goes to SECONDS."""
     python = bpy_python()
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as handle:
         json.dump(jobs, handle)
@@ -60,6 +65,9 @@ def _run(script: str, jobs: list[dict], timeout: float) -> dict[str, str]:
     for line in done.stdout.splitlines():
         if line.startswith("ok "):
             results[line[3:]] = "ok"
+        elif line.startswith("seconds "):
+            _, seconds, path = line.split(" ", 2)
+            SECONDS[path] = float(seconds)
         elif line.startswith("failed "):
             path, _, reason = line[7:].partition(": ")
             results[path] = reason

@@ -10,7 +10,8 @@ JOBS.json: a list of {"stage", "camera" (prim path, "" for usdrecord's automatic
 framing), "frame" (null: the default time), "width", "out" (.png: 8-bit sRGB as usdview
 shows it; .exr: linear), "purposes" (default ["default", "proxy"], usdview's),
 "camera_light" (usdview's default headlight; default true)}. Each job's image goes to
-"out"; a line "ok OUT" or "failed OUT: reason" per job on stdout.
+"out"; a line "ok OUT" or "failed OUT: reason" per job on stdout, and "seconds S OUT":
+the time Record took.
 
 Setup (verified here, GUIDE.md section 7): ``import bpy`` first, then its site-packages
 first on sys.path; a current EGL context of the compatibility profile (a core profile
@@ -24,6 +25,7 @@ import importlib.util
 import json
 import os
 import sys
+import time
 
 EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
 EGL_OPENGL_API = 0x30A2
@@ -110,8 +112,10 @@ def main(jobs_path: str) -> None:
 
     for job in jobs:
         try:
+            started = time.perf_counter()
             record(job)
             print(f"ok {job['out']}", flush=True)
+            print(f"seconds {time.perf_counter() - started:.6f} {job['out']}", flush=True)
         except Tf.ErrorException as exc:
             # Storm's GL errors are raised after the image is written; the image decides
             if os.path.isfile(job["out"]):

@@ -23,6 +23,7 @@ uniform mat4 u_world_to_eye;     // view
 uniform mat3 u_normal_to_world;  // inverse transpose of local_to_world's 3x3 (column-vector)
 uniform vec3 u_eye_local;        // camera position in the mesh's local space
 uniform vec3 u_eye_world;        // camera position in world space
+uniform int u_wrinkles;          // 0: same shading, no wrinkles
 
 #if defined VERTEX_SHADER
 
@@ -36,6 +37,16 @@ centroid out vec3 v_bary;
 centroid out vec2 v_st;
 #if defined NORMAL_MAP
 centroid out vec2 v_normal_st;
+#endif
+// per triangle, the same at its three corners (the draw is not indexed): the corner
+// waves (wave.glsl: CornerWaves), gathered here once instead of in every fragment
+flat out vec4 v_wave[WAVE_SLOTS];
+flat out vec3 v_phase[SYSTEMS_MAX];
+flat out vec3 v_corner[3];
+#if defined TEXTURED
+// the texture deformation's map from a local-space offset to an st offset: the rows of
+// inverse(gram) [dP/ds; dP/dt] (zero where the triangle's st are degenerate)
+flat out vec3 v_st_from_local[2];
 #endif
 
 void main() {
@@ -58,6 +69,27 @@ void main() {
 #if defined NORMAL_MAP
     v_normal_st = fetch(normal_st, corner).xy;
 #endif
+    CornerWaves cw;
+    for (int k = 0; k < WAVE_SLOTS; ++k) cw.wave[k] = vec4(0.0);
+    for (int k = 0; k < SYSTEMS_MAX; ++k) cw.phase[k] = vec3(0.0);
+    for (int k = 0; k < 3; ++k) cw.corner[k] = vec3(0.0);
+    if (u_wrinkles != 0) cw = corner_waves(t);
+    v_wave = cw.wave;
+    v_phase = cw.phase;
+    v_corner = cw.corner;
+#if defined TEXTURED
+    v_st_from_local[0] = v_st_from_local[1] = vec3(0.0);
+    vec3 dp_du, dp_dv;  // dP/dUV, local space
+    if (u_wrinkles != 0 && uv_derivatives(t, corner_st, dp_du, dp_dv)) {
+        mat2 gram = mat2(dot(dp_du, dp_du), dot(dp_du, dp_dv),
+                         dot(dp_du, dp_dv), dot(dp_dv, dp_dv));
+        if (abs(determinant(gram)) > 1e-30) {
+            mat2 inv = inverse(gram);  // column-major: inv[col][row]
+            v_st_from_local[0] = inv[0][0] * dp_du + inv[1][0] * dp_dv;
+            v_st_from_local[1] = inv[0][1] * dp_du + inv[1][1] * dp_dv;
+        }
+    }
+#endif
     gl_Position = u_world_to_clip * world;         // world -> clip
 }
 
@@ -71,6 +103,12 @@ centroid in vec2 v_st;
 #if defined NORMAL_MAP
 centroid in vec2 v_normal_st;
 #endif
+flat in vec4 v_wave[WAVE_SLOTS];
+flat in vec3 v_phase[SYSTEMS_MAX];
+flat in vec3 v_corner[3];
+#if defined TEXTURED
+flat in vec3 v_st_from_local[2];
+#endif
 
 layout(location = 0) out vec4 out_color;    // linear RGB, alpha
 layout(location = 1) out vec4 out_wrinkle;  // x: height h, y: amplitude, z: eye depth Z
@@ -78,9 +116,11 @@ layout(location = 2) out vec4 out_normal;   // world-space shading normal
 
 #include "include/surface.glsl"
 
-uniform int u_wrinkles;                // 0: same shading, no wrinkles
 uniform int u_double_sided;            // back faces shaded with the flipped normal
-uniform int u_fallback_surface;        // no UsdPreviewSurface: Storm's fallback surface
+// switches (render/passes/draw.py): FALLBACK_SURFACE (no UsdPreviewSurface: Storm's
+// fallback surface), TEXTURED (a diffuse texture), DOME (a dome light), MASKED (an
+// opacityThreshold above 0); each off compiles
+// out, which llvmpipe's masked execution of uniform branches would otherwise pay for
 uniform vec3 u_diffuse_color;          // UsdPreviewSurface diffuseColor, or displayColor
 uniform vec3 u_emissive_color;
 uniform int u_use_specular_workflow;
@@ -93,7 +133,6 @@ uniform float u_opacity;               // or displayOpacity
 uniform float u_opacity_threshold;     // > 0: masked (cut out below it, else opaque)
 uniform float u_ior;
 uniform float u_occlusion;
-uniform int u_has_texture;
 layout(binding = DRAW_DIFFUSE_TEXTURE) uniform sampler2D u_diffuse_texture;
 uniform vec4 u_texture_scale;
 uniform vec4 u_texture_bias;
@@ -128,7 +167,8 @@ void main() {
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
-        wave = wave_blend(t, v_bary, v_local, n, false);
+        wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner), v_bary, v_local,
+                                  n, false);
     }
     float h = wave.height;
     vec3 shading_local = safe_normalize(n - wave.gradient, n);
@@ -142,25 +182,20 @@ void main() {
 #endif
     // texture deformation: the point seen through the wrinkle, dx = (v/(v.n') - n') h
     vec2 st = v_st;
-    if (u_has_texture != 0 && u_wrinkles != 0 && h != 0.0) {
+#if defined TEXTURED
+    if (u_wrinkles != 0 && h != 0.0) {
         vec3 v = safe_normalize(u_eye_local - v_local, n);
         float vn = max(abs(dot(v, shading_local)), 0.25);
         vec3 dx = (v / vn - shading_local) * h;
-        vec3 dp_du, dp_dv;  // dP/dUV, local space
-        if (uv_derivatives(t, corner_st, dp_du, dp_dv)) {
-            mat2 gram = mat2(dot(dp_du, dp_du), dot(dp_du, dp_dv),
-                             dot(dp_du, dp_dv), dot(dp_dv, dp_dv));
-            if (abs(determinant(gram)) > 1e-30) {
-                st += inverse(gram) * vec2(dot(dp_du, dx), dot(dp_dv, dx));
-            }
-        }
+        st += vec2(dot(v_st_from_local[0], dx), dot(v_st_from_local[1], dx));
     }
+#endif
 
     vec3 base = u_diffuse_color;
-    if (u_has_texture != 0) {
-        vec4 texel = texture(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
-        base *= texel.rgb;
-    }
+#if defined TEXTURED
+    vec4 texel = texture(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
+    base *= texel.rgb;
+#endif
 
     // local -> world shading normal; a double-sided mesh's back faces see it flipped, a
     // single-sided mesh's back faces keep it (unlit, as Storm draws them)
@@ -170,15 +205,19 @@ void main() {
 
     vec3 radiance;
     float alpha;
-    if (u_fallback_surface != 0) {
-        radiance = fallback_surface(base, v_world, N);
-        alpha = u_opacity;
-    } else {
+#if defined FALLBACK_SURFACE
+    radiance = fallback_surface(base, v_world, N);
+    alpha = u_opacity;
+#else
+    {
         float opacity = u_opacity;
-        if (u_opacity_threshold > 0.0) {  // masked: cut out, else opaque
-            if (opacity < u_opacity_threshold) discard;
-            opacity = 1.0;
-        }
+#if defined MASKED
+        // opacityThreshold > 0: cut out, else opaque. Only this variant may discard: a
+        // shader that can discard is depth-tested after it runs (llvmpipe shades every
+        // hidden fragment then)
+        if (opacity < u_opacity_threshold) discard;
+        opacity = 1.0;
+#endif
         PreviewSurface surface = PreviewSurface(
             base * opacity, u_emissive_color, u_use_specular_workflow != 0, u_specular_color,
             u_metallic, u_roughness, u_clearcoat, u_clearcoat_roughness, opacity, u_ior,
@@ -186,6 +225,7 @@ void main() {
         radiance = preview_surface(surface, v_world, N, V);
         alpha = opacity;
     }
+#endif
 
     vec4 eye = u_world_to_eye * vec4(v_world, 1.0);
     out_color = vec4(radiance, alpha);

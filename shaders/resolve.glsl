@@ -33,6 +33,12 @@ layout(std430, binding = RESOLVE_OUT) writeonly buffer Words { uint words[]; };
 layout(std430, binding = RESOLVE_BAD) buffer Bad { uint u_bad; };
 
 uniform ivec2 u_size;
+// The invocations cover the part of the frame drawn into (render/bounds.py), its pixels
+// (EXR: pixel pairs) numbered row by row: u_rect = (x0, y0, x1, y1), x1 and y1 exclusive,
+// in a grid u_grid_width wide (the frame's width; for the pairs of an odd-width frame, one
+// row of all its pixels). What lies outside is filled in by render/resolve.py.
+uniform ivec4 u_rect;
+uniform int u_grid_width;
 // OUTPUT_AOVS: first word of color, wrinkle.height, wrinkle.amplitude, normal, depth;
 // OUTPUT_EXR: first word of each channel's plane, in the order above
 uniform int u_offset[10];
@@ -55,8 +61,33 @@ vec4 average(ATTACHMENT target, ivec2 p) {
 #endif
 }
 
-Pixel resolve(int i) {
-    ivec2 p = ivec2(i % u_size.x, i / u_size.x);
+// floor(a / b) for 0 <= a, 0 < b: a float division corrected by one either way (an
+// integer division per invocation cost this pass a tenth of its time on llvmpipe, which
+// divides vector lanes one at a time)
+int divide(int a, int b) {
+    int q = int(float(a) / float(b));
+    int r = a - q * b;
+    if (r < 0) q -= 1;
+    if (r >= b) q += 1;
+    return q;
+}
+
+// the pixel of index i = y * width + x
+ivec2 pixel_of(int i) {
+    int y = divide(i, u_size.x);
+    return ivec2(i - y * u_size.x, y);
+}
+
+// the grid cell (x, y) of invocation j's first pixel (``step`` pixels per invocation),
+// or (-1, -1) past the last
+ivec2 item_cell(int j, int step) {
+    int per_row = (u_rect.z - u_rect.x) / step;
+    if (per_row <= 0 || j >= per_row * (u_rect.w - u_rect.y)) return ivec2(-1);
+    int row = divide(j, per_row);
+    return ivec2(u_rect.x + step * (j - row * per_row), u_rect.y + row);
+}
+
+Pixel resolve(ivec2 p) {
     Pixel px;
     px.color = average(u_color, p);
     bool covered = px.color.a > 0.0;
@@ -92,8 +123,10 @@ vec3 srgb_encode(vec3 linear) {  // IEC 61966-2-1, as colour.py's srgb_encode
 
 uint codes(Pixel px) {
 #if defined OVER_BLACK
+    if (px.color.rgb == vec3(0.0)) return 0xff000000u;  // black: no sRGB encode to run
     return packUnorm4x8(vec4(srgb_encode(px.color.rgb), 1.0));
 #else
+    if (!(px.color.a > 0.0)) return 0u;  // empty (or NaN): transparent black
     float alpha = clamp(px.color.a, 0.0, 1.0);
     vec3 straight = alpha > 0.0 ? px.color.rgb / alpha : vec3(0.0);
     return packUnorm4x8(vec4(srgb_encode(straight), alpha));
@@ -121,12 +154,13 @@ bool is_half(int c) { return false; }
 // Two neighbouring pixels per invocation, so that a half plane's words hold whole pairs.
 void main() {
     int n = u_size.x * u_size.y;
-    int pair = int(gl_GlobalInvocationID.x);
-    int first = 2 * pair;
-    if (first >= n) return;
+    ivec2 cell = item_cell(int(gl_GlobalInvocationID.x), 2);
+    int first = cell.y * u_grid_width + cell.x;
+    if (cell.x < 0 || first >= n) return;
+    int pair = first / 2;  // first is even: a pair never straddles the rectangle's edge
     bool second = first + 1 < n;
-    Pixel a = resolve(first);
-    Pixel b = resolve(second ? first + 1 : first);
+    Pixel a = resolve(pixel_of(first));
+    Pixel b = resolve(pixel_of(second ? first + 1 : first));
     uint bad = 0u;
     for (int c = 0; c < 10; ++c) {
         vec2 v = vec2(channel(a, c), channel(b, c));
@@ -145,9 +179,10 @@ void main() {
 #else
 // One pixel per invocation.
 void main() {
-    int i = int(gl_GlobalInvocationID.x);
-    if (i >= u_size.x * u_size.y) return;
-    Pixel px = resolve(i);
+    ivec2 p = item_cell(int(gl_GlobalInvocationID.x), 1);  // the grid is the frame
+    if (p.x < 0) return;
+    int i = p.y * u_size.x + p.x;
+    Pixel px = resolve(p);
     uint bad = bad_values(px.color);
 #if defined OUTPUT_AOVS
     for (int c = 0; c < 4; ++c) words[u_offset[0] + 4 * i + c] = floatBitsToUint(px.color[c]);

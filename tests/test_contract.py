@@ -26,6 +26,8 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   "STEP", "TWO_SYSTEMS", "NORMAL_MAP",
                   # the normals pass's (render/passes/normals.py)
                   "SMOOTH", "FACETED", "SKINNED",
+                  # the draw pass's (render/passes/draw.py)
+                  "FALLBACK_SURFACE", "TEXTURED", "DOME", "MASKED",
                   # the resolve pass's (render/resolve.py)
                   "SAMPLES", "NEED_FIELDS", "NEED_NORMAL", "OUTPUT_AOVS", "OUTPUT_EXR",
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK"}
@@ -92,16 +94,19 @@ def test_fields_follow_the_layout():
 
 
 def test_the_wave_blend_is_written_once():
-    """Draw and the wrinkle maps evaluate the waves through include/wave.glsl's
-    wave_blend: no other shader samples the profiles or sums the corner waves itself."""
+    """Draw, the wrinkle maps and the geometry evaluate the waves through
+    include/wave.glsl's blend (wave_blend, or blend_corner_waves of corners gathered by
+    corner_waves): no other shader samples the profiles or sums the corner waves itself."""
     users = []
     for path in shader_files():
         text = strip_comments(path.read_text())
         if path.name == "wave.glsl":
-            assert "Wave wave_blend(" in text
+            assert "Wave wave_blend(" in text and "Wave blend_corner_waves(" in text
             continue
         assert "u_height_profile" not in text and "u_gradient_profile" not in text, path.name
         if '#include "include/wave.glsl"' in text:
-            assert "wave_blend(" in text, path.name
+            assert "FIELD_WAVE" not in text, path.name  # the corners come from corner_waves
+            assert "wave_blend(" in text or ("corner_waves(" in text and
+                                             "blend_corner_waves(" in text), path.name
             users.append(path.name)
     assert {"draw.glsl", "maps.glsl", "geometry.glsl"} <= set(users)

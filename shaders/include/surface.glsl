@@ -17,7 +17,7 @@ uniform vec3 u_light_ambient[MAX_LIGHTS];
 uniform int u_light_attenuate[MAX_LIGHTS];    // 1/d^2
 uniform vec4 u_light_spot[MAX_LIGHTS];        // xyz: cone axis (world); w: cone angle, degrees
 uniform float u_light_spot_falloff[MAX_LIGHTS];
-uniform int u_dome;                           // a dome light: its SH9 radiance (x its colour)
+// DOME (a switch): a dome light, its SH9 radiance (x its colour)
 uniform vec3 u_dome_sh[9];
 // a textured dome's environment (lat-long, mip-mapped) for its specular reflections
 layout(binding = DRAW_DOME_TEXTURE) uniform sampler2D u_dome_texture;
@@ -165,7 +165,8 @@ vec3 preview_surface(PreviewSurface s, vec3 p, vec3 n, vec3 e) {
             (d * u_light_diffuse[i] + (s1 + s2) * u_light_specular[i]);
     }
     vec3 indirect = vec3(0.0);
-    if (u_dome != 0) {  // evaluateIndirectLighting: its half vector is e itself
+#if defined DOME
+    {  // evaluateIndirectLighting: its half vector is e itself
         vec3 reflected = reflect(-e, n);
         vec2 brdf = environment_brdf(n_dot_e, roughness);
         indirect = diffuse * (1.0 - f0) * sh9(n, vec3(1.0, 2.0 / 3.0, 0.25))
@@ -177,6 +178,7 @@ vec3 preview_surface(PreviewSurface s, vec3 p, vec3 n, vec3 e) {
         }
         indirect *= s.occlusion;
     }
+#endif
     return s.emissive_color + direct + indirect;
 }
 
@@ -193,8 +195,8 @@ vec3 fallback_surface(vec3 color, vec3 p, vec3 n) {
         diffuse += atten * max(0.0, dot(n, l)) * u_light_diffuse[i] / storm_pi;
         specular += atten * pow(max(0.0, dot(n, h)), 32.0) * u_light_specular[i] / storm_pi;
     }
-    if (u_dome != 0) {
-        diffuse += sh9(n, vec3(1.0, 2.0 / 3.0, 0.25));
-    }
+#if defined DOME
+    diffuse += sh9(n, vec3(1.0, 2.0 / 3.0, 0.25));
+#endif
     return vec3(0.01 * 0.2) + ambient * 0.2 + diffuse * color + specular * 0.1;
 }

@@ -24,8 +24,10 @@ uniform float u_profile_samples;
 #if defined TWO_SYSTEMS
 uniform int u_systems;
 #define SYSTEMS u_systems
+#define SYSTEMS_MAX 2
 #else
 #define SYSTEMS 1
+#define SYSTEMS_MAX 1
 #endif
 
 float profile(sampler2D table, float theta) {
@@ -54,23 +56,29 @@ vec3 weight_gradient(int c, vec3 p0, vec3 p1, vec3 p2) {
     return cross(normal, opposite) / area2;
 }
 
-// The blend at local-space point p of triangle t, barycentric weights bary, interpolated
-// coarse unit normal n. The surface P + h n has the normal normalize(n - gradient).
-// The gradient is the paper's sum(b_c a_c H'(theta_c) k_c) in the tangent plane of n,
-// which shading uses. With exact_gradient it is the true 3D gradient of h over the flat
-// coarse triangle instead: the blend weights' own slope sum(a_c H(theta_c) grad b_c)
-// added, and not projected (displaced geometry differentiates its surface with it).
-Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
-    Wave w = Wave(0.0, vec3(0.0), 0.0);
-    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
-    bary = clamp(bary, 0.0, 1.0);
-    bary /= max(bary.x + bary.y + bary.z, 1e-20);
+// The three corner waves of a triangle as the blend reads them, gathered once per
+// triangle: wave[3 s + c] = (k, a) of corner c in system s, its sign aligned to corner
+// 0's (a corner whose eigenvectors are swapped against corner 0's contributes its other
+// system), phase[s][c] its phase, corner[c] the posed corner (local space). The draw pass
+// gathers them in the vertex stage and hands them to its fragments as flat varyings.
+#if defined TWO_SYSTEMS
+#define WAVE_SLOTS 6
+#else
+#define WAVE_SLOTS 3
+#endif
+struct CornerWaves {
+    vec4 wave[WAVE_SLOTS];
+    vec3 phase[SYSTEMS_MAX];
+    vec3 corner[3];
+};
+
+CornerWaves corner_waves(int t) {
+    CornerWaves cw;
     ivec3 corners = fetch(triangles, t).xyz;
+    for (int c = 0; c < 3; ++c) cw.corner[c] = fetch(posed_points, corners[c]).xyz;
     vec3 reference0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
 #if defined TWO_SYSTEMS
     vec3 reference1 = fetch(fields, FIELD_WAVE_OF(corners.x, 1)).xyz;
-    // a corner whose eigenvectors are swapped against corner 0's (matched by direction)
-    // adds its system 2 to corner 0's system 1, and the other way round
     bool swapped[3] = bool[3](false, false, false);
     for (int c = 1; c < 3; ++c) {
         vec3 k0 = normalize_or_zero(fetch(fields, FIELD_WAVE_OF(corners[c], 0)).xyz);
@@ -80,13 +88,8 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
         swapped[c] = abs(dot(r0, k1)) + abs(dot(r1, k0)) > abs(dot(r0, k0)) + abs(dot(r1, k1));
     }
 #endif
-    vec3 p0 = vec3(0.0), p1 = vec3(0.0), p2 = vec3(0.0);
-    if (exact_gradient) {
-        p0 = fetch(posed_points, corners.x).xyz;
-        p1 = fetch(posed_points, corners.y).xyz;
-        p2 = fetch(posed_points, corners.z).xyz;
-    }
-    for (int s = 0; s < SYSTEMS; ++s) {
+    for (int s = 0; s < SYSTEMS_MAX; ++s) {
+        cw.phase[s] = vec3(0.0);
 #if defined TWO_SYSTEMS
         vec3 k0 = s == 0 ? reference0 : reference1;
 #else
@@ -96,24 +99,47 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
             int i = corners[c];
 #if defined TWO_SYSTEMS
             int system = swapped[c] ? 1 - s : s;
-            vec4 wave = fetch(fields, FIELD_WAVE_OF(i, system));
+            vec4 wave = s < SYSTEMS ? fetch(fields, FIELD_WAVE_OF(i, system)) : vec4(0.0);
             float phi = fetch(phase, i)[system];
 #else
             vec4 wave = fetch(fields, FIELD_WAVE(i));
             float phi = fetch(phase, i).x;
 #endif
+            if (c > 0 && dot(wave.xyz, k0) < 0.0) { wave.xyz = -wave.xyz; phi = -phi; }
+            cw.wave[3 * s + c] = wave;
+            cw.phase[s][c] = phi;
+        }
+    }
+    return cw;
+}
+
+// The blend at local-space point p of a triangle with corner waves cw, barycentric
+// weights bary, interpolated coarse unit normal n. The surface P + h n has the normal
+// normalize(n - gradient). The gradient is the paper's sum(b_c a_c H'(theta_c) k_c) in
+// the tangent plane of n, which shading uses. With exact_gradient it is the true 3D
+// gradient of h over the flat coarse triangle instead: the blend weights' own slope
+// sum(a_c H(theta_c) grad b_c) added, and not projected (displaced geometry
+// differentiates its surface with it).
+Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
+    Wave w = Wave(0.0, vec3(0.0), 0.0);
+    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
+    bary = clamp(bary, 0.0, 1.0);
+    bary /= max(bary.x + bary.y + bary.z, 1e-20);
+    for (int s = 0; s < SYSTEMS; ++s) {
+        for (int c = 0; c < 3; ++c) {
+            vec4 wave = cw.wave[3 * s + c];
             float a = wave.w;
-            if (a == 0.0) continue;  // no wave here: skip the gathers and the profile lookups
+            if (a == 0.0) continue;  // no wave here: skip the profile lookups
             vec3 k = wave.xyz;
-            if (c > 0 && dot(k, k0) < 0.0) { k = -k; phi = -phi; }  // align signs to corner 0
-            float theta = phi + dot(k, p - fetch(posed_points, i).xyz);  // local space
+            float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
             float b = bary[c];
             float height = profile(u_height_profile, theta);
             w.height += b * a * height;
             w.gradient += b * a * profile(u_gradient_profile, theta) * k;
             w.amplitude += b * a;
             if (exact_gradient) {
-                w.gradient += a * height * weight_gradient(c, p0, p1, p2);
+                w.gradient += a * height * weight_gradient(c, cw.corner[0], cw.corner[1],
+                                                           cw.corner[2]);
             }
         }
     }
@@ -121,6 +147,11 @@ Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
         w.gradient -= dot(w.gradient, n) * n;  // keep the gradient in the tangent plane
     }
     return w;
+}
+
+// The blend at local-space point p of triangle t (corner_waves and blend_corner_waves).
+Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
+    return blend_corner_waves(corner_waves(t), bary, p, n, exact_gradient);
 }
 
 // dP/ds and dP/dt of triangle t (posed, local space) for a table of texture coordinates

@@ -6,8 +6,8 @@ import os
 import time
 
 from ..errors import UsdWrinkleError
-from ..geometry.bake import GeometryOptions
-from ..maps.bake import MapOptions
+from ..geometry.options import GeometryOptions
+from ..maps.options import MapOptions
 from .common import (
     Reporter,
     add_shot_args,

@@ -14,16 +14,14 @@ those at 6 per wavelength took the shirt from 4 to 6 levels (1.7 M points instea
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..errors import UsdWrinkleError
 from ..render.buffers import available_memory
 from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
+from .options import GeometryOptions
 from .subdivide import (
-    DEFAULT_SAMPLES_PER_WAVELENGTH,
     MAX_LEVELS,
     check_size,
     levels_for,
@@ -35,14 +33,6 @@ from .subdivide import (
 BYTES_PER_POINT_FRAME = 2 * 12 + 2 * 16
 #: the share of wrinkled triangles (over all frames) whose phase advance sets the levels
 SURVEY_PERCENTILE = 99.0
-
-
-@dataclass(frozen=True)
-class GeometryOptions:
-    """What ``--geometry`` and its options ask for."""
-
-    levels: int | None = None
-    samples_per_wavelength: float = DEFAULT_SAMPLES_PER_WAVELENGTH
 
 
 def check_geometry_options(options: GeometryOptions) -> None:

@@ -19,7 +19,6 @@ from ..errors import UsdWrinkleError
 #: fine points above which a mesh is refused (``--levels`` lowers the count)
 MAX_FINE_POINTS = 4_000_000
 #: samples per wavelength the default level count aims for
-DEFAULT_SAMPLES_PER_WAVELENGTH = 6.0
 MAX_LEVELS = 10
 
 

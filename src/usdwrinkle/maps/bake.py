@@ -26,6 +26,7 @@ from .files import (
     udim_number,
     uv_tiles,
 )
+from .options import MapOptions
 from .raster import MapRasterizer
 
 #: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
@@ -36,25 +37,6 @@ MAX_PADDING = 256
 BYTES_PER_TEXEL = 2 * 16 + 2 * 16 + 2 * 16 + 16
 #: a texel covered more than once over this fraction of a tile's islands gets a warning
 OVERLAP_WARNING = 0.002
-
-
-@dataclass(frozen=True)
-class MapOptions:
-    """What ``--maps`` and its options ask for."""
-
-    kinds: tuple = ("normal",)
-    size: int = 2048
-    #: the map folder (default: ``<layer name>_maps`` beside the layer)
-    folder: str | None = None
-    fmt: str = "png"
-    padding: int = 8
-    uv: str = "st"
-
-    def folder_for(self, layer_path: str) -> str:
-        if self.folder:
-            return self.folder
-        stem = os.path.splitext(os.path.basename(layer_path))[0]
-        return os.path.join(os.path.dirname(os.path.abspath(layer_path)), f"{stem}_maps")
 
 
 def check_map_options(options: MapOptions, max_texture_size: int | None = None) -> None:

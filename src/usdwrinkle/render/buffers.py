@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .resolve import AOVS, ImageLayout, ResolvedImage, ResolvePass
+from .resolve import AOVS, ImageLayout, ResolvedImage, ResolvePass, read_rect
 
 
 @dataclass
@@ -76,7 +76,10 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
 
 
 class Framebuffer:
-    """Three float RGBA attachments plus depth, at one resolution.
+    """Up to three float RGBA attachments (colour; height, amplitude, depth; normal) plus
+    depth, at one resolution: ``count`` of them, the first ones (an 8-bit image keeps
+    colour alone, and allocating and clearing multisampled float targets it does not keep
+    cost start-up and memory).
 
     With ``samples`` > 1 the meshes are drawn multisampled (edges anti-aliased) into
     multisample textures, which the resolve pass (render/resolve.py) reads directly: it
@@ -86,28 +89,58 @@ class Framebuffer:
     """
 
     def __init__(self, ctx, width: int, height: int, samples: int = 4,
-                 resolve: ResolvePass | None = None):
+                 resolve: ResolvePass | None = None, count: int = 3, colour: str = "f4"):
         self.ctx = ctx
         self.size = (width, height)
         check_frame_size(ctx, width, height, int(samples))
         self.samples = max(1, int(samples))
         multisample = self.samples if self.samples > 1 else 0  # 0: single-sample
-        self.targets = [ctx.texture((width, height), 4, samples=multisample, dtype="f4")
-                        for _ in range(3)]
+        self.colour = colour
+        self.targets = [ctx.texture((width, height), 4, samples=multisample,
+                                    dtype=colour if index == 0 else "f4")
+                        for index in range(count)]
         self.depth = ctx.depth_renderbuffer((width, height), samples=multisample)
         self.fbo = ctx.framebuffer(color_attachments=self.targets, depth_attachment=self.depth)
+        self.rect = (0, 0, width, height)
         self._own_resolve = resolve is None
         self.resolve = resolve or ResolvePass(ctx)
 
-    def begin(self) -> None:
+    def begin(self, attachments=None, rect=None, layout: ImageLayout | None = None) -> None:
+        """Bind, clear, and write only ``attachments`` (indices; None: all): an 8-bit
+        image keeps the colour alone, and the other targets' multisampled writes and
+        clears cost the draw about as much as the shading. ``rect`` (x0, y0, x1, y1;
+        None: the whole frame): the part of the frame that anything is drawn into
+        (render/bounds.py); only the part that the resolve then reads for ``layout``
+        (resolve.read_rect; None: AOVs) is cleared, and the rest of the frame is read
+        as empty."""
         self.fbo.use()
         self.ctx.viewport = (0, 0, *self.size)
-        self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        keep = range(len(self.targets)) if attachments is None else attachments
+        self.write_only([index in keep for index in range(len(self.targets))])
+        self.ctx.enable(self.ctx.DEPTH_TEST)
+        self.rect = read_rect(layout, *self.size, rect)
+        x0, y0, x1, y1 = self.rect
+        if (x0, y0, x1, y1) == (0, 0, *self.size):
+            self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        elif x1 > x0 and y1 > y0:
+            self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0, viewport=(x0, y0, x1 - x0, y1 - y0))
+
+    def write_only(self, flags) -> list:
+        """Write the attachments whose flag is true (moderngl takes one tuple for one
+        attachment, a list for several); returns the previous flags."""
+        previous = self.fbo.color_mask
+        previous = [mask[0] for mask in previous] if isinstance(previous[0], tuple) \
+            else [previous[0]]
+        masks = [(bool(flag),) * 4 for flag in flags]
+        self.fbo.color_mask = masks[0] if len(masks) == 1 else masks
+        return previous
 
     def read_image(self, layout: ImageLayout) -> ResolvedImage:
         """The frame as ``layout`` says (an image file's planes or codes): only the
         attachments it needs are read, at the precision it is stored at."""
-        return self.resolve.run(self.targets, self.size, self.samples, layout)
+        if read_rect(layout, *self.size, self.rect) != self.rect:
+            raise RuntimeError(f"the frame was cleared for another layout than {layout.kind}")
+        return self.resolve.run(self.targets, self.size, self.samples, layout, self.rect)
 
     def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
         """The requested AOVs as float RenderBuffers, views of one array of their own

@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 
 from ..contract import COLD_START_FACTOR
 from ..scene.changes import DirtyBits
+from .bounds import eye_bound, screen_rect
 from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer
 from .passes.crush import CrushPass
-from .passes.draw import DrawPass
+from .passes.draw import FLIP_Y, DrawPass
 from .passes.normals import NormalsPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
@@ -173,13 +174,18 @@ class RenderDelegate:
         if mesh is not None:
             mesh.release()
 
-    def framebuffer(self, width: int, height: int, samples: int = 4) -> Framebuffer:
+    def framebuffer(self, width: int, height: int, samples: int = 4,
+                    count: int = 3, colour: str = "f4") -> Framebuffer:
+        """A framebuffer of at least ``count`` attachments, colour of ``colour`` (kept, and
+        reused, until the size, the samples, a larger count or another colour is asked
+        for)."""
         fb = self._framebuffer
-        if fb is None or fb.size != (width, height) or fb.samples != max(1, samples):
+        if fb is None or fb.size != (width, height) or fb.samples != max(1, samples) or \
+                len(fb.targets) < count or fb.colour != colour:
             if fb is not None:
                 fb.release()
             fb = self._framebuffer = Framebuffer(self.ctx, width, height, samples,
-                                                 self.resolve)
+                                                 self.resolve, count, colour)
         return fb
 
     def release(self) -> None:
@@ -190,14 +196,6 @@ class RenderDelegate:
             self._framebuffer = None
         self.resolve.release()
         self.draw.release()
-
-
-def is_translucent(material) -> bool:
-    """A surface that lets what is behind it show: opacity (or displayOpacity) below 1,
-    and no opacityThreshold (a threshold cuts out instead: masked, opaque)."""
-    if material.surface is None:
-        return material.opacity < 1.0
-    return material.surface.opacity < 1.0 and material.surface.opacity_threshold <= 0.0
 
 
 class RenderPass:
@@ -221,7 +219,7 @@ class RenderPass:
                     timings[key] = value if isinstance(value, str) else \
                         timings.get(key, 0.0) + value
 
-    def _draw_translucent(self, meshes: list, fb, camera) -> None:
+    def _draw_translucent(self, meshes: list, fb, camera, bounds: dict) -> None:
         """Translucent meshes after the opaque ones, farthest first, each composited
         "over" what is drawn (its colour is premultiplied by its opacity, as Storm's);
         they write neither depth nor the other AOVs, which keep the surface behind.
@@ -236,17 +234,16 @@ class RenderPass:
             return float(np.linalg.norm((centre @ mesh.frame.local_to_world)[:3] -
                                         camera.position))
 
-        masks = fb.fbo.color_mask
-        fb.fbo.color_mask = [(True,) * 4] + [(False,) * 4] * (len(masks) - 1)
+        previous = fb.write_only([True] + [False] * (len(fb.targets) - 1))
         fb.fbo.depth_mask = False
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         try:
             for mesh in sorted(meshes, key=distance, reverse=True):
-                self.delegate.draw.draw(mesh.resources, mesh.frame, camera)
+                self.delegate.draw.draw(mesh.resources, mesh.frame, camera, bounds[id(mesh)])
         finally:
             ctx.disable(moderngl.BLEND)
-            fb.fbo.color_mask = masks
+            fb.write_only(previous)
             fb.fbo.depth_mask = True
 
     def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage:
@@ -254,20 +251,34 @@ class RenderPass:
         image file stores it."""
         d = self.delegate
         ctx = d.ctx
-        fb = d.framebuffer(state.width, state.height, state.samples)
+        attachments = state.image.attachments if state.image is not None else None
+        # an 8-bit image is as exact from half-float colour samples (11 bits), which
+        # halve the multisampled colour's clears, writes and reads
+        eight_bit = state.image is not None and state.image.kind == "8bit"
+        fb = d.framebuffer(state.width, state.height, state.samples,
+                           3 if attachments is None else max(attachments) + 1,
+                           "f2" if eight_bit else "f4")
         timer = ctx if d.profile else None
         with _timed(timer, "draw", state.timings):
-            fb.begin()
+            drawn = [mesh for mesh in d.rprims.values() if mesh.resources is not None and
+                     mesh.frame is not None and mesh.frame.visible and
+                     mesh.resources.num_triangles]
+            # where each mesh can be this frame: its culling, and the part of the frame
+            # that is cleared and read back (render/bounds.py)
+            bounds = {id(mesh): eye_bound(mesh.resources.record, mesh.frame,
+                                          state.camera.view) for mesh in drawn}
+            fb.begin(attachments, screen_rect(bounds.values(),
+                                              state.camera.projection @ FLIP_Y,
+                                              state.width, state.height), state.image)
             ctx.enable(ctx.DEPTH_TEST)
             ctx.disable(ctx.CULL_FACE)
             d.draw.begin(state.camera, state.lights, state.wrinkles)
-            translucent = [mesh for mesh in d.rprims.values() if mesh.resources is not None
-                           and is_translucent(mesh.resources.record.material)]
-            for mesh in d.rprims.values():
+            translucent = [mesh for mesh in drawn if mesh.resources.record.material.translucent]
+            for mesh in drawn:
                 if mesh not in translucent:
-                    d.draw.draw(mesh.resources, mesh.frame, state.camera)
+                    d.draw.draw(mesh.resources, mesh.frame, state.camera, bounds[id(mesh)])
             if translucent:
-                self._draw_translucent(translucent, fb, state.camera)
+                self._draw_translucent(translucent, fb, state.camera, bounds)
         started = time.perf_counter()
         buffers = fb.read_image(state.image) if state.image is not None else fb.read(state.aovs)
         if d.profile:

@@ -106,6 +106,57 @@ def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
     return offsets, word, views
 
 
+def read_rect(layout: ImageLayout | None, width: int, height: int,
+              rect=None) -> tuple[int, int, int, int]:
+    """The pixels (x0, y0, x1, y1; x1, y1 exclusive) that the resolve reads for ``layout``
+    when ``rect`` (None: all) is what was drawn into; Framebuffer.begin clears exactly
+    these. An EXR frame's half planes hold two neighbouring pixels per 32-bit word, so
+    its rectangle is widened to even columns; an odd-width EXR frame's pairs straddle
+    rows, so it is read whole."""
+    x0, y0, x1, y1 = (0, 0, width, height) if rect is None else (int(v) for v in rect)
+    if x1 <= x0 or y1 <= y0:
+        return (0, 0, 0, 0)
+    if layout is not None and layout.kind == "exr":
+        if width % 2:
+            return (0, 0, width, height)
+        return (x0 - x0 % 2, y0, x1 + x1 % 2, y1)
+    return (x0, y0, x1, y1)
+
+
+def _grid(layout: ImageLayout, width: int, height: int, rect) -> tuple[tuple, int, int]:
+    """(the rectangle of cells the shader resolves, the grid's width, pixels per cell):
+    ``rect`` (read_rect's), in pixels, or for EXR in pixel pairs; an odd-width EXR frame
+    is one row of all its pixels."""
+    if layout.kind != "exr":
+        return rect, width, 1
+    if width % 2:
+        n = width * height
+        return (0, 0, n + n % 2, 1), n + n % 2, 2
+    return rect, width, 2
+
+
+def _empty_value(layout: ImageLayout, name: str):
+    """What a pixel that nothing covers holds in plane ``name``."""
+    if name in ("Z", "depth"):
+        return np.inf
+    if layout.kind == "8bit" and layout.over_black:
+        return np.array([0, 0, 0, 255], np.uint8)  # black, opaque
+    return 0
+
+
+def _fill_outside(plane: np.ndarray, rect, value) -> None:
+    """Write ``value`` into the pixels of ``plane`` (height, width[, channels]) outside
+    ``rect`` (x0, y0, x1, y1), which the shader did not write."""
+    x0, y0, x1, y1 = rect
+    height, width = plane.shape[:2]
+    if (x0, y0, x1, y1) == (0, 0, width, height):
+        return
+    plane[:y0] = value
+    plane[y1:] = value
+    plane[y0:y1, :x0] = value
+    plane[y0:y1, x1:] = value
+
+
 class ResolvePass:
     """Compiles one shader variant per (samples, layout) on first use."""
 
@@ -136,9 +187,12 @@ class ResolvePass:
         return self.variants[samples](**switches)
 
     def run(self, targets: list, size: tuple[int, int], samples: int,
-            layout: ImageLayout) -> ResolvedImage:
+            layout: ImageLayout, rect=None) -> ResolvedImage:
         """Resolve ``targets`` (the three colour attachments, multisampled textures when
-        ``samples`` > 1) into ``layout``; returns the frame's arrays."""
+        ``samples`` > 1) into ``layout``; returns the frame's arrays. ``rect`` (x0, y0,
+        x1, y1; None: all): the part of the targets drawn into and cleared, which must
+        hold read_rect(layout, ..., rect); the pixels outside it are written empty,
+        without reading the targets."""
         width, height = size
         n = width * height
         offsets, words, views = _plan(layout, n)
@@ -154,11 +208,17 @@ class ResolvePass:
         self.out.bind_to_storage_buffer(bindings.RESOLVE["RESOLVE_OUT"])
         self.bad.bind_to_storage_buffer(bindings.RESOLVE["RESOLVE_BAD"])
         shader["u_size"] = (width, height)
+        rect = read_rect(layout, width, height, rect)
+        grid, grid_width, step = _grid(layout, width, height, rect)
+        shader["u_rect"] = grid
+        if "u_grid_width" in shader:  # EXR's pairs only
+            shader["u_grid_width"] = grid_width
         if "u_offset" in shader:  # the compiler keeps the elements the variant reads
             kept = shader["u_offset"].array_length
             shader["u_offset"] = offsets[:kept] if kept > 1 else offsets[0]
-        invocations = (n + 1) // 2 if layout.kind == "exr" else n  # EXR: pixel pairs
-        shader.run((invocations + bindings.LOCAL_SIZE - 1) // bindings.LOCAL_SIZE)
+        invocations = (grid[2] - grid[0]) // step * (grid[3] - grid[1])
+        if invocations:
+            shader.run((invocations + bindings.LOCAL_SIZE - 1) // bindings.LOCAL_SIZE)
         array = self._take_array(words)
         self.out.read_into(array, size=words * 4)
         bad = int(np.frombuffer(self.bad.read(), np.uint32)[0])
@@ -169,6 +229,7 @@ class ResolvePass:
             flat = array.view(np.uint8)[first * 4:first * 4 + count * itemsize].view(dtype)
             planes[name] = flat.reshape((height, width, channels) if channels > 1 or
                                         layout.kind != "exr" else (height, width))
+            _fill_outside(planes[name], rect, _empty_value(layout, name))
         return ResolvedImage(layout, width, height, planes, bad,
                              _recycle=lambda: self._give_back(array))
 

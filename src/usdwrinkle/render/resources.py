@@ -205,7 +205,7 @@ class MeshResources:
             packed[:, 1] = np.asarray(skin.joint_weights, np.float32).reshape(-1)
             self.influence_table = self._table(count, 2, data=packed)
             #: a joint moves the points (else blend shapes alone, or nothing)
-            self.skinned = skin.num_joints > 0 and bool(np.any(skin.joint_weights))
+            self.skinned = skin.skinned
             #: DQS: a joint of this frame scales or shears (the skin pass sets it)
             self.has_scale = False
             self.joints = self._table(max(skin.num_joints, 1) * JOINT_TEXELS, 4)

@@ -89,7 +89,9 @@ def camera_record(path: str, gf_cam: Gf.Camera, aspect: float) -> CameraRecord:
     view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
     projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
     position = np.asarray(frustum.position, dtype=np.float64)
-    return CameraRecord(path, view, projection, position, aspect)
+    near_far = frustum.nearFar
+    return CameraRecord(path, view, projection, position, aspect,
+                        (float(near_far.min), float(near_far.max)))
 
 
 def framing_camera(bounds_min, bounds_max, up_axis: str, aspect: float,
@@ -112,13 +114,13 @@ def framing_camera(bounds_min, bounds_max, up_axis: str, aspect: float,
     distance = radius / math.sin(fov_min / 2) * 1.05
     eye = center + front * distance
     frustum = Gf.Frustum()
-    frustum.SetPerspective(fov_degrees, aspect, max(distance - radius * 2, distance * 1e-3),
-                           distance + radius * 2)
+    near, far = max(distance - radius * 2, distance * 1e-3), distance + radius * 2
+    frustum.SetPerspective(fov_degrees, aspect, near, far)
     look = Gf.Matrix4d().SetLookAt(Gf.Vec3d(*eye), Gf.Vec3d(*center), Gf.Vec3d(*up))
     frustum.Transform(look.GetInverse())
     view = np.asarray(frustum.ComputeViewMatrix(), dtype=np.float64)
     projection = np.asarray(frustum.ComputeProjectionMatrix(), dtype=np.float64)
-    return CameraRecord("<framing>", view, projection, eye, aspect)
+    return CameraRecord("<framing>", view, projection, eye, aspect, (near, far))
 
 
 def framing_gf_camera(bounds_min, bounds_max, up_axis: str, aspect: float) -> Gf.Camera:

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .topology import Topology
+from .topology import Topology, closed_orientation
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,18 @@ class SkinData:
     @property
     def num_subshapes(self) -> int:
         return len(self.subshape_offsets)
+
+    @functools.cached_property
+    def skinned(self) -> bool:
+        """Joints move the points (else only blend shapes do, in the prim's own space)."""
+        return self.num_joints > 0 and bool(np.any(self.joint_weights))
+
+    @functools.cached_property
+    def convex(self) -> bool:
+        """Every point's joint weights are >= 0 and sum to 1: LBS keeps each posed point in
+        the convex hull of its joints' images of it (render/bounds.py)."""
+        weights = np.asarray(self.joint_weights, np.float64)
+        return bool(np.all(weights >= 0) and np.all(np.abs(weights.sum(axis=1) - 1) <= 1e-4))
 
 
 @dataclass(frozen=True)
@@ -167,6 +179,14 @@ class MaterialRecord:
     surface: SurfaceParams | None = None
     opacity: float = 1.0
 
+    @property
+    def translucent(self) -> bool:
+        """A surface that lets what is behind it show: opacity (or displayOpacity) below 1,
+        and no opacityThreshold (a threshold cuts out instead: masked, opaque)."""
+        if self.surface is None:
+            return self.opacity < 1.0
+        return self.surface.opacity < 1.0 and self.surface.opacity_threshold <= 0.0
+
 
 @dataclass(frozen=True)
 class MeshRecord:
@@ -194,6 +214,34 @@ class MeshRecord:
         """The largest |coordinate| of the rest points (scene/stage.py: check_transform)."""
         return float(np.abs(self.rest_points).max(initial=0.0))
 
+    @functools.cached_property
+    def joint_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per joint that moves some point (a weight > 0): its index, and the lower and
+        upper corners of the box of the rest points it moves ((k,), (k, 3), (k, 3);
+        render/bounds.py)."""
+        skin = self.skin
+        points = np.asarray(self.rest_points, np.float64)
+        if skin is None or not len(points):
+            return np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3))
+        indices = np.asarray(skin.joint_indices, np.int64)
+        moved = (np.asarray(skin.joint_weights) > 0) & (indices >= 0) & \
+            (indices < skin.num_joints)
+        rows, columns = np.nonzero(moved)
+        joint_of = indices[rows, columns]
+        joints = np.unique(joint_of)
+        slot = np.searchsorted(joints, joint_of)
+        lo = np.full((len(joints), 3), np.inf)
+        hi = np.full((len(joints), 3), -np.inf)
+        np.minimum.at(lo, slot, points[rows])
+        np.maximum.at(hi, slot, points[rows])
+        return joints, lo, hi
+
+    @functools.cached_property
+    def closed(self) -> int:
+        """topology.closed_orientation of the rest pose: +1 a closed surface wound outward,
+        -1 inward, 0 open (render/bounds.py)."""
+        return closed_orientation(self.rest_points, self.topology.triangles)
+
 
 @dataclass(frozen=True)
 class MeshFrame:
@@ -220,6 +268,8 @@ class CameraRecord:
     projection: np.ndarray
     position: np.ndarray
     aspect: float
+    #: clippingRange (near, far) in scene units along the view direction
+    clipping: tuple = (1.0, 1.0e6)
 
 
 @dataclass(frozen=True)

@@ -247,3 +247,34 @@ def mean_edge_length(points: np.ndarray, topology: Topology) -> float:
         return 0.0
     pts = np.asarray(points, dtype=np.float64)
     return float(np.linalg.norm(pts[edges[:, 1]] - pts[edges[:, 0]], axis=1).mean())
+
+
+def closed_orientation(points: np.ndarray, triangles: np.ndarray) -> int:
+    """+1 when the triangles close a surface wound outward (points at equal positions welded),
+    -1 when they close one wound inward, 0 when the surface is open, non-manifold, wound
+    inconsistently or encloses no volume. Only a closed surface hides one of its sides from
+    every camera outside it (render/bounds.py)."""
+    pts = np.asarray(points, np.float32).reshape(-1, 3)
+    tri = np.asarray(triangles, np.int64).reshape(-1, 3)
+    if not len(tri) or not len(pts):
+        return 0
+    _, weld = np.unique(pts, axis=0, return_inverse=True)
+    welded = weld.reshape(-1)[tri]
+    keep = (welded[:, 0] != welded[:, 1]) & (welded[:, 1] != welded[:, 2]) & \
+        (welded[:, 2] != welded[:, 0])
+    welded, tri = welded[keep], tri[keep]
+    if not len(tri):
+        return 0
+    n = int(welded.max()) + 1
+    a, b = welded.reshape(-1), welded[:, [1, 2, 0]].reshape(-1)
+    directed = np.sort(a * n + b)
+    if np.any(directed[1:] == directed[:-1]):
+        return 0  # an edge used twice in one direction: non-manifold or flipped faces
+    if not np.all(np.isin(b * n + a, directed, assume_unique=False)):
+        return 0  # a boundary edge: an open surface
+    p = pts.astype(np.float64)[tri]
+    volume = float(np.einsum("ij,ij->", p[:, 0], np.cross(p[:, 1], p[:, 2]))) / 6.0
+    size = float(np.ptp(pts, axis=0).max())
+    if not np.isfinite(volume) or abs(volume) <= 1e-9 * size ** 3:
+        return 0
+    return 1 if volume > 0 else -1

@@ -1,11 +1,13 @@
 """Draw pass: rasterise every mesh into the AOVs (colour, wrinkle, normal)."""
 from __future__ import annotations
 
+import moderngl
 import numpy as np
 
 from ...contract import MAX_LIGHTS
 from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
+from ..bounds import EyeBound, culled_side
 from ..resources import MeshResources
 from ..shaders import DrawableProgram, Variants, program
 from . import bind, bind_wave, gl_matrix, set_uniforms
@@ -26,6 +28,7 @@ def light_uniforms(lights) -> dict:
     dome_sh = np.zeros((9, 3), np.float32)
     dome = 0
     count = 0
+    # returns (uniforms, whether a dome lights the frame: the DOME switch)
     for light in lights:
         if light.kind == "dome":
             dome, dome_sh = 1, np.asarray(light.dome_sh, np.float32)
@@ -45,17 +48,15 @@ def light_uniforms(lights) -> dict:
     return {"u_num_lights": count, "u_light_position": position, "u_light_diffuse": diffuse,
             "u_light_specular": specular, "u_light_ambient": ambient,
             "u_light_attenuate": attenuate, "u_light_spot": spot,
-            "u_light_spot_falloff": falloff, "u_dome": dome, "u_dome_sh": dome_sh}
+            "u_light_spot_falloff": falloff, "u_dome_sh": dome_sh}, bool(dome)
 
 
 def material_uniforms(material) -> dict:
     """UsdPreviewSurface's inputs, or the fallback surface's displayColor and opacity."""
     surface = material.surface
     if surface is None:
-        return {"u_fallback_surface": 1, "u_opacity": float(material.opacity),
-                "u_opacity_threshold": 0.0}
-    return {"u_fallback_surface": 0,
-            "u_emissive_color": tuple(float(c) for c in surface.emissive_color),
+        return {"u_opacity": float(material.opacity), "u_opacity_threshold": 0.0}
+    return {"u_emissive_color": tuple(float(c) for c in surface.emissive_color),
             "u_use_specular_workflow": int(surface.use_specular_workflow),
             "u_specular_color": tuple(float(c) for c in surface.specular_color),
             "u_metallic": surface.metallic, "u_roughness": surface.roughness,
@@ -86,6 +87,7 @@ class DrawPass:
             ctx, program(ctx, "draw.glsl", {**defines, **extra})))
         self.variants()  # the paper's variant always; the other on first use
         self.frame_uniforms: dict = {}
+        self.dome_lit = False
         #: a textured dome's environment, uploaded once per file: (key, texture, levels)
         self.dome = (None, None, 0)
 
@@ -101,8 +103,9 @@ class DrawPass:
             "u_wrinkles": int(wrinkles),
             # eye space +Z in world: the directional viewer of Storm's fallback surface
             "u_viewer_direction": tuple(float(v) for v in np.linalg.inv(camera.view)[2, :3]),
-            **light_uniforms(lights),
         }
+        lights_uniforms, self.dome_lit = light_uniforms(lights)
+        self.frame_uniforms.update(lights_uniforms)
         self.frame_uniforms.update(self._dome_texture(lights))
         for variant in self.variants.programs.values():
             set_uniforms(variant.program, self.frame_uniforms)
@@ -136,7 +139,10 @@ class DrawPass:
             self.dome[1].release()
         self.dome = (None, None, 0)
 
-    def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord) -> None:
+    def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord,
+             bound: EyeBound | None = None) -> None:
+        """Draw one mesh; ``bound``: where its pose can be (render/bounds.py), which
+        decides whether a side of it can be left out."""
         if res.num_triangles == 0 or not frame.visible:
             return
         record = res.record
@@ -150,7 +156,11 @@ class DrawPass:
         eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
         material = record.material
         variant = self.variants(TWO_SYSTEMS=res.systems > 1,
-                                NORMAL_MAP=res.normal_map is not None)
+                                NORMAL_MAP=res.normal_map is not None,
+                                FALLBACK_SURFACE=material.surface is None,
+                                TEXTURED=res.texture is not None, DOME=self.dome_lit,
+                                MASKED=material.surface is not None and
+                                material.surface.opacity_threshold > 0.0)
         if variant.frame_uniforms is not self.frame_uniforms:  # a variant made this frame
             set_uniforms(variant.program, self.frame_uniforms)
             variant.frame_uniforms = self.frame_uniforms
@@ -162,11 +172,17 @@ class DrawPass:
             "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),
             "u_double_sided": int(record.double_sided),
             **material_uniforms(material),
-            "u_has_texture": int(res.texture is not None),
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
             **normal_map_uniforms(res),
         })
+        # Storm culls nothing; a side no camera can see is left out (render/bounds.py)
+        side = culled_side(record, frame, camera, bound)
+        if side is None:
+            self.ctx.disable(moderngl.CULL_FACE)
+        else:
+            self.ctx.enable(moderngl.CULL_FACE)
+            self.ctx.cull_face = side
         units = bindings.DRAW
         bind_wave(units, res, variant.program)
         if res.texture is not None:

@@ -1,0 +1,25 @@
+"""What ``bake --maps`` and its options ask for (light: the CLI's help reads the defaults
+without loading the bake)."""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class MapOptions:
+    """What ``--maps`` and its options ask for."""
+
+    kinds: tuple = ("normal",)
+    size: int = 2048
+    #: the map folder (default: ``<layer name>_maps`` beside the layer)
+    folder: str | None = None
+    fmt: str = "png"
+    padding: int = 8
+    uv: str = "st"
+
+    def folder_for(self, layer_path: str) -> str:
+        if self.folder:
+            return self.folder
+        stem = os.path.splitext(os.path.basename(layer_path))[0]
+        return os.path.join(os.path.dirname(os.path.abspath(layer_path)), f"{stem}_maps")
