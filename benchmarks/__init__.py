@@ -1,5 +1,6 @@
 """usdwrinkle's benchmarks: the paper's timing table, scaling, baselines, end to end,
-the farm rows, triangulation and the floors, measured in one run.
+the farm rows, the peer row against usdview's Storm, triangulation and the floors,
+measured in one run.
 
     usdwrinkle bench [--json PATH] [--markdown PATH] [--quick]
     python -m benchmarks ...
@@ -58,6 +59,9 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
     progress("bench: beyond the paper")
     from .beyond import overhead
     result["beyond"] = overhead(quick, ctx)
+    progress("bench: against Storm")
+    from .peers import storm_peer
+    result["peers"] = storm_peer(quick, corpus)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

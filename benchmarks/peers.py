@@ -115,3 +115,28 @@ def storm_peer(quick: bool, corpus: Path) -> dict:
             "rounds": rounds, "ours_s": ours, "storm_s": theirs,
             "ours_fps": FRAMES / ours_s, "storm_fps": FRAMES / storm_s,
             "lead": storm_s / ours_s}
+
+
+def markdown(result: dict) -> list[str]:
+    peers = result.get("peers")
+    if peers is None:
+        return []
+    lines = ["", "## Against usdview's Storm", ""]
+    if not peers["ran"]:
+        return lines + [f"Not run: {peers['why']}."]
+    rounds = ", ".join(f"{o:.2f} s / {s:.2f} s" for o, s in zip(peers["ours_s"],
+                                                              peers["storm_s"], strict=True))
+    return lines + [
+        f"{peers['shot']}, one camera framing his walk closely. usdwrinkle: the whole "
+        "`usdwrinkle render ... --all-meshes` process with wrinkles (start-up, USD, the four "
+        "passes, the resolve, the PNG encodes), timed from outside. Storm: driven as "
+        "usdrecord drives it (UsdAppUtils.FrameRecorder with usdview's camera light), its "
+        "frame loop only (the Record calls, each rendering and writing one PNG), without "
+        "its process's start-up. They alternate, "
+        f"{peers['rounds']} round(s), medians (`benchmarks/peers.py`).", "",
+        "| | seconds for the shot | fps |", "|---|---|---|",
+        f"| usdwrinkle, with wrinkles, whole process | {min(peers['ours_s']):.2f}-"
+        f"{max(peers['ours_s']):.2f} | {peers['ours_fps']:.1f} |",
+        f"| Storm, plain, frame loop | {min(peers['storm_s']):.2f}-"
+        f"{max(peers['storm_s']):.2f} | {peers['storm_fps']:.1f} |", "",
+        f"usdwrinkle's lead: {peers['lead']:.2f}x (rounds, ours / Storm's: {rounds})."]

@@ -57,6 +57,12 @@ def targets(result: dict) -> list[dict]:
     if "ratio" in e2e:
         out.append({"measure": "CesiumMan with / without wrinkles", "target": "<= 1.3x",
                     "value": f"{e2e['ratio']:.2f}x", "met": e2e["ratio"] <= 1.3})
+    peers = result.get("peers")
+    if peers is not None:
+        out.append({"measure": "usdwrinkle with wrinkles vs Storm's plain frames (CesiumMan "
+                               "960x540, PNG)", "target": ">= 3x Storm's frame rate",
+                    "value": f"{peers['lead']:.2f}x" if peers["ran"] else
+                    f"not run: {peers['why']}", "met": peers["ran"] and peers["lead"] >= 3.0})
     return out
 
 
@@ -190,6 +196,8 @@ def markdown(result: dict) -> str:
                       "cores; numpy pays a temporary array per step of the 1-ring sums, the "
                       "passes gather in registers."]
     from . import farm as farm_bench
+    from .peers import markdown as peers_report
+    lines += peers_report(result)
     lines += farm_bench.markdown(result)
     lines += cpu_nodes_report(result)
     lines += renderers_report(result)

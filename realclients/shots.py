@@ -86,6 +86,47 @@ def shared_camera(stage_path: Path, folder: Path) -> tuple[Path, str]:
     return wrapper, CAMERA_PATH
 
 
+def over_layer(stage_path: Path, target: Path):
+    """A new layer at ``target`` that sublayers ``stage_path`` (an over layer: the stage's
+    paths hold) with its time and axis metadata; returns (stage on it, the layer)."""
+    from pxr import Sdf, Usd
+
+    layer = Sdf.Layer.CreateNew(str(target))
+    layer.subLayerPaths.append(str(stage_path))
+    source = Sdf.Layer.FindOrOpen(str(stage_path))  # held: its specs expire with it
+    for key in ("upAxis", "metersPerUnit", "timeCodesPerSecond", "startTimeCode",
+                "endTimeCode"):
+        if source.pseudoRoot.HasInfo(key):
+            layer.pseudoRoot.SetInfo(key, source.pseudoRoot.GetInfo(key))
+    layer.Save()
+    return Usd.Stage.Open(layer), layer
+
+
+def flat_textures(stage, folder: Path, grey: float = 0.6) -> int:
+    """Replace every UsdUVTexture's image by a 4x4 image of one ``grey`` (in the stage's
+    edit target), so that texture filtering, which renderers and GL drivers do their own
+    way, drops out of a comparison; returns how many were replaced."""
+    import numpy as np
+    import OpenImageIO as oiio
+    from pxr import Sdf, UsdShade
+
+    replaced = 0
+    for prim in stage.Traverse():
+        shader = UsdShade.Shader(prim)
+        if not shader or shader.GetIdAttr().Get() != "UsdUVTexture":
+            continue
+        attr = prim.GetAttribute("inputs:file")
+        if not attr or not attr.Get():
+            continue
+        flat = folder / f"{Path(stage.GetRootLayer().realPath).stem}.flat{replaced}.png"
+        buf = oiio.ImageBuf(oiio.ImageSpec(4, 4, 3, "uint8"))
+        buf.set_pixels(oiio.ROI(), np.full((4, 4, 3), grey, np.float32))
+        buf.write(str(flat))
+        attr.Set(Sdf.AssetPath(str(flat)))
+        replaced += 1
+    return replaced
+
+
 def has_lights(stage_path: Path) -> bool:
     from pxr import Usd, UsdLux
 

@@ -146,6 +146,41 @@ uniform vec4 u_normal_bias;
 #endif
 
 
+// Anisotropic filtering as GPUs do it, written out: the footprint of the pixel in the
+// texture (st's screen derivatives, in texels of level 0) is sampled by n trilinear probes
+// spaced along its longer axis, n = ceil(longer / shorter) but at most TEXTURE_ANISOTROPY,
+// each at the level where the longer axis over n, or the shorter axis if that is longer,
+// is one texel. Hydra's GL samplers ask the
+// driver for this with 16 probes (hgiGL/sampler.cpp); drivers differ in the details, and
+// Mesa's llvmpipe walks the whole elliptical footprint at the shorter axis's level, which
+// at a grazing triangle is millions of texels (CesiumMan at 960x540, frame 7: one draw
+// took 14 s). Written out, every machine filters alike and in bounded time.
+// ``size``: level 0 in texels; ``dx``, ``dy``: st's derivatives; ``lod``, ``step`` and
+// the returned n: the probes at st + step * ((i + 0.5) / n - 0.5), i < n, at level lod.
+int anisotropic_probes(vec2 size, vec2 dx, vec2 dy, out float lod, out vec2 step) {
+    vec2 tx = dx * size, ty = dy * size;
+    float lx = length(tx), ly = length(ty);
+    float longer = max(lx, ly), shorter = min(lx, ly);
+    float n = clamp(ceil(longer / max(shorter, 1e-20)), 1.0, TEXTURE_ANISOTROPY);
+    if (!(longer > 0.0) || isinf(longer)) {  // constant, or not finite: one probe
+        n = 1.0;
+    }
+    lod = log2(max(max(longer / n, shorter), 1e-20));  // the shorter axis never aliases
+    step = lx >= ly ? dx : dy;
+    return int(n);
+}
+
+vec4 texture_anisotropic(sampler2D tex, vec2 st) {
+    float lod;
+    vec2 step;
+    int n = anisotropic_probes(vec2(textureSize(tex, 0)), dFdx(st), dFdy(st), lod, step);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < n; ++i) {
+        sum += textureLod(tex, st + step * ((float(i) + 0.5) / float(n) - 0.5), lod);
+    }
+    return sum / float(n);
+}
+
 #if defined NORMAL_MAP
 // The tangent-space normal of the normal map at st, or nothing (false) outside its tiles
 bool normal_map(vec2 st, out vec3 n_tangent) {
@@ -156,7 +191,16 @@ bool normal_map(vec2 st, out vec3 n_tangent) {
         layer = inside ? u_udim_layer[int(tile.y) * 10 + int(tile.x)] : -1;
         if (layer < 0) return false;
     }
-    vec4 texel = texture(u_normal_map, vec3(st - tile, float(layer)));
+    float lod;
+    vec2 step;  // from the continuous st: a tile's border is no edge of the footprint
+    int n = anisotropic_probes(vec2(textureSize(u_normal_map, 0).xy), dFdx(st), dFdy(st),
+                               lod, step);
+    vec4 texel = vec4(0.0);
+    for (int i = 0; i < n; ++i) {
+        vec2 probe = st - tile + step * ((float(i) + 0.5) / float(n) - 0.5);
+        texel += textureLod(u_normal_map, vec3(probe, float(layer)), lod);
+    }
+    texel /= float(n);
     n_tangent = (texel * u_normal_scale + u_normal_bias).xyz;
     return true;
 }
@@ -193,7 +237,7 @@ void main() {
 
     vec3 base = u_diffuse_color;
 #if defined TEXTURED
-    vec4 texel = texture(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
+    vec4 texel = texture_anisotropic(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
     base *= texel.rgb;
 #endif
 

@@ -21,6 +21,10 @@ WEIGHT_FLOOR = 1e-7
 COLD_START_FACTOR = 4
 #: Lights the draw pass sums (more are ignored, with a warning).
 MAX_LIGHTS = 8
+#: Anisotropic filtering of textures: Hydra's GL samplers ask for 16 (hgiGL/sampler.cpp),
+#: so a texture seen at a grazing angle is as sharp as in usdview; the draw pass takes at
+#: most this many trilinear probes per lookup (draw.glsl: anisotropic_probes)
+TEXTURE_ANISOTROPY = 16.0
 #: Texels per joint in the joints table (skin.glsl documents the layout).
 JOINT_TEXELS = 9
 #: UDIM tiles a normal map may have: u and v in 0..9, tiles 1001..1100 (draw.glsl
@@ -69,6 +73,7 @@ def glsl_literal(value) -> str:
 #: What every shader gets as #defines.
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
+    ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
     ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL), ("FIELD_WAVE2_TEXEL", FIELD_WAVE2_TEXEL),

@@ -31,10 +31,6 @@ from .bindings import TABLE_WIDTH
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 
 
-#: anisotropic filtering of textures: Hydra's samplers default to 16 (HdSamplerParameters),
-#: so a texture seen at a grazing angle is as sharp as in usdview
-TEXTURE_ANISOTROPY = 16.0
-
 #: the sized internal format of 8-bit sRGB textures with alpha
 GL_SRGB8_ALPHA8 = 0x8C43
 
@@ -315,7 +311,6 @@ class MeshResources:
                                                  _bytes(layers), dtype=dtype)
         self.textures.append(self.normal_map)
         self.normal_map.build_mipmaps()
-        self.normal_map.anisotropy = TEXTURE_ANISOTROPY
         for layer, (tile, _) in enumerate(normal_map.tiles):
             if tile == -1:  # one texture that repeats (draw.glsl: normal_map)
                 self.udim_layers[:] = -2
@@ -340,7 +335,6 @@ class MeshResources:
             self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f4")
         self.textures.append(self.texture)
         self.texture.build_mipmaps()
-        self.texture.anisotropy = TEXTURE_ANISOTROPY
         self.texture.repeat_x = self.texture.repeat_y = True
 
     def write_baked(self, baked) -> None:
