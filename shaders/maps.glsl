@@ -8,6 +8,10 @@
 
 layout(binding = MAPS_UV) uniform sampler2D corner_uv;   // [3t + c].xy, the baked UV set
 layout(binding = MAPS_Q_WIDTH) uniform sampler2D q_width;  // .w: rest wavelength W
+// the draw pass's shading normals (normals pass) and each corner's entry: the maps are
+// relative to the normal every renderer shades with, which the bake layer authors
+layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
+layout(binding = MAPS_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
 
 #if defined VERTEX_SHADER
@@ -23,7 +27,8 @@ void main() {
     int c = corner - 3 * t;
     int i = fetch(triangles, t)[c];
     v_local = fetch(posed_points, i).xyz;             // posed, local space
-    v_normal_local = fetch(fields, FIELD_NORMAL(i)).xyz;
+    vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
+    v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_width = fetch(q_width, i).w;
     vec2 uv = fetch(corner_uv, corner).xy - u_tile;   // [0, 1] inside the tile

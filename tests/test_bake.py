@@ -95,23 +95,33 @@ def test_rigid_rotation_changes_no_amplitude_or_wavelength(gl_context, tmp_path)
 
 
 @pytest.mark.parametrize("name,frames", [("lbs.usda", "1:30"), ("dqs.usda", "1:30"),
-                                         ("blendshapes.usda", "1:131x10")])
+                                         ("blendshapes.usda", "1:131x10"),
+                                         ("blendshapesWithNormals.usda", "1:131x10")])
 def test_with_points_matches_pixar_baseline(gl_context, corpus, tmp_path, name, frames):
+    """Points, and the normals of the meshes that author them (same attribute and
+    interpolation, posed), as UsdSkelBakeSkinning bakes them; a mesh without authored
+    normals gets none, as there."""
     folder = corpus / "openusd-usdskel"
     out = tmp_path / name.replace(".usda", ".wrinkles.usdc")
     assert main(["bake", str(folder / name), str(out), "--all-meshes", "--with-points",
                  "--frames", frames, "--quiet"]) == 0
     stage = Usd.Stage.Open(str(out))
     baseline = Usd.Stage.Open(str(folder / "baseline" / name.replace(".usda", ".baked.usda")))
-    # the composed stage shows the baked points once: nothing is skinned any more
+    # the composed stage shows the baked points once: no baked mesh is skinned any more,
+    # and what was not baked (lbs.usda's curves and implicit shapes) still is
     cache = UsdSkel.Cache()
-    bound = 0
+    skinned = set()
     for prim in stage.Traverse():
         if prim.IsA(UsdSkel.Root):
             cache.Populate(UsdSkel.Root(prim), Usd.PrimDefaultPredicate)
-            bound += len(cache.ComputeSkelBindings(UsdSkel.Root(prim), Usd.PrimDefaultPredicate))
-    assert bound == 0
-    checked = 0
+            for binding in cache.ComputeSkelBindings(UsdSkel.Root(prim),
+                                                     Usd.PrimDefaultPredicate):
+                skinned |= {q.GetPrim() for q in binding.GetSkinningTargets()}
+    baked_meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh) and
+                    p.GetAttribute("points").GetNumTimeSamples()]
+    assert baked_meshes and not any(p in skinned for p in baked_meshes)
+    assert all(not p.IsA(UsdGeom.Mesh) for p in skinned)
+    checked = normals_checked = 0
     for prim in baseline.Traverse():
         if not prim.IsA(UsdGeom.Mesh) or not prim.HasAPI(UsdSkel.BindingAPI):
             continue
@@ -122,7 +132,24 @@ def test_with_points_matches_pixar_baseline(gl_context, corpus, tmp_path, name, 
             extent = float(np.max(theirs.max(0) - theirs.min(0)))
             assert np.max(np.abs(ours - theirs)) <= 1e-4 * extent, (prim.GetPath(), tc)
             checked += 1
+        ours_prim = stage.GetPrimAtPath(prim.GetPath())
+        theirs_normals = prim.GetAttribute("normals")
+        if not theirs_normals.HasAuthoredValue():
+            assert not ours_prim.GetAttribute("normals").GetTimeSamples()
+            continue
+        ours_normals = ours_prim.GetAttribute("normals")
+        assert ours_normals.GetMetadata("interpolation") == \
+            theirs_normals.GetMetadata("interpolation")
+        for tc in ours_attr.GetTimeSamples():
+            a = np.asarray(ours_normals.Get(tc), np.float64)
+            b = np.asarray(theirs_normals.Get(tc), np.float64)
+            b /= np.linalg.norm(b, axis=1, keepdims=True)  # UsdSkel leaves them unnormalised
+            cos = np.sum(a * b, axis=1)
+            assert np.degrees(np.arccos(np.clip(cos.min(), -1, 1))) < 0.05, (prim.GetPath(), tc)
+            normals_checked += 1
     assert checked >= 3
+    if name in ("lbs.usda", "dqs.usda", "blendshapesWithNormals.usda"):
+        assert normals_checked >= 3
 
 
 def test_frame_alone_equals_frame_in_range(gl_context, tmp_path):

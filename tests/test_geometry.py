@@ -85,8 +85,9 @@ def test_shirt_layer_has_proxy_and_render_meshes(gl_context, shirt):
         cache = UsdGeom.XformCache(frame)
         np.testing.assert_allclose(np.asarray(cache.GetLocalToWorldTransform(fine)),
                                    np.asarray(cache.GetLocalToWorldTransform(coarse)))
-    # --with-points retypes the SkelRoot (as UsdSkelBakeSkinning): nothing is skinned
-    assert not UsdSkel.Root.Find(coarse)
+    # --with-points bakes the posed points and unbinds the skeleton: nothing is skinned
+    root = UsdSkel.Root.Find(coarse)
+    assert root and not skinned_prims(stage, str(root.GetPath()))
 
 
 def skinned_prims(stage, root_path):

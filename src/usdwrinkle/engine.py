@@ -232,6 +232,12 @@ class WrinkleEngine:
         """Per-vertex fields of ``path`` as computed for the last frame (numpy)."""
         return self.render_delegate.rprims[path].resources.read_fields()
 
+    def read_shading_normals(self, path: str):
+        """The shading normals of ``path`` at the last frame: (NormalPlan, (entries, 3)
+        float32 local normals) (scene/normals.py)."""
+        res = self.render_delegate.rprims[path].resources
+        return res.normal_plan, res.read_shading_normals()
+
     def release(self) -> None:
         self.scene.tracker.revoke()
         self.render_delegate.release()

@@ -159,9 +159,12 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so the layer would hold no "
                               "wrinkle data: pass --all-meshes to wrinkle every mesh, or apply "
                               "WrinkleAPI to the cloth (usdwrinkle apply)")
+    # the maps are relative to the posed shading normals, which renderers must shade with:
+    # Storm drops the authored normals of a skinned mesh, so the posed points and normals
+    # are baked (README: maps)
     baker = LayerBaker(engine.scene.stage, stage_path, wrinkled, engine.scene.meshes,
-                       with_points=with_points, display_color=display_color, sparse=sparse,
-                       warn=warn)
+                       with_points=with_points or maps is not None,
+                       display_color=display_color, sparse=sparse, warn=warn)
     wanted = set(wrinkled) | set(baker.point_meshes)
     extras = {}
     map_bake = geometry_bake = None
@@ -184,7 +187,9 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
         for frame in progress(frames):
             with at_frame(frame):
                 engine.compute_frame(frame)
-                baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted})
+                baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted},
+                                {path: engine.read_shading_normals(path)
+                                 for path in baker.point_meshes})
                 if map_bake is not None:
                     map_bake.add_frame(frame)
                 if geometry_bake is not None:

@@ -34,9 +34,11 @@ def add_parser(subparsers) -> None:
                     "mesh per wrinkled mesh, with the coarse mesh as its proxy.")
     add_shot_args(p, "the layer to write (.usda, .usdc or .usd)")
     p.add_argument("--with-points", action="store_true",
-                   help="also write the posed points, normals and extent in each mesh's local "
-                        "space (as UsdSkelBakeSkinning), and retype the affected SkelRoots to "
-                        "Xform so that the composed stage is not skinned twice")
+                   help="also write the posed points and extent in each mesh's local space, "
+                        "and the posed normals of the meshes that author normals, in their "
+                        "own attribute (as UsdSkelBakeSkinning), and retype the affected "
+                        "SkelRoots to Xform so that the composed stage is not skinned twice "
+                        "(--maps implies it)")
     p.add_argument("--display-color", choices=("amplitude", "compression"),
                    help="also write primvars:displayColor (vertex) as a viridis ramp of that "
                         "field, for usdview's default shading")
@@ -63,6 +65,16 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--uv", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in; "
                            f"default {MAP_DEFAULTS.uv}")
+    maps.add_argument("--tangent-space", choices=("triangle", "mikktspace"),
+                      help="the tangent frame of the normal maps: triangle (per triangle, as "
+                           "usdview's Storm and usdwrinkle decode them) or mikktspace (per "
+                           "vertex, as Blender/Cycles, Unreal and Substance do); default "
+                           f"{MAP_DEFAULTS.tangent_space} (README: maps)")
+    maps.add_argument("--map-displacement", action="store_true", default=None,
+                      help="also bind the height map to UsdPreviewSurface's "
+                           "inputs:displacement, for renderers that subdivide and displace "
+                           "at render time (Storm displaces the coarse corners and keeps "
+                           "their normals: streaks)")
     geometry = p.add_argument_group(
         "displaced geometry", "a finer render mesh per wrinkled mesh that carries the "
                               "wrinkles as real displacement, with the coarse mesh as its "
@@ -95,7 +107,8 @@ def _given(args, flags: dict) -> dict:
 
 
 MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
-             "--map-padding": "padding", "--uv": "uv"}
+             "--map-padding": "padding", "--uv": "uv", "--tangent-space": "tangent_space",
+             "--map-displacement": "displacement"}
 GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
 
 

@@ -95,6 +95,11 @@ class MapBake:
                 warn(f"{outside} triangle(s) have texture coordinates outside the UDIM tiles "
                      f"1001..1100; their wrinkle maps are not written ({path})")
             self.plans[path] = MeshMaps(path, stems[path], corner_uv, tiles)
+        if meshes and not self.plans:
+            raise UsdWrinkleError(
+                f"no wrinkled mesh has the texture coordinates '{options.uv}' that --maps "
+                f"lays the maps out in ({', '.join(sorted(meshes))}): author them, or pass "
+                "--uv with the name of the mesh's texture coordinates")
         #: path -> kind -> [(frame, asset path)]
         self.files: dict[str, dict[str, list]] = {p: {k: [] for k in options.kinds}
                                                   for p in self.plans}
@@ -170,7 +175,8 @@ class MapBake:
 
         for path, plan in self.plans.items():
             author_material(layer, stage, path, material_path(stage, path, plan.stem),
-                            self.files[path], self.options.uv, self.warn)
+                            self.files[path], self.options.uv, self.warn,
+                            displacement=self.options.displacement, udim=plan.udim)
 
     def commit(self) -> None:
         """Finish the encodes and move the staged maps into the map folder (before the
@@ -183,7 +189,9 @@ class MapBake:
         return {"kinds": ",".join(self.options.kinds), "size": self.options.size,
                 "folder": relative_asset(self.folder, self.layer_path),
                 "format": self.options.fmt, "padding": self.options.padding,
-                "uv": self.options.uv, "meshes": ",".join(sorted(self.plans))}
+                "uv": self.options.uv, "meshes": ",".join(sorted(self.plans)),
+                "tangentSpace": self.options.tangent_space,
+                "displacement": self.options.displacement}
 
     def release(self) -> None:
         """Free the GPU targets; staged maps not committed are removed."""

@@ -9,9 +9,11 @@ For each mesh, a Material ``WrinkleMaterials/<mesh>``:
 - has ``inputs:wrinkleNormalFile`` (and ``wrinkleHeightFile``, ``wrinkleAmplitudeFile``)
   as interface inputs, time-sampled per frame, with the first frame's file as default;
 - reads the normal map through a UsdUVTexture (sourceColorSpace raw, scale (2, 2, 2, 1),
-  bias (-1, -1, -1, 0)) into the surface's ``inputs:normal``, the height map into
-  ``inputs:displacement``; the amplitude map is named on the material only (a mask to
-  composite with, no UsdPreviewSurface input takes it).
+  bias (-1, -1, -1, 0), wrapS/wrapT repeat, or clamp for UDIM sets) into the surface's
+  ``inputs:normal``; the height map into ``inputs:displacement`` only when asked
+  (``--map-displacement``: Storm displaces the coarse corners and keeps their normals,
+  which streaks); the amplitude map is named on the material only (a mask to composite
+  with, no UsdPreviewSurface input takes it).
 
 The mesh's ``material:binding`` is overridden to the new material. Written with the Sdf
 API into the bake's layer: the source stage is read, never edited.
@@ -66,10 +68,13 @@ def _source_surface(prim: Usd.Prim):
 
 
 def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sdf.Path,
-                    files: dict, uv_name: str, warn) -> None:
+                    files: dict, uv_name: str, warn, displacement: bool = False,
+                    udim: bool = False) -> None:
     """Write the material at ``path`` and bind it to the mesh.
 
     ``files``: map kind -> [(frame, asset path)], frames in order (NaN: default only).
+    ``displacement``: also bind the height map to ``inputs:displacement``. ``udim``: the
+    files are UDIM sets (a tile's edge is clamped; one texture repeats).
     """
     prim = stage.GetPrimAtPath(mesh_path)
     source_material, source_surface = _source_surface(prim)
@@ -108,7 +113,7 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
         for frame, asset in frames:
             if not math.isnan(frame):
                 layer.SetTimeSample(file_input.path, frame, Sdf.AssetPath(asset))
-        if shader_name is None:
+        if shader_name is None or (kind == "height" and not displacement):
             continue
         texture = path.AppendChild(shader_name)
         spec = _shader(layer, texture, "UsdUVTexture")
@@ -116,6 +121,11 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
         attribute_spec(spec, "inputs:st", VALUE_TYPES.Float2,
                    connect=reader.AppendProperty("outputs:result"))
         attribute_spec(spec, "inputs:sourceColorSpace", VALUE_TYPES.Token, "raw")
+        # the wrap the maps were made for: a seam across the 0/1 border reads the other
+        # side (UsdUVTexture's fallback, "useMetadata", is a black border in Storm)
+        wrap = "clamp" if udim else "repeat"
+        attribute_spec(spec, "inputs:wrapS", VALUE_TYPES.Token, wrap)
+        attribute_spec(spec, "inputs:wrapT", VALUE_TYPES.Token, wrap)
         if kind == "normal":  # stored as 0.5 n + 0.5
             attribute_spec(spec, "inputs:scale", VALUE_TYPES.Float4, (2.0, 2.0, 2.0, 1.0))
             attribute_spec(spec, "inputs:bias", VALUE_TYPES.Float4, (-1.0, -1.0, -1.0, 0.0))

@@ -17,6 +17,13 @@ class MapOptions:
     fmt: str = "png"
     padding: int = 8
     uv: str = "st"
+    #: also bind the height map to UsdPreviewSurface's inputs:displacement (opt-in: Storm
+    #: and most real-time renderers displace the coarse corners and keep their normals)
+    displacement: bool = False
+    #: the tangent frame the normal maps are expressed in: "triangle" (per triangle, from
+    #: dP/ds, as Storm and usdwrinkle decode them) or "mikktspace" (per vertex, as
+    #: Blender/Cycles, Unreal and Substance decode them)
+    tangent_space: str = "triangle"
 
     def folder_for(self, layer_path: str) -> str:
         if self.folder:

@@ -116,7 +116,9 @@ class MapRasterizer:
         })
         units = bindings.MAPS
         bind_wave(units, res, variant.program)
-        bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width})
+        bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width,
+                           "MAPS_SHADING_NORMALS": res.shading_normals,
+                           "MAPS_NORMAL_CORNERS": res.normal_corners})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)

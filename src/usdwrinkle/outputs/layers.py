@@ -90,9 +90,13 @@ class LayerBaker:
     meshes : dict path -> MeshRecord
         The wrinkled meshes to bake.
     with_points : bool
-        Also bake points, normals and extent (all skinned meshes of the affected skel
-        roots), and retype those SkelRoots to Xform so the composed stage is not
-        skinned twice, as UsdSkelBakeSkinning does.
+        Also bake points and extent (all skinned meshes of the affected skel roots), and
+        the normals where the mesh authors them, posed, in the attribute and with the
+        interpolation it authors them with (``primvars:normals`` or ``normals``), as
+        UsdSkelBakeSkinning does; each skinned mesh then binds no skeleton
+        (``skel:skeleton`` with no targets), so the composed stage is not skinned twice.
+        Meshes without authored normals get none: renderers derive them from the points
+        by the mesh's subdivision scheme, as usdwrinkle does.
     """
 
     def __init__(self, stage: Usd.Stage, stage_path: str, wrinkled: dict, all_records: dict,
@@ -144,8 +148,10 @@ class LayerBaker:
         else:
             self.layer.SetTimeSample(attr_path, frame, value)
 
-    def add_frame(self, frame: float, fields_by_path: dict) -> None:
-        """Record one frame: ``fields_by_path[path]`` as returned by read_fields()."""
+    def add_frame(self, frame: float, fields_by_path: dict,
+                  normals_by_path: dict | None = None) -> None:
+        """Record one frame: ``fields_by_path[path]`` as returned by read_fields(),
+        ``normals_by_path[path]`` by read_shading_normals() (the point meshes')."""
         for path, fields in fields_by_path.items():
             for name, values in fields.arrays().items():  # no NaN or Inf reaches a layer
                 if isinstance(values, np.ndarray) and values.dtype.kind == "f" and \
@@ -173,14 +179,32 @@ class LayerBaker:
                 points = np.ascontiguousarray(fields.points, np.float32)
                 self._set(self._attr(path, "points", Sdf.ValueTypeNames.Point3fArray), frame,
                           Vt.Vec3fArray.FromNumpy(points))
-                normals = np.ascontiguousarray(fields.normals, np.float32)
-                self._set(self._attr(path, "normals", Sdf.ValueTypeNames.Normal3fArray,
-                                     UsdGeom.Tokens.vertex), frame,
-                          Vt.Vec3fArray.FromNumpy(normals))
+                if normals_by_path and path in normals_by_path:
+                    self._add_normals(path, frame, *normals_by_path[path])
                 extent = Vt.Vec3fArray.FromNumpy(
                     np.stack([points.min(0), points.max(0)]).astype(np.float32))
                 self._set(self._attr(path, "extent", Sdf.ValueTypeNames.Float3Array), frame,
                           extent)
+
+    def _add_normals(self, path: str, frame: float, plan, normals: np.ndarray) -> None:
+        """The posed shading normals of a mesh that authors normals, into the attribute
+        it authors them in, with its interpolation; flattened, so an indexed primvar's
+        indices are blocked."""
+        if plan.source != "authored":
+            return
+        prim = self.stage.GetPrimAtPath(path)
+        if plan.attribute == "primvars:normals":
+            interpolation = UsdGeom.Primvar(prim.GetAttribute(plan.attribute)).GetInterpolation()
+            if UsdGeom.Primvar(prim.GetAttribute(plan.attribute)).IsIndexed():
+                indices = self._attr(path, "primvars:normals:indices",
+                                     Sdf.ValueTypeNames.IntArray)
+                self.layer.GetAttributeAtPath(indices).default = Sdf.ValueBlock()
+        else:
+            interpolation = UsdGeom.Mesh(prim).GetNormalsInterpolation()
+        attr = self._attr(path, plan.attribute, Sdf.ValueTypeNames.Normal3fArray,
+                          interpolation)
+        self._set(attr, frame, Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals,
+                                                                             np.float32)))
 
     def _metadata(self, output_path: str, frame_spec: str) -> None:
         root = self.stage.GetRootLayer()
@@ -200,10 +224,16 @@ class LayerBaker:
             folder = os.path.dirname(os.path.abspath(output_path))
             source = os.path.abspath(self.stage_path)
             layer.subLayerPaths.append(os.path.relpath(source, folder).replace(os.sep, "/"))
-        for root_path in self.skel_roots:
-            spec = self.layer.GetPrimAtPath(root_path) or Sdf.CreatePrimInLayer(self.layer,
-                                                                                 root_path)
-            spec.typeName = "Xform"  # as UsdSkelBakeSkinning: no skinning over baked points
+        for path, record in self.point_meshes.items():
+            if record.skin is None:
+                continue
+            # baked points are posed already: the mesh binds no skeleton any more, so
+            # nothing skins it twice (UsdSkelBakeSkinning retypes the SkelRoot instead,
+            # which leaves its bindings rootless: usdchecker's SkelBindingApiValidator)
+            spec = self.layer.GetPrimAtPath(path) or Sdf.CreatePrimInLayer(self.layer, path)
+            rel = spec.relationships.get("skel:skeleton") or Sdf.RelationshipSpec(
+                spec, "skel:skeleton", custom=False)
+            rel.targetPathList.ClearEditsAndMakeExplicit()
         layer.customLayerData = {"usdwrinkle": {
             "version": __version__, "frames": frame_spec, "source": self.stage_path,
             "withPoints": self.with_points, "displayColor": self.display_color or "",

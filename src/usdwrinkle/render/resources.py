@@ -402,6 +402,11 @@ class MeshResources:
         return WrinkleFields.from_tables(self.posed_points.read(), fields, self.phase.read(),
                                          self.anchor_phase.read())
 
+    def read_shading_normals(self) -> np.ndarray:
+        """This frame's shading normals (the normals pass's table: one per NormalPlan
+        entry), (entries, 3) float32, local space, unit length."""
+        return np.ascontiguousarray(self.shading_normals.read()[:, :3], np.float32)
+
     def release(self) -> None:
         for buf in self.buffers:
             buf.release()

@@ -42,6 +42,7 @@ class NormalPlan:
     authored : (entries, 3) float32 local normals at the default time (authored), or None.
     attribute : the authored attribute ("primvars:normals" or "normals"), or None.
     time_varying : authored values sampled per frame (a point cache's normals).
+    interpolation : the authored values' interpolation (authored), or None.
     """
 
     source: str
@@ -51,6 +52,7 @@ class NormalPlan:
     authored: np.ndarray | None = None
     attribute: str | None = None
     time_varying: bool = False
+    interpolation: str | None = None
 
 
 def _csr(keys: np.ndarray, values: np.ndarray, entries: int, width: int) -> np.ndarray:
@@ -147,7 +149,7 @@ def _authored(prim, mesh, topology: Topology, counts, indices, path: str, warn):
     csr = np.concatenate([np.arange(entries + 1) + entries + 1, entry_point]).astype(np.int32)
     return NormalPlan("authored", entries, np.asarray(corner, np.int32), csr,
                       values.astype(np.float32), name,
-                      attr.ValueMightBeTimeVarying())
+                      attr.ValueMightBeTimeVarying(), str(interpolation))
 
 
 def sample_normals(prim, plan: NormalPlan, time, frame) -> np.ndarray | None:

@@ -31,6 +31,9 @@ class SkinData:
         Per blend shape, the points it moves (None: all points).
     subshape_offsets : list of (p, 3) float32
         Per sub-shape (UsdSkelBlendShapeQuery order), its point offsets.
+    subshape_normal_offsets : list of (p, 3) float32
+        Per sub-shape, its normalOffsets ((0, 3) where none are authored): added to
+        vertex-interpolated authored normals, as UsdSkel deforms normals.
     """
 
     method: str
@@ -40,6 +43,7 @@ class SkinData:
     num_joints: int
     blend_point_indices: list = field(default_factory=list)
     subshape_offsets: list = field(default_factory=list)
+    subshape_normal_offsets: list = field(default_factory=list)
 
     @property
     def num_subshapes(self) -> int:

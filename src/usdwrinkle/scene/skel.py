@@ -93,14 +93,17 @@ def skin_data(path: str, skel_query, skinning_query, num_points: int,
                               "beyond 3.4e38)", path, "primvars:skel:geomBindTransform")
     point_indices: list = []
     offsets: list = []
+    normal_offsets: list = []
     if blend_query is not None:
-        point_indices, offsets = _blend_shapes(path, blend_query, num_points)
-    return SkinData(method, geom_bind, indices, weights, num_joints, point_indices, offsets)
+        point_indices, offsets, normal_offsets = _blend_shapes(path, blend_query, num_points)
+    return SkinData(method, geom_bind, indices, weights, num_joints, point_indices, offsets,
+                    normal_offsets)
 
 
-def _blend_shapes(path: str, blend_query, num_points: int) -> tuple[list, list]:
-    """(point indices per blend shape, offsets per sub-shape), validated: every target a
-    BlendShape, indices within the mesh's points, offsets finite."""
+def _blend_shapes(path: str, blend_query, num_points: int) -> tuple[list, list, list]:
+    """(point indices per blend shape, offsets per sub-shape, normal offsets per sub-shape
+    (empty where none are authored)), validated: every target a BlendShape, indices within
+    the mesh's points, offsets finite."""
     shapes = [blend_query.GetBlendShape(i) for i in range(blend_query.GetNumBlendShapes())]
     for shape in shapes:
         if not shape:
@@ -123,7 +126,19 @@ def _blend_shapes(path: str, blend_query, num_points: int) -> tuple[list, list]:
                                   "beyond 3.4e38)", str(shape.GetPrim().GetPath()),
                                   inbetween.GetAttr().GetName() if inbetween else "offsets")
         offsets.append(values.astype(np.float32))
-    return point_indices, offsets
+    normal_offsets = []
+    for sub in range(len(offsets)):
+        shape = shapes[blend_query.GetBlendShapeIndex(sub)]
+        inbetween = blend_query.GetInbetween(sub)
+        values = inbetween.GetNormalOffsets() if inbetween else \
+            shape.GetNormalOffsetsAttr().Get()
+        values = np.asarray(values if values is not None else [], np.float64).reshape(-1, 3)
+        if not finite_in_float32(values):
+            raise UsdWrinkleError("blend shape normal offsets are not finite in float32",
+                                  str(shape.GetPrim().GetPath()), "normalOffsets")
+        normal_offsets.append(values.astype(np.float32) if np.any(values) else
+                              np.zeros((0, 3), np.float32))
+    return point_indices, offsets, normal_offsets
 
 
 def check_blend_weights(path: str, skin: SkinData, weights: np.ndarray, frame,

@@ -26,9 +26,17 @@ class NormalsPass:
     def run(self, res: MeshResources, frame: MeshFrame) -> None:
         plan = res.normal_plan
         if plan.source == "authored":
-            if res.authored_normals is not None and frame.joint_transforms is not None \
-                    and res.skinned:
+            deformed = blended_normals(res, frame)
+            skinned = res.authored_normals is not None and frame.joint_transforms is not None \
+                and res.skinned
+            if skinned:
+                if deformed is not None:  # this frame's rest normals, then skinned
+                    res.authored_normals.write(vec4(deformed, 0.0))
                 self._skin(res, frame)
+            elif deformed is not None:
+                length = np.linalg.norm(deformed, axis=1, keepdims=True)
+                res.shading_normals.write(vec4(np.where(
+                    length > 0, deformed / np.maximum(length, 1e-30), 0.0), 1.0))
             elif frame.normals is not None:
                 res.shading_normals.write(vec4(frame.normals, 1.0))
             return
@@ -54,6 +62,35 @@ class NormalsPass:
              writes={"NORMALS_OUT": res.shading_normals})
         shader.run(groups(res.normal_plan.entries, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
+
+
+def blended_normals(res: MeshResources, frame: MeshFrame) -> np.ndarray | None:
+    """The authored normals plus this frame's blend-shape normal offsets, as UsdSkel
+    deforms them (vertex-interpolated normals only), or None: the mesh's blend shapes
+    author no normal offsets."""
+    skin = res.record.skin
+    plan = res.normal_plan
+    if skin is None or not any(len(o) for o in skin.subshape_normal_offsets) or \
+            plan.interpolation not in ("vertex", "varying") or \
+            plan.entries != res.num_points:
+        return None
+    normals = np.array(frame.normals if frame.normals is not None else plan.authored,
+                       np.float64)
+    weights = frame.subshape_weights if frame.subshape_weights is not None else []
+    for blend_shape, subshape in frame.active_subshapes:
+        offsets = skin.subshape_normal_offsets[subshape]
+        weight = float(weights[subshape]) if subshape < len(weights) else 0.0
+        if not len(offsets) or weight == 0.0:
+            continue
+        ids = skin.blend_point_indices[blend_shape] if blend_shape < len(
+            skin.blend_point_indices) else None
+        if ids is None:
+            count = min(len(offsets), len(normals))
+            normals[:count] += weight * offsets[:count]
+        else:
+            count = min(len(ids), len(offsets))
+            normals[ids[:count]] += weight * offsets[:count]
+    return normals.astype(np.float32)
 
 
 def normal_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
