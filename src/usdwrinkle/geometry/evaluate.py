@@ -68,7 +68,9 @@ class GeometryEvaluator:
             "u_profile_samples": float(len(res.record.params.height_profile))})
         units = bindings.GEOMETRY
         bind_wave(units, res, shader)
-        bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries},
+        bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries,
+                           "GEOMETRY_SHADING_NORMALS": res.shading_normals,
+                           "GEOMETRY_NORMAL_CORNERS": res.normal_corners},
              writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
         shader.run(groups(len(fine.points), bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

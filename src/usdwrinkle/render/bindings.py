@@ -54,6 +54,7 @@ MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9, "MAPS_SHADING_NORMALS": 10,
         "MAPS_NORMAL_CORNERS": 11}
 #: displaced geometry (geometry/): the blend at every fine vertex
 GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
+            "GEOMETRY_SHADING_NORMALS": 11, "GEOMETRY_NORMAL_CORNERS": 12,
             # image units
             "GEOMETRY_POINTS": 0, "GEOMETRY_NORMALS": 1}
 #: the resolve pass (render/resolve.py): the three colour attachments (texture units) and
