@@ -209,6 +209,12 @@ bool normal_map(vec2 st, out vec3 n_tangent) {
 void main() {
     int t = gl_PrimitiveID;
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
+    // a double-sided mesh's back faces are shaded about the flipped normal, which the
+    // wrinkles then bend and a normal map's frame is built about, as Storm does: the
+    // tangent frame keeps T and B and turns N (previewSurface's ComputeTBNMatrix), so a
+    // normal map's tilt reads the same from both sides. A single-sided mesh's back faces
+    // keep it (unlit, as Storm draws them).
+    if (!gl_FrontFacing && u_double_sided != 0) n = -n;
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
         wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner), v_bary, v_local,
@@ -241,11 +247,9 @@ void main() {
     base *= texel.rgb;
 #endif
 
-    // local -> world shading normal; a double-sided mesh's back faces see it flipped, a
-    // single-sided mesh's back faces keep it (unlit, as Storm draws them)
+    // local -> world shading normal (a double-sided mesh's back faces: flipped above)
     vec3 N = safe_normalize(u_normal_to_world * shading_local, vec3(0.0, 0.0, 1.0));
     vec3 V = safe_normalize(u_eye_world - v_world, N);
-    if (!gl_FrontFacing && u_double_sided != 0) N = -N;
 
     vec3 radiance;
     float alpha;
