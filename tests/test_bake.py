@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pxr import Sdf, Usd, UsdGeom, UsdSkel
+from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from usdwrinkle.cli.main import main
 from usdwrinkle.reference.relax import phase_misfit, wrap
@@ -184,6 +184,17 @@ def test_layer_shape_sublayer_sparse_and_metadata(gl_context, tmp_path):
     colors = UsdGeom.PrimvarsAPI(cloth).GetPrimvar("displayColor")
     assert colors.GetInterpolation() == UsdGeom.Tokens.vertex
     assert len(colors.Get(24)) == 92
+    # usdview's Storm resolves the preview purpose first: the ramp's material there, whose
+    # surface reads displayColor; renderers of the full purpose keep the cloth's own
+    binding = UsdShade.MaterialBindingAPI(cloth)
+    preview, _ = binding.ComputeBoundMaterial(UsdShade.Tokens.preview)
+    full_material, _ = binding.ComputeBoundMaterial(UsdShade.Tokens.full)
+    assert preview.GetPath().name == "DisplayColor" and full_material.GetPath() != \
+        preview.GetPath()
+    source = preview.ComputeSurfaceSource()[0].GetInput("diffuseColor")
+    reader = UsdShade.Shader(source.GetConnectedSources()[0][0].source.GetPrim())
+    assert reader.GetInput("varname").Get() == "displayColor"
+    assert main(["check", str(full)]) == 0
     sparse_stage = Usd.Stage.Open(str(sparse))
     sparse_layer = sparse_stage.GetRootLayer()
     assert len(sparse_layer.subLayerPaths) == 0

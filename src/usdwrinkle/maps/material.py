@@ -136,3 +136,8 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sd
         attribute_spec(surface_spec, f"inputs:{input_name}", type_name,
                    connect=texture.AppendProperty(f"outputs:{output_name}"))
     bind_material(layer, mesh_path, path)
+    preview, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(UsdShade.Tokens.preview)
+    if preview and (not source_material or preview.GetPath() != source_material):
+        # the mesh binds another material for the preview purpose, which usdview's Storm
+        # resolves first: the maps are bound for it too
+        bind_material(layer, mesh_path, path, purpose="preview")

@@ -186,6 +186,37 @@ class LayerBaker:
                 self._set(self._attr(path, "extent", Sdf.ValueTypeNames.Float3Array), frame,
                           extent)
 
+    def _display_color_material(self) -> None:
+        """usdview (Storm) shows a mesh's bound material, which hides displayColor: each
+        mesh given the ramp binds, for the preview purpose that Storm resolves first, a
+        UsdPreviewSurface whose diffuseColor reads primvars:displayColor. Renderers of
+        the full purpose keep the mesh's own material."""
+        default = self.stage.GetDefaultPrim()
+        root = default.GetPath() if default else Sdf.Path.absoluteRootPath
+        scope = root.AppendChild("WrinkleMaterials")
+        path = scope.AppendChild("DisplayColor")
+        scope_spec = Sdf.CreatePrimInLayer(self.layer, scope)
+        if not scope_spec.typeName:
+            scope_spec.specifier = Sdf.SpecifierDef
+            scope_spec.typeName = "Scope"
+        material = define_prim(self.layer, path, "Material")
+        surface = define_prim(self.layer, path.AppendChild("PreviewSurface"), "Shader")
+        attribute_spec(surface, "info:id", Sdf.ValueTypeNames.Token, "UsdPreviewSurface",
+                       uniform=True)
+        reader = define_prim(self.layer, path.AppendChild("DisplayColor"), "Shader")
+        attribute_spec(reader, "info:id", Sdf.ValueTypeNames.Token,
+                       "UsdPrimvarReader_float3", uniform=True)
+        attribute_spec(reader, "inputs:varname", Sdf.ValueTypeNames.String, "displayColor")
+        attribute_spec(reader, "inputs:fallback", Sdf.ValueTypeNames.Float3, (0.5, 0.5, 0.5))
+        attribute_spec(reader, "outputs:result", Sdf.ValueTypeNames.Float3)
+        attribute_spec(surface, "inputs:diffuseColor", Sdf.ValueTypeNames.Color3f,
+                       connect=reader.path.AppendProperty("outputs:result"))
+        attribute_spec(surface, "outputs:surface", Sdf.ValueTypeNames.Token)
+        attribute_spec(material, "outputs:surface", Sdf.ValueTypeNames.Token,
+                       connect=surface.path.AppendProperty("outputs:surface"))
+        for mesh_path in self.wrinkled:
+            bind_material(self.layer, mesh_path, path, purpose="preview")
+
     def _add_normals(self, path: str, frame: float, plan, normals: np.ndarray) -> None:
         """The posed shading normals of a mesh that authors normals, into the attribute
         it authors them in, with its interpolation; flattened, so an indexed primvar's
@@ -224,6 +255,8 @@ class LayerBaker:
             folder = os.path.dirname(os.path.abspath(output_path))
             source = os.path.abspath(self.stage_path)
             layer.subLayerPaths.append(os.path.relpath(source, folder).replace(os.sep, "/"))
+        if self.display_color and self.wrinkled:
+            self._display_color_material()
         for path, record in self.point_meshes.items():
             if record.skin is None:
                 continue
@@ -319,15 +352,16 @@ def attribute_spec(prim_spec: Sdf.PrimSpec, name: str, type_name, value=None, *,
     return spec
 
 
-def bind_material(layer: Sdf.Layer, prim_path, material_path) -> None:
+def bind_material(layer: Sdf.Layer, prim_path, material_path, purpose: str = "") -> None:
     """Author a direct material binding of ``prim_path`` to ``material_path`` in
-    ``layer`` (MaterialBindingAPI applied, ``material:binding`` targeting it)."""
+    ``layer`` (MaterialBindingAPI applied, ``material:binding`` targeting it, or
+    ``material:binding:<purpose>``)."""
     spec = Sdf.CreatePrimInLayer(layer, prim_path)
     schemas = spec.GetInfo("apiSchemas") if spec.HasInfo("apiSchemas") else Sdf.TokenListOp()
     prepended = list(schemas.prependedItems)
     if "MaterialBindingAPI" not in prepended:
         schemas.prependedItems = prepended + ["MaterialBindingAPI"]
         spec.SetInfo("apiSchemas", schemas)
-    rel = spec.relationships.get("material:binding") or Sdf.RelationshipSpec(
-        spec, "material:binding", custom=False)
+    name = f"material:binding:{purpose}" if purpose else "material:binding"
+    rel = spec.relationships.get(name) or Sdf.RelationshipSpec(spec, name, custom=False)
     rel.targetPathList.explicitItems = [Sdf.Path(str(material_path))]

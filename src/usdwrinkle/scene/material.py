@@ -301,9 +301,10 @@ def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time, warn) -> Surfa
     return SurfaceParams(**values)
 
 
-def bound_surface(prim: Usd.Prim):
-    """(the mesh's bound Material or None, its UsdPreviewSurface or None)."""
-    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+def bound_surface(prim: Usd.Prim, purpose: str = UsdShade.Tokens.allPurpose):
+    """(the mesh's bound Material or None, its UsdPreviewSurface or None), for the material
+    ``purpose`` (a purpose's own binding, else the all-purpose one)."""
+    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(purpose)
     if not material:
         return None, None
     shader = material.ComputeSurfaceSource()[0]
@@ -316,8 +317,9 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
     """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
     diffuseColor, constant or from a UsdUVTexture, its normal map and its other inputs;
     without a UsdPreviewSurface, displayColor and displayOpacity for Storm's fallback
-    surface (an empty displayColor is Storm's 0.5 grey)."""
-    material, shader = bound_surface(prim)
+    surface (an empty displayColor is Storm's 0.5 grey). The binding is the preview
+    purpose's where there is one, as usdview's Storm resolves it."""
+    material, shader = bound_surface(prim, UsdShade.Tokens.preview)
     if shader is None:
         color = display_color(prim, time)
         if color is DEFAULT_COLOR:
