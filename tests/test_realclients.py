@@ -170,3 +170,80 @@ def test_probes_are_documented():
     method = (Path(__file__).resolve().parents[1] / "docs" / "method.md").read_text()
     for reason, *_ in (*PLAIN_EXCEPTIONS.values(), *PROBE_EXCEPTIONS.values()):
         assert reason.split(" (")[0].split(";")[0][:40] in method, reason
+
+
+# --- issue 23: the bake outputs as Storm shows them ------------------------------------
+
+#: the bar of issue 23: the wrinkle contribution of Storm's render of the maps layer
+#: against usdwrinkle's, in every tile of a 4 x 4 grid where the wrinkles show (the
+#: shirt's elbow and cuff, pull's sheet, CesiumMan's body and limbs)
+MIN_MAPS_CORRELATION = 0.95
+#: the geometry layer, Storm (render purpose) against usdwrinkle's render of that layer
+MIN_GEOMETRY_CORRELATION = 0.98
+
+
+@pytest.fixture(scope="module")
+def bake_views(realclient, tmp_path_factory):
+    from realclients.bakes import MAP_SHOTS, bake_views
+
+    folder = tmp_path_factory.mktemp("bakes")
+    return {shot.name: bake_views(shot, folder / shot.name, display_color=True)
+            for shot in MAP_SHOTS}
+
+
+@pytest.mark.parametrize("name", ["shirt", "pull", "CesiumMan"])
+def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
+    """Issue 23: usdview's Storm shows the maps layer's wrinkles as usdwrinkle draws them,
+    everywhere they show (was 0.58 at the shirt's elbow and 0.82 for CesiumMan)."""
+    contribution = bake_views[name].maps()
+    tiles = contribution.tiles()
+    assert len(tiles) >= 8, tiles  # the wrinkles show over most of the mesh
+    low = {k: v for k, v in tiles.items() if v[0] < MIN_MAPS_CORRELATION}
+    assert not low, (name, low)
+    assert contribution.correlation() >= 0.97, name
+    # and Storm's wrinkles are as strong as ours (not merely correlated)
+    strength = contribution.theirs[contribution.mask].std() / \
+        contribution.ours[contribution.mask].std()
+    assert 0.85 <= strength <= 1.15, (name, strength)
+
+
+@pytest.mark.parametrize("name", ["shirt", "pull", "CesiumMan"])
+def test_geometry_layer_shows_in_storm_as_in_usdwrinkle(bake_views, name):
+    """Storm with the render purpose draws the geometry layer's displaced mesh as
+    usdwrinkle draws that layer (issue 23: >= 0.98; measured 0.989-0.997)."""
+    from realclients.compare import compare
+
+    views = bake_views[name]
+    match = compare(views.images["ours_geometry"], views.images["storm_geometry"])
+    assert match.correlation >= MIN_GEOMETRY_CORRELATION and match.iou >= 0.99, match
+
+
+@pytest.mark.parametrize("name", ["shirt", "pull", "CesiumMan"])
+def test_display_color_layer_shows_the_amplitude_in_storm(bake_views, name):
+    """With usdview's defaults (materials on) Storm shows the display-colour layer's
+    viridis ramp, bound for the preview purpose over the mesh's own material: its hue
+    follows the amplitude that usdwrinkle renders, pixel by pixel."""
+    from realclients.bakes import display_ramp_order
+
+    order, pixels = display_ramp_order(bake_views[name])
+    assert pixels > 5000
+    assert order <= -0.95, (name, order)
+
+
+def test_maps_decoded_normals_at_the_shirt_elbow(realclient, tmp_path):
+    """The shading normals Storm decodes from the maps against usdwrinkle's, both by
+    photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z). Issue
+    23 asks for p99 <= 3 degrees; measured here at 640 pixels: median 0.45, p99 9.7 over
+    the shirt (17 in the lower third, the elbow's crease). The remaining error lies in
+    one-pixel lines along the coarse triangles' edges (it halves at 1280 pixels: p99 4.5):
+    Storm shades its four multisamples at the pixel's centre, so an edge pixel samples the
+    neighbouring triangle's texels and decodes them in its own triangle's tangent frame,
+    which turns by 29 degrees (median) across the elbow's quads. This test holds the
+    measured values, so that a change for the worse fails; issue 23 stays open on it."""
+    from realclients.bakes import MAP_SHOTS, angles, normal_views
+
+    views = normal_views(MAP_SHOTS[0], tmp_path)
+    degrees, mask = angles(views["usdwrinkle"], views["storm"])
+    assert mask.sum() > 40000
+    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
+    assert median <= 0.6 and p90 <= 2.0 and p99 <= 11.0, (median, p90, p99)

@@ -1,0 +1,316 @@
+"""usdwrinkle's bake outputs as real clients show them, against usdwrinkle's own render.
+
+The *wrinkle contribution* of a renderer is its wrinkled image minus its image of the same
+shot without wrinkles, so that what each renderer does its own way (lights, filtering)
+drops out and the wrinkles remain (issue 23):
+- usdwrinkle: ``render`` minus ``render --no-wrinkles`` of the stage;
+- Storm, maps: the ``--maps normal`` layer minus the ``--with-points`` layer (the same
+  posed points and normals without the maps, so that Storm's skinned-normals limitation
+  drops out too);
+- Storm, geometry: the ``--geometry`` layer with the render purpose, likewise.
+
+The stage's textures are flattened to one grey first (shots.flat_textures): the maps carry
+the wrinkles' shading, not usdwrinkle's bending of the texture coordinates, which moves
+the texture's pattern (docs/method.md, "Maps").
+
+Decoded normals: each renderer's shading normal per pixel by photometric stereo, six
+renders with one distant light each along +-X, +-Y, +-Z (n ~ I(+a) - I(-a) per axis for a
+Lambertian surface); the same procedure on both renderers, so that the shading model's own
+factors are common to both and cancel in the angle between them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import storm
+from .compare import read_rgba8
+from .shots import (
+    CORPUS,
+    SAMPLES,
+    _usdwrinkle,
+    flat_textures,
+    has_lights,
+    over_layer,
+    shared_camera,
+)
+
+
+@dataclass(frozen=True)
+class BakeShot:
+    name: str
+    stage: Path
+    frame: float
+    all_meshes: bool = False
+    width: int = 640
+
+
+#: issue 23's shots: the shirt's elbow and cuff, pull's sheet, CesiumMan's body
+MAP_SHOTS = (
+    BakeShot("shirt", SAMPLES / "shirt.usda", 24),
+    BakeShot("pull", SAMPLES / "pull.usda", 24),
+    BakeShot("CesiumMan", CORPUS / "usd-wg" / "CesiumMan.usdz", 24, all_meshes=True,
+             width=960),
+)
+
+
+@dataclass
+class Prepared:
+    """A shot's stage with flat textures and a camera both renderers look through."""
+
+    shot: BakeShot
+    stage: Path
+    camera: str
+    folder: Path
+
+    def base(self, label: str) -> Path:
+        return self.folder / f"{self.shot.name}.{label}"
+
+    def meshes(self) -> tuple[str, ...]:
+        return ("--all-meshes",) if self.shot.all_meshes else ()
+
+    def render(self, stage, out, *extra) -> Path:
+        _usdwrinkle("render", stage, out, "--frames", f"{self.shot.frame:g}", "--width",
+                    self.shot.width, "--camera", self.camera, "--quiet", *self.meshes(),
+                    *extra)
+        return Path(out)
+
+    def bake(self, out, *extra) -> Path:
+        _usdwrinkle("bake", self.stage, out, "--frames", f"{self.shot.frame:g}", "--quiet",
+                    *self.meshes(), *extra)
+        return Path(out)
+
+    def storm_job(self, stage, out, **extra) -> dict:
+        return {"stage": str(stage), "camera": self.camera, "frame": self.shot.frame,
+                "width": self.shot.width, "out": str(out),
+                "camera_light": not has_lights(self.shot.stage), **extra}
+
+
+def prepare(shot: BakeShot, folder: Path) -> Prepared:
+    folder.mkdir(parents=True, exist_ok=True)
+    framed, camera = shared_camera(shot.stage.resolve(), folder)
+    stage, layer = over_layer(Path(framed).resolve(), folder / f"{shot.name}.flat.usda")
+    flat_textures(stage, folder)
+    layer.Save()
+    return Prepared(shot, Path(layer.realPath), camera, folder)
+
+
+def grey(path) -> tuple[np.ndarray, np.ndarray]:
+    """(mean of the sRGB codes, fully covered) of an 8-bit RGBA image."""
+    rgba = read_rgba8(path).astype(np.float64)
+    return rgba[..., :3].mean(axis=2), rgba[..., 3] == 255
+
+
+def erode(mask: np.ndarray, pixels: int = 1) -> np.ndarray:
+    """``mask`` shrunk by ``pixels`` (4-neighbourhood): silhouettes, which each renderer
+    anti-aliases its own way, drop out."""
+    for _ in range(pixels):
+        inner = mask.copy()
+        inner[1:] &= mask[:-1]
+        inner[:-1] &= mask[1:]
+        inner[:, 1:] &= mask[:, :-1]
+        inner[:, :-1] &= mask[:, 1:]
+        mask = inner
+    return mask
+
+
+@dataclass
+class Contribution:
+    """Two renderers' wrinkle contributions over the pixels all four images cover."""
+
+    ours: np.ndarray    # (h, w) in 8-bit codes
+    theirs: np.ndarray
+    mask: np.ndarray    # (h, w) bool
+
+    def correlation(self, where: np.ndarray | None = None) -> float:
+        mask = self.mask if where is None else self.mask & where
+        return float(np.corrcoef(self.ours[mask], self.theirs[mask])[0, 1])
+
+    def tiles(self, n: int = 4, min_pixels: int = 400, min_std: float = 3.0):
+        """{(row, column): (correlation, pixels)} over an n x n grid on the covered
+        pixels' bound, for each tile with ``min_pixels`` and wrinkles that show (our
+        contribution's standard deviation at least ``min_std`` codes)."""
+        ys, xs = np.nonzero(self.mask)
+        y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+        result = {}
+        for i in range(n):
+            for j in range(n):
+                tile = np.zeros_like(self.mask)
+                tile[y0 + (y1 - y0) * i // n:y0 + (y1 - y0) * (i + 1) // n,
+                     x0 + (x1 - x0) * j // n:x0 + (x1 - x0) * (j + 1) // n] = True
+                tile &= self.mask
+                count = int(np.count_nonzero(tile))
+                if count >= min_pixels and self.ours[tile].std() >= min_std:
+                    result[(i, j)] = (self.correlation(tile), count)
+        return result
+
+    def image(self, gain: float = 2.0) -> np.ndarray:
+        """Both contributions side by side as RGBA (mid grey: none)."""
+        tiles = []
+        for values in (self.ours, self.theirs):
+            v = np.clip(128 + gain * values * self.mask, 0, 255).astype(np.uint8)
+            tiles.append(np.dstack([v, v, v, np.full_like(v, 255)]))
+        return tiles
+
+
+def contribution(ours_wrinkled, ours_plain, theirs_wrinkled, theirs_plain) -> Contribution:
+    ow, m1 = grey(ours_wrinkled)
+    op, m2 = grey(ours_plain)
+    tw, m3 = grey(theirs_wrinkled)
+    tp, m4 = grey(theirs_plain)
+    return Contribution(ow - op, tw - tp, erode(m1 & m2 & m3 & m4))
+
+
+@dataclass
+class BakeViews:
+    """One shot's renders: usdwrinkle's, and Storm's of each bake output."""
+
+    prepared: Prepared
+    images: dict  # label -> path
+
+    def maps(self) -> Contribution:
+        i = self.images
+        return contribution(i["ours"], i["ours_plain"], i["storm_maps"], i["storm_points"])
+
+    def geometry(self) -> Contribution:
+        i = self.images
+        return contribution(i["ours"], i["ours_plain"], i["storm_geometry"],
+                            i["storm_points"])
+
+
+def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
+               geometry: bool = True, display_color: bool = False) -> BakeViews:
+    """Render ``shot`` through usdwrinkle and its bake outputs through Storm."""
+    p = prepare(shot, folder)
+    images = {"ours": p.render(p.stage, p.base("ours.png")),
+              "ours_plain": p.render(p.stage, p.base("ours_plain.png"), "--no-wrinkles")}
+    layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
+                             map_size),
+              "points": p.bake(p.base("points.usda"), "--with-points")}
+    purposes = {}
+    if geometry:
+        layers["geometry"] = p.bake(p.base("geometry.usda"), "--geometry", "--with-points")
+        purposes["geometry"] = ["default", "render"]
+        # usdwrinkle draws the default and render purposes: the displaced mesh
+        images["ours_geometry"] = p.render(layers["geometry"], p.base("ours_geometry.png"),
+                                           "--no-wrinkles")
+    if display_color:
+        layers["display"] = p.bake(p.base("display.usda"), "--display-color", "amplitude",
+                                   "--with-points")
+        images["ours_aovs"] = p.render(p.stage, p.base("ours_aovs.exr"))
+    jobs = []
+    for label, layer in layers.items():
+        images[f"storm_{label}"] = p.base(f"storm_{label}.png")
+        jobs.append(p.storm_job(layer, images[f"storm_{label}"],
+                                **({"purposes": purposes[label]} if label in purposes
+                                   else {})))
+    failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
+    if failed:
+        raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
+    return BakeViews(p, images)
+
+
+def hue(rgb: np.ndarray) -> np.ndarray:
+    """HSV hue in [0, 1) of (..., 3) colours; lighting that scales a colour keeps it."""
+    r, g, b = np.moveaxis(rgb.astype(np.float64), -1, 0)
+    top, bottom = rgb.max(axis=-1), rgb.min(axis=-1)
+    span = np.maximum(top - bottom, 1e-9)
+    h = np.where(top == r, (g - b) / span % 6, np.where(top == g, (b - r) / span + 2,
+                                                         (r - g) / span + 4))
+    return h / 6.0
+
+
+def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Spearman's rank correlation (ties broken by order: the images' values are dense)."""
+    ranks = [np.argsort(np.argsort(x, kind="stable")).astype(np.float64) for x in (a, b)]
+    return float(np.corrcoef(*ranks)[0, 1])
+
+
+def display_ramp_order(views: BakeViews) -> tuple[float, int]:
+    """(rank correlation between the hue Storm shows of the display-colour layer and the
+    wrinkle amplitude usdwrinkle renders (its EXR's wrinkle.amplitude), pixels compared).
+    The ramp is viridis, whose hue falls from purple to yellow as the amplitude rises:
+    close to -1 when Storm shows the amplitude the layer holds."""
+    import OpenEXR
+
+    rgba = read_rgba8(views.images["storm_display"])
+    channels = OpenEXR.File(str(views.images["ours_aovs"])).channels()
+    amplitude = np.asarray(channels["wrinkle.amplitude"].pixels, np.float64)
+    covered = np.asarray(channels["RGBA"].pixels, np.float64)[..., 3] >= 0.999
+    mask = erode(covered & (rgba[..., 3] == 255)) & np.isfinite(amplitude)
+    saturated = rgba[..., :3].max(axis=-1).astype(int) - rgba[..., :3].min(axis=-1) > 12
+    mask &= saturated  # hue is defined
+    return rank_correlation(hue(rgba[..., :3])[mask], amplitude[mask]), int(mask.sum())
+
+
+#: photometric stereo's light directions (the direction light travels is -axis)
+AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+
+
+def lit_by(stage_path: Path, axis: str, target: Path) -> Path:
+    """A layer over ``stage_path`` whose only light is a distant light from ``axis``
+    (the stage's lights deactivated)."""
+    from pxr import Gf, Usd, UsdGeom, UsdLux
+
+    stage, layer = over_layer(stage_path, target)
+    for prim in [p for p in stage.Traverse() if p.HasAPI(UsdLux.LightAPI)]:
+        prim.SetActive(False)
+    light = UsdLux.DistantLight.Define(stage, "/PhotometricLight")
+    light.CreateIntensityAttr(float(np.pi))
+    light.CreateNormalizeAttr(True)  # irradiance pi: a white diffuse surface reads n.l
+    # a distant light shines along its -Z: turn -Z to point against ``axis``
+    toward = Gf.Vec3d(0, 0, 0)
+    toward["XYZ".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
+    rotation = Gf.Rotation(Gf.Vec3d(0, 0, 1), toward)
+    UsdGeom.Xformable(light).AddTransformOp().Set(Gf.Matrix4d().SetRotate(rotation))
+    layer.Save()
+    return target
+
+
+def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(unit normals (h, w, 3), where all six images cover and the normal is defined)
+    from {axis: linear EXR path}."""
+    import OpenEXR
+
+    def luminance(path):
+        channels = OpenEXR.File(str(path)).channels()
+        rgba = channels["RGBA"].pixels if "RGBA" in channels else np.dstack(
+            [channels[c].pixels for c in "RGBA"])
+        rgba = np.asarray(rgba, np.float64)
+        return rgba[..., :3].mean(axis=2), rgba[..., 3] >= 0.999
+
+    values = {axis: luminance(path) for axis, path in images.items()}
+    n = np.dstack([values[f"+{a}"][0] - values[f"-{a}"][0] for a in "XYZ"])
+    covered = np.logical_and.reduce([m for _, m in values.values()])
+    length = np.linalg.norm(n, axis=2)
+    ok = erode(covered) & (length > 1e-4)
+    return n / np.maximum(length, 1e-12)[..., None], ok
+
+
+def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
+    """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer, each
+    decoded by photometric stereo."""
+    p = prepare(shot, folder)
+    maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size)
+    ours, theirs, jobs = {}, {}, []
+    for axis in AXES:
+        tag = axis.replace("+", "p").replace("-", "m")
+        ours[axis] = p.render(lit_by(p.stage, axis, p.base(f"lit{tag}.usda")),
+                              p.base(f"ours_{tag}.exr"))
+        theirs[axis] = p.base(f"storm_{tag}.exr")
+        jobs.append({**p.storm_job(lit_by(maps, axis, p.base(f"maps_lit{tag}.usda")),
+                                   theirs[axis]), "camera_light": False})
+    failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
+    if failed:
+        raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
+    return {"usdwrinkle": decoded_normals(ours), "storm": decoded_normals(theirs)}
+
+
+def angles(a, b) -> tuple[np.ndarray, np.ndarray]:
+    """(degrees between two normal images, where both are defined)."""
+    (na, ma), (nb, mb) = a, b
+    mask = ma & mb
+    cosine = np.clip(np.sum(na * nb, axis=2), -1, 1)
+    return np.degrees(np.arccos(cosine)), mask
