@@ -252,7 +252,7 @@ AXES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 def lit_by(stage_path: Path, axis: str, target: Path) -> Path:
     """A layer over ``stage_path`` whose only light is a distant light from ``axis``
     (the stage's lights deactivated)."""
-    from pxr import Gf, Usd, UsdGeom, UsdLux
+    from pxr import Gf, UsdGeom, UsdLux
 
     stage, layer = over_layer(stage_path, target)
     for prim in [p for p in stage.Traverse() if p.HasAPI(UsdLux.LightAPI)]:
@@ -314,3 +314,70 @@ def angles(a, b) -> tuple[np.ndarray, np.ndarray]:
     mask = ma & mb
     cosine = np.clip(np.sum(na * nb, axis=2), -1, 1)
     return np.degrees(np.arccos(cosine)), mask
+
+
+def our_normals(path) -> tuple[np.ndarray, np.ndarray]:
+    """(world-space shading normals, fully covered) from usdwrinkle's EXR (N.X, N.Y, N.Z)."""
+    import OpenEXR
+
+    channels = OpenEXR.File(str(path)).channels()
+    n = np.dstack([channels[f"N.{c}"].pixels for c in "XYZ"]).astype(np.float64)
+    alpha = np.asarray(channels["RGBA"].pixels, np.float64)[..., 3]
+    return _unit(n), erode(alpha >= 0.999)
+
+
+def blender_normals(path, up_axis: str) -> tuple[np.ndarray, np.ndarray]:
+    """(shading normals in the stage's axes, fully covered) from Blender's multilayer EXR
+    (its Normal pass: world space, Z up; the importer turned a Y-up stage by +90 degrees
+    about X, which is undone here)."""
+    import OpenEXR
+
+    parts = {part.name(): part for part in OpenEXR.File(str(path)).parts}
+    channels = parts["ViewLayer.Normal"].channels
+    n = np.dstack([channels[f"ViewLayer.Normal.{c}"].pixels for c in "XYZ"]).astype(
+        np.float64)
+    combined = parts["ViewLayer.Combined"].channels["ViewLayer.Combined"].pixels
+    if up_axis == "Y":
+        n = np.dstack([n[..., 0], n[..., 2], -n[..., 1]])
+    return _unit(n), erode(np.asarray(combined)[..., 3] >= 0.999)
+
+
+def _unit(n: np.ndarray) -> np.ndarray:
+    return n / np.maximum(np.linalg.norm(n, axis=2), 1e-12)[..., None]
+
+
+def front_angles(a, b) -> tuple[np.ndarray, np.ndarray]:
+    """angles() over the pixels where the two normals face the same way: renderers write
+    a back face's normal (the inside of a sleeve) each its own way."""
+    degrees, mask = angles(a, b)
+    return degrees, mask & (np.nan_to_num(degrees) < 90.0)
+
+
+def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
+    """{output: (usdwrinkle's normals, Cycles' normals)} for the maps layer (against
+    usdwrinkle's wrinkled render) and the geometry layer (against usdwrinkle's render of
+    that layer), from each renderer's world-space normal AOV. Cycles imports the layers
+    through Blender's USD importer (coarse meshes: no subdivision, as usdview's default
+    complexity), the render purpose on for the geometry layer."""
+    from pxr import Usd, UsdGeom
+
+    from . import cycles
+
+    p = prepare(shot, folder)
+    up_axis = UsdGeom.GetStageUpAxis(Usd.Stage.Open(str(p.stage)))
+    layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
+                             map_size),
+              "geometry": p.bake(p.base("geometry.usda"), "--geometry", "--with-points")}
+    ours = {"maps": p.render(p.stage, p.base("ours.exr")),
+            "geometry": p.render(layers["geometry"], p.base("ours_geometry.exr"),
+                                 "--no-wrinkles")}
+    height = our_normals(ours["maps"])[1].shape[0]
+    jobs = [{"stage": str(layers[k]), "camera": p.camera, "frame": shot.frame,
+             "width": shot.width, "height": height, "out": str(p.base(f"cycles_{k}.exr")),
+             "purposes": ["default", "render"] if k == "geometry" else None}
+            for k in layers]
+    failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
+    if failed:
+        raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
+    return {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
+            for k in layers}

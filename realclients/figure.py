@@ -1,11 +1,19 @@
-"""The README's side-by-side figure: usdwrinkle's frame and Storm's (usdview's renderer)
-of the same shot, through one camera, with their measured agreement.
+"""The README's side-by-side figures, each with its measured agreement.
 
     python -m realclients.figure docs/images/storm [--width 360]
 
-writes ``NAME.png`` (usdwrinkle left, Storm right) for each shot of FIGURE_SHOTS and
-prints one table row per shot, in the README's format. Needs the real-client Python
-(realclients/__init__.py).
+writes ``NAME.png`` (usdwrinkle left, Storm right: plain frames through one camera) for
+each shot of FIGURE_SHOTS and prints one table row per shot, in the README's format.
+
+    python -m realclients.figure --bakes docs/images/renderers [--width 360]
+
+writes ``NAME.png`` for each shot of bakes.MAP_SHOTS: usdwrinkle's render, then Storm's
+renders of the bake outputs (maps layer; geometry layer with the render purpose;
+display-colour layer, as usdview shows them by default), then Cycles' (maps layer;
+geometry layer), textures flattened to one grey (bakes.py says why), and prints a table
+row per shot. Cycles' lights are scaled by CYCLES_LIGHT_SCALE at import: Blender's USD
+importer does not read UsdLux distant-light intensities as Storm does; the figure
+compares wrinkles, not exposure. Needs the real-client Python (realclients/__init__.py).
 """
 from __future__ import annotations
 
@@ -15,6 +23,13 @@ import tempfile
 from pathlib import Path
 
 from .shots import PLAIN_SHOTS, Shot, compare_plain_frames
+
+#: Blender's importer's light_intensity_scale for the Cycles panels: brings the samples'
+#: Cycles renders to about Storm's mean brightness (measured on the shirt)
+CYCLES_LIGHT_SCALE = 0.3
+#: the strength of the Cycles panels' head-light for stages without lights (usdview's
+#: camera light)
+CYCLES_HEAD_LIGHT = 3.0
 
 #: shot name -> frame shown
 FIGURE_FRAMES = {"shirt": 24, "pillow": 24, "CesiumMan": 24, "test_lbs": 60}
@@ -26,13 +41,57 @@ def figure_shots() -> list[Shot]:
             for name, frame in FIGURE_FRAMES.items()]
 
 
+def bake_figure(folder: Path, width: int, scratch: Path) -> None:
+    import dataclasses
+
+    import numpy as np
+
+    from . import cycles
+    from .bakes import MAP_SHOTS, bake_views
+    from .compare import compare, read_rgba8, side_by_side
+    from .shots import has_lights
+
+    print("| shot | usdwrinkle; Storm: maps, geometry, display colour; Cycles: maps, "
+          "geometry | maps (Storm, worst tile) | geometry (Storm) |")
+    print("|---|---|---|---|")
+    for shot in MAP_SHOTS:
+        shot = dataclasses.replace(shot, width=max(width, shot.width * width // 640))
+        views = bake_views(shot, scratch / shot.name, display_color=True)
+        p, images = views.prepared, views.images
+        height = read_rgba8(images["ours"]).shape[0]
+        jobs = [{"stage": str(p.base(f"{kind}.usda")), "camera": p.camera,
+                 "frame": shot.frame, "width": shot.width, "height": height,
+                 "out": str(p.base(f"cycles_{kind}.png")), "samples": 32,
+                 "light_scale": CYCLES_LIGHT_SCALE,
+                 "camera_light": None if has_lights(shot.stage) else CYCLES_HEAD_LIGHT,
+                 "purposes": ["default", "render"] if kind == "geometry" else None}
+                for kind in ("maps", "geometry")]
+        failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
+        if failed:
+            raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
+        panels = [images["ours"], images["storm_maps"], images["storm_geometry"],
+                  images["storm_display"], *(job["out"] for job in jobs)]
+        target = folder / f"{shot.name}.png"
+        side_by_side(panels, target)
+        worst = min(c for c, _ in views.maps().tiles().values())
+        geometry = compare(images["ours_geometry"], images["storm_geometry"]).correlation
+        print(f"| {shot.name} | ![{shot.name}]({target}) | {worst:.3f} | "
+              f"{np.round(geometry, 3):.3f} |")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m realclients.figure",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("folder", type=Path)
     parser.add_argument("--width", type=int, default=360)
+    parser.add_argument("--bakes", action="store_true",
+                        help="the bake outputs in Storm and Cycles beside usdwrinkle")
     args = parser.parse_args(argv)
     args.folder.mkdir(parents=True, exist_ok=True)
+    if args.bakes:
+        with tempfile.TemporaryDirectory() as scratch:
+            bake_figure(args.folder, args.width, Path(scratch))
+        return 0
     with tempfile.TemporaryDirectory() as scratch:
         comparisons = compare_plain_frames(figure_shots(), Path(scratch), width=args.width)
         print("| shot | frame | usdwrinkle (left) and Storm (right) | correlation | mean "

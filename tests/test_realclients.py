@@ -1,10 +1,13 @@
 """The real-client tier: usdwrinkle's frames against usdview's Storm, rendered headless
-from Blender's bpy wheel (realclients/). Marker ``realclient``; without a Python that has
+from Blender's bpy wheel (realclients/), and usdwrinkle's bake outputs through Storm and
+Cycles (Blender's USD importer). Marker ``realclient``; without a Python that has
 bpy these tests are skipped with the reason, and the run's summary says the tier did not
 run (``--require-realclients``, which .ci/run passes, makes that an error).
 
-Cost on this 2-core machine: about 60 s for the plain frames (8 shots x 2 frames, both
-renderers at 320 pixels) and 15 s for the probes.
+Cost on this 2-core machine, 75 s in all: about 20 s for the plain frames (8 shots x 2
+frames), 5 s for the probes, 40 s for the bake outputs in Storm (3 shots: 3-4 bakes and
+3 renders each, and six more renders each side for the decoded normals) and 10 s for
+Cycles (one shot, 16 samples).
 """
 from __future__ import annotations
 
@@ -247,3 +250,38 @@ def test_maps_decoded_normals_at_the_shirt_elbow(realclient, tmp_path):
     assert mask.sum() > 40000
     median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
     assert median <= 0.6 and p90 <= 2.0 and p99 <= 11.0, (median, p90, p99)
+
+
+# --- issue 23: the bake outputs as Cycles shows them -----------------------------------
+
+
+@pytest.fixture(scope="module")
+def cycles_shirt(realclient, tmp_path_factory):
+    from realclients.bakes import MAP_SHOTS, cycles_views
+
+    return cycles_views(MAP_SHOTS[0], tmp_path_factory.mktemp("cycles"))
+
+
+def test_geometry_layer_normals_in_cycles(cycles_shirt):
+    """Cycles (Blender's USD importer, render purpose) shades the geometry layer's
+    displaced mesh with the normals usdwrinkle shades it with: its Normal pass against
+    usdwrinkle's N AOV (measured: median 0.10, p90 0.92, p99 3.3 degrees)."""
+    from realclients.bakes import front_angles
+
+    degrees, mask = front_angles(*cycles_shirt["geometry"])
+    assert mask.sum() > 40000
+    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
+    assert median <= 0.3 and p90 <= 1.5 and p99 <= 5.0, (median, p90, p99)
+
+
+def test_maps_normals_in_cycles_as_measured(cycles_shirt):
+    """Cycles decodes the maps' per-triangle tangent frame in MikkTSpace's per-vertex one:
+    issue 23 asks for p99 <= 5 degrees; measured here median 0.17, p90 7.0, p99 27 (the
+    issue's 25.5). The MikkTSpace option is not written yet (issue 23 stays open); this
+    holds the measured values so that a change for the worse fails."""
+    from realclients.bakes import front_angles
+
+    degrees, mask = front_angles(*cycles_shirt["maps"])
+    assert mask.sum() > 40000
+    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
+    assert median <= 0.4 and p90 <= 8.5 and p99 <= 30.0, (median, p90, p99)

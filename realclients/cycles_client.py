@@ -1,0 +1,101 @@
+"""Render USD stages with Blender (Cycles or EEVEE) through its USD importer.
+
+Runs in a Python that has Blender's ``bpy`` wheel, never in usdwrinkle's own process
+(the two USD builds cannot share one). realclients/__init__.py starts it:
+
+    python cycles_client.py JOBS.json
+
+JOBS.json: a list of {"stage", "camera" (prim path), "frame", "width", "height",
+"out" (.exr: a multilayer EXR with the combined image and the Normal pass, world space
+in the stage's axes; .png: the combined image, 8-bit, Standard view transform),
+"camera_light" (the strength of a sun along the camera's view, as usdview's head-light;
+default none), "light_scale" (the importer's light_intensity_scale, default 1),
+"subdivision" (import subdivision surfaces as such; default false: the coarse mesh, as
+usdview's default complexity shows it), "engine" ("CYCLES", default, or "BLENDER_EEVEE"),
+"samples" (default 16),
+"purposes" (default ["default", "proxy"]: Blender's importer defaults; add "render" for
+the geometry layer's render mesh)}. One line "ok OUT" or "failed OUT: reason" per job on
+stdout, and "seconds S OUT": the time the render took.
+
+The importer converts a Y-up stage to Blender's Z-up by rotating the root objects; the
+Normal pass is turned back into the stage's axes, so that it compares with usdwrinkle's.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+
+
+def render(job: dict) -> None:
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    purposes = set(job.get("purposes") or ["default", "proxy"])
+    bpy.ops.wm.usd_import(filepath=job["stage"], set_frame_range=True,
+                          import_proxy="proxy" in purposes,
+                          import_render="render" in purposes, import_guide=False,
+                          import_usd_preview=True,
+                          light_intensity_scale=float(job.get("light_scale", 1.0)),
+                          import_subdivision=bool(job.get("subdivision", False)))
+    scene = bpy.context.scene
+    camera_name = job["camera"].rstrip("/").rsplit("/", 1)[-1]
+    cameras = [o for o in scene.objects if o.type == "CAMERA"]
+    camera = next((o for o in cameras if o.name == camera_name or
+                   o.data.name == camera_name), None)
+    if camera is None:
+        raise RuntimeError(f"no camera {camera_name} among {[o.name for o in cameras]}")
+    scene.camera = camera
+    if job.get("camera_light"):
+        # usdview's default head-light: a sun along the camera's view
+        light = bpy.data.objects.new("HeadLight", bpy.data.lights.new("HeadLight", "SUN"))
+        light.data.energy = float(job["camera_light"])
+        light.parent = camera
+        scene.collection.objects.link(light)
+    scene.frame_set(int(round(float(job["frame"]))))
+    scene.render.engine = job.get("engine", "CYCLES")
+    scene.render.resolution_x = int(job["width"])
+    scene.render.resolution_y = int(job["height"])
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = True
+    scene.view_settings.view_transform = "Standard"
+    if scene.render.engine == "CYCLES":
+        scene.cycles.device = "CPU"
+        scene.cycles.samples = int(job.get("samples", 16))
+        scene.cycles.use_denoising = False
+        scene.cycles.pixel_filter_type = "BOX"
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("World")
+    exr = job["out"].endswith(".exr")
+    if exr:
+        scene.view_layers[0].use_pass_normal = True
+        scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+        scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
+        scene.render.image_settings.color_depth = "32"
+    else:
+        scene.render.image_settings.file_format = "PNG"
+        scene.render.image_settings.color_mode = "RGBA"
+    scene.render.filepath = job["out"]
+    bpy.ops.render.render(write_still=True)
+    if not os.path.isfile(job["out"]):
+        raise RuntimeError("Blender wrote no image")
+
+
+def main(jobs_path: str) -> None:
+    with open(jobs_path, encoding="utf-8") as handle:
+        jobs = json.load(handle)
+    for job in jobs:
+        try:
+            started = time.perf_counter()
+            render(job)
+            print(f"ok {job['out']}", flush=True)
+            print(f"seconds {time.perf_counter() - started:.6f} {job['out']}", flush=True)
+        except Exception as exc:  # noqa: BLE001 (reported per job, the next one goes on)
+            print(f"failed {job['out']}: {type(exc).__name__}: {exc}", flush=True)
+    sys.stdout.flush()
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
