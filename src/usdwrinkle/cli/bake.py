@@ -65,11 +65,6 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--uv", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in; "
                            f"default {MAP_DEFAULTS.uv}")
-    maps.add_argument("--tangent-space", choices=("triangle", "mikktspace"),
-                      help="the tangent frame of the normal maps: triangle (per triangle, as "
-                           "usdview's Storm and usdwrinkle decode them) or mikktspace (per "
-                           "vertex, as Blender/Cycles, Unreal and Substance do); default "
-                           f"{MAP_DEFAULTS.tangent_space} (README: maps)")
     maps.add_argument("--map-displacement", action="store_true", default=None,
                       help="also bind the height map to UsdPreviewSurface's "
                            "inputs:displacement, for renderers that subdivide and displace "
@@ -107,7 +102,7 @@ def _given(args, flags: dict) -> dict:
 
 
 MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
-             "--map-padding": "padding", "--uv": "uv", "--tangent-space": "tangent_space",
+             "--map-padding": "padding", "--uv": "uv",
              "--map-displacement": "displacement"}
 GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
 

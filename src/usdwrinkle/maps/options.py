@@ -20,9 +20,9 @@ class MapOptions:
     #: also bind the height map to UsdPreviewSurface's inputs:displacement (opt-in: Storm
     #: and most real-time renderers displace the coarse corners and keep their normals)
     displacement: bool = False
-    #: the tangent frame the normal maps are expressed in: "triangle" (per triangle, from
-    #: dP/ds, as Storm and usdwrinkle decode them) or "mikktspace" (per vertex, as
-    #: Blender/Cycles, Unreal and Substance decode them)
+    #: the tangent frame the normal maps are expressed in, recorded in the layer's
+    #: metadata: "triangle" (per triangle, from dP/ds, as Storm and usdwrinkle decode
+    #: them). MikkTSpace (per vertex, as Blender/Cycles decode them) is not written yet.
     tangent_space: str = "triangle"
 
     def folder_for(self, layer_path: str) -> str:
