@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import storm
+from .compare import eroded as erode
 from .compare import read_rgba8
 from .shots import (
     CORPUS,
@@ -101,19 +102,6 @@ def grey(path) -> tuple[np.ndarray, np.ndarray]:
     """(mean of the sRGB codes, fully covered) of an 8-bit RGBA image."""
     rgba = read_rgba8(path).astype(np.float64)
     return rgba[..., :3].mean(axis=2), rgba[..., 3] == 255
-
-
-def erode(mask: np.ndarray, pixels: int = 1) -> np.ndarray:
-    """``mask`` shrunk by ``pixels`` (4-neighbourhood): silhouettes, which each renderer
-    anti-aliases its own way, drop out."""
-    for _ in range(pixels):
-        inner = mask.copy()
-        inner[1:] &= mask[:-1]
-        inner[:-1] &= mask[1:]
-        inner[:, 1:] &= mask[:, :-1]
-        inner[:, :-1] &= mask[:, 1:]
-        mask = inner
-    return mask
 
 
 @dataclass

@@ -33,6 +33,19 @@ def read_rgba8(path) -> np.ndarray:
     return pixels
 
 
+def eroded(mask: np.ndarray, pixels: int = 1) -> np.ndarray:
+    """``mask`` shrunk by ``pixels`` (4-neighbourhood): silhouettes, which each renderer
+    anti-aliases its own way, drop out."""
+    for _ in range(pixels):
+        inner = mask.copy()
+        inner[1:] &= mask[:-1]
+        inner[:-1] &= mask[1:]
+        inner[:, 1:] &= mask[:, :-1]
+        inner[:, :-1] &= mask[:, 1:]
+        mask = inner
+    return mask
+
+
 def compare(ours, theirs, erode: int = 1) -> Match:
     """Compare two RGBA images (paths or (h, w, 4) uint8) over the pixels both cover
     fully (alpha 255), shrunk by ``erode`` pixels so that anti-aliased edges, which
@@ -44,14 +57,7 @@ def compare(ours, theirs, erode: int = 1) -> Match:
     cover_a, cover_b = a[..., 3] > 0, b[..., 3] > 0
     union = np.count_nonzero(cover_a | cover_b)
     iou = np.count_nonzero(cover_a & cover_b) / union if union else 1.0
-    both = (a[..., 3] == 255) & (b[..., 3] == 255)
-    for _ in range(erode):
-        inner = both.copy()
-        inner[1:] &= both[:-1]
-        inner[:-1] &= both[1:]
-        inner[:, 1:] &= both[:, :-1]
-        inner[:, :-1] &= both[:, 1:]
-        both = inner
+    both = eroded((a[..., 3] == 255) & (b[..., 3] == 255), erode)
     x = a[both][:, :3].astype(np.float64)
     y = b[both][:, :3].astype(np.float64)
     if len(x) < 2:
