@@ -316,7 +316,7 @@ def test_demo_onto_a_file_and_a_deleted_working_folder(tmp_path):
     assert "current folder no longer exists" in one_error(result.stderr)
 
 
-def test_a_closed_stdout_and_a_full_stderr_are_not_errors(gl_context, tmp_path):
+def test_a_closed_stdout_and_a_full_stderr_are_not_errors(gl_context, corpus, tmp_path):
     """Finding 12-13: 'usdwrinkle info | head' raised BrokenPipeError (exit 3); with
     stderr on /dev/full a render exited 1 and wrote no frame."""
     result = subprocess.run(f"{sys.executable} -m usdwrinkle info | head -c 10",
@@ -326,8 +326,8 @@ def test_a_closed_stdout_and_a_full_stderr_are_not_errors(gl_context, tmp_path):
     out = tmp_path / "out"
     with open("/dev/full", "w") as full:
         code = subprocess.run([sys.executable, "-m", "usdwrinkle", "render",
-                               str(Path(__file__).parents[1].parent / "shared" / "corpus" /
-                                   "usd-wg" / "CesiumMan.usdz"), str(out / "c.####.png"),
+                               str(corpus / "usd-wg" / "CesiumMan.usdz"),
+                               str(out / "c.####.png"),
                                "--frames", "1:3", "--width", "64"],
                               stdout=subprocess.DEVNULL, stderr=full, timeout=300).returncode
     assert code == 0
