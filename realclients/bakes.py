@@ -65,6 +65,8 @@ class Prepared:
     stage: Path
     camera: str
     folder: Path
+    #: usdview's head-light on: the stage has no lights of its own
+    camera_light: bool
 
     def base(self, label: str) -> Path:
         return self.folder / f"{self.shot.name}.{label}"
@@ -86,7 +88,7 @@ class Prepared:
     def storm_job(self, stage, out, **extra) -> dict:
         return {"stage": str(stage), "camera": self.camera, "frame": self.shot.frame,
                 "width": self.shot.width, "out": str(out),
-                "camera_light": not has_lights(self.shot.stage), **extra}
+                "camera_light": self.camera_light, **extra}
 
 
 def prepare(shot: BakeShot, folder: Path) -> Prepared:
@@ -95,7 +97,7 @@ def prepare(shot: BakeShot, folder: Path) -> Prepared:
     stage, layer = over_layer(Path(framed).resolve(), folder / f"{shot.name}.flat.usda")
     flat_textures(stage, folder)
     layer.Save()
-    return Prepared(shot, Path(layer.realPath), camera, folder)
+    return Prepared(shot, Path(layer.realPath), camera, folder, not has_lights(shot.stage))
 
 
 def grey(path) -> tuple[np.ndarray, np.ndarray]:
@@ -134,14 +136,6 @@ class Contribution:
                     result[(i, j)] = (self.correlation(tile), count)
         return result
 
-    def image(self, gain: float = 2.0) -> np.ndarray:
-        """Both contributions side by side as RGBA (mid grey: none)."""
-        tiles = []
-        for values in (self.ours, self.theirs):
-            v = np.clip(128 + gain * values * self.mask, 0, 255).astype(np.uint8)
-            tiles.append(np.dstack([v, v, v, np.full_like(v, 255)]))
-        return tiles
-
 
 def contribution(ours_wrinkled, ours_plain, theirs_wrinkled, theirs_plain) -> Contribution:
     ow, m1 = grey(ours_wrinkled)
@@ -161,11 +155,6 @@ class BakeViews:
     def maps(self) -> Contribution:
         i = self.images
         return contribution(i["ours"], i["ours_plain"], i["storm_maps"], i["storm_points"])
-
-    def geometry(self) -> Contribution:
-        i = self.images
-        return contribution(i["ours"], i["ours_plain"], i["storm_geometry"],
-                            i["storm_points"])
 
 
 def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,

@@ -49,7 +49,6 @@ def bake_figure(folder: Path, width: int, scratch: Path) -> None:
     from . import cycles
     from .bakes import MAP_SHOTS, bake_views
     from .compare import compare, read_rgba8, side_by_side
-    from .shots import has_lights
 
     print("| shot | usdwrinkle; Storm: maps, geometry, display colour; Cycles: maps, "
           "geometry | maps (Storm, worst tile) | geometry (Storm) |")
@@ -63,7 +62,7 @@ def bake_figure(folder: Path, width: int, scratch: Path) -> None:
                  "frame": shot.frame, "width": shot.width, "height": height,
                  "out": str(p.base(f"cycles_{kind}.png")), "samples": 32,
                  "light_scale": CYCLES_LIGHT_SCALE,
-                 "camera_light": None if has_lights(shot.stage) else CYCLES_HEAD_LIGHT,
+                 "camera_light": CYCLES_HEAD_LIGHT if p.camera_light else None,
                  "purposes": ["default", "render"] if kind == "geometry" else None}
                 for kind in ("maps", "geometry")]
         failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
