@@ -34,8 +34,10 @@ def bpy_python() -> str:
                   str(REPO / ".venv-bpy" / "bin" / "python")]
     for candidate in candidates:
         if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
-            probe = subprocess.run([candidate, "-c", "import bpy, moderngl"],
-                                   capture_output=True, text=True, timeout=120)
+            with tempfile.TemporaryDirectory(prefix="usdwrinkle-client-") as scratch:
+                probe = subprocess.run([candidate, "-c", "import bpy, moderngl"],
+                                       capture_output=True, text=True, timeout=120,
+                                       env={**os.environ, "TMPDIR": scratch})
             if probe.returncode == 0:
                 return candidate
             raise NoClient(f"{candidate} cannot import bpy and moderngl "
@@ -53,14 +55,15 @@ def _run(script: str, jobs: list[dict], timeout: float) -> dict[str, str]:
     """Run a client on ``jobs``; returns {out path: "ok" or the failure}. The time each
     render took inside the client goes to SECONDS."""
     python = bpy_python()
-    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as handle:
-        json.dump(jobs, handle)
-    try:
-        done = subprocess.run([python, str(HERE / script), handle.name], capture_output=True,
-                              text=True, timeout=timeout, env={**os.environ,
-                                                                "PYTHONNOUSERSITE": "1"})
-    finally:
-        os.unlink(handle.name)
+    # Blender makes a blender_* folder in TMPDIR that os._exit never removes: give each
+    # client run its own TMPDIR and remove it afterwards
+    with tempfile.TemporaryDirectory(prefix="usdwrinkle-client-") as scratch:
+        jobs_path = os.path.join(scratch, "jobs.json")
+        with open(jobs_path, "w", encoding="utf-8") as handle:
+            json.dump(jobs, handle)
+        done = subprocess.run([python, str(HERE / script), jobs_path], capture_output=True,
+                              text=True, timeout=timeout,
+                              env={**os.environ, "PYTHONNOUSERSITE": "1", "TMPDIR": scratch})
     results = {}
     for line in done.stdout.splitlines():
         if line.startswith("ok "):
@@ -85,6 +88,11 @@ def storm(jobs: list[dict], timeout: float = 600) -> dict[str, str]:
 def cycles(jobs: list[dict], timeout: float = 1200) -> dict[str, str]:
     """Render each job with Blender's Cycles or EEVEE (cycles_client.py)."""
     return _run("cycles_client.py", jobs, timeout)
+
+
+def blender_tangents(jobs: list[dict], timeout: float = 300) -> dict[str, str]:
+    """Blender's MikkTSpace tangents of each job's mesh (tangents_client.py)."""
+    return _run("tangents_client.py", jobs, timeout)
 
 
 if __name__ == "__main__":  # python -m realclients: say whether the clients can run here

@@ -158,13 +158,16 @@ class BakeViews:
 
 
 def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
-               geometry: bool = True, display_color: bool = False) -> BakeViews:
-    """Render ``shot`` through usdwrinkle and its bake outputs through Storm."""
+               geometry: bool = True, display_color: bool = False,
+               tangent_space: str | None = None) -> BakeViews:
+    """Render ``shot`` through usdwrinkle and its bake outputs through Storm (the maps
+    in ``tangent_space``; None: bake's default)."""
     p = prepare(shot, folder)
     images = {"ours": p.render(p.stage, p.base("ours.png")),
               "ours_plain": p.render(p.stage, p.base("ours_plain.png"), "--no-wrinkles")}
+    frame = ("--tangent-space", tangent_space) if tangent_space else ()
     layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
-                             map_size),
+                             map_size, *frame),
               "points": p.bake(p.base("points.usda"), "--with-points")}
     purposes = {}
     if geometry:
@@ -266,11 +269,13 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
     return n / np.maximum(length, 1e-12)[..., None], ok
 
 
-def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
-    """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer, each
-    decoded by photometric stereo."""
+def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
+                 tangent_space: str = "triangle") -> dict:
+    """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer (its
+    normal maps in ``tangent_space``), each decoded by photometric stereo."""
     p = prepare(shot, folder)
-    maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size)
+    maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
+                  "--tangent-space", tangent_space)
     ours, theirs, jobs = {}, {}, []
     for axis in AXES:
         tag = axis.replace("+", "p").replace("-", "m")
@@ -330,11 +335,55 @@ def front_angles(a, b) -> tuple[np.ndarray, np.ndarray]:
     return degrees, mask & (np.nan_to_num(degrees) < 90.0)
 
 
-def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
-    """{output: (usdwrinkle's normals, Cycles' normals)} for the maps layer (against
-    usdwrinkle's wrinkled render) and the geometry layer (against usdwrinkle's render of
-    that layer), from each renderer's world-space normal AOV. Cycles imports the layers
-    through Blender's USD importer (coarse meshes: no subdivision, as usdview's default
+def view_directions(stage_path: Path, camera: str, frame: float, shape) -> np.ndarray:
+    """(h, w, 3) unit world-space directions from each pixel's surface toward the camera
+    (row 0 at the top), through ``camera`` of ``stage_path`` at ``frame``."""
+    from pxr import Gf, Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(stage_path))
+    frustum = UsdGeom.Camera(stage.GetPrimAtPath(camera)).GetCamera(
+        Usd.TimeCode(frame)).frustum
+    height, width = shape[:2]
+    window = frustum.GetWindow()
+    x = window.GetMin()[0] + (np.arange(width) + 0.5) / width * window.GetSize()[0]
+    y = window.GetMax()[1] - (np.arange(height) + 0.5) / height * window.GetSize()[1]
+    local = np.dstack([np.broadcast_to(x[None, :], (height, width)),
+                       np.broadcast_to(y[:, None], (height, width)),
+                       -np.ones((height, width))])
+    rotation = np.array(Gf.Matrix4d().SetRotate(frustum.GetRotation()).ExtractRotationMatrix())
+    return _unit(-(local @ rotation))  # Gf's row vectors: world = local * R
+
+
+def cycles_reflection_clamp(n: np.ndarray, ng: np.ndarray, i: np.ndarray) -> np.ndarray:
+    """Cycles' ensure_valid_specular_reflection (kernel/closure/bsdf_util.h), which its
+    normal-map node output goes through before shading and the Normal pass: a shading
+    normal whose mirror reflection of the view direction ``i`` would fall below the
+    surface ``ng`` is tilted back toward ``ng`` until it does not. A normal tilted more
+    than 45 degrees from ``ng`` seen head-on is clamped, so steep normal-map wrinkles show
+    shallower in Cycles than in usdwrinkle, Storm or the geometry layer."""
+    dot = lambda a, b: np.sum(a * b, axis=-1, keepdims=True)  # noqa: E731
+    reflected = 2.0 * dot(n, i) * n - i
+    iz = np.maximum(dot(i, ng), 0.0)
+    threshold = np.minimum(0.9 * iz, 0.01)
+    x = _unit(n - dot(n, ng) * ng)
+    ix = dot(i, x)
+    a = np.maximum(ix ** 2 + iz ** 2, 1e-12)
+    b = 2.0 * (a + iz * threshold)
+    c = (threshold + iz) ** 2
+    root = np.sqrt(np.maximum(b ** 2 - 4.0 * a * c, 0.0))
+    nz2 = np.clip(np.where(ix < 0, 0.25 * (b + root) / a, 0.25 * (b - root) / a), 0.0, 1.0)
+    clamped = np.sqrt(1.0 - nz2) * x + np.sqrt(nz2) * ng
+    return np.where(dot(ng, reflected) >= threshold, n, clamped)
+
+
+def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
+                 tangent_space: str = "triangle") -> dict:
+    """{output: (usdwrinkle's normals, Cycles' normals)} for the maps layer (its normal
+    maps in ``tangent_space``; against usdwrinkle's wrinkled render) and the geometry
+    layer (against usdwrinkle's render of that layer), from each renderer's world-space
+    normal AOV; also "plain": usdwrinkle's unwrinkled normals and "view": the directions
+    toward the camera (for cycles_reflection_clamp). Cycles imports the layers through
+    Blender's USD importer (coarse meshes: no subdivision, as usdview's default
     complexity), the render purpose on for the geometry layer."""
     from pxr import Usd, UsdGeom
 
@@ -343,11 +392,12 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
     p = prepare(shot, folder)
     up_axis = UsdGeom.GetStageUpAxis(Usd.Stage.Open(str(p.stage)))
     layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
-                             map_size),
+                             map_size, "--tangent-space", tangent_space),
               "geometry": p.bake(p.base("geometry.usda"), "--geometry", "--with-points")}
     ours = {"maps": p.render(p.stage, p.base("ours.exr")),
             "geometry": p.render(layers["geometry"], p.base("ours_geometry.exr"),
                                  "--no-wrinkles")}
+    plain = our_normals(p.render(p.stage, p.base("ours_plain.exr"), "--no-wrinkles"))
     height = our_normals(ours["maps"])[1].shape[0]
     jobs = [{"stage": str(layers[k]), "camera": p.camera, "frame": shot.frame,
              "width": shot.width, "height": height, "out": str(p.base(f"cycles_{k}.exr")),
@@ -356,5 +406,8 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048) -> dict:
     failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
     if failed:
         raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
-    return {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
-            for k in layers}
+    views = {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
+             for k in layers}
+    views["plain"] = plain
+    views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
+    return views

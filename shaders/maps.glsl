@@ -13,6 +13,10 @@ layout(binding = MAPS_Q_WIDTH) uniform sampler2D q_width;  // .w: rest wavelengt
 layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
 layout(binding = MAPS_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
+#if defined MIKKTSPACE
+// MikkTSpace per triangle corner ([3t + c]): unit tangent, bitangent sign (maps/tangents.py)
+layout(binding = MAPS_TANGENTS) uniform sampler2D corner_tangents;
+#endif
 
 #if defined VERTEX_SHADER
 
@@ -20,6 +24,9 @@ out vec3 v_local;
 out vec3 v_normal_local;
 out vec3 v_bary;
 out float v_width;
+#if defined MIKKTSPACE
+out vec4 v_tangent;
+#endif
 
 void main() {
     int corner = gl_VertexID;
@@ -31,6 +38,9 @@ void main() {
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_width = fetch(q_width, i).w;
+#if defined MIKKTSPACE
+    v_tangent = fetch(corner_tangents, corner);
+#endif
     vec2 uv = fetch(corner_uv, corner).xy - u_tile;   // [0, 1] inside the tile
     gl_Position = vec4(uv * 2.0 - 1.0, 0.0, 1.0);     // row 0 of the target is t = 0
 }
@@ -41,6 +51,9 @@ in vec3 v_local;
 in vec3 v_normal_local;
 in vec3 v_bary;
 in float v_width;
+#if defined MIKKTSPACE
+in vec4 v_tangent;
+#endif
 
 uniform float u_amplitude_scale;  // s
 uniform int u_count;              // 1: count the triangles over each texel (overlaps)
@@ -59,8 +72,21 @@ void main() {
     Wave wave = wave_blend(t, v_bary, v_local, n, false);
     vec3 shading = safe_normalize(n - wave.gradient, n);
     mat3 frame = tangent_frame(t, corner_uv, n);   // orthonormal: its transpose inverts it
+    vec3 encoded = transpose(frame) * shading;
+#if defined MIKKTSPACE
+    // the frame a MikkTSpace renderer decodes in (Cycles' normal-map node): T and N
+    // interpolated and not renormalised, B = sign * cross(N, T); the decoded normal is
+    // normalize(x T + y B + z N), so the map holds the direction of that frame's inverse
+    // applied to the shading normal
+    vec3 T = v_tangent.xyz;
+    vec3 B = (v_tangent.w < 0.0 ? -1.0 : 1.0) * cross(v_normal_local, T);
+    mat3 mikk = mat3(T, B, v_normal_local);
+    if (dot(T, T) > 1e-6 && abs(determinant(mikk)) > 1e-6) {
+        encoded = safe_normalize(inverse(mikk) * shading, encoded);
+    }
+#endif
     float full = u_amplitude_scale * v_width / 4.0;
-    out_normal = vec4(transpose(frame) * shading, 1.0);
+    out_normal = vec4(encoded, 1.0);
     out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 0.0, 1.0);
 }
 

@@ -353,3 +353,130 @@ def test_drawing_wrinkles_over_baked_maps_warns(gl_context, tmp_path, shirt_maps
     assert main(["render", str(shirt_maps), str(out), "--frames", "24", "--width", "64",
                  "--no-wrinkles"]) == 0
     assert "baked wrinkle maps" not in capsys.readouterr().err
+
+
+# --- MikkTSpace (bake --tangent-space mikktspace) ---------------------------------------
+
+
+def test_mikktspace_on_a_flat_sheet_is_the_triangle_frame():
+    """On a plane with affine texture coordinates every triangle's dP/ds is the same, so
+    MikkTSpace's averaged tangent is dP/ds exactly, sign +1; a mirrored island gets the
+    mirrored tangent and sign -1 (mikktspace.c: ORIENT_PRESERVING)."""
+    from usdwrinkle.maps.tangents import mikktspace
+
+    rest, counts, indices = grid_sheet(5, 4, 2.0)
+    quads = np.asarray(indices).reshape(-1, 4)
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    uv = (rest[:, :2] + 1.0) / 2.0 * np.array([0.5, 2.0])   # s along x, t along y
+    corner_uv = uv[triangles].reshape(-1, 2)
+    normals = np.tile([0.0, 0.0, 1.0], (3 * len(triangles), 1))
+    tangents = mikktspace(rest, triangles, normals, corner_uv)
+    np.testing.assert_allclose(tangents[:, :3], np.tile([1.0, 0.0, 0.0], (len(tangents), 1)),
+                               atol=1e-6)
+    assert (tangents[:, 3] == 1.0).all()
+    mirrored = mikktspace(rest, triangles, normals, corner_uv * np.array([-1.0, 1.0]))
+    np.testing.assert_allclose(mirrored[:, :3], -tangents[:, :3], atol=1e-6)
+    assert (mirrored[:, 3] == -1.0).all()
+
+
+def test_mikktspace_maps_of_the_analytic_sheet_equal_the_triangle_maps(gl_context, tmp_path):
+    """On the flat analytic sheet the two frames agree, so the two maps do (8-bit); the
+    layer records the frame it was baked in."""
+    source = sheet_stage(tmp_path, 0.7)
+    maps = {}
+    for frame in ("triangle", "mikktspace"):
+        layer = tmp_path / f"{frame}.usda"
+        assert bake_maps(source, layer, "--tangent-space", frame, kinds="normal") == 0
+        maps[frame] = read(tmp_path / f"{frame}_maps" / "Sheet.normal.0001.png")
+        data = Sdf.Layer.FindOrOpen(str(layer)).customLayerData["usdwrinkle"]["maps"]
+        assert data["tangentSpace"] == frame
+    assert np.abs(maps["mikktspace"] - maps["triangle"]).max() <= 1.5 / 255
+
+
+def _smooth_normals(points, quads):
+    """Per point the sum over its quads' corners of cross(next - p, prev - p), as the
+    normals pass makes a polygonal mesh's smooth normals (scene/normals.py)."""
+    normals = np.zeros_like(points)
+    for c in range(4):
+        p = points[quads[:, c]]
+        cross = np.cross(points[quads[:, (c + 1) % 4]] - p, points[quads[:, (c - 1) % 4]] - p)
+        np.add.at(normals, quads[:, c], cross)
+    return normals / np.linalg.norm(normals, axis=1, keepdims=True)
+
+
+def test_mikktspace_maps_decode_to_the_triangle_maps_normals_on_the_shirt(gl_context,
+                                                                           tmp_path):
+    """The shirt's elbow, where the two frames differ by 10 degrees (median): the
+    MikkTSpace map decoded as Cycles decodes it (tangent and normal interpolated, not
+    renormalised, B = sign cross(N, T); numpy, maps/tangents.py) gives the normal that
+    the per-triangle map decodes to in its own frame, at 2000 points inside the
+    triangles. Both decodes read the same texel, so what is left is the 8-bit
+    quantisation and the normals pass's float rounding (measured: p99 0.22 degrees)."""
+    from usdwrinkle.maps.tangents import mikktspace
+
+    size = 1024
+    maps = {}
+    for frame in ("triangle", "mikktspace"):
+        layer = tmp_path / f"{frame}.usda"
+        assert bake_maps(SHIRT, layer, "--frames", "24", "--with-points", "--tangent-space",
+                         frame, kinds="normal", size=size) == 0
+        maps[frame] = read(tmp_path / f"{frame}_maps" / "Sleeve.normal.0024.png") * 2 - 1
+    root = Sdf.Layer.CreateAnonymous()
+    root.subLayerPaths = [str(tmp_path / "triangle.usda"), SHIRT]   # the layer over the shot
+    stage = Usd.Stage.Open(root)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Arm/Sleeve"))
+    points = np.asarray(mesh.GetPointsAttr().Get(24), np.float64)
+    quads = np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 4)
+    st = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("st")
+    face_uv = np.asarray(st.Get(), np.float64).reshape(-1, 4, 2)   # faceVarying
+    assert st.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    triangles = np.concatenate([quads[:, :3], quads[:, [0, 2, 3]]])
+    corner_uv = np.concatenate([face_uv[:, :3], face_uv[:, [0, 2, 3]]]).reshape(-1, 2)
+    vertex_normals = _smooth_normals(points, quads)
+    corner_normals = vertex_normals[triangles].reshape(-1, 3)
+    tangents = mikktspace(points, triangles, corner_normals, corner_uv).reshape(-1, 3, 4)
+
+    rng = np.random.default_rng(7)
+    t = rng.integers(0, len(triangles), 2000)
+    bary = rng.dirichlet([4, 4, 4], 2000)
+    bary = np.maximum(bary, 0.15) / np.maximum(bary, 0.15).sum(1, keepdims=True)
+    uv = np.einsum("nc,ncd->nd", bary, corner_uv.reshape(-1, 3, 2)[t])
+    texel = np.floor(uv * size).astype(int).clip(0, size - 1)
+    row = size - 1 - texel[:, 1]                       # image row 0 is t = 1
+    n = np.einsum("nc,ncd->nd", bary, vertex_normals[triangles[t]])
+
+    # MikkTSpace, as Cycles' normal-map node decodes it
+    tangent = np.einsum("nc,ncd->nd", bary, tangents[t, :, :3])
+    bitangent = tangents[t, 0, 3:4] * np.cross(n, tangent)
+    c = maps["mikktspace"][row, texel[:, 0]]
+    mikk = c[:, :1] * tangent + c[:, 1:2] * bitangent + c[:, 2:3] * n
+    mikk /= np.linalg.norm(mikk, axis=1, keepdims=True)
+
+    # the per-triangle frame, as Storm and usdwrinkle decode it (include/wave.glsl)
+    p = points[triangles[t]]
+    s = corner_uv.reshape(-1, 3, 2)[t]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    d1, d2 = s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    dp_ds = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) / det[:, None]
+    dp_dt = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) / det[:, None]
+    unit_n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    T = dp_ds - np.sum(dp_ds * unit_n, 1, keepdims=True) * unit_n
+    T /= np.linalg.norm(T, axis=1, keepdims=True)
+    B = np.cross(unit_n, T)
+    B *= np.sign(np.sum(B * dp_dt, 1, keepdims=True))
+    c = maps["triangle"][row, texel[:, 0]]
+    triangle = c[:, :1] * T + c[:, 1:2] * B + c[:, 2:3] * unit_n
+    triangle /= np.linalg.norm(triangle, axis=1, keepdims=True)
+
+    degrees = np.degrees(np.arccos(np.clip(np.sum(mikk * triangle, 1), -1, 1)))
+    tilt = np.degrees(np.arccos(np.clip(np.sum(triangle * unit_n, 1), -1, 1)))
+    assert np.percentile(tilt, 90) > 10.0            # the samples hold real wrinkles
+    median, p99 = np.percentile(degrees, [50, 99])
+    print(f"MikkTSpace vs triangle decode: median {median:.2f}, p99 {p99:.2f} degrees")
+    assert median < 0.5 and p99 < 2.0, (median, p99)
+    # and the two maps differ where the frames do: the option is not a no-op
+    frames = np.degrees(np.arccos(np.clip(np.sum(
+        maps["mikktspace"][row, texel[:, 0]] * c, 1) / np.linalg.norm(c, axis=1)
+        / np.linalg.norm(maps["mikktspace"][row, texel[:, 0]], axis=1), -1, 1)))
+    assert np.percentile(frames, 90) > 2.0

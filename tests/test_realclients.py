@@ -233,23 +233,35 @@ def test_display_color_layer_shows_the_amplitude_in_storm(bake_views, name):
     assert order <= -0.95, (name, order)
 
 
-def test_maps_decoded_normals_at_the_shirt_elbow(realclient, tmp_path):
+@pytest.mark.parametrize("frame,bounds", [
+    ("triangle", (0.6, 2.0, 11.0, 17.0)),      # measured 0.45, 1.52, 9.75; 15.2
+    ("mikktspace", (0.6, 2.3, 22.0, 30.0)),    # measured 0.46, 1.82, 19.7; 27.6
+])
+def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, bounds):
     """The shading normals Storm decodes from the maps against usdwrinkle's, both by
-    photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z). Issue
-    23 asks for p99 <= 3 degrees; measured here at 640 pixels: median 0.45, p99 9.7 over
-    the shirt (17 in the lower third, the elbow's crease). The remaining error lies in
-    one-pixel lines along the coarse triangles' edges (it halves at 1280 pixels: p99 4.5):
-    Storm shades its four multisamples at the pixel's centre, so an edge pixel samples the
-    neighbouring triangle's texels and decodes them in its own triangle's tangent frame,
-    which turns by 29 degrees (median) across the elbow's quads. This test holds the
-    measured values, so that a change for the worse fails; issue 23 stays open on it."""
+    photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z), for
+    each tangent frame of --tangent-space: median, p90 and p99 over the shirt at 640
+    pixels, and p99 in the lower third (the elbow's crease). Issue 23 asks for p99 <= 3
+    degrees at the elbow.
+
+    Storm builds the per-triangle frame, so "triangle" is its own: what is left lies in
+    one-pixel lines along the coarse triangles' edges (the p99 halves at 1280 pixels, to
+    4.5): Storm shades its four multisamples at the pixel's centre, so an edge pixel
+    samples the neighbouring triangle's texels and decodes them in its own triangle's
+    frame, which turns by 29 degrees (median) across the elbow's quads. A MikkTSpace map
+    decoded in Storm's frame is off by the frames' difference (10 degrees median at the
+    elbow) times the tilt. This test holds the measured values, so that a change for
+    the worse fails; issue 23's 3 degrees is not met."""
     from realclients.bakes import MAP_SHOTS, angles, normal_views
 
-    views = normal_views(MAP_SHOTS[0], tmp_path)
+    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame)
     degrees, mask = angles(views["usdwrinkle"], views["storm"])
     assert mask.sum() > 40000
+    lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
     median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
-    assert median <= 0.6 and p90 <= 2.0 and p99 <= 11.0, (median, p90, p99)
+    elbow = np.percentile(degrees[lower], 99)
+    assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \
+        elbow <= bounds[3], (median, p90, p99, elbow)
 
 
 # --- issue 23: the bake outputs as Cycles shows them -----------------------------------
@@ -259,7 +271,9 @@ def test_maps_decoded_normals_at_the_shirt_elbow(realclient, tmp_path):
 def cycles_shirt(realclient, tmp_path_factory):
     from realclients.bakes import MAP_SHOTS, cycles_views
 
-    return cycles_views(MAP_SHOTS[0], tmp_path_factory.mktemp("cycles"))
+    return {frame: cycles_views(MAP_SHOTS[0], tmp_path_factory.mktemp(f"cycles_{frame}"),
+                                tangent_space=frame)
+            for frame in ("triangle", "mikktspace")}
 
 
 def test_geometry_layer_normals_in_cycles(cycles_shirt):
@@ -268,20 +282,102 @@ def test_geometry_layer_normals_in_cycles(cycles_shirt):
     usdwrinkle's N AOV (measured: median 0.10, p90 0.92, p99 3.3 degrees)."""
     from realclients.bakes import front_angles
 
-    degrees, mask = front_angles(*cycles_shirt["geometry"])
+    degrees, mask = front_angles(*cycles_shirt["triangle"]["geometry"])
     assert mask.sum() > 40000
     median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
     assert median <= 0.3 and p90 <= 1.5 and p99 <= 5.0, (median, p90, p99)
 
 
-def test_maps_normals_in_cycles_as_measured(cycles_shirt):
-    """Cycles decodes the maps' per-triangle tangent frame in MikkTSpace's per-vertex one:
-    issue 23 asks for p99 <= 5 degrees; measured here median 0.17, p90 7.0, p99 27 (the
-    issue's 25.5). The MikkTSpace option is not written yet (issue 23 stays open); this
-    holds the measured values so that a change for the worse fails."""
-    from realclients.bakes import front_angles
+def _cycles_maps_angles(views):
+    """(degrees, mask, lower third) of Cycles' maps normals against usdwrinkle's, both raw
+    and with usdwrinkle's normals put through Cycles' reflection clamp."""
+    from realclients.bakes import cycles_reflection_clamp, front_angles
 
-    degrees, mask = front_angles(*cycles_shirt["maps"])
-    assert mask.sum() > 40000
-    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
-    assert median <= 0.4 and p90 <= 8.5 and p99 <= 30.0, (median, p90, p99)
+    (ours, ours_mask), theirs = views["maps"]
+    plain, plain_mask = views["plain"]
+    clamped = cycles_reflection_clamp(ours, plain, views["view"])
+    result = {}
+    for label, normals in (("raw", ours), ("clamped", clamped)):
+        degrees, mask = front_angles((normals, ours_mask & plain_mask), theirs)
+        lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
+        result[label] = (np.percentile(degrees[mask], [50, 90, 99]),
+                         np.percentile(degrees[lower], 99))
+    return result
+
+
+@pytest.mark.parametrize("frame,bounds", [
+    # (raw: median, p90, p99, elbow p99; clamped: p90, p99, elbow p99), measured + margin
+    ("triangle", (0.4, 8.5, 30.0, 32.0, 5.0, 29.0, 23.5)),
+    ("mikktspace", (0.4, 6.5, 27.0, 30.0, 4.5, 23.5, 19.0)),
+])
+def test_maps_normals_in_cycles_as_measured(cycles_shirt, frame, bounds):
+    """Cycles decodes the maps (Blender's USD importer, normal-map node), both tangent
+    frames, against usdwrinkle's N AOV; issue 23 asks for p99 <= 5 degrees at the elbow.
+    Measured over the shirt at 640 pixels (median, p90, p99; the lower third, the
+    elbow's, p99): triangle 0.17 / 7.0 / 27.1; 29.8; mikktspace 0.15 / 5.4 / 24.6; 27.6.
+
+    Most of what is left is not the frame: Cycles tilts any shading normal whose mirror
+    reflection of the view would fall below the surface back toward the geometric normal
+    (ensure_valid_specular_reflection), so normal-map wrinkles steeper than about 45
+    degrees show shallower in Cycles (13% of the shirt's pixels, the cuff's crests and
+    the elbow's pinch). With usdwrinkle's normals put through that clamp (our smooth
+    normal standing in for Cycles' flat one): triangle p90 4.2, p99 26.4, elbow 21.0;
+    mikktspace 3.6, 20.9, 16.3. This test holds the measured values; issue 23's 5
+    degrees is not met (the geometry layer meets it: the test above)."""
+    angles = _cycles_maps_angles(cycles_shirt[frame])
+    (median, p90, p99), elbow = angles["raw"]
+    assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \
+        elbow <= bounds[3], angles
+    (_, p90, p99), elbow = angles["clamped"]
+    assert p90 <= bounds[4] and p99 <= bounds[5] and elbow <= bounds[6], angles
+
+
+def test_mikktspace_matches_blenders_calc_tangents(realclient, tmp_path):
+    """usdwrinkle's vectorised MikkTSpace (maps/tangents.py) against Blender's
+    Mesh.calc_tangents on a noisy sleeve with a UV seam and a mirrored island: the same
+    tangents (Blender's custom normals are stored compressed, within 0.4 degrees) and the
+    same signs."""
+    from realclients import blender_tangents
+    from usdwrinkle.maps.tangents import mikktspace
+
+    rng = np.random.default_rng(3)
+    around, along = 24, 12
+    angle = np.arange(around) / around * 2 * np.pi
+    rows = np.linspace(0.0, 2.0, along + 1)
+    points = np.stack(np.broadcast_arrays(np.cos(angle)[None, :], np.sin(angle)[None, :],
+                                          rows[:, None]), -1).reshape(-1, 3)
+    points = points + rng.normal(0.0, 0.03, points.shape)
+    triangles, uv = [], []
+    for r in range(along):
+        for c in range(around):
+            quad = [(r, c), (r, c + 1), (r + 1, c + 1), (r + 1, c)]
+            quad_uv = [(cc / around, rr / along) for rr, cc in quad]
+            if r >= along // 2:   # the upper half mirrored in s
+                quad_uv = [(1.0 - s, t) for s, t in quad_uv]
+            for corners in ((0, 1, 2), (0, 2, 3)):
+                triangles.append([rr * around + cc % around
+                                  for rr, cc in (quad[k] for k in corners)])
+                uv += [quad_uv[k] for k in corners]
+    triangles, uv = np.array(triangles), np.array(uv, np.float32)
+    face = np.cross(points[triangles[:, 1]] - points[triangles[:, 0]],
+                    points[triangles[:, 2]] - points[triangles[:, 0]])
+    normals = np.zeros_like(points)
+    np.add.at(normals, triangles.reshape(-1), np.repeat(face, 3, axis=0))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    mesh, out = tmp_path / "mesh.npz", tmp_path / "tangents.npz"
+    np.savez(mesh, points=points.astype(np.float32), triangles=triangles,
+             normals=normals[triangles.reshape(-1)].astype(np.float32), uv=uv)
+    assert blender_tangents([{"mesh": str(mesh), "out": str(out)}]) == {str(out): "ok"}
+    blender = np.load(out)
+    # with the normals Blender used, so that its compression does not count
+    ours = mikktspace(points, triangles, blender["normal"], uv)
+    degrees = np.degrees(np.arccos(np.clip(np.sum(ours[:, :3] * blender["tangent"], 1),
+                                           -1, 1)))
+    assert np.percentile(degrees, 99) < 0.1 and degrees.max() < 0.5, degrees.max()
+    assert (ours[:, 3] == blender["sign"]).all() and (blender["sign"] < 0).any()
+    # and not a vacuous match: the per-triangle frame is far from Blender's
+    ours_triangle = mikktspace(points, triangles, blender["normal"], uv,
+                               (np.arange(3 * len(triangles)), ours[::3, 3] > 0))
+    apart = np.degrees(np.arccos(np.clip(np.sum(ours_triangle[:, :3] * blender["tangent"],
+                                                1), -1, 1)))
+    assert np.percentile(apart, 50) > 2.0

@@ -7,7 +7,7 @@ import time
 
 from ..errors import UsdWrinkleError
 from ..geometry.options import GeometryOptions
-from ..maps.options import MapOptions
+from ..maps.options import TANGENT_SPACES, MapOptions
 from .common import (
     Reporter,
     add_shot_args,
@@ -65,6 +65,12 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--uv", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in; "
                            f"default {MAP_DEFAULTS.uv}")
+    maps.add_argument("--tangent-space", choices=TANGENT_SPACES,
+                      help="the tangent frame the normal maps are written in: triangle (per "
+                           "triangle, as usdview's Storm and usdwrinkle decode them) or "
+                           "mikktspace (per vertex, as Blender's Cycles and EEVEE, Unreal, "
+                           "Substance and glTF viewers decode them); default "
+                           f"{MAP_DEFAULTS.tangent_space} (docs/method.md: tangent frames)")
     maps.add_argument("--map-displacement", action="store_true", default=None,
                       help="also bind the height map to UsdPreviewSurface's "
                            "inputs:displacement, for renderers that subdivide and displace "
@@ -102,7 +108,7 @@ def _given(args, flags: dict) -> dict:
 
 
 MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
-             "--map-padding": "padding", "--uv": "uv",
+             "--map-padding": "padding", "--uv": "uv", "--tangent-space": "tangent_space",
              "--map-displacement": "displacement"}
 GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
 

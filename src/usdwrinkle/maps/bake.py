@@ -28,6 +28,7 @@ from .files import (
 )
 from .options import MapOptions
 from .raster import MapRasterizer
+from .tangents import corner_groups, mikktspace
 
 #: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
 MIN_MAP_SIZE = 16
@@ -64,6 +65,8 @@ class MeshMaps:
     stem: str
     corner_uv: np.ndarray
     tiles: list
+    #: MikkTSpace's corner groups (maps/tangents.corner_groups), made on the first frame
+    groups: tuple | None = None
 
     @property
     def udim(self) -> bool:
@@ -150,14 +153,28 @@ class MapBake:
                 name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
                 self.files[path][kind].append(
                     (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            tangents = self._tangents(plan, res) \
+                if self.options.tangent_space == "mikktspace" else None
             for tile in plan.tiles:
                 pixels = self._rasterizer.render(res, plan.corner_uv, tile,
-                                                 self.options.padding)
+                                                 self.options.padding, tangents)
                 for kind in self.options.kinds:
                     name = tile_file_name(
                         map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
                     self._writer.submit(frame, self._staging.path(name),
                                         (kind, getattr(pixels, kind), self._staging.final(name)))
+
+    @staticmethod
+    def _tangents(plan: MeshMaps, res) -> np.ndarray:
+        """This frame's MikkTSpace tangents per triangle corner, from the posed points
+        and the shading normals the passes made (maps/tangents.py)."""
+        corner_entry = res.normal_plan.corner_entry.reshape(-1)
+        triangles = res.record.topology.triangles
+        if plan.groups is None:
+            plan.groups = corner_groups(triangles, corner_entry, plan.corner_uv)
+        points = res.posed_points.read()[:, :3]
+        normals = res.read_shading_normals()[corner_entry]
+        return mikktspace(points, triangles, normals, plan.corner_uv, plan.groups)
 
     def _check_overlap(self, plan: MeshMaps, res) -> None:
         self._checked_overlap.add(plan.path)

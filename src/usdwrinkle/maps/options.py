@@ -5,6 +5,9 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
+#: the --tangent-space choices
+TANGENT_SPACES = ("triangle", "mikktspace")
+
 
 @dataclass(frozen=True)
 class MapOptions:
@@ -22,7 +25,8 @@ class MapOptions:
     displacement: bool = False
     #: the tangent frame the normal maps are expressed in, recorded in the layer's
     #: metadata: "triangle" (per triangle, from dP/ds, as Storm and usdwrinkle decode
-    #: them). MikkTSpace (per vertex, as Blender/Cycles decode them) is not written yet.
+    #: them) or "mikktspace" (per vertex, interpolated, as Blender's Cycles and EEVEE,
+    #: Unreal, Substance and glTF viewers decode them); docs/method.md has the trade-off
     tangent_space: str = "triangle"
 
     def folder_for(self, layer_path: str) -> str:

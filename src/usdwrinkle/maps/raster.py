@@ -80,6 +80,8 @@ class MapRasterizer:
         self.targets = [ctx.texture(shape, 4, dtype="f4") for _ in range(2)]  # normal, wrinkle
         self.framebuffer = ctx.framebuffer(color_attachments=self.targets)
         self.uv_tables: dict[str, Table] = {}
+        #: MikkTSpace tangents per triangle corner, by mesh path (written each frame)
+        self.tangent_tables: dict[str, Table] = {}
         #: (mesh path, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -95,7 +97,19 @@ class MapRasterizer:
             self.uv_tables[res.record.path] = table
         return table
 
-    def _draw(self, res: MeshResources, uv: Table, tile: tuple[int, int], count: bool) -> None:
+    def tangent_table(self, res: MeshResources, tangents: np.ndarray) -> Table:
+        """This frame's MikkTSpace tangents ([3t + c]: xyz, sign) on the GPU."""
+        table = self.tangent_tables.get(res.record.path)
+        if table is None or table.count != 3 * res.num_triangles:
+            if table is not None:
+                table.release()
+            table = Table(self.ctx, 3 * res.num_triangles, 4, path=res.record.path)
+            self.tangent_tables[res.record.path] = table
+        table.write(np.asarray(tangents, np.float32).reshape(-1, 4))
+        return table
+
+    def _draw(self, res: MeshResources, uv: Table, tile: tuple[int, int], count: bool,
+              tangents: Table | None = None) -> None:
         import moderngl
 
         fbo = self.framebuffer
@@ -108,7 +122,8 @@ class MapRasterizer:
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         else:
             self.ctx.disable(moderngl.BLEND)
-        variant = self.variants(TWO_SYSTEMS=res.systems > 1)
+        variant = self.variants(TWO_SYSTEMS=res.systems > 1,
+                                MIKKTSPACE=tangents is not None and not count)
         set_uniforms(variant.program, {
             "u_tile": (float(tile[0]), float(tile[1])),
             "u_count": int(count),
@@ -119,6 +134,8 @@ class MapRasterizer:
         bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width,
                            "MAPS_SHADING_NORMALS": res.shading_normals,
                            "MAPS_NORMAL_CORNERS": res.normal_corners})
+        if tangents is not None and not count:
+            bind(units, reads={"MAPS_TANGENTS": tangents})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
@@ -135,11 +152,14 @@ class MapRasterizer:
         return float(np.count_nonzero(counts > 1.5) / covered) if covered else 0.0
 
     def render(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
-               padding: int = 8) -> MapPixels:
-        """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``."""
+               padding: int = 8, tangents: np.ndarray | None = None) -> MapPixels:
+        """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``; the
+        normal map in MikkTSpace when this frame's ``tangents`` are given
+        (maps/tangents.py), else in the per-triangle frame."""
         uv = self.uv_table(res, corner_uv)
         if res.num_triangles:
-            self._draw(res, uv, tile, count=False)
+            table = self.tangent_table(res, tangents) if tangents is not None else None
+            self._draw(res, uv, tile, count=False, tangents=table)
         else:
             self.framebuffer.clear(0.0, 0.0, 0.0, 0.0)
         normal = self._read(self.targets[0])
@@ -163,9 +183,10 @@ class MapRasterizer:
         return np.frombuffer(texture.read(), np.float32).reshape(self.size, self.size, 4).copy()
 
     def release(self) -> None:
-        for table in self.uv_tables.values():
+        for table in [*self.uv_tables.values(), *self.tangent_tables.values()]:
             table.release()
         self.uv_tables.clear()
+        self.tangent_tables.clear()
         self.framebuffer.release()
         for tex in self.targets:
             tex.release()
