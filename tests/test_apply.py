@@ -135,6 +135,13 @@ def test_api_refuses_bad_values_before_writing(tmp_path):
         api.CreateHeightProfileAttr([1.0])
     with pytest.raises(UsdWrinkleError, match="Mesh"):
         WrinkleAPI.Apply(stage.GetPrimAtPath("/World"))
+    # the reader's bound, not only >= 0 (issue 25: the API wrote what render refused)
+    from usdwrinkle.limits import MAX_RELAX_ITERATIONS
+
+    for bad in (-1, MAX_RELAX_ITERATIONS + 1):
+        with pytest.raises(UsdWrinkleError, match="relax iterations must be in 0.."):
+            api.CreateRelaxIterationsAttr(bad)
+    assert not api.GetRelaxIterationsAttr().HasAuthoredValue()
     assert not api.GetQPrimvar().HasAuthoredValue()
 
 

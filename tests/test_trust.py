@@ -442,3 +442,33 @@ def test_a_farm_chunk_without_baked_fields_says_it_computes_them(gl_context, tmp
                  "--width", "64", "--quiet"]) == 0
     assert "no baked wave fields" not in capsys.readouterr().err
     os.remove(layer)
+
+
+def test_a_broken_installation_is_one_error_not_a_crash(tmp_path):
+    """Issue 25: a shader that is missing (a broken install) or that the GL driver rejects
+    raised ShaderError, which was not a UsdWrinkleError, so the run ended with exit 3 and
+    'please report'. It is one line naming the shader file, exit 2."""
+    script = ("import pathlib, sys\n"
+              "import usdwrinkle.render.shaders as shaders\n"
+              f"shaders.resource_dir = lambda name: pathlib.Path({str(tmp_path)!r})\n"
+              "from usdwrinkle.cli.main import main\n"
+              "sys.exit(main(sys.argv[1:]))\n")
+    result = subprocess.run([sys.executable, "-c", script, "render", SHIRT,
+                             str(tmp_path / "f.png"), "--frames", "1", "--width", "64"],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 2, result.stderr
+    line = one_error(result.stderr)
+    assert "shader" in line and ".glsl:0: shader file not found" in line, line
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_a_shader_the_driver_rejects_names_its_file_and_line(gl_context, tmp_path):
+    from usdwrinkle.errors import ShaderError, UsdWrinkleError
+    from usdwrinkle.render.shaders import compute_shader
+
+    (tmp_path / "broken.glsl").write_text(
+        "#version 430\nlayout(local_size_x = 1) in;\nvoid main() {\n  undefined_call();\n}\n")
+    with pytest.raises(ShaderError) as caught:
+        compute_shader(gl_context, "broken.glsl", {}, root=tmp_path)
+    assert isinstance(caught.value, UsdWrinkleError)
+    assert caught.value.file == "broken.glsl" and caught.value.line == 4, caught.value

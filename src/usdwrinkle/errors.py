@@ -97,8 +97,9 @@ class SchemaRegistrationError(UsdWrinkleError):
     """The WrinkleAPI plugin was registered after USD built its schema registry."""
 
 
-class ShaderError(Exception):
-    """A shader failed to load, preprocess or compile.
+class ShaderError(UsdWrinkleError):
+    """A shader failed to load, preprocess or compile: a broken installation or a GL
+    driver that rejects it, reported as one line (exit 2), not as a crash.
 
     Carries the file and line, as moderngl-window's loader does, so that a
     message from the GLSL compiler points at the file a developer edits.
@@ -108,4 +109,6 @@ class ShaderError(Exception):
         self.file = file
         self.line = line
         self.message = message
-        super().__init__(f"{file}:{line}: {message}")
+        super().__init__(f"shader {file}:{line}: {message}; the installation is incomplete "
+                         "or the GL driver rejects the shader (usdwrinkle info names the "
+                         "driver; reinstall usdwrinkle, or report it with that line)")

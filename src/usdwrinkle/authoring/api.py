@@ -22,6 +22,7 @@ from ..validation import (
     check_biaxial,
     check_profile,
     check_q,
+    check_relax_iterations,
     check_tension,
     check_tension_threshold,
     check_width,
@@ -184,13 +185,10 @@ class WrinkleAPI:
         return self._attr(schema.RELAX_ITERATIONS)
 
     def CreateRelaxIterationsAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
-        def check(value):
-            if value < 0:
-                raise UsdWrinkleError("relax iterations must be >= 0", self._path(),
-                                      schema.RELAX_ITERATIONS)
-            return []
+        # the reader's own check (validation.py), so that what is authored is what renders
         return self._create(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int,
-                            None if default_value is None else int(default_value), check)
+                            None if default_value is None else int(default_value),
+                            lambda v: check_relax_iterations(v, self._path()))
 
     # -- numpy conveniences -----------------------------------------------------------
     def get_q(self, time=Usd.TimeCode.Default()) -> np.ndarray:  # noqa: B008
