@@ -41,7 +41,7 @@ uniform ivec4 u_rect;
 uniform int u_grid_width;
 // OUTPUT_AOVS: first word of color, wrinkle.height, wrinkle.amplitude, normal, depth;
 // OUTPUT_EXR: first word of each channel's plane, in the order above
-uniform int u_offset[10];
+uniform int u_offset[OFFSET_SLOTS];
 
 const float INF = uintBitsToFloat(0x7f800000u);
 
@@ -162,7 +162,7 @@ void main() {
     Pixel a = resolve(pixel_of(first));
     Pixel b = resolve(pixel_of(second ? first + 1 : first));
     uint bad = 0u;
-    for (int c = 0; c < 10; ++c) {
+    for (int c = 0; c < OFFSET_SLOTS; ++c) {
         vec2 v = vec2(channel(a, c), channel(b, c));
         if (is_half(c)) {
             uint word = packHalf2x16(v);

@@ -15,7 +15,7 @@ from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
-from .scene.changes import DirtyBits
+from .scene.dirty import DirtyBits
 from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate
 

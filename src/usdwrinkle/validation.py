@@ -21,7 +21,8 @@ from .limits import (
     MAX_RELAX_ITERATIONS,
     MAX_WORLD_COORDINATE,
 )
-from .scene.values import (
+from .timecode import format_frame
+from .values import (
     FLOAT3_TYPES,
     INT_TYPES,
     finite_in_float32,
@@ -31,7 +32,6 @@ from .scene.values import (
     static_value,
     type_problem,
 )
-from .timecode import format_frame
 
 VALIDATOR_NAME = "usdWrinkleValidators:WrinkleAPIChecker"
 VALIDATOR_KEYWORD = "UsdWrinkleValidators"

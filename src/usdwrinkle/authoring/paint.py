@@ -80,8 +80,8 @@ class MeshSurface:
 
 def read_image(path: str) -> np.ndarray:
     """(h, w, 4) float32 in [0, 1] as stored (no colour conversion: data, not colour)."""
+    from ..imagefiles import read_float_image
     from ..limits import MAX_TEXTURE_SIZE
-    from ..outputs.images import read_float_image
 
     try:
         pixels, _ = read_float_image(path, MAX_TEXTURE_SIZE)

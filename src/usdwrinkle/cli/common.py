@@ -41,22 +41,7 @@ def check_stage_args(args) -> None:
         check_time_code(args.history_start, "--history-start")
 
 
-def refuse_overwriting_inputs(stage_path: str, outputs: list[str], stage=None) -> None:
-    """Never write over the input stage or anything it reads: its layers (also those of
-    unselected variants, and sublayers that do not exist yet), packages and textures,
-    compared by real path and by inode."""
-    from ..scene.inputs import StageInputs
-    from ..scene.stage import stage_inputs
-
-    if stage is not None:
-        inputs = stage_inputs(stage)
-    else:
-        inputs = StageInputs()
-        inputs.add_file(stage_path)
-    for out in outputs:
-        if inputs.protects(out):
-            raise UsdWrinkleError(f"output '{out}' is an input of the stage: a layer, texture "
-                                  "or other file it reads (choose another output path)")
+from ..scene.stage import refuse_overwriting_inputs  # noqa: E402,F401  (the CLI's name)
 
 
 class Reporter:

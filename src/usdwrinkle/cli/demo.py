@@ -1,6 +1,7 @@
 """usdwrinkle demo [OUTDIR]: render the bundled shirt sample to PNGs."""
 from __future__ import annotations
 
+import argparse
 import os
 
 from ..errors import UsdWrinkleError
@@ -25,10 +26,11 @@ def run(args) -> int:
                               "not a folder")
     # the render subcommand's own parser fills in every option's default, so the demo
     # stays in step with render's options
-    from .main import build_parser
+    parser = argparse.ArgumentParser(prog="usdwrinkle")
+    render.add_parser(parser.add_subparsers(dest="command"))
     argv = ["render", stage, os.path.join(args.outdir, "shirt.####.png"),
             "--width", str(args.width)] + (["--quiet"] if args.quiet else [])
-    ns = build_parser().parse_args(argv)
+    ns = parser.parse_args(argv)
     code = render.run(ns)
     if code == 0 and not args.quiet:
         print(f"usdwrinkle: demo frames are in {os.path.abspath(args.outdir)}")

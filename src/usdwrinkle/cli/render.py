@@ -11,6 +11,7 @@ from .common import (
     Reporter,
     add_shot_args,
     check_stage_args,
+    engine_options,
     refuse_overwriting_inputs,
     start_engine,
 )
@@ -117,6 +118,30 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
     return text
 
 
+def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> int:
+    """--dask: the farm's typed request from the options, and the summary of its result."""
+    from ..farm.client import FarmRender, render_on_dask
+    from ..shot import ImageOptions
+
+    job = FarmRender(
+        stage_path=args.stage, output=args.output, frames=tuple(frames),
+        outputs=tuple(outputs),
+        engine=engine_options(args, camera=args.camera,
+                              use_baked=not (args.recompute or args.no_wrinkles)),
+        image=ImageOptions(args.width, args.height, args.samples, not args.no_wrinkles,
+                           args.write_threads, args.exr_compression, args.exr_half),
+        frame_spec=args.frames, recompute=args.recompute, skip_existing=args.skip_existing,
+        scheduler=args.dask, workers=args.workers, chunk=args.chunk)
+    result = render_on_dask(job, stage, reporter)
+    if not reporter.quiet:
+        print(summary(result.written, result.width, result.height, args.output, frames,
+                      result.elapsed, result.baked,
+                      f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
+                      f"{result.workers} Dask worker(s), chunks of {result.chunk})"),
+              flush=True)
+    return 0
+
+
 def write_stats(path: str, stats: dict) -> None:
     """--stats: the timings as JSON, written atomically."""
     import json
@@ -147,8 +172,8 @@ def _warn_unbaked(engine, reporter, args) -> None:
 
 
 def run(args) -> int:
+    from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
-    from ..outputs.images import is_complete_image
     from ..scene.stage import inherited_range_note, open_stage, stage_frames
     from ..shot import ImageOptions, render_frames
 
@@ -169,8 +194,7 @@ def run(args) -> int:
     if args.dask is not None:
         if args.stats:
             reporter.warn("--stats applies to a serial render; ignored with --dask")
-        from ..farm.client import render_on_dask
-        return render_on_dask(args, reporter, stage, frames, outputs)
+        return _render_on_dask(args, reporter, stage, frames, outputs)
     if args.chunk is not None or args.workers is not None:
         reporter.warn("--chunk and --workers apply to --dask only; ignored")
     # --no-wrinkles draws no waves, so it needs no baked frames either

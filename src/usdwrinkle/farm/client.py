@@ -19,6 +19,7 @@ Flow:
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import math
 import os
@@ -26,10 +27,11 @@ import shutil
 import tempfile
 import time
 import uuid
+from dataclasses import dataclass
 
 from ..errors import STDERR, UsdWrinkleError
 from ..outputs.atomic import remove_temporaries
-from ..shot import ImageOptions, bake_layer, frame_spec_text
+from ..shot import EngineOptions, ImageOptions, bake_layer, frame_spec_text
 from .worker import file_identity, render_chunk
 
 #: how often Dask reruns a chunk whose worker died
@@ -110,76 +112,113 @@ def _needs_bake(scene, frames: list[float], wrinkles: bool, recompute: bool) -> 
     return False
 
 
-def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> int:
-    """Run ``usdwrinkle render --dask``; returns the exit code."""
-    from ..cli.common import engine_options, refuse_overwriting_inputs
-    from ..cli.render import summary
+@dataclass(frozen=True)
+class FarmRender:
+    """What ``usdwrinkle render --dask`` asks for; cli/render.py builds it from its
+    options (Python callers build it themselves)."""
+
+    #: the stage as given, and the output pattern (the bake goes beside the outputs)
+    stage_path: str
+    output: str
+    frames: tuple
+    #: the file of each frame
+    outputs: tuple
+    #: the stage's engine options (use_baked: whether its own baked fields may be used)
+    engine: EngineOptions
+    #: width and height as asked (None: from the camera's aspect, as a serial render)
+    image: ImageOptions
+    #: the frames as the user wrote them (recorded in the bake's layer), or None
+    frame_spec: str | None = None
+    recompute: bool = False
+    skip_existing: bool = False
+    #: "local" (a LocalCluster) or a scheduler's address
+    scheduler: str = "local"
+    workers: int | None = None
+    chunk: int | None = None
+
+
+@dataclass(frozen=True)
+class FarmResult:
+    """What a farm render did: frames written, meshes whose wave fields were baked, the
+    image size, the wall time, and how the frames were spread."""
+
+    written: int
+    baked: list
+    width: int
+    height: int
+    elapsed: float
+    workers: int
+    chunk: int
+
+
+def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
+    """Run a farm render. ``stage``: the opened Usd.Stage of ``job.stage_path``;
+    ``reporter``: warn(message), progress(items, desc) and quiet (cli/common.Reporter)."""
     from ..engine import image_size
     from ..scene.camera import find_camera
-    from ..scene.stage import StageSceneDelegate
+    from ..scene.stage import StageSceneDelegate, refuse_overwriting_inputs
 
     distributed = _import_dask()
-    wrinkles = not args.no_wrinkles
+    frames, outputs = list(job.frames), list(job.outputs)
+    wrinkles = job.image.wrinkles
     # the checks of a serial render, once, here (no GL context)
-    scene = StageSceneDelegate(stage, all_meshes=args.all_meshes,
-                               relax_iterations=args.relax_iterations, warn=reporter.warn,
-                               use_baked=wrinkles and not args.recompute)
-    find_camera(stage, args.camera)
-    needs_bake = _needs_bake(scene, frames, wrinkles, args.recompute)
-    layer = bake_path(args.output, args.stage) if needs_bake else None
+    scene = StageSceneDelegate(stage, all_meshes=job.engine.all_meshes,
+                               relax_iterations=job.engine.relax_iterations,
+                               warn=reporter.warn, use_baked=wrinkles and not job.recompute)
+    find_camera(stage, job.engine.camera)
+    needs_bake = _needs_bake(scene, frames, wrinkles, job.recompute)
+    layer = bake_path(job.output, job.stage_path) if needs_bake else None
     if layer is not None:
-        refuse_overwriting_inputs(args.stage, [layer], stage)
+        refuse_overwriting_inputs(job.stage_path, [layer], stage)
     if wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
         reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
                       "(use --all-meshes to wrinkle every mesh)")
-    width, height = image_size(scene, args.camera, args.width, args.height, frames[0])
-    image = ImageOptions(width, height, args.samples, wrinkles, args.write_threads,
-                         args.exr_compression, args.exr_half)
+    width, height = image_size(scene, job.engine.camera, job.image.width, job.image.height,
+                               frames[0])
+    image = dataclasses.replace(job.image, width=width, height=height)
 
     started = time.perf_counter()
     client = cluster = None
     futures = []
     try:
-        client, cluster, workers = _connect(distributed, args.dask, args.workers)
-        if not args.quiet:
-            where = "a local cluster" if cluster is not None else args.dask
+        client, cluster, workers = _connect(distributed, job.scheduler, job.workers)
+        if not reporter.quiet:
+            where = "a local cluster" if cluster is not None else job.scheduler
             dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
                 else "none (pip install bokeh for Dask's dashboard)"
             print(f"usdwrinkle: rendering on {where}, {workers} worker(s); dashboard: "
                   f"{dashboard}", flush=True)
-        render_stage = args.stage
+        render_stage = job.stage_path
         if layer is not None:
             bake_started = time.perf_counter()
-            engine = engine_options(args, use_baked=False).create(stage, reporter.warn)
+            engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
+                stage, reporter.warn)
             engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
             try:
-                bake_layer(engine, args.stage, layer, frames,
-                           args.frames or frame_spec_text(frames),
+                bake_layer(engine, job.stage_path, layer, frames,
+                           job.frame_spec or frame_spec_text(frames),
                            warn=reporter.warn,
                            progress=lambda items: reporter.progress(items, "bake"))
             finally:
                 engine.release()
-            if not args.quiet:
+            if not reporter.quiet:
                 print(f"usdwrinkle: baked wave fields to {layer} in "
                       f"{time.perf_counter() - bake_started:.1f} s", flush=True)
             render_stage = layer
-        options = engine_options(args, stage_path=render_stage, camera=args.camera,
-                                 use_baked=wrinkles)
-        chunk = args.chunk or default_chunk(len(frames), workers)
+        options = dataclasses.replace(job.engine, stage=os.path.abspath(render_stage),
+                                      use_baked=wrinkles)
+        chunk = job.chunk or default_chunk(len(frames), workers)
         before = [file_identity(p) for p in outputs]
         run_id = uuid.uuid4().hex[:8]
         for index, start in enumerate(range(0, len(frames), chunk)):
             part = slice(start, start + chunk)
             futures.append(client.submit(
                 render_chunk, options, image, frames[part], outputs[part], before[part],
-                args.skip_existing, retries=RETRIES, pure=False,
+                job.skip_existing, retries=RETRIES, pure=False,
                 key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
         written, baked = _gather(distributed, futures, len(frames), chunk, reporter)
-        if not args.quiet:
-            elapsed = time.perf_counter() - started
-            print(summary(written, width, height, args.output, frames, elapsed, baked,
-                          f" ({len(frames) / elapsed:.1f} fps over the whole run, "
-                          f"{workers} Dask worker(s), chunks of {chunk})"), flush=True)
+        return FarmResult(written, baked, width, height, time.perf_counter() - started,
+                          workers, chunk)
     finally:
         for future in futures:
             future.cancel()
@@ -192,7 +231,6 @@ def render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str
             shutil.rmtree(cluster.usdwrinkle_scratch, ignore_errors=True)
         for path in outputs:  # killed workers never reach atomic_path's cleanup
             remove_temporaries(path)
-    return 0
 
 
 def _gather(distributed, futures, total: int, chunk: int, reporter) -> tuple[int, list[str]]:

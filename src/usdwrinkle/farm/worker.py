@@ -16,7 +16,7 @@ import os
 import threading
 
 from ..errors import UsdWrinkleError
-from ..outputs.images import is_complete_image
+from ..imagefiles import is_complete_image
 from ..shot import EngineOptions, ImageOptions, render_frames
 
 _lock = threading.Lock()

@@ -296,7 +296,7 @@ def export_layer(layer: Sdf.Layer, tmp: str, output_path: str, ext: str | None =
     reason, not the exception text USD repeats for every failed buffer."""
     from pxr import Tf
 
-    from ..scene.diagnostics import usd_diagnostics, usd_error_text
+    from ..diagnostics import usd_diagnostics, usd_error_text
 
     ext = ext or os.path.splitext(output_path)[1].lower()
     args = {"format": "usdc"} if ext == ".usd" else {}

@@ -8,6 +8,7 @@ no stage needs more than 8 image units or 16 texture units (the GL 4.5 minimums)
 """
 from __future__ import annotations
 
+from ..aovs import OFFSET_SLOTS
 from ..contract import SHADER_DEFINES
 
 #: Work group size of every compute pass.
@@ -59,5 +60,7 @@ GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
             "GEOMETRY_POINTS": 0, "GEOMETRY_NORMALS": 1}
 #: the resolve pass (render/resolve.py): the three colour attachments (texture units) and
 #: the output words and the count of non-finite values (storage buffers)
+#: the resolve pass's sizes from the image contract (aovs.py)
+RESOLVE_SHAPE = {"OFFSET_SLOTS": OFFSET_SLOTS}
 RESOLVE = {"RESOLVE_COLOR": 0, "RESOLVE_WRINKLE": 1, "RESOLVE_NORMAL": 2,
            "RESOLVE_OUT": 0, "RESOLVE_BAD": 1}

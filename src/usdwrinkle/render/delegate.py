@@ -11,7 +11,7 @@ import time
 from dataclasses import dataclass, field
 
 from ..contract import COLD_START_FACTOR
-from ..scene.changes import DirtyBits
+from ..scene.dirty import DirtyBits
 from .bounds import eye_bound, screen_rect
 from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer

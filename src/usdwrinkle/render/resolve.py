@@ -10,77 +10,20 @@ frame comes back as the planes its file stores, a PNG frame as its 8-bit codes.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..aovs import (  # noqa: F401  (re-exported: the pass's own names for its tables)
+    AOV_BLOCKS,
+    AOVS,
+    EXR_CHANNELS,
+    HALF_CHANNELS,
+    OFFSET_SLOTS,
+    ImageLayout,
+    ResolvedImage,
+)
 from . import bindings
 from .shaders import Variants, compute_shader
-
-#: AOV name -> (attachment, first channel, channel names in image files)
-AOVS = {
-    "color": (0, 0, ("R", "G", "B", "A")),
-    "wrinkle.height": (1, 0, ("wrinkle.height",)),
-    "wrinkle.amplitude": (1, 1, ("wrinkle.amplitude",)),
-    "normal": (2, 0, ("N.X", "N.Y", "N.Z")),
-    "depth": (1, 2, ("Z",)),
-}
-#: the order of the AOV blocks of the OUTPUT_AOVS layout (u_offset's order)
-AOV_BLOCKS = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
-#: an EXR frame's channels, one plane each, in the shader's plane order
-EXR_CHANNELS = ("R", "G", "B", "A", "wrinkle.height", "wrinkle.amplitude", "N.X", "N.Y", "N.Z",
-                "Z")
-#: the channels that ``half`` stores as half float: colour and normals
-HALF_CHANNELS = ("R", "G", "B", "A", "N.X", "N.Y", "N.Z")
-
-
-@dataclass(frozen=True)
-class ImageLayout:
-    """What a frame is read back as.
-
-    ``kind``: "aovs" (float AOVs, for Framebuffer.read), "exr" (one plane per EXR
-    channel, colour and normals as half float with ``half``) or "8bit" (RGBA sRGB codes,
-    straight alpha; with ``over_black`` the colour over black, for JPEG).
-    ``aovs``: the AOVs an "aovs" layout holds.
-    """
-
-    kind: str
-    aovs: tuple = tuple(AOVS)
-    half: bool = False
-    over_black: bool = False
-
-    @property
-    def attachments(self) -> frozenset:
-        if self.kind == "exr":
-            return frozenset((0, 1, 2))
-        if self.kind == "8bit":
-            return frozenset((0,))
-        return frozenset(AOVS[name][0] for name in self.aovs) | {0}
-
-
-@dataclass
-class ResolvedImage:
-    """One frame as a file stores it: ``planes`` maps an EXR channel name to its
-    (height, width) plane (float16 or float32), or "RGBA" to the (height, width, 4) uint8
-    codes of an 8-bit image. ``bad``: how many written values are NaN or infinite (depth:
-    NaN); the writer refuses such a frame. Row 0 is the top of the image."""
-
-    layout: ImageLayout
-    width: int
-    height: int
-    planes: dict
-    bad: int
-    #: hands the planes' memory back to the pass that made them (see :meth:`release`)
-    _recycle: object = field(default=None, repr=False, compare=False)
-
-    def release(self) -> None:
-        """Say that nobody reads these planes any more: their memory may then hold a
-        later frame. Only the writer calls it, after the file is written; an image that
-        is never released keeps its own memory (nothing else ever writes into it)."""
-        recycle, self._recycle = self._recycle, None
-        self.planes = {}
-        if recycle is not None:
-            recycle()
 
 
 def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
@@ -102,7 +45,7 @@ def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
     else:
         views.append(("RGBA", 0, np.uint8, 4))
         word = n
-    offsets += [0] * (10 - len(offsets))
+    offsets += [0] * (OFFSET_SLOTS - len(offsets))
     return offsets, word, views
 
 
@@ -162,7 +105,7 @@ class ResolvePass:
 
     def __init__(self, ctx):
         self.ctx = ctx
-        self.defines = {**bindings.COMMON, **bindings.RESOLVE}
+        self.defines = {**bindings.COMMON, **bindings.RESOLVE, **bindings.RESOLVE_SHAPE}
         #: sample count -> the shader's variants (SAMPLES is a value, not a switch)
         self.variants: dict[int, Variants] = {}
         self.bad = ctx.buffer(reserve=4)

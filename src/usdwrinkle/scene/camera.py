@@ -12,8 +12,8 @@ import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdUtils
 
 from ..errors import UsdWrinkleError
+from ..values import finite_in_float32, frame_of
 from .records import CameraRecord
-from .values import finite_in_float32, frame_of
 
 
 def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:

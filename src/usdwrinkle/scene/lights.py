@@ -28,8 +28,8 @@ import numpy as np
 from pxr import Usd, UsdGeom, UsdLux
 
 from ..errors import UsdWrinkleError
+from ..values import finite_in_float32, frame_of
 from .records import LightRecord
-from .values import finite_in_float32, frame_of
 
 #: radiance beyond this is refused: the draw sums lights in float32 (max 3.4e38)
 MAX_RADIANCE = 1e30

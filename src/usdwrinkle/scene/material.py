@@ -19,10 +19,10 @@ from ..colour import srgb_decode
 from ..contract import UDIM_TILES
 from ..limits import MAX_TEXTURE_SIZE
 from ..schema import MAP_INPUTS
+from ..values import static_flattened, static_value
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
 from .topology import Topology
-from .values import static_flattened, static_value
 
 DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
 #: Storm's displayColor where a mesh authors none (measured: 0.5 grey)
@@ -42,7 +42,7 @@ def load_texture(resolved_path: str, color_space: str = "auto") -> TextureImage:
     no decode on the CPU (CesiumMan's 2048² texture: 0.29 s of start-up before). Raises
     OSError when the asset cannot be read or decoded.
     """
-    from ..outputs.images import read_float_image
+    from ..imagefiles import read_float_image
 
     require_regular_file(package_file(resolved_path), "texture")
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))

@@ -23,8 +23,8 @@ import numpy as np
 from pxr import UsdGeom
 
 from ..errors import UsdWrinkleError
+from ..values import finite_in_float32, static_flattened, static_value
 from .topology import Topology
-from .values import finite_in_float32, static_flattened, static_value
 
 SOURCES = ("smooth", "faceted", "authored")
 

@@ -7,9 +7,9 @@ from pxr import Usd, UsdGeom
 from .. import schema
 from ..profiles import cosine_profile, derive_gradient
 from ..validation import parameter_findings, refuse
+from ..values import static_flattened, static_value
 from .records import WrinkleParams
 from .topology import Topology, mean_edge_length
-from .values import static_flattened, static_value
 
 
 def _get(prim: Usd.Prim, name: str):

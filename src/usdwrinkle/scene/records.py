@@ -261,6 +261,10 @@ class MeshFrame:
     baked: object | None = None                 # scene.baked.BakedFields at this frame
     normal_map: NormalMapRecord | None = None   # this frame's, when its file is time-sampled
     normals: np.ndarray | None = None           # (K, 3) authored normals, when time-sampled
+    #: DQS: the joints' transforms split as UsdSkel does (scene/skel.dual_quaternions:
+    #: real (J, 4) xyzw, dual (J, 4) xyzw, scale (J, 3, 3), any joint scales), made by the
+    #: scene so that the GPU side needs no Gf
+    dual_quaternions: tuple | None = None
 
 
 @dataclass(frozen=True)

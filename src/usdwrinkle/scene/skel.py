@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
+from ..diagnostics import usd_diagnostics
 from ..errors import UsdWrinkleError
 from ..limits import MAX_WORLD_COORDINATE
-from .diagnostics import usd_diagnostics
+from ..values import finite_in_float32
 from .records import SkinData
-from .values import finite_in_float32
 
 
 def gf_matrices(xforms) -> np.ndarray:

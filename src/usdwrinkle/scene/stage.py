@@ -15,27 +15,28 @@ import numpy as np
 from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from .. import schema
+from ..diagnostics import usd_diagnostics, usd_error_text
 from ..errors import UsdWrinkleError, print_warning
 from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE, MAX_WORLD_COORDINATE
-from . import camera as camera_mod
-from .baked import BakedSource, find_baked
-from .changes import ChangeTracker, DirtyBits, classify
-from .diagnostics import usd_diagnostics, usd_error_text
-from .inputs import StageInputs, package_file, scan_inputs
-from .lights import default_lights, read_lights
-from .material import read_material, read_normal_map
-from .normals import plan_normals, sample_normals
-from .params import read_params
-from .records import FrameRecord, MeshFrame, MeshRecord
-from .skel import SkelBindings, check_blend_weights, sample_skin, skin_data
-from .topology import Topology, build_topology, vertex_normals
-from .values import (
+from ..values import (
     finite_in_float32,
     frame_of,
     require_mesh_array,
     static_flattened,
     static_value,
 )
+from . import camera as camera_mod
+from .baked import BakedSource, find_baked
+from .changes import ChangeTracker
+from .dirty import DirtyBits, classify
+from .inputs import StageInputs, package_file, scan_inputs
+from .lights import default_lights, read_lights
+from .material import read_material, read_normal_map
+from .normals import plan_normals, sample_normals
+from .params import read_params
+from .records import FrameRecord, MeshFrame, MeshRecord
+from .skel import SkelBindings, check_blend_weights, dual_quaternions, sample_skin, skin_data
+from .topology import Topology, build_topology, vertex_normals
 
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
 #: prims whose edits change the skinning of the meshes bound to them
@@ -457,8 +458,10 @@ class StageSceneDelegate:
             check_blend_weights(path, record.skin, weights, frame, record.extent)
             check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
                             record.extent)
+            dqs = dual_quaternions(joints) if record.skin.method == "dualQuaternion" else None
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
-                             active, baked, self._frame_normal_map(record, prim, time))
+                             active, baked, self._frame_normal_map(record, prim, time),
+                             dual_quaternions=dqs)
         normals = sample_normals(prim, record.normals, time, frame) \
             if not time.IsDefault() else None
         points = None
@@ -556,4 +559,19 @@ class StageSceneDelegate:
         return FrameRecord(frame, cam, tuple(lights), meshes)
 
 
-__all__ = ["StageSceneDelegate", "open_stage"]
+def refuse_overwriting_inputs(stage_path: str, outputs: list[str], stage=None) -> None:
+    """Never write over the input stage or anything it reads: its layers (also those of
+    unselected variants, and sublayers that do not exist yet), packages and textures,
+    compared by real path and by inode."""
+    if stage is not None:
+        inputs = stage_inputs(stage)
+    else:
+        inputs = StageInputs()
+        inputs.add_file(stage_path)
+    for out in outputs:
+        if inputs.protects(out):
+            raise UsdWrinkleError(f"output '{out}' is an input of the stage: a layer, texture "
+                                  "or other file it reads (choose another output path)")
+
+
+__all__ = ["StageSceneDelegate", "open_stage", "refuse_overwriting_inputs"]

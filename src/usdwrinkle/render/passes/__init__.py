@@ -54,3 +54,16 @@ def gl_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
     ``M^T * v`` in GLSL equals ``v * M`` in USD: no transpose is needed.
     """
     return np.ascontiguousarray(row_vector_matrix, dtype=np.float32)
+
+
+def normal_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
+    """The column-vector 3x3 that takes normals through a row-vector matrix (the inverse
+    transpose), as GLSL mat3 bytes."""
+    m3 = np.asarray(row_vector_matrix, np.float64)[:3, :3]
+    try:
+        inverse = np.linalg.inv(m3)
+    except np.linalg.LinAlgError:
+        inverse = np.eye(3)
+    # row-vector normals: n' = n inverse(M3)^T, i.e. column-vector n' = inverse(M3) n;
+    # GLSL reads the uploaded rows as columns, so upload the transpose
+    return np.ascontiguousarray(inverse.T, np.float32)

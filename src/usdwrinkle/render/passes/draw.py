@@ -10,7 +10,7 @@ from .. import bindings
 from ..bounds import EyeBound, culled_side
 from ..resources import MeshResources
 from ..shaders import DrawableProgram, Variants, program
-from . import bind, bind_wave, gl_matrix, set_uniforms
+from . import bind, bind_wave, gl_matrix, normal_matrix, set_uniforms
 
 FLIP_Y = np.diag([1.0, -1.0, 1.0, 1.0])
 
@@ -147,12 +147,6 @@ class DrawPass:
             return
         record = res.record
         local_to_world = frame.local_to_world
-        # column-vector normal matrix: inverse transpose of (M3)^T = inverse of M3
-        m3 = local_to_world[:3, :3]
-        try:
-            normal_matrix = np.linalg.inv(m3)
-        except np.linalg.LinAlgError:
-            normal_matrix = np.eye(3)
         eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
         material = record.material
         variant = self.variants(TWO_SYSTEMS=res.systems > 1,
@@ -166,7 +160,7 @@ class DrawPass:
             variant.frame_uniforms = self.frame_uniforms
         set_uniforms(variant.program, {
             "u_local_to_world": gl_matrix(local_to_world),
-            "u_normal_to_world": np.ascontiguousarray(normal_matrix.T, np.float32),
+            "u_normal_to_world": normal_matrix(local_to_world),
             "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
             "u_eye_world": tuple(float(v) for v in camera.position[:3]),
             "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),

@@ -5,18 +5,19 @@ import numpy as np
 
 from ...contract import JOINT_TEXELS
 from ...scene.records import MeshFrame
-from ...scene.skel import dual_quaternions
 from .. import bindings
 from ..resources import MeshResources, vec4
 from ..shaders import compute_shader
-from . import bind, gl_matrix, groups, set_uniforms
+from . import bind, gl_matrix, groups, normal_matrix, set_uniforms
 
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
 
 
 def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray,
-                skel_to_local: np.ndarray) -> tuple[np.ndarray, bool]:
-    """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS).
+                skel_to_local: np.ndarray, dual_quaternions: tuple | None = None
+                ) -> tuple[np.ndarray, bool]:
+    """The Joint structs of skin.glsl for one frame, and whether any joint scales (DQS:
+    the scene's split of the transforms, MeshFrame.dual_quaternions).
 
     For LBS each joint's matrix is geomBind @ skinning transform @ skel-to-local
     (row-vector, float64, then float32): local rest to local posed in one product, stored
@@ -40,7 +41,7 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
             [np.linalg.inv(linear), np.zeros((count, 3, 1))], axis=2).reshape(count, 12)
     has_scale = False
     if method == "dualQuaternion":
-        real, dual, scale, has_scale = dual_quaternions(joint_transforms)
+        real, dual, scale, has_scale = dual_quaternions
         block[:count, 16:20] = real
         block[:count, 20:24] = dual
         rows = np.zeros((count, 3, 4))
@@ -51,7 +52,6 @@ def joint_block(joint_transforms: np.ndarray, method: str, geom_bind: np.ndarray
 
 def skinning_uniforms(res: MeshResources, frame: MeshFrame) -> dict:
     """The uniforms of include/skinning.glsl for this frame (its joints are uploaded)."""
-    from .normals import normal_matrix
 
     skin = res.record.skin
     skel_to_local = frame.skel_to_local if res.skinned else np.eye(4)
@@ -82,7 +82,7 @@ class SkinPass:
         if len(weights):
             res.subshape_weights.write(np.asarray(weights, np.float32).tobytes())
         block, has_scale = joint_block(frame.joint_transforms, skin.method, skin.geom_bind,
-                                       frame.skel_to_local)
+                                       frame.skel_to_local, frame.dual_quaternions)
         res.joints.write(block)
         res.has_scale = has_scale
         set_uniforms(self.shader, {
