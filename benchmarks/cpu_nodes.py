@@ -111,9 +111,9 @@ def encoders(ctx, stage: Path, width: int, height: int, repeats: int) -> dict:
     import numpy as np
     import OpenImageIO as oiio
 
+    from usdwrinkle.aovs import AOV_BLOCKS, ImageLayout
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.outputs import images
-    from usdwrinkle.render.resolve import ImageLayout
 
     engine = WrinkleEngine(str(stage), all_meshes=True, ctx=ctx, warn=lambda m: None)
     try:
@@ -135,7 +135,7 @@ def encoders(ctx, stage: Path, width: int, height: int, repeats: int) -> dict:
 
     def with_oiio(half: bool, compression: str):
         def write(scratch: str) -> None:
-            names = images.EXR_ORDER
+            names = AOV_BLOCKS
             pixels = np.ascontiguousarray(np.concatenate(
                 [buffers[aov].pixels for aov in names], axis=2), np.float32)
             spec = oiio.ImageSpec(width, height, pixels.shape[2], "float")

@@ -186,7 +186,7 @@ vec4 texture_anisotropic(sampler2D tex, vec2 st) {
 bool normal_map(vec2 st, out vec3 n_tangent) {
     vec2 tile = floor(st);
     int layer = 0;
-    if (u_udim_layer[0] != -2) {  // -2: one texture that repeats, not a UDIM set
+    if (u_udim_layer[0] != UDIM_REPEAT) {  // one texture that repeats, not a UDIM set
         bool inside = tile.x >= 0.0 && tile.x < 10.0 && tile.y >= 0.0 && tile.y < 10.0;
         layer = inside ? u_udim_layer[int(tile.y) * 10 + int(tile.x)] : -1;
         if (layer < 0) return false;

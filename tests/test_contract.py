@@ -113,3 +113,28 @@ def test_the_wave_blend_is_written_once():
                                              "blend_corner_waves(" in text), path.name
             users.append(path.name)
     assert {"draw.glsl", "maps.glsl", "geometry.glsl"} <= set(users)
+
+
+def test_each_on_disk_contract_is_written_once():
+    """Issue 25: the baked primvar names, the AOV and EXR channel names, the half-float
+    mask and the UDIM sentinel stand in one module each (schema.py, aovs.py,
+    contract.py); a writer, reader or shader that types one again fails here."""
+    from pathlib import Path
+
+    source = Path(__file__).resolve().parents[1] / "src" / "usdwrinkle"
+    owners = {
+        '"primvars:wrinkle:waveVector': "schema.py",
+        '"primvars:wrinkle:phase': "schema.py",
+        '"primvars:wrinkle:compression"': "schema.py",
+        '"wrinkle.height"': "aovs.py",
+        '"wrinkle.amplitude"': "aovs.py",
+        '"N.X"': "aovs.py",
+    }
+    for text, owner in owners.items():
+        places = sorted(str(p.relative_to(source)) for p in source.rglob("*.py")
+                        if "__pycache__" not in p.parts and text in p.read_text())
+        assert places == [owner], (text, places)
+    for path in SHADERS.rglob("*.glsl"):
+        code = strip_comments(path.read_text())
+        assert "!= -2" not in code and "== -2" not in code, path.name  # UDIM_REPEAT
+        assert "[10]" not in code and "< 10;" not in code, path.name     # OFFSET_SLOTS

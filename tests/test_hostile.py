@@ -304,7 +304,7 @@ def test_sub_frames_that_share_a_name_are_refused(gl_context, tmp_path, capsys):
      "GiB of memory are available"),
 ])
 def test_frame_sizes_beyond_the_limits_are_refused(tmp_path, args, fragment):
-    from usdwrinkle.render.buffers import available_memory
+    from usdwrinkle.memory import available_memory
 
     if fragment.startswith("GiB"):  # the largest frame GL 4.5 guarantees, 4 samples
         needed = 16384 * 16384 * (52 * 5 + 96)

@@ -200,3 +200,46 @@ def test_late_schema_registration_says_how_to_fix():
     assert "WARN usdwrinkle was imported after USD built its schema registry" in out
     assert "ERROR the WrinkleAPI schema is not known to USD" in out
     assert "PXR_PLUGINPATH_NAME=" in out
+
+
+def test_a_repainted_texture_is_read_again(tmp_path):
+    """Issue 25: load_texture's cache was keyed by name alone, so a long-running host
+    (usdview) never saw a texture the artist repainted. It is keyed by the file's
+    modification time and size too."""
+    import os
+
+    import OpenImageIO as oiio
+
+    from usdwrinkle.scene.material import load_texture
+
+    path = tmp_path / "paint.png"
+
+    def paint(value: int, mtime: int) -> None:
+        pixels = np.full((4, 4, 3), value, np.uint8)
+        buf = oiio.ImageBuf(oiio.ImageSpec(4, 4, 3, oiio.UINT8))
+        buf.set_pixels(oiio.ROI(), pixels)
+        assert buf.write(str(path))
+        os.utime(path, ns=(mtime, mtime))
+
+    paint(10, 1_000_000_000_000_000_000)
+    first = load_texture(str(path), "raw")
+    assert first is load_texture(str(path), "raw")  # unchanged: the cached decode
+    paint(200, 1_000_000_002_000_000_000)
+    second = load_texture(str(path), "raw")
+    assert int(first.pixels[0, 0, 0]) == 10 and int(second.pixels[0, 0, 0]) == 200
+
+
+def test_the_stage_inputs_cache_is_bounded(tmp_path):
+    """Issue 25: _INPUTS kept the inputs of every stage a process ever opened. It keeps
+    the most recent INPUTS_KEPT; an evicted stage's inputs are scanned again."""
+    from usdwrinkle.scene import stage as stage_module
+
+    stages = []
+    for i in range(stage_module.INPUTS_KEPT + 4):
+        path = tmp_path / f"s{i}.usda"
+        Usd.Stage.CreateNew(str(path)).Save()
+        stages.append((path, stage_module.open_stage(str(path))))
+    assert len(stage_module._INPUTS) <= stage_module.INPUTS_KEPT
+    first_path, first = stages[0]
+    assert first.GetRootLayer().identifier not in stage_module._INPUTS
+    assert stage_module.stage_inputs(first).protects(str(first_path))

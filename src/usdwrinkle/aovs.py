@@ -15,11 +15,11 @@ AOVS = {
     "normal": (2, 0, ("N.X", "N.Y", "N.Z")),
     "depth": (1, 2, ("Z",)),
 }
-#: the order of the AOV blocks of the OUTPUT_AOVS layout (u_offset's order)
-AOV_BLOCKS = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
+#: the order of the AOV blocks of the OUTPUT_AOVS layout (u_offset's order), of a frame's
+#: AOVs and of an EXR's channel blocks
+AOV_BLOCKS = tuple(AOVS)
 #: an EXR frame's channels, one plane each, in the shader's plane order
-EXR_CHANNELS = ("R", "G", "B", "A", "wrinkle.height", "wrinkle.amplitude", "N.X", "N.Y", "N.Z",
-                "Z")
+EXR_CHANNELS = tuple(channel for aov in AOV_BLOCKS for channel in AOVS[aov][2])
 #: the channels that ``half`` stores as half float: colour and normals
 HALF_CHANNELS = ("R", "G", "B", "A", "N.X", "N.Y", "N.Z")
 #: u_offset's length in resolve.glsl: one first word per EXR plane (the most blocks any

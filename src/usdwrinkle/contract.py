@@ -30,6 +30,9 @@ JOINT_TEXELS = 9
 #: UDIM tiles a normal map may have: u and v in 0..9, tiles 1001..1100 (draw.glsl
 #: looks each tile's texture layer up in a table of this many entries).
 UDIM_TILES = 100
+#: the UDIM layer table's first entry when the normal map is one texture that repeats,
+#: not a UDIM set (render/resources.py writes it, draw.glsl tests it)
+UDIM_REPEAT = -2
 
 #: Per-vertex fields table (crush writes it; relax and draw read it): FIELD_TEXELS RGBA
 #: texels per vertex, in this order:
@@ -74,7 +77,8 @@ def glsl_literal(value) -> str:
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
-    ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("FIELD_TEXELS", FIELD_TEXELS),
+    ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
+    ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
     ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL), ("FIELD_WAVE2_TEXEL", FIELD_WAVE2_TEXEL),
     ("FIELD_DIRECTION2_TEXEL", FIELD_DIRECTION2_TEXEL), ("WAVE_SYSTEMS", WAVE_SYSTEMS),

@@ -25,6 +25,36 @@ BIAXIAL = "wrinkle:biaxial"
 TENSION = "wrinkle:tension"
 TENSION_THRESHOLD = "wrinkle:tensionThreshold"
 #: the Material interface inputs that ``bake --maps`` writes: map kind -> input name
+#: the baked wave fields on disk (bake writes them, a render reads them back): primvar ->
+#: (WrinkleFields/BakedFields attribute, components), vertex interpolation, one time
+#: sample per frame; in the order the layer writes them
+BAKED_PRIMVARS = {
+    "primvars:wrinkle:amplitude": ("amplitude", 1),
+    "primvars:wrinkle:compression": ("compression", 1),
+    "primvars:wrinkle:waveVector": ("wave_vector", 3),
+    "primvars:wrinkle:phase": ("phase", 1),
+    "primvars:wrinkle:direction": ("direction", 3),
+    # the second wave system (wrinkle:biaxial): all three, or none
+    "primvars:wrinkle:amplitude2": ("amplitude2", 1),
+    "primvars:wrinkle:waveVector2": ("wave_vector2", 3),
+    "primvars:wrinkle:phase2": ("phase2", 1),
+}
+#: what a mesh's bake must hold to be drawn from it
+BAKED_REQUIRED = ("primvars:wrinkle:amplitude", "primvars:wrinkle:waveVector",
+                  "primvars:wrinkle:phase")
+BAKED_SECOND_SYSTEM = ("primvars:wrinkle:amplitude2", "primvars:wrinkle:waveVector2",
+                       "primvars:wrinkle:phase2")
+
+
+def baked_names_text() -> str:
+    """The baked primvars as bake's help names them."""
+    def short(names):
+        return ", ".join(name.rsplit(":", 1)[-1] for name in names)
+    first = [n for n in BAKED_PRIMVARS if n not in BAKED_SECOND_SYSTEM]
+    return (f"primvars:wrinkle:{short(first)}; with wrinkle:biaxial also "
+            f"{short(BAKED_SECOND_SYSTEM)}")
+
+
 MAP_INPUTS = {"normal": "wrinkleNormalFile", "height": "wrinkleHeightFile",
               "amplitude": "wrinkleAmplitudeFile"}
 #: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain

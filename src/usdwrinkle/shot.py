@@ -15,6 +15,10 @@ from . import schema
 from .errors import UsdWrinkleError
 from .timecode import format_frame
 
+#: the warning of a render that finds no wrinkled mesh (serial and farm)
+NO_WRINKLED_MESH = ("no mesh has WrinkleAPI applied; rendering without wrinkles "
+                    "(use --all-meshes to wrinkle every mesh)")
+
 
 @dataclass(frozen=True)
 class EngineOptions:

@@ -8,6 +8,7 @@ import time
 from ..errors import UsdWrinkleError
 from ..geometry.options import GeometryOptions
 from ..maps.options import TANGENT_SPACES, MapOptions
+from ..schema import baked_names_text
 from .common import (
     Reporter,
     add_shot_args,
@@ -25,8 +26,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "bake", help="bake the wrinkle fields of every frame into a USD layer",
         description="Compute the wrinkles of a stage and write them as per-vertex primvars "
-                    "(primvars:wrinkle:amplitude, compression, waveVector, phase, direction; "
-                    "with wrinkle:biaxial also amplitude2, waveVector2, phase2; "
+                    f"({baked_names_text()}; "
                     "interpolation vertex) with a time sample per frame. By default the "
                     "output layer sublayers the input, so 'usdview OUTPUT_LAYER' shows the "
                     "shot with the baked data. --maps adds per-frame wrinkle maps bound in a "

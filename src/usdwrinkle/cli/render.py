@@ -175,7 +175,7 @@ def run(args) -> int:
     from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
     from ..scene.stage import inherited_range_note, open_stage, stage_frames
-    from ..shot import ImageOptions, render_frames
+    from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames
 
     check_render_args(args)
     reporter = Reporter(args.quiet)
@@ -204,8 +204,7 @@ def run(args) -> int:
         engine.scene.check_baked(frames)
         _warn_unbaked(engine, reporter, args)
         if not engine.wrinkled_paths and not args.no_wrinkles:
-            reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
-                          "(use --all-meshes to wrinkle every mesh)")
+            reporter.warn(NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
                   if engine.scene.meshes[path].material.wrinkle_maps]
         if mapped and not args.no_wrinkles:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 from ..errors import STDERR, UsdWrinkleError
 from ..outputs.atomic import remove_temporaries
-from ..shot import EngineOptions, ImageOptions, bake_layer, frame_spec_text
+from ..shot import NO_WRINKLED_MESH, EngineOptions, ImageOptions, bake_layer, frame_spec_text
 from .worker import file_identity, render_chunk
 
 #: how often Dask reruns a chunk whose worker died
@@ -171,8 +171,7 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     if layer is not None:
         refuse_overwriting_inputs(job.stage_path, [layer], stage)
     if wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
-        reporter.warn("no mesh has WrinkleAPI applied; rendering without wrinkles "
-                      "(use --all-meshes to wrinkle every mesh)")
+        reporter.warn(NO_WRINKLED_MESH)
     width, height = image_size(scene, job.engine.camera, job.image.width, job.image.height,
                                frames[0])
     image = dataclasses.replace(job.image, width=width, height=height)

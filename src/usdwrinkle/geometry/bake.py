@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import UsdWrinkleError
-from ..render.buffers import available_memory
+from ..memory import require_memory
 from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
 from .options import GeometryOptions
@@ -119,14 +119,9 @@ class GeometryBake:
             counts[path] = check_size(path, len(record.rest_points),
                                       record.topology.triangles, levels)
             self.levels[path] = levels
-        needed = sum(counts.values()) * max(len(self.frames), 1) * BYTES_PER_POINT_FRAME
-        available = available_memory()
-        if available is not None and needed > available:
-            raise UsdWrinkleError(
-                f"the wrinkled meshes of {len(self.frames)} frame(s) need about "
-                f"{needed / 2**30:.1f} GiB while the layer is built, but "
-                f"{available / 2**30:.1f} GiB of memory are available; pass fewer --levels "
-                "or bake fewer --frames per layer")
+        require_memory(sum(counts.values()) * max(len(self.frames), 1) * BYTES_PER_POINT_FRAME,
+                       f"building the layer, the wrinkled meshes of {len(self.frames)} "
+                       "frame(s) need", "pass fewer --levels or bake fewer --frames per layer")
         stage = self.engine.scene.stage
         for path, record in self.meshes.items():
             fine = subdivide(record.rest_points, record.topology.triangles, self.levels[path])

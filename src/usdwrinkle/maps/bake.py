@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UsdWrinkleError
+from ..memory import require_memory
 from ..outputs.writer import FrameWriter
-from ..render.buffers import available_memory
 from ..scene.stage import stage_inputs
 from .files import (
     MAP_KINDS,
@@ -49,12 +49,8 @@ def check_map_options(options: MapOptions, max_texture_size: int | None = None) 
     if not 0 <= options.padding <= MAX_PADDING:
         raise UsdWrinkleError(f"--map-padding must be in 0..{MAX_PADDING} "
                               f"(got {options.padding})")
-    needed = options.size * options.size * BYTES_PER_TEXEL
-    available = available_memory()
-    if available is not None and needed > available:
-        raise UsdWrinkleError(f"{options.size}x{options.size} maps need about "
-                              f"{needed / 2**30:.1f} GiB, but {available / 2**30:.1f} GiB "
-                              "of memory are available; lower --map-size")
+    require_memory(options.size * options.size * BYTES_PER_TEXEL,
+                   f"{options.size}x{options.size} maps need", "lower --map-size")
 
 
 @dataclass

@@ -20,7 +20,7 @@ import tempfile
 
 import numpy as np
 
-from ..aovs import HALF_CHANNELS, ImageLayout, ResolvedImage
+from ..aovs import AOV_BLOCKS, HALF_CHANNELS, ImageLayout, ResolvedImage
 from ..colour import srgb_encode
 from ..diagnostics import one_line
 from ..errors import UsdWrinkleError
@@ -28,7 +28,6 @@ from .atomic import atomic_path, sweep_dead, write_error
 
 FLOAT_FORMATS = (".exr",)
 EIGHT_BIT_FORMATS = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
-EXR_ORDER = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
 #: EXR compressions offered by --exr-compression (OpenEXR's names)
 EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
 #: libpng's row filter for frames (PNG_FILTER_UP) and their zlib level
@@ -56,7 +55,7 @@ def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:
     height, width = color.shape[:2]
     if layout.kind == "exr":
         planes = {}
-        for aov in EXR_ORDER:
+        for aov in AOV_BLOCKS:
             buf = buffers[aov]
             for index, name in enumerate(buf.channel_names):
                 plane = np.ascontiguousarray(buf.pixels[..., index], np.float32)

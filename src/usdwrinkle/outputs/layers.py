@@ -12,7 +12,7 @@ import os
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
 
-from .. import __version__
+from .. import __version__, schema
 from ..colour import srgb_decode
 from ..contract import MIN_RATIO
 from ..errors import UsdWrinkleError
@@ -20,20 +20,15 @@ from .atomic import atomic_path
 
 LAYER_FORMATS = (".usda", ".usdc", ".usd")
 
-#: baked primvar -> (field, value type)
-PRIMVARS = {
-    "primvars:wrinkle:amplitude": ("amplitude", Sdf.ValueTypeNames.FloatArray),
-    "primvars:wrinkle:compression": ("compression", Sdf.ValueTypeNames.FloatArray),
-    "primvars:wrinkle:waveVector": ("wave_vector", Sdf.ValueTypeNames.Vector3fArray),
-    "primvars:wrinkle:phase": ("phase", Sdf.ValueTypeNames.FloatArray),
-    "primvars:wrinkle:direction": ("direction", Sdf.ValueTypeNames.Vector3fArray),
-}
+#: baked primvar -> (field, value type), from the one table (schema.BAKED_PRIMVARS)
+_VALUE_TYPES = {1: Sdf.ValueTypeNames.FloatArray, 3: Sdf.ValueTypeNames.Vector3fArray}
+PRIMVARS = {name: (field, _VALUE_TYPES[components])
+            for name, (field, components) in schema.BAKED_PRIMVARS.items()
+            if name not in schema.BAKED_SECOND_SYSTEM}
 #: the second wave system, baked for meshes with wrinkle:biaxial on
-SECOND_SYSTEM_PRIMVARS = {
-    "primvars:wrinkle:amplitude2": ("amplitude2", Sdf.ValueTypeNames.FloatArray),
-    "primvars:wrinkle:waveVector2": ("wave_vector2", Sdf.ValueTypeNames.Vector3fArray),
-    "primvars:wrinkle:phase2": ("phase2", Sdf.ValueTypeNames.FloatArray),
-}
+SECOND_SYSTEM_PRIMVARS = {name: (field, _VALUE_TYPES[components])
+                          for name, (field, components) in schema.BAKED_PRIMVARS.items()
+                          if name in schema.BAKED_SECOND_SYSTEM}
 DISPLAY_COLOR_FIELDS = ("amplitude", "compression")
 
 # viridis at 9 stops: perceptually uniform, readable by colour-blind viewers

@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..aovs import OFFSET_SLOTS
+from ..memory import require_memory
 from .resolve import AOVS, ImageLayout, ResolvedImage, ResolvePass, read_rect
 
 
@@ -23,18 +25,6 @@ class RenderBuffer:
 
 #: bytes per pixel and sample: three RGBA float attachments, and depth
 _ATTACHMENT_BYTES = 3 * 16 + 4
-
-
-def available_memory() -> int | None:
-    """Bytes of memory available to a new allocation (Linux MemAvailable), or None."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as meminfo:
-            for line in meminfo:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
 
 
 def check_samples(samples: int) -> None:
@@ -67,12 +57,9 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
                               f"GL_MAX_SAMPLES of {max_samples}")
     # the targets, the resolve pass's output and the read-back copies (the writer may
     # hold a few)
-    needed = width * height * (_ATTACHMENT_BYTES * samples + 10 * 4 * 4)
-    available = available_memory()
-    if available is not None and needed > available:
-        raise UsdWrinkleError(f"a {width}x{height} frame with {samples} samples needs about "
-                              f"{needed / 2**30:.1f} GiB, but {available / 2**30:.1f} GiB of "
-                              "memory are available; lower --width/--height or --samples")
+    require_memory(width * height * (_ATTACHMENT_BYTES * samples + OFFSET_SLOTS * 4 * 4),
+                   f"a {width}x{height} frame with {samples} samples needs",
+                   "lower --width/--height or --samples")
 
 
 class Framebuffer:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+from ..aovs import AOV_BLOCKS
 from ..contract import COLD_START_FACTOR
 from ..scene.dirty import DirtyBits
 from .bounds import eye_bound, screen_rect
@@ -138,7 +139,7 @@ class RenderPassState:
     height: int
     wrinkles: bool = True
     samples: int = 4
-    aovs: tuple = ("color", "wrinkle.height", "wrinkle.amplitude", "normal", "depth")
+    aovs: tuple = AOV_BLOCKS
     timings: dict = field(default_factory=dict)
     #: read the frame back as an image file stores it instead of as float AOVs
     image: ImageLayout | None = None

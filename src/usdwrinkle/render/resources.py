@@ -18,6 +18,7 @@ from ..contract import (
     FIELD_FLOATS,
     FIELD_TEXELS,
     JOINT_TEXELS,
+    UDIM_REPEAT,
     UDIM_TILES,
     WAVE_SYSTEMS,
     WrinkleFields,
@@ -313,12 +314,13 @@ class MeshResources:
         self.normal_map.build_mipmaps()
         for layer, (tile, _) in enumerate(normal_map.tiles):
             if tile == -1:  # one texture that repeats (draw.glsl: normal_map)
-                self.udim_layers[:] = -2
+                self.udim_layers[:] = UDIM_REPEAT
                 break
             self.udim_layers[tile] = layer
         # a UDIM tile is clamped at its edges (its neighbour is another file); one texture
         # repeats, as UsdUVTexture's wrap modes default to
-        self.normal_map.repeat_x = self.normal_map.repeat_y = bool(self.udim_layers[0] == -2)
+        repeats = bool(self.udim_layers[0] == UDIM_REPEAT)
+        self.normal_map.repeat_x = self.normal_map.repeat_y = repeats
 
     def _upload_texture(self, record: MeshRecord) -> None:
         if record.material.texture is None:

@@ -22,25 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Usd
 
+from .. import schema
 from ..errors import UsdWrinkleError
 from ..timecode import format_frame
 
-#: baked primvar -> (field, components). The first three are required.
-BAKED_PRIMVARS = {
-    "primvars:wrinkle:amplitude": ("amplitude", 1),
-    "primvars:wrinkle:waveVector": ("wave_vector", 3),
-    "primvars:wrinkle:phase": ("phase", 1),
-    "primvars:wrinkle:direction": ("direction", 3),
-    "primvars:wrinkle:compression": ("compression", 1),
-    # the second wave system (wrinkle:biaxial): all three, or none
-    "primvars:wrinkle:amplitude2": ("amplitude2", 1),
-    "primvars:wrinkle:waveVector2": ("wave_vector2", 3),
-    "primvars:wrinkle:phase2": ("phase2", 1),
-}
-REQUIRED = ("primvars:wrinkle:amplitude", "primvars:wrinkle:waveVector",
-            "primvars:wrinkle:phase")
-SECOND_SYSTEM = ("primvars:wrinkle:amplitude2", "primvars:wrinkle:waveVector2",
-                 "primvars:wrinkle:phase2")
+#: baked primvar -> (field, components), the required ones, the second system's
+BAKED_PRIMVARS = schema.BAKED_PRIMVARS
+REQUIRED = schema.BAKED_REQUIRED
+SECOND_SYSTEM = schema.BAKED_SECOND_SYSTEM
 
 
 @dataclass(frozen=True)

@@ -31,9 +31,10 @@ FALLBACK_DISPLAY_COLOR = np.array([0.5, 0.5, 0.5], np.float32)
 PREVIEW_DIFFUSE_FALLBACK = np.array([0.18, 0.18, 0.18], np.float32)
 
 
-@lru_cache(maxsize=32)
 def load_texture(resolved_path: str, color_space: str = "auto") -> TextureImage:
-    """Decode an image asset into RGBA, row 0 at the bottom.
+    """Decode an image asset into RGBA, row 0 at the bottom (cached while the file, or
+    the package that holds it, keeps its size and modification time: an artist who
+    repaints a texture in a live usdview session sees the new one).
 
     ``color_space``: UsdUVTexture's sourceColorSpace. ``sRGB`` decodes to linear, ``raw``
     keeps the values (normal maps), ``auto`` decodes 8-bit images only, as the
@@ -42,9 +43,21 @@ def load_texture(resolved_path: str, color_space: str = "auto") -> TextureImage:
     no decode on the CPU (CesiumMan's 2048² texture: 0.29 s of start-up before). Raises
     OSError when the asset cannot be read or decoded.
     """
+    package = package_file(resolved_path)
+    require_regular_file(package, "texture")
+    try:
+        status = os.stat(package)
+        identity = (status.st_mtime_ns, status.st_size, status.st_ino)
+    except OSError:
+        identity = None  # not a local file: Ar reads it; cached by name
+    return _decode_texture(resolved_path, color_space, identity)
+
+
+@lru_cache(maxsize=32)
+def _decode_texture(resolved_path: str, color_space: str, identity) -> TextureImage:
+    """load_texture's decode, cached by the file's identity too."""
     from ..imagefiles import read_float_image
 
-    require_regular_file(package_file(resolved_path), "texture")
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))
     if asset is None:
         raise OSError(f"cannot open texture '{resolved_path}'")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+from collections import OrderedDict
 
 import numpy as np
 from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
@@ -49,8 +50,18 @@ def _is_a(prim: Usd.Prim, types) -> bool:
     return bool(prim) and any(prim.IsA(kind) for kind in types)
 
 
-#: root layer identifier -> the StageInputs of stages opened by open_stage
-_INPUTS: dict[str, StageInputs] = {}
+#: root layer identifier -> the StageInputs of stages opened by open_stage, the most
+#: recent INPUTS_KEPT (a long-running host such as usdview opens many stages; an evicted
+#: entry is scanned again when asked for)
+_INPUTS: OrderedDict[str, StageInputs] = OrderedDict()
+INPUTS_KEPT = 16
+
+
+def _keep_inputs(identifier: str, inputs: StageInputs) -> None:
+    _INPUTS[identifier] = inputs
+    _INPUTS.move_to_end(identifier)
+    while len(_INPUTS) > INPUTS_KEPT:
+        _INPUTS.popitem(last=False)
 
 
 def open_stage(path: str, warn=None) -> Usd.Stage:
@@ -70,17 +81,18 @@ def open_stage(path: str, warn=None) -> Usd.Stage:
     if stage is None:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
     inputs.layers = []  # the stage holds what it uses; a cache must not keep stale layers
-    _INPUTS[root.identifier] = inputs
+    _keep_inputs(root.identifier, inputs)
     return stage
 
 
 def stage_inputs(stage: Usd.Stage) -> StageInputs:
     """Every file the stage reads (scene/inputs.py), for output checks."""
     root = stage.GetRootLayer()
-    if root.identifier not in _INPUTS:
-        _INPUTS[root.identifier] = scan_inputs(root.realPath) if root.realPath and \
+    inputs = _INPUTS.get(root.identifier)
+    if inputs is None:
+        inputs = scan_inputs(root.realPath) if root.realPath and \
             "[" not in root.realPath else StageInputs()
-    inputs = _INPUTS[root.identifier]
+    _keep_inputs(root.identifier, inputs)
     inputs.layers = []
     for layer in stage.GetUsedLayers():  # also what a session layer brought in
         if layer.realPath:
