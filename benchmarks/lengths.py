@@ -86,7 +86,7 @@ def elbow(folder: str) -> dict:
                  .split("=")[-1])
     engine = WrinkleEngine(str(SHIRT), warn=lambda m: None)
     try:
-        record = engine.scene.meshes["/World/Arm/Sleeve"]
+        record = engine.meshes["/World/Arm/Sleeve"]
     finally:
         engine.release()
     fine = subdivide(record.rest_points, record.topology.triangles, levels)

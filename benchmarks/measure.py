@@ -44,7 +44,7 @@ def measure_frames(engines, width, height, frames, warmup=3, repeat=1):
     for _ in range(repeat):
         for frame in frames[warmup:]:
             for (engine, wrinkles), (walls, passes, sources) in zip(engines, results, strict=True):
-                ctx = engine.render_delegate.ctx
+                ctx = engine.ctx
                 ctx.finish()
                 started = time.perf_counter()
                 engine.render_frame(frame, width, height, wrinkles, samples=1)
@@ -81,7 +81,7 @@ def paper_table(quick: bool, ctx) -> list[dict]:
             frames = [float(f) for f in range(1, 9 if quick else 25)]
             (passes, wall, sources, count), (_, plain_wall, _, _) = measure_frames(
                 [(engine, True), (plain, False)], width, height, frames)
-            actual_vertices = sum(len(r.rest_points) for r in engine.scene.meshes.values())
+            actual_vertices = sum(len(r.rest_points) for r in engine.meshes.values())
         finally:
             engine.release()
             plain.release()
@@ -118,7 +118,7 @@ def scaling(quick: bool, ctx) -> dict:
     for vertices in vertex_sizes:
         engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True, warn=lambda m: None)
         try:
-            n = len(next(iter(engine.scene.meshes.values())).rest_points)
+            n = len(next(iter(engine.meshes.values())).rest_points)
             (passes, wall, _, _), = measure_frames([(engine, True)], 512, 512, frames, warmup=2)
         finally:
             engine.release()
@@ -154,7 +154,7 @@ def skin_baseline(quick: bool, ctx) -> list[dict]:
         stage = sleeve_stage(vertices)
         engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
         try:
-            path = next(iter(engine.scene.meshes))
+            path = next(iter(engine.meshes))
             skel_query, skinning_query = engine.scene.skel.get(path)
             points = UsdGeom.Mesh(stage.GetPrimAtPath(path)).GetPointsAttr().Get()
             cpu, gpu, gpu_read = [], [], []
@@ -194,8 +194,8 @@ def numpy_baseline(quick: bool, ctx) -> dict:
     vertices = 10_000 if quick else 50_000
     engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True, warn=lambda m: None)
     try:
-        path = next(iter(engine.scene.meshes))
-        record = engine.scene.meshes[path]
+        path = next(iter(engine.meshes))
+        record = engine.meshes[path]
         engine.compute_frame(1.0)
         gpu_times = []
         for frame in range(2, 11):

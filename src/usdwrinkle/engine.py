@@ -16,7 +16,6 @@ from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
 from .scene.camera import find_camera
 from .scene.dirty import DirtyBits
-from .scene.records import FrameRecord
 from .scene.stage import StageSceneDelegate
 
 AOV_NAMES = tuple(AOVS)
@@ -45,11 +44,14 @@ class WrinkleEngine:
     use_baked : bool
         Draw the baked wave fields of meshes that hold them (scene/baked.py): no crush,
         no relax and no preroll for those meshes. False recomputes everything.
+    preroll_progress : callable or None
+        Wraps the list of preroll frames (the CLI's progress bar).
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
                  camera: str | None = None, warn=print_warning, ctx=None, profile: bool = False,
-                 history_start: float | None = None, use_baked: bool = True):
+                 history_start: float | None = None, use_baked: bool = True,
+                 preroll_progress=None):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, warn=warn,
                                         use_baked=use_baked)
@@ -65,7 +67,7 @@ class WrinkleEngine:
         self._history_start = history_start
         self._history_frame: float | None = None
         #: wraps the list of preroll frames (the CLI shows a progress bar)
-        self.preroll_progress = lambda frames: frames
+        self.preroll_progress = preroll_progress or (lambda frames: frames)
 
     @property
     def wrinkled_paths(self) -> list[str]:
@@ -75,6 +77,51 @@ class WrinkleEngine:
     def baked_paths(self) -> list[str]:
         """The wrinkled meshes drawn from baked wave fields."""
         return list(self.scene.baked)
+
+    # -- what the shot's loops and the writers may ask (nothing outside this file reaches
+    # into the scene or the render delegate) ------------------------------------------
+
+    @property
+    def stage(self):
+        """The Usd.Stage the scene delegate reads."""
+        return self.scene.stage
+
+    @property
+    def meshes(self) -> dict:
+        """Path -> MeshRecord of every mesh the scene delegate holds."""
+        return self.scene.meshes
+
+    @property
+    def baked(self) -> dict:
+        """Path -> the baked wave fields the scene found (scene/baked.py)."""
+        return self.scene.baked
+
+    def check_baked(self, frames: list[float]) -> None:
+        """Refuse frames outside the baked range of a mesh drawn from its bake."""
+        self.scene.check_baked(frames)
+
+    def corner_primvar(self, path: str, name: str):
+        """A primvar of ``path`` per triangle corner ([3t + c]), or None (scene side)."""
+        return self.scene.corner_primvar(path, name)
+
+    def set_warn(self, warn) -> None:
+        """Where the scene's warnings go from now on (a farm worker collects them)."""
+        self.scene.warn = warn
+
+    @property
+    def ctx(self):
+        """The moderngl context the passes run in."""
+        return self.render_delegate.ctx
+
+    @property
+    def max_texture_size(self) -> int:
+        return self.render_delegate.max_texture_size
+
+    def mesh_resources(self, path: str):
+        """The GPU tables of ``path`` after the last computed frame (render/resources.py):
+        the one way out of the GPU besides read_fields, for the passes of the bake
+        outputs (maps, geometry) that run on the same tables."""
+        return self.render_delegate.rprims[path].resources
 
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (image_size)."""
@@ -110,8 +157,10 @@ class WrinkleEngine:
         frames = self.scene.frame_range()
         return None if math.isnan(frames[0]) else frames[0]
 
-    def _history_plan(self, frame: float) -> tuple[list[float], bool]:
-        """Frames to compute before ``frame`` and whether ``frame`` then has history.
+    def _history_plan(self, frame: float) -> tuple[list[float], bool, bool]:
+        """Frames to compute before ``frame``, whether ``frame`` then has history, and
+        whether the chain of frames computed so far goes on (False: replay it from the
+        start). Plans only: the caller applies it.
 
         The history runs on the integer grid start, start+1, ... A frame's phases are
         therefore a deterministic function of the shot, whichever frames a run renders:
@@ -119,14 +168,15 @@ class WrinkleEngine:
         """
         start = self.history_start()
         if start is None or math.isnan(frame) or frame < start:
-            return [], False
+            return [], False, True
         last = self._history_frame
         # continue the chain from the last grid frame, or replay it from the start
-        if last is None or last > frame or (last - start) != int(last - start):
-            last = self._history_frame = None
+        chained = not (last is None or last > frame or (last - start) != int(last - start))
+        if not chained:
+            last = None
         first = start if last is None else last + 1
         if frame == first and last is None:
-            return [], False  # the shot's first frame: a cold start
+            return [], False, chained  # the shot's first frame: a cold start
         if frame - first > MAX_HISTORY_FRAMES:
             raise UsdWrinkleError(
                 f"frame {frame:g} is {frame - first:,.0f} frames after the phase history's "
@@ -134,13 +184,11 @@ class WrinkleEngine:
                 "refused (pass --history-start nearer, or bake the shot)")
         # grid frames before ``frame``; a subframe is one step from its grid frame
         steps = np.arange(first, frame, 1.0) if frame > first else []
-        return [float(f) for f in steps], True
+        return [float(f) for f in steps], True, chained
 
     def _compute_only(self, frame: float, history: bool, wrinkles: bool) -> None:
         """A preroll step: the meshes that have no baked fields, compute only."""
-        meshes = self.scene.sample_meshes(frame, with_baked=False)
-        self.scene.current_frame = FrameRecord(frame, None, (), meshes)
-        self._sync()
+        self._sync(self.scene.sample_meshes(frame, with_baked=False))
         self.render_pass.compute(wrinkles, None, history, skip=frozenset(self.scene.baked))
 
     def pull_changes(self) -> None:
@@ -161,10 +209,12 @@ class WrinkleEngine:
                           for value in self._dirty.values()):
             self._history_frame = None
 
-    def _sync(self) -> None:
+    def _sync(self, meshes: dict) -> None:
+        """Sync every rprim to the scene's sample ``meshes`` (path -> MeshFrame)."""
         for path, mesh in self.render_delegate.rprims.items():
             # a new frame dirties the time-varying state; edits add their own bits
-            self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME)
+            self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME,
+                                          meshes.get(path))
 
     def compute_frame(self, frame: float, aspect: float | None = None, wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
@@ -179,7 +229,9 @@ class WrinkleEngine:
         # meshes drawn from a bake need no history; the others replay the shot's start
         needs_history = any(p not in self.scene.baked for p in self.wrinkled_paths)
         if wrinkles and needs_history:
-            steps, history = self._history_plan(frame)
+            steps, history, chained = self._history_plan(frame)
+            if not chained:
+                self._history_frame = None
             for index, step in enumerate(self.preroll_progress(steps)):
                 step_history = index > 0 or self._history_frame is not None
                 self._compute_only(step, step_history, wrinkles)
@@ -190,8 +242,7 @@ class WrinkleEngine:
             aspect = FRAMING_ASPECT
         record = self.scene.sample(frame, aspect, self.camera)
         read = time.perf_counter()
-        self.scene.current_frame = record
-        self._sync()
+        self._sync(record.meshes)
         synced = time.perf_counter()
         self.last_timings = {}
         if profile:
@@ -230,12 +281,12 @@ class WrinkleEngine:
 
     def read_fields(self, path: str) -> dict:
         """Per-vertex fields of ``path`` as computed for the last frame (numpy)."""
-        return self.render_delegate.rprims[path].resources.read_fields()
+        return self.mesh_resources(path).read_fields()
 
     def read_shading_normals(self, path: str):
         """The shading normals of ``path`` at the last frame: (NormalPlan, (entries, 3)
         float32 local normals) (scene/normals.py)."""
-        res = self.render_delegate.rprims[path].resources
+        res = self.mesh_resources(path)
         return res.normal_plan, res.read_shading_normals()
 
     def release(self) -> None:

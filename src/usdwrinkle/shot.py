@@ -33,11 +33,14 @@ class EngineOptions:
     #: time every pass (GL timer queries, or the wall clock between glFinish calls)
     profile: bool = False
 
-    def create(self, stage=None, warn=None):
-        """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``."""
+    def create(self, stage=None, warn=None, preroll_progress=None):
+        """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
+        ``preroll_progress`` wraps the list of preroll frames (a progress bar)."""
         from .engine import WrinkleEngine
 
         kwargs = {"warn": warn} if warn is not None else {}
+        if preroll_progress is not None:
+            kwargs["preroll_progress"] = preroll_progress
         return WrinkleEngine(stage if stage is not None else self.stage,
                              all_meshes=self.all_meshes,
                              relax_iterations=self.relax_iterations, camera=self.camera,
@@ -127,10 +130,10 @@ def bakeable_meshes(engine, warn) -> dict:
     """Path -> MeshRecord of the wrinkled meshes a layer can override."""
     wrinkled = {}
     for path in engine.wrinkled_paths:
-        if engine.scene.stage.GetPrimAtPath(path).IsInstanceProxy():
+        if engine.stage.GetPrimAtPath(path).IsInstanceProxy():
             warn(f"mesh is inside an instance and cannot be overridden; skipped ({path})")
             continue
-        wrinkled[path] = engine.scene.meshes[path]
+        wrinkled[path] = engine.meshes[path]
     return wrinkled
 
 
@@ -157,7 +160,7 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
             raise UsdWrinkleError("every wrinkled mesh is inside an instance and cannot be "
                                   "overridden, so the layer would hold no wrinkle data (make "
                                   "those prims not instanceable)")
-        if any(schema.has_wrinkle_api(prim) for prim in engine.scene.stage.Traverse()):
+        if any(schema.has_wrinkle_api(prim) for prim in engine.stage.Traverse()):
             raise UsdWrinkleError("no mesh with WrinkleAPI can be wrinkled (each was skipped: "
                                   "see the warnings), so the layer would hold no wrinkle data")
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so the layer would hold no "
@@ -166,7 +169,7 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
     # the maps are relative to the posed shading normals, which renderers must shade with:
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals
     # are baked (README: maps)
-    baker = LayerBaker(engine.scene.stage, stage_path, wrinkled, engine.scene.meshes,
+    baker = LayerBaker(engine.stage, stage_path, wrinkled, engine.meshes,
                        with_points=with_points or maps is not None,
                        display_color=display_color, sparse=sparse, warn=warn)
     wanted = set(wrinkled) | set(baker.point_meshes)
@@ -200,7 +203,7 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
                     geometry_bake.add_frame(frame)
         commit = None
         if map_bake is not None:
-            map_bake.author(baker.layer, engine.scene.stage)
+            map_bake.author(baker.layer, engine.stage)
             extras["maps"] = map_bake.metadata()
             commit = map_bake.commit
         if geometry_bake is not None:

@@ -185,7 +185,7 @@ def run(args) -> int:
         if maps is not None:
             from ..maps.bake import check_map_options
 
-            check_map_options(maps, engine.render_delegate.max_texture_size)
+            check_map_options(maps, engine.max_texture_size)
         started = time.perf_counter()
         count = bake_layer(engine, args.stage, args.output, frames,
                            args.frames or frame_spec_text(frames),

@@ -78,7 +78,6 @@ def engine_options(args, stage_path: str | None = None, camera: str | None = Non
 def start_engine(args, reporter: Reporter, stage, camera: str | None = None,
                  use_baked: bool = True):
     """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
-    engine = engine_options(args, camera=camera, use_baked=use_baked).create(stage,
-                                                                             reporter.warn)
-    engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+    engine = engine_options(args, camera=camera, use_baked=use_baked).create(
+        stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
     return engine

@@ -158,9 +158,9 @@ def _warn_unbaked(engine, reporter, args) -> None:
     so, since that is what the farm recipe's bake exists to avoid."""
     from ..scene.baked import holds_bake
 
-    if args.recompute or args.no_wrinkles or not holds_bake(engine.scene.stage):
+    if args.recompute or args.no_wrinkles or not holds_bake(engine.stage):
         return
-    unbaked = [path for path in engine.wrinkled_paths if path not in engine.scene.baked]
+    unbaked = [path for path in engine.wrinkled_paths if path not in engine.baked]
     if unbaked:
         start = engine.history_start()
         preroll = f", with a phase-history preroll from frame {start:g}" \
@@ -201,12 +201,12 @@ def run(args) -> int:
     engine = start_engine(args, reporter, stage, args.camera,
                           use_baked=not (args.recompute or args.no_wrinkles))
     try:
-        engine.scene.check_baked(frames)
+        engine.check_baked(frames)
         _warn_unbaked(engine, reporter, args)
         if not engine.wrinkled_paths and not args.no_wrinkles:
             reporter.warn(NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
-                  if engine.scene.meshes[path].material.wrinkle_maps]
+                  if engine.meshes[path].material.wrinkle_maps]
         if mapped and not args.no_wrinkles:
             reporter.warn(f"{len(mapped)} mesh(es) have baked wrinkle maps in their material "
                           f"and are drawn with wrinkles too, so their wrinkles show twice; "

@@ -191,8 +191,7 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
         if layer is not None:
             bake_started = time.perf_counter()
             engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
-                stage, reporter.warn)
-            engine.preroll_progress = lambda steps: reporter.progress(steps, "preroll")
+                stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
             try:
                 bake_layer(engine, job.stage_path, layer, frames,
                            job.frame_spec or frame_spec_text(frames),

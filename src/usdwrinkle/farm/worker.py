@@ -33,7 +33,7 @@ def _engine(options: EngineOptions, warnings: list[str]):
         _cached["engine"] = options.create(warn=warnings.append)
         _cached["key"] = key
     engine = _cached["engine"]
-    engine.scene.warn = warnings.append
+    engine.set_warn(warnings.append)
     return engine
 
 

@@ -122,7 +122,7 @@ class GeometryBake:
         require_memory(sum(counts.values()) * max(len(self.frames), 1) * BYTES_PER_POINT_FRAME,
                        f"building the layer, the wrinkled meshes of {len(self.frames)} "
                        "frame(s) need", "pass fewer --levels or bake fewer --frames per layer")
-        stage = self.engine.scene.stage
+        stage = self.engine.stage
         for path, record in self.meshes.items():
             fine = subdivide(record.rest_points, record.topology.triangles, self.levels[path])
             self.fine_points[path] = len(fine.points)
@@ -135,9 +135,9 @@ class GeometryBake:
         if not self.writers:
             return
         if self._evaluator is None:
-            self._evaluator = GeometryEvaluator(self.engine.render_delegate.ctx)
+            self._evaluator = GeometryEvaluator(self.engine.ctx)
         for path, writer in self.writers.items():
-            res = self.engine.render_delegate.rprims[path].resources
+            res = self.engine.mesh_resources(path)
             result = self._evaluator.evaluate(res, writer.fine, wrinkles)
             if not (np.all(np.isfinite(result.points)) and np.all(np.isfinite(result.normals))):
                 raise UsdWrinkleError("the displaced points are not finite (NaN or Inf)", path)

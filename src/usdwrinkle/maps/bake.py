@@ -83,7 +83,7 @@ class MapBake:
         self.plans: dict[str, MeshMaps] = {}
         stems = mesh_file_names(meshes)
         for path in meshes:
-            corner_uv = engine.scene.corner_primvar(path, options.uv)
+            corner_uv = engine.corner_primvar(path, options.uv)
             if corner_uv is None or corner_uv.shape[-1] < 2:
                 warn(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
                      f"maps for it ({path})")
@@ -106,7 +106,7 @@ class MapBake:
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None
         self._checked_overlap: set[str] = set()
-        inputs = stage_inputs(engine.scene.stage)
+        inputs = stage_inputs(engine.stage)
         for name in self.file_names(frames):
             if inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
@@ -127,7 +127,7 @@ class MapBake:
     def _start(self) -> None:
         if self._rasterizer is None:
             self._staging = MapStaging(self.folder)
-            self._rasterizer = MapRasterizer(self.engine.render_delegate.ctx,
+            self._rasterizer = MapRasterizer(self.engine.ctx,
                                              self.options.size)
             # frame f's maps encode while frame f + 1 computes and rasterises
             # (outputs/writer.py: OpenImageIO releases the GIL while it encodes)
@@ -142,7 +142,7 @@ class MapBake:
         self._start()
         token = frame_token(frame)
         for path, plan in self.plans.items():
-            res = self.engine.render_delegate.rprims[path].resources
+            res = self.engine.mesh_resources(path)
             if path not in self._checked_overlap:
                 self._check_overlap(plan, res)
             for kind in self.options.kinds:

@@ -38,12 +38,14 @@ class Mesh:
         #: "params" (wrinkle parameters re-uploaded), "material", "frame" (per frame)
         self.sync_counts = {"resources": 0, "params": 0, "material": 0, "frame": 0}
 
-    def sync(self, scene_delegate, dirty_bits: int) -> int:
+    def sync(self, scene_delegate, dirty_bits: int, frame=None) -> int:
         """Pull what is dirty from the scene delegate; returns the bits left dirty.
 
-        ``scene_delegate`` provides ``meshes[path]`` (MeshRecord) and
-        ``current_frame.meshes[path]`` (MeshFrame). Topology rebuilds every resource;
-        wrinkle parameters and the material re-upload only their own tables.
+        ``scene_delegate`` provides ``meshes[path]`` (MeshRecord); ``frame`` is this
+        mesh's MeshFrame at the time the scene was sampled at (the scene owns time, as
+        UsdImagingDelegate::SetTime does; the engine hands the sample down). Topology
+        rebuilds every resource; wrinkle parameters and the material re-upload only their
+        own tables.
         """
         record = scene_delegate.meshes[self.path]
         if dirty_bits & DirtyBits.DIRTY_TOPOLOGY or self.resources is None:
@@ -58,8 +60,8 @@ class Mesh:
             if dirty_bits & DirtyBits.DIRTY_MATERIAL:
                 self.resources.update_material(record)
                 self.sync_counts["material"] += 1
-        if dirty_bits & DirtyBits.FRAME:
-            self.frame = scene_delegate.current_frame.meshes[self.path]
+        if dirty_bits & DirtyBits.FRAME and frame is not None:
+            self.frame = frame
             if self.frame.normal_map is not None:  # a time-sampled normal map
                 self.resources.set_normal_map(self.frame.normal_map)
             self.sync_counts["frame"] += 1

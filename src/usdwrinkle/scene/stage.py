@@ -246,6 +246,9 @@ class StageSceneDelegate:
         self.skel = SkelBindings(self.stage, warn)
         self._relax_override = relax_iterations
         self._prims: dict[str, Usd.Prim] = {}
+        #: the meshes' bounds for the automatic framing (made on first use, dropped on
+        #: an edit of the shapes)
+        self._bounds = None
         self.meshes: dict[str, MeshRecord] = {}
         for prim in self._rendered_meshes(self.stage.GetPseudoRoot()):
             self._add_mesh(prim)
@@ -355,7 +358,7 @@ class StageSceneDelegate:
             bits[mesh] = DirtyBits.ALL
         moved = DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_TRANSFORM
         if added or before - after or any(value & moved for value in bits.values()):
-            self.__dict__.pop("_bounds", None)  # the automatic framing sees the new shapes
+            self._bounds = None  # the automatic framing sees the new shapes
         return bits, added, sorted(before - after)
 
     def _refresh(self, path: str, bits: int) -> bool:
@@ -563,7 +566,7 @@ class StageSceneDelegate:
         if prim is not None:
             cam = camera_mod.usd_camera(prim, time, aspect)
         else:
-            if not hasattr(self, "_bounds"):
+            if self._bounds is None:
                 self._bounds = self.bounds()
             cam = camera_mod.framing_camera(*self._bounds, self.up_axis, aspect)
         lights = read_lights(self.stage, time, xform_cache, self.warn) or \

@@ -60,9 +60,9 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
             usdview_api.PrintStatus("Wrinkles: no mesh on this stage has WrinkleAPI applied")
             return []
         engine.compute_frame(frame)
-        records = {path: engine.scene.meshes[path] for path in targets}
+        records = {path: engine.meshes[path] for path in targets}
         baker = LayerBaker(stage, stage.GetRootLayer().realPath or "", records,
-                           engine.scene.meshes, display_color="amplitude",
+                           engine.meshes, display_color="amplitude",
                            layer=stage.GetSessionLayer())
         baker.add_frame(frame, {path: engine.read_fields(path) for path in targets})
     except UsdWrinkleError as exc:
