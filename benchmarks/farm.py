@@ -42,7 +42,7 @@ def preroll(quick: bool, ctx) -> dict:
     from pxr import Sdf
 
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.shot import bake_layer
+    from usdwrinkle.shot import BakeRequest, bake_layer
 
     late = 90 if quick else 900
     repeats = 3 if quick else 7
@@ -55,7 +55,8 @@ def preroll(quick: bool, ctx) -> dict:
         engine = WrinkleEngine(shot.realPath, ctx=ctx, use_baked=False, warn=lambda m: None)
         try:
             started = time.perf_counter()
-            bake_layer(engine, shot.realPath, bake, [2.0, float(late)], f"2,{late}")
+            bake_layer(engine, BakeRequest(shot.realPath, bake, (2.0, float(late)),
+                                           f"2,{late}"))
             bake_s = time.perf_counter() - started
         finally:
             engine.release()

@@ -24,7 +24,7 @@ def _bake_seconds(ctx, frames, maps=None, geometry=None, stage=SHIRT,
     from pxr import Sdf
 
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.shot import bake_layer
+    from usdwrinkle.shot import BakeRequest, bake_layer
 
     engine = WrinkleEngine(str(stage), ctx=ctx, warn=lambda m: None, use_baked=False,
                            all_meshes=all_meshes)
@@ -32,8 +32,8 @@ def _bake_seconds(ctx, frames, maps=None, geometry=None, stage=SHIRT,
         with tempfile.TemporaryDirectory() as folder:
             layer = os.path.join(folder, "bench.usdc")
             started = time.perf_counter()
-            bake_layer(engine, str(stage), layer, frames, "bench", maps=maps,
-                       geometry=geometry)
+            bake_layer(engine, BakeRequest(str(stage), layer, tuple(frames), "bench",
+                                           maps=maps, geometry=geometry))
             seconds = time.perf_counter() - started
             size = sum(p.stat().st_size for p in Path(folder).rglob("*.png")) + \
                 sum(p.stat().st_size for p in Path(folder).rglob("*.exr"))

@@ -137,21 +137,41 @@ def bakeable_meshes(engine, warn) -> dict:
     return wrinkled
 
 
-def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_spec: str,
-               with_points: bool = False, display_color: str | None = None,
-               sparse: bool = False, warn=lambda message: None,
-               progress: Callable = lambda items: items, maps=None, geometry=None,
-               survey_progress: Callable | None = None) -> int:
-    """Compute every frame in order (the phase history is sequential in time) and write
-    the wrinkle fields to ``output`` atomically; returns the number of meshes baked.
+@dataclass(frozen=True)
+class BakeRequest:
+    """What a bake writes (``usdwrinkle bake`` builds it from its options).
 
-    ``maps`` (maps.bake.MapOptions): also render each frame's wrinkle maps and bind them
-    in a material per mesh; the maps are moved into their folder just before the layer
-    is renamed into place, so an error leaves neither.
-    ``geometry`` (geometry.bake.GeometryOptions): also write a displaced render mesh per
-    wrinkled mesh, with the coarse mesh as its proxy; without ``levels``, every frame's
-    waves are surveyed first (``survey_progress`` wraps those frames)."""
+    ``frame_spec``: the frames as the user wrote them, recorded in the layer (None:
+    first:last). ``maps`` (maps.options.MapOptions): also render each frame's wrinkle
+    maps and bind them in a material per mesh; the maps are moved into their folder just
+    before the layer is renamed into place, so an error leaves neither. ``geometry``
+    (geometry.options.GeometryOptions): also write a displaced render mesh per wrinkled
+    mesh, with the coarse mesh as its proxy; without ``levels``, every frame's waves are
+    surveyed first."""
+
+    stage_path: str
+    output: str
+    frames: tuple
+    frame_spec: str | None = None
+    with_points: bool = False
+    display_color: str | None = None
+    sparse: bool = False
+    maps: object | None = None
+    geometry: object | None = None
+
+
+def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
+               progress: Callable = lambda items: items,
+               survey_progress: Callable | None = None) -> int:
+    """Compute every frame of ``request`` in order (the phase history is sequential in
+    time) and write the wrinkle fields to its output atomically; returns the number of
+    meshes baked. ``progress`` wraps the frames, ``survey_progress`` the geometry's
+    survey of them."""
     from .outputs.layers import LayerBaker
+
+    stage_path, output, frames = request.stage_path, request.output, list(request.frames)
+    maps, geometry = request.maps, request.geometry
+    frame_spec = request.frame_spec or frame_spec_text(frames)
 
     engine.check_relax_work(frames)
     wrinkled = bakeable_meshes(engine, warn)
@@ -170,8 +190,8 @@ def bake_layer(engine, stage_path: str, output: str, frames: list[float], frame_
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals
     # are baked (README: maps)
     baker = LayerBaker(engine.stage, stage_path, wrinkled, engine.meshes,
-                       with_points=with_points or maps is not None,
-                       display_color=display_color, sparse=sparse, warn=warn)
+                       with_points=request.with_points or maps is not None,
+                       display_color=request.display_color, sparse=request.sparse, warn=warn)
     wanted = set(wrinkled) | set(baker.point_meshes)
     extras = {}
     map_bake = geometry_bake = None

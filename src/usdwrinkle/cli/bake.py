@@ -162,7 +162,7 @@ def run(args) -> int:
     from ..outputs.atomic import check_writable
     from ..outputs.layers import check_layer_path
     from ..scene.stage import inherited_range_note, open_stage, stage_frames
-    from ..shot import bake_layer, frame_spec_text
+    from ..shot import BakeRequest, bake_layer
 
     check_stage_args(args)
     maps = map_options(args)
@@ -187,12 +187,11 @@ def run(args) -> int:
 
             check_map_options(maps, engine.max_texture_size)
         started = time.perf_counter()
-        count = bake_layer(engine, args.stage, args.output, frames,
-                           args.frames or frame_spec_text(frames),
-                           with_points=args.with_points, display_color=args.display_color,
-                           sparse=args.sparse, warn=reporter.warn,
-                           progress=lambda items: reporter.progress(items, "bake"), maps=maps,
-                           geometry=geometry,
+        request = BakeRequest(args.stage, args.output, tuple(frames), args.frames,
+                              with_points=args.with_points, display_color=args.display_color,
+                              sparse=args.sparse, maps=maps, geometry=geometry)
+        count = bake_layer(engine, request, warn=reporter.warn,
+                           progress=lambda items: reporter.progress(items, "bake"),
                            survey_progress=lambda items: reporter.progress(items, "survey"))
         if not args.quiet:
             print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "

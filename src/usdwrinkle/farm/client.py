@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 from ..errors import STDERR, UsdWrinkleError
 from ..outputs.atomic import remove_temporaries
-from ..shot import NO_WRINKLED_MESH, EngineOptions, ImageOptions, bake_layer, frame_spec_text
+from ..shot import NO_WRINKLED_MESH, BakeRequest, EngineOptions, ImageOptions, bake_layer
 from .worker import file_identity, render_chunk
 
 #: how often Dask reruns a chunk whose worker died
@@ -193,8 +193,8 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
             engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
                 stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
             try:
-                bake_layer(engine, job.stage_path, layer, frames,
-                           job.frame_spec or frame_spec_text(frames),
+                bake_layer(engine, BakeRequest(job.stage_path, layer, tuple(frames),
+                                               job.frame_spec),
                            warn=reporter.warn,
                            progress=lambda items: reporter.progress(items, "bake"))
             finally:
