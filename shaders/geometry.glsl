@@ -28,8 +28,8 @@ layout(binding = GEOMETRY_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform int u_count;
 uniform int u_wrinkles;
 
-// The displaced point of entry e (xyz) with its h (w), and its surface normal.
-vec4 displaced(int e, out vec3 normal, out float amplitude) {
+// The displaced point of entry e, and its surface normal.
+vec3 displaced(int e, out vec3 normal) {
     vec4 row = fetch(entries, e);
     int t = int(row.x);
     vec3 bary = row.yzw;
@@ -54,8 +54,7 @@ vec4 displaced(int e, out vec3 normal, out float amplitude) {
     float h = wave.height;
     vec3 g = wave.gradient - dot(wave.gradient, n) * n;
     normal = safe_normalize(n - g, n);
-    amplitude = wave.amplitude;
-    return vec4(p + h * n, h);
+    return p + h * n;
 }
 
 void main() {
@@ -63,15 +62,13 @@ void main() {
     if (v >= u_count) return;
     ivec2 range = fetch(ranges, v).xy;
     vec3 normal;
-    float amplitude;
-    vec4 point = displaced(range.x, normal, amplitude);
+    vec3 point = displaced(range.x, normal);
     vec3 normal_sum = normal;
     for (int e = range.x + 1; e < range.y; ++e) {
-        float other_amplitude;
         vec3 other;
-        displaced(e, other, other_amplitude);
+        displaced(e, other);
         normal_sum += other;
     }
-    STORE(points_out, v, point);
-    STORE(normals_out, v, vec4(safe_normalize(normal_sum, normal), amplitude));
+    STORE(points_out, v, vec4(point, 1.0));
+    STORE(normals_out, v, vec4(safe_normalize(normal_sum, normal), 0.0));
 }

@@ -36,12 +36,12 @@ def test_200_frames_keep_memory_and_gpu_resources_flat(gl_context):
             if frame == 20:
                 after_warmup = rss_bytes()
                 resources = {p: m.resources for p, m in engine.render_delegate.rprims.items()}
-                framebuffer = engine.render_delegate._framebuffer
+                framebuffer = engine.render_delegate.current_framebuffer
         final = rss_bytes()
         assert final < after_warmup * 1.05, (after_warmup, final)
         # the GPU objects of frame 20 are the ones of frame 200: nothing re-created
         assert all(engine.render_delegate.rprims[p].resources is r for p, r in resources.items())
-        assert engine.render_delegate._framebuffer is framebuffer
+        assert engine.render_delegate.current_framebuffer is framebuffer
     finally:
         engine.release()
 

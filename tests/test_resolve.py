@@ -20,7 +20,7 @@ def drawn(request, gl_context):
     """The shirt at frame 24, drawn; yields (engine, framebuffer, samples)."""
     engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context, warn=lambda m: None)
     engine.render_frame(24.0, 160, 120, samples=request.param)
-    yield engine, engine.render_delegate._framebuffer, request.param
+    yield engine, engine.render_delegate.current_framebuffer, request.param
     engine.release()
 
 

@@ -19,8 +19,8 @@ layout(binding = WAVE_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  /
 uniform float u_profile_samples;
 // Wave systems per vertex: the program variant with TWO_SYSTEMS defined (wrinkle:biaxial,
 // or a bake of it) loops over u_systems; the default variant is the paper's one system,
-// compiled without the second system's code (on llvmpipe the general loop cost a third
-// more draw time even with one system).
+// compiled without the second system's code (the general loop costs draw time even with
+// one system: render/shaders.py, Variants, has the measurement).
 #if defined TWO_SYSTEMS
 uniform int u_systems;
 #define SYSTEMS u_systems

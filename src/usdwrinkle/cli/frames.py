@@ -8,7 +8,7 @@ from pxr import Usd, UsdUtils
 
 from ..errors import UsdWrinkleError
 from ..limits import MAX_FRAMES, MAX_TIME_CODE
-from ..timecode import SUBFRAME_DECIMALS, format_frame, frame_text  # noqa: F401
+from ..timecode import SUBFRAME_DECIMALS, frame_text
 
 _HASHES = re.compile(r"#+")
 

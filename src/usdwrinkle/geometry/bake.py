@@ -130,7 +130,7 @@ class GeometryBake:
             writer.define()
             self.writers[path] = writer
 
-    def add_frame(self, frame: float, wrinkles: bool = True) -> None:
+    def add_frame(self, frame: float) -> None:
         """Evaluate and record the frame the engine computed last."""
         if not self.writers:
             return
@@ -138,7 +138,7 @@ class GeometryBake:
             self._evaluator = GeometryEvaluator(self.engine.ctx)
         for path, writer in self.writers.items():
             res = self.engine.mesh_resources(path)
-            result = self._evaluator.evaluate(res, writer.fine, wrinkles)
+            result = self._evaluator.evaluate(res, writer.fine)
             if not (np.all(np.isfinite(result.points)) and np.all(np.isfinite(result.normals))):
                 raise UsdWrinkleError("the displaced points are not finite (NaN or Inf)", path)
             writer.add_frame(frame, result.points, result.normals)

@@ -24,12 +24,10 @@ class FineFrame:
 
     points : (n, 3) float32 displaced points.
     normals : (n, 3) float32 unit normals from the wrinkle gradient.
-    height : (n,) float32 the displacement h along the interpolated coarse normal.
     """
 
     points: np.ndarray
     normals: np.ndarray
-    height: np.ndarray
 
 
 class GeometryEvaluator:
@@ -77,8 +75,7 @@ class GeometryEvaluator:
         out_points = points.read()
         out_normals = normals.read()
         return FineFrame(np.ascontiguousarray(out_points[:, :3]),
-                         np.ascontiguousarray(out_normals[:, :3]),
-                         np.ascontiguousarray(out_points[:, 3]))
+                         np.ascontiguousarray(out_normals[:, :3]))
 
     def _release(self, path: str) -> None:
         for table in self.tables.pop(path, ()):

@@ -177,6 +177,11 @@ class RenderDelegate:
         if mesh is not None:
             mesh.release()
 
+    @property
+    def current_framebuffer(self) -> Framebuffer | None:
+        """The framebuffer the last frame was drawn into (kept for the next), or None."""
+        return self._framebuffer
+
     def framebuffer(self, width: int, height: int, samples: int = 4,
                     count: int = 3, colour: str = "f4") -> Framebuffer:
         """A framebuffer of at least ``count`` attachments, colour of ``colour`` (kept, and
