@@ -2,7 +2,11 @@
 shared with the sample generator and the benchmarks."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import OpenImageIO as oiio
+from pxr import Sdf, Vt
 
 from usdwrinkle.authoring.builders import point_cache_stage  # noqa: F401
 
@@ -36,3 +40,49 @@ def read_until(stream, pattern, timeout: float) -> bytes:
             assert chunk, f"the stream ended before {pattern.pattern!r}; got {data[-400:]!r}"
             data += chunk
     return data
+
+
+# --- shared by several test modules (one place, no test module imports another) ------
+
+#: the sample shirt's sleeve
+SLEEVE = "/World/Arm/Sleeve"
+
+EXR_CHANNELS = ("R", "G", "B", "A", "wrinkle.height", "wrinkle.amplitude", "N.X", "N.Y", "N.Z",
+                "Z")
+
+
+def read_exr(path):
+    buf = oiio.ImageBuf(str(path))
+    spec = buf.spec()
+    pixels = buf.get_pixels(oiio.FLOAT).reshape(spec.height, spec.width, spec.nchannels)
+    return {name: pixels[..., i] for i, name in enumerate(spec.channelnames)}
+
+
+def edited_copy(layer: Path, out: Path, edit) -> Path:
+    """A copy of the bake ``layer`` at ``out`` (its sublayers still found), changed by
+    ``edit(copy)``."""
+    source = Sdf.Layer.FindOrOpen(str(layer))
+    copy = Sdf.Layer.CreateNew(str(out))
+    copy.TransferContent(source)
+    copy.subLayerPaths[:] = [str(layer.parent / p) for p in source.subLayerPaths]
+    edit(copy)
+    copy.Save()
+    return out
+
+
+def set_sample(name, frame, transform):
+    """An edit for edited_copy: the sleeve's baked primvar ``name`` at ``frame``
+    replaced by ``transform(value)``."""
+    def edit(layer):
+        path = Sdf.Path(f"{SLEEVE}.primvars:wrinkle:{name}")
+        value = np.asarray(layer.QueryTimeSample(path, frame), np.float32)
+        new = transform(value)
+        array = Vt.FloatArray.FromNumpy(new) if new.ndim == 1 else Vt.Vec3fArray.FromNumpy(new)
+        layer.SetTimeSample(path, frame, array)
+    return edit
+
+
+def scratch_frames_since(started: float) -> list[str]:
+    """Frames encoded in memory (/dev/shm) since ``started`` and left behind."""
+    return [p.name for p in Path("/dev/shm").glob(".usdwrinkle-frame.*")
+            if p.stat().st_mtime >= started]

@@ -10,18 +10,9 @@ import pytest
 
 from usdwrinkle.cli.main import main
 
+from helpers import EXR_CHANNELS, read_exr
+
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
-EXR_CHANNELS = ("R", "G", "B", "A", "wrinkle.height", "wrinkle.amplitude", "N.X", "N.Y", "N.Z",
-                "Z")
-
-
-def read_exr(path):
-    buf = oiio.ImageBuf(str(path))
-    spec = buf.spec()
-    pixels = buf.get_pixels(oiio.FLOAT).reshape(spec.height, spec.width, spec.nchannels)
-    return {name: pixels[..., i] for i, name in enumerate(spec.channelnames)}
-
-
 def test_render_writes_every_aov(gl_context, tmp_path):
     out = tmp_path / "shirt.####.exr"
     assert main(["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "24",

@@ -110,11 +110,11 @@ def test_an_input_error_is_reported_once(gl_context, tmp_path):
 
 
 def test_an_error_inside_a_chunk_is_reported_once(gl_context, tmp_path):
-    from test_render_from_bake import SLEEVE, _set, edited_copy
+    from helpers import SLEEVE, edited_copy, set_sample
 
     layer = tmp_path / "bake.usda"
     assert main(["bake", SHIRT, str(layer), "--quiet"]) == 0
-    broken = edited_copy(layer, tmp_path / "broken.usda", _set(
+    broken = edited_copy(layer, tmp_path / "broken.usda", set_sample(
         "phase", 10, lambda v: np.full_like(v, np.nan)))
     out = tmp_path / "frames"
     done = cli("render", broken, out / "s.####.png", "--dask", "--workers", "2", "--chunk",

@@ -25,8 +25,7 @@ from pxr import Sdf, UsdGeom
 from usdwrinkle import schema
 
 from conftest import grid_sheet
-from helpers import point_cache_stage
-from test_hostile import scratch_frames_since
+from helpers import point_cache_stage, scratch_frames_since
 
 #: seconds one CLI call may take (a small stage: start-up plus a few frames)
 DEADLINE = 90

@@ -22,7 +22,7 @@ from usdwrinkle.cli.frames import frame_path, parse_frame_spec
 from usdwrinkle.cli.main import main
 
 from conftest import grid_sheet
-from helpers import point_cache_stage, read_until
+from helpers import point_cache_stage, read_until, scratch_frames_since
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 SHIRT_MESH = "/World/Arm/Sleeve"
@@ -76,12 +76,6 @@ def cli(args, timeout=120, cwd=None) -> subprocess.CompletedProcess:
 def leftovers(folder: Path) -> list[str]:
     """Temporary files (ours: '.NAME.*.tmp.EXT', probes, scratch frames) under ``folder``."""
     return [p.name for p in folder.rglob(".*") if p.is_file()]
-
-
-def scratch_frames_since(started: float) -> list[str]:
-    """Frames encoded in memory (/dev/shm) since ``started`` and left behind."""
-    return [p.name for p in Path("/dev/shm").glob(".usdwrinkle-frame.*")
-            if p.stat().st_mtime >= started]
 
 
 @contextlib.contextmanager

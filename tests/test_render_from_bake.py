@@ -10,11 +10,10 @@ from pxr import Sdf, Vt
 
 from usdwrinkle.cli.main import main
 
-from test_cli import EXR_CHANNELS, read_exr
+from helpers import EXR_CHANNELS, SLEEVE, edited_copy, read_exr, set_sample
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 SHIRT = str(SAMPLES / "shirt.usda")
-SLEEVE = "/World/Arm/Sleeve"
 WIDTH = "128"
 
 
@@ -64,18 +63,6 @@ def test_summary_names_the_baked_meshes(gl_context, tmp_path, shirt_bake, capsys
     assert "baked wave fields" not in capsys.readouterr().out
 
 
-def edited_copy(layer: Path, out: Path, edit) -> Path:
-    """A copy of the bake ``layer`` at ``out`` (its sublayers still found), changed by
-    ``edit(copy)``."""
-    source = Sdf.Layer.FindOrOpen(str(layer))
-    copy = Sdf.Layer.CreateNew(str(out))
-    copy.TransferContent(source)
-    copy.subLayerPaths[:] = [str(layer.parent / p) for p in source.subLayerPaths]
-    edit(copy)
-    copy.Save()
-    return out
-
-
 def perturbed_copy(layer: Path, out: Path, seed: int = 7) -> Path:
     """The bake as another GL implementation might have made it: the same waves to float
     rounding, phases that drifted apart (docs/method.md measures ~1.2 rad median between
@@ -119,16 +106,6 @@ def test_a_bake_from_another_machine_renders_identically_from_the_layer(
     assert_same(tmp_path / "ours.0017.exr", tmp_path / "recomputed.0017.exr")
 
 
-def _set(name, frame, transform):
-    def edit(layer):
-        path = Sdf.Path(f"{SLEEVE}.primvars:wrinkle:{name}")
-        value = np.asarray(layer.QueryTimeSample(path, frame), np.float32)
-        new = transform(value)
-        array = Vt.FloatArray.FromNumpy(new) if new.ndim == 1 else Vt.Vec3fArray.FromNumpy(new)
-        layer.SetTimeSample(path, frame, array)
-    return edit
-
-
 def _drop_sample(frame):
     def edit(layer):
         for name in ("amplitude", "waveVector", "phase", "direction", "compression"):
@@ -142,12 +119,13 @@ def _remove_phase(layer):
 
 
 @pytest.mark.parametrize("edit,frames,message", [
-    (_set("amplitude", 3, lambda v: v[:-5]), "1:4",
+    (set_sample("amplitude", 3, lambda v: v[:-5]), "1:4",
      f"baked field has {455 - 5} values for 455 points (or the wrong type) "
      f"({SLEEVE}.primvars:wrinkle:amplitude at frame 3)"),
-    (_set("phase", 2, lambda v: np.where(np.arange(len(v)) == 7, np.nan, v).astype(np.float32)),
+    (set_sample("phase", 2,
+                lambda v: np.where(np.arange(len(v)) == 7, np.nan, v).astype(np.float32)),
      "1:4", f"baked field is not finite (NaN or Inf) ({SLEEVE}.primvars:wrinkle:phase at frame 2)"),
-    (_set("waveVector", 4, lambda v: np.full_like(v, np.inf)), "4",
+    (set_sample("waveVector", 4, lambda v: np.full_like(v, np.inf)), "4",
      f"baked field is not finite (NaN or Inf) ({SLEEVE}.primvars:wrinkle:waveVector at frame 4)"),
     (_drop_sample(5), "4:6",
      f"frame missing from the baked range 1..24; bake this frame, or pass --recompute "
