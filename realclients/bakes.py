@@ -180,6 +180,9 @@ def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         layers["display"] = p.bake(p.base("display.usda"), "--display-color", "amplitude",
                                    "--with-points")
         images["ours_aovs"] = p.render(p.stage, p.base("ours_aovs.exr"))
+        # usdwrinkle's render of that layer (its preview material reads displayColor)
+        images["ours_display"] = p.render(layers["display"], p.base("ours_display.png"),
+                                          "--no-wrinkles")
     jobs = []
     for label, layer in layers.items():
         images[f"storm_{label}"] = p.base(f"storm_{label}.png")

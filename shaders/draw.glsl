@@ -16,6 +16,11 @@ layout(binding = DRAW_CORNER_ST) uniform sampler2D corner_st;
 #if defined NORMAL_MAP
 layout(binding = DRAW_NORMAL_ST) uniform sampler2D normal_st;
 #endif
+#if defined VERTEX_COLOR
+// colours per triangle corner ([3t + c].rgb, linear) that multiply the diffuse colour: a
+// per-vertex displayColor, or the primvar a UsdPrimvarReader_float3 feeds diffuseColor
+layout(binding = DRAW_CORNER_COLORS) uniform sampler2D corner_colors;
+#endif
 
 uniform mat4 u_local_to_world;   // USD row-vector matrix: GLSL sees its transpose
 uniform mat4 u_world_to_clip;    // view * projection, same convention
@@ -37,6 +42,9 @@ centroid out vec3 v_bary;
 centroid out vec2 v_st;
 #if defined NORMAL_MAP
 centroid out vec2 v_normal_st;
+#endif
+#if defined VERTEX_COLOR
+centroid out vec3 v_color;
 #endif
 // per triangle, the same at its three corners (the draw is not indexed): the corner
 // waves (wave.glsl: CornerWaves), gathered here once instead of in every fragment
@@ -66,6 +74,9 @@ void main() {
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
     v_st = fetch(corner_st, corner).xy;
+#if defined VERTEX_COLOR
+    v_color = fetch(corner_colors, corner).rgb;
+#endif
 #if defined NORMAL_MAP
     v_normal_st = fetch(normal_st, corner).xy;
 #endif
@@ -102,6 +113,9 @@ centroid in vec3 v_bary;
 centroid in vec2 v_st;
 #if defined NORMAL_MAP
 centroid in vec2 v_normal_st;
+#endif
+#if defined VERTEX_COLOR
+centroid in vec3 v_color;
 #endif
 flat in vec4 v_wave[WAVE_SLOTS];
 flat in vec3 v_phase[SYSTEMS_MAX];
@@ -242,6 +256,9 @@ void main() {
 #endif
 
     vec3 base = u_diffuse_color;
+#if defined VERTEX_COLOR
+    base *= v_color;
+#endif
 #if defined TEXTURED
     vec4 texel = texture_anisotropic(u_diffuse_texture, st) * u_texture_scale + u_texture_bias;
     base *= texel.rgb;

@@ -27,7 +27,7 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   # the normals pass's (render/passes/normals.py)
                   "SMOOTH", "FACETED", "SKINNED",
                   # the draw pass's (render/passes/draw.py)
-                  "FALLBACK_SURFACE", "TEXTURED", "DOME", "MASKED",
+                  "FALLBACK_SURFACE", "TEXTURED", "DOME", "MASKED", "VERTEX_COLOR",
                   # the resolve pass's (render/resolve.py)
                   "SAMPLES", "NEED_FIELDS", "NEED_NORMAL", "OUTPUT_AOVS", "OUTPUT_EXR",
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK",

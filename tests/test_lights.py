@@ -228,3 +228,52 @@ def test_the_fallback_surface_is_storms_simple_lighting(gl_context):
         expected = 0.002 + ambient * 0.2 + c * n_l / 3.1415 * np.asarray(display) + \
             c * n_h ** 32 / 3.1415 * 0.1
         np.testing.assert_allclose(pixel, expected, rtol=2e-4)
+
+
+def test_a_per_vertex_display_color_is_shaded_per_corner(gl_context):
+    """A displayColor that varies over the mesh is interpolated across each triangle, as
+    Storm's fallback surface does (usdwrinkle drew the first colour everywhere): red on
+    the quad's left edge, blue on its right, so a pixel's colour is the linear mix at its
+    x, through glf's simple lighting as in the test above."""
+    stage = quad_stage(None, (35.0, 0.0, 0.0))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Quad"))
+    red, blue = np.array([0.9, 0.1, 0.1]), np.array([0.1, 0.2, 0.8])
+    primvar = mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+    primvar.Set([Gf.Vec3f(*red), Gf.Vec3f(*blue), Gf.Vec3f(*blue), Gf.Vec3f(*red)])
+    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam", warn=lambda m: None)
+    try:
+        color = engine.render_frame(float("nan"), 65, 65, wrinkles=False,
+                                    samples=1)["color"].pixels
+    finally:
+        engine.release()
+    c = 50000 * SUN_SOLID_ANGLE
+    n_l = math.cos(math.radians(35))
+    h = np.array([0.0, -math.sin(math.radians(35)), 1 + math.cos(math.radians(35))])
+    n_h = float(h[2] / np.linalg.norm(h))
+    half_width = 5 * 20.955 / 2 / 50   # at the quad's distance
+    for column in (10, 32, 50):
+        x = ((column + 0.5) / 65 * 2 - 1) * half_width
+        display = red + (blue - red) * (x + 1) / 2
+        expected = 0.002 + c * n_l / 3.1415 * display + c * n_h ** 32 / 3.1415 * 0.1
+        np.testing.assert_allclose(color[32, column, :3], expected, rtol=2e-3)
+
+
+def test_a_time_sampled_display_color_is_read_each_frame(gl_context):
+    """A displayColor with time samples (the display-colour bake layer's) is shaded
+    with each frame's own values."""
+    stage = quad_stage(None, (35.0, 0.0, 0.0))
+    primvar = UsdGeom.Mesh(stage.GetPrimAtPath("/Quad")).CreateDisplayColorPrimvar(
+        UsdGeom.Tokens.vertex)
+    primvar.GetAttr().ClearDefault()  # quad_stage's one constant colour
+    colours = {1.0: (0.9, 0.1, 0.1), 2.0: (0.1, 0.2, 0.8)}
+    for frame, colour in colours.items():
+        primvar.Set([Gf.Vec3f(*colour)] * 4, frame)
+    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam", warn=lambda m: None)
+    try:
+        pixels = {frame: engine.render_frame(frame, 65, 65, wrinkles=False,
+                                             samples=1)["color"].pixels[32, 32, :3].copy()
+                  for frame in (1.0, 2.0, 1.0)}
+    finally:
+        engine.release()
+    ratio = {frame: pixels[frame][0] / pixels[frame][2] for frame in pixels}
+    assert ratio[1.0] > 3.0 and ratio[2.0] < 0.6, ratio

@@ -233,6 +233,22 @@ def test_display_color_layer_shows_the_amplitude_in_storm(bake_views, name):
     assert order <= -0.95, (name, order)
 
 
+@pytest.mark.parametrize("name,least", [("shirt", 0.98), ("pull", 0.98), ("CesiumMan", 0.90)])
+def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, name, least):
+    """usdwrinkle draws the display-colour layer as Storm does: each corner's
+    displayColor through the preview material's UsdPrimvarReader_float3 (it drew the
+    clay default before, ignoring per-vertex colours). CesiumMan, lit by usdview's
+    head-light only, measures 0.913: the same ramp, with Storm's highlights brighter on
+    the default UsdPreviewSurface (roughness 0.5); the cause is not measured yet (the
+    plain frame with his own material agrees at 0.997)."""
+    from realclients.compare import compare
+
+    views = bake_views[name]
+    match = compare(views.images["ours_display"], views.images["storm_display"])
+    print(name, match)
+    assert match.correlation >= least and match.iou >= 0.99, match
+
+
 @pytest.mark.parametrize("frame,bounds", [
     ("triangle", (0.6, 2.0, 11.0, 17.0)),      # measured 0.45, 1.52, 9.75; 15.2
     ("mikktspace", (0.6, 2.3, 22.0, 30.0)),    # measured 0.46, 1.82, 19.7; 27.6

@@ -64,6 +64,8 @@ class Mesh:
             self.frame = frame
             if self.frame.normal_map is not None:  # a time-sampled normal map
                 self.resources.set_normal_map(self.frame.normal_map)
+            if self.frame.corner_colors is not None:  # a time-sampled displayColor
+                self.resources.set_frame_colors(self.frame.corner_colors)
             self.sync_counts["frame"] += 1
         return DirtyBits.CLEAN
 

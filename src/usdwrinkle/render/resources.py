@@ -181,6 +181,10 @@ class MeshResources:
         self.baked_waves: Table | None = None  # write_baked() makes it
         self.corner_st = self._table(3 * self.num_triangles, 2,
                                      data=self._corner_st(record))  # [3t + c]
+        #: colours per triangle corner ([3t + c], linear RGB) that multiply the diffuse
+        #: colour: a per-vertex displayColor (MaterialRecord.corner_colors), else None
+        self.corner_colors: Table | None = None
+        self._set_corner_colors(record.material.corner_colors)
         #: the normal map's texture coordinates ([3t + c]), its tiles (a texture array)
         #: and their layers by UDIM tile (set_normal_map)
         self.normal_st = self._table(3 * self.num_triangles, 2)
@@ -275,10 +279,28 @@ class MeshResources:
             self.textures.remove(old)
             old.release()
 
+    def _set_corner_colors(self, colors) -> None:
+        """Upload colours per triangle corner ((m, 3, 3)), or drop them (None)."""
+        if colors is None:
+            if self.corner_colors is not None:
+                self.tables.remove(self.corner_colors)
+                self.corner_colors.release()
+                self.corner_colors = None
+            return
+        if self.corner_colors is None:
+            self.corner_colors = self._table(3 * self.num_triangles, 4)
+        self.corner_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+
+    def set_frame_colors(self, colors) -> None:
+        """A frame's own corner colours (time-sampled displayColor)."""
+        if colors is not None and self.corner_colors is not None:
+            self.corner_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+
     def update_material(self, record: MeshRecord) -> None:
         """Re-upload the material (texture, texture coordinates) of an edited record."""
         self.record = record
         self.corner_st.write(self._corner_st(record))
+        self._set_corner_colors(record.material.corner_colors)
         if self.texture is not None:
             self.textures.remove(self.texture)
             self.texture.release()

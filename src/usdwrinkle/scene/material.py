@@ -326,6 +326,45 @@ def bound_surface(prim: Usd.Prim, purpose: str = UsdShade.Tokens.allPurpose):
     return material, shader
 
 
+def corner_colors(prim: Usd.Prim, name: str, topology: Topology, time):
+    """(colours per triangle corner (m, 3, 3) float32, time-sampled) of the colour
+    primvar ``name``, or None where it has no usable value."""
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
+    if not primvar or not primvar.HasValue():
+        return None
+    values = corner_values(primvar, topology, time)
+    if values is None or values.shape[-1] < 3 or not np.all(np.isfinite(values[..., :3])):
+        return None
+    return (np.ascontiguousarray(values[..., :3], np.float32),
+            primvar.ValueMightBeTimeVarying())
+
+
+def _primvar_reader(source: UsdShade.Shader):
+    """(primvar name, fallback colour or None) of a UsdPrimvarReader_float3 (or _float4)
+    node that feeds diffuseColor, or None for any other source (a texture)."""
+    shader_id = source.GetIdAttr().Get() if source.GetIdAttr() else None
+    if shader_id not in ("UsdPrimvarReader_float3", "UsdPrimvarReader_float4"):
+        return None
+    varname = source.GetInput("varname")
+    name = varname.Get() if varname else None
+    if not name:
+        return None
+    fallback = source.GetInput("fallback")
+    value = fallback.Get() if fallback else None
+    return str(name), (None if value is None else np.asarray(value, np.float32)[:3])
+
+
+def _per_corner(colors) -> dict:
+    """MaterialRecord fields of a per-corner colour (a non-constant one only)."""
+    if colors is None:
+        return {}
+    values, varies = colors
+    flat = values.reshape(-1, 3)
+    if not varies and (len(flat) == 0 or np.all(flat == flat[0])):
+        return {}  # one colour: the constant diffuse colour does it
+    return {"corner_colors": values, "color_varies": varies}
+
+
 def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
     """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
     diffuseColor, constant or from a UsdUVTexture, its normal map and its other inputs;
@@ -334,6 +373,10 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
     purpose's where there is one, as usdview's Storm resolves it."""
     material, shader = bound_surface(prim, UsdShade.Tokens.preview)
     if shader is None:
+        per_corner = _per_corner(corner_colors(prim, "displayColor", topology, time))
+        if per_corner:  # Storm shades each corner's displayColor
+            return MaterialRecord(np.ones(3, np.float32), color_primvar="displayColor",
+                                  opacity=display_opacity(prim, time), **per_corner)
         color = display_color(prim, time)
         if color is DEFAULT_COLOR:
             color = FALLBACK_DISPLAY_COLOR
@@ -345,6 +388,19 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
         color = PREVIEW_DIFFUSE_FALLBACK if value is None else value
+        return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
+                              normal_map_varies=varies, wrinkle_maps=maps, surface=surface)
+    reader = _primvar_reader(source)
+    if reader is not None:  # diffuseColor from a primvar (UsdPrimvarReader_float3)
+        name, fallback = reader
+        colors = corner_colors(prim, name, topology, time)
+        if colors is not None:
+            values, colors_vary = colors
+            return MaterialRecord(np.ones(3, np.float32), normal_map=normal_map,
+                                  normal_map_varies=varies, wrinkle_maps=maps,
+                                  surface=surface, corner_colors=values,
+                                  color_primvar=name, color_varies=colors_vary)
+        color = PREVIEW_DIFFUSE_FALLBACK if fallback is None else fallback
         return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
                               normal_map_varies=varies, wrinkle_maps=maps, surface=surface)
     texture, st, scale, bias = _texture(prim, source, topology, time, warn)

@@ -170,6 +170,11 @@ class MaterialRecord:
         reads its own (MeshFrame.normal_map).
     wrinkle_maps : the material is one that ``bake --maps`` wrote (its normal map holds
         the wrinkles already).
+    corner_colors : (m, 3, 3) float32 linear colours per triangle corner that multiply
+        the diffuse colour, or None: a displayColor that is not constant (Storm's fallback
+        surface), or the primvar a UsdPrimvarReader_float3 feeds diffuseColor from.
+    color_primvar : that primvar's name; color_varies: it is time-sampled (each frame
+        reads its own, MeshFrame.corner_colors).
     """
 
     diffuse_color: np.ndarray
@@ -181,6 +186,9 @@ class MaterialRecord:
     normal_map_varies: bool = False
     wrinkle_maps: bool = False
     surface: SurfaceParams | None = None
+    corner_colors: np.ndarray | None = None
+    color_primvar: str | None = None
+    color_varies: bool = False
     opacity: float = 1.0
 
     @property
@@ -261,6 +269,8 @@ class MeshFrame:
     baked: object | None = None                 # scene.baked.BakedFields at this frame
     normal_map: NormalMapRecord | None = None   # this frame's, when its file is time-sampled
     normals: np.ndarray | None = None           # (K, 3) authored normals, when time-sampled
+    #: (m, 3, 3) this frame's corner colours, when the material's are time-sampled
+    corner_colors: np.ndarray | None = None
     #: DQS: the joints' transforms split as UsdSkel does (scene/skel.dual_quaternions:
     #: real (J, 4) xyzw, dual (J, 4) xyzw, scale (J, 3, 3), any joint scales), made by the
     #: scene so that the GPU side needs no Gf

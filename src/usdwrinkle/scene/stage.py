@@ -32,7 +32,7 @@ from .changes import ChangeTracker
 from .dirty import DirtyBits, classify
 from .inputs import StageInputs, package_file, scan_inputs
 from .lights import default_lights, read_lights
-from .material import read_material, read_normal_map
+from .material import corner_colors, read_material, read_normal_map
 from .normals import plan_normals, sample_normals
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
@@ -476,7 +476,8 @@ class StageSceneDelegate:
             dqs = dual_quaternions(joints) if record.skin.method == "dualQuaternion" else None
             return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
                              active, baked, self._frame_normal_map(record, prim, time),
-                             dual_quaternions=dqs)
+                             dual_quaternions=dqs,
+                             corner_colors=self._frame_colors(record, prim, time))
         normals = sample_normals(prim, record.normals, time, frame) \
             if not time.IsDefault() else None
         points = None
@@ -493,7 +494,18 @@ class StageSceneDelegate:
             check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
         return MeshFrame(local_to_world, visible, points, baked=baked,
                          normal_map=self._frame_normal_map(record, prim, time),
-                         normals=normals)
+                         normals=normals, corner_colors=self._frame_colors(record, prim, time))
+
+    @staticmethod
+    def _frame_colors(record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
+        """This frame's colours per corner, where the material's are time-sampled."""
+        material = record.material
+        if not material.color_varies or time.IsDefault():
+            return None
+        colors = corner_colors(prim, material.color_primvar, record.topology, time)
+        if colors is None or colors[0].shape != material.corner_colors.shape:
+            return None  # the default time's colours stay
+        return colors[0]
 
     def _frame_normal_map(self, record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
         """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""

@@ -153,6 +153,7 @@ class DrawPass:
                                 NORMAL_MAP=res.normal_map is not None,
                                 FALLBACK_SURFACE=material.surface is None,
                                 TEXTURED=res.texture is not None, DOME=self.dome_lit,
+                                VERTEX_COLOR=res.corner_colors is not None,
                                 MASKED=material.surface is not None and
                                 material.surface.opacity_threshold > 0.0)
         if variant.frame_uniforms is not self.frame_uniforms:  # a variant made this frame
@@ -190,5 +191,7 @@ class DrawPass:
                            "DRAW_NORMAL_CORNERS": res.normal_corners})
         if res.normal_map is not None:
             bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
+        if res.corner_colors is not None:
+            bind(units, reads={"DRAW_CORNER_COLORS": res.corner_colors})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
 
