@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from usdwrinkle.cli.main import main
 
 FIELDS = {
@@ -16,6 +18,7 @@ FIELDS = {
 }
 
 
+@pytest.mark.slow
 def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     out_json, out_md = tmp_path / "bench.json", tmp_path / "bench.md"
     assert main(["bench", "--quick", "--json", str(out_json), "--markdown", str(out_md),

@@ -188,6 +188,7 @@ def test_remote_scheduler_survives_a_killed_worker(gl_context, tmp_path):
         logs.close()
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_cluster_and_leaves_no_temporary(gl_context, tmp_path):
     import psutil
 
