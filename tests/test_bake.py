@@ -213,3 +213,22 @@ def test_bake_refuses_to_overwrite_inputs_and_leaves_nothing_on_error(gl_context
     assert main(["bake", str(source), str(tmp_path / "x.usda"), "--frames", "a:b",
                  "--quiet"]) == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == ["shot.usda"]
+
+
+def test_the_layer_names_its_source_relative_to_itself(tmp_path, monkeypatch):
+    """Issue 27: customLayerData.source was relative to the working directory of the
+    bake; it is relative to the layer, as its sublayer path is, wherever the bake ran."""
+    from pxr import Sdf
+
+    (tmp_path / "shots").mkdir()
+    (tmp_path / "elsewhere" / "deeper").mkdir(parents=True)
+    monkeypatch.chdir(tmp_path / "elsewhere" / "deeper")
+    rest, counts, indices = grid_sheet(5, 5, 1.0)
+    stage = point_cache_stage(rest, {1: rest * [0.8, 1, 1]}, counts, indices)
+    stage.GetRootLayer().Export(str(tmp_path / "shots" / "sheet.usda"))
+    out = tmp_path / "bakes" / "sheet_wrinkles.usda"
+    out.parent.mkdir()
+    assert main(["bake", "../../shots/sheet.usda", str(out), "--quiet", "--all-meshes"]) == 0
+    layer = Sdf.Layer.FindOrOpen(str(out))
+    assert layer.customLayerData["usdwrinkle"]["source"] == "../shots/sheet.usda"
+    assert list(layer.subLayerPaths) == ["../shots/sheet.usda"]

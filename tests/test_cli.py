@@ -177,3 +177,39 @@ def test_exr_half_and_compression_keep_names_and_values(gl_context, tmp_path):
     overlapped = half.get_pixels(oiio.FLOAT)
     assert np.array_equal(np.nan_to_num(serial, posinf=1e30),
                           np.nan_to_num(overlapped, posinf=1e30))
+
+
+def test_info_is_a_health_check(tmp_path):
+    """Issue 27: info exits 1 when it cannot make a GL context (here: a GPU index the node
+    does not have, USDWRINKLE_EGL_DEVICE), so a farm can use it to check a node; with a
+    context it exits 0. It names usd-core by the package's own version (26.11), not
+    OpenUSD's 0.26.11 alone."""
+    import subprocess
+    import sys
+    from importlib.metadata import version
+
+    ok = subprocess.run([sys.executable, "-m", "usdwrinkle", "info"], capture_output=True,
+                        text=True, timeout=120)
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert f"usd-core {version('usd-core')} (OpenUSD 0." in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "usdwrinkle", "info"], capture_output=True,
+                         text=True, timeout=120, env={**os.environ, "USDWRINKLE_EGL_DEVICE": "99"})
+    assert bad.returncode == 1, bad.stdout + bad.stderr
+    assert "GL renderer: unavailable" in bad.stdout and "device index 99" in bad.stdout
+    word = subprocess.run([sys.executable, "-m", "usdwrinkle", "info"], capture_output=True,
+                          text=True, timeout=120,
+                          env={**os.environ, "USDWRINKLE_EGL_DEVICE": "second"})
+    assert word.returncode == 1 and "must be a device index" in word.stdout
+
+
+def test_skip_existing_counts_the_frames_it_kept(gl_context, tmp_path, capsys):
+    """Issue 27: with --skip-existing the closing line said 'wrote 0 frame(s)' and never
+    counted the complete frames it left alone."""
+    out = tmp_path / "s.####.png"
+    args = ["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "1:3", "--width", "64"]
+    assert main(args + ["--quiet"]) == 0
+    (tmp_path / "s.0002.png").unlink()
+    capsys.readouterr()
+    assert main(args + ["--skip-existing"]) == 0
+    line = [t for t in capsys.readouterr().out.splitlines() if "wrote" in t][0]
+    assert "wrote 1 frame(s)" in line and "kept 2 complete frame(s)" in line, line

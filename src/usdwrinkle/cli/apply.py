@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import schema
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -22,8 +24,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("-o", "--output", metavar="LAYER",
                    help="write the edits to this override layer (created or updated) instead "
                         "of the root layer")
-    p.add_argument("--width", type=float, metavar="W", help="rest wavelength W (scene units)")
-    p.add_argument("--amplitude-scale", type=float, metavar="S", help="amplitude scale s")
+    p.add_argument("--width", type=float, metavar="W",
+                   help="rest wavelength W (scene units); without it, and with no "
+                        "primvars:wrinkle:width authored, a mesh uses "
+                        f"{schema.WIDTH_EDGE_MULTIPLE:g} x its mean rest edge length")
+    p.add_argument("--amplitude-scale", type=float, metavar="S",
+                   help="amplitude scale s (default 1: the amplitude law of docs/method.md)")
     p.add_argument("--biaxial", type=float, metavar="WEIGHT",
                    help="wrinkle:biaxial in [0, 1]: a second wave where the cloth is "
                         "compressed both ways (0: off, the default)")
@@ -34,8 +40,8 @@ def add_parser(subparsers) -> None:
                    help="wrinkle:tensionThreshold in [0, 1]: the strain where tension "
                         "wrinkles begin (fallback 0.02)")
     p.add_argument("--profile", metavar="NAME|FILE",
-                   help="height profile: cosine, sharp, rounded, box, triangle, or a text file "
-                        "of heights over one period (or 'theta height' pairs)")
+                   help="height profile: cosine (the default), sharp, rounded, box, triangle, "
+                        "or a text file of heights over one period (or 'theta height' pairs)")
     p.add_argument("--q", metavar="X,Y,Z:AMOUNT",
                    help="uniform rest-space direction, projected onto each vertex's tangent "
                         "plane, with |q| = AMOUNT")

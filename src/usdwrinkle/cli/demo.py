@@ -8,11 +8,16 @@ from ..errors import UsdWrinkleError
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("demo", help="render the bundled shirt sample stage to PNGs")
+    p = subparsers.add_parser(
+        "demo", help="render the bundled shirt sample stage to PNGs",
+        description="Render the bundled shirt sample (sample_stages/shirt.usda, 24 frames) "
+                    "to OUTDIR/shirt.####.png with render's defaults: the quickest check "
+                    "that usdwrinkle works on this machine.")
     p.add_argument("outdir", nargs="?", default="usdwrinkle_demo",
                    help="output folder (default: ./usdwrinkle_demo)")
     p.add_argument("--width", type=int, default=640, metavar="PX", help="image width (640)")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress bar and no closing line (errors are still printed)")
     p.set_defaults(run=run)
 
 

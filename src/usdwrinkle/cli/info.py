@@ -6,9 +6,17 @@ import platform
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("info", help="print versions, the GL renderer and the environment "
-                                           "usdview needs")
-    p.add_argument("--no-gl", action="store_true", help="do not create a GL context")
+    p = subparsers.add_parser(
+        "info", help="print versions, the GL renderer and the environment usdview needs",
+        description="Print usdwrinkle's and its libraries' versions, the GL renderer it would "
+                    "use, and the environment other USD processes (usdview, usdcat) need to "
+                    "see the WrinkleAPI schema and the Wrinkles menu. Exits 1 when no GL "
+                    "context can be made or the schema is not usable, so it serves as a "
+                    "render node's health check. USDWRINKLE_EGL_DEVICE picks the GPU on a "
+                    "multi-GPU node (EGL's device index, default 0); USDWRINKLE_GL_BACKEND "
+                    "picks moderngl's backend (default egl).")
+    p.add_argument("--no-gl", action="store_true",
+                   help="do not create a GL context (and do not check it)")
     p.set_defaults(run=run)
 
 
@@ -23,10 +31,12 @@ def run(args) -> int:
 
     print(f"usdwrinkle {__version__}")
     print(f"python {platform.python_version()} ({platform.platform()})")
-    print(f"usd-core {'.'.join(str(v) for v in Usd.GetVersion())}")
+    print(f"usd-core {_usd_core_version()} (OpenUSD "
+          f"{'.'.join(str(v) for v in Usd.GetVersion())})")
     print(f"moderngl {moderngl.__version__}, numpy {numpy.__version__}, "
           f"OpenImageIO {OpenImageIO.__version__}")
-    print(f"WrinkleAPI schema: {'registered' if schema.register() else 'NOT usable'} "
+    healthy = schema.register()
+    print(f"WrinkleAPI schema: {'registered' if healthy else 'NOT usable'} "
           f"({schema.schema_dir()})")
     if not args.no_gl:
         from ..render.context import renderer_info
@@ -35,9 +45,20 @@ def run(args) -> int:
             print(f"GL renderer: {info['renderer']}; {info['version']}")
         except GLContextError as exc:
             print(f"GL renderer: unavailable: {exc.one_line()}")
+            healthy = False
     for line in environment_lines():
         print(line)
-    return 0
+    return 0 if healthy else 1
+
+
+def _usd_core_version() -> str:
+    """The usd-core package's own version (26.11), as pip names it."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("usd-core")
+    except PackageNotFoundError:
+        return "not installed as usd-core"
 
 
 def environment_lines() -> list[str]:

@@ -50,8 +50,8 @@ def add_parser(subparsers) -> None:
                      help="EXR: every channel as 32-bit float (files about 60%% larger)")
     p.set_defaults(exr_half=True)
     p.add_argument("--exr-compression", choices=EXR_COMPRESSIONS,
-                   default="zip", help="EXR compression (zip: the fastest compressed "
-                                       "encode measured, docs/benchmarks.md)")
+                   default="zip", help="EXR compression; default zip (the fastest "
+                                       "compressed encode measured, docs/benchmarks.md)")
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",
@@ -106,13 +106,15 @@ def check_render_args(args) -> None:
 
 
 def summary(written: int, width: int, height: int, output: str, frames: list[float],
-            elapsed: float, baked: list[str], extra: str = "") -> str:
-    """The closing line of a render, serial or on a farm."""
+            elapsed: float, baked: list[str], extra: str = "", skipped: int = 0) -> str:
+    """The closing line of a render, serial or on a farm (``skipped``: frames that
+    --skip-existing found complete)."""
     from ..timecode import format_frame
 
     last = f" .. {format_frame(frames[-1])}" if len(frames) > 1 else ""
+    kept = f", kept {skipped} complete frame(s) (--skip-existing)" if skipped else ""
     text = (f"usdwrinkle: wrote {written} frame(s) {width}x{height} to "
-            f"{frame_path(output, frames[0])}{last} in {elapsed:.1f} s{extra}")
+            f"{frame_path(output, frames[0])}{last}{kept} in {elapsed:.1f} s{extra}")
     if baked:
         text += f"; baked wave fields: {', '.join(baked)}"
     return text
@@ -137,7 +139,8 @@ def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[st
         print(summary(result.written, result.width, result.height, args.output, frames,
                       result.elapsed, result.baked,
                       f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
-                      f"{result.workers} Dask worker(s), chunks of {result.chunk})"),
+                      f"{result.workers} Dask worker(s), chunks of {result.chunk})",
+                      skipped=result.skipped),
               flush=True)
     return 0
 
@@ -225,7 +228,9 @@ def run(args) -> int:
             write_stats(args.stats, stats)
         if not args.quiet:
             print(summary(len(written), width, height, args.output, frames,
-                          time.perf_counter() - started, engine.baked_paths), flush=True)
+                          time.perf_counter() - started, engine.baked_paths,
+                          skipped=len(frames) - len(written) if args.skip_existing else 0),
+                  flush=True)
     finally:
         engine.release()
     return 0

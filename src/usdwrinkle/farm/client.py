@@ -149,6 +149,8 @@ class FarmResult:
     elapsed: float
     workers: int
     chunk: int
+    #: frames --skip-existing found complete
+    skipped: int = 0
 
 
 def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
@@ -214,9 +216,9 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
                 render_chunk, options, image, frames[part], outputs[part], before[part],
                 job.skip_existing, retries=RETRIES, pure=False,
                 key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
-        written, baked = _gather(distributed, futures, len(frames), chunk, reporter)
+        written, baked, skipped = _gather(distributed, futures, len(frames), chunk, reporter)
         return FarmResult(written, baked, width, height, time.perf_counter() - started,
-                          workers, chunk)
+                          workers, chunk, skipped)
     finally:
         for future in futures:
             future.cancel()
@@ -231,14 +233,15 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
             remove_temporaries(path)
 
 
-def _gather(distributed, futures, total: int, chunk: int, reporter) -> tuple[int, list[str]]:
+def _gather(distributed, futures, total: int, chunk: int,
+            reporter) -> tuple[int, list[str], int]:
     """Wait for every chunk; the first input error raises as the serial one would."""
     bar = None
     if not reporter.quiet and total > 1:
         from tqdm import tqdm
         bar = tqdm(total=total, desc="render", unit="frame", dynamic_ncols=True,
                    file=STDERR)
-    written = 0
+    written = skipped = 0
     baked: set[str] = set()
     try:
         for future in distributed.as_completed(futures):
@@ -257,10 +260,11 @@ def _gather(distributed, futures, total: int, chunk: int, reporter) -> tuple[int
                 raise UsdWrinkleError(error["what"], error["prim_path"], error["attribute"],
                                       error["frame"])
             written += len(result["written"])
+            skipped += len(result["skipped"])
             baked.update(result["baked"])
             if bar is not None:
                 bar.update(len(result["written"]) + len(result["skipped"]))
     finally:
         if bar is not None:
             bar.close()
-    return written, sorted(baked)
+    return written, sorted(baked), skipped

@@ -262,8 +262,11 @@ class LayerBaker:
             rel = spec.relationships.get("skel:skeleton") or Sdf.RelationshipSpec(
                 spec, "skel:skeleton", custom=False)
             rel.targetPathList.ClearEditsAndMakeExplicit()
+        # the source stage as the layer's own paths are: relative to the layer's folder
+        source_path = os.path.relpath(os.path.abspath(self.stage_path), os.path.dirname(
+            os.path.abspath(output_path))).replace(os.sep, "/")
         layer.customLayerData = {"usdwrinkle": {
-            "version": __version__, "frames": frame_spec, "source": self.stage_path,
+            "version": __version__, "frames": frame_spec, "source": source_path,
             "withPoints": self.with_points, "displayColor": self.display_color or "",
             "sparse": self.sparse}}
 

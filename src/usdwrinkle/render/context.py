@@ -32,8 +32,16 @@ def create_context(backend: str | None = None):
     except ImportError as exc:  # pragma: no cover - a broken install
         raise GLContextError(f"moderngl is not installed ({exc})") from None
     backend = backend or os.environ.get("USDWRINKLE_GL_BACKEND", "egl")
+    options = {}
+    device = os.environ.get("USDWRINKLE_EGL_DEVICE", "").strip()
+    if device and backend == "egl":  # which GPU of a multi-GPU node (EGL's device list)
+        if not device.isdigit():
+            raise GLContextError(f"USDWRINKLE_EGL_DEVICE must be a device index (0, 1, ...), "
+                                 f"not '{device}'")
+        options["device_index"] = int(device)
     try:
-        ctx = moderngl.create_standalone_context(backend=backend, require=REQUIRED_VERSION)
+        ctx = moderngl.create_standalone_context(backend=backend, require=REQUIRED_VERSION,
+                                                 **options)
     except Exception as exc:  # moderngl raises plain Exceptions from glcontext
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise GLContextError(
