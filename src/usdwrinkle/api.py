@@ -1,0 +1,90 @@
+"""usdwrinkle from Python: render and bake a shot in-process, with the command line's
+options as keyword arguments.
+
+    from usdwrinkle import api
+
+    frames = api.render("shot.usda", "out/shot.####.exr", frames="1:24", width=960)
+    layer = api.bake("shot.usda", "shot_wrinkles.usdc", maps="normal", with_points=True)
+
+Each call runs the same code as ``usdwrinkle render`` or ``usdwrinkle bake``, with the
+same checks and defaults (``usdwrinkle render --help`` lists every option). A keyword is
+the option's long name with ``_`` for ``-``: ``no_wrinkles=True``, ``all_meshes=True``,
+``skip_existing=True``, ``dask="local"``. ``frames`` takes the command line's text
+("1:24", "1,5,9", "1:24x2") or a list of numbers. A problem with the input raises
+:class:`usdwrinkle.errors.UsdWrinkleError` with the command line's one-line message.
+Warnings go to stderr, as on the command line; ``quiet`` (True by default here) leaves out
+the progress bars and the closing line.
+
+Authoring is :class:`usdwrinkle.WrinkleAPI` (and ``usdwrinkle apply`` on the command
+line).
+"""
+from __future__ import annotations
+
+import argparse
+
+from .errors import UsdWrinkleError
+
+__all__ = ["bake", "render"]
+
+
+def _namespace(command: str, stage, output, frames, options: dict) -> argparse.Namespace:
+    """The command's parsed options: its parser's defaults, then ``options``."""
+    from .cli.main import build_parser
+
+    args = build_parser().parse_args([command, str(stage), str(output)])
+    known = set(vars(args)) - {"command", "run", "stage", "output", "frames", "debug"}
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise TypeError(f"usdwrinkle.api.{command}() got unknown option(s) "
+                        f"{', '.join(unknown)}; it takes {', '.join(sorted(known))}")
+    if frames is not None and not isinstance(frames, str):
+        frames = ",".join(repr(float(f)) for f in frames)
+    args.frames = frames
+    for name, value in options.items():
+        setattr(args, name, value)
+    args.debug = False
+    return args
+
+
+def _run(command: str, args: argparse.Namespace) -> None:
+    from .cli import bake as bake_command
+    from .cli import render as render_command
+
+    run = {"render": render_command.run, "bake": bake_command.run}[command]
+    code = run(args)
+    if code != 0:  # pragma: no cover - the commands raise instead
+        raise UsdWrinkleError(f"usdwrinkle {command} ended with exit code {code}")
+
+
+def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list[str]:
+    """Render ``stage`` to ``output`` (a path with a '#' frame placeholder, or one file
+    for one frame); returns the paths of the frames the shot now has on disk (written,
+    or kept by ``skip_existing``). The options are render's: ``width`` (640), ``height``,
+    ``camera``, ``samples`` (4), ``no_wrinkles``, ``all_meshes``, ``recompute``,
+    ``relax_iterations``, ``history_start``, ``write_threads``, ``exr_compression``,
+    ``exr_half``, ``skip_existing``, ``stats``, ``dask``, ``workers``, ``chunk``."""
+    import os
+
+    from .cli.frames import frame_paths, parse_frame_spec
+    from .scene.stage import open_stage, stage_frames
+
+    args = _namespace("render", stage, output, frames, {"quiet": quiet, **options})
+    _run("render", args)
+    shot_frames = parse_frame_spec(args.frames) if args.frames else \
+        stage_frames(open_stage(str(stage)))
+    return [path for path in frame_paths(str(output), shot_frames) if os.path.isfile(path)]
+
+
+def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
+    """Bake the wrinkle fields of ``stage`` into the layer ``output`` (.usda, .usdc or
+    .usd); returns its path. The options are bake's: ``with_points``, ``display_color``
+    ("amplitude" or "compression"), ``sparse``, ``all_meshes``, ``relax_iterations``,
+    ``history_start``, ``maps`` ("normal,height,amplitude" or a list), ``map_size``,
+    ``map_dir``, ``map_format``, ``map_padding``, ``uv``, ``tangent_space``,
+    ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``."""
+    if "maps" in options and options["maps"] is not None and \
+            not isinstance(options["maps"], str):
+        options["maps"] = ",".join(options["maps"])
+    args = _namespace("bake", stage, output, frames, {"quiet": quiet, **options})
+    _run("bake", args)
+    return str(output)

@@ -1,0 +1,49 @@
+"""usdwrinkle.api: render and bake from Python run the commands' code, with their checks
+(issue 27)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from usdwrinkle import api
+from usdwrinkle.cli.main import main
+from usdwrinkle.errors import UsdWrinkleError
+
+SHIRT = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+
+
+def pixels(path) -> np.ndarray:
+    return oiio.ImageBuf(str(path)).get_pixels(oiio.UINT8)
+
+
+def test_render_equals_the_command_and_returns_its_frames(gl_context, tmp_path):
+    written = api.render(SHIRT, tmp_path / "api" / "s.####.png", frames=[23, 24], width=96)
+    assert [Path(p).name for p in written] == ["s.0023.png", "s.0024.png"]
+    assert main(["render", SHIRT, str(tmp_path / "cli" / "s.####.png"), "--frames", "23:24",
+                 "--width", "96", "--quiet"]) == 0
+    for name in ("s.0023.png", "s.0024.png"):
+        np.testing.assert_array_equal(pixels(tmp_path / "api" / name),
+                                      pixels(tmp_path / "cli" / name))
+
+
+def test_bake_writes_the_layer_with_its_options(gl_context, tmp_path):
+    from pxr import Sdf
+
+    layer = api.bake(SHIRT, tmp_path / "shirt.usda", frames="24", maps=["normal"],
+                     map_size=64, with_points=True)
+    data = Sdf.Layer.FindOrOpen(layer).customLayerData["usdwrinkle"]
+    assert data["withPoints"] and data["maps"]["size"] == 64
+    assert (tmp_path / "shirt_maps" / "Sleeve.normal.0024.png").is_file()
+
+
+def test_mistakes_are_the_commands_errors(tmp_path):
+    with pytest.raises(TypeError, match="unknown option.*widht"):
+        api.render(SHIRT, tmp_path / "s.png", widht=3)
+    with pytest.raises(UsdWrinkleError, match="--width and --height must be positive"):
+        api.render(SHIRT, tmp_path / "s.####.png", width=-3)
+    with pytest.raises(UsdWrinkleError, match="does not exist"):
+        api.bake(tmp_path / "missing.usda", tmp_path / "out.usda")
+    assert not list(tmp_path.iterdir())
