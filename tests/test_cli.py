@@ -213,3 +213,27 @@ def test_skip_existing_counts_the_frames_it_kept(gl_context, tmp_path, capsys):
     assert main(args + ["--skip-existing"]) == 0
     line = [t for t in capsys.readouterr().out.splitlines() if "wrote" in t][0]
     assert "wrote 1 frame(s)" in line and "kept 2 complete frame(s)" in line, line
+
+
+def test_a_farm_log_holds_whole_lines_and_the_summary(tmp_path):
+    """Issue 27: with stderr in a file, tqdm filled the log with carriage returns and
+    cursor escapes. Off a terminal, progress is whole log lines (every tenth of the run),
+    and the closing line stays."""
+    import subprocess
+    import sys
+
+    log = tmp_path / "render.log"
+    with open(log, "wb") as handle:
+        result = subprocess.run(
+            [sys.executable, "-m", "usdwrinkle", "render", str(SAMPLES / "shirt.usda"),
+             str(tmp_path / "f.####.png"), "--frames", "1:48", "--width", "64"],
+            stdout=handle, stderr=subprocess.STDOUT, timeout=300,
+            env={k: v for k, v in os.environ.items() if k != "USDWRINKLE_PROGRESS"})
+    assert result.returncode == 0
+    data = log.read_bytes()
+    assert not [b for b in data if b < 32 and b != 10], data[:300]
+    lines = data.decode().splitlines()
+    progress = [line for line in lines if line.startswith("usdwrinkle: render: ")]
+    assert progress[-1] == "usdwrinkle: render: 48/48 frame(s) (100%)"
+    assert 8 <= len(progress) <= 12, progress
+    assert lines[-1].startswith("usdwrinkle: wrote 48 frame(s) 64x")

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import STDERR, UsdWrinkleError, print_warning
+from ..errors import UsdWrinkleError, print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -60,8 +60,9 @@ class Reporter:
     def progress(self, items, desc: str):
         if self.quiet or len(items) < 2:
             return items
-        from tqdm import tqdm
-        return tqdm(items, desc=desc, unit="frame", file=STDERR, dynamic_ncols=True)
+        from ..progress import wrap  # a bar on a terminal, log lines in a farm's log
+
+        return wrap(items, desc)
 
 
 def engine_options(args, stage_path: str | None = None, camera: str | None = None,

@@ -29,7 +29,7 @@ import time
 import uuid
 from dataclasses import dataclass
 
-from ..errors import STDERR, UsdWrinkleError
+from ..errors import UsdWrinkleError
 from ..outputs.atomic import remove_temporaries
 from ..shot import NO_WRINKLED_MESH, BakeRequest, EngineOptions, ImageOptions, bake_layer
 from .worker import file_identity, render_chunk
@@ -238,9 +238,9 @@ def _gather(distributed, futures, total: int, chunk: int,
     """Wait for every chunk; the first input error raises as the serial one would."""
     bar = None
     if not reporter.quiet and total > 1:
-        from tqdm import tqdm
-        bar = tqdm(total=total, desc="render", unit="frame", dynamic_ncols=True,
-                   file=STDERR)
+        from ..progress import counter
+
+        bar = counter(total, "render")
     written = skipped = 0
     baked: set[str] = set()
     try:
