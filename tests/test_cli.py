@@ -237,3 +237,17 @@ def test_a_farm_log_holds_whole_lines_and_the_summary(tmp_path):
     assert progress[-1] == "usdwrinkle: render: 48/48 frame(s) (100%)"
     assert 8 <= len(progress) <= 12, progress
     assert lines[-1].startswith("usdwrinkle: wrote 48 frame(s) 64x")
+
+
+def test_frames_that_name_the_same_frame_are_refused(tmp_path, capsys):
+    """Issue 27: --frames 1,1.0001 wrote x.0001.png and x.0001.000.png, two files that
+    read as the same frame; it is refused as frames sharing one name."""
+    out = tmp_path / "x.####.png"
+    code = main(["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "1,1.0001",
+                 "--width", "32", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "frames 1 and 1.0001 would both be named frame 1.000" in err, err
+    assert not list(tmp_path.iterdir())
+    assert main(["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "1,1.5",
+                 "--width", "32", "--quiet"]) == 0
+    assert {p.name for p in tmp_path.iterdir()} == {"x.0001.png", "x.0001.500.png"}

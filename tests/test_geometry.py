@@ -239,3 +239,24 @@ def test_default_levels_keep_fine_edges_within_w_over_s(gl_context, shirt):
     longest = np.linalg.norm(rest[:, [1, 2, 0]] - rest, axis=2).max()
     assert longest / 2 ** levels <= record.params.width.min() / 6
     assert levels == 4 and longest / 2 ** 3 <= record.params.width.min() / 6  # (a) alone: 3
+
+
+def test_rendering_the_layer_gives_the_right_advice(gl_context, tmp_path, capsys):
+    """Issue 27: rendering a geometry layer advised --all-meshes, which wrinkles the
+    displaced mesh a second time, and frames outside the baked ones rendered silently."""
+
+
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+    layer = tmp_path / "geo.usda"
+    assert main(["bake", shirt, str(layer), "--frames", "20:24", "--geometry", "--levels", "1",
+                 "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["render", str(layer), str(tmp_path / "g.####.png"), "--frames", "18:21",
+                 "--width", "48", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "render with --no-wrinkles" in err and "use --all-meshes" not in err, err
+    assert "2 frame(s) lie outside the frames the displaced geometry was baked for (20..24)" \
+        in err, err
+    assert main(["render", str(layer), str(tmp_path / "h.####.png"), "--frames", "20:21",
+                 "--width", "48", "--quiet", "--no-wrinkles"]) == 0
+    assert capsys.readouterr().err == ""

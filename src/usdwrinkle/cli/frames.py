@@ -102,13 +102,17 @@ def frame_paths(pattern: str, frames: list[float]) -> list[str]:
     closer than the file name's SUBFRAME_DECIMALS decimals)."""
     check_output_pattern(pattern, frames)
     paths = [frame_path(pattern, f) for f in frames]
-    first: dict[str, float] = {}
+    first: dict[object, tuple[float, str]] = {}
     for frame, path in zip(frames, paths, strict=True):
-        other = first.setdefault(path, frame)
-        if other != frame and not (math.isnan(other) and math.isnan(frame)):  # NaN: default
-            raise UsdWrinkleError(
-                f"frames {other:g} and {frame:g} would both be written to '{path}' (sub-frames "
-                f"are named to {SUBFRAME_DECIMALS} decimals); choose frames that differ there")
+        # the same file, or files that name the same frame (1 and 1.0001: 0001, 0001.000)
+        for key in (path, "nan" if math.isnan(frame) else round(frame, SUBFRAME_DECIMALS)):
+            other, other_path = first.setdefault(key, (frame, path))
+            if other != frame and not (math.isnan(other) and math.isnan(frame)):
+                where = f"written to '{path}'" if other_path == path else \
+                    f"named frame {frame_text(frame, 1)} ('{other_path}', '{path}')"
+                raise UsdWrinkleError(
+                    f"frames {other:g} and {frame:g} would both be {where} (sub-frames are "
+                    f"named to {SUBFRAME_DECIMALS} decimals); choose frames that differ there")
     return paths
 
 

@@ -174,9 +174,35 @@ def _warn_unbaked(engine, reporter, args) -> None:
                       f"options the render uses, e.g. --all-meshes) ({unbaked[0]})")
 
 
+def _warn_geometry(engine, reporter, args, frames: list[float]) -> None:
+    """A ``bake --geometry`` layer carries the wrinkles in its displaced meshes: say so
+    instead of advising --all-meshes (which would wrinkle them again), and say when frames
+    fall outside the ones it baked (they show its nearest baked frame)."""
+    import math
+
+    from ..scene.baked import geometry_bake
+
+    found = geometry_bake(engine.stage)
+    if found is None:
+        return
+    layer, first, last = found
+    if not args.no_wrinkles and not engine.wrinkled_paths:
+        reporter.warn(f"the stage holds usdwrinkle's displaced geometry, whose wrinkles are in "
+                      f"its meshes: render with --no-wrinkles (--all-meshes would wrinkle them "
+                      f"a second time) ({layer})")
+    if math.isnan(first) or math.isnan(last):
+        return
+    outside = [f for f in frames if not math.isnan(f) and not first <= f <= last]
+    if outside:
+        reporter.warn(f"{len(outside)} frame(s) lie outside the frames the displaced geometry "
+                      f"was baked for ({first:g}..{last:g}), from {outside[0]:g}: they show its "
+                      f"nearest baked frame ({layer})")
+
+
 def run(args) -> int:
     from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
+    from ..scene.baked import geometry_bake
     from ..scene.stage import inherited_range_note, open_stage, stage_frames
     from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames
 
@@ -206,7 +232,9 @@ def run(args) -> int:
     try:
         engine.check_baked(frames)
         _warn_unbaked(engine, reporter, args)
-        if not engine.wrinkled_paths and not args.no_wrinkles:
+        _warn_geometry(engine, reporter, args, frames)
+        if not engine.wrinkled_paths and not args.no_wrinkles and \
+                geometry_bake(engine.stage) is None:
             reporter.warn(NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
                   if engine.meshes[path].material.wrinkle_maps]

@@ -181,3 +181,18 @@ def holds_bake(stage: Usd.Stage) -> bool:
     customLayerData has a "usdwrinkle" entry): rendering it is rendering a bake."""
     return any("usdwrinkle" in layer.customLayerData
                for layer in stage.GetLayerStack(includeSessionLayers=False))
+
+
+def geometry_bake(stage: Usd.Stage):
+    """(layer path, first frame, last frame) of a ``bake --geometry`` layer in the stage's
+    layer stack, or None. Its displaced meshes carry the wrinkles in their points: a
+    render draws them with --no-wrinkles, and holds the nearest baked frame outside
+    first..last."""
+    for layer in stage.GetLayerStack(includeSessionLayers=False):
+        data = layer.customLayerData.get("usdwrinkle")
+        if data and "geometry" in data:
+            first = layer.startTimeCode if layer.HasStartTimeCode() else float("nan")
+            last = layer.endTimeCode if layer.HasEndTimeCode() else float("nan")
+            return layer.realPath or layer.identifier, first, last
+    return None
+
