@@ -73,3 +73,20 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
                     "## Triangulation of hostile meshes", "## CPU render nodes"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text
+
+
+def test_quick_never_writes_the_committed_report(monkeypatch):
+    """Issue 27: bench --quick overwrote docs/benchmarks.md with smoke-test figures; its
+    default report is bench-quick.md in the current folder (the full bench's stays)."""
+    from types import SimpleNamespace
+
+    from usdwrinkle.cli import bench
+    from usdwrinkle.cli.main import build_parser
+
+    seen = []
+    monkeypatch.setattr(bench, "benchmarks",
+                        lambda: SimpleNamespace(run=lambda args: seen.append(args.markdown)))
+    for argv in (["bench", "--quick"], ["bench"], ["bench", "--quick", "--markdown", "x.md"]):
+        args = build_parser().parse_args(argv)
+        args.run(args)
+    assert seen == ["bench-quick.md", "docs/benchmarks.md", "x.md"]

@@ -36,8 +36,10 @@ def add_parser(subparsers) -> None:
                     "the rasteriser's floors. Writes a markdown report (and JSON). Runs from "
                     "a source checkout (benchmarks/).")
     p.add_argument("--json", metavar="PATH", help="also write the results as JSON")
-    p.add_argument("--markdown", metavar="PATH", default="docs/benchmarks.md",
-                   help="markdown report (default docs/benchmarks.md; '-' for stdout)")
+    p.add_argument("--markdown", metavar="PATH",
+                   help="markdown report (default docs/benchmarks.md, or with --quick "
+                        "bench-quick.md in the current folder, so that a smoke test never "
+                        "overwrites the committed figures; '-' for stdout)")
     p.add_argument("--quick", action="store_true",
                    help="reduced sizes and frames: a smoke test, not figures to quote")
     p.add_argument("--label", metavar="TEXT",
@@ -57,4 +59,6 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    if args.markdown is None:
+        args.markdown = "bench-quick.md" if args.quick else "docs/benchmarks.md"
     return benchmarks().run(args)
