@@ -62,6 +62,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         terminalreporter.write_line(
             f"REAL-CLIENT TIER NOT RUN ({len(skipped)} tests): {realclient_problem()}",
             yellow=True, bold=True)
+    if corpus_problem():
+        terminalreporter.write_line(f"CORPUS MISSING: {corpus_problem()}", red=True, bold=True)
 
 
 @pytest.fixture(scope="session")
@@ -70,10 +72,34 @@ def gl_context():
     return create_context()
 
 
+#: what the tests read from the corpus, and where each comes from
+CORPUS_SOURCES = (
+    ("openusd-usdskel/", "lbs.usda, dqs.usda, blendshapes.usda, blendshapesWithNormals.usda "
+     "and baseline/*.baked.usda from OpenUSD's pxr/usd/usdSkel/testenv/"
+     "testUsdSkelBakeSkinning; twoBends.usda, arm.usda and test_lbs.usda from "
+     "pxr/usdImaging/usdImagingGL/testenv (github.com/PixarAnimationStudios/OpenUSD)"),
+    ("usd-wg/", "CesiumMan.usdz, RiggedFigure.usdz, RiggedSimple.usdz and "
+     "SoC-ElephantWithMonochord.usdc from the USD working group's assets "
+     "(github.com/usd-wg/assets)"),
+)
+
+
+def corpus_problem() -> str | None:
+    """Why the corpus tests cannot run here (None: they can), saying what to get."""
+    missing = [folder for folder, _ in CORPUS_SOURCES if not (CORPUS / folder).is_dir()]
+    if not missing:
+        return None
+    wanted = "; ".join(f"{folder}: {what}" for folder, what in CORPUS_SOURCES
+                       if folder in missing)
+    return (f"the shared test corpus is missing at {CORPUS} ({', '.join(missing)}); set "
+            f"USDWRINKLE_CORPUS to a folder that holds {wanted}")
+
+
 @pytest.fixture(scope="session")
 def corpus() -> Path:
-    if not CORPUS.is_dir():
-        pytest.fail(f"the shared corpus is missing at {CORPUS} (set USDWRINKLE_CORPUS)")
+    problem = corpus_problem()
+    if problem:
+        pytest.fail(problem)
     return CORPUS
 
 
