@@ -155,3 +155,23 @@ def test_a_scalar_width_is_read_but_flagged(gl_context, tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert any(f["validator"] == "usdValidation:AttributeTypeMismatch"
                and "primvars:wrinkle:width" in f["message"] for f in report["findings"])
+
+
+def test_wrinkles_only_gates_on_the_wrinkle_attributes(corpus, tmp_path, capsys):
+    """Issue 27: check exited 1 on CesiumMan for USD's own ShaderSdrCompliance finding and
+    on a minimal shot for its stage metadata, so it could not gate a pipeline on the
+    wrinkles alone. --wrinkles-only runs only our checker: those stages pass, a broken
+    wrinkle attribute still fails."""
+    cesium = str(corpus / "usd-wg" / "CesiumMan.usdz")
+    assert main(["check", cesium]) == 1
+    assert main(["check", cesium, "--wrinkles-only"]) == 0
+    lbs = str(corpus / "openusd-usdskel" / "lbs.usda")
+    assert main(["check", lbs]) == 1 and main(["check", lbs, "--wrinkles-only"]) == 0
+    path = tmp_path / "shot.usda"
+    stage, mesh = sheet_stage(path)
+    _width(mesh, np.nan)
+    stage.Save()
+    capsys.readouterr()
+    assert main(["check", str(path), "--wrinkles-only", "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert {f["validator"] for f in report["findings"]} == {VALIDATOR_NAME}

@@ -18,6 +18,10 @@ def add_parser(subparsers) -> None:
                     "findings, 2 on usage errors.")
     p.add_argument("stage", help="the USD stage")
     p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
+    p.add_argument("--wrinkles-only", action="store_true",
+                   help="run only usdwrinkle's WrinkleAPI checker, so that the exit code "
+                        "gates on the wrinkle attributes alone (USD's own findings, such as "
+                        "upAxis or defaultPrim, are left to usdchecker)")
     p.set_defaults(run=run)
 
 
@@ -31,14 +35,15 @@ def _site(error) -> tuple[str, str | None]:
     return "/", None
 
 
-def collect(stage) -> list[dict]:
-    """Findings of every validator, as dicts (path, attribute, message, validator, type)."""
+def collect(stage, keywords=KEYWORDS) -> list[dict]:
+    """Findings of the validators of ``keywords``, as dicts (path, attribute, message,
+    validator, type)."""
     from pxr import UsdValidation
 
     from ..validation import register_validators
 
     register_validators()
-    context = UsdValidation.ValidationContext(keywords=list(KEYWORDS))
+    context = UsdValidation.ValidationContext(keywords=list(keywords))
     findings = []
     for error in context.Validate(stage):
         if error.HasNoError():
@@ -58,7 +63,7 @@ def run(args) -> int:
     from ..scene.stage import open_stage
 
     stage = open_stage(args.stage)
-    findings = collect(stage)
+    findings = collect(stage, ("UsdWrinkleValidators",) if args.wrinkles_only else KEYWORDS)
     if args.json:
         json.dump({"stage": args.stage, "findings": findings, "clean": not findings},
                   sys.stdout, indent=2)
