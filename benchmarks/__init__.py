@@ -75,6 +75,7 @@ def run(args) -> int:
 
     if args.from_json:
         result = json.loads(Path(args.from_json).read_text())
+        result["targets"] = targets(result)  # the words of this report's version
     else:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
         result = run_bench(args.quick, corpus,
