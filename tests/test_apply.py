@@ -272,3 +272,31 @@ def test_patterns_that_match_nothing(tmp_path, capsys):
     path = sheet_file(tmp_path)
     assert main(["apply", str(path), "/Nope/**", "--width", "1"]) == 2
     assert "no prim matches" in capsys.readouterr().err
+
+
+def test_apply_updates_the_override_layer_the_shot_already_sublayers(corpus, tmp_path, capsys):
+    """Issue 27: the usual assembly is a shot layer that sublayers an override layer over a
+    read-only package. apply -o refused that override layer (an input of the stage) and
+    advised editing the shot file; it edits the override layer where it is, keeping what
+    an earlier apply wrote, and still refuses a package or a texture."""
+    from pxr import Sdf
+
+    Sdf.Layer.CreateNew(str(tmp_path / "overrides.usda")).Save()
+    shot = Sdf.Layer.CreateNew(str(tmp_path / "shot.usda"))
+    shot.subLayerPaths = ["overrides.usda", str(corpus / "usd-wg" / "CesiumMan.usdz")]
+    shot.Save()
+    before = (tmp_path / "shot.usda").read_text()
+    mesh = "/CesiumMan/**/Cesium_Man_2"
+    for extra in (["--width", "0.05"], ["--amplitude-scale", "0.7"]):
+        assert main(["apply", str(tmp_path / "shot.usda"), mesh, "-o",
+                     str(tmp_path / "overrides.usda"), *extra]) == 0
+    stage = Usd.Stage.Open(str(tmp_path / "shot.usda"))
+    prim = next(p for p in stage.Traverse() if p.GetName() == "Cesium_Man_2")
+    assert "WrinkleAPI" in prim.GetAppliedSchemas()
+    assert list(prim.GetAttribute("primvars:wrinkle:width").Get()) == [pytest.approx(0.05)]
+    assert prim.GetAttribute("wrinkle:amplitudeScale").Get() == pytest.approx(0.7)
+    assert (tmp_path / "shot.usda").read_text() == before   # the shot file is untouched
+    capsys.readouterr()
+    assert main(["apply", str(tmp_path / "shot.usda"), mesh, "-o",
+                 str(corpus / "usd-wg" / "CesiumMan.usdz"), "--width", "0.05"]) == 2
+    assert "cannot be edited in place" in capsys.readouterr().err

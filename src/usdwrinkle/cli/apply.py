@@ -182,12 +182,34 @@ def edit_target(args, stage):
     try:
         refuse_overwriting_inputs(args.stage, [args.output], stage)
     except UsdWrinkleError:
-        raise UsdWrinkleError(f"-o '{args.output}' is an input of the stage; leave -o out "
-                              "to edit the root layer") from None
+        # an override layer the shot already sublayers (the usual assembly: the shot's
+        # own layer over a read-only package) is edited where it is
+        layer = _sublayer_named(stage, args.output)
+        if layer is None:
+            raise UsdWrinkleError(
+                f"-o '{args.output}' is a file the stage reads but not one of its own "
+                "layers (a package, a referenced layer or a texture); choose a new override "
+                "layer, or name a layer of the shot's layer stack") from None
+        stage.SetEditTarget(Usd.EditTarget(layer))
+        return stage, layer
     override = open_override_layer(args.output)
     stage = Usd.Stage.Open(stage.GetRootLayer(), override)
     stage.SetEditTarget(Usd.EditTarget(override))
     return stage, override
+
+
+def _sublayer_named(stage, path: str):
+    """The layer of the stage's local layer stack at ``path`` (not the root layer, not
+    inside a package), or None."""
+    import os
+
+    wanted = os.path.realpath(path)
+    for layer in stage.GetLayerStack(includeSessionLayers=False)[1:]:
+        real = layer.realPath
+        if real and "[" not in real and not real.lower().endswith(".usdz") and \
+                os.path.realpath(real) == wanted:
+            return layer
+    return None
 
 
 def target_meshes(stage, patterns: list[str]) -> list:
