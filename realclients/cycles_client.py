@@ -22,10 +22,8 @@ Normal pass is turned back into the stage's axes, so that it compares with usdwr
 """
 from __future__ import annotations
 
-import json
 import os
 import sys
-import time
 
 
 def render(job: dict) -> None:
@@ -83,19 +81,10 @@ def render(job: dict) -> None:
 
 
 def main(jobs_path: str) -> None:
-    with open(jobs_path, encoding="utf-8") as handle:
-        jobs = json.load(handle)
-    for job in jobs:
-        try:
-            started = time.perf_counter()
-            render(job)
-            print(f"ok {job['out']}", flush=True)
-            print(f"seconds {time.perf_counter() - started:.6f} {job['out']}", flush=True)
-        except Exception as exc:  # noqa: BLE001 (reported per job, the next one goes on)
-            print(f"failed {job['out']}: {type(exc).__name__}: {exc}", flush=True)
-    sys.stdout.flush()
-    os._exit(0)
+    import client_jobs
 
+    client_jobs.run(client_jobs.load(jobs_path), render)
+    client_jobs.finish()
 
 if __name__ == "__main__":
     main(sys.argv[1])

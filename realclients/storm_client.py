@@ -22,10 +22,8 @@ from __future__ import annotations
 
 import ctypes
 import importlib.util
-import json
 import os
 import sys
-import time
 
 EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
 EGL_OPENGL_API = 0x30A2
@@ -101,8 +99,9 @@ def record(job: dict) -> None:
 
 
 def main(jobs_path: str) -> None:
-    with open(jobs_path, encoding="utf-8") as handle:
-        jobs = json.load(handle)
+    import client_jobs
+
+    jobs = client_jobs.load(jobs_path)
     import_blender_pxr()
     egl_compatibility_context()
     # one framebuffer as large as the largest job (FrameRecorder renders into its own
@@ -110,25 +109,17 @@ def main(jobs_path: str) -> None:
     keep = bind_framebuffer(max(int(j["width"]) for j in jobs), max(int(j["width"]) for j in jobs))
     from pxr import Tf
 
-    for job in jobs:
-        try:
-            started = time.perf_counter()
-            record(job)
-            print(f"ok {job['out']}", flush=True)
-            print(f"seconds {time.perf_counter() - started:.6f} {job['out']}", flush=True)
-        except Tf.ErrorException as exc:
+    def failure(job, exc):
+        if isinstance(exc, Tf.ErrorException):
             # Storm's GL errors are raised after the image is written; the image decides
             if os.path.isfile(job["out"]):
-                print(f"ok {job['out']}", flush=True)
-            else:
-                print(f"failed {job['out']}: {' '.join(str(exc).split())[:300]}", flush=True)
-        except Exception as exc:  # noqa: BLE001 (reported per job, the next one goes on)
-            print(f"failed {job['out']}: {type(exc).__name__}: {exc}", flush=True)
-    del keep
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(0)
+                return f"ok {job['out']}"
+            return f"failed {job['out']}: {' '.join(str(exc).split())[:300]}"
+        return None
 
+    client_jobs.run(jobs, record, failure)
+    del keep
+    client_jobs.finish()
 
 if __name__ == "__main__":
     main(sys.argv[1])

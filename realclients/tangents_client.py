@@ -13,8 +13,6 @@ compressed: within 0.4 degrees). One line "ok OUT" or "failed OUT: reason" per j
 """
 from __future__ import annotations
 
-import json
-import os
 import sys
 
 
@@ -43,17 +41,10 @@ def tangents(job: dict) -> None:
 
 
 def main(jobs_path: str) -> None:
-    with open(jobs_path, encoding="utf-8") as handle:
-        jobs = json.load(handle)
-    for job in jobs:
-        try:
-            tangents(job)
-            print(f"ok {job['out']}", flush=True)
-        except Exception as exc:  # noqa: BLE001 (reported per job, the next one goes on)
-            print(f"failed {job['out']}: {type(exc).__name__}: {exc}", flush=True)
-    sys.stdout.flush()
-    os._exit(0)
+    import client_jobs
 
+    client_jobs.run(client_jobs.load(jobs_path), tangents)
+    client_jobs.finish()
 
 if __name__ == "__main__":
     main(sys.argv[1])
