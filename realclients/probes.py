@@ -28,6 +28,8 @@ PROBES = {
     "translucent": ({"diffuseColor": (0.8, 0.2, 0.2), "opacity": 0.4}, "sun",
                     "a translucent sphere over an opaque floor"),
     "plain_dome": ({}, "plain_dome", "a dome without a texture (Storm ignores it)"),
+    "headlight_glossy": ({"diffuseColor": (0.4, 0.2, 0.6), "roughness": 0.3}, "none",
+                         "no light: usdview's head-light on a glossy preview surface"),
 }
 
 
@@ -126,6 +128,7 @@ def _light(stage, kind: str):
     elif kind == "plain_dome":
         UsdLux.DomeLight.Define(stage, "/Lights/Dome")
         _light(stage, "sun")
+    # "none": no light at all (both renderers add the camera's head-light)
 
 
 def write_probe(folder: Path, name: str) -> Path:
