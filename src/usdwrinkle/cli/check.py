@@ -63,7 +63,8 @@ def run(args) -> int:
     from ..scene.stage import open_stage
 
     stage = open_stage(args.stage)
-    findings = collect(stage, ("UsdWrinkleValidators",) if args.wrinkles_only else KEYWORDS)
+    findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
+        collect(stage)
     if args.json:
         json.dump({"stage": args.stage, "findings": findings, "clean": not findings},
                   sys.stdout, indent=2)
