@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import OpenImageIO as oiio
+import pytest
 from pxr import Usd, UsdGeom
 
 from usdwrinkle import usdview
@@ -106,3 +107,64 @@ def test_plug_info_names_the_container():
     assert "usdwrinkle.usdview.WrinklePluginContainer" in types
     assert types["usdwrinkle.usdview.WrinklePluginContainer"]["bases"] == [
         "pxr.Usdviewq.plugin.PluginContainer"]
+
+
+PLAIN_SCRIPT = r"""
+import json, sys
+from types import SimpleNamespace
+from pxr import Usd
+import usdwrinkle.usdview as plugin
+
+stage = Usd.Stage.Open(sys.argv[1])
+status = []
+api = SimpleNamespace(stage=stage, frame=Usd.TimeCode(12), selectedPrims=[], prim=None,
+                      cameraPrim=None, PrintStatus=status.append)
+baked = plugin.bake_current_frame(api)
+amplitude = stage.GetPrimAtPath("/World/Zeppelin/Hull").GetAttribute(
+    "primvars:wrinkle:amplitude").Get(12)
+opened = []
+paths = plugin.render_current_frame(api, outdir=sys.argv[2], opener=opened.append, width=96)
+print(json.dumps({"baked": baked, "amplitude": len(amplitude or []), "paths": paths,
+                  "opened": opened, "status": status,
+                  "numpy": "numpy" in sys.modules}))
+"""
+
+
+@pytest.mark.slow
+def test_the_plugin_works_from_a_python_with_only_pxr(tmp_path):
+    """Issue 27: from usdview's own Python (pxr and nothing else: no numpy, moderngl or
+    OpenImageIO) with only the paths usdwrinkle info prints, both commands failed with
+    ModuleNotFoundError. They now run usdwrinkle in USDWRINKLE_PYTHON (which info prints)
+    on the stage as usdview holds it, and bring the bake back as a session sublayer."""
+    import os
+    import subprocess
+    import sys
+
+    plain = tmp_path / "plain"
+    subprocess.run([sys.executable, "-m", "venv", str(plain)], check=True, timeout=300)
+    python = plain / "bin" / "python"
+    install = subprocess.run([str(python), "-m", "pip", "install", "-q", "usd-core"],
+                             capture_output=True, text=True, timeout=600)
+    if install.returncode != 0:
+        pytest.skip(f"cannot install usd-core into a fresh venv here: "
+                    f"{install.stderr.strip().splitlines()[-1:]}")
+    info = subprocess.run([sys.executable, "-m", "usdwrinkle", "info", "--no-gl"],
+                          capture_output=True, text=True, timeout=120).stdout
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    for line in info.splitlines():
+        if line.strip().startswith("export "):
+            name, _, value = line.strip()[len("export "):].partition("=")
+            env[name] = value
+    assert set(env) >= {"PXR_PLUGINPATH_NAME", "PYTHONPATH", "USDWRINKLE_PYTHON"}
+    (tmp_path / "out").mkdir()
+    done = subprocess.run([str(python), "-c", PLAIN_SCRIPT, str(SAMPLES / "zeppelin.usda"),
+                           str(tmp_path / "out")], capture_output=True, text=True,
+                          timeout=600, env=env)
+    assert done.returncode == 0, done.stderr[-2000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert not result["numpy"]  # truly a Python without usdwrinkle's dependencies
+    assert result["baked"] == ["/World/Zeppelin/Hull"] and result["amplitude"] == 506, result
+    assert [Path(p).suffix for p in result["paths"]] == [".exr", ".png"], result
+    assert result["opened"] == [result["paths"][1]]
+    image = oiio.ImageBuf(result["paths"][1]).get_pixels(oiio.UINT8)
+    assert image.shape[1] == 96 and image[..., 3].max() == 255

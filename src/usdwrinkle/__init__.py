@@ -26,7 +26,14 @@ if UNUSABLE is None:
             "unknown in this process; import usdwrinkle first or set PXR_PLUGINPATH_NAME="
             + _schema.schema_dir(), stacklevel=2)
 
-    from .authoring import WrinkleAPI, profile_from_curve, profile_preset  # noqa: E402
+    def __getattr__(name: str):
+        # the authoring API loads on first use: importing usdwrinkle (the usdview plugin
+        # does) needs only the standard library and pxr, not numpy
+        if name in ("WrinkleAPI", "profile_from_curve", "profile_preset"):
+            from . import authoring
+
+            return getattr(authoring, name)
+        raise AttributeError(f"module 'usdwrinkle' has no attribute '{name}'")
 else:
     def __getattr__(name: str):
         if name in __all__:

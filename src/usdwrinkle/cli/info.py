@@ -75,6 +75,11 @@ def environment_lines() -> list[str]:
 
     package_parent = os.path.dirname(os.path.dirname(os.path.abspath(usdwrinkle.__file__)))
     plugin_path = joined("PXR_PLUGINPATH_NAME", schema.schema_dir(), plugin_dir())
+    import sys
+
     return ["environment for other USD processes (usdview, usdcat):",
             f"  export PXR_PLUGINPATH_NAME={plugin_path}",
-            f"  export PYTHONPATH={joined('PYTHONPATH', package_parent)}"]
+            f"  export PYTHONPATH={joined('PYTHONPATH', package_parent)}",
+            # usdview's Python may lack numpy, moderngl and OpenImageIO: the plugin's
+            # commands then run usdwrinkle in this Python
+            f"  export USDWRINKLE_PYTHON={sys.executable}"]

@@ -4,6 +4,14 @@ usdview finds it when ``PXR_PLUGINPATH_NAME`` names this folder and ``PYTHONPATH
 can import ``usdwrinkle`` (``usdwrinkle info`` prints both). usd-core has no
 Usdviewq, so it is imported lazily: this module imports everywhere, and the
 commands are plain functions of a usdviewApi that tests drive with a stand-in.
+
+usdview's own Python often has pxr and nothing else (no numpy, moderngl or OpenImageIO).
+Importing this module needs only the standard library and pxr. Where usdwrinkle's
+dependencies import, a command runs in usdview's process. Where they do not, it runs
+``usdwrinkle`` in the Python that ``USDWRINKLE_PYTHON`` names (``usdwrinkle info`` prints
+it: the Python usdwrinkle is installed in) on the stage as usdview holds it (its session
+layer over its root layer), and brings the result back: the bake as a sublayer of the
+session layer, the render as files.
 """
 from __future__ import annotations
 
@@ -39,9 +47,86 @@ def _targets(usdview_api, wrinkled: list[str]) -> list[str]:
     return picked or list(wrinkled)
 
 
+def _in_process() -> bool:
+    """usdwrinkle's dependencies import in this Python (else: out of process)."""
+    import importlib.util
+
+    return all(importlib.util.find_spec(name) is not None
+               for name in ("numpy", "moderngl", "OpenImageIO", "OpenEXR"))
+
+
+def _usdwrinkle_python() -> str | None:
+    python = os.environ.get("USDWRINKLE_PYTHON")
+    return python if python and os.path.isfile(python) else None
+
+
+def _held_stage(stage, folder: str) -> str:
+    """A stage file that composes the session layer over the root layer, as usdview
+    shows them (its edits and variant choices included)."""
+    from pxr import Sdf
+
+    session = os.path.join(folder, "session.usda")
+    stage.GetSessionLayer().Export(session)
+    root = stage.GetRootLayer()
+    shot = Sdf.Layer.CreateNew(os.path.join(folder, "shot.usda"))
+    shot.subLayerPaths = [session, root.realPath or root.identifier]
+    for key in ("startTimeCode", "endTimeCode", "timeCodesPerSecond", "framesPerSecond"):
+        if root.pseudoRoot.HasInfo(key):
+            shot.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
+    shot.Save()
+    return shot.realPath
+
+
+def _run_usdwrinkle(usdview_api, args: list[str]) -> bool:
+    """Run ``usdwrinkle ARGS`` in USDWRINKLE_PYTHON; False (said in the status bar) when it
+    cannot run or fails."""
+    python = _usdwrinkle_python()
+    if python is None:
+        usdview_api.PrintStatus("Wrinkles: usdwrinkle's dependencies are not importable in "
+                                "usdview's Python; set USDWRINKLE_PYTHON to the Python "
+                                "usdwrinkle is installed in (usdwrinkle info prints it)")
+        return False
+    done = subprocess.run([python, "-m", "usdwrinkle", *args, "--quiet"],
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        lines = done.stderr.strip().splitlines()
+        usdview_api.PrintStatus(f"Wrinkles: {lines[-1] if lines else 'usdwrinkle failed'}")
+        return False
+    return True
+
+
+def _frame_args(frame: float) -> list[str]:
+    return [] if math.isnan(frame) else [f"--frames={frame!r}"]
+
+
+def _bake_out_of_process(usdview_api) -> list[str]:
+    from pxr import Sdf
+
+    stage = usdview_api.stage
+    frame = _frame(usdview_api)
+    folder = tempfile.mkdtemp(prefix="usdwrinkle-usdview-")
+    layer = os.path.join(folder, "wrinkles.usda")
+    if not _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, folder), layer,
+                                         "--sparse", "--display-color", "amplitude",
+                                         *_frame_args(frame)]):
+        return []
+    baked = Sdf.Layer.FindOrOpen(layer)
+    targets = []
+    baked.Traverse(Sdf.Path.absoluteRootPath, lambda path: targets.append(str(path.GetPrimPath()))
+                   if path.IsPropertyPath() and path.name == "primvars:wrinkle:amplitude"
+                   else None)
+    stage.GetSessionLayer().subLayerPaths.insert(0, layer)
+    when = "the default time" if math.isnan(frame) else f"frame {frame:g}"
+    usdview_api.PrintStatus(f"Wrinkles: baked {len(targets)} mesh(es) at {when} into the "
+                            "session layer (displayColor shows the amplitude)")
+    return sorted(targets)
+
+
 def bake_current_frame(usdview_api, ctx=None) -> list[str]:
     """Bake the wrinkle primvars (and a displayColor ramp) of the current frame into the
     stage's session layer; returns the baked mesh paths."""
+    if not _in_process():
+        return _bake_out_of_process(usdview_api)
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
     from ..outputs.layers import LayerBaker
@@ -96,9 +181,6 @@ def _open_file(path: str) -> None:
 def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_file,
                          width: int = 960, ctx=None) -> list[str]:
     """Render the current frame through the current camera to EXR and PNG, open the PNG."""
-    from ..engine import WrinkleEngine
-    from ..errors import UsdWrinkleError
-    from ..outputs.images import write_image
     from ..timecode import format_frame
 
     stage = usdview_api.stage
@@ -109,6 +191,20 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     stem = os.path.splitext(os.path.basename(stage.GetRootLayer().identifier))[0] or "stage"
     tag = format_frame(frame)
     paths = [os.path.join(outdir, f"usdwrinkle_{stem}.{tag}{ext}") for ext in (".exr", ".png")]
+    if not _in_process():
+        held = _held_stage(stage, tempfile.mkdtemp(prefix="usdwrinkle-usdview-"))
+        for path in paths:
+            if not _run_usdwrinkle(usdview_api, ["render", held, path, "--width", str(width),
+                                                 *(["--camera", camera] if camera else []),
+                                                 *_frame_args(frame)]):
+                return []
+        opener(paths[1])
+        usdview_api.PrintStatus(f"Wrinkles: rendered {paths[0]} and {paths[1]}")
+        return paths
+    from ..engine import WrinkleEngine
+    from ..errors import UsdWrinkleError
+    from ..outputs.images import write_image
+
     try:
         engine = WrinkleEngine(stage, camera=camera, warn=lambda m: None, ctx=ctx)
         try:
