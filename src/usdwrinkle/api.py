@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import argparse
 
-from .errors import UsdWrinkleError
-
 __all__ = ["bake", "render"]
 
 
@@ -46,16 +44,6 @@ def _namespace(command: str, stage, output, frames, options: dict) -> argparse.N
     return args
 
 
-def _run(command: str, args: argparse.Namespace) -> None:
-    from .cli import bake as bake_command
-    from .cli import render as render_command
-
-    run = {"render": render_command.run, "bake": bake_command.run}[command]
-    code = run(args)
-    if code != 0:  # pragma: no cover - the commands raise instead
-        raise UsdWrinkleError(f"usdwrinkle {command} ended with exit code {code}")
-
-
 def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list[str]:
     """Render ``stage`` to ``output`` (a path with a '#' frame placeholder, or one file
     for one frame); returns the paths of the frames the shot now has on disk (written,
@@ -65,14 +53,10 @@ def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list
     ``exr_half``, ``skip_existing``, ``stats``, ``dask``, ``workers``, ``chunk``."""
     import os
 
-    from .cli.frames import frame_paths, parse_frame_spec
-    from .scene.stage import open_stage, stage_frames
+    from .cli.render import render_shot
 
     args = _namespace("render", stage, output, frames, {"quiet": quiet, **options})
-    _run("render", args)
-    shot_frames = parse_frame_spec(args.frames) if args.frames else \
-        stage_frames(open_stage(str(stage)))
-    return [path for path in frame_paths(str(output), shot_frames) if os.path.isfile(path)]
+    return [path for path in render_shot(args) if os.path.isfile(path)]
 
 
 def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
@@ -85,6 +69,7 @@ def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
     if "maps" in options and options["maps"] is not None and \
             not isinstance(options["maps"], str):
         options["maps"] = ",".join(options["maps"])
-    args = _namespace("bake", stage, output, frames, {"quiet": quiet, **options})
-    _run("bake", args)
+    from .cli import bake as bake_command
+
+    bake_command.run(_namespace("bake", stage, output, frames, {"quiet": quiet, **options}))
     return str(output)

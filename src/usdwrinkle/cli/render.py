@@ -120,7 +120,7 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
     return text
 
 
-def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> int:
+def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> None:
     """--dask: the farm's typed request from the options, and the summary of its result."""
     from ..farm.client import FarmRender, render_on_dask
     from ..shot import ImageOptions
@@ -142,7 +142,6 @@ def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[st
                       f"{result.workers} Dask worker(s), chunks of {result.chunk})",
                       skipped=result.skipped),
               flush=True)
-    return 0
 
 
 def write_stats(path: str, stats: dict) -> None:
@@ -200,6 +199,13 @@ def _warn_geometry(engine, reporter, args, frames: list[float]) -> None:
 
 
 def run(args) -> int:
+    render_shot(args)
+    return 0
+
+
+def render_shot(args) -> list[str]:
+    """The render command's work; returns the file of each frame of the shot (written, or
+    kept by --skip-existing). usdwrinkle.api.render calls it too."""
     from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
     from ..scene.baked import geometry_bake
@@ -223,7 +229,8 @@ def run(args) -> int:
     if args.dask is not None:
         if args.stats:
             reporter.warn("--stats applies to a serial render; ignored with --dask")
-        return _render_on_dask(args, reporter, stage, frames, outputs)
+        _render_on_dask(args, reporter, stage, frames, outputs)
+        return outputs
     if args.chunk is not None or args.workers is not None:
         reporter.warn("--chunk and --workers apply to --dask only; ignored")
     # --no-wrinkles draws no waves, so it needs no baked frames either
@@ -261,4 +268,4 @@ def run(args) -> int:
                   flush=True)
     finally:
         engine.release()
-    return 0
+    return outputs

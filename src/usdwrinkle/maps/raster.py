@@ -85,26 +85,28 @@ class MapRasterizer:
         #: (mesh path, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
+    def _corner_table(self, store: dict, res: MeshResources, components: int) -> tuple:
+        """(the mesh's table of one value per triangle corner in ``store``, made now);
+        a table of another size is replaced."""
+        table = store.get(res.record.path)
+        if table is not None and table.count == 3 * res.num_triangles:
+            return table, False
+        if table is not None:
+            table.release()
+        table = store[res.record.path] = Table(self.ctx, 3 * res.num_triangles, components,
+                                               path=res.record.path)
+        return table, True
+
     def uv_table(self, res: MeshResources, corner_uv: np.ndarray) -> Table:
         """The mesh's UVs per triangle corner ([3t + c]) on the GPU, uploaded once."""
-        table = self.uv_tables.get(res.record.path)
-        if table is None or table.count != 3 * res.num_triangles:
-            if table is not None:
-                table.release()
-            table = Table(self.ctx, 3 * res.num_triangles, 2,
-                          data=np.asarray(corner_uv, np.float32).reshape(-1, 2),
-                          path=res.record.path)
-            self.uv_tables[res.record.path] = table
+        table, new = self._corner_table(self.uv_tables, res, 2)
+        if new:
+            table.write(np.asarray(corner_uv, np.float32).reshape(-1, 2))
         return table
 
     def tangent_table(self, res: MeshResources, tangents: np.ndarray) -> Table:
         """This frame's MikkTSpace tangents ([3t + c]: xyz, sign) on the GPU."""
-        table = self.tangent_tables.get(res.record.path)
-        if table is None or table.count != 3 * res.num_triangles:
-            if table is not None:
-                table.release()
-            table = Table(self.ctx, 3 * res.num_triangles, 4, path=res.record.path)
-            self.tangent_tables[res.record.path] = table
+        table, _ = self._corner_table(self.tangent_tables, res, 4)
         table.write(np.asarray(tangents, np.float32).reshape(-1, 4))
         return table
 

@@ -289,10 +289,11 @@ class MeshResources:
             return
         if self.corner_colors is None:
             self.corner_colors = self._table(3 * self.num_triangles, 4)
-        self.corner_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+        self.set_frame_colors(colors)
 
     def set_frame_colors(self, colors) -> None:
-        """A frame's own corner colours (time-sampled displayColor)."""
+        """Write corner colours ((m, 3, 3)) into the table the material made (a frame's
+        own, where displayColor is time-sampled)."""
         if colors is not None and self.corner_colors is not None:
             self.corner_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
 

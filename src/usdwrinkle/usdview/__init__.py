@@ -104,12 +104,13 @@ def _bake_out_of_process(usdview_api) -> list[str]:
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
-    folder = tempfile.mkdtemp(prefix="usdwrinkle-usdview-")
-    layer = os.path.join(folder, "wrinkles.usda")
-    if not _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, folder), layer,
-                                         "--sparse", "--display-color", "amplitude",
-                                         *_frame_args(frame)]):
-        return []
+    # the layer stays (the session layer sublayers it); the held stage goes
+    layer = os.path.join(tempfile.mkdtemp(prefix="usdwrinkle-usdview-"), "wrinkles.usda")
+    with tempfile.TemporaryDirectory(prefix="usdwrinkle-usdview-") as held:
+        if not _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, held), layer,
+                                             "--sparse", "--display-color", "amplitude",
+                                             *_frame_args(frame)]):
+            return []
     baked = Sdf.Layer.FindOrOpen(layer)
     targets = []
     baked.Traverse(Sdf.Path.absoluteRootPath, lambda path: targets.append(str(path.GetPrimPath()))
@@ -192,12 +193,13 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     tag = format_frame(frame)
     paths = [os.path.join(outdir, f"usdwrinkle_{stem}.{tag}{ext}") for ext in (".exr", ".png")]
     if not _in_process():
-        held = _held_stage(stage, tempfile.mkdtemp(prefix="usdwrinkle-usdview-"))
-        for path in paths:
-            if not _run_usdwrinkle(usdview_api, ["render", held, path, "--width", str(width),
-                                                 *(["--camera", camera] if camera else []),
-                                                 *_frame_args(frame)]):
-                return []
+        with tempfile.TemporaryDirectory(prefix="usdwrinkle-usdview-") as folder:
+            held = _held_stage(stage, folder)
+            for path in paths:
+                if not _run_usdwrinkle(usdview_api, [
+                        "render", held, path, "--width", str(width),
+                        *(["--camera", camera] if camera else []), *_frame_args(frame)]):
+                    return []
         opener(paths[1])
         usdview_api.PrintStatus(f"Wrinkles: rendered {paths[0]} and {paths[1]}")
         return paths
