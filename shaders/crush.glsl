@@ -30,6 +30,12 @@ layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
 // xyz: painted q (rest space, |q| <= 1); w: rest wavelength W.
 layout(binding = CRUSH_Q_WIDTH) uniform sampler2D q_width;
 layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
+// held edges (wrinkle:held, scene/params.py held_weights): x the damping strength in
+// [0, 1], yzw the unit rest vector u from the holder to the point (0 on a held point)
+layout(binding = CRUSH_HOLD) uniform sampler2D hold;
+// xy: the damped rest direction d of the shot's previous frame (T1, T2 coordinates),
+// z: 1 once written; read and written in place
+layout(rgba32f, binding = CRUSH_DAMPED) uniform image2D damped;
 layout(rgba32f, binding = CRUSH_FIELDS) writeonly uniform image2D fields;
 layout(rg32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;  // x, y: systems 1, 2
 #endif
@@ -40,6 +46,13 @@ uniform float u_amplitude_scale;    // s
 uniform float u_biaxial;            // wrinkle:biaxial, the second system's weight (0: off)
 uniform float u_tension;            // wrinkle:tension, the tension wave's factor (0: off)
 uniform float u_tension_threshold;  // wrinkle:tensionThreshold, the onset strain
+uniform float u_slack;              // wrinkle:slack, compression taken in-plane
+// crest damping (wrinkle:crestDamping, docs/method.md): d turns towards the strain's by
+// u_damping_alpha = 1 - exp(-1 / tau) a frame where it turns by less than
+// u_damping_deadband radians, at once where by twice that; 1: off
+uniform float u_damping_alpha;
+uniform float u_damping_deadband;
+uniform int u_has_history;          // the previous frame's damped direction is in the table
 
 #if defined FACE_NORMALS
 
@@ -171,16 +184,38 @@ void main() {
     } else {
         d = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
     }
+    // Crest damping (docs/method.md): the rest direction turns towards the strain's by
+    // the share u_damping_alpha a frame while it turns by less than u_damping_deadband
+    // radians a frame, at once when by twice that; r is then the compression along it
+    vec4 before = imageLoad(damped, TABLE_TEXEL(i));
+    if (u_has_history != 0 && u_damping_alpha < 1.0 && before.z > 0.5) {
+        vec2 d_before = dot(before.xy, d) < 0.0 ? -before.xy : before.xy;
+        float turn = acos(clamp(dot(d_before, d), 0.0, 1.0));
+        float follow = mix(u_damping_alpha, 1.0,
+                           smoothstep(u_damping_deadband, 2.0 * u_damping_deadband, turn));
+        vec2 turned = mix(d_before, d, follow);
+        d = dot(turned, turned) > 1e-24 ? normalize(turned) : d;
+    }
     vec3 d3 = rest_direction(d, T1, T2);
     if (dot(d3, d.x * T1 + d.y * T2) < 0.0) d = -d;
+    imageStore(damped, TABLE_TEXEL(i), vec4(d, 1.0, 0.0));
     vec2 e = vec2(-d.y, d.x);  // the other principal direction
     vec3 e3 = rest_direction(e, T1, T2);
     if (dot(e3, e.x * T1 + e.y * T2) < 0.0) e = -e;
 
     // r in [r_min, 1]: a ring crushed flat still has a finite wavelength W r_min
     bool any_wave = usable || q_len > 0.0;
-    float r = any_wave ? clamp(sqrt(lambda), MIN_RATIO, 1.0) : 1.0;
-    float amplitude = u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r * r, 0.0));
+    // |M d| = sqrt(lambda) for the eigenvector; a damped d reads the compression along it
+    float r = any_wave ? clamp(length(M * d), MIN_RATIO, 1.0) : 1.0;
+    // slack (docs/method.md): the cloth takes the first compression in-plane; the
+    // amplitude law reads r_b = min(r / (1 - slack), 1), the wavelength keeps r
+    // held edges (docs/method.md): a wave whose crests run into the held edge (d across u)
+    // fades towards it by the strength x; one whose crests run along it keeps its amplitude
+    vec4 holder = fetch(hold, i);
+    float along = dot(normalize(d3), holder.yzw);
+    float held = 1.0 - holder.x * (1.0 - along * along);
+    float r_b = min(r / (1.0 - u_slack), 1.0);
+    float amplitude = held * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r_b * r_b, 0.0));
     float wavelength = W;  // rest space
 
     // Tension (docs/method.md): across the largest stretch s1 = sqrt(lambda2) beyond the
@@ -190,7 +225,7 @@ void main() {
     float strain = stretch - 1.0 - u_tension_threshold;
     if (u_tension > 0.0 && usable && strain > 0.0) {
         float tension_wavelength = W * pow(strain / TENSION_REFERENCE_STRAIN, -0.25);
-        float tension_amplitude = u_amplitude_scale * u_tension * TENSION_SLOPE
+        float tension_amplitude = held * u_amplitude_scale * u_tension * TENSION_SLOPE
             * sqrt(strain) * tension_wavelength;
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
@@ -200,9 +235,11 @@ void main() {
     vec3 k = wave_vector(M, d, wavelength, t1, t2);
 
     // The second system: the other principal direction, where it is compressed too
-    float r2 = any_wave ? clamp(sqrt(lambda2), MIN_RATIO, 1.0) : 1.0;
+    float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
+    float r2_b = min(r2 / (1.0 - u_slack), 1.0);
     float amplitude2 = u_biaxial > 0.0
-        ? u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2 * r2, 0.0)) : 0.0;
+        ? held * u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2_b * r2_b, 0.0))
+        : 0.0;
     vec3 k2 = wave_vector(M, e, W, t1, t2);
 
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));

@@ -36,6 +36,7 @@ uniform int u_wrinkles;          // 0: same shading, no wrinkles
 // barycentrics never extrapolate past a triangle's edge.
 
 centroid out vec3 v_local;
+out vec3 v_local_footprint;  // the same, not centroid: derivatives of centroid are skewed
 centroid out vec3 v_world;
 centroid out vec3 v_normal_local;
 centroid out vec3 v_bary;
@@ -67,6 +68,7 @@ void main() {
     int i = fetch(triangles, t)[c];
     vec3 p = fetch(posed_points, i).xyz;  // posed, local space
     v_local = p;
+    v_local_footprint = p;
     vec4 world = u_local_to_world * vec4(p, 1.0);  // local -> world
     v_world = world.xyz / world.w;
     // the shading normal; the wave physics' own where it degenerates
@@ -107,6 +109,7 @@ void main() {
 #elif defined FRAGMENT_SHADER
 
 centroid in vec3 v_local;
+in vec3 v_local_footprint;
 centroid in vec3 v_world;
 centroid in vec3 v_normal_local;
 centroid in vec3 v_bary;
@@ -231,8 +234,10 @@ void main() {
     if (!gl_FrontFacing && u_double_sided != 0) n = -n;
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
+        // band limit: no wave shorter than 2 pixels along it
+        Footprint pixel = Footprint(dFdx(v_local_footprint), dFdy(v_local_footprint), 0.0);
         wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner), v_bary, v_local,
-                                  n, false);
+                                  n, false, pixel);
     }
     float h = wave.height;
     vec3 shading_local = safe_normalize(n - wave.gradient, n);

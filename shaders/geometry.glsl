@@ -27,6 +27,8 @@ layout(binding = GEOMETRY_SHADING_NORMALS) uniform sampler2D shading_normals;
 layout(binding = GEOMETRY_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform int u_count;
 uniform int u_wrinkles;
+// band limit: 2 fine edges (local space), no wave shorter than the fine mesh can carry
+uniform float u_min_wavelength;
 
 // The displaced point of entry e, and its surface normal.
 vec3 displaced(int e, out vec3 normal) {
@@ -49,7 +51,8 @@ vec3 displaced(int e, out vec3 normal) {
     vec3 n = safe_normalize(m, face);
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
-        wave = wave_blend(t, bary, p, n, true);
+        wave = wave_blend(t, bary, p, n, true, Footprint(vec3(0.0), vec3(0.0),
+                                                         u_min_wavelength));
     }
     float h = wave.height;
     vec3 g = wave.gradient - dot(wave.gradient, n) * n;

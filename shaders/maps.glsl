@@ -69,7 +69,9 @@ void main() {
     }
     int t = gl_PrimitiveID;
     vec3 n = safe_normalize(v_normal_local, vec3(0.0, 0.0, 1.0));
-    Wave wave = wave_blend(t, v_bary, v_local, n, false);
+    // band limit: no wave shorter than 2 texels along it
+    Wave wave = wave_blend(t, v_bary, v_local, n, false,
+                           Footprint(dFdx(v_local), dFdy(v_local), 0.0));
     vec3 shading = safe_normalize(n - wave.gradient, n);
     mat3 frame = tangent_frame(t, corner_uv, n);   // orthonormal: its transpose inverts it
     vec3 encoded = transpose(frame) * shading;

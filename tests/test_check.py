@@ -148,8 +148,10 @@ def test_a_scalar_width_is_read_but_flagged(gl_context, tmp_path, capsys):
     stage = Usd.Stage.Open(str(tmp_path / "baked.usda"))
     amplitude = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Cloth")).GetPrimvar(
         "wrinkle:amplitude").Get(2)
-    # uniform compression by 0.6 with W = 0.3: h = (W/4) sqrt(1 - 0.36)
-    np.testing.assert_allclose(amplitude, 0.3 / 4 * 0.8, rtol=1e-4)
+    # uniform compression by 0.6 with W = 0.3 and the fallback slack: h = (W/4)
+    # sqrt(1 - r_b^2), r_b = 0.6 / (1 - slack)
+    r_b = 0.6 / (1.0 - schema.DEFAULT_SLACK)
+    np.testing.assert_allclose(amplitude, 0.3 / 4 * np.sqrt(1 - r_b ** 2), rtol=1e-4)
     capsys.readouterr()
     assert main(["check", str(path), "--json"]) == 1
     report = json.loads(capsys.readouterr().out)

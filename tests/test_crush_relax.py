@@ -49,7 +49,8 @@ def test_crush_matches_numpy_reference(gl_context, seed):
     stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
                               width=0.2, relax_iterations=0)
     ours, record = gpu_fields(gl_context, stage)
-    ref = crush_reference(rest, posed, record.topology, q, record.params.width)
+    ref = crush_reference(rest, posed, record.topology, q, record.params.width,
+                          slack=record.params.slack, hold=record.params.hold)
     assert np.all(ours["usable"] == ref["usable"])
     np.testing.assert_allclose(ours["compression"], ref["compression"], atol=2e-4)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
@@ -82,7 +83,8 @@ def test_relax_matches_numpy_reference(gl_context):
         record = engine.scene.meshes["/Sheet"]
     finally:
         engine.release()
-    starts = [crush_reference(rest, frames[f], record.topology, q, record.params.width)
+    starts = [crush_reference(rest, frames[f], record.topology, q, record.params.width,
+                              slack=record.params.slack)
               for f in (1, 2, 3)]
     for fields, f in zip(starts, (1, 2, 3), strict=True):
         fields["points"] = frames[f]

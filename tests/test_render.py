@@ -97,10 +97,12 @@ def test_buffers_handed_out_are_never_overwritten(gl_context):
     """The framebuffer reuses its readback arrays only when nobody holds them."""
     engine = WrinkleEngine(str(SAMPLES / "flag.usda"), ctx=gl_context, warn=lambda m: None)
     try:
-        first = engine.render_frame(1.0, 64, 48, samples=1)
+        # the flag's waves must be longer than the band limit's 4 pixels to show (at
+        # 64 x 48 they fade out and every frame is the same picture)
+        first = engine.render_frame(1.0, 160, 120, samples=1)
         kept = {name: buf.pixels.copy() for name, buf in first.items()}
-        second = engine.render_frame(12.0, 64, 48, samples=1)
-        third = engine.render_frame(24.0, 64, 48, samples=1)
+        second = engine.render_frame(12.0, 160, 120, samples=1)
+        third = engine.render_frame(24.0, 160, 120, samples=1)
     finally:
         engine.release()
     for name, pixels in kept.items():

@@ -120,7 +120,35 @@ CornerWaves corner_waves(int t) {
 // gradient of h over the flat coarse triangle instead: the blend weights' own slope
 // sum(a_c H(theta_c) grad b_c) added, and not projected (displaced geometry
 // differentiates its surface with it).
-Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
+//
+// Band limit: a corner wave shorter than what the consumer can carry fades towards the
+// mean surface (amplitude to 0) instead of aliasing (docs/method.md: band limit).
+// - min_wavelength (local space; 0: none): displaced geometry passes 2 fine edges; the
+//   factor is smoothstep(min_wavelength, 1.5 min_wavelength, 2 pi / |k|).
+// - footprint: the local-space steps of one pixel (or texel) across and down the image,
+//   dFdx and dFdy of the position (zero vectors: none). The wave advances |k . step|
+//   radians a pixel; fewer than 2 pixels a wavelength alias, so the factor is
+//   smoothstep(2, 3, 2 pi / max |k . step|): only the wave's own direction counts, and a
+//   grazing view does not fade waves that run across it.
+struct Footprint {
+    vec3 dx;
+    vec3 dy;
+    float min_wavelength;
+};
+
+float band_limit(vec3 k, Footprint footprint) {
+    float factor = 1.0;
+    if (footprint.min_wavelength > 0.0) {
+        float lambda = TWO_PI / max(length(k), 1e-30);
+        factor = smoothstep(footprint.min_wavelength, 1.5 * footprint.min_wavelength, lambda);
+    }
+    float step = max(abs(dot(k, footprint.dx)), abs(dot(k, footprint.dy)));
+    if (step > 0.0) factor *= smoothstep(2.0, 3.0, TWO_PI / step);
+    return factor;
+}
+
+Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gradient,
+                        Footprint footprint) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
     bary = clamp(bary, 0.0, 1.0);
@@ -128,9 +156,9 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
     for (int s = 0; s < SYSTEMS; ++s) {
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
-            float a = wave.w;
-            if (a == 0.0) continue;  // no wave here: skip the profile lookups
             vec3 k = wave.xyz;
+            float a = wave.w * band_limit(k, footprint);
+            if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
             float b = bary[c];
             float height = profile(u_height_profile, theta);
@@ -150,8 +178,9 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
 }
 
 // The blend at local-space point p of triangle t (corner_waves and blend_corner_waves).
-Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient) {
-    return blend_corner_waves(corner_waves(t), bary, p, n, exact_gradient);
+Wave wave_blend(int t, vec3 bary, vec3 p, vec3 n, bool exact_gradient,
+                Footprint footprint) {
+    return blend_corner_waves(corner_waves(t), bary, p, n, exact_gradient, footprint);
 }
 
 // dP/ds and dP/dt of triangle t (posed, local space) for a table of texture coordinates

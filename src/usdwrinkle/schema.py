@@ -24,6 +24,10 @@ RELAX_ITERATIONS = "wrinkle:relaxIterations"
 BIAXIAL = "wrinkle:biaxial"
 TENSION = "wrinkle:tension"
 TENSION_THRESHOLD = "wrinkle:tensionThreshold"
+CLOTH = "wrinkle:cloth"
+SLACK = "wrinkle:slack"
+HELD = "primvars:wrinkle:held"
+CREST_DAMPING = "wrinkle:crestDamping"
 #: the Material interface inputs that ``bake --maps`` writes: map kind -> input name
 #: the baked wave fields on disk (bake writes them, a render reads them back): primvar ->
 #: (WrinkleFields/BakedFields attribute, components), vertex interpolation, one time
@@ -62,8 +66,26 @@ DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0
 DEFAULT_TENSION_THRESHOLD = 0.02
 
-#: Fallback width: this multiple of the mean rest edge length of the mesh.
+#: Fallback width: the cloth's (wrinkle:cloth) fold wavelength in metres, measured with
+#: Blender 5.0's cloth solver on its cloth presets (benchmarks/physics, docs/physics.md):
+#: cotton is the geometric mean of the three oracle shots' simulated wavelengths, the
+#: others cotton's scaled by their sheet's wavelength over cotton's sheet's. Converted to
+#: scene units through the stage's metersPerUnit.
+CLOTH_WIDTHS_M = {"silk": 0.063, "cotton": 0.067, "denim": 0.080, "leather": 0.154}
+DEFAULT_CLOTH = "cotton"
+#: wrinkle:cloth = "mesh": the width follows the mesh, this multiple of its mean rest edge
+#: length (the fallback before the cloth oracle)
+MESH_CLOTH = "mesh"
 WIDTH_EDGE_MULTIPLE = 4.0
+CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
+#: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles (fitted
+#: to the cloth oracle's amplitudes at matched width, docs/physics.md)
+DEFAULT_SLACK = 0.08
+#: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
+#: the strain are followed (docs/method.md: crest damping)
+DEFAULT_CREST_DAMPING = 4.0
+#: wrinkle:held: waves reach full amplitude this many widths W away from a held point
+HELD_REACH = 3.0
 #: Samples of the default (cosine) profile.
 PROFILE_SAMPLES = 256
 DEFAULT_RELAX_ITERATIONS = 8

@@ -66,6 +66,10 @@ EXPECTED_TYPES = {
     schema.BIAXIAL: (_NUMBERS, (False,), "a float"),
     schema.TENSION: (_NUMBERS, (False,), "a float"),
     schema.TENSION_THRESHOLD: (_NUMBERS, (False,), "a float"),
+    schema.CLOTH: ({"token", "string"}, (False,), "a token"),
+    schema.SLACK: (_NUMBERS, (False,), "a float"),
+    schema.CREST_DAMPING: (_NUMBERS, (False,), "a float"),
+    schema.HELD: (_NUMBERS, (True, False), "a float[] array or a float"),
 }
 
 
@@ -183,6 +187,38 @@ def check_tension_threshold(value, path: str) -> list[Finding]:
     return _in_range(value, schema.TENSION_THRESHOLD, "tension threshold", 0.0, 1.0, path)
 
 
+def check_cloth(value, path: str) -> list[Finding]:
+    """wrinkle:cloth: one of the cloth presets, or "mesh"."""
+    if value is None or str(value) in schema.CLOTH_TOKENS:
+        return []
+    return [Finding(path, schema.CLOTH, f"cloth {str(value)!r} is not one of "
+                                        f"{', '.join(schema.CLOTH_TOKENS)}")]
+
+
+def check_slack(value, path: str) -> list[Finding]:
+    """wrinkle:slack: a compression in [0, 0.9]."""
+    return _in_range(value, schema.SLACK, "slack", 0.0, 0.9, path)
+
+
+def check_crest_damping(value, path: str) -> list[Finding]:
+    """wrinkle:crestDamping: a time constant in frames, in [0, 1000]."""
+    return _in_range(value, schema.CREST_DAMPING, "crest damping", 0.0, 1000.0, path)
+
+
+def check_held(values, point_count: int | None, path: str) -> list[Finding]:
+    """primvars:wrinkle:held: one weight in [0, 1], or one per point."""
+    if values is None:
+        return []
+    arr = np.atleast_1d(np.asarray(values, dtype=np.float64))
+    out = []
+    if arr.size != 1 and (point_count is None or arr.size != point_count):
+        out.append(Finding(path, schema.HELD, f"held must be constant or have one value per "
+                                              f"point ({point_count})"))
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0) or np.any(arr > 1):
+        out.append(Finding(path, schema.HELD, "held weights must be in [0, 1]"))
+    return out
+
+
 def _value_check(name: str, path: str, count: int | None):
     """check(attr, time) -> findings for the value of WrinkleAPI attribute ``name``."""
     def primvar_value(attr, time):
@@ -199,6 +235,10 @@ def _value_check(name: str, path: str, count: int | None):
         schema.RELAX_ITERATIONS: lambda attr, time: check_relax_iterations(attr.Get(time), path),
         schema.BIAXIAL: lambda attr, time: check_biaxial(attr.Get(time), path),
         schema.TENSION: lambda attr, time: check_tension(attr.Get(time), path),
+        schema.CLOTH: lambda attr, time: check_cloth(attr.Get(time), path),
+        schema.SLACK: lambda attr, time: check_slack(attr.Get(time), path),
+        schema.CREST_DAMPING: lambda attr, time: check_crest_damping(attr.Get(time), path),
+        schema.HELD: lambda attr, time: check_held(primvar_value(attr, time), count, path),
         schema.TENSION_THRESHOLD: lambda attr, time: check_tension_threshold(attr.Get(time),
                                                                              path),
     }[name]
@@ -223,7 +263,8 @@ def attribute_findings(attr: Usd.Attribute, path: str, count: int | None) -> lis
     values = []
     for time in _times(attr):
         findings += [dataclasses.replace(f, frame=frame_of(time)) for f in check(attr, time)]
-        value = UsdGeom.Primvar(attr).ComputeFlattened(time) if name in (schema.Q, schema.WIDTH) \
+        value = UsdGeom.Primvar(attr).ComputeFlattened(time) \
+            if name in (schema.Q, schema.WIDTH, schema.HELD) \
             else attr.Get(time)
         if value is not None:
             values.append(value)
@@ -243,7 +284,8 @@ def attribute_findings(attr: Usd.Attribute, path: str, count: int | None) -> lis
 #: the WrinkleAPI attributes, in the order their findings are reported
 ATTRIBUTES = (schema.Q, schema.WIDTH, schema.HEIGHT_PROFILE, schema.GRADIENT_PROFILE,
               schema.AMPLITUDE_SCALE, schema.RELAX_ITERATIONS, schema.BIAXIAL, schema.TENSION,
-              schema.TENSION_THRESHOLD)
+              schema.TENSION_THRESHOLD, schema.CLOTH, schema.SLACK, schema.HELD,
+              schema.CREST_DAMPING)
 
 
 def parameter_findings(prim: Usd.Prim, count: int | None) -> list[Finding]:

@@ -20,6 +20,10 @@ from ..profiles import derive_gradient
 from ..validation import (
     check_amplitude_scale,
     check_biaxial,
+    check_cloth,
+    check_crest_damping,
+    check_held,
+    check_slack,
     check_profile,
     check_q,
     check_relax_iterations,
@@ -80,7 +84,8 @@ class WrinkleAPI:
     def GetSchemaAttributeNames(includeInherited: bool = True) -> list[str]:  # noqa: N802, N803
         return [schema.Q, schema.WIDTH, schema.AMPLITUDE_SCALE, schema.HEIGHT_PROFILE,
                 schema.GRADIENT_PROFILE, schema.RELAX_ITERATIONS, schema.BIAXIAL,
-                schema.TENSION, schema.TENSION_THRESHOLD]
+                schema.TENSION, schema.TENSION_THRESHOLD, schema.CLOTH, schema.SLACK,
+                schema.HELD, schema.CREST_DAMPING]
 
     # -- attributes -------------------------------------------------------------------
     def _primvars(self) -> UsdGeom.PrimvarsAPI:
@@ -138,6 +143,45 @@ class WrinkleAPI:
         return self._create(schema.AMPLITUDE_SCALE, Sdf.ValueTypeNames.Float,
                             None if default_value is None else float(default_value),
                             lambda v: check_amplitude_scale(v, self._path()))
+
+    def GetClothAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.CLOTH)
+
+    def CreateClothAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.CLOTH, Sdf.ValueTypeNames.Token, default_value,
+                            lambda v: check_cloth(v, self._path()))
+
+    def GetSlackAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.SLACK)
+
+    def CreateSlackAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.SLACK, Sdf.ValueTypeNames.Float, default_value,
+                            lambda v: check_slack(v, self._path()))
+
+    def GetCrestDampingAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.CREST_DAMPING)
+
+    def CreateCrestDampingAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.CREST_DAMPING, Sdf.ValueTypeNames.Float, default_value,
+                            lambda v: check_crest_damping(v, self._path()))
+
+    def GetHeldPrimvar(self) -> UsdGeom.Primvar:  # noqa: N802
+        return self._primvars().GetPrimvar("wrinkle:held")
+
+    def CreateHeldPrimvar(self, default_value=None) -> UsdGeom.Primvar:  # noqa: N802
+        """One weight in [0, 1] per point (vertex), or one for every point (constant)."""
+        values = None if default_value is None else np.atleast_1d(
+            np.asarray(default_value, np.float32))
+        interpolation = UsdGeom.Tokens.constant if values is not None and values.size == 1 \
+            else UsdGeom.Tokens.vertex
+        if values is not None:
+            refuse(check_held(values, self._point_count(), self._path()))
+        primvar = self._primvars().CreatePrimvar("wrinkle:held", Sdf.ValueTypeNames.FloatArray,
+                                                 interpolation)
+        primvar.SetInterpolation(interpolation)
+        if values is not None:
+            primvar.Set(Vt.FloatArray.FromNumpy(values))
+        return primvar
 
     def GetBiaxialAttr(self) -> Usd.Attribute:  # noqa: N802
         return self._attr(schema.BIAXIAL)

@@ -41,8 +41,13 @@ def grid_sheet(nx: int = 21, ny: int = 21, size: float = 2.0, centered: bool = T
 
 def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width=None,
                       amplitude_scale=None, relax_iterations=None, apply_api=True,
-                      path="/Sheet") -> Usd.Stage:
-    """A stage with one mesh: ``primvars:rest`` = rest, ``points`` time-sampled."""
+                      path="/Sheet", slack=0.0, crest_damping=0.0) -> Usd.Stage:
+    """A stage with one mesh: ``primvars:rest`` = rest, ``points`` time-sampled.
+
+    These are the analytic cases: ``slack`` and ``crest_damping`` are authored as 0 (the
+    paper's amplitude law and frames that follow the strain at once, which the analytic
+    bars assume) unless given; None leaves the attribute unauthored (its fallback
+    applies)."""
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     frames = sorted(posed_by_frame)
@@ -73,6 +78,11 @@ def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width
     if relax_iterations is not None:
         prim.CreateAttribute(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int).Set(
             int(relax_iterations))
+    if slack is not None and apply_api:
+        prim.CreateAttribute(schema.SLACK, Sdf.ValueTypeNames.Float).Set(float(slack))
+    if crest_damping is not None and apply_api:
+        prim.CreateAttribute(schema.CREST_DAMPING, Sdf.ValueTypeNames.Float).Set(
+            float(crest_damping))
     return stage
 
 

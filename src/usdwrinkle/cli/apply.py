@@ -26,8 +26,25 @@ def add_parser(subparsers) -> None:
                         "of the root layer")
     p.add_argument("--width", type=float, metavar="W",
                    help="rest wavelength W (scene units); without it, and with no "
-                        "primvars:wrinkle:width authored, a mesh uses "
-                        f"{schema.WIDTH_EDGE_MULTIPLE:g} x its mean rest edge length")
+                        "primvars:wrinkle:width authored, a mesh uses its cloth's fold "
+                        "wavelength (--cloth) through the stage's metersPerUnit")
+    p.add_argument("--cloth", choices=schema.CLOTH_TOKENS,
+                   help="wrinkle:cloth, the cloth whose fold wavelength is the fallback W: "
+                        + ", ".join(f"{name} {100 * metres:g} cm"
+                                    for name, metres in schema.CLOTH_WIDTHS_M.items())
+                        + f"; mesh: {schema.WIDTH_EDGE_MULTIPLE:g} x the mean rest edge "
+                        f"length (default {schema.DEFAULT_CLOTH})")
+    p.add_argument("--slack", type=float, metavar="C",
+                   help="wrinkle:slack in [0, 0.9], the compression the cloth takes in-plane "
+                        f"before it buckles (default {schema.DEFAULT_SLACK:g}; 0: the "
+                        "paper's law)")
+    p.add_argument("--crest-damping", type=float, metavar="FRAMES",
+                   help="wrinkle:crestDamping, the time constant in frames with which the "
+                        "compression direction follows slight turns (default "
+                        f"{schema.DEFAULT_CREST_DAMPING:g}; 0: none)")
+    p.add_argument("--held-from-primvar", metavar="NAME",
+                   help="author primvars:wrinkle:held from this float primvar of the mesh "
+                        "(a painted pin or seam weight in [0, 1], vertex interpolation)")
     p.add_argument("--amplitude-scale", type=float, metavar="S",
                    help="amplitude scale s (default 1: the amplitude law of docs/method.md)")
     p.add_argument("--biaxial", type=float, metavar="WEIGHT",
@@ -151,6 +168,10 @@ class MeshEdit:
     biaxial: float | None = None
     tension: float | None = None
     tension_threshold: float | None = None
+    cloth: str | None = None
+    slack: float | None = None
+    crest_damping: float | None = None
+    held: np.ndarray | None = None
 
 
 def check_args(args) -> None:
@@ -246,7 +267,11 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
     from ..validation import (
         check_amplitude_scale,
         check_biaxial,
+        check_cloth,
+        check_crest_damping,
+        check_held,
         check_q,
+        check_slack,
         check_tension,
         check_tension_threshold,
         check_width,
@@ -262,7 +287,10 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
         plan = MeshEdit(prim, clear_q=bool(args.clear_q),
                         amplitude_scale=args.amplitude_scale, profile=profile,
                         biaxial=args.biaxial, tension=args.tension,
-                        tension_threshold=args.tension_threshold)
+                        tension_threshold=args.tension_threshold, cloth=args.cloth,
+                        slack=args.slack, crest_damping=args.crest_damping)
+        if args.held_from_primvar:
+            plan.held = held_from_primvar(prim, args.held_from_primvar)
         if q_spec is not None:
             plan.q = q_uniform(surface, *q_spec)
         elif args.q_from_texture:
@@ -284,6 +312,10 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
         findings += check_biaxial(plan.biaxial, path)
         findings += check_tension(plan.tension, path)
         findings += check_tension_threshold(plan.tension_threshold, path)
+        findings += check_cloth(plan.cloth, path)
+        findings += check_slack(plan.slack, path)
+        findings += check_crest_damping(plan.crest_damping, path)
+        findings += check_held(plan.held, count, path)
         refuse(findings)
         plans.append(plan)
     return plans
@@ -311,6 +343,36 @@ def author(plans: list[MeshEdit]) -> None:
             api.CreateTensionAttr(plan.tension)
         if plan.tension_threshold is not None:
             api.CreateTensionThresholdAttr(plan.tension_threshold)
+        if plan.cloth is not None:
+            api.CreateClothAttr(plan.cloth)
+        if plan.slack is not None:
+            api.CreateSlackAttr(plan.slack)
+        if plan.crest_damping is not None:
+            api.CreateCrestDampingAttr(plan.crest_damping)
+        if plan.held is not None:
+            api.CreateHeldPrimvar(plan.held)
+
+
+def held_from_primvar(prim, name: str) -> np.ndarray:
+    """A mesh's float primvar as held weights, one per point (refused when it is not one
+    value per point or a constant)."""
+    from pxr import UsdGeom
+
+    from ..errors import UsdWrinkleError
+
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar(name)
+    if not primvar or not primvar.HasValue():
+        raise UsdWrinkleError(f"no primvar {name!r} to read held weights from",
+                              str(prim.GetPath()))
+    if primvar.GetInterpolation() not in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying,
+                                          UsdGeom.Tokens.constant):
+        raise UsdWrinkleError(f"primvar {name!r} must have vertex or constant interpolation "
+                              "to give held weights per point", str(prim.GetPath()))
+    try:
+        return np.atleast_1d(np.asarray(primvar.ComputeFlattened(), np.float32)).ravel()
+    except (TypeError, ValueError) as exc:
+        raise UsdWrinkleError(f"primvar {name!r} is not a float array ({exc})",
+                              str(prim.GetPath())) from None
 
 
 def export(layer, destination: str) -> None:

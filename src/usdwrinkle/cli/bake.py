@@ -194,8 +194,13 @@ def run(args) -> int:
                            progress=lambda items: reporter.progress(items, "bake"),
                            survey_progress=lambda items: reporter.progress(items, "survey"))
         if not args.quiet:
+            from ..scene.params import width_summary
+
             print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
                   f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)
+            for path, record in sorted(engine.meshes.items()):
+                if record.wrinkled:
+                    print(f"  {path}: {width_summary(record.params)['text']}", flush=True)
     finally:
         engine.release()
     return 0

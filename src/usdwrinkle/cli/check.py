@@ -65,14 +65,33 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
+    widths = effective_widths(stage)
     if args.json:
-        json.dump({"stage": args.stage, "findings": findings, "clean": not findings},
-                  sys.stdout, indent=2)
+        json.dump({"stage": args.stage, "findings": findings, "clean": not findings,
+                   "widths": widths}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         for f in findings:
             where = f["prim"] + (f".{f['attribute']}" if f["attribute"] else "")
             print(f"{f['type']}: {where}: {f['message']} [{f['validator']}]")
+        for entry in widths:
+            print(f"width: {entry['prim']}: {entry['text']}")
         print(f"usdwrinkle: {len(findings)} finding(s) in {args.stage}" if findings
               else f"usdwrinkle: {args.stage} is clean")
     return 1 if findings else 0
+
+
+def effective_widths(stage) -> list[dict]:
+    """The width W each wrinkled mesh gets (authored, or its cloth's through the stage's
+    metersPerUnit), as the scene delegate resolves it; none where the stage cannot be
+    read that far (the findings say why)."""
+    from ..errors import UsdWrinkleError
+    from ..scene.params import width_summary
+    from ..scene.stage import StageSceneDelegate
+
+    try:
+        scene = StageSceneDelegate(stage, warn=lambda message: None, use_baked=False)
+    except UsdWrinkleError:
+        return []
+    return [{"prim": path, **width_summary(record.params)}
+            for path, record in sorted(scene.meshes.items()) if record.wrinkled]

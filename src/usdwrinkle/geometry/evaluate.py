@@ -17,6 +17,9 @@ from ..render.resources import MeshResources, Table
 from ..render.shaders import Variants, compute_shader
 from .subdivide import FineMesh
 
+#: the band limit: no wave on the fine mesh shorter than this many rest fine edges
+BAND_LIMIT_EDGES = 2.0
+
 
 @dataclass
 class FineFrame:
@@ -63,6 +66,7 @@ class GeometryEvaluator:
         shader = self.variants(TWO_SYSTEMS=res.systems > 1)
         set_uniforms(shader, {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
+            "u_min_wavelength": float(BAND_LIMIT_EDGES * fine.edge_length),
             "u_profile_samples": float(len(res.record.params.height_profile))})
         units = bindings.GEOMETRY
         bind_wave(units, res, shader)

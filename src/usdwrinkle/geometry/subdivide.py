@@ -38,6 +38,8 @@ class FineMesh:
         on a coarse edge, the valence at a coarse vertex), the first being
         vertex_triangle[v]: its normal is averaged over them, as the surface's is.
     entry_triangle : (e,) int32; entry_bary : (e, 3) float32.
+    edge_length : float, the mean fine edge length in the rest pose (local space): the
+        band limit lets no wave be shorter than two of them (geometry.glsl).
     """
 
     points: np.ndarray
@@ -50,6 +52,7 @@ class FineMesh:
     entry_offsets: np.ndarray
     entry_triangle: np.ndarray
     entry_bary: np.ndarray
+    edge_length: float = 0.0
 
 
 def fine_point_count(num_points: int, triangles: np.ndarray, levels: int) -> int:
@@ -132,7 +135,9 @@ def subdivide(rest: np.ndarray, triangles: np.ndarray, levels: int) -> FineMesh:
     vertex_bary = np.tile([1.0, 0.0, 0.0], (len(vertices), 1))
     vertex_triangle[used] = entry_triangle[offsets[:-1][used]]
     vertex_bary[used] = entry_bary[offsets[:-1][used]]
+    edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
     return FineMesh(vertices.astype(np.float32), faces.astype(np.int32),
                     vertex_triangle.astype(np.int32), vertex_bary.astype(np.float32),
                     face_triangle.astype(np.int32), bary.astype(np.float32), int(levels),
-                    offsets, entry_triangle.astype(np.int32), entry_bary.astype(np.float32))
+                    offsets, entry_triangle.astype(np.int32), entry_bary.astype(np.float32),
+                    float(edges.mean()) if edges.size else 0.0)

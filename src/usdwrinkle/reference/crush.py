@@ -22,8 +22,10 @@ def _normalize(v, fallback):
 
 
 def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray,
-          width: np.ndarray, amplitude_scale: float = 1.0) -> dict:
-    """Per-vertex wave fields, as crush.glsl computes them.
+          width: np.ndarray, amplitude_scale: float = 1.0, slack: float = 0.0,
+          hold: np.ndarray | None = None) -> dict:
+    """Per-vertex wave fields, as crush.glsl computes them (``slack``: wrinkle:slack;
+    ``hold``: what held edges leave each point, scene.params.held_weights).
 
     Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
     direction (n,3), compression (n,), phase (n,), usable (n,) bool.
@@ -80,7 +82,12 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     d, d3 = d * flip[:, None], d3 * flip[:, None]
     r = np.where(usable | (q_len > 0), np.clip(np.sqrt(lam), MIN_RATIO, 1.0), 1.0)
     width = np.asarray(width, np.float64)
-    amplitude = amplitude_scale * 0.25 * width * np.sqrt(np.maximum(1 - r * r, 0))
+    r_b = np.minimum(r / (1.0 - slack), 1.0)
+    amplitude = amplitude_scale * 0.25 * width * np.sqrt(np.maximum(1 - r_b * r_b, 0))
+    if hold is not None:
+        hold = np.asarray(hold, np.float64)
+        along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
+        amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
     md = np.einsum("nij,nj->ni", M, d)
     sigma = np.linalg.norm(md, axis=1)
     k2 = (2 * np.pi / width)[:, None] * md / (np.maximum(sigma, 1e-30)

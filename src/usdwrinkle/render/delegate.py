@@ -87,7 +87,7 @@ class Mesh:
                 d.crush.run_baked(res, self.frame.baked)
             return
         with _timed(timer, "crush", self.timings):
-            d.crush.run(res, wrinkles)
+            d.crush.run(res, wrinkles, history=history and wrinkles)
         iterations = res.record.params.relax_iterations if wrinkles else 0
         if not history:
             iterations *= COLD_START_FACTOR

@@ -56,6 +56,13 @@ def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:
     return np.concatenate(parts).astype(np.int32), uniforms
 
 
+def _hold(params, n: int) -> np.ndarray:
+    """What held edges leave each point (scene.params.held_weights; zeros: nothing held)."""
+    if params.hold is None:
+        return np.zeros((n, 4), np.float32)
+    return np.asarray(params.hold, np.float32)
+
+
 def _bytes(array: np.ndarray) -> bytes:
     data = np.ascontiguousarray(array).tobytes()
     return data if data else b"\0" * 16  # GL buffers cannot be empty
@@ -159,6 +166,9 @@ class MeshResources:
         # [2i] = rest normal, [2i + 1] = rest tangent
         self.rest_frame = self._table(2 * n, 4, data=frame)
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
+        self.hold = self._table(n, 4, data=_hold(record.params, n))
+        #: crest damping: each point's damped rest direction of the last frame
+        self.damped = self._table(n, 4, data=np.zeros((n, 4), np.float32))
         # Two field tables alternate: crush writes this frame's, the seed step reads the
         # previous frame's wave vectors to carry its phases over (phase history).
         # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2 (contract.py)
@@ -269,6 +279,7 @@ class MeshResources:
         rest of the resources, and the phase tables, stay."""
         self.record = record
         self.q_width.write(vec4(record.params.q, record.params.width))
+        self.hold.write(_hold(record.params, self.num_points))
         for index, table in enumerate((record.params.height_profile,
                                        record.params.gradient_profile)):
             old = self.profiles[index]

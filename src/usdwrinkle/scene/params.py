@@ -58,9 +58,18 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     if value is not None:
         arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
         width = np.broadcast_to(arr, (n,)).astype(np.float32)
+        width_note = "wrinkle:width"
     else:
-        fallback = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest_points, topology)
-        width = np.full(n, fallback if fallback > 0 else 1.0, np.float32)
+        width, width_note = cloth_width(prim, rest_points, topology)
+        width = np.full(n, width, np.float32)
+
+    slack = _get(prim, schema.SLACK)
+    slack = schema.DEFAULT_SLACK if slack is None else float(slack)
+    damping = _get(prim, schema.CREST_DAMPING)
+    damping = schema.DEFAULT_CREST_DAMPING if damping is None else float(damping)
+    held = _primvar(prim, "wrinkle:held")
+    hold = None if held is None else held_weights(rest_points, np.asarray(held, np.float32),
+                                                  width)
 
     scale = _get(prim, schema.AMPLITUDE_SCALE)
     scale = 1.0 if scale is None else float(scale)
@@ -83,4 +92,69 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
                            (schema.TENSION_THRESHOLD, schema.DEFAULT_TENSION_THRESHOLD)):
         value = _get(prim, name)
         controls.append(fallback if value is None else float(value))
-    return WrinkleParams(q, width, scale, height, gradient, iterations, *controls)
+    return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
+                         slack=slack, hold=hold, width_note=width_note,
+                         crest_damping=damping)
+
+
+def width_summary(params: WrinkleParams) -> dict:
+    """The effective width of one mesh as ``check`` and the bake summary print it: the
+    smallest and largest W (scene units) and where it came from."""
+    width = np.asarray(params.width, np.float64)
+    low, high = (float(width.min()), float(width.max())) if width.size else (0.0, 0.0)
+    text = f"{low:.4g}" if high <= low * (1 + 1e-6) else f"{low:.4g}..{high:.4g}"
+    return {"width": [low, high], "source": params.width_note,
+            "text": f"W = {text} scene units ({params.width_note})"}
+
+
+def cloth_width(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology) -> tuple:
+    """The fallback width W (scene units) and how it was found: the cloth's fold
+    wavelength (wrinkle:cloth, cotton unless authored) through the stage's metersPerUnit,
+    or with wrinkle:cloth = "mesh" a multiple of the mean rest edge length."""
+    cloth = _get(prim, schema.CLOTH)
+    cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
+    if cloth == schema.MESH_CLOTH:
+        width = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest_points, topology)
+        width = width if width > 0 else 1.0
+        return width, (f"{schema.WIDTH_EDGE_MULTIPLE:g} x the mean rest edge "
+                       f"(wrinkle:cloth = mesh)")
+    stage = prim.GetStage()
+    meters = UsdGeom.GetStageMetersPerUnit(stage)
+    authored = UsdGeom.StageHasAuthoredMetersPerUnit(stage)
+    metres = schema.CLOTH_WIDTHS_M[cloth]
+    width = metres / meters
+    units = f"metersPerUnit {meters:g}" + ("" if authored else ", USD's fallback: unauthored")
+    return width, f"{cloth} {100 * metres:g} cm ({units})"
+
+
+def held_weights(rest_points: np.ndarray, held: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """What held points leave each point: (n, 4) float32, x the damping strength
+    max_j w_j f(d_ij / (HELD_REACH W_i)) with f(t) = 1 - smoothstep(0, 1, t), d the
+    rest-space distance and w_j the held weight of point j (wrinkle:held, in [0, 1]; one
+    constant value holds every point); yzw the rest-space unit vector from that strongest
+    holder to the point (0 on a held point). The crush pass damps a wave by x (1 - (d . u)^2)
+    for its rest direction d: a wave whose crests run into the held edge fades towards
+    it, one whose crests run along it does not (docs/method.md: held edges)."""
+    n = len(rest_points)
+    weights = np.broadcast_to(np.atleast_1d(held).astype(np.float64), (n,))
+    holders = np.flatnonzero(weights > 0)
+    out = np.zeros((n, 4), np.float32)
+    if len(holders) == 0:
+        return out
+    rest = np.asarray(rest_points, np.float64)
+    reach = np.maximum(schema.HELD_REACH * np.asarray(width, np.float64), 1e-30)
+    anchor, anchor_weight = rest[holders], weights[holders]
+    block = max(1, 4_000_000 // len(holders))
+    for start in range(0, n, block):
+        offset = rest[start:start + block, None, :] - anchor[None]
+        d = np.linalg.norm(offset, axis=2)
+        t = np.clip(d / reach[start:start + block, None], 0.0, 1.0)
+        strength = anchor_weight[None] * (1.0 - t * t * (3.0 - 2.0 * t))
+        best = strength.argmax(axis=1)
+        rows = np.arange(len(best))
+        out[start:start + block, 0] = strength[rows, best]
+        away = offset[rows, best]
+        length = d[rows, best][:, None]
+        out[start:start + block, 1:] = np.where(length > 1e-12, away / np.maximum(length, 1e-30),
+                                                0.0)
+    return out

@@ -74,6 +74,14 @@ class WrinkleParams:
     biaxial : float, the second wave system's weight in [0, 1] (0: one system).
     tension : float, the tension wave's amplitude factor (0: no tension wrinkles).
     tension_threshold : float, the strain below which no tension wrinkle appears.
+    slack : float, the compression the cloth takes in-plane before it buckles (r is read
+        as min(r / (1 - slack), 1)).
+    hold : (n, 4) float32 or None, what held edges leave each point (wrinkle:held;
+        params.held_weights): damping strength, and the unit rest vector from the holder;
+        None: nothing held.
+    width_note : str, where the width came from (check and the bake summary print it).
+    crest_damping : float, the time constant in frames with which small changes of the
+        strain are followed (wrinkle:crestDamping; 0: none).
     """
 
     q: np.ndarray
@@ -85,6 +93,10 @@ class WrinkleParams:
     biaxial: float = 0.0
     tension: float = 0.0
     tension_threshold: float = 0.02
+    slack: float = 0.0
+    hold: np.ndarray | None = None
+    width_note: str = ""
+    crest_damping: float = 0.0
 
 
 @dataclass(frozen=True)

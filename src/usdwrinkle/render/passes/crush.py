@@ -10,6 +10,19 @@ from ..resources import MeshResources
 from ..shaders import compute_shader
 from . import bind, groups, set_uniforms
 
+#: crest damping: a turn of the compression direction by less than this a frame (radians,
+#: 5 degrees) is followed with the time constant wrinkle:crestDamping; by twice this and
+#: more, at once
+DAMPING_DEADBAND = 0.0873
+
+
+def damping_alpha(tau: float) -> float:
+    """The share of the change that the damped strain follows a frame: 1 - exp(-1/tau)
+    for a time constant of ``tau`` frames (0: no damping, 1)."""
+    import math
+
+    return 1.0 if tau <= 0 else 1.0 - math.exp(-1.0 / tau)
+
 
 class CrushPass:
     def __init__(self, ctx):
@@ -30,9 +43,10 @@ class CrushPass:
             self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
             self.ctx.memory_barrier()
 
-    def run(self, res: MeshResources, wrinkles: bool = True) -> None:
+    def run(self, res: MeshResources, wrinkles: bool = True, history: bool = False) -> None:
         """Write this frame's fields into the other field buffer (the previous frame's
-        stay readable for the relax pass's seed step) and the anchored phase."""
+        stay readable for the relax pass's seed step) and the anchored phase.
+        ``history``: the strain table holds the shot's previous frame (crest damping)."""
         res.current_fields = 1 - res.current_fields
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
@@ -41,12 +55,17 @@ class CrushPass:
                                    "u_biaxial": float(params.biaxial),
                                    "u_tension": float(params.tension),
                                    "u_tension_threshold": float(params.tension_threshold),
+                                   "u_slack": float(params.slack),
+                                   "u_damping_alpha": damping_alpha(params.crest_damping),
+                                   "u_damping_deadband": DAMPING_DEADBAND,
+                                   "u_has_history": int(history),
                                    **res.topology_uniforms})
         self._face_normals(res)
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
-                           "CRUSH_FACE_NORMALS": res.face_normals},
-             writes={"CRUSH_FIELDS": res.fields, "CRUSH_PHASE": res.anchor_phase})
+                           "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold},
+             writes={"CRUSH_FIELDS": res.fields, "CRUSH_PHASE": res.anchor_phase},
+             read_writes={"CRUSH_DAMPED": res.damped})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
 

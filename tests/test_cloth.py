@@ -1,0 +1,320 @@
+"""The cloth-oracle defaults (issue 26): the width from the cloth through metersPerUnit, the
+slack before buckling, held edges, the band limit and crest damping, each against a numpy
+reference or an analytic case."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from pxr import Sdf, Usd, UsdGeom
+from test_bake import baked, interior
+from test_crush_relax import gpu_fields, random_cloth
+
+from usdwrinkle import schema
+from usdwrinkle.cli.main import main
+from usdwrinkle.reference.crush import crush as crush_reference
+from usdwrinkle.render.passes.crush import DAMPING_DEADBAND, damping_alpha
+from usdwrinkle.scene.params import held_weights
+from usdwrinkle.scene.topology import mean_edge_length
+from usdwrinkle.validation import wrinkle_findings
+
+from conftest import grid_sheet
+from helpers import point_cache_stage, rotation_matrix
+
+
+def sheet_file(tmp_path, meters=None, name="sheet.usda", **kwargs):
+    rest, counts, indices = grid_sheet(11, 11, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, **kwargs)
+    if meters is not None:
+        UsdGeom.SetStageMetersPerUnit(stage, meters)
+    path = tmp_path / name
+    stage.GetRootLayer().Export(str(path))
+    return path, rest, counts, indices
+
+
+def fallback_width(path):
+    from usdwrinkle.scene.stage import StageSceneDelegate
+
+    record = StageSceneDelegate(str(path), warn=lambda m: None).meshes["/Sheet"]
+    return float(record.params.width[0]), record.params.width_note
+
+
+@pytest.mark.parametrize("meters, cloth", [(0.01, None), (1.0, None), (0.01, "denim"),
+                                           (1.0, "silk"), (None, None)])
+def test_the_fallback_width_is_the_cloth_s_in_scene_units(tmp_path, meters, cloth):
+    """W = the cloth's fold wavelength (metres) / metersPerUnit; unauthored
+    metersPerUnit is USD's fallback, centimetres, and the note says so."""
+    path, *_ = sheet_file(tmp_path, meters)
+    if cloth is not None:
+        stage = Usd.Stage.Open(str(path))
+        stage.GetPrimAtPath("/Sheet").CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token
+                                                      ).Set(cloth)
+        stage.Save()
+    width, note = fallback_width(path)
+    metres = schema.CLOTH_WIDTHS_M[cloth or schema.DEFAULT_CLOTH]
+    assert width == pytest.approx(metres / (meters or 0.01), rel=1e-6)
+    assert (cloth or "cotton") in note
+    assert ("unauthored" in note) == (meters is None)
+
+
+def test_cloth_mesh_is_the_old_edge_multiple_and_an_authored_width_wins(tmp_path):
+    path, rest, counts, indices = sheet_file(tmp_path, 1.0)
+    stage = Usd.Stage.Open(str(path))
+    stage.GetPrimAtPath("/Sheet").CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token
+                                                  ).Set("mesh")
+    stage.Save()
+    from usdwrinkle.scene.stage import StageSceneDelegate
+
+    record = StageSceneDelegate(str(path), warn=lambda m: None).meshes["/Sheet"]
+    expected = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest, record.topology)
+    assert fallback_width(path)[0] == pytest.approx(expected, rel=1e-6)
+    authored, *_ = sheet_file(tmp_path, 1.0, name="authored.usda", width=0.42)
+    assert fallback_width(authored) == (pytest.approx(0.42), "wrinkle:width")
+
+
+def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_path, capsys):
+    path, *_ = sheet_file(tmp_path, 0.01)
+    cm = 100 * schema.CLOTH_WIDTHS_M["cotton"]
+    assert main(["check", str(path), "--wrinkles-only"]) == 0
+    out = capsys.readouterr().out
+    assert f"width: /Sheet: W = {cm:.4g} scene units (cotton {cm:g} cm (metersPerUnit " \
+           "0.01))" in out
+    assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
+    widths = json.loads(capsys.readouterr().out)["widths"]
+    assert widths[0]["prim"] == "/Sheet" and widths[0]["width"] == pytest.approx([cm, cm])
+    assert main(["bake", str(path), str(tmp_path / "baked.usda")]) == 0
+    assert f"  /Sheet: W = {cm:.4g} scene units (cotton" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name, type_name, value, message", [
+    (schema.CLOTH, Sdf.ValueTypeNames.Token, "velvet", "is not one of"),
+    (schema.SLACK, Sdf.ValueTypeNames.Float, 0.95, "slack"),
+    (schema.CREST_DAMPING, Sdf.ValueTypeNames.Float, -1.0, "crest damping"),
+])
+def test_new_controls_are_checked(tmp_path, name, type_name, value, message):
+    path, *_ = sheet_file(tmp_path, 1.0)
+    stage = Usd.Stage.Open(str(path))
+    prim = stage.GetPrimAtPath("/Sheet")
+    prim.CreateAttribute(name, type_name).Set(value)
+    findings = [f for f in wrinkle_findings(prim) if f.attribute == name]
+    assert findings and message in findings[0].message
+
+
+@pytest.mark.parametrize("values", [[0.5, 1.5], [2.0], [0.5] * 7])
+def test_held_weights_are_checked(tmp_path, values):
+    path, *_ = sheet_file(tmp_path, 1.0)
+    stage = Usd.Stage.Open(str(path))
+    prim = stage.GetPrimAtPath("/Sheet")
+    UsdGeom.PrimvarsAPI(prim).CreatePrimvar("wrinkle:held", Sdf.ValueTypeNames.FloatArray,
+                                            UsdGeom.Tokens.vertex).Set(values)
+    assert [f for f in wrinkle_findings(prim) if f.attribute == schema.HELD]
+
+
+def test_held_weights_fall_off_over_the_reach():
+    """Strength 1 on a held point, 1 - smoothstep over HELD_REACH W, the direction from
+    the strongest holder."""
+    points = np.array([[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0], [0, 3.0, 0]], np.float64)
+    width = np.full(4, 1.0 / schema.HELD_REACH)          # reach 1
+    out = held_weights(points, np.array([1, 0, 0, 0], np.float32), width)
+    np.testing.assert_allclose(out[:, 0], [1.0, 0.5, 0.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(out[1, 1:], [1, 0, 0], atol=1e-6)
+    np.testing.assert_allclose(out[0, 1:], [0, 0, 0])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_slack_and_held_edges_match_the_numpy_reference(gl_context, seed):
+    """crush.glsl's slack and held-edge damping against reference/crush.py, on a random
+    cloth with a held band."""
+    rest, posed, faces, q = random_cloth(seed)
+    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
+                              width=0.2, relax_iterations=0, slack=0.1)
+    held = (rest[:, 2] > 0.6).astype(np.float32)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "wrinkle:held", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(held)
+    ours, record = gpu_fields(gl_context, stage)
+    assert record.params.slack == pytest.approx(0.1)
+    hold = record.params.hold
+    assert hold is not None and 0.0 < hold[:, 0].mean() < 1.0
+    ref = crush_reference(rest, posed, record.topology, q, record.params.width, slack=0.1,
+                          hold=hold)
+    np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
+    plain = crush_reference(rest, posed, record.topology, q, record.params.width)
+    assert np.abs(ours["amplitude"] - plain["amplitude"]).max() > 1e-3   # it did something
+
+
+def test_slack_follows_its_law_on_the_analytic_sheet(gl_context, tmp_path):
+    """Uniform compression by r with slack c: h = (W/4) sqrt(1 - (r / (1 - c))^2), and no
+    wave at all once r >= 1 - c."""
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    inside = interior(rest, 0.2)
+    for ratio, slack in ((0.7, 0.1), (0.93, 0.08)):
+        posed = rest * np.array([ratio, 1, 1], np.float32)
+        stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.3, slack=slack)
+        source = tmp_path / f"slack{ratio}.usda"
+        stage.GetRootLayer().Export(str(source))
+        out = tmp_path / f"slack{ratio}_baked.usda"
+        assert main(["bake", str(source), str(out), "--quiet"]) == 0
+        fields, _ = baked(out, "/Sheet", 1)
+        r_b = min(ratio / (1 - slack), 1.0)
+        np.testing.assert_allclose(fields["amplitude"][inside],
+                                   0.3 / 4 * np.sqrt(1 - r_b ** 2), atol=1e-6, rtol=0.01)
+
+
+def test_a_held_edge_damps_crossing_waves_not_parallel_ones(gl_context):
+    """A sheet compressed along x and held along its y = -1 edge (crests run into it) and
+    along its x = -1 edge (crests run along it): the waves fade towards the first only."""
+    rest, counts, indices = grid_sheet(41, 41, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    held = ((rest[:, 1] < -0.99) | (rest[:, 0] < -0.99)).astype(np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.2)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "wrinkle:held", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(held)
+    ours, _ = gpu_fields(gl_context, stage)
+    full = 0.2 / 4 * np.sqrt(1 - 0.7 ** 2)
+    reach = schema.HELD_REACH * 0.2
+    x, y = rest[:, 0], rest[:, 1]
+    near_bottom = (np.abs(y + 1 - reach / 4) < 0.01) & (x > 0)       # a quarter reach away
+    near_side = (np.abs(x + 0.95) < 0.01) & (y > 0.2)                # one row off the side
+    t = 0.25
+    np.testing.assert_allclose(ours["amplitude"][near_bottom], full * t * t * (3 - 2 * t),
+                               rtol=0.08)
+    np.testing.assert_allclose(ours["amplitude"][near_side], full, rtol=1e-3)
+    far = (x > 0) & (y > -1 + reach + 0.05)
+    np.testing.assert_allclose(ours["amplitude"][far], full, rtol=1e-3)
+
+
+def geometry_heights(tmp_path, width, levels, name):
+    """The displaced heights of a sheet compressed by 0.5 along x, baked with --geometry."""
+    rest, counts, indices = grid_sheet(9, 9, 2.0)
+    posed = rest * np.array([0.5, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=width)
+    source = tmp_path / f"{name}.usda"
+    stage.GetRootLayer().Export(str(source))
+    out = tmp_path / f"{name}_geometry.usdc"
+    assert main(["bake", str(source), str(out), "--quiet", "--geometry", "--levels",
+                 str(levels)]) == 0
+    layer = Usd.Stage.Open(str(out))
+    points = np.asarray(layer.GetPrimAtPath("/Sheet_wrinkled").GetAttribute("points").Get(1),
+                        np.float64)
+    return points[:, 2]
+
+
+def test_geometry_fades_waves_shorter_than_two_fine_edges(gl_context, tmp_path):
+    """Band limit: posed wavelength 0.5 W. Below 2 mean fine edges (rest; the diagonals
+    make the mean 1.14 x-edges) the displaced mesh is flat; from 3 mean edges on it
+    carries the full amplitude."""
+    for multiple, expect_flat in ((1.6, True), (4.0, False)):
+        levels = 3
+        edge = 2.0 / 8 / 2 ** levels
+        width = multiple * edge / 0.5
+        h = geometry_heights(tmp_path, width, levels, f"band{multiple}")
+        full = width / 4 * np.sqrt(1 - 0.5 ** 2)
+        if expect_flat:
+            assert np.abs(h).max() == 0.0
+        else:
+            assert np.abs(h).max() > 0.9 * full
+
+
+def render_pixels(tmp_path, stage, width, name, *extra):
+    source = tmp_path / f"{name}.usda"
+    stage.GetRootLayer().Export(str(source))
+    out = tmp_path / f"{name}.exr"
+    assert main(["render", str(source), str(out), "--frames", "1", "--width", str(width),
+                 "--quiet", *extra]) == 0
+    from helpers import read_exr
+
+    return read_exr(out)
+
+
+def test_the_draw_pass_fades_waves_shorter_than_two_pixels(gl_context, tmp_path):
+    """A sheet seen face on, its waves about 1.4 pixels long at 64 pixels: drawn as the
+    plain sheet. At 640 pixels (14 pixels a wave) the wrinkles show."""
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.05)
+    for size, faded in ((64, True), (640, False)):
+        wrinkled = render_pixels(tmp_path, stage, size, f"w{size}")
+        plain = render_pixels(tmp_path, stage, size, f"p{size}", "--no-wrinkles")
+        difference = np.abs(wrinkled["R"] - plain["R"]).max()
+        if faded:
+            assert difference < 1e-6
+        else:
+            assert difference > 0.05
+
+
+def direction_angles(tmp_path, degrees_per_frame, frames, tau):
+    """A sheet compressed by 0.7 along a direction that turns by ``degrees_per_frame``
+    each frame; the baked rest directions' angles (degrees) per frame."""
+    rest, counts, indices = grid_sheet(11, 11, 2.0)
+    posed = {}
+    for f in range(1, frames + 1):
+        turn = rotation_matrix([0, 0, 1], np.radians(degrees_per_frame * (f - 1)))
+        squash = turn @ np.diag([0.7, 1.0, 1.0]) @ turn.T
+        posed[f] = (rest @ squash.T).astype(np.float32)
+    stage = point_cache_stage(rest, posed, counts, indices, width=0.3, crest_damping=tau)
+    source = tmp_path / f"turn{degrees_per_frame}.usda"
+    stage.GetRootLayer().Export(str(source))
+    out = tmp_path / f"turn{degrees_per_frame}_baked.usda"
+    assert main(["bake", str(source), str(out), "--quiet"]) == 0
+    inside = interior(rest, 0.3)
+    angles = []
+    for f in range(1, frames + 1):
+        d = baked(out, "/Sheet", f)[0]["direction"][inside].mean(0)
+        angles.append(np.degrees(np.arctan2(d[1], d[0])))
+    # undirected: fold into (-90, 90]
+    return (np.array(angles) + 90.0) % 180.0 - 90.0
+
+
+def test_crest_damping_follows_slow_turns_with_its_time_constant(gl_context, tmp_path):
+    """A compression direction turning by 1 degree a frame (below the 5-degree deadband) is
+    followed with d_t = normalize(mix(d_t-1, d_strain, 1 - exp(-1/tau))); one turning
+    by 20 degrees a frame is followed at once; tau = 0 follows everything at once."""
+    tau, frames = 4.0, 12
+    alpha = damping_alpha(tau)
+    assert np.degrees(DAMPING_DEADBAND) == pytest.approx(5.0, abs=0.01)
+    angles = direction_angles(tmp_path, 1.0, frames, tau)
+    expected, d = [], np.array([1.0, 0.0])
+    for f in range(frames):
+        target = np.radians(1.0 * f)
+        new = np.array([np.cos(target), np.sin(target)])
+        if f:
+            d = (1 - alpha) * d + alpha * new
+            d /= np.linalg.norm(d)
+        else:
+            d = new
+        expected.append(np.degrees(np.arctan2(d[1], d[0])))
+    np.testing.assert_allclose(angles, expected, atol=0.05)
+    assert angles[-1] < 11.0 - 2.0          # it lags the strain by about tau degrees
+    fast = direction_angles(tmp_path, 20.0, 4, tau)
+    np.testing.assert_allclose(fast, [0.0, 20.0, 40.0, 60.0], atol=0.05)
+    undamped = direction_angles(tmp_path, 1.0, 5, 0.0)
+    np.testing.assert_allclose(undamped, [0.0, 1.0, 2.0, 3.0, 4.0], atol=0.05)
+
+
+def test_apply_authors_the_cloth_controls(tmp_path):
+    """apply --cloth --slack --crest-damping --held-from-primvar, checked like the rest;
+    a held weight out of [0, 1] is refused and nothing is written."""
+    path, rest, *_ = sheet_file(tmp_path, 1.0, slack=None, crest_damping=None)
+    stage = Usd.Stage.Open(str(path))
+    pins = (rest[:, 0] < -0.99).astype(np.float32)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "pins", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(pins)
+    stage.Save()
+    assert main(["apply", str(path), "/Sheet", "--cloth", "denim", "--slack", "0.1",
+                 "--crest-damping", "2", "--held-from-primvar", "pins"]) == 0
+    edited = Usd.Stage.Open(str(path))
+    prim = edited.GetPrimAtPath("/Sheet")
+    assert prim.GetAttribute(schema.CLOTH).Get() == "denim"
+    assert prim.GetAttribute(schema.SLACK).Get() == pytest.approx(0.1)
+    assert prim.GetAttribute(schema.CREST_DAMPING).Get() == pytest.approx(2.0)
+    np.testing.assert_array_equal(
+        UsdGeom.PrimvarsAPI(prim).GetPrimvar("wrinkle:held").Get(), pins)
+    assert fallback_width(path)[0] == pytest.approx(schema.CLOTH_WIDTHS_M["denim"])
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).GetPrimvar("pins").Set(pins * 2)
+    stage.Save()
+    before = path.read_bytes()
+    assert main(["apply", str(path), "/Sheet", "--held-from-primvar", "pins"]) != 0
+    assert path.read_bytes() == before
