@@ -236,7 +236,7 @@ void main() {
     if (u_wrinkles != 0) {
         // band limit: no wave shorter than 2 pixels along it
         Footprint pixel = Footprint(dFdx(v_local_footprint), dFdy(v_local_footprint), 0.0);
-        wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner), v_bary, v_local,
+        wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS), v_bary, v_local,
                                   n, false, pixel);
     }
     float h = wave.height;

@@ -202,13 +202,16 @@ def geometry_heights(tmp_path, width, levels, name):
 
 
 def test_geometry_fades_waves_shorter_than_two_fine_edges(gl_context, tmp_path):
-    """Band limit: posed wavelength 0.5 W. Below 2 mean fine edges (rest; the diagonals
-    make the mean 1.14 x-edges) the displaced mesh is flat; from 3 mean edges on it
-    carries the full amplitude."""
+    """Band limit of the displaced mesh: its vertices ride with the cloth, so what they can
+    carry is the rest wavelength W (the posed one is 0.5 W here, and so are the posed
+    edges along it). W below 2 mean rest fine edges: the displaced mesh is flat; from 3 on
+    it carries the full amplitude. The mean fine edge of the 8 x 8 grid at 3 levels: two
+    sides of 2/64 and a diagonal per triangle."""
+    levels = 3
+    side = 2.0 / 8 / 2 ** levels
+    mean_edge = (2 * side + np.sqrt(2) * side) / 3
     for multiple, expect_flat in ((1.6, True), (4.0, False)):
-        levels = 3
-        edge = 2.0 / 8 / 2 ** levels
-        width = multiple * edge / 0.5
+        width = multiple * mean_edge
         h = geometry_heights(tmp_path, width, levels, f"band{multiple}")
         full = width / 4 * np.sqrt(1 - 0.5 ** 2)
         if expect_flat:

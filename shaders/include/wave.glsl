@@ -70,7 +70,15 @@ struct CornerWaves {
     vec4 wave[WAVE_SLOTS];
     vec3 phase[SYSTEMS_MAX];
     vec3 corner[3];
+    // each corner's compression r along its wave (crush's FIELD_DIRECTION w): the rest
+    // (material) wavelength is 2 pi / (|k| r), what the displaced mesh's band limit reads
+    vec3 ratio[SYSTEMS_MAX];
 };
+#if defined TWO_SYSTEMS
+#define NO_RATIOS vec3[2](vec3(1.0), vec3(1.0))
+#else
+#define NO_RATIOS vec3[1](vec3(1.0))
+#endif
 
 CornerWaves corner_waves(int t) {
     CornerWaves cw;
@@ -90,6 +98,7 @@ CornerWaves corner_waves(int t) {
 #endif
     for (int s = 0; s < SYSTEMS_MAX; ++s) {
         cw.phase[s] = vec3(0.0);
+        cw.ratio[s] = vec3(1.0);
 #if defined TWO_SYSTEMS
         vec3 k0 = s == 0 ? reference0 : reference1;
 #else
@@ -101,9 +110,12 @@ CornerWaves corner_waves(int t) {
             int system = swapped[c] ? 1 - s : s;
             vec4 wave = s < SYSTEMS ? fetch(fields, FIELD_WAVE_OF(i, system)) : vec4(0.0);
             float phi = fetch(phase, i)[system];
+            cw.ratio[s][c] = fetch(fields, FIELD_TEXELS * i + (system == 0
+                ? FIELD_DIRECTION_TEXEL : FIELD_DIRECTION2_TEXEL)).w;
 #else
             vec4 wave = fetch(fields, FIELD_WAVE(i));
             float phi = fetch(phase, i).x;
+            cw.ratio[s][c] = fetch(fields, FIELD_DIRECTION(i)).w;
 #endif
             if (c > 0 && dot(wave.xyz, k0) < 0.0) { wave.xyz = -wave.xyz; phi = -phi; }
             cw.wave[3 * s + c] = wave;
@@ -123,8 +135,11 @@ CornerWaves corner_waves(int t) {
 //
 // Band limit: a corner wave shorter than what the consumer can carry fades towards the
 // mean surface (amplitude to 0) instead of aliasing (docs/method.md: band limit).
-// - min_wavelength (local space; 0: none): displaced geometry passes 2 fine edges; the
-//   factor is smoothstep(min_wavelength, 1.5 min_wavelength, 2 pi / |k|).
+// - min_wavelength (rest space; 0: none): displaced geometry passes 2 mean rest edges of
+//   its fine mesh. The fine vertices ride with the cloth, so they sample a wave along the
+//   material, and what they can carry is the rest wavelength 2 pi / (|k| r) (r: the
+//   corner's compression along k): the factor is smoothstep(min_wavelength,
+//   1.5 min_wavelength, 2 pi / (|k| r)).
 // - footprint: the local-space steps of one pixel (or texel) across and down the image,
 //   dFdx and dFdy of the position (zero vectors: none). The wave advances |k . step|
 //   radians a pixel; fewer than 2 pixels a wavelength alias, so the factor is
@@ -136,10 +151,10 @@ struct Footprint {
     float min_wavelength;
 };
 
-float band_limit(vec3 k, Footprint footprint) {
+float band_limit(vec3 k, float ratio, Footprint footprint) {
     float factor = 1.0;
     if (footprint.min_wavelength > 0.0) {
-        float lambda = TWO_PI / max(length(k), 1e-30);
+        float lambda = TWO_PI / max(length(k) * ratio, 1e-30);
         factor = smoothstep(footprint.min_wavelength, 1.5 * footprint.min_wavelength, lambda);
     }
     float step = max(abs(dot(k, footprint.dx)), abs(dot(k, footprint.dy)));
@@ -157,7 +172,7 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
             vec3 k = wave.xyz;
-            float a = wave.w * band_limit(k, footprint);
+            float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
             if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
             float b = bary[c];

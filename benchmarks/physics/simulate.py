@@ -1,0 +1,52 @@
+"""Simulate a shot in Blender's cloth solver (sim_client.py in the bpy Python), cached."""
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .shots import Shot
+
+HERE = Path(__file__).resolve().parent
+
+
+def simulate(shot: Shot, cache: Path, preset: str = "Cotton") -> tuple[np.ndarray, float]:
+    """The fine points of every frame (frames, n, 3) and the solver's seconds; cached in
+    ``cache`` by shot and preset (delete the file to simulate again)."""
+    spec_arrays = _spec(shot, preset)
+    digest = hashlib.sha1(b"".join(np.ascontiguousarray(v).tobytes()
+                                   for v in spec_arrays.values())).hexdigest()[:10]
+    out = cache / f"{shot.name}-{preset}-{digest}.npz"
+    if not out.exists():
+        from realclients import bpy_python
+
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix="usdwrinkle-cloth-") as scratch:
+            spec = os.path.join(scratch, "shot.npz")
+            np.savez(spec, **spec_arrays)
+            done = subprocess.run([bpy_python(), str(HERE / "sim_client.py"), spec,
+                                   str(out) + ".tmp.npz"], capture_output=True, text=True,
+                                  timeout=3600, env={**os.environ, "TMPDIR": scratch,
+                                                     "PYTHONNOUSERSITE": "1"})
+            if done.returncode != 0 or not os.path.exists(str(out) + ".tmp.npz"):
+                raise RuntimeError(f"Blender's cloth failed on {shot.name}: "
+                                   f"{done.stderr.strip()[-800:]}")
+            os.replace(str(out) + ".tmp.npz", out)
+    data = np.load(out)
+    return data["points"], float(data["seconds"])
+
+
+def _spec(shot: Shot, preset: str) -> dict:
+    spec = dict(rest=shot.rest, quads=shot.quads(), pinned=shot.pinned,
+                key_frames=np.array([f for f, _ in shot.keys]),
+                key_points=np.stack([p for _, p in shot.keys]), frames=np.array(shot.frames),
+                gravity=np.array(shot.gravity), preset=np.array(preset))
+    spec.update({key: np.array(value) for key, value in shot.solver.items()})
+    if shot.collider is not None:
+        rest, quads, keys = shot.collider
+        spec.update(collider_rest=rest, collider_quads=quads, collider_keys=np.stack(keys))
+    return spec

@@ -1,0 +1,62 @@
+"""The cloth oracle's measurements (benchmarks/physics/measure.py, coarse.py) on analytic
+fields: a plane wave's wavelength, direction and phase motion, and a low-pass that keeps
+a smooth bend while it removes folds. The oracle itself needs Blender (docs/physics.md)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from benchmarks.physics import measure
+from benchmarks.physics.coarse import lowpass
+from benchmarks.physics.shots import Shot, sheet
+
+
+def flat_shot(rows=65, cols=97, spacing=0.01) -> Shot:
+    u = np.arange(cols) * spacing
+    v = np.arange(rows) * spacing
+    U, V = np.meshgrid(u, v)
+    rest = np.stack([U, np.zeros_like(U), -V], -1).reshape(-1, 3)
+    return Shot("flat", rows, cols, False, rest, np.stack([U, V], -1).reshape(-1, 2),
+                np.zeros(rows * cols, bool), 1, False)
+
+
+@pytest.mark.parametrize("wavelength, angle", [(0.07, 0.0), (0.09, 30.0), (0.05, 90.0)])
+def test_a_plane_wave_s_wavelength_and_direction(wavelength, angle):
+    shot = flat_shot()
+    direction = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle))])
+    h = 0.01 * np.cos(2 * np.pi / wavelength * shot.material @ direction)
+    assert measure.wavelength(shot, h) == pytest.approx(wavelength, rel=0.05)
+    assert measure.angle_between(measure.structure_direction(shot, h), direction) < 1.5
+    inner = measure.amplitude_field(shot, h).reshape(shot.rows, shot.cols)[15:-15, 15:-15]
+    np.testing.assert_allclose(inner, 0.01, rtol=0.05)   # a sine's local amplitude
+
+
+def test_crest_motion_is_the_phase_change_a_frame():
+    shot = flat_shot()
+    k = 2 * np.pi / 0.07 * np.array([1.0, 0.0])
+    h = np.stack([0.01 * np.cos(shot.material @ k - 0.1 * f) for f in range(4)])
+    mask = np.ones(len(shot.material), bool)
+    assert measure.crest_motion(shot, h, mask, range(3)) == pytest.approx(0.1, rel=0.02)
+    still = np.stack([h[0]] * 4)
+    assert measure.crest_motion(shot, still, mask, range(3)) < 1e-9
+
+
+def test_the_low_pass_keeps_a_bend_and_removes_folds():
+    """A sheet bent on a radius of 20 cm with 7 cm folds on it: the twiced low-pass stays
+    within 2 mm of the bend (a plain Gaussian of 5 cm sags 7 mm inwards) and
+    keeps under 2% of the folds' height."""
+    shot = sheet()
+    u = shot.material[:, 0]
+    radius = 0.2
+    angle = (u - u.mean()) / radius
+    bent = shot.rest.copy()
+    bent[:, 0] = radius * np.sin(angle)
+    bent[:, 1] = radius * (1 - np.cos(angle))
+    normal = np.stack([-np.sin(angle), np.cos(angle), np.zeros_like(angle)], 1)
+    folds = 0.01 * np.cos(2 * np.pi * u / 0.07)[:, None] * normal
+    smooth = lowpass(shot, (bent + folds)[None])[0]
+    inner = (shot.material[:, 0] > 0.15) & (shot.material[:, 0] < 0.8)
+    assert np.abs(smooth - bent)[inner].max() < 2e-3
+    # the filter is linear in the displacement: what it keeps of the folds alone
+    kept = smooth - lowpass(shot, bent[None])[0]
+    assert np.linalg.norm(kept, axis=1)[inner].max() < 0.02 * 0.01
