@@ -96,8 +96,30 @@ def prepare(shot: BakeShot, folder: Path) -> Prepared:
     framed, camera = shared_camera(shot.stage.resolve(), folder)
     stage, layer = over_layer(Path(framed).resolve(), folder / f"{shot.name}.flat.usda")
     flat_textures(stage, folder)
+    measured_controls(stage, mesh_width=shot.all_meshes)
     layer.Save()
     return Prepared(shot, Path(layer.realPath), camera, folder, not has_lights(shot.stage))
+
+
+def measured_controls(stage, mesh_width: bool) -> None:
+    """The controls these comparisons were measured with (issues 23 and 24), authored on
+    every mesh of the over layer: wrinkle:slack = 0, the paper's amplitude law, so that
+    the wrinkles cover most of each mesh (with the default slack, compression under 8%
+    draws none, and the per-tile and colour-ramp comparisons lose their signal), and with
+    ``mesh_width`` (a corpus asset wrinkled with --all-meshes) wrinkle:cloth = "mesh",
+    4 x its mean edge: CesiumMan, in metres, would get cotton's 6.7 cm folds, finer than
+    these frames resolve. The renderers' agreement is what is tested, not the defaults
+    (docs/physics.md tests those)."""
+    from pxr import Sdf, UsdGeom
+
+    from usdwrinkle import schema
+
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Mesh):
+            prim.CreateAttribute(schema.SLACK, Sdf.ValueTypeNames.Float).Set(0.0)
+            if mesh_width:
+                prim.CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token).Set(
+                    schema.MESH_CLOTH)
 
 
 def grey(path) -> tuple[np.ndarray, np.ndarray]:

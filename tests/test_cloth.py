@@ -321,3 +321,25 @@ def test_apply_authors_the_cloth_controls(tmp_path):
     before = path.read_bytes()
     assert main(["apply", str(path), "/Sheet", "--held-from-primvar", "pins"]) != 0
     assert path.read_bytes() == before
+
+
+def test_automatic_levels_fit_the_point_cap_with_a_warning(gl_context, tmp_path, capsys,
+                                                            monkeypatch):
+    """A width far finer than the mesh asks for more levels than the fine-point cap
+    allows: without --levels the bake lowers them until the mesh fits and says so (the
+    band limit fades what is left unresolved); an explicit --levels is still refused."""
+    import usdwrinkle.geometry.bake as geometry_bake
+
+    monkeypatch.setattr(geometry_bake, "AUTO_FINE_POINTS", 20_000)
+    rest, counts, indices = grid_sheet(41, 41, 2.0)
+    stage = point_cache_stage(rest, {1: rest * np.array([0.7, 1, 1], np.float32)}, counts,
+                              indices, width=0.002)
+    source = tmp_path / "fine.usda"
+    stage.GetRootLayer().Export(str(source))
+    out = tmp_path / "fine_geometry.usdc"
+    assert main(["bake", str(source), str(out), "--geometry"]) == 0
+    err = capsys.readouterr().err
+    assert "fine points (more than 20,000); baking 1 levels" in err
+    layer = Usd.Stage.Open(str(out))
+    fine = layer.GetPrimAtPath("/Sheet_wrinkled").GetAttribute("points").Get(1)
+    assert 1681 < len(fine) <= 20_000

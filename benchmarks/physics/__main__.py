@@ -84,7 +84,7 @@ def calibration(cache: Path, shots: dict) -> dict:
 def band_limit(shot, sim, default) -> dict:
     """The elbow pinch: the posed wavelengths the crush pass gives there (the baked wave
     vectors at the coarse vertices) against the fine mesh's edges, and what the draw pass's
-    band limit leaves of the wrinkles when the shot is drawn small (the blended amplitude
+    band limit leaves of the wrinkles when the shot is drawn small (the RMS of the height
     AOV over the cloth, against a 1280-pixel render)."""
     import tempfile
 
@@ -114,7 +114,8 @@ def band_limit(shot, sim, default) -> dict:
             names = list(buf.spec().channelnames)
             pixels = buf.get_pixels(oiio.FLOAT)
             covered = pixels[..., names.index("A")] > 0.99
-            kept[size] = float(pixels[..., names.index("wrinkle.amplitude")][covered].mean())
+            height = pixels[..., names.index("wrinkle.height")][covered]
+            kept[size] = float(np.sqrt(np.mean(height ** 2)))
     return {"shortest": float(posed.min()), "median": float(np.median(posed)),
             "edge": shot.spacing, "width": float(schema.CLOTH_WIDTHS_M["cotton"]),
             "kept": {size: kept[size] / kept[sizes[-1]] for size in sizes}}
@@ -377,11 +378,12 @@ def _band_section(limited: dict) -> list[str]:
         "tests/test_cloth.py bakes a sheet whose W is 1.6 edges flat, one of 4 edges at "
         "full height).",
         "- **The draw pass** is limited by pixels: a wave fades between 2 and 3 pixels a "
-        "wavelength along its own direction. The blended amplitude it draws (the "
-        "`wrinkle.amplitude` AOV, mean over the cloth) at the last frame, against a "
-        "1280-pixel render of the same shot:",
+        "wavelength along its own direction. The wrinkle height it draws (the RMS of the "
+        "`wrinkle.height` AOV over the cloth) at the last frame, against a 1280-pixel "
+        "render of the same shot (the `wrinkle.amplitude` AOV keeps the cloth's amplitude "
+        "before the limit, as the maps' amplitude mask does):",
         "",
-        "| render width | amplitude kept |",
+        "| render width | height kept |",
         "|---|---|",
     ]
     for size, kept in limited["kept"].items():

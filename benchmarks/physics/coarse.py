@@ -67,13 +67,3 @@ def coarse_indices(shot: Shot) -> tuple[np.ndarray, int, int]:
     assert (shot.rows - 1) % shot.stride == 0
     index = (rows[:, None] * shot.cols + cols[None, :]).ravel()
     return index, len(rows), len(cols)
-
-
-def coarse_quads(rows: int, cols: int, periodic: bool) -> np.ndarray:
-    c = cols if periodic else cols - 1
-    idx = np.arange(rows * cols).reshape(rows, cols)
-    a = idx[:-1, :c]
-    b = idx[:-1, (np.arange(c) + 1) % cols]
-    d = idx[1:, :c]
-    e = idx[1:, (np.arange(c) + 1) % cols]
-    return np.stack([a, d, e, b], -1).reshape(-1, 4)

@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from usdwrinkle.authoring.builders import grid_faces
+
 STRIDE = 8          # every 8th grid line makes the coarse mesh
 NOISE = 3e-4        # m, the seeded out-of-plane noise
 SOLVER = {"quality": 10, "self_collision": True}
@@ -61,14 +63,8 @@ class Shot:
         return float(abs(m[0, 1, 0] - m[0, 0, 0]))
 
     def quads(self) -> np.ndarray:
-        r, c = self.rows, self.cols
-        cols = c if self.periodic else c - 1
-        idx = np.arange(r * c).reshape(r, c)
-        a = idx[:-1, :cols]
-        b = idx[:-1, (np.arange(cols) + 1) % c]
-        d = idx[1:, :cols]
-        e = idx[1:, (np.arange(cols) + 1) % c]
-        return np.stack([a, b, e, d], -1).reshape(-1, 4)
+        _, indices = grid_faces(self.rows, self.cols, wrap_cols=self.periodic)
+        return indices.reshape(-1, 4).astype(np.int64)
 
     def held_distance(self) -> np.ndarray:
         """Material distance (m) of each fine vertex to the nearest pinned vertex."""
@@ -94,16 +90,20 @@ def _ramp(frame, start, end):
     return float(np.clip((frame - start) / (end - start), 0.0, 1.0))
 
 
-def sheet(refine: int = 1) -> Shot:
-    rows, cols, h = 64 * refine + 1, 96 * refine + 1, 0.01 / refine
+def _hanging_grid(rows: int, cols: int, h: float, seed: int):
+    """A vertical grid in the x-z plane, its top row at z = 0, centred on x, with the
+    seeded noise across it: (rest, material)."""
     u = np.arange(cols) * h
     v = np.arange(rows) * h
     U, V = np.meshgrid(u, v)
-    x = U - u[-1] / 2
-    z = -V
-    y = _noise(rows * cols, 1).reshape(rows, cols)
-    rest = np.stack([x, y, z], -1).reshape(-1, 3)
-    material = np.stack([U, V], -1).reshape(-1, 2)
+    y = _noise(rows * cols, seed).reshape(rows, cols)
+    rest = np.stack([U - u[-1] / 2, y, -V], -1).reshape(-1, 3)
+    return rest, np.stack([U, V], -1).reshape(-1, 2)
+
+
+def sheet(refine: int = 1) -> Shot:
+    rows, cols, h = 64 * refine + 1, 96 * refine + 1, 0.01 / refine
+    rest, material = _hanging_grid(rows, cols, h, 1)
     pinned = np.zeros((rows, cols), bool)
     # the sides, and the top on its rail (1 cm of each)
     pinned[:, :refine] = pinned[:, -refine:] = pinned[:refine] = True
@@ -197,14 +197,7 @@ def sleeve(refine: int = 1) -> Shot:
 
 def shear() -> Shot:
     rows, cols, h = 65, 65, 0.01
-    u = np.arange(cols) * h
-    v = np.arange(rows) * h
-    U, V = np.meshgrid(u, v)
-    x = U - u[-1] / 2
-    z = -V
-    y = _noise(rows * cols, 3).reshape(rows, cols)
-    rest = np.stack([x, y, z], -1).reshape(-1, 3)
-    material = np.stack([U, V], -1).reshape(-1, 2)
+    rest, material = _hanging_grid(rows, cols, h, 3)
     pinned = np.zeros((rows, cols), bool)
     pinned[0] = pinned[-1] = True
     bottom = np.zeros((rows, cols), bool)

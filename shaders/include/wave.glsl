@@ -43,7 +43,7 @@ vec3 normalize_or_zero(vec3 v) {
 struct Wave {
     float height;     // h, along the coarse normal (scene units)
     vec3 gradient;    // dh/dx in the tangent plane of n (local space)
-    float amplitude;  // the blended amplitude sum(b_c a_c)
+    float amplitude;  // the blended amplitude sum(b_c a_c), before the band limit
 };
 
 // The gradient of barycentric weight c over triangle (p0, p1, p2): constant, pointing from
@@ -172,14 +172,16 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
             vec3 k = wave.xyz;
+            float b = bary[c];
+            // the amplitude field (the AOV, the maps' mask) is the cloth's, before the
+            // band limit: it says how wrinkled the cloth is, not what this pixel resolves
+            w.amplitude += b * wave.w;
             float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
             if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
-            float b = bary[c];
             float height = profile(u_height_profile, theta);
             w.height += b * a * height;
             w.gradient += b * a * profile(u_gradient_profile, theta) * k;
-            w.amplitude += b * a;
             if (exact_gradient) {
                 w.gradient += a * height * weight_gradient(c, cw.corner[0], cw.corner[1],
                                                            cw.corner[2]);

@@ -116,14 +116,20 @@ def check_q(values, interpolation: str, point_count: int | None, path: str) -> l
     return out
 
 
+def _constant_or_per_point(arr, point_count: int | None, name: str, what: str,
+                           path: str) -> list[Finding]:
+    """A primvar value that must be one value, or one per point."""
+    if arr.size != 1 and (point_count is None or arr.size != point_count):
+        return [Finding(path, name, f"{what} must be constant or have one value per point "
+                                    f"({point_count})")]
+    return []
+
+
 def check_width(values, point_count: int | None, path: str) -> list[Finding]:
     if values is None:
         return []
     arr = np.atleast_1d(np.asarray(values, dtype=np.float64))
-    out = []
-    if arr.size != 1 and (point_count is None or arr.size != point_count):
-        out.append(Finding(path, schema.WIDTH, f"width must be constant or have one value per "
-                                               f"point ({point_count})"))
+    out = _constant_or_per_point(arr, point_count, schema.WIDTH, "width", path)
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         out.append(Finding(path, schema.WIDTH, "width must be finite and > 0"))
     elif np.any(arr > MAX_WORLD_COORDINATE):
@@ -210,10 +216,7 @@ def check_held(values, point_count: int | None, path: str) -> list[Finding]:
     if values is None:
         return []
     arr = np.atleast_1d(np.asarray(values, dtype=np.float64))
-    out = []
-    if arr.size != 1 and (point_count is None or arr.size != point_count):
-        out.append(Finding(path, schema.HELD, f"held must be constant or have one value per "
-                                              f"point ({point_count})"))
+    out = _constant_or_per_point(arr, point_count, schema.HELD, "held", path)
     if not np.all(np.isfinite(arr)) or np.any(arr < 0) or np.any(arr > 1):
         out.append(Finding(path, schema.HELD, "held weights must be in [0, 1]"))
     return out

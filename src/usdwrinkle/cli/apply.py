@@ -333,24 +333,20 @@ def author(plans: list[MeshEdit]) -> None:
             api.clear_q()
         if plan.width is not None:
             api.CreateWidthPrimvar(plan.width)
-        if plan.amplitude_scale is not None:
-            api.CreateAmplitudeScaleAttr(plan.amplitude_scale)
         if plan.profile is not None:
             api.set_profile(plan.profile)
-        if plan.biaxial is not None:
-            api.CreateBiaxialAttr(plan.biaxial)
-        if plan.tension is not None:
-            api.CreateTensionAttr(plan.tension)
-        if plan.tension_threshold is not None:
-            api.CreateTensionThresholdAttr(plan.tension_threshold)
-        if plan.cloth is not None:
-            api.CreateClothAttr(plan.cloth)
-        if plan.slack is not None:
-            api.CreateSlackAttr(plan.slack)
-        if plan.crest_damping is not None:
-            api.CreateCrestDampingAttr(plan.crest_damping)
-        if plan.held is not None:
-            api.CreateHeldPrimvar(plan.held)
+        for field, create in _AUTHORED:
+            value = getattr(plan, field)
+            if value is not None:
+                getattr(api, create)(value)
+
+
+#: MeshEdit fields that author one WrinkleAPI property each, and the method that does
+_AUTHORED = (("amplitude_scale", "CreateAmplitudeScaleAttr"), ("biaxial", "CreateBiaxialAttr"),
+             ("tension", "CreateTensionAttr"),
+             ("tension_threshold", "CreateTensionThresholdAttr"),
+             ("cloth", "CreateClothAttr"), ("slack", "CreateSlackAttr"),
+             ("crest_damping", "CreateCrestDampingAttr"), ("held", "CreateHeldPrimvar"))
 
 
 def held_from_primvar(prim, name: str) -> np.ndarray:

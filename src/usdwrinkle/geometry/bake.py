@@ -22,8 +22,10 @@ from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
 from .options import GeometryOptions
 from .subdivide import (
+    AUTO_FINE_POINTS,
     MAX_LEVELS,
     check_size,
+    fine_point_count,
     levels_for,
     subdivide,
 )
@@ -114,8 +116,9 @@ class GeometryBake:
             levels = self.options.levels
             if levels is None:
                 samples = self.options.samples_per_wavelength
-                levels = max(levels_for(rest_phase_step(record), samples),
-                             levels_for(self.phase_step(path), samples))
+                levels = self._fitting_levels(path, record, max(
+                    levels_for(rest_phase_step(record), samples),
+                    levels_for(self.phase_step(path), samples)))
             counts[path] = check_size(path, len(record.rest_points),
                                       record.topology.triangles, levels)
             self.levels[path] = levels
@@ -129,6 +132,24 @@ class GeometryBake:
             writer = FineMeshWriter(self.layer, stage, path, fine, record.topology, self.warn)
             writer.define()
             self.writers[path] = writer
+
+    def _fitting_levels(self, path: str, record, wanted: int) -> int:
+        """The automatic level count, lowered until the fine mesh fits AUTO_FINE_POINTS
+        (with a warning: the waves it no longer resolves fade to the smooth surface, the
+        band limit, rather than the bake being refused)."""
+        levels = wanted
+        triangles = record.topology.triangles
+        while levels > 0 and fine_point_count(len(record.rest_points), triangles,
+                                              levels) > AUTO_FINE_POINTS:
+            levels -= 1
+        if levels < wanted:
+            self.warn(f"{path}: {wanted} subdivision levels would resolve its waves but make "
+                      f"{fine_point_count(len(record.rest_points), triangles, wanted):,} "
+                      f"fine points (more than {AUTO_FINE_POINTS:,}); baking {levels} levels, "
+                      "where waves shorter than 2 fine edges fade to the smooth surface "
+                      "(band limit); a smaller wrinkle:width asks for this, --levels sets "
+                      "the count")
+        return levels
 
     def add_frame(self, frame: float) -> None:
         """Evaluate and record the frame the engine computed last."""

@@ -18,6 +18,9 @@ from ..errors import UsdWrinkleError
 
 #: fine points above which a mesh is refused (``--levels`` lowers the count)
 MAX_FINE_POINTS = 4_000_000
+#: fine points the automatic level count stays under (a mesh of a few million points a
+#: frame makes layers of gigabytes, and renders slowly); --levels may go to MAX_FINE_POINTS
+AUTO_FINE_POINTS = 1_000_000
 #: samples per wavelength the default level count aims for
 MAX_LEVELS = 10
 
