@@ -71,7 +71,8 @@ def test_dask_local_cluster_equals_a_serial_render_from_the_same_bake(gl_context
     done = cli("render", SHIRT, out / "s.####.exr", "--dask", "--workers", "2",
                "--width", "160")
     assert done.returncode == 0, done.stderr
-    layer = out / "shirt.wrinkles.usdc"
+    layer = out / "usdwrinkle_bake" / "shirt.wrinkles.usdc"
+    assert len(list(out.glob("*"))) == 24 + 1   # the frames, and the bake's folder
     assert f"baked wave fields to {layer}" in done.stdout
     assert "wrote 24 frame(s)" in done.stdout and "fps over the whole run" in done.stdout
     assert "baked wave fields: /World/Arm/Sleeve" in done.stdout
@@ -96,7 +97,7 @@ def test_dask_renders_cesium_man_48_frames(gl_context, corpus, tmp_path):
                "--width", "96", "--quiet")
     assert done.returncode == 0, done.stderr
     serial = tmp_path / "serial"
-    assert main(["render", str(out / "CesiumMan.wrinkles.usdc"), str(serial / "c.####.exr"),
+    assert main(["render", str(out / "usdwrinkle_bake" / "CesiumMan.wrinkles.usdc"), str(serial / "c.####.exr"),
                  "--all-meshes", "--width", "96", "--quiet"]) == 0
     assert_identical_frames(out, serial, pattern="c.*.exr", count=48)
 

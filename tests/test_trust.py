@@ -117,7 +117,8 @@ def test_every_dask_file_is_the_frame_it_names(gl_context, tmp_path, alone):
             assert main(["render", SHIRT, str(out / f"m.####.{fmt}"), "--frames", FRAMES,
                          "--width", str(WIDTH), "--dask", cluster.scheduler_address,
                          "--chunk", "3", "--quiet"]) == 0
-            (out / "shirt.wrinkles.usdc").unlink()
+            (out / "usdwrinkle_bake" / "shirt.wrinkles.usdc").unlink()
+            (out / "usdwrinkle_bake").rmdir()
             assert_every_file_is_its_frame(out, fmt, alone)
 
 

@@ -66,8 +66,9 @@ def add_parser(subparsers) -> None:
                       help="render on Dask: without SCHEDULER, a local cluster of worker "
                            "processes; with tcp://host:port, a running 'dask scheduler'. "
                            "Unless the stage already holds baked wave fields for every "
-                           "frame, they are baked first, once, into STAGE_NAME.wrinkles.usdc "
-                           "beside the outputs")
+                           "frame, they are baked first, once, into usdwrinkle_bake/"
+                           "STAGE_NAME.wrinkles.usdc beside the outputs (not among the "
+                           "frames)")
     farm.add_argument("--chunk", type=int, metavar="N",
                       help="frames per task (default: 10, fewer when the shot is short, so "
                            "that every worker gets at least two chunks)")

@@ -8,8 +8,8 @@ Flow:
    scheduler (``tcp://host:port``).
 3. Unless the stage already holds baked wave fields for every wrinkled mesh and frame,
    bake them: one sequential, compute-only pass in this process (the phase history runs
-   in time order), written atomically to ``STAGE_NAME.wrinkles.usdc`` beside the
-   outputs. The workers start as spawned processes before this process makes its GL
+   in time order), written atomically to ``usdwrinkle_bake/STAGE_NAME.wrinkles.usdc``
+   beside the outputs. The workers start as spawned processes before this process makes its GL
    context, so no context crosses a fork.
 4. Submit chunks of ``--chunk`` frames (``retries``: a chunk whose worker dies runs
    again, and skips the frames that its first run finished); show one progress bar.
@@ -55,11 +55,17 @@ def default_chunk(frames: int, workers: int) -> int:
     return max(1, min(DEFAULT_CHUNK, math.ceil(frames / (2 * max(workers, 1)))))
 
 
+#: the folder beside the outputs that holds the farm's bake: every worker must reach it,
+#: and the outputs' folder is what the farm shares, but it is not one of the frames
+BAKE_FOLDER = "usdwrinkle_bake"
+
+
 def bake_path(output_pattern: str, stage_path: str) -> str:
-    """Where the farm bakes the wave fields: beside the outputs, named after the stage."""
+    """Where the farm bakes the wave fields: in BAKE_FOLDER beside the outputs (not among
+    the frames), named after the stage."""
     folder = os.path.dirname(os.path.abspath(output_pattern))
     stem = os.path.splitext(os.path.basename(stage_path))[0]
-    return os.path.join(folder, f"{stem}.wrinkles.usdc")
+    return os.path.join(folder, BAKE_FOLDER, f"{stem}.wrinkles.usdc")
 
 
 def _has_bokeh() -> bool:
@@ -192,6 +198,7 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
         render_stage = job.stage_path
         if layer is not None:
             bake_started = time.perf_counter()
+            os.makedirs(os.path.dirname(layer), exist_ok=True)
             engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
                 stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
             try:
