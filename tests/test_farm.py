@@ -97,8 +97,9 @@ def test_dask_renders_cesium_man_48_frames(gl_context, corpus, tmp_path):
                "--width", "96", "--quiet")
     assert done.returncode == 0, done.stderr
     serial = tmp_path / "serial"
-    assert main(["render", str(out / "usdwrinkle_bake" / "CesiumMan.wrinkles.usdc"), str(serial / "c.####.exr"),
-                 "--all-meshes", "--width", "96", "--quiet"]) == 0
+    layer = out / "usdwrinkle_bake" / "CesiumMan.wrinkles.usdc"
+    assert main(["render", str(layer), str(serial / "c.####.exr"), "--all-meshes", "--width",
+                 "96", "--quiet"]) == 0
     assert_identical_frames(out, serial, pattern="c.*.exr", count=48)
 
 
