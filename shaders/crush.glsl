@@ -207,13 +207,13 @@ void main() {
     bool any_wave = usable || q_len > 0.0;
     // |M d| = sqrt(lambda) for the eigenvector; a damped d reads the compression along it
     float r = any_wave ? clamp(length(M * d), MIN_RATIO, 1.0) : 1.0;
-    // slack (docs/method.md): the cloth takes the first compression in-plane; the
-    // amplitude law reads r_b = min(r / (1 - slack), 1), the wavelength keeps r
     // held edges (docs/method.md): a wave whose crests run into the held edge (d across u)
     // fades towards it by the strength x; one whose crests run along it keeps its amplitude
     vec4 holder = fetch(hold, i);
     float along = dot(normalize(d3), holder.yzw);
     float held = 1.0 - holder.x * (1.0 - along * along);
+    // slack (docs/method.md): the cloth takes the first compression in-plane; the
+    // amplitude law reads r_b = min(r / (1 - slack), 1), the wavelength keeps r
     float r_b = min(r / (1.0 - u_slack), 1.0);
     float amplitude = held * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r_b * r_b, 0.0));
     float wavelength = W;  // rest space

@@ -112,13 +112,22 @@ class WrinkleAPI:
 
     def CreateWidthPrimvar(self, default_value=None, time=Usd.TimeCode.Default()):  # noqa: N802, B008
         """Constant for one value, vertex interpolation for one value per point."""
+        return self._float_primvar("wrinkle:width", default_value, check_width,
+                                   UsdGeom.Tokens.constant, time)
+
+    def _float_primvar(self, name: str, default_value, check, unset_interpolation,
+                       time=Usd.TimeCode.Default()):  # noqa: B008
+        """A float[] primvar: constant for one value, vertex for one per point (without a
+        value, ``unset_interpolation``); the value refused by ``check`` first."""
         values = None if default_value is None else np.atleast_1d(
             np.asarray(default_value, np.float32))
-        interpolation = UsdGeom.Tokens.constant if values is None or values.size == 1 \
-            else UsdGeom.Tokens.vertex
-        if values is not None:
-            refuse(check_width(values, self._point_count(), self._path()))
-        primvar = self._primvars().CreatePrimvar("wrinkle:width", Sdf.ValueTypeNames.FloatArray,
+        if values is None:
+            interpolation = unset_interpolation
+        else:
+            interpolation = UsdGeom.Tokens.constant if values.size == 1 \
+                else UsdGeom.Tokens.vertex
+            refuse(check(values, self._point_count(), self._path()))
+        primvar = self._primvars().CreatePrimvar(name, Sdf.ValueTypeNames.FloatArray,
                                                  interpolation)
         primvar.SetInterpolation(interpolation)
         if values is not None:
@@ -170,18 +179,8 @@ class WrinkleAPI:
 
     def CreateHeldPrimvar(self, default_value=None) -> UsdGeom.Primvar:  # noqa: N802
         """One weight in [0, 1] per point (vertex), or one for every point (constant)."""
-        values = None if default_value is None else np.atleast_1d(
-            np.asarray(default_value, np.float32))
-        interpolation = UsdGeom.Tokens.constant if values is not None and values.size == 1 \
-            else UsdGeom.Tokens.vertex
-        if values is not None:
-            refuse(check_held(values, self._point_count(), self._path()))
-        primvar = self._primvars().CreatePrimvar("wrinkle:held", Sdf.ValueTypeNames.FloatArray,
-                                                 interpolation)
-        primvar.SetInterpolation(interpolation)
-        if values is not None:
-            primvar.Set(Vt.FloatArray.FromNumpy(values))
-        return primvar
+        return self._float_primvar("wrinkle:held", default_value, check_held,
+                                   UsdGeom.Tokens.vertex)
 
     def GetBiaxialAttr(self) -> Usd.Attribute:  # noqa: N802
         return self._attr(schema.BIAXIAL)
