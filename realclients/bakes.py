@@ -104,11 +104,11 @@ def prepare(shot: BakeShot, folder: Path) -> Prepared:
 def measured_controls(stage, mesh_width: bool) -> None:
     """The controls these comparisons were measured with (issues 23 and 24), authored on
     every mesh of the over layer: wrinkle:slack = 0, the paper's amplitude law, so that
-    the wrinkles cover most of each mesh (with the default slack, compression under 8%
+    the wrinkles cover most of each mesh (with the default slack, compression under 6%
     draws none, and the per-tile and colour-ramp comparisons lose their signal), and with
     ``mesh_width`` (a corpus asset wrinkled with --all-meshes) wrinkle:cloth = "mesh",
-    4 x its mean edge: CesiumMan, in metres, would get cotton's 6.7 cm folds, finer than
-    these frames resolve. The renderers' agreement is what is tested, not the defaults
+    4 x its mean edge: CesiumMan, in metres, would get cotton's 1.3-8.5 cm folds, finer
+    than these frames resolve. The renderers' agreement is what is tested, not the defaults
     (docs/physics.md tests those)."""
     from pxr import Sdf, UsdGeom
 

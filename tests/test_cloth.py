@@ -12,11 +12,12 @@ from test_bake import baked, interior
 from test_crush_relax import gpu_fields, random_cloth
 
 from usdwrinkle import schema
+from usdwrinkle.authoring.builders import grid_faces
 from usdwrinkle.cli.main import main
 from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.render.passes.crush import DAMPING_DEADBAND, damping_alpha
 from usdwrinkle.scene.params import held_weights
-from usdwrinkle.scene.topology import mean_edge_length
+from usdwrinkle.scene.topology import build_topology, curvature, mean_edge_length
 from usdwrinkle.validation import wrinkle_findings
 
 from conftest import grid_sheet
@@ -74,13 +75,89 @@ def test_cloth_mesh_is_the_old_edge_multiple_and_an_authored_width_wins(tmp_path
     assert fallback_width(authored) == (pytest.approx(0.42), "wrinkle:width")
 
 
+def tube(rows: int, cols: int, radius: float, length: float = 1.0):
+    """A tube along z: (points, counts, indices), each ring a regular cols-gon."""
+    angle = np.arange(cols) * (2 * np.pi / cols)
+    along = np.linspace(0.0, length, rows)
+    A, L = np.meshgrid(angle, along)
+    points = np.stack([radius * np.cos(A), radius * np.sin(A), L], -1).reshape(-1, 3)
+    counts, indices = grid_faces(rows, cols, wrap_cols=True)
+    return points.astype(np.float64), counts, indices
+
+
+def topology_of(points, counts, indices):
+    return build_topology(np.asarray(counts), np.asarray(indices), np.asarray(points))
+
+
+@pytest.mark.parametrize("cols", [4, 8, 24])
+def test_curvature_is_one_over_the_radius_on_a_ring_however_coarse(cols):
+    """max |(n_i - n_j) . e| / |e|^2 over the edges: the chord of a regular polygon and
+    the turn of its radial normals shrink alike, so a coarse tube gives 1/R exactly, open
+    ends included (angle-weighted normals do not depend on how the quads are split); a
+    plane gives 0."""
+    points, counts, indices = tube(5, cols, 0.37)
+    kappa = curvature(points, topology_of(points, counts, indices))
+    np.testing.assert_allclose(kappa, 1 / 0.37, rtol=1e-5)
+    rest, counts, indices = grid_sheet(6, 7, 2.0)
+    assert np.abs(curvature(rest, topology_of(rest, counts, indices))).max() < 1e-5
+
+
+def test_curvature_on_a_sphere_is_one_over_its_radius():
+    """Within 5%: on an icosphere's uneven rings the angle-weighted normals lean off the
+    radius along the edges by a little (radial normals give 1/R exactly, as on the tube:
+    the first subdivision, whose rings are even, is exact)."""
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.8)
+    kappa = curvature(sphere.vertices, topology_of(
+        sphere.vertices, np.full(len(sphere.faces), 3), sphere.faces.ravel()))
+    np.testing.assert_allclose(kappa, 1 / 0.8, rtol=0.05)
+    even = trimesh.creation.icosphere(subdivisions=1, radius=0.8)
+    kappa = curvature(even.vertices, topology_of(
+        even.vertices, np.full(len(even.faces), 3), even.faces.ravel()))
+    np.testing.assert_allclose(kappa, 1 / 0.8, rtol=1e-6)
+
+
+def tube_file(tmp_path, radius, meters):
+    points, counts, indices = tube(5, 8, radius / meters, 40 * radius / meters)
+    posed = points * np.array([1, 1, 0.8])
+    stage = point_cache_stage(points.astype(np.float32), {1: posed.astype(np.float32)},
+                              counts, indices)
+    UsdGeom.SetStageMetersPerUnit(stage, meters)
+    path = tmp_path / f"tube{radius}_{meters}.usda"
+    stage.GetRootLayer().Export(str(path))
+    return path
+
+
+@pytest.mark.parametrize("radius, meters", [(0.06, 1.0), (0.06, 0.01), (0.15, 0.01),
+                                            (0.005, 1.0), (0.5, 1.0)])
+def test_the_fallback_width_narrows_on_curved_cloth(tmp_path, radius, meters):
+    """A tube of radius R (metres) gets W = W_cloth (R / R_c)^p in scene units, R held in
+    [CURVED_RADIUS_MIN_M, CURVED_RADIUS_M]: a 6 cm sleeve 3.0 cm of cotton, a 0.5 cm
+    strap as a 2 cm tube, a 50 cm drum as flat cloth."""
+    path = tube_file(tmp_path, radius, meters)
+    width, note = fallback_width(path)
+    held = min(max(radius, 0.02), 0.23)
+    expected = 0.085 * (held / 0.23) ** 0.78 / meters
+    assert (schema.CLOTH_WIDTHS_M["cotton"], schema.CURVED_RADIUS_M,
+            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.085, 0.23, 0.78, 0.02)
+    assert width == pytest.approx(expected, rel=1e-4)
+    assert ("narrower where curved under 23 cm" in note) == (radius < 0.23)
+    if radius == 0.06:
+        assert width * meters == pytest.approx(0.0298, abs=1e-4)
+
+
 def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_path, capsys):
     path, *_ = sheet_file(tmp_path, 0.01)
     cm = 100 * schema.CLOTH_WIDTHS_M["cotton"]
     assert main(["check", str(path), "--wrinkles-only"]) == 0
     out = capsys.readouterr().out
-    assert f"width: /Sheet: W = {cm:.4g} scene units (cotton {cm:g} cm (metersPerUnit " \
+    assert f"width: /Sheet: W = {cm:.4g} scene units (cotton {cm:g} cm flat (metersPerUnit " \
            "0.01))" in out
+    curved = tube_file(tmp_path, 0.06, 0.01)
+    assert main(["check", str(curved), "--wrinkles-only"]) == 0
+    assert ("W = 2.98 scene units (cotton 8.5 cm flat, narrower where curved under 23 cm "
+            "(metersPerUnit 0.01))") in capsys.readouterr().out
     assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
     widths = json.loads(capsys.readouterr().out)["widths"]
     assert widths[0]["prim"] == "/Sheet" and widths[0]["width"] == pytest.approx([cm, cm])

@@ -54,7 +54,7 @@ def zones(shot: Shot) -> dict:
         inner &= (m[:, 0] > m[:, 0].min() + MARGIN) & (m[:, 0] < m[:, 0].max() - MARGIN)
     out = {"all": inner, "held": inner & (shot.held_distance() < measure.EDGE),
            "focus": inner}
-    if shot.name == "sleeve":
+    if shot.name.startswith("sleeve"):
         along = m[:, 1] - m[:, 1].max() / 2
         out["elbow"] = inner & (np.abs(along) < ELBOW_ZONE)
         out["focus"] = out["elbow"]

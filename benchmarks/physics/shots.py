@@ -151,23 +151,26 @@ def bend(points: np.ndarray, angle: float, zone: float = ELBOW) -> np.ndarray:
     return out
 
 
-def arm_mesh(angle_keys: list[float]) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """The collider: a closed tube of ARM_RADIUS (rest points, quads, and its points at
+def arm_mesh(angle_keys: list[float], radius: float = ARM_RADIUS
+             ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The collider: a closed tube of ``radius`` (rest points, quads, and its points at
     each key's angle)."""
     cols, rows, length = 32, 89, 0.88
     around = np.arange(cols) * (2 * np.pi / cols)
     along = np.linspace(-length / 2, length / 2, rows)
     A, L = np.meshgrid(around, along)
-    rest = np.stack([ARM_RADIUS * np.cos(A), ARM_RADIUS * np.sin(A), L], -1).reshape(-1, 3)
+    rest = np.stack([radius * np.cos(A), radius * np.sin(A), L], -1).reshape(-1, 3)
     idx = np.arange(rows * cols).reshape(rows, cols)
     nxt = (np.arange(cols) + 1) % cols
     quads = np.stack([idx[:-1], idx[:-1][:, nxt], idx[1:][:, nxt], idx[1:]], -1)
     return rest, quads.reshape(-1, 4), [bend(rest, a) for a in angle_keys]
 
 
-def sleeve(refine: int = 1) -> Shot:
-    radius, length = 0.10, 0.80
-    cols = 64 * refine                 # around: 0.98 cm / refine
+def sleeve(refine: int = 1, radius: float = 0.10) -> Shot:
+    """The sleeve; ``radius`` other than 10 cm makes the held-out shot of the curvature
+    law (its arm 0.8 of the radius, its grid about 1 cm around, a multiple of STRIDE)."""
+    length = 0.80
+    cols = int(round(2 * np.pi * radius / 0.01 / STRIDE)) * STRIDE * refine  # ~1 cm around
     rows = 80 * refine + 1             # along: 1 cm / refine
     around = np.arange(cols) * (2 * np.pi / cols)
     along = np.linspace(0.0, length, rows)
@@ -186,11 +189,14 @@ def sleeve(refine: int = 1) -> Shot:
 
     frames = [1] + [10 + 4 * k for k in range(11)] + [70]   # 9 degrees a key
     keys = [(frame, bend(rest, angle(frame))) for frame in frames]
-    shot = Shot("sleeve", rows, cols, True, rest, material, pinned.ravel(), 70, False, keys,
+    name = "sleeve" if radius == 0.10 else f"sleeve{100 * radius:.0f}"
+    shot = Shot(name, rows, cols, True, rest, material, pinned.ravel(), 70, False, keys,
                 {"bend": (10, 50), "held": (50, 70)},
-                "a sleeve of radius 10 cm and length 0.80 m on an arm of radius 8 cm, its "
-                "end rings pinned, the arm bent 90 degrees over 20 cm (the elbow)")
-    shot.collider = arm_mesh([angle(f) for f in frames])
+                f"a sleeve of radius {100 * radius:.0f} cm and length 0.80 m on an arm of "
+                f"radius {80 * radius:.0f} cm, its end rings pinned, the arm bent 90 degrees "
+                "over 20 cm (the elbow)")
+    shot.collider = arm_mesh([angle(f) for f in frames],
+                             ARM_RADIUS if radius == 0.10 else 0.8 * radius)
     shot.stride = STRIDE * refine
     return shot
 

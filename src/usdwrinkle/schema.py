@@ -66,12 +66,21 @@ DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0
 DEFAULT_TENSION_THRESHOLD = 0.02
 
-#: Fallback width: the cloth's (wrinkle:cloth) fold wavelength in metres, measured with
-#: Blender 5.0's cloth solver on its cloth presets (benchmarks/physics, docs/physics.md):
-#: cotton is the geometric mean of the three oracle shots' simulated wavelengths, the
-#: others cotton's scaled by their sheet's wavelength over cotton's sheet's. Converted to
-#: scene units through the stage's metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.063, "cotton": 0.067, "denim": 0.080, "leather": 0.154}
+#: Fallback width: the cloth's (wrinkle:cloth) fold wavelength in metres on flat cloth,
+#: measured with Blender 5.0's cloth solver on its cloth presets (benchmarks/physics,
+#: docs/physics.md): cotton is the geometric mean of the flat oracle shots' simulated
+#: wavelengths (the curtain and the sheared square), the others cotton's scaled by their
+#: sheet's wavelength over cotton's sheet's. Converted to scene units through the stage's
+#: metersPerUnit.
+CLOTH_WIDTHS_M = {"silk": 0.079, "cotton": 0.085, "denim": 0.101, "leather": 0.196}
+#: Where the rest surface curves tighter than CURVED_RADIUS_M (a sleeve, a trouser leg),
+#: the fallback width narrows as (R / CURVED_RADIUS_M) ** CURVED_EXPONENT, R the point's
+#: smallest radius of curvature (never taken below CURVED_RADIUS_MIN_M): fitted to the
+#: oracle's sleeves of radius 6, 10 and 15 cm (docs/physics.md; shell buckling theory
+#: gives an exponent of 1/2)
+CURVED_RADIUS_M = 0.23
+CURVED_EXPONENT = 0.78
+CURVED_RADIUS_MIN_M = 0.02
 DEFAULT_CLOTH = "cotton"
 #: wrinkle:cloth = "mesh": the width follows the mesh, this multiple of its mean rest edge
 #: length (the fallback before the cloth oracle)
@@ -79,8 +88,8 @@ MESH_CLOTH = "mesh"
 WIDTH_EDGE_MULTIPLE = 4.0
 CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
 #: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles (fitted
-#: to the cloth oracle's amplitudes at matched width, docs/physics.md)
-DEFAULT_SLACK = 0.08
+#: to the cloth oracle's amplitudes, docs/physics.md)
+DEFAULT_SLACK = 0.06
 #: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
 #: the strain are followed (docs/method.md: crest damping)
 DEFAULT_CREST_DAMPING = 4.0

@@ -9,7 +9,7 @@ from ..profiles import cosine_profile, derive_gradient
 from ..validation import parameter_findings, refuse
 from ..values import static_flattened, static_value
 from .records import WrinkleParams
-from .topology import Topology, mean_edge_length
+from .topology import Topology, curvature, mean_edge_length
 
 
 def _get(prim: Usd.Prim, name: str):
@@ -61,7 +61,6 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         width_note = "wrinkle:width"
     else:
         width, width_note = cloth_width(prim, rest_points, topology)
-        width = np.full(n, width, np.float32)
 
     slack = _get(prim, schema.SLACK)
     slack = schema.DEFAULT_SLACK if slack is None else float(slack)
@@ -108,23 +107,40 @@ def width_summary(params: WrinkleParams) -> dict:
 
 
 def cloth_width(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology) -> tuple:
-    """The fallback width W (scene units) and how it was found: the cloth's fold
-    wavelength (wrinkle:cloth, cotton unless authored) through the stage's metersPerUnit,
-    or with wrinkle:cloth = "mesh" a multiple of the mean rest edge length."""
+    """The fallback width W per point, (n,) float32 in scene units, and how it was found:
+    the cloth's fold wavelength on flat cloth (wrinkle:cloth, cotton unless authored)
+    through the stage's metersPerUnit, narrowed where the rest surface curves tighter than
+    schema.CURVED_RADIUS_M (curved_width); with wrinkle:cloth = "mesh", a multiple of the
+    mean rest edge length."""
+    n = len(rest_points)
     cloth = _get(prim, schema.CLOTH)
     cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
     if cloth == schema.MESH_CLOTH:
         width = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest_points, topology)
         width = width if width > 0 else 1.0
-        return width, (f"{schema.WIDTH_EDGE_MULTIPLE:g} x the mean rest edge "
-                       f"(wrinkle:cloth = mesh)")
+        return np.full(n, width, np.float32), (f"{schema.WIDTH_EDGE_MULTIPLE:g} x the mean "
+                                               f"rest edge (wrinkle:cloth = mesh)")
     stage = prim.GetStage()
     meters = UsdGeom.GetStageMetersPerUnit(stage)
     authored = UsdGeom.StageHasAuthoredMetersPerUnit(stage)
     metres = schema.CLOTH_WIDTHS_M[cloth]
-    width = metres / meters
+    width = curved_width(metres, curvature(rest_points, topology) / meters) / meters
     units = f"metersPerUnit {meters:g}" + ("" if authored else ", USD's fallback: unauthored")
-    return width, f"{cloth} {100 * metres:g} cm ({units})"
+    note = f"{cloth} {100 * metres:g} cm flat"
+    if width.size and width.min() < metres / meters * (1 - 1e-6):
+        note += f", narrower where curved under {100 * schema.CURVED_RADIUS_M:g} cm"
+    return width.astype(np.float32), f"{note} ({units})"
+
+
+def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
+    """The fold wavelength (m) of a cloth whose flat wavelength is ``flat`` (m) at points
+    whose largest rest curvature is ``kappa`` (1/m): flat * (R / R_c) ** p with R = 1 /
+    kappa held in [schema.CURVED_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], p =
+    schema.CURVED_EXPONENT (docs/method.md: the cloth's width)."""
+    kappa = np.asarray(kappa, np.float64)
+    radius = 1.0 / np.maximum(kappa, 1.0 / schema.CURVED_RADIUS_M)
+    radius = np.maximum(radius, schema.CURVED_RADIUS_MIN_M)
+    return flat * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
 
 
 def held_weights(rest_points: np.ndarray, held: np.ndarray, width: np.ndarray) -> np.ndarray:

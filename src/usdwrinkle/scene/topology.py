@@ -228,6 +228,50 @@ def vertex_normals(points: np.ndarray, topology: Topology) -> np.ndarray:
     return np.where(length > 1e-30, normals / np.maximum(length, 1e-30), 0.0).astype(np.float32)
 
 
+def angle_weighted_normals(points: np.ndarray, topology: Topology) -> np.ndarray:
+    """Unit vertex normals weighted by each triangle's corner angle, (n, 3) float64: a
+    planar polygon weighs the same however it is triangulated; zero where no triangle
+    has area."""
+    pts = np.asarray(points, dtype=np.float64)
+    tri = topology.triangles
+    normals = np.zeros((topology.num_points, 3))
+    if len(tri):
+        corners = pts[tri]
+        face = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        area = np.linalg.norm(face, axis=1, keepdims=True)
+        face = np.where(area > 1e-300, face / np.maximum(area, 1e-300), 0.0)
+        for c in range(3):
+            a = corners[:, (c + 1) % 3] - corners[:, c]
+            b = corners[:, (c + 2) % 3] - corners[:, c]
+            angle = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), (a * b).sum(1))
+            np.add.at(normals, tri[:, c], face * angle[:, None])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.where(length > 1e-30, normals / np.maximum(length, 1e-30), 0.0)
+
+
+def curvature(points: np.ndarray, topology: Topology) -> np.ndarray:
+    """The largest normal curvature at each point, (n,) float64 in 1 / scene units: over
+    the point's edges e = p_i - p_j, the most that the angle-weighted normal turns along
+    them, max_j |(n_i - n_j) . e| / |e|^2. Exact (1/R) on a regular ring of a cylinder of
+    radius R however coarse and however its quads are split, and on any ring of a sphere
+    whose normals are radial (the normals' lean across the edge does not count); 0 on a
+    plane and on isolated points."""
+    pts = np.asarray(points, dtype=np.float64)
+    out = np.zeros(topology.num_points)
+    edges = topology.edges
+    if not len(edges):
+        return out
+    normals = angle_weighted_normals(pts, topology)
+    i, j = edges[:, 0], edges[:, 1]
+    edge = pts[i] - pts[j]
+    squared = (edge * edge).sum(1)
+    turn = np.abs(((normals[i] - normals[j]) * edge).sum(1))
+    kappa = np.where(squared > 1e-60, turn / np.maximum(squared, 1e-60), 0.0)
+    np.maximum.at(out, i, kappa)
+    np.maximum.at(out, j, kappa)
+    return out
+
+
 def rest_tangents(normals: np.ndarray) -> np.ndarray:
     """A deterministic unit tangent orthogonal to each rest normal, (n, 3) float32."""
     normals = np.asarray(normals, np.float64)
