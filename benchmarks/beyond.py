@@ -47,7 +47,7 @@ def overhead(quick: bool, ctx) -> list[dict]:
             frames = [float(f) for f in range(1, 9 if quick else 25)]
             (both, both_wall, _, count), (one, one_wall, _, _), (_, plain_wall, _, _) = \
                 measure_frames(engines, width, height, frames)
-            vertices = sum(len(r.rest_points) for r in engines[0][0].scene.meshes.values())
+            vertices = sum(len(r.rest_points) for r in engines[0][0].meshes.values())
         finally:
             for engine, _ in engines:
                 engine.release()

@@ -147,6 +147,7 @@ def scaling(quick: bool, ctx) -> dict:
 
 def skin_baseline(quick: bool, ctx) -> list[dict]:
     """UsdSkel's C++ ComputeSkinnedPoints against our skin pass, on the same skinned mesh."""
+    from usdwrinkle.authoring.builders import usdskel_queries
     from usdwrinkle.engine import WrinkleEngine
 
     rows = []
@@ -155,10 +156,9 @@ def skin_baseline(quick: bool, ctx) -> list[dict]:
         engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
         try:
             path = next(iter(engine.meshes))
-            skel_query, skinning_query = engine.scene.skel.get(path)
+            skel_query, skinning_query = usdskel_queries(stage, path)
             points = UsdGeom.Mesh(stage.GetPrimAtPath(path)).GetPointsAttr().Get()
             cpu, gpu, gpu_read = [], [], []
-            mesh = engine.render_delegate.rprims[path]
             engine.compute_frame(1.0, wrinkles=False)  # builds the GPU resources
             for frame in range(2, 8 if quick else 12):
                 t = Usd.TimeCode(frame)
@@ -170,10 +170,10 @@ def skin_baseline(quick: bool, ctx) -> list[dict]:
                 engine.compute_frame(float(frame), wrinkles=False)  # syncs the frame
                 ctx.finish()
                 started = time.perf_counter()
-                engine.render_delegate.skin.run(mesh.resources, mesh.frame)
+                engine.run_skin(path)
                 ctx.finish()
                 gpu.append((time.perf_counter() - started) * 1e3)
-                mesh.resources.posed_points.read()
+                engine.mesh_resources(path).posed_points.read()
                 gpu_read.append((time.perf_counter() - started) * 1e3)
             n = len(points)
         finally:

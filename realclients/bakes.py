@@ -91,21 +91,24 @@ class Prepared:
                 "camera_light": self.camera_light, **extra}
 
 
-def prepare(shot: BakeShot, folder: Path) -> Prepared:
+def prepare(shot: BakeShot, folder: Path, slack: float | None = 0.0) -> Prepared:
+    """The shot framed, flat-textured and with the measured controls (``slack`` None:
+    the fallback slack)."""
     folder.mkdir(parents=True, exist_ok=True)
     framed, camera = shared_camera(shot.stage.resolve(), folder)
     stage, layer = over_layer(Path(framed).resolve(), folder / f"{shot.name}.flat.usda")
     flat_textures(stage, folder)
-    measured_controls(stage, mesh_width=shot.all_meshes)
+    measured_controls(stage, mesh_width=shot.all_meshes, slack=slack)
     layer.Save()
     return Prepared(shot, Path(layer.realPath), camera, folder, not has_lights(shot.stage))
 
 
-def measured_controls(stage, mesh_width: bool) -> None:
+def measured_controls(stage, mesh_width: bool, slack: float | None = 0.0) -> None:
     """The controls these comparisons were measured with (issues 23 and 24), authored on
-    every mesh of the over layer: wrinkle:slack = 0, the paper's amplitude law, so that
-    the wrinkles cover most of each mesh (with the default slack, compression under 6%
-    draws none, and the per-tile and colour-ramp comparisons lose their signal), and with
+    every mesh of the over layer: wrinkle:slack = ``slack`` (0, the paper's amplitude law,
+    unless told: the wrinkles then cover most of each mesh; with the default slack,
+    compression under 6% draws none, and the per-tile and colour-ramp comparisons lose
+    their signal; None leaves the fallback, as test_realclients' Storm normals check), and with
     ``mesh_width`` (a corpus asset wrinkled with --all-meshes) wrinkle:cloth = "mesh",
     4 x its mean edge: CesiumMan, in metres, would get cotton's 1.3-8.5 cm folds, finer
     than these frames resolve. The renderers' agreement is what is tested, not the defaults
@@ -116,7 +119,8 @@ def measured_controls(stage, mesh_width: bool) -> None:
 
     for prim in stage.Traverse():
         if prim.IsA(UsdGeom.Mesh):
-            prim.CreateAttribute(schema.SLACK, Sdf.ValueTypeNames.Float).Set(0.0)
+            if slack is not None:
+                prim.CreateAttribute(schema.SLACK, Sdf.ValueTypeNames.Float).Set(slack)
             if mesh_width:
                 prim.CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token).Set(
                     schema.MESH_CLOTH)
@@ -295,10 +299,10 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
-                 tangent_space: str = "triangle") -> dict:
+                 tangent_space: str = "triangle", slack: float | None = 0.0) -> dict:
     """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer (its
     normal maps in ``tangent_space``), each decoded by photometric stereo."""
-    p = prepare(shot, folder)
+    p = prepare(shot, folder, slack)
     maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
                   "--tangent-space", tangent_space)
     ours, theirs, jobs = {}, {}, []

@@ -11,6 +11,7 @@ import pytest
 import trimesh
 from pxr import Gf, Usd, UsdGeom
 
+from usdwrinkle.authoring.builders import usdskel_queries
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.outputs.images import layout_for
 from usdwrinkle.render import bounds as bounds_mod
@@ -59,8 +60,8 @@ def test_a_flat_or_empty_surface_is_not_closed():
 def _usdskel_points(engine, path, frame):
     """UsdSkel's own skinning of ``path`` at ``frame``, in the prim's space."""
     t = Usd.TimeCode(frame)
-    skel_query, skinning_query = engine.scene.skel.get(path)
-    prim = engine.scene.stage.GetPrimAtPath(path)
+    skel_query, skinning_query = usdskel_queries(engine.stage, path)
+    prim = engine.stage.GetPrimAtPath(path)
     points = UsdGeom.Mesh(prim).GetPointsAttr().Get(t)
     assert skinning_query.ComputeSkinnedPoints(skel_query.ComputeSkinningTransforms(t),
                                                points, t)
@@ -100,7 +101,7 @@ def test_every_posed_point_lies_in_the_bound(gl_context, corpus, name, frames, b
         for frame in frames:
             record = engine.scene.sample(frame, width / height)
             view, eye_to_clip = record.camera.view, record.camera.projection @ FLIP_Y
-            for path, mesh in engine.scene.meshes.items():
+            for path, mesh in engine.meshes.items():
                 if mesh.skin is None:
                     continue
                 pose = record.meshes[path]
@@ -140,11 +141,11 @@ def test_the_rectangle_of_a_closely_framed_figure_is_a_fraction_of_the_frame(
         for frame in (1.0, 12.0, 24.0):
             record = engine.scene.sample(frame, WIDTH / HEIGHT, CAMERA)
             found = [eye_bound(mesh, record.meshes[path], record.camera.view)
-                     for path, mesh in engine.scene.meshes.items()]
+                     for path, mesh in engine.meshes.items()]
             x0, y0, x1, y1 = screen_rect(found, record.camera.projection @ FLIP_Y, WIDTH,
                                          HEIGHT)
             assert (x1 - x0) * (y1 - y0) < 0.4 * WIDTH * HEIGHT, (frame, (x0, y0, x1, y1))
-            (path, mesh), = engine.scene.meshes.items()
+            (path, mesh), = engine.meshes.items()
             assert culled_side(mesh, record.meshes[path], record.camera, found[0]) == "back"
     finally:
         engine.release()
@@ -186,7 +187,7 @@ def test_only_a_side_that_no_camera_sees_is_culled(gl_context, tmp_path, case, s
                            camera="/Camera", warn=lambda m: None)
     try:
         record = engine.scene.sample(1.0, 1.0, "/Camera")
-        (path, mesh), = engine.scene.meshes.items()
+        (path, mesh), = engine.meshes.items()
         bound = eye_bound(mesh, record.meshes[path], record.camera.view)
         assert culled_side(mesh, record.meshes[path], record.camera, bound) == side
     finally:

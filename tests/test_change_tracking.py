@@ -57,7 +57,7 @@ def fresh_render(stage, frame=3.0):
 
 
 def counts(engine, path="/Sheet"):
-    return dict(engine.render_delegate.rprims[path].sync_counts)
+    return engine.sync_counts(path)
 
 
 def assert_same(a, b):
@@ -68,17 +68,17 @@ def assert_same(a, b):
 def test_width_edit_reuploads_parameters_only(tracked):
     stage, engine = tracked
     before = render(engine)
-    resources = engine.render_delegate.rprims["/Sheet"].resources
+    resources = engine.mesh_resources("/Sheet")
     synced = counts(engine)
     UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).GetPrimvar("wrinkle:width").Set(
         Vt.FloatArray([0.25]))
     after = render(engine)
     now = counts(engine)
-    assert engine.render_delegate.rprims["/Sheet"].resources is resources  # not rebuilt
+    assert engine.mesh_resources("/Sheet") is resources  # not rebuilt
     assert now["resources"] == synced["resources"]
     assert now["params"] == synced["params"] + 1
     assert now["material"] == synced["material"]
-    assert engine.scene.meshes["/Sheet"].params.width[0] == pytest.approx(0.25)
+    assert engine.meshes["/Sheet"].params.width[0] == pytest.approx(0.25)
     # the image changes, and is the one a fresh engine renders from the edited stage
     assert np.abs(after["wrinkle.height"] - before["wrinkle.height"]).max() > 1e-3
     assert_same(after, fresh_render(stage))
@@ -89,7 +89,7 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     render(engine, 2.0)
     render(engine, 3.0)
     assert engine._history_frame == 3.0
-    resources = engine.render_delegate.rprims["/Sheet"].resources
+    resources = engine.mesh_resources("/Sheet")
     synced = counts(engine)
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
     # the same quads, each split into two triangles: new faces, same surface
@@ -100,9 +100,9 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     engine.pull_changes()
     assert engine._history_frame is None  # the phase history restarts
     after = render(engine, 3.0)
-    assert engine.render_delegate.rprims["/Sheet"].resources is not resources
+    assert engine.mesh_resources("/Sheet") is not resources
     assert counts(engine)["resources"] == synced["resources"] + 1
-    assert len(engine.scene.meshes["/Sheet"].topology.triangles) == 2 * len(quads)
+    assert len(engine.meshes["/Sheet"].topology.triangles) == 2 * len(quads)
     assert_same(after, fresh_render(stage, 3.0))
 
 
@@ -142,11 +142,11 @@ def test_material_edit_and_new_mesh(tracked):
     now = counts(engine)
     assert now["material"] == synced["material"] + 1
     assert now["resources"] == synced["resources"] and now["params"] == synced["params"]
-    assert "/Other" in engine.render_delegate.rprims
+    assert "/Other" in engine.rprim_paths
     assert_same(after, fresh_render(stage))
     stage.RemovePrim("/Other")
     render(engine)
-    assert "/Other" not in engine.render_delegate.rprims
+    assert "/Other" not in engine.rprim_paths
 
 
 def test_wrinkle_api_attribute_change_is_a_parameter_edit(tracked):

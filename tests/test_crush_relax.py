@@ -18,7 +18,7 @@ def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
     engine = WrinkleEngine(stage, ctx=ctx, warn=lambda m: None)
     try:
         engine.compute_frame(frame)
-        return engine.read_fields(path).arrays(), engine.scene.meshes[path]
+        return engine.read_fields(path).arrays(), engine.meshes[path]
     finally:
         engine.release()
 
@@ -80,7 +80,7 @@ def test_relax_matches_numpy_reference(gl_context):
     try:
         engine.compute_frame(3.0)  # replays frames 1 and 2 first
         ours = engine.read_fields("/Sheet").arrays()
-        record = engine.scene.meshes["/Sheet"]
+        record = engine.meshes["/Sheet"]
     finally:
         engine.release()
     starts = [crush_reference(rest, frames[f], record.topology, q, record.params.width,

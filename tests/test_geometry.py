@@ -232,7 +232,7 @@ def test_default_levels_keep_fine_edges_within_w_over_s(gl_context, shirt):
                  .split("=")[-1])
     engine = WrinkleEngine(SHIRT, warn=lambda m: None)
     try:
-        record = engine.scene.meshes[SLEEVE]
+        record = engine.meshes[SLEEVE]
     finally:
         engine.release()
     rest = record.rest_points[record.topology.triangles]

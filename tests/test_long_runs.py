@@ -35,13 +35,13 @@ def test_200_frames_keep_memory_and_gpu_resources_flat(gl_context):
             engine.render_frame(float(frame), 96, 64)
             if frame == 20:
                 after_warmup = rss_bytes()
-                resources = {p: m.resources for p, m in engine.render_delegate.rprims.items()}
-                framebuffer = engine.render_delegate.current_framebuffer
+                resources = {p: engine.mesh_resources(p) for p in engine.rprim_paths}
+                framebuffer = engine.framebuffer
         final = rss_bytes()
         assert final < after_warmup * 1.05, (after_warmup, final)
         # the GPU objects of frame 20 are the ones of frame 200: nothing re-created
-        assert all(engine.render_delegate.rprims[p].resources is r for p, r in resources.items())
-        assert engine.render_delegate.current_framebuffer is framebuffer
+        assert all(engine.mesh_resources(p) is r for p, r in resources.items())
+        assert engine.framebuffer is framebuffer
     finally:
         engine.release()
 

@@ -250,11 +250,12 @@ def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, 
     assert match.correlation >= least and match.iou >= 0.99, match
 
 
-@pytest.mark.parametrize("frame,bounds", [
-    ("triangle", (0.6, 2.0, 11.0, 17.0)),      # measured 0.45, 1.52, 9.75; 15.2
-    ("mikktspace", (0.6, 2.3, 22.0, 30.0)),    # measured 0.46, 1.82, 19.7; 27.6
+@pytest.mark.parametrize("frame,slack,bounds", [
+    ("triangle", 0.0, (0.6, 2.0, 11.0, 17.0)),      # measured 0.45, 1.52, 9.75; 15.2
+    ("mikktspace", 0.0, (0.6, 2.3, 22.0, 30.0)),    # measured 0.46, 1.82, 19.7; 27.6
+    ("triangle", None, (0.6, 2.0, 11.0, 16.0)),     # measured 0.49, 1.47, 9.09; 13.4
 ])
-def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, bounds):
+def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, bounds):
     """The shading normals Storm decodes from the maps against usdwrinkle's, both by
     photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z), for
     each tangent frame of --tangent-space: median, p90 and p99 over the shirt at 640
@@ -268,10 +269,11 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, bounds):
     frame, which turns by 29 degrees (median) across the elbow's quads. A MikkTSpace map
     decoded in Storm's frame is off by the frames' difference (10 degrees median at the
     elbow) times the tilt. This test holds the measured values, so that a change for
-    the worse fails; issue 23's 3 degrees is not met."""
+    the worse fails; issue 23's 3 degrees is not met. ``slack`` None keeps the fallback
+    wrinkle:slack (the other comparisons author 0): Storm agrees as well with it."""
     from realclients.bakes import MAP_SHOTS, angles, normal_views
 
-    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame)
+    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame, slack=slack)
     degrees, mask = angles(views["usdwrinkle"], views["storm"])
     assert mask.sum() > 40000
     lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
@@ -340,7 +342,11 @@ def test_maps_normals_in_cycles_as_measured(cycles_shirt, frame, bounds):
     the elbow's pinch). With usdwrinkle's normals put through that clamp (our smooth
     normal standing in for Cycles' flat one): triangle p90 4.2, p99 26.4, elbow 21.0;
     mikktspace 3.6, 20.9, 16.3. This test holds the measured values; issue 23's 5
-    degrees is not met (the geometry layer meets it: the test above)."""
+    degrees is not met (the geometry layer meets it: the test above). Measured with
+    wrinkle:slack 0; with the fallback slack (0.06) the triangle maps give raw p99 34.9
+    (elbow 35.5) and clamped elbow p99 22.1, against 25.0 (27.6) and 20.6 here, in
+    streaks along the coarse triangles' edges at the elbow's pinch (per-triangle frames),
+    while Storm agrees better with it (p99 9.1 against 9.7)."""
     angles = _cycles_maps_angles(cycles_shirt[frame])
     (median, p90, p99), elbow = angles["raw"]
     assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \

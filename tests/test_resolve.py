@@ -20,7 +20,7 @@ def drawn(request, gl_context):
     """The shirt at frame 24, drawn; yields (engine, framebuffer, samples)."""
     engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context, warn=lambda m: None)
     engine.render_frame(24.0, 160, 120, samples=request.param)
-    yield engine, engine.render_delegate.current_framebuffer, request.param
+    yield engine, engine.framebuffer, request.param
     engine.release()
 
 
@@ -59,7 +59,7 @@ def blit_resolve(ctx, fb, samples: int) -> dict[str, np.ndarray]:
 
 def test_float_aovs_match_the_blit_resolve(drawn):
     engine, fb, samples = drawn
-    expected = blit_resolve(engine.render_delegate.ctx, fb, samples)
+    expected = blit_resolve(engine.ctx, fb, samples)
     got = fb.read()
     assert (got["color"].pixels[..., 3] > 0).mean() > 0.05  # the shirt is in the frame
     for name, pixels in expected.items():

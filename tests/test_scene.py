@@ -150,7 +150,7 @@ def test_visibility_purpose_and_animated_transforms(gl_context):
     cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
     engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
     try:
-        assert list(engine.scene.meshes) == ["/Sheet"]  # guide purpose is not rendered
+        assert list(engine.meshes) == ["/Sheet"]  # guide purpose is not rendered
         centers = []
         for frame in (1.0, 2.0):
             alpha = engine.render_frame(frame, 120, 80)["color"].pixels[..., 3]

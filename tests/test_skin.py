@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom, UsdSkel
 
+from usdwrinkle.authoring.builders import usdskel_queries
 from usdwrinkle.engine import WrinkleEngine
 
 CASES = [("lbs.usda", range(1, 31)), ("dqs.usda", range(1, 31)),
@@ -17,7 +18,7 @@ def test_skin_matches_pixar_baseline(gl_context, corpus, name, frames):
     engine = WrinkleEngine(str(folder / name), all_meshes=True, ctx=gl_context,
                            warn=lambda m: None)
     baseline = Usd.Stage.Open(str(folder / "baseline" / name.replace(".usda", ".baked.usda")))
-    skinned = [p for p, r in engine.scene.meshes.items() if r.skin is not None]
+    skinned = [p for p, r in engine.meshes.items() if r.skin is not None]
     assert skinned, "no skinned mesh found"
     worst = 0.0
     checked = 0
@@ -32,7 +33,7 @@ def test_skin_matches_pixar_baseline(gl_context, corpus, name, frames):
                 extent = float(np.max(theirs.max(0) - theirs.min(0)))
                 error = float(np.max(np.abs(ours - theirs))) / extent
                 worst = max(worst, error)
-                rest = engine.scene.meshes[path].rest_points
+                rest = engine.meshes[path].rest_points
                 moved = max(moved, float(np.max(np.abs(theirs - rest))) / extent)
                 checked += 1
                 assert error <= 1e-5, f"{path} frame {frame}: error {error:.2e} of extent"
@@ -55,8 +56,8 @@ def test_skin_matches_usdskel(gl_context, corpus, name, frames):
     UsdSkel's own ComputeSkinnedPoints, taken to prim space."""
     engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context,
                            warn=lambda m: None)
-    stage = engine.scene.stage
-    skinned = [p for p, r in engine.scene.meshes.items() if r.skin is not None]
+    stage = engine.stage
+    skinned = [p for p, r in engine.meshes.items() if r.skin is not None]
     assert skinned
     mapped = 0
     try:
@@ -65,7 +66,7 @@ def test_skin_matches_usdskel(gl_context, corpus, name, frames):
             t = Usd.TimeCode(frame)
             cache = UsdGeom.XformCache(t)
             for mesh_path in skinned:
-                skel_query, skinning_query = engine.scene.skel.get(mesh_path)
+                skel_query, skinning_query = usdskel_queries(stage, mesh_path)
                 mapper = skinning_query.GetJointMapper()
                 mapped += int(mapper is not None and not mapper.IsIdentity())
                 ours = engine.read_fields(mesh_path).points

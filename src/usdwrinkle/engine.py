@@ -123,6 +123,27 @@ class WrinkleEngine:
         outputs (maps, geometry) that run on the same tables."""
         return self.render_delegate.rprims[path].resources
 
+    @property
+    def rprim_paths(self) -> list[str]:
+        """The meshes that hold GPU resources now (Hydra's rprims)."""
+        return list(self.render_delegate.rprims)
+
+    def sync_counts(self, path: str) -> dict:
+        """How often ``path``'s rprim rebuilt its resources, re-read its parameters, its
+        material and its frame (change tracking: what a change costs)."""
+        return dict(self.render_delegate.rprims[path].sync_counts)
+
+    @property
+    def framebuffer(self):
+        """The framebuffer of the last drawn frame (None before the first)."""
+        return self.render_delegate.current_framebuffer
+
+    def run_skin(self, path: str) -> None:
+        """Run the skin pass again on ``path``'s last synced frame, alone (the bench times
+        it against UsdSkel); its output is mesh_resources(path).posed_points."""
+        mesh = self.render_delegate.rprims[path]
+        self.render_delegate.skin.run(mesh.resources, mesh.frame)
+
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (image_size)."""
         return image_size(self.scene, self.camera, width, height, frame)

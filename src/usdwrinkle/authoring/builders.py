@@ -146,3 +146,21 @@ def sleeve_stage(vertices: int) -> Usd.Stage:
                                    Gf.Vec3d(0, 1, 0))
     cam.AddTransformOp().Set(look.GetInverse())
     return stage
+
+
+def usdskel_queries(stage: Usd.Stage, path: str):
+    """UsdSkel's own (SkelQuery, SkinningQuery) for the mesh at ``path``, from a fresh
+    UsdSkel.Cache over its SkelRoot: the oracle that the tests and the bench compare the
+    skin pass with, built without usdwrinkle's scene code. (None, None) if UsdSkel does
+    not skin it."""
+    prim = stage.GetPrimAtPath(path)
+    root = UsdSkel.Root.Find(prim)
+    if not root:
+        return None, None
+    cache = UsdSkel.Cache()
+    cache.Populate(root, Usd.PrimDefaultPredicate)
+    for binding in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
+        for query in binding.GetSkinningTargets():
+            if query.GetPrim() == prim:
+                return cache.GetSkelQuery(binding.GetSkeleton()), query
+    return None, None
