@@ -260,3 +260,29 @@ def test_rendering_the_layer_gives_the_right_advice(gl_context, tmp_path, capsys
     assert main(["render", str(layer), str(tmp_path / "h.####.png"), "--frames", "20:21",
                  "--width", "48", "--quiet", "--no-wrinkles"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_the_largest_geometry_the_render_can_draw_on_any_gl45_gpu():
+    """MAX_FINE_POINTS is what the render of the displaced mesh holds: its topology table
+    (render/resources.topology_block, the largest per point) of a subdivided sheet and of a
+    subdivided closed box, scaled to MAX_FINE_POINTS points, fits TABLE_WIDTH x 16384
+    elements (GL 4.5's minimum GL_MAX_TEXTURE_SIZE); the old 4 M did not."""
+    import trimesh
+
+    from usdwrinkle.geometry.subdivide import MAX_FINE_POINTS, subdivide
+    from usdwrinkle.render.bindings import TABLE_WIDTH
+    from usdwrinkle.render.resources import topology_block
+    from usdwrinkle.scene.topology import build_topology
+
+    box = trimesh.creation.box()
+    points, counts, indices = grid_sheet(11, 11, 2.0)
+    meshes = [(box.vertices, box.faces),
+              (points, build_topology(counts, indices, points).triangles)]
+    capacity = TABLE_WIDTH * 16384
+    for rest, triangles in meshes:
+        fine = subdivide(rest, triangles, 3)
+        topology = build_topology(np.full(len(fine.faces), 3), fine.faces.ravel(), fine.points)
+        block, _ = topology_block(type("Record", (), {"topology": topology})())
+        per_point = len(block) / len(fine.points)
+        assert 12.0 < per_point < 14.5
+        assert MAX_FINE_POINTS * per_point <= capacity < 4_000_000 * per_point

@@ -16,8 +16,12 @@ import numpy as np
 
 from ..errors import UsdWrinkleError
 
-#: fine points above which a mesh is refused (``--levels`` lowers the count)
-MAX_FINE_POINTS = 4_000_000
+#: fine points above which a mesh is refused (``--levels`` lowers the count): what the
+#: render of the displaced mesh holds on any GL 4.5 GPU. Its largest table, the topology
+#: (render/resources.topology_block: about 14 elements a point on a subdivided mesh, the
+#: 1-rings and the incident triangles), must fit TABLE_WIDTH x 16384 = 33.5 M elements
+#: (GL 4.5's minimum GL_MAX_TEXTURE_SIZE): 2.4 M points; 4 M baked but did not render
+MAX_FINE_POINTS = 2_000_000
 #: fine points the automatic level count stays under (a mesh of a few million points a
 #: frame makes layers of gigabytes, and renders slowly); --levels may go to MAX_FINE_POINTS
 AUTO_FINE_POINTS = 1_000_000
