@@ -119,6 +119,8 @@ def compare(sim: Simulated, ours: Baked) -> dict:
     inner = zone["all"]
     out = {
         "correlation": measure.correlation(a_our[:, inner], a_sim[:, inner]),
+        "correlation_free": measure.correlation(a_our[:, inner & ~zone["held"]],
+                                                a_sim[:, inner & ~zone["held"]]),
         "amplitude_ratio": measure.rms(ours.h[frames], inner) / measure.rms(sim.h[frames],
                                                                             inner),
         "wavelength": float(np.mean([measure.wavelength(shot, ours.h[f]) for f in frames])),
