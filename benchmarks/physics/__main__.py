@@ -378,7 +378,7 @@ def _summary(results: dict) -> list[str]:
         + listing({n: _within(matched[n]["amplitude_ratio"], 1.2) for n in names}) + ".",
         "- Where (amplitude-field correlation, 0.9 / 0.9 / 0.75): "
         + listing({n: default[n]["correlation"] >= BARS["correlation"][n] for n in names})
-        + f". Away from the held edges (10 cm) the correlation is "
+        + ". Away from the held edges (10 cm) the correlation is "
         + ", ".join(f"{n} {default[n]['correlation_free']:.2f}" for n in names)
         + ": the simulated sleeve's folds reach up to its pinned rings (its amplitude field "
         "is 1 cm at the forearm's ring at the last frame), where usdwrinkle's held points "
