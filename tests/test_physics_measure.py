@@ -60,3 +60,18 @@ def test_the_low_pass_keeps_a_bend_and_removes_folds():
     # the filter is linear in the displacement: what it keeps of the folds alone
     kept = smooth - lowpass(shot, bent[None])[0]
     assert np.linalg.norm(kept, axis=1)[inner].max() < 0.02 * 0.01
+
+
+def test_the_curvature_fit_recovers_a_power_law():
+    """Tubes folding as 0.085 (R / 0.23)^0.78 give back p = 0.78 and R_c = 0.23, and the
+    product's curved_width with those constants reproduces them."""
+    from benchmarks.physics.__main__ import curvature_fit
+    from usdwrinkle import schema
+    from usdwrinkle.scene.params import curved_width
+
+    radii = np.array([0.06, 0.10, 0.15])
+    wavelengths = 0.085 * (radii / 0.23) ** 0.78
+    exponent, radius = curvature_fit(radii, wavelengths, 0.085)
+    assert exponent == pytest.approx(0.78, abs=1e-9) and radius == pytest.approx(0.23, rel=1e-9)
+    assert (schema.CURVED_EXPONENT, schema.CURVED_RADIUS_M) == (0.78, 0.23)
+    np.testing.assert_allclose(curved_width(0.085, 1.0 / radii), wavelengths, rtol=1e-12)

@@ -85,13 +85,11 @@ def calibration(cache: Path, shots: dict) -> dict:
     for radius in CURVED_RADII:
         sim = shots["sleeve"][1] if radius == 0.10 else simulated(sleeve(radius=radius), cache)
         sleeves[radius] = (sim.wavelength, sim.seconds)
-    exponent, intercept = np.polyfit(np.log(list(sleeves)),
-                                     np.log([v[0] for v in sleeves.values()]), 1)
-    radius = float(np.exp((np.log(cotton) - intercept) / exponent))
+    exponent, radius = curvature_fit(list(sleeves), [v[0] for v in sleeves.values()], cotton)
     fine = sheet(2)
     fine_sim = simulated(fine, cache)
     return {"sheet": sheet_wavelengths, "widths": widths, "flat": flat,
-            "sleeves": sleeves, "exponent": float(exponent), "radius": radius,
+            "sleeves": sleeves, "exponent": exponent, "radius": radius,
             "fine": (fine_sim.wavelength, measure.rms(fine_sim.h[measured_frames(fine)]),
                      fine_sim.seconds, fine.spacing)}
 
@@ -149,6 +147,14 @@ def _slack_section(slacks: dict) -> list[str]:
         "",
     ]
     return lines
+
+
+def curvature_fit(radii, wavelengths, flat: float) -> tuple[float, float]:
+    """The curvature law through tubes' (radius, wavelength): a line through the logs,
+    wavelength = flat (R / R_c) ** p; returns (p, R_c), R_c where the line meets the flat
+    cloth's wavelength ``flat``."""
+    exponent, intercept = np.polyfit(np.log(radii), np.log(wavelengths), 1)
+    return float(exponent), float(np.exp((np.log(flat) - intercept) / exponent))
 
 
 def default_width(shot) -> float:
