@@ -282,7 +282,7 @@ def test_the_largest_geometry_the_render_can_draw_on_any_gl45_gpu():
     for rest, triangles in meshes:
         fine = subdivide(rest, triangles, 3)
         topology = build_topology(np.full(len(fine.faces), 3), fine.faces.ravel(), fine.points)
-        block, _ = topology_block(type("Record", (), {"topology": topology})())
+        block, _ = topology_block(topology)
         per_point = len(block) / len(fine.points)
         assert 12.0 < per_point < 14.5
         assert MAX_FINE_POINTS * per_point <= capacity < 4_000_000 * per_point

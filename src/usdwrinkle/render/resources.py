@@ -44,9 +44,9 @@ def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
     return out
 
 
-def topology_block(record: MeshRecord) -> tuple[np.ndarray, dict]:
-    """The int table of include/topology.glsl and the uniforms giving its part offsets."""
-    topo = record.topology
+def topology_block(topo) -> tuple[np.ndarray, dict]:
+    """The int table of include/topology.glsl for a mesh's Topology (scene/topology.py)
+    and the uniforms giving its part offsets."""
     parts = [topo.neighbor_offsets, topo.neighbor_indices, topo.triangle_offsets,
              topo.triangle_indices]
     starts = np.concatenate([[0], np.cumsum([len(p) for p in parts])])
@@ -152,7 +152,7 @@ class MeshResources:
         n = self.num_points
         self.rest_points = self._table(n, 4, data=vec4(record.rest_points))
         self.posed_points = self._table(n, 4, data=vec4(record.rest_points))
-        topo, self.topology_uniforms = topology_block(record)
+        topo, self.topology_uniforms = topology_block(record.topology)
         self.topology = self._table(len(topo), 1, "i4", topo)
         # the three corners of each triangle in one texel (w unused)
         corners = np.zeros((self.num_triangles, 4), np.int32)
