@@ -158,16 +158,21 @@ def curvature_fit(radii, wavelengths, flat: float) -> tuple[float, float]:
 
 
 def default_width(shot) -> float:
-    """The fallback W (m) usdwrinkle gives the shot's coarse mesh: cotton's flat width,
-    narrowed on the sleeve by its ring's curvature (the law of scene/params.curved_width,
-    which the product applies to the mesh's own curvature)."""
+    """The fallback W (m) usdwrinkle gives the shot's coarse mesh, the median over its
+    points: cotton's flat width narrowed by the coarse rest mesh's own curvature, as
+    scene/params.cloth_width computes it (the stage is in metres)."""
     from usdwrinkle.scene.params import curved_width
+    from usdwrinkle.scene.topology import build_topology, curvature
 
+    from .coarse import coarse_indices
+    from .stage import coarse_triangles
+
+    index, rows, cols = coarse_indices(shot)
+    rest = shot.rest[index]
+    triangles = coarse_triangles(rows, cols, shot.periodic)
+    topology = build_topology(np.full(len(triangles), 3), triangles.ravel(), rest)
     cotton = schema.CLOTH_WIDTHS_M[schema.DEFAULT_CLOTH]
-    if not shot.periodic:
-        return cotton
-    ring = float(np.median(np.hypot(shot.rest[:, 0], shot.rest[:, 1])))
-    return float(curved_width(cotton, np.array([1.0 / ring]))[0])
+    return float(np.median(curved_width(cotton, curvature(rest, topology))))
 
 
 def band_limit(shot, sim, default) -> dict:
