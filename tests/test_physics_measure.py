@@ -62,6 +62,28 @@ def test_the_low_pass_keeps_a_bend_and_removes_folds():
     assert np.linalg.norm(kept, axis=1)[inner].max() < 0.02 * 0.01
 
 
+def test_the_low_pass_keeps_a_rotated_end_at_its_border():
+    """The sleeve's forearm end turns with the arm: a displacement that grows linearly
+    towards an open border. The local-linear low-pass keeps such a ramp to the border (the
+    coarse mesh's end ring stays on the pinned ring, and the simulation's fold height there
+    is 0); the twiced renormalised Gaussian it replaced pulled the border 2.3 cm towards
+    the body (for a slope of 1.4: a quarter turn)."""
+    from benchmarks.physics.coarse import _smooth_axis
+
+    shot = flat_shot()
+    v = shot.material[:, 1]
+    turned = shot.rest.copy()
+    turned[:, 1] += 1.4 * v              # out of plane, growing towards the last row
+    smooth = lowpass(shot, turned[None])[0]
+    np.testing.assert_allclose(smooth, turned, atol=1e-9)
+    ramp = 1.4 * 0.01 * np.arange(65.0)
+    once = _smooth_axis(ramp, 0, 5.0, False, linear=False)
+    twiced = once + _smooth_axis(ramp - once, 0, 5.0, False, linear=False)
+    assert ramp[-1] - twiced[-1] > 0.02    # what the renormalised average did at the end
+    np.testing.assert_allclose(_smooth_axis(ramp, 0, 5.0, False, linear=True), ramp,
+                               atol=1e-12)
+
+
 def test_the_curvature_fit_recovers_a_power_law():
     """Tubes folding as 0.085 (R / 0.23)^0.78 give back p = 0.78 and R_c = 0.23, and the
     product's curved_width with those constants reproduces them."""

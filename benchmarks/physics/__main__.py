@@ -141,8 +141,9 @@ def _slack_section(slacks: dict) -> list[str]:
         "hugs its arm: its coarse ring is compressed 4-12% around and the simulation folds "
         "there too, so a lower slack raises its amplitude, at the price of crests that "
         "appear and vanish as the slight compression comes and goes (the crest motion). "
-        "The fallback trades between them: the curtain's correlation falls under 0.9 "
-        "below it, the sleeve's amplitude falls with every step above it. A garment with "
+        "The fallback trades between them: below it the elbow's crest motion passes 1.5x "
+        "and the curtain's correlation falls to 0.9 and under, above it the sleeve's "
+        "amplitude falls further. A garment with "
         "no tension to take slack up may author a lower `wrinkle:slack`.",
         "",
     ]
@@ -273,8 +274,11 @@ def report(results: dict, calibrated: dict, limited: dict, slacks: dict,
         "",
         "The coarse mesh an animator would have is the simulation low-pass filtered (a "
         "Gaussian of 5 cm on the rest grid, twiced (2G - G^2, so that the elbow's bend "
-        "is kept where G alone would pull it 1.2 cm inwards), applied to the displacement "
-        "from the rest pose) with every 8th grid line kept. usdwrinkle bakes it with "
+        "is kept where G alone would pull it 1.2 cm inwards), local-linear at open borders "
+        "(a line fitted under the Gaussian, so that the sleeve's forearm ring, which turns "
+        "with the arm, stays where it is pinned: the renormalised Gaussian pulled it 2 cm "
+        "towards the body, and read that as a 1.6 cm fold beside the ring), applied to the "
+        "displacement from the rest pose) with every 8th grid line kept. usdwrinkle bakes it with "
         "`bake --geometry --levels 3`, whose fine vertices are then the simulation's grid "
         "points, so both are measured at the same material points. The fold height is "
         "the simulation's fine points over their low-pass, and usdwrinkle's displaced "
@@ -386,17 +390,18 @@ def _summary(results: dict) -> list[str]:
         "- Amplitude at the default W within 1.5x: "
         + listing({n: _within(default[n]["amplitude_ratio"], 1.5) for n in names}) + ".",
         "- Amplitude at matched W within 1.2x: "
-        + listing({n: _within(matched[n]["amplitude_ratio"], 1.2) for n in names}) + ".",
+        + listing({n: _within(matched[n]["amplitude_ratio"], 1.2) for n in names})
+        + ". The sleeve's amplitude at matched W falls short where its coarse ring is "
+        "compressed only 4-12% around (towards its pinned ends: it hugs the arm, and no "
+        "gravity pulls the slack out) and the simulation folds there, while the slack that "
+        "the hanging shots want leaves it flat; a lower slack meets the sleeve's bar but "
+        "breaks the curtain's correlation and the elbow's crest motion: see \"Choosing the "
+        "slack\".",
         "- Where (amplitude-field correlation, 0.9 / 0.9 / 0.75): "
         + listing({n: default[n]["correlation"] >= BARS["correlation"][n] for n in names})
         + ". Away from the held edges (10 cm) the correlation is "
         + ", ".join(f"{n} {default[n]['correlation_free']:.2f}" for n in names)
-        + ": the simulated sleeve's folds reach up to its pinned rings (its amplitude field "
-        "is 1 cm at the forearm's ring at the last frame), where usdwrinkle's held points "
-        "get no wave and the coarse mesh fades the folds parallel to the ring to zero over "
-        "one coarse edge (8 cm). The simulated sleeve also folds where its "
-        "coarse ring is compressed only 4-12% (it hugs the arm, and no gravity pulls the "
-        "slack out), which the slack leaves flat: see \"Choosing the slack\".",
+        + ".",
         "- Which way: crest directions within "
         f"{max(default[n]['direction_deg'] for n in names):.1f} degrees.",
         "- Fold energy near held edges at most 1.3x the simulation's: "
