@@ -76,7 +76,7 @@ def paper_table(quick: bool, ctx) -> list[dict]:
         engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
         plain = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
         try:
-            aspect = engine.scene.camera_aspect(None, 1.0) or 1.0
+            aspect = engine.camera_aspect(1.0) or 1.0
             width, height = size_for(pixels // (16 if quick else 1), aspect)
             frames = [float(f) for f in range(1, 9 if quick else 25)]
             (passes, wall, sources, count), (_, plain_wall, _, _) = measure_frames(

@@ -99,7 +99,7 @@ def test_every_posed_point_lies_in_the_bound(gl_context, corpus, name, frames, b
     checked = 0
     try:
         for frame in frames:
-            record = engine.scene.sample(frame, width / height)
+            record = engine.sample(frame, width / height)
             view, eye_to_clip = record.camera.view, record.camera.projection @ FLIP_Y
             for path, mesh in engine.meshes.items():
                 if mesh.skin is None:
@@ -139,7 +139,7 @@ def test_the_rectangle_of_a_closely_framed_figure_is_a_fraction_of_the_frame(
                            warn=lambda m: None)
     try:
         for frame in (1.0, 12.0, 24.0):
-            record = engine.scene.sample(frame, WIDTH / HEIGHT, CAMERA)
+            record = engine.sample(frame, WIDTH / HEIGHT)
             found = [eye_bound(mesh, record.meshes[path], record.camera.view)
                      for path, mesh in engine.meshes.items()]
             x0, y0, x1, y1 = screen_rect(found, record.camera.projection @ FLIP_Y, WIDTH,
@@ -186,7 +186,7 @@ def test_only_a_side_that_no_camera_sees_is_culled(gl_context, tmp_path, case, s
     engine = WrinkleEngine(_sphere_stage(tmp_path, **case), all_meshes=True, ctx=gl_context,
                            camera="/Camera", warn=lambda m: None)
     try:
-        record = engine.scene.sample(1.0, 1.0, "/Camera")
+        record = engine.sample(1.0, 1.0)
         (path, mesh), = engine.meshes.items()
         bound = eye_bound(mesh, record.meshes[path], record.camera.view)
         assert culled_side(mesh, record.meshes[path], record.camera, bound) == side

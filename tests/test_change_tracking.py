@@ -88,7 +88,7 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     stage, engine = tracked
     render(engine, 2.0)
     render(engine, 3.0)
-    assert engine._history_frame == 3.0
+    assert engine.history_frame == 3.0
     resources = engine.mesh_resources("/Sheet")
     synced = counts(engine)
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
@@ -98,7 +98,7 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     mesh.GetFaceVertexCountsAttr().Set(Vt.IntArray([3] * (2 * len(quads))))
     mesh.GetFaceVertexIndicesAttr().Set(Vt.IntArray(triangles.ravel().tolist()))
     engine.pull_changes()
-    assert engine._history_frame is None  # the phase history restarts
+    assert engine.history_frame is None  # the phase history restarts
     after = render(engine, 3.0)
     assert engine.mesh_resources("/Sheet") is not resources
     assert counts(engine)["resources"] == synced["resources"] + 1
@@ -117,14 +117,14 @@ def test_unrelated_edits_resync_nothing(tracked):
         Gf.Vec3d(7, 0, 0))
     UsdLux.DistantLight(stage.GetPrimAtPath("/Key")).GetIntensityAttr().Set(2.0)
     UsdGeom.Xform.Define(stage, "/Props/New")
-    bits, added, removed = engine.scene.process_changes()
+    bits, added, removed = engine.process_changes()
     assert (bits, added, removed) == ({}, [], [])
     render(engine, 4.0)
     now = counts(engine)
     assert {k: now[k] for k in ("resources", "params", "material")} == \
            {k: synced[k] for k in ("resources", "params", "material")}
     assert now["frame"] == synced["frame"] + 1  # the new frame only
-    assert engine._history_frame == 4.0  # the history went on
+    assert engine.history_frame == 4.0  # the history went on
 
 
 def test_material_edit_and_new_mesh(tracked):

@@ -144,6 +144,25 @@ class WrinkleEngine:
         mesh = self.render_delegate.rprims[path]
         self.render_delegate.skin.run(mesh.resources, mesh.frame)
 
+    @property
+    def history_frame(self) -> float | None:
+        """The frame the phase history has reached (None: the next frame restarts it)."""
+        return self._history_frame
+
+    def sample(self, frame: float, aspect: float):
+        """The scene's FrameRecord at ``frame`` through this engine's camera (what
+        compute_frame syncs to), without computing anything."""
+        return self.scene.sample(frame, aspect, self.camera)
+
+    def camera_aspect(self, frame: float) -> float | None:
+        """This engine's camera's aspect ratio at ``frame`` (None: no camera)."""
+        return self.scene.camera_aspect(self.camera, frame)
+
+    def process_changes(self) -> tuple[dict[str, int], list[str], list[str]]:
+        """The stage's edits since the last call, as the scene reads them ({path: dirty
+        bits}, added, removed): what pull_changes turns into dirty bits. Consumes them."""
+        return self.scene.process_changes()
+
     def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (image_size)."""
         return image_size(self.scene, self.camera, width, height, frame)
