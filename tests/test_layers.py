@@ -52,3 +52,33 @@ def test_the_command_says_so():
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stdout
     assert "folder cycles: none" in result.stdout and "file circles: none" in result.stdout
+
+
+def _parameters(function) -> list[str]:
+    import inspect
+
+    return [name for name in inspect.signature(function).parameters if name != "self"]
+
+
+def test_every_bake_sink_has_the_one_protocol_and_few_parameters():
+    """The primvars, the maps and the geometry are written through one protocol
+    (outputs/sink.py: begin, add_frame, finish, commit, release), and neither the sinks,
+    their writers nor shot.bake_layer take more than 5 parameters. No sink is handed the
+    engine: a frame arrives as (frame, fields, resources)."""
+    from usdwrinkle.geometry.bake import GeometryBake
+    from usdwrinkle.geometry.layer import FineMeshWriter
+    from usdwrinkle.maps.bake import MapBake
+    from usdwrinkle.maps.material import author_material
+    from usdwrinkle.outputs.layers import LayerBaker, save_layer
+    from usdwrinkle.outputs.sink import BakeSink
+    from usdwrinkle.shot import bake_layer
+
+    protocol = ("begin", "add_frame", "finish", "commit", "release")
+    for sink in (LayerBaker, MapBake, GeometryBake):
+        for name in protocol:
+            assert _parameters(getattr(sink, name)) == _parameters(getattr(BakeSink, name)), \
+                (sink.__name__, name)
+        assert _parameters(sink.__init__) == ["scene", "options"], sink.__name__
+    for function in (FineMeshWriter.__init__, FineMeshWriter.define, FineMeshWriter.add_frame,
+                     author_material, save_layer, bake_layer):
+        assert len(_parameters(function)) <= 5, function.__qualname__

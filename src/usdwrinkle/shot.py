@@ -167,7 +167,8 @@ def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
     time) and write the wrinkle fields to its output atomically; returns the number of
     meshes baked. ``progress`` wraps the frames, ``survey_progress`` the geometry's
     survey of them."""
-    from .outputs.layers import LayerBaker
+    from .outputs.layers import LayerBaker, LayerOptions, new_layer, save_layer
+    from .outputs.sink import BakeScene
 
     stage_path, output, frames = request.stage_path, request.output, list(request.frames)
     maps, geometry = request.maps, request.geometry
@@ -189,51 +190,49 @@ def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
     # the maps are relative to the posed shading normals, which renderers must shade with:
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals
     # are baked (README: maps)
-    baker = LayerBaker(engine.stage, stage_path, wrinkled, engine.meshes,
-                       with_points=request.with_points or maps is not None,
-                       display_color=request.display_color, sparse=request.sparse, warn=warn)
-    wanted = set(wrinkled) | set(baker.point_meshes)
-    extras = {}
-    map_bake = geometry_bake = None
-    if maps is not None:
-        from .maps.bake import MapBake
-
-        map_bake = MapBake(engine, wrinkled, maps, output, warn, frames)
-    if geometry is not None:
-        from .geometry.bake import GeometryBake
-
-        geometry_bake = GeometryBake(engine, wrinkled, geometry, baker.layer, frames, warn)
+    scene = BakeScene(engine.stage, stage_path, output, tuple(frames), wrinkled,
+                      engine.meshes, engine.ctx, engine.corner_primvar, warn)
+    sinks = [LayerBaker(scene, LayerOptions(
+        with_points=request.with_points or maps is not None,
+        display_color=request.display_color, sparse=request.sparse, frame_spec=frame_spec))]
+    geometry_bake = None
     try:
-        if geometry_bake is not None:
-            if geometry_bake.needs_survey:
-                for frame in (survey_progress or progress)(frames):
-                    with at_frame(frame):
-                        engine.compute_frame(frame)
-                        geometry_bake.survey({p: engine.read_fields(p) for p in wrinkled})
-            geometry_bake.plan()
+        if maps is not None:
+            from .maps.bake import MapBake
+
+            sinks.append(MapBake(scene, maps))
+        if geometry is not None:
+            from .geometry.bake import GeometryBake
+
+            geometry_bake = GeometryBake(scene, geometry)
+            sinks.append(geometry_bake)
+        if geometry_bake is not None and geometry_bake.needs_survey:
+            for frame in (survey_progress or progress)(frames):
+                with at_frame(frame):
+                    engine.compute_frame(frame)
+                    geometry_bake.survey({p: engine.read_fields(p) for p in wrinkled})
+        layer = new_layer()
+        for sink in sinks:
+            sink.begin(layer)
         for frame in progress(frames):
             with at_frame(frame):
                 engine.compute_frame(frame)
-                baker.add_frame(frame, {path: engine.read_fields(path) for path in wanted},
-                                {path: engine.read_shading_normals(path)
-                                 for path in baker.point_meshes})
-                if map_bake is not None:
-                    map_bake.add_frame(frame)
-                if geometry_bake is not None:
-                    geometry_bake.add_frame(frame)
-        commit = None
-        if map_bake is not None:
-            map_bake.author(baker.layer, engine.stage)
-            extras["maps"] = map_bake.metadata()
-            commit = map_bake.commit
-        if geometry_bake is not None:
-            extras["geometry"] = geometry_bake.metadata()
-        baker.save(output, frame_spec, before_rename=commit, extra_metadata=extras)
+                fields = {path: engine.read_fields(path) for path in wrinkled}
+                resources = {path: engine.mesh_resources(path) for path in engine.rprim_paths}
+                for sink in sinks:
+                    sink.add_frame(frame, fields, resources)
+        metadata = {}
+        for sink in sinks:
+            metadata.update(sink.finish())
+
+        def commit():
+            for sink in sinks:
+                sink.commit()
+
+        save_layer(layer, output, metadata, before_rename=commit)
     finally:
-        if map_bake is not None:
-            map_bake.release()
-        if geometry_bake is not None:
-            geometry_bake.release()
+        for sink in sinks:
+            sink.release()
     return len(wrinkled)
 
 

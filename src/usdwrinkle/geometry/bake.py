@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import UsdWrinkleError
 from ..memory import require_memory
+from ..outputs.sink import BakeScene
 from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
 from .options import GeometryOptions
@@ -74,18 +75,19 @@ def phase_advance(points: np.ndarray, triangles: np.ndarray, wave_vector: np.nda
 
 
 class GeometryBake:
-    """Plans, evaluates and writes the fine meshes of ``meshes`` (path -> MeshRecord)."""
+    """The bake sink of the displaced render meshes (outputs/sink.py): plans the fine
+    meshes of the scene's wrinkled meshes (after :meth:`survey` when it
+    :attr:`needs_survey`), defines them at :meth:`begin`, evaluates and writes them per
+    frame."""
 
-    def __init__(self, engine, meshes: dict, options: GeometryOptions, layer, frames: list,
-                 warn):
-        self.engine = engine
-        self.meshes = meshes
+    def __init__(self, scene: BakeScene, options: GeometryOptions):
+        self.scene = scene
+        self.meshes = scene.meshes
         self.options = options
-        self.layer = layer
-        self.frames = frames
-        self.warn = warn
+        self.frames = list(scene.frames)
+        self.warn = scene.warn
         #: per mesh, the per-triangle phase advances of the surveyed frames
-        self.advances: dict[str, list[np.ndarray]] = {path: [] for path in meshes}
+        self.advances: dict[str, list[np.ndarray]] = {path: [] for path in scene.meshes}
         self.writers: dict[str, FineMeshWriter] = {}
         self.levels: dict[str, int] = {}
         self.fine_points: dict[str, int] = {}
@@ -108,9 +110,9 @@ class GeometryBake:
         values = np.concatenate(self.advances[path]) if self.advances[path] else []
         return float(np.percentile(values, SURVEY_PERCENTILE)) if len(values) else 0.0
 
-    def plan(self) -> None:
+    def begin(self, layer) -> None:
         """Choose the levels, refuse meshes that would be too large, subdivide, and define
-        the fine meshes in the layer."""
+        the fine meshes in ``layer``."""
         counts = {}
         for path, record in self.meshes.items():
             levels = self.options.levels
@@ -125,12 +127,11 @@ class GeometryBake:
         require_memory(sum(counts.values()) * max(len(self.frames), 1) * BYTES_PER_POINT_FRAME,
                        f"building the layer, the wrinkled meshes of {len(self.frames)} "
                        "frame(s) need", "pass fewer --levels or bake fewer --frames per layer")
-        stage = self.engine.stage
         for path, record in self.meshes.items():
             fine = subdivide(record.rest_points, record.topology.triangles, self.levels[path])
             self.fine_points[path] = len(fine.points)
-            writer = FineMeshWriter(self.layer, stage, path, fine, record.topology, self.warn)
-            writer.define()
+            writer = FineMeshWriter(self.scene, path, fine)
+            writer.define(layer)
             self.writers[path] = writer
 
     def _fitting_levels(self, path: str, record, wanted: int) -> int:
@@ -151,23 +152,28 @@ class GeometryBake:
                       "the count")
         return levels
 
-    def add_frame(self, frame: float) -> None:
-        """Evaluate and record the frame the engine computed last."""
+    def add_frame(self, frame: float, fields: dict, resources: dict) -> None:
+        """Evaluate and record a frame from each mesh's GPU tables (``resources``)."""
         if not self.writers:
             return
         if self._evaluator is None:
-            self._evaluator = GeometryEvaluator(self.engine.ctx)
+            self._evaluator = GeometryEvaluator(self.scene.ctx)
         for path, writer in self.writers.items():
-            res = self.engine.mesh_resources(path)
+            res = resources[path]
             result = self._evaluator.evaluate(res, writer.fine)
             if not (np.all(np.isfinite(result.points)) and np.all(np.isfinite(result.normals))):
                 raise UsdWrinkleError("the displaced points are not finite (NaN or Inf)", path)
             writer.add_frame(frame, result.points, result.normals)
 
-    def metadata(self) -> dict:
-        return {"levels": ",".join(f"{p}={n}" for p, n in sorted(self.levels.items())),
-                "finePoints": int(sum(self.fine_points.values())),
-                "meshes": ",".join(str(w.path) for w in self.writers.values())}
+    def finish(self) -> dict:
+        """The layer's record of the fine meshes (the frames are written as they come)."""
+        return {"geometry": {
+            "levels": ",".join(f"{p}={n}" for p, n in sorted(self.levels.items())),
+            "finePoints": int(sum(self.fine_points.values())),
+            "meshes": ",".join(str(w.path) for w in self.writers.values())}}
+
+    def commit(self) -> None:
+        """Nothing beside the layer to move into place."""
 
     def release(self) -> None:
         if self._evaluator is not None:

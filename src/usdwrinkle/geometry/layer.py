@@ -22,6 +22,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
 from ..outputs.layers import attribute_spec, bind_material, define_prim
+from ..outputs.sink import BakeScene
 from ..scene.material import corner_values
 from .subdivide import FineMesh
 
@@ -58,21 +59,21 @@ def _array(type_name, values: np.ndarray):
 class FineMeshWriter:
     """Authors one fine mesh: :meth:`define` once, :meth:`add_frame` per frame."""
 
-    def __init__(self, layer: Sdf.Layer, stage: Usd.Stage, coarse: str, fine: FineMesh,
-                 topology, warn):
-        self.layer = layer
+    def __init__(self, scene: BakeScene, coarse: str, fine: FineMesh):
+        self.layer: Sdf.Layer | None = None
         self.coarse = coarse
-        self.path = fine_path(stage, coarse)
-        self.prim = stage.GetPrimAtPath(coarse)
+        self.path = fine_path(scene.stage, coarse)
+        self.prim = scene.stage.GetPrimAtPath(coarse)
         self.fine = fine
-        self.topology = topology
-        self.warn = warn
+        self.topology = scene.meshes[coarse].topology
+        self.warn = scene.warn
         self.xformable = UsdGeom.Xformable(self.prim)
         self.moves = bool(self.xformable.GetOrderedXformOps()) and \
             self.xformable.TransformMightBeTimeVarying()
 
-    def define(self) -> None:
-        layer, fine = self.layer, self.fine
+    def define(self, layer: Sdf.Layer) -> None:
+        self.layer = layer
+        fine = self.fine
         spec = define_prim(layer, self.path, "Mesh")
         attribute_spec(spec, "faceVertexCounts", VT.IntArray,
                        Vt.IntArray.FromNumpy(np.full(len(fine.faces), 3, np.int32)))

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import UsdWrinkleError
 from ..memory import require_memory
+from ..outputs.sink import BakeScene
 from ..outputs.writer import FrameWriter
 from ..scene.stage import stage_inputs
 from .files import (
@@ -70,20 +71,22 @@ class MeshMaps:
 
 
 class MapBake:
-    """Renders and stages the maps of ``meshes`` frame by frame; :meth:`author` writes the
-    materials into the layer and :meth:`commit` moves the maps into their folder."""
+    """The bake sink of the wrinkle maps (outputs/sink.py): renders and stages each
+    frame's maps of the scene's wrinkled meshes; :meth:`finish` writes the materials into
+    the layer and :meth:`commit` moves the maps into their folder."""
 
-    def __init__(self, engine, meshes: dict, options: MapOptions, layer_path: str, warn,
-                 frames: list[float]):
-        self.engine = engine
+    def __init__(self, scene: BakeScene, options: MapOptions):
+        self.scene = scene
         self.options = options
-        self.layer_path = layer_path
-        self.warn = warn
-        self.folder = options.folder_for(layer_path)
+        self.layer_path = scene.output
+        self.warn = warn = scene.warn
+        self.folder = options.folder_for(scene.output)
         self.plans: dict[str, MeshMaps] = {}
+        self.layer = None
+        meshes = scene.meshes
         stems = mesh_file_names(meshes)
         for path in meshes:
-            corner_uv = engine.corner_primvar(path, options.uv)
+            corner_uv = scene.corner_primvar(path, options.uv)
             if corner_uv is None or corner_uv.shape[-1] < 2:
                 warn(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
                      f"maps for it ({path})")
@@ -106,8 +109,8 @@ class MapBake:
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None
         self._checked_overlap: set[str] = set()
-        inputs = stage_inputs(engine.stage)
-        for name in self.file_names(frames):
+        inputs = stage_inputs(scene.stage)
+        for name in self.file_names(list(scene.frames)):
             if inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
                                       "reads (choose another --map-dir)")
@@ -127,22 +130,24 @@ class MapBake:
     def _start(self) -> None:
         if self._rasterizer is None:
             self._staging = MapStaging(self.folder)
-            self._rasterizer = MapRasterizer(self.engine.ctx,
-                                             self.options.size)
+            self._rasterizer = MapRasterizer(self.scene.ctx, self.options.size)
             # frame f's maps encode while frame f + 1 computes and rasterises
             # (outputs/writer.py: OpenImageIO releases the GIL while it encodes)
             self._writer = FrameWriter(
                 lambda path, item: encode_map(path, item[0], item[1], item[2]), threads=1,
                 max_in_flight=2 * len(MAP_KINDS))
 
-    def add_frame(self, frame: float) -> None:
-        """Render, encode and stage the maps of the frame the engine computed last."""
+    def begin(self, layer) -> None:
+        self.layer = layer
+
+    def add_frame(self, frame: float, fields: dict, resources: dict) -> None:
+        """Render, encode and stage a frame's maps from each mesh's GPU tables."""
         if not self.plans:
             return
         self._start()
         token = frame_token(frame)
         for path, plan in self.plans.items():
-            res = self.engine.mesh_resources(path)
+            res = resources[path]
             if path not in self._checked_overlap:
                 self._check_overlap(plan, res)
             for kind in self.options.kinds:
@@ -182,14 +187,17 @@ class MapBake:
                           f"{100 * fraction:.1f}% of the map's texels lie under more than one "
                           f"triangle, and hold the wrinkles of only one of them ({plan.path})")
 
-    def author(self, layer, stage) -> None:
-        """Write each mesh's material and binding into ``layer`` (maps/material.py)."""
-        from .material import author_material, material_path
+    def finish(self) -> dict:
+        """Write each mesh's material and binding into the layer (maps/material.py);
+        returns the layer's record of the maps."""
+        from .material import MaterialTarget, author_material, material_path
 
+        stage = self.scene.stage
         for path, plan in self.plans.items():
-            author_material(layer, stage, path, material_path(stage, path, plan.stem),
-                            self.files[path], self.options.uv, self.warn,
-                            displacement=self.options.displacement, udim=plan.udim)
+            target = MaterialTarget(path, material_path(stage, path, plan.stem),
+                                    self.files[path], plan.udim)
+            author_material(self.layer, stage, target, self.options, self.warn)
+        return {"maps": self.metadata()}
 
     def commit(self) -> None:
         """Finish the encodes and move the staged maps into the map folder (before the

@@ -21,6 +21,7 @@ API into the bake's layer: the source stage is read, never edited.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from pxr import Sdf, Usd, UsdShade
 
@@ -67,15 +68,25 @@ def _source_surface(prim: Usd.Prim):
     return material.GetPath(), shader.GetPath()
 
 
-def author_material(layer: Sdf.Layer, stage: Usd.Stage, mesh_path: str, path: Sdf.Path,
-                    files: dict, uv_name: str, warn, displacement: bool = False,
-                    udim: bool = False) -> None:
-    """Write the material at ``path`` and bind it to the mesh.
+@dataclass(frozen=True)
+class MaterialTarget:
+    """One mesh's wrinkle material: the mesh, the material's path (material_path), its
+    map files (kind -> [(frame, asset path)], frames in order; NaN: default only), and
+    whether they are UDIM sets (a tile's edge is clamped; one texture repeats)."""
 
-    ``files``: map kind -> [(frame, asset path)], frames in order (NaN: default only).
-    ``displacement``: also bind the height map to ``inputs:displacement``. ``udim``: the
-    files are UDIM sets (a tile's edge is clamped; one texture repeats).
-    """
+    mesh_path: str
+    path: Sdf.Path
+    files: dict
+    udim: bool = False
+
+
+def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
+                    options, warn) -> None:
+    """Write ``target``'s material and bind it to the mesh. ``options``
+    (maps.options.MapOptions): the UV primvar the maps are laid out in, and whether the
+    height map is also bound to ``inputs:displacement``."""
+    mesh_path, path, files, udim = target.mesh_path, target.path, target.files, target.udim
+    uv_name, displacement = options.uv, options.displacement
     prim = stage.GetPrimAtPath(mesh_path)
     source_material, source_surface = _source_surface(prim)
     scope = Sdf.CreatePrimInLayer(layer, path.GetParentPath())

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import dataclass
 
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
@@ -17,6 +18,7 @@ from ..colour import srgb_decode
 from ..contract import MIN_RATIO
 from ..errors import UsdWrinkleError
 from .atomic import atomic_path
+from .sink import BakeScene
 
 LAYER_FORMATS = (".usda", ".usdc", ".usd")
 
@@ -73,45 +75,52 @@ def _array(values: np.ndarray, type_name):
     return Vt.Vec3fArray.FromNumpy(values)
 
 
+@dataclass(frozen=True)
+class LayerOptions:
+    """What the primvar sink writes besides the wrinkle primvars.
+
+    ``with_points``: also bake points and extent (all skinned meshes of the affected skel
+    roots), and the normals where the mesh authors them, posed, in the attribute and with
+    the interpolation it authors them with (``primvars:normals`` or ``normals``), as
+    UsdSkelBakeSkinning does; each skinned mesh then binds no skeleton (``skel:skeleton``
+    with no targets), so the composed stage is not skinned twice. Meshes without authored
+    normals get none: renderers derive them from the points by the mesh's subdivision
+    scheme, as usdwrinkle does. ``display_color``: a field shown as a viridis
+    displayColor ramp. ``sparse``: the layer does not sublayer the input stage.
+    ``frame_spec``: the frames as the user wrote them, recorded in the layer."""
+
+    with_points: bool = False
+    display_color: str | None = None
+    sparse: bool = False
+    frame_spec: str = ""
+
+
 class LayerBaker:
-    """Collects per-frame fields into an Sdf layer; :meth:`save` writes it atomically.
+    """The bake sink of the wrinkle primvars (outputs/sink.py): per frame, each wrinkled
+    mesh's fields as vertex primvars; at the end, the layer's metadata."""
 
-    Parameters
-    ----------
-    stage : Usd.Stage
-        The input stage (for metadata, skel roots and paths).
-    stage_path : str
-        Where the input stage lives (the sublayer path is made relative to the output).
-    meshes : dict path -> MeshRecord
-        The wrinkled meshes to bake.
-    with_points : bool
-        Also bake points and extent (all skinned meshes of the affected skel roots), and
-        the normals where the mesh authors them, posed, in the attribute and with the
-        interpolation it authors them with (``primvars:normals`` or ``normals``), as
-        UsdSkelBakeSkinning does; each skinned mesh then binds no skeleton
-        (``skel:skeleton`` with no targets), so the composed stage is not skinned twice.
-        Meshes without authored normals get none: renderers derive them from the points
-        by the mesh's subdivision scheme, as usdwrinkle does.
-    """
-
-    def __init__(self, stage: Usd.Stage, stage_path: str, wrinkled: dict, all_records: dict,
-                 with_points: bool = False, display_color: str | None = None,
-                 sparse: bool = False, warn=lambda m: None, layer: Sdf.Layer | None = None):
-        self.stage = stage
-        self.stage_path = stage_path
-        self.wrinkled = wrinkled
-        self.with_points = with_points
-        self.display_color = display_color
-        self.sparse = sparse
-        self.warn = warn
-        # ``layer``: write into an existing layer (usdview's session layer) instead
-        self.layer = layer if layer is not None else Sdf.Layer.CreateAnonymous(".usda")
+    def __init__(self, scene: BakeScene, options: LayerOptions):
+        self.stage = scene.stage
+        self.stage_path = scene.stage_path
+        self.output = scene.output
+        self.wrinkled = scene.meshes
+        self.options = options
+        self.layer: Sdf.Layer | None = None
         self.frames: list[float] = []
         self.point_meshes: dict = {}
         self.skel_roots: list[str] = []
-        if with_points:
-            self._collect_point_meshes(all_records)
+        if options.with_points:
+            self._collect_point_meshes(scene.records)
         self._specs: dict = {}
+
+    def begin(self, layer: Sdf.Layer) -> None:
+        self.layer = layer
+
+    def commit(self) -> None:
+        """Nothing beside the layer to move into place."""
+
+    def release(self) -> None:
+        """Nothing held."""
 
     def _collect_point_meshes(self, records: dict) -> None:
         roots = set()
@@ -143,12 +152,15 @@ class LayerBaker:
         else:
             self.layer.SetTimeSample(attr_path, frame, value)
 
-    def add_frame(self, frame: float, fields_by_path: dict,
-                  normals_by_path: dict | None = None) -> None:
-        """Record one frame: ``fields_by_path[path]`` as returned by read_fields(),
-        ``normals_by_path[path]`` by read_shading_normals() (the point meshes')."""
-        for path, fields in fields_by_path.items():
-            for name, values in fields.arrays().items():  # no NaN or Inf reaches a layer
+    def add_frame(self, frame: float, fields: dict, resources: dict) -> None:
+        """Record one frame: ``fields[path]`` (the wrinkled meshes'), the point meshes'
+        points and posed shading normals read back through ``resources[path]``."""
+        fields_by_path = dict(fields)
+        for path in self.point_meshes:
+            if path not in fields_by_path:
+                fields_by_path[path] = resources[path].read_fields()
+        for path, values_of in fields_by_path.items():
+            for name, values in values_of.arrays().items():  # no NaN or Inf reaches a layer
                 if isinstance(values, np.ndarray) and values.dtype.kind == "f" and \
                         not np.all(np.isfinite(values)):
                     raise UsdWrinkleError(
@@ -164,8 +176,8 @@ class LayerBaker:
                 for name, (field, type_name) in primvars.items():
                     attr = self._attr(path, name, type_name, UsdGeom.Tokens.vertex)
                     self._set(attr, frame, _array(getattr(fields, field), type_name))
-                if self.display_color:
-                    colors = viridis(display_values(self.display_color, fields,
+                if self.options.display_color:
+                    colors = viridis(display_values(self.options.display_color, fields,
                                                     self.wrinkled[path].params))
                     attr = self._attr(path, "primvars:displayColor",
                                       Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.vertex)
@@ -174,8 +186,8 @@ class LayerBaker:
                 points = np.ascontiguousarray(fields.points, np.float32)
                 self._set(self._attr(path, "points", Sdf.ValueTypeNames.Point3fArray), frame,
                           Vt.Vec3fArray.FromNumpy(points))
-                if normals_by_path and path in normals_by_path:
-                    self._add_normals(path, frame, *normals_by_path[path])
+                if path in resources:
+                    self._add_normals(path, frame, resources[path])
                 extent = Vt.Vec3fArray.FromNumpy(
                     np.stack([points.min(0), points.max(0)]).astype(np.float32))
                 self._set(self._attr(path, "extent", Sdf.ValueTypeNames.Float3Array), frame,
@@ -212,12 +224,14 @@ class LayerBaker:
         for mesh_path in self.wrinkled:
             bind_material(self.layer, mesh_path, path, purpose="preview")
 
-    def _add_normals(self, path: str, frame: float, plan, normals: np.ndarray) -> None:
-        """The posed shading normals of a mesh that authors normals, into the attribute
-        it authors them in, with its interpolation; flattened, so an indexed primvar's
-        indices are blocked."""
+    def _add_normals(self, path: str, frame: float, res) -> None:
+        """The posed shading normals of a mesh that authors normals (read back through
+        its resources), into the attribute it authors them in, with its interpolation;
+        flattened, so an indexed primvar's indices are blocked."""
+        plan = res.normal_plan
         if plan.source != "authored":
             return
+        normals = res.read_shading_normals()
         prim = self.stage.GetPrimAtPath(path)
         if plan.attribute == "primvars:normals":
             interpolation = UsdGeom.Primvar(prim.GetAttribute(plan.attribute)).GetInterpolation()
@@ -232,7 +246,11 @@ class LayerBaker:
         self._set(attr, frame, Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals,
                                                                              np.float32)))
 
-    def _metadata(self, output_path: str, frame_spec: str) -> None:
+    def finish(self) -> dict:
+        """The layer's metadata (time codes, up axis, units, default prim, the sublayered
+        input), the display-colour material, and the skinned meshes' unbound skeletons;
+        returns what customLayerData records of this bake."""
+        output_path, options = self.output, self.options
         root = self.stage.GetRootLayer()
         layer = self.layer
         layer.timeCodesPerSecond = self.stage.GetTimeCodesPerSecond()
@@ -246,11 +264,11 @@ class LayerBaker:
                 layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
         if root.defaultPrim:
             layer.defaultPrim = root.defaultPrim
-        if not self.sparse:
+        if not options.sparse:
             folder = os.path.dirname(os.path.abspath(output_path))
             source = os.path.abspath(self.stage_path)
             layer.subLayerPaths.append(os.path.relpath(source, folder).replace(os.sep, "/"))
-        if self.display_color and self.wrinkled:
+        if options.display_color and self.wrinkled:
             self._display_color_material()
         for path, record in self.point_meshes.items():
             if record.skin is None:
@@ -265,26 +283,30 @@ class LayerBaker:
         # the source stage as the layer's own paths are: relative to the layer's folder
         source_path = os.path.relpath(os.path.abspath(self.stage_path), os.path.dirname(
             os.path.abspath(output_path))).replace(os.sep, "/")
-        layer.customLayerData = {"usdwrinkle": {
-            "version": __version__, "frames": frame_spec, "source": source_path,
-            "withPoints": self.with_points, "displayColor": self.display_color or "",
-            "sparse": self.sparse}}
+        return {"version": __version__, "frames": options.frame_spec, "source": source_path,
+                "withPoints": options.with_points, "displayColor": options.display_color or "",
+                "sparse": options.sparse}
 
-    def save(self, output_path: str, frame_spec: str, before_rename=None,
-             extra_metadata: dict | None = None) -> None:
-        """Write the layer atomically; ``before_rename()`` runs once it is written under
-        its temporary name (the wrinkle maps are moved into place there, so that an error
-        leaves neither a layer naming missing maps nor maps without their layer)."""
-        ext = check_layer_path(output_path)
-        self._metadata(output_path, frame_spec)
-        if extra_metadata:
-            data = dict(self.layer.customLayerData)
-            data["usdwrinkle"] = {**data["usdwrinkle"], **extra_metadata}
-            self.layer.customLayerData = data
-        with atomic_path(output_path) as tmp:
-            export_layer(self.layer, tmp, output_path, ext)
-            if before_rename is not None:
-                before_rename()
+
+
+def save_layer(layer: Sdf.Layer, output_path: str, metadata: dict, before_rename=None) -> None:
+    """Record ``metadata`` as the layer's ``customLayerData["usdwrinkle"]`` and write the
+    layer atomically; ``before_rename()`` runs once it is written under its temporary
+    name (the wrinkle maps are moved into place there, so that an error leaves neither a
+    layer naming missing maps nor maps without their layer)."""
+    ext = check_layer_path(output_path)
+    data = dict(layer.customLayerData)
+    data["usdwrinkle"] = {**data.get("usdwrinkle", {}), **metadata}
+    layer.customLayerData = data
+    with atomic_path(output_path) as tmp:
+        export_layer(layer, tmp, output_path, ext)
+        if before_rename is not None:
+            before_rename()
+
+
+def new_layer() -> Sdf.Layer:
+    """The anonymous layer a bake's sinks author into (save_layer writes it)."""
+    return Sdf.Layer.CreateAnonymous(".usda")
 
 
 def export_layer(layer: Sdf.Layer, tmp: str, output_path: str, ext: str | None = None) -> None:

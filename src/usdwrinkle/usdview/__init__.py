@@ -130,7 +130,8 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
         return _bake_out_of_process(usdview_api)
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
-    from ..outputs.layers import LayerBaker
+    from ..outputs.layers import LayerBaker, LayerOptions
+    from ..outputs.sink import BakeScene
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
@@ -147,10 +148,11 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
             return []
         engine.compute_frame(frame)
         records = {path: engine.meshes[path] for path in targets}
-        baker = LayerBaker(stage, stage.GetRootLayer().realPath or "", records,
-                           engine.meshes, display_color="amplitude",
-                           layer=stage.GetSessionLayer())
-        baker.add_frame(frame, {path: engine.read_fields(path) for path in targets})
+        scene = BakeScene(stage, stage.GetRootLayer().realPath or "", "", (frame,), records,
+                          engine.meshes)
+        baker = LayerBaker(scene, LayerOptions(display_color="amplitude"))
+        baker.begin(stage.GetSessionLayer())
+        baker.add_frame(frame, {path: engine.read_fields(path) for path in targets}, {})
     except UsdWrinkleError as exc:
         usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
         return []
