@@ -100,6 +100,7 @@ def test_lights_are_read():
     """The sample's two distant lights (UsdLux units) and an added sphere light; the
     formulas themselves are checked in tests/test_lights.py."""
     stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    stage.SetEditTarget(stage.GetSessionLayer())  # the sample's own layer stays as it is
     UsdLux.SphereLight.Define(stage, "/World/Lights/bulb").CreateIntensityAttr(3.0)
     scene = StageSceneDelegate(stage)
     frame = scene.sample(1.0, 1.5)
@@ -125,6 +126,7 @@ def test_texture_inside_usdz_is_read_through_ar(corpus):
 
 def test_missing_texture_warns_and_renders_untextured(tmp_path):
     stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    stage.SetEditTarget(stage.GetSessionLayer())  # the sample's own layer stays as it is
     tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Plaid/diffuse_texture"))
     tex.GetInput("file").Set(Sdf.AssetPath("./textures/missing.png"))
     warnings = []
@@ -243,3 +245,22 @@ def test_the_stage_inputs_cache_is_bounded(tmp_path):
     first_path, first = stages[0]
     assert first.GetRootLayer().identifier not in stage_module._INPUTS
     assert stage_module.stage_inputs(first).protects(str(first_path))
+
+
+def test_a_dropped_scene_delegate_frees_its_stage_at_once():
+    """The delegate and its FrameSampler make no reference cycle: a dropped delegate (and
+    the stage it opened, with any unsaved edits of its layers, which a later
+    Usd.Stage.Open of the same file would otherwise be given) goes with its last
+    reference, not at some later garbage collection."""
+    import gc
+    import weakref
+
+    gc.disable()
+    try:
+        scene = StageSceneDelegate(str(SAMPLES / "shirt.usda"), warn=lambda m: None)
+        scene.sample(1.0, 1.5)
+        alive = weakref.ref(scene)
+        del scene
+        assert alive() is None
+    finally:
+        gc.enable()

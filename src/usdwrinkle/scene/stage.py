@@ -18,28 +18,24 @@ from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
 from .. import schema
 from ..diagnostics import usd_diagnostics, usd_error_text
 from ..errors import UsdWrinkleError, print_warning
-from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE, MAX_WORLD_COORDINATE
+from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE
 from ..values import (
-    finite_in_float32,
-    frame_of,
     require_mesh_array,
     static_flattened,
     static_value,
 )
-from . import camera as camera_mod
 from .baked import BakedSource, find_baked
 from .changes import ChangeTracker
 from .dirty import DirtyBits, classify
 from .inputs import StageInputs, package_file, scan_inputs
-from .lights import default_lights, read_lights
-from .material import corner_colors, read_material, read_normal_map
-from .normals import plan_normals, sample_normals
+from .material import read_material
+from .normals import plan_normals
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
-from .skel import SkelBindings, check_blend_weights, dual_quaternions, sample_skin, skin_data
+from .sampling import RENDERED_PURPOSES, FrameSampler, finite_points, time_code
+from .skel import SkelBindings, skin_data
 from .topology import Topology, build_topology, vertex_normals
 
-RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
 #: prims whose edits change the skinning of the meshes bound to them
 SKEL_TYPES = (UsdSkel.Root, UsdSkel.Skeleton, UsdSkel.Animation, UsdSkel.BlendShape)
 #: prims whose edits change the materials of the meshes bound to them
@@ -193,29 +189,6 @@ def read_topology(prim: Usd.Prim, rest: np.ndarray, faces=None) -> Topology | No
     return topology
 
 
-def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -> None:
-    """Refuse a transform that is not finite, or that takes a mesh of half-size ``extent``
-    beyond MAX_WORLD_COORDINATE (where float32 squares of lengths overflow on the GPU)."""
-    matrix = np.asarray(matrix, np.float64)
-    if not finite_in_float32(matrix):
-        raise UsdWrinkleError("transform is not finite in float32 (NaN, Inf or beyond 3.4e38)",
-                              path, "xformOp", frame)
-    scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
-    reach = scale * extent + float(np.abs(matrix[..., 3, :3]).max(initial=0.0))
-    if reach > MAX_WORLD_COORDINATE:
-        raise UsdWrinkleError(f"the mesh reaches {reach:.3g} scene units from the origin, "
-                              f"beyond +-{MAX_WORLD_COORDINATE:g} (the GPU's float32 range); "
-                              "check the units and the transforms", path, "xformOp", frame)
-
-
-def _finite_points(points, path, attribute, time=None):
-    arr = np.asarray(points, dtype=np.float32).reshape(-1, 3)
-    if not np.all(np.isfinite(arr)):
-        frame = frame_of(time)
-        raise UsdWrinkleError("points are not finite (NaN or Inf)", path, attribute, frame)
-    return arr
-
-
 class StageSceneDelegate:
     """Reads a stage for the render delegate.
 
@@ -246,9 +219,8 @@ class StageSceneDelegate:
         self.skel = SkelBindings(self.stage, warn)
         self._relax_override = relax_iterations
         self._prims: dict[str, Usd.Prim] = {}
-        #: the meshes' bounds for the automatic framing (made on first use, dropped on
-        #: an edit of the shapes)
-        self._bounds = None
+        #: per frame: the meshes, the camera and the lights (scene/sampling.py)
+        self.sampler = FrameSampler(self)
         self.meshes: dict[str, MeshRecord] = {}
         for prim in self._rendered_meshes(self.stage.GetPseudoRoot()):
             self._add_mesh(prim)
@@ -358,7 +330,7 @@ class StageSceneDelegate:
             bits[mesh] = DirtyBits.ALL
         moved = DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_TRANSFORM
         if added or before - after or any(value & moved for value in bits.values()):
-            self._bounds = None  # the automatic framing sees the new shapes
+            self.sampler.forget_bounds()  # the automatic framing sees the new shapes
         return bits, added, sorted(before - after)
 
     def _refresh(self, path: str, bits: int) -> bool:
@@ -398,7 +370,7 @@ class StageSceneDelegate:
             raise UsdWrinkleError(f"mesh too large: {len(rest_value):,} points, usdwrinkle "
                                   f"handles fewer than {MAX_POINTS:,} per mesh", path,
                                   rest_attr_name)
-        rest = _finite_points(rest_value, path, rest_attr_name)
+        rest = finite_points(rest_value, path, rest_attr_name)
         first_points = static_value(points_attr)
         if has_rest and first_points is not None and len(rest) != len(first_points):
             raise UsdWrinkleError("primvars:rest and points differ in length", path,
@@ -443,104 +415,32 @@ class StageSceneDelegate:
 
     @staticmethod
     def time_code(frame: float) -> Usd.TimeCode:
-        return Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
+        return time_code(frame)
 
-    # -- per frame ----------------------------------------------------------------------
+    def prim(self, path: str) -> Usd.Prim:
+        """The Usd.Prim of a mesh the scene keeps a record of."""
+        return self._prims[path]
+
+    # -- per frame (scene/sampling.py) -------------------------------------------------
     def sample_mesh(self, path: str, time: Usd.TimeCode, xform_cache,
                     with_baked: bool = True) -> MeshFrame:
-        """One mesh at ``time``; ``with_baked``: also its baked fields, if it has any."""
-        record = self.meshes[path]
-        prim = self._prims[path]
-        frame = frame_of(time)
-        baked = None
-        if with_baked and path in self.baked:
-            baked = self.baked[path].at(float("nan") if frame is None else frame)
-        local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
-        check_transform(local_to_world, path, frame, record.extent)
-        visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible
-        if record.skin is not None:
-            skel_query, skinning_query = self.skel.get(path)
-            joints, skel_to_local, weights, active = sample_skin(
-                path, skel_query, skinning_query, self.skel.blend_queries.get(path), time,
-                xform_cache, record.skin.num_subshapes)
-            if joints.shape[0] < record.skin.num_joints:
-                raise UsdWrinkleError(
-                    f"{joints.shape[0]} skinning transforms for {record.skin.num_joints} joints",
-                    path, "skel:joints", frame)
-            if not np.all(np.isfinite(joints)):
-                raise UsdWrinkleError("skinning transforms are not finite", path,
-                                      "skel:skeleton", frame)
-            check_blend_weights(path, record.skin, weights, frame, record.extent)
-            check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
-                            record.extent)
-            dqs = dual_quaternions(joints) if record.skin.method == "dualQuaternion" else None
-            return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
-                             active, baked, self._frame_normal_map(record, prim, time),
-                             dual_quaternions=dqs,
-                             corner_colors=self._frame_colors(record, prim, time))
-        normals = sample_normals(prim, record.normals, time, frame) \
-            if not time.IsDefault() else None
-        points = None
-        if record.point_cached:
-            attr = UsdGeom.Mesh(prim).GetPointsAttr()
-            value = static_value(attr) if time.IsDefault() else attr.Get(time)
-            if value is None:
-                raise UsdWrinkleError("points have no value", path, "points", frame)
-            points = _finite_points(value, path, "points", time)
-            if len(points) != len(record.rest_points):
-                raise UsdWrinkleError(
-                    f"point count changes over time ({len(points)} != "
-                    f"{len(record.rest_points)})", path, "points", frame)
-            check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
-        return MeshFrame(local_to_world, visible, points, baked=baked,
-                         normal_map=self._frame_normal_map(record, prim, time),
-                         normals=normals, corner_colors=self._frame_colors(record, prim, time))
+        """One mesh at ``time`` (FrameSampler.sample_mesh)."""
+        return self.sampler.sample_mesh(path, time, xform_cache, with_baked)
 
-    @staticmethod
-    def _frame_colors(record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
-        """This frame's colours per corner, where the material's are time-sampled."""
-        material = record.material
-        if not material.color_varies or time.IsDefault():
-            return None
-        colors = corner_colors(prim, material.color_primvar, record.topology, time)
-        if colors is None or colors[0].shape != material.corner_colors.shape:
-            return None  # the default time's colours stay
-        return colors[0]
+    def sample_meshes(self, frame: float, xform_cache=None, with_baked: bool = True) -> dict:
+        """The MeshFrames of every mesh at ``frame`` (FrameSampler.sample_meshes)."""
+        return self.sampler.sample_meshes(frame, xform_cache, with_baked)
 
-    def _frame_normal_map(self, record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
-        """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""
-        if not record.material.normal_map_varies:
-            return None
-        return read_normal_map(prim, record.topology, time, self.warn)[0]
+    def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
+        """Everything time-varying at ``frame`` (FrameSampler.sample)."""
+        return self.sampler.sample(frame, aspect, camera_spec)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """World bounds of the rendered meshes over the stage's range (at most 9 samples).
+        """World bounds of the rendered meshes over the stage's range (FrameSampler.bounds)."""
+        return self.sampler.bounds()
 
-        Fixed for the whole shot, so automatic framing does not depend on which
-        frames a farm chunk renders.
-        """
-        frames = self.frame_range()
-        if len(frames) > 9:
-            frames = list(np.linspace(frames[0], frames[-1], 9))
-        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-        for f in frames:
-            cache = UsdGeom.BBoxCache(self.time_code(f), list(RENDERED_PURPOSES),
-                                      useExtentsHint=True)
-            for path in self.meshes:
-                prim = self._prims[path]
-                box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
-                if box.IsEmpty():
-                    continue
-                lo = np.minimum(lo, np.asarray(box.GetMin()))
-                hi = np.maximum(hi, np.asarray(box.GetMax()))
-            skel_roots = {self.skel.get(p)[0].GetSkeleton().GetPrim() for p in self.meshes
-                          if self.meshes[p].skin is not None}
-            for skel_prim in skel_roots:
-                box = cache.ComputeWorldBound(skel_prim).ComputeAlignedRange()
-                if not box.IsEmpty():
-                    lo = np.minimum(lo, np.asarray(box.GetMin()))
-                    hi = np.maximum(hi, np.asarray(box.GetMax()))
-        return lo, hi
+    def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
+        return self.sampler.camera_aspect(camera_spec, frame)
 
     def corner_primvar(self, path: str, name: str) -> np.ndarray | None:
         """A primvar of a mesh as one value per triangle corner, (m, 3, c), at its
@@ -552,38 +452,11 @@ class StageSceneDelegate:
             return None
         return corner_values(primvar, self.meshes[path].topology, Usd.TimeCode.EarliestTime())
 
-    def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
-        prim = camera_mod.find_camera(self.stage, camera_spec)
-        return camera_mod.camera_aspect(prim, self.time_code(frame)) if prim else None
-
     def check_baked(self, frames: list[float]) -> None:
         """Refuse, before any frame is drawn, a frame that a mesh's bake does not hold."""
         for source in self.baked.values():
             for frame in frames:
                 source.check_covers(frame)
-
-    def sample_meshes(self, frame: float, xform_cache=None, with_baked: bool = True) -> dict:
-        """The MeshFrames of every mesh at ``frame`` (no camera or lights)."""
-        time = self.time_code(frame)
-        xform_cache = xform_cache or UsdGeom.XformCache(time)
-        return {path: self.sample_mesh(path, time, xform_cache, with_baked)
-                for path in self.meshes}
-
-    def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
-        """Everything time-varying at ``frame`` (NaN: the default time)."""
-        time = self.time_code(frame)
-        xform_cache = UsdGeom.XformCache(time)
-        meshes = self.sample_meshes(frame, xform_cache)
-        prim = camera_mod.find_camera(self.stage, camera_spec)
-        if prim is not None:
-            cam = camera_mod.usd_camera(prim, time, aspect)
-        else:
-            if self._bounds is None:
-                self._bounds = self.bounds()
-            cam = camera_mod.framing_camera(*self._bounds, self.up_axis, aspect)
-        lights = read_lights(self.stage, time, xform_cache, self.warn) or \
-            default_lights(cam.view)
-        return FrameRecord(frame, cam, tuple(lights), meshes)
 
 
 def refuse_overwriting_inputs(stage_path: str, outputs: list[str], stage=None) -> None:

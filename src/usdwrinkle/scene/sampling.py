@@ -1,0 +1,193 @@
+"""Per frame, what is time-varying on the stage: a MeshFrame per mesh (transforms,
+skinning, point caches, baked fields, time-sampled colours and normal maps), the camera
+and the lights, as a FrameRecord. The scene delegate (scene/stage.py) keeps the records
+and processes the stage's edits; :class:`FrameSampler` reads its records and prims and
+only samples."""
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+from pxr import Usd, UsdGeom
+
+from ..errors import UsdWrinkleError
+from ..limits import MAX_WORLD_COORDINATE
+from ..values import finite_in_float32, frame_of, static_value
+from . import camera as camera_mod
+from .lights import default_lights, read_lights
+from .material import corner_colors, read_normal_map
+from .normals import sample_normals
+from .records import FrameRecord, MeshFrame, MeshRecord
+from .skel import check_blend_weights, dual_quaternions, sample_skin
+
+RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
+
+
+def time_code(frame: float) -> Usd.TimeCode:
+    return Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
+
+
+def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -> None:
+    """Refuse a transform that is not finite, or that takes a mesh of half-size ``extent``
+    beyond MAX_WORLD_COORDINATE (where float32 squares of lengths overflow on the GPU)."""
+    matrix = np.asarray(matrix, np.float64)
+    if not finite_in_float32(matrix):
+        raise UsdWrinkleError("transform is not finite in float32 (NaN, Inf or beyond 3.4e38)",
+                              path, "xformOp", frame)
+    scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
+    reach = scale * extent + float(np.abs(matrix[..., 3, :3]).max(initial=0.0))
+    if reach > MAX_WORLD_COORDINATE:
+        raise UsdWrinkleError(f"the mesh reaches {reach:.3g} scene units from the origin, "
+                              f"beyond +-{MAX_WORLD_COORDINATE:g} (the GPU's float32 range); "
+                              "check the units and the transforms", path, "xformOp", frame)
+
+
+def finite_points(points, path, attribute, time=None):
+    arr = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+    if not np.all(np.isfinite(arr)):
+        frame = frame_of(time)
+        raise UsdWrinkleError("points are not finite (NaN or Inf)", path, attribute, frame)
+    return arr
+
+
+
+class FrameSampler:
+    """Samples the scene delegate ``scene``'s meshes, camera and lights at a frame. The
+    meshes' bounds for the automatic framing are made on first use and kept until
+    :meth:`forget_bounds` (an edit of the shapes)."""
+
+    def __init__(self, scene):
+        # a proxy, not a reference: the delegate owns its sampler, and a cycle would keep
+        # a dropped delegate (and the stage, with any unsaved edits of its layers that a
+        # later Usd.Stage.Open of the same file would see) alive until a GC pass
+        self.scene = weakref.proxy(scene)
+        self._bounds = None
+
+    def forget_bounds(self) -> None:
+        self._bounds = None
+
+    def sample_mesh(self, path: str, time: Usd.TimeCode, xform_cache,
+                    with_baked: bool = True) -> MeshFrame:
+        """One mesh at ``time``; ``with_baked``: also its baked fields, if it has any."""
+        record = self.scene.meshes[path]
+        prim = self.scene.prim(path)
+        frame = frame_of(time)
+        baked = None
+        if with_baked and path in self.scene.baked:
+            baked = self.scene.baked[path].at(float("nan") if frame is None else frame)
+        local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
+        check_transform(local_to_world, path, frame, record.extent)
+        visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible
+        if record.skin is not None:
+            skel_query, skinning_query = self.scene.skel.get(path)
+            joints, skel_to_local, weights, active = sample_skin(
+                path, skel_query, skinning_query, self.scene.skel.blend_queries.get(path), time,
+                xform_cache, record.skin.num_subshapes)
+            if joints.shape[0] < record.skin.num_joints:
+                raise UsdWrinkleError(
+                    f"{joints.shape[0]} skinning transforms for {record.skin.num_joints} joints",
+                    path, "skel:joints", frame)
+            if not np.all(np.isfinite(joints)):
+                raise UsdWrinkleError("skinning transforms are not finite", path,
+                                      "skel:skeleton", frame)
+            check_blend_weights(path, record.skin, weights, frame, record.extent)
+            check_transform(np.asarray(joints, np.float64).reshape(-1, 4, 4), path, frame,
+                            record.extent)
+            dqs = dual_quaternions(joints) if record.skin.method == "dualQuaternion" else None
+            return MeshFrame(local_to_world, visible, None, joints, skel_to_local, weights,
+                             active, baked, self._frame_normal_map(record, prim, time),
+                             dual_quaternions=dqs,
+                             corner_colors=self._frame_colors(record, prim, time))
+        normals = sample_normals(prim, record.normals, time, frame) \
+            if not time.IsDefault() else None
+        points = None
+        if record.point_cached:
+            attr = UsdGeom.Mesh(prim).GetPointsAttr()
+            value = static_value(attr) if time.IsDefault() else attr.Get(time)
+            if value is None:
+                raise UsdWrinkleError("points have no value", path, "points", frame)
+            points = finite_points(value, path, "points", time)
+            if len(points) != len(record.rest_points):
+                raise UsdWrinkleError(
+                    f"point count changes over time ({len(points)} != "
+                    f"{len(record.rest_points)})", path, "points", frame)
+            check_transform(local_to_world, path, frame, float(np.abs(points).max(initial=0)))
+        return MeshFrame(local_to_world, visible, points, baked=baked,
+                         normal_map=self._frame_normal_map(record, prim, time),
+                         normals=normals, corner_colors=self._frame_colors(record, prim, time))
+
+    @staticmethod
+    def _frame_colors(record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
+        """This frame's colours per corner, where the material's are time-sampled."""
+        material = record.material
+        if not material.color_varies or time.IsDefault():
+            return None
+        colors = corner_colors(prim, material.color_primvar, record.topology, time)
+        if colors is None or colors[0].shape != material.corner_colors.shape:
+            return None  # the default time's colours stay
+        return colors[0]
+
+    def _frame_normal_map(self, record: MeshRecord, prim: Usd.Prim, time: Usd.TimeCode):
+        """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""
+        if not record.material.normal_map_varies:
+            return None
+        return read_normal_map(prim, record.topology, time, self.scene.warn)[0]
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World bounds of the rendered meshes over the stage's range (at most 9 samples).
+
+        Fixed for the whole shot, so automatic framing does not depend on which
+        frames a farm chunk renders.
+        """
+        frames = self.scene.frame_range()
+        if len(frames) > 9:
+            frames = list(np.linspace(frames[0], frames[-1], 9))
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for f in frames:
+            cache = UsdGeom.BBoxCache(time_code(f), list(RENDERED_PURPOSES),
+                                      useExtentsHint=True)
+            for path in self.scene.meshes:
+                prim = self.scene.prim(path)
+                box = cache.ComputeWorldBound(prim).ComputeAlignedRange()
+                if box.IsEmpty():
+                    continue
+                lo = np.minimum(lo, np.asarray(box.GetMin()))
+                hi = np.maximum(hi, np.asarray(box.GetMax()))
+            meshes = self.scene.meshes
+            skel_roots = {self.scene.skel.get(p)[0].GetSkeleton().GetPrim() for p in meshes
+                          if meshes[p].skin is not None}
+            for skel_prim in skel_roots:
+                box = cache.ComputeWorldBound(skel_prim).ComputeAlignedRange()
+                if not box.IsEmpty():
+                    lo = np.minimum(lo, np.asarray(box.GetMin()))
+                    hi = np.maximum(hi, np.asarray(box.GetMax()))
+        return lo, hi
+
+    def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
+        prim = camera_mod.find_camera(self.scene.stage, camera_spec)
+        return camera_mod.camera_aspect(prim, time_code(frame)) if prim else None
+
+    def sample_meshes(self, frame: float, xform_cache=None, with_baked: bool = True) -> dict:
+        """The MeshFrames of every mesh at ``frame`` (no camera or lights)."""
+        time = time_code(frame)
+        xform_cache = xform_cache or UsdGeom.XformCache(time)
+        return {path: self.sample_mesh(path, time, xform_cache, with_baked)
+                for path in self.scene.meshes}
+
+    def sample(self, frame: float, aspect: float, camera_spec: str | None = None) -> FrameRecord:
+        """Everything time-varying at ``frame`` (NaN: the default time)."""
+        time = time_code(frame)
+        xform_cache = UsdGeom.XformCache(time)
+        meshes = self.sample_meshes(frame, xform_cache)
+        prim = camera_mod.find_camera(self.scene.stage, camera_spec)
+        if prim is not None:
+            cam = camera_mod.usd_camera(prim, time, aspect)
+        else:
+            if self._bounds is None:
+                self._bounds = self.bounds()
+            cam = camera_mod.framing_camera(*self._bounds, self.scene.up_axis, aspect)
+        lights = read_lights(self.scene.stage, time, xform_cache, self.scene.warn) or \
+            default_lights(cam.view)
+        return FrameRecord(frame, cam, tuple(lights), meshes)
+
+
