@@ -264,10 +264,11 @@ class LayerBaker:
                 layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
         if root.defaultPrim:
             layer.defaultPrim = root.defaultPrim
+        # the source stage as the layer's own paths are: relative to the layer's folder
+        source_path = os.path.relpath(os.path.abspath(self.stage_path), os.path.dirname(
+            os.path.abspath(output_path))).replace(os.sep, "/")
         if not options.sparse:
-            folder = os.path.dirname(os.path.abspath(output_path))
-            source = os.path.abspath(self.stage_path)
-            layer.subLayerPaths.append(os.path.relpath(source, folder).replace(os.sep, "/"))
+            layer.subLayerPaths.append(source_path)
         if options.display_color and self.wrinkled:
             self._display_color_material()
         for path, record in self.point_meshes.items():
@@ -280,9 +281,6 @@ class LayerBaker:
             rel = spec.relationships.get("skel:skeleton") or Sdf.RelationshipSpec(
                 spec, "skel:skeleton", custom=False)
             rel.targetPathList.ClearEditsAndMakeExplicit()
-        # the source stage as the layer's own paths are: relative to the layer's folder
-        source_path = os.path.relpath(os.path.abspath(self.stage_path), os.path.dirname(
-            os.path.abspath(output_path))).replace(os.sep, "/")
         return {"version": __version__, "frames": options.frame_spec, "source": source_path,
                 "withPoints": options.with_points, "displayColor": options.display_color or "",
                 "sparse": options.sparse}

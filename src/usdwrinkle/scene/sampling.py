@@ -50,7 +50,6 @@ def finite_points(points, path, attribute, time=None):
     return arr
 
 
-
 class FrameSampler:
     """Samples the scene delegate ``scene``'s meshes, camera and lights at a frame. The
     meshes' bounds for the automatic framing are made on first use and kept until

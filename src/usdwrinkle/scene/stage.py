@@ -32,7 +32,7 @@ from .material import read_material
 from .normals import plan_normals
 from .params import read_params
 from .records import FrameRecord, MeshFrame, MeshRecord
-from .sampling import RENDERED_PURPOSES, FrameSampler, finite_points, time_code
+from .sampling import RENDERED_PURPOSES, FrameSampler, finite_points
 from .skel import SkelBindings, skin_data
 from .topology import Topology, build_topology, vertex_normals
 
@@ -412,10 +412,6 @@ class StageSceneDelegate:
             return stage_frames(self.stage)
         except UsdWrinkleError:
             return [float("nan")]
-
-    @staticmethod
-    def time_code(frame: float) -> Usd.TimeCode:
-        return time_code(frame)
 
     def prim(self, path: str) -> Usd.Prim:
         """The Usd.Prim of a mesh the scene keeps a record of."""
