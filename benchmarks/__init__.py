@@ -2,14 +2,15 @@
 the farm rows, the peer row against usdview's Storm, triangulation and the floors,
 measured in one run.
 
-    usdwrinkle bench [--json PATH] [--markdown PATH] [--quick]
-    python -m benchmarks ...
+    python -m benchmarks [--json PATH] [--markdown PATH] [--quick] ...
 
-They live in the source checkout, not in the wheel: `usdwrinkle bench` runs them from a
-checkout (cli/bench.py finds this folder).
+They live in the source checkout, not in the wheel, and import usdwrinkle as any user
+would; nothing in the package imports them. ``usdwrinkle bench ...`` (an editable install)
+runs this same command in a child process.
 """
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
@@ -81,7 +82,7 @@ def run(args) -> int:
         result = run_bench(args.quick, corpus,
                            progress=lambda m: print(m, file=sys.stderr, flush=True),
                            before=args.before)
-        result["command"] = "usdwrinkle bench" + (" --quick" if args.quick else "") + (
+        result["command"] = "python -m benchmarks" + (" --quick" if args.quick else "") + (
             f" --json {args.json}" if args.json else "") + (
             f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "") + (
             " --before CHECKOUT" if args.before else "")
@@ -101,9 +102,51 @@ def run(args) -> int:
     return 0
 
 
-def main(argv=None) -> int:
-    """``python -m benchmarks``: the bench command's own parser."""
-    from usdwrinkle.cli.main import main as usdwrinkle
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m benchmarks",
+        description="Measure the real pipeline: the paper's five cases, scaling in vertices "
+                    "and pixels, UsdSkel's CPU skinning and a numpy crush+relax as baselines, "
+                    "CesiumMan end to end, the farm rows, triangulation of hostile meshes and "
+                    "the rasteriser's floors. Writes a markdown report (and JSON). Runs from "
+                    "a source checkout; `usdwrinkle bench` is the same command.")
+    p.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    p.add_argument("--markdown", metavar="PATH",
+                   help="markdown report (default docs/benchmarks.md, or with --quick "
+                        "bench-quick.md in the current folder, so that a smoke test never "
+                        "overwrites the committed figures; '-' for stdout)")
+    p.add_argument("--quick", action="store_true",
+                   help="reduced sizes and frames: a smoke test, not figures to quote")
+    p.add_argument("--label", metavar="TEXT",
+                   help="name this run in the JSON (kept in docs/bench/ for before/after)")
+    p.add_argument("--history", metavar="DIR", default="docs/bench",
+                   help="folder of labelled JSON runs to tabulate (docs/bench)")
+    p.add_argument("--before", metavar="CHECKOUT",
+                   help="a checkout of an earlier usdwrinkle (e.g. a git worktree): the CPU "
+                        "render nodes section also runs its default EXR render, in turn with "
+                        "this one's, as the before row")
+    p.add_argument("--from-json", metavar="PATH",
+                   help="measure nothing: rewrite the markdown report from a saved run")
+    p.add_argument("--corpus", metavar="DIR",
+                   help="folder with usd-wg/CesiumMan.usdz (default ../shared/corpus or "
+                        "$USDWRINKLE_CORPUS)")
+    return p
 
-    return usdwrinkle(["bench", *(sys.argv[1:] if argv is None else argv)])
 
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    args = build_parser().parse_args(argv)
+    if args.markdown is None:
+        args.markdown = "bench-quick.md" if args.quick else "docs/benchmarks.md"
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m benchmarks``: errors as usdwrinkle's one line, exit 2."""
+    from usdwrinkle.errors import UsdWrinkleError, print_stderr
+
+    args = parse_args(argv)
+    try:
+        return run(args)
+    except UsdWrinkleError as exc:
+        print_stderr(f"benchmarks: error: {exc.one_line()}")
+        return 2

@@ -4,9 +4,11 @@
 
 prints each folder's (and top-level module's) imports of the others, the folder cycles
 and the file circles (empty when the layers only look down), and what under render/
-reaches pxr. tests/test_layers.py enforces the rules. Imports inside functions count: a
-lazy import is still a dependency. The package's own __init__ (which registers the
-schema with USD) is left out: every module is reached through it.
+reaches pxr, and what in the package imports the checkout's benchmarks/ (nothing may: the
+bench imports usdwrinkle, never the reverse). tests/test_layers.py enforces the rules.
+Imports inside functions count: a lazy import is still a dependency. The package's own
+__init__ (which registers the schema with USD) is left out: every module is reached
+through it.
 """
 from __future__ import annotations
 
@@ -62,6 +64,23 @@ def imports(known: dict[str, Path]) -> tuple[dict[str, set], set]:
                         if parent in known and parent != name:
                             graph[name].add(parent)
     return graph, pxr
+
+
+def importers(known: dict[str, Path], package: str) -> list[str]:
+    """The modules that import ``package`` (absolute imports: it is outside the package)."""
+    found = []
+    for name, path in known.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                targets = [node.module or ""]
+            else:
+                continue
+            if any(t == package or t.startswith(package + ".") for t in targets):
+                found.append(name)
+                break
+    return found
 
 
 def room(module: str) -> str:
@@ -146,7 +165,9 @@ def main() -> int:
     render_pxr = {m: reaches(graph, m, pxr) for m in known if room(m) == "render"}
     render_pxr = {m: p for m, p in render_pxr.items() if p}
     print("render/ modules that reach pxr:", render_pxr or "none")
-    return 1 if folder_cycles or file_circles or render_pxr else 0
+    bench = importers(known, "benchmarks")
+    print("package modules that import benchmarks/:", bench or "none")
+    return 1 if folder_cycles or file_circles or render_pxr or bench else 0
 
 
 if __name__ == "__main__":

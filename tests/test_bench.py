@@ -1,4 +1,4 @@
-"""`usdwrinkle bench --quick` as a smoke test: it finishes and reports every field.
+"""`python -m benchmarks --quick` as a smoke test: it finishes and reports every field.
 
 Speed is never asserted here; the figures live in docs/benchmarks.md.
 """
@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from usdwrinkle.cli.main import main
+from benchmarks import main
 
 FIELDS = {
     "paper_table": ["case", "vertices", "pixels", "pass_ms", "pass_sources", "gpu_ms", "wall_ms",
@@ -21,7 +21,7 @@ FIELDS = {
 @pytest.mark.slow
 def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     out_json, out_md = tmp_path / "bench.json", tmp_path / "bench.md"
-    assert main(["bench", "--quick", "--json", str(out_json), "--markdown", str(out_md),
+    assert main(["--quick", "--json", str(out_json), "--markdown", str(out_md),
                  "--corpus", str(corpus), "--history", str(tmp_path / "none")]) == 0
     result = json.loads(out_json.read_text())
     assert result["quick"] is True
@@ -78,15 +78,34 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
 def test_quick_never_writes_the_committed_report(monkeypatch):
     """Issue 27: bench --quick overwrote docs/benchmarks.md with smoke-test figures; its
     default report is bench-quick.md in the current folder (the full bench's stays)."""
-    from types import SimpleNamespace
-
-    from usdwrinkle.cli import bench
-    from usdwrinkle.cli.main import build_parser
+    import benchmarks
 
     seen = []
-    monkeypatch.setattr(bench, "benchmarks",
-                        lambda: SimpleNamespace(run=lambda args: seen.append(args.markdown)))
-    for argv in (["bench", "--quick"], ["bench"], ["bench", "--quick", "--markdown", "x.md"]):
-        args = build_parser().parse_args(argv)
-        args.run(args)
+    monkeypatch.setattr(benchmarks, "run", lambda args: seen.append(args.markdown) or 0)
+    for argv in (["--quick"], [], ["--quick", "--markdown", "x.md"]):
+        assert benchmarks.main(argv) == 0
     assert seen == ["bench-quick.md", "docs/benchmarks.md", "x.md"]
+
+
+def test_usdwrinkle_bench_runs_the_checkouts_benchmarks(tmp_path):
+    """Issue 25: the installed CLI imports nothing of benchmarks/; `usdwrinkle bench ARGS`
+    runs `python -m benchmarks ARGS` in a child process. --from-json measures nothing, so
+    the child's report is the committed run's, rewritten."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    checkout = Path(__file__).resolve().parents[1]
+    out = tmp_path / "report.md"
+    done = subprocess.run(
+        [sys.executable, "-m", "usdwrinkle", "bench", "--from-json",
+         str(checkout / "docs" / "benchmarks.json"), "--markdown", str(out),
+         "--history", str(tmp_path / "none")],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    saved = json.loads((checkout / "docs" / "benchmarks.json").read_text())
+    text = out.read_text()
+    assert saved["machine"]["gl_renderer"] in text and "## The paper's table" in text
+    bad = subprocess.run([sys.executable, "-m", "usdwrinkle", "bench", "--no-such-option"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "--no-such-option" in bad.stderr

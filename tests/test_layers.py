@@ -37,6 +37,14 @@ def test_outputs_does_not_import_render():
             assert not [t for t in edges.get(module, ()) if layering.room(t) == "render"], module
 
 
+def test_the_package_does_not_import_the_benchmarks():
+    """cli/bench.py used to put the checkout on sys.path and import benchmarks/, which
+    imported cli.main back (a circle across the package's edge)."""
+    known, _, _ = graph()
+    assert layering.importers(known, "benchmarks") == []
+    assert layering.importers(known, "pxr")  # the reader sees absolute imports
+
+
 def test_the_graph_is_read_right():
     """The reader finds what is there: a module of render/ imports scene.records, and
     scene.stage imports pxr (so an empty result above is not a blind reader)."""
@@ -52,6 +60,7 @@ def test_the_command_says_so():
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stdout
     assert "folder cycles: none" in result.stdout and "file circles: none" in result.stdout
+    assert "import benchmarks/: none" in result.stdout
 
 
 def _parameters(function) -> list[str]:

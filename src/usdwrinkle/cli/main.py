@@ -145,7 +145,12 @@ def _main(argv: list[str] | None) -> int:
         return 2
     _one_line_warnings()
     parser = build_parser()
-    args = parser.parse_args(_attach_signed_values(sys.argv[1:] if argv is None else argv))
+    args, extra = parser.parse_known_args(
+        _attach_signed_values(sys.argv[1:] if argv is None else argv))
+    if getattr(args, "forward", False):  # bench: its options are python -m benchmarks'
+        args.forwarded = extra
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
     if not getattr(args, "command", None):
         parser.print_help(STDERR)
         return 2
