@@ -79,9 +79,12 @@ def run(args) -> int:
         result["targets"] = targets(result)  # the words of this report's version
     else:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
-        result = run_bench(args.quick, corpus,
-                           progress=lambda m: print(m, file=sys.stderr, flush=True),
-                           before=args.before)
+        from usdwrinkle.log import silenced
+
+        with silenced():  # the shots' degraded-input warnings are not the bench's output
+            result = run_bench(args.quick, corpus,
+                               progress=lambda m: print(m, file=sys.stderr, flush=True),
+                               before=args.before)
         result["command"] = "python -m benchmarks" + (" --quick" if args.quick else "") + (
             f" --json {args.json}" if args.json else "") + (
             f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "") + (

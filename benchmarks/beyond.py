@@ -35,12 +35,9 @@ def overhead(quick: bool, ctx) -> list[dict]:
 
     rows = []
     for name in CASES:
-        engines = [(WrinkleEngine(_stage(name, True), ctx=ctx, profile=True,
-                                  warn=lambda m: None), True),
-                   (WrinkleEngine(_stage(name, False), ctx=ctx, profile=True,
-                                  warn=lambda m: None), True),
-                   (WrinkleEngine(_stage(name, False), ctx=ctx, profile=True,
-                                  warn=lambda m: None), False)]
+        engines = [(WrinkleEngine(_stage(name, True), ctx=ctx, profile=True), True),
+                   (WrinkleEngine(_stage(name, False), ctx=ctx, profile=True), True),
+                   (WrinkleEngine(_stage(name, False), ctx=ctx, profile=True), False)]
         try:
             aspect = engines[0][0].scene.camera_aspect(None, 1.0) or 1.0
             width, height = size_for(64_000 if quick else 1_000_000, aspect)

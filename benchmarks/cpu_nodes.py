@@ -115,7 +115,7 @@ def encoders(ctx, stage: Path, width: int, height: int, repeats: int) -> dict:
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.outputs import images
 
-    engine = WrinkleEngine(str(stage), all_meshes=True, ctx=ctx, warn=lambda m: None)
+    engine = WrinkleEngine(str(stage), all_meshes=True, ctx=ctx)
     try:
         buffers = engine.render_frame(12.0, width, height)
     finally:

@@ -52,7 +52,7 @@ def preroll(quick: bool, ctx) -> dict:
         shot.startTimeCode, shot.endTimeCode = 1, 1000  # the animation holds after 24
         shot.Save()
         bake = os.path.join(folder, "long_shirt.wrinkles.usdc")
-        engine = WrinkleEngine(shot.realPath, ctx=ctx, use_baked=False, warn=lambda m: None)
+        engine = WrinkleEngine(shot.realPath, ctx=ctx, use_baked=False)
         try:
             started = time.perf_counter()
             bake_layer(engine, BakeRequest(shot.realPath, bake, (2.0, float(late)),
@@ -62,7 +62,7 @@ def preroll(quick: bool, ctx) -> dict:
             engine.release()
         width, height = 320, 213
         times = {"baked_2": [], "baked_late": [], "direct_late": []}
-        engine = WrinkleEngine(bake, ctx=ctx, warn=lambda m: None)
+        engine = WrinkleEngine(bake, ctx=ctx)
         try:
             for _ in range(repeats):  # alternate, so that machine drift falls on both
                 for key, frame in (("baked_2", 2.0), ("baked_late", float(late))):
@@ -73,7 +73,7 @@ def preroll(quick: bool, ctx) -> dict:
         finally:
             engine.release()
         for _ in range(1 if quick else 2):
-            engine = WrinkleEngine(shot.realPath, ctx=ctx, use_baked=False, warn=lambda m: None)
+            engine = WrinkleEngine(shot.realPath, ctx=ctx, use_baked=False)
             try:
                 started = time.perf_counter()
                 engine.render_frame(float(late), width, height)

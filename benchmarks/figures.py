@@ -101,7 +101,7 @@ def _render_stage(stage, width: int, height: int) -> np.ndarray:
     from usdwrinkle.colour import srgb_encode
     from usdwrinkle.engine import WrinkleEngine
 
-    engine = WrinkleEngine(stage, warn=lambda m: None)
+    engine = WrinkleEngine(stage)
     try:
         color = engine.render_frame(24.0, width, height)["color"].pixels
     finally:

@@ -84,7 +84,7 @@ def elbow(folder: str) -> dict:
     stage = Usd.Stage.Open(layer)
     levels = int(stage.GetRootLayer().customLayerData["usdwrinkle"]["geometry"]["levels"]
                  .split("=")[-1])
-    engine = WrinkleEngine(str(SHIRT), warn=lambda m: None)
+    engine = WrinkleEngine(str(SHIRT))
     try:
         record = engine.meshes["/World/Arm/Sleeve"]
     finally:

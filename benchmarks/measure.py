@@ -73,8 +73,8 @@ def paper_table(quick: bool, ctx) -> list[dict]:
             stage = str(samples / f"{name}.usda")
         else:
             stage = sleeve_stage(vertices)
-        engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
-        plain = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
+        engine = WrinkleEngine(stage, ctx=ctx, profile=True)
+        plain = WrinkleEngine(stage, ctx=ctx, profile=True)
         try:
             aspect = engine.camera_aspect(1.0) or 1.0
             width, height = size_for(pixels // (16 if quick else 1), aspect)
@@ -116,7 +116,7 @@ def scaling(quick: bool, ctx) -> dict:
     frames = [float(f) for f in range(1, 6 if quick else 10)]
     by_vertices = []
     for vertices in vertex_sizes:
-        engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True, warn=lambda m: None)
+        engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True)
         try:
             n = len(next(iter(engine.meshes.values())).rest_points)
             (passes, wall, _, _), = measure_frames([(engine, True)], 512, 512, frames, warmup=2)
@@ -127,7 +127,7 @@ def scaling(quick: bool, ctx) -> dict:
                             "wall_ms": wall, "per_vertex_ns": compute * 1e6 / n,
                             "pass_ms": passes})
     by_pixels = []
-    engine = WrinkleEngine(sleeve_stage(5_000), ctx=ctx, profile=True, warn=lambda m: None)
+    engine = WrinkleEngine(sleeve_stage(5_000), ctx=ctx, profile=True)
     try:
         for side in pixel_sizes:
             (passes, wall, _, _), = measure_frames([(engine, True)], side, side, frames,
@@ -153,7 +153,7 @@ def skin_baseline(quick: bool, ctx) -> list[dict]:
     rows = []
     for vertices in ([50_000] if quick else [50_000, 1_000_000]):
         stage = sleeve_stage(vertices)
-        engine = WrinkleEngine(stage, ctx=ctx, profile=True, warn=lambda m: None)
+        engine = WrinkleEngine(stage, ctx=ctx, profile=True)
         try:
             path = next(iter(engine.meshes))
             skel_query, skinning_query = usdskel_queries(stage, path)
@@ -192,7 +192,7 @@ def numpy_baseline(quick: bool, ctx) -> dict:
     from usdwrinkle.reference.relax import relax
 
     vertices = 10_000 if quick else 50_000
-    engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True, warn=lambda m: None)
+    engine = WrinkleEngine(sleeve_stage(vertices), ctx=ctx, profile=True)
     try:
         path = next(iter(engine.meshes))
         record = engine.meshes[path]
@@ -233,8 +233,7 @@ def end_to_end(quick: bool, ctx, corpus: Path | None) -> dict:
     frames = [float(f) for f in range(1, 7 if quick else 49)]
     out = {}
     for label, wrinkles in (("wrinkles", True), ("no_wrinkles", False)):
-        engine = WrinkleEngine(str(path), all_meshes=True, ctx=ctx, profile=True,
-                               warn=lambda m: None)
+        engine = WrinkleEngine(str(path), all_meshes=True, ctx=ctx, profile=True)
         stages = {k: [] for k in ("usd_read", "upload", "gpu", "readback", "encode", "total")}
         try:
             with tempfile.TemporaryDirectory() as folder:

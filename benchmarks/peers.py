@@ -48,7 +48,7 @@ def closely_framed(corpus: Path, folder: Path) -> Path:
             layer.pseudoRoot.SetInfo(key, source.pseudoRoot.GetInfo(key))
     layer.Save()
     stage = Usd.Stage.Open(layer)
-    lo, hi = StageSceneDelegate(stage, all_meshes=True, warn=lambda m: None).bounds()
+    lo, hi = StageSceneDelegate(stage, all_meshes=True).bounds()
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
         raise RuntimeError(f"no mesh to frame in {package}")
     centre, size = (lo + hi) / 2, hi - lo

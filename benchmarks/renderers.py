@@ -26,7 +26,7 @@ def _bake_seconds(ctx, frames, maps=None, geometry=None, stage=SHIRT,
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.shot import BakeRequest, bake_layer
 
-    engine = WrinkleEngine(str(stage), ctx=ctx, warn=lambda m: None, use_baked=False,
+    engine = WrinkleEngine(str(stage), ctx=ctx, use_baked=False,
                            all_meshes=all_meshes)
     try:
         with tempfile.TemporaryDirectory() as folder:

@@ -68,7 +68,7 @@ def shared_camera(stage_path: Path, folder: Path) -> tuple[Path, str]:
     camera = find_camera(stage, None)
     if camera is not None:
         return stage_path, str(camera.GetPath())
-    scene = StageSceneDelegate(stage, warn=lambda message: None)
+    scene = StageSceneDelegate(stage)
     gf_camera = framing_gf_camera(*scene.bounds(), scene.up_axis, 16.0 / 9.0)
     wrapper = folder / f"{stage_path.stem}.framed.usda"
     layer = Sdf.Layer.CreateNew(str(wrapper))

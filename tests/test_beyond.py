@@ -37,7 +37,7 @@ def sheet(scale, rotation=None, biaxial=None, tension=None, threshold=None):
 
 
 def fields_of(ctx, stage):
-    engine = WrinkleEngine(stage, ctx=ctx, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=ctx)
     try:
         engine.compute_frame(1.0)
         return engine.read_fields("/Sheet")

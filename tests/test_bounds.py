@@ -91,8 +91,7 @@ BOUND_CASES = [("usd-wg/CesiumMan.usdz", (1.0, 17.0, 40.0), None),
 def test_every_posed_point_lies_in_the_bound(gl_context, corpus, name, frames, baseline):
     """Depth range and screen rectangle of the bound hold UsdSkel's (or Pixar's baked)
     posed points, under a camera framing the shot; LBS assets get a bound at all."""
-    engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context,
-                           warn=lambda m: None)
+    engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context)
     oracle = _usdskel_points if baseline is None else _baseline_points(
         Usd.Stage.Open(str(corpus / "openusd-usdskel" / "baseline" / baseline)))
     width, height = 320, 180
@@ -135,8 +134,7 @@ def test_the_rectangle_of_a_closely_framed_figure_is_a_fraction_of_the_frame(
     from benchmarks.peers import CAMERA, HEIGHT, WIDTH, closely_framed
 
     stage = closely_framed(corpus, tmp_path)
-    engine = WrinkleEngine(str(stage), all_meshes=True, ctx=gl_context, camera=CAMERA,
-                           warn=lambda m: None)
+    engine = WrinkleEngine(str(stage), all_meshes=True, ctx=gl_context, camera=CAMERA)
     try:
         for frame in (1.0, 12.0, 24.0):
             record = engine.sample(frame, WIDTH / HEIGHT)
@@ -184,7 +182,7 @@ def _sphere_stage(tmp_path, inward=False, double_sided=False, opacity=1.0, scale
 ])
 def test_only_a_side_that_no_camera_sees_is_culled(gl_context, tmp_path, case, side):
     engine = WrinkleEngine(_sphere_stage(tmp_path, **case), all_meshes=True, ctx=gl_context,
-                           camera="/Camera", warn=lambda m: None)
+                           camera="/Camera")
     try:
         record = engine.sample(1.0, 1.0)
         (path, mesh), = engine.meshes.items()
@@ -197,7 +195,7 @@ def test_only_a_side_that_no_camera_sees_is_culled(gl_context, tmp_path, case, s
 # --- the shortcuts change no pixel --------------------------------------------------------
 
 def _frames(path, frames, width, height, suffix, **engine_args):
-    engine = WrinkleEngine(str(path), warn=lambda m: None, **engine_args)
+    engine = WrinkleEngine(str(path), **engine_args)
     try:
         out = []
         for frame in frames:

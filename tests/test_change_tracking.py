@@ -36,7 +36,7 @@ def squeezed_sheet() -> Usd.Stage:
 def tracked(gl_context):
     """(stage, engine) of the squeezed sheet; the engine is released after the test."""
     stage = squeezed_sheet()
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context)
     yield stage, engine
     engine.release()
 
@@ -49,7 +49,7 @@ def render(engine, frame=3.0):
 def fresh_render(stage, frame=3.0):
     """The oracle: a new engine on a copy of the edited stage."""
     copy = Usd.Stage.Open(stage.GetRootLayer())  # the same layers: the edited state
-    engine = WrinkleEngine(copy, warn=lambda m: None)
+    engine = WrinkleEngine(copy)
     try:
         return render(engine, frame)
     finally:

@@ -38,7 +38,7 @@ def sheet_file(tmp_path, meters=None, name="sheet.usda", **kwargs):
 def fallback_width(path):
     from usdwrinkle.scene.stage import StageSceneDelegate
 
-    record = StageSceneDelegate(str(path), warn=lambda m: None).meshes["/Sheet"]
+    record = StageSceneDelegate(str(path)).meshes["/Sheet"]
     return float(record.params.width[0]), record.params.width_note
 
 
@@ -68,7 +68,7 @@ def test_cloth_mesh_is_the_old_edge_multiple_and_an_authored_width_wins(tmp_path
     stage.Save()
     from usdwrinkle.scene.stage import StageSceneDelegate
 
-    record = StageSceneDelegate(str(path), warn=lambda m: None).meshes["/Sheet"]
+    record = StageSceneDelegate(str(path)).meshes["/Sheet"]
     expected = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest, record.topology)
     assert fallback_width(path)[0] == pytest.approx(expected, rel=1e-6)
     authored, *_ = sheet_file(tmp_path, 1.0, name="authored.usda", width=0.42)

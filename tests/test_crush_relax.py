@@ -15,7 +15,7 @@ from helpers import point_cache_stage, rotation_matrix
 
 
 def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
-    engine = WrinkleEngine(stage, ctx=ctx, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=ctx)
     try:
         engine.compute_frame(frame)
         return engine.read_fields(path).arrays(), engine.meshes[path]
@@ -76,7 +76,7 @@ def test_relax_matches_numpy_reference(gl_context):
     stage = point_cache_stage(rest, {f: p.astype(np.float32) for f, p in frames.items()},
                               np.full(len(faces), 3), faces.ravel(), q=q, width=0.2,
                               relax_iterations=iterations)
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context)
     try:
         engine.compute_frame(3.0)  # replays frames 1 and 2 first
         ours = engine.read_fields("/Sheet").arrays()

@@ -230,7 +230,7 @@ def test_default_levels_keep_fine_edges_within_w_over_s(gl_context, shirt):
     stage, _ = shirt
     levels = int(stage.GetRootLayer().customLayerData["usdwrinkle"]["geometry"]["levels"]
                  .split("=")[-1])
-    engine = WrinkleEngine(SHIRT, warn=lambda m: None)
+    engine = WrinkleEngine(SHIRT)
     try:
         record = engine.meshes[SLEEVE]
     finally:

@@ -13,7 +13,7 @@ SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 
 
 def fields_at(ctx, stage, frames):
-    engine = WrinkleEngine(str(stage), ctx=ctx, warn=lambda m: None)
+    engine = WrinkleEngine(str(stage), ctx=ctx)
     path = engine.wrinkled_paths[0]
     out = []
     try:

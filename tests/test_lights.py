@@ -28,7 +28,7 @@ SUN_SOLID_ANGLE = 2 * math.pi * (1 - math.cos(math.radians(0.53) / 2))
 
 
 def lights_of(stage):
-    return read_lights(stage, Usd.TimeCode.Default(), UsdGeom.XformCache(), warn=None)
+    return read_lights(stage, Usd.TimeCode.Default(), UsdGeom.XformCache())
 
 
 def one_light(kind, **inputs):
@@ -90,7 +90,7 @@ def test_invisible_lights_are_off_and_a_stage_without_lights_gets_the_camera_lig
     mesh.CreatePointsAttr([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    frame = StageSceneDelegate(stage, warn=lambda m: None).sample(float("nan"), 1.0)
+    frame = StageSceneDelegate(stage).sample(float("nan"), 1.0)
     (camera,) = frame.lights
     assert camera.kind == "positional" and not camera.attenuate
     np.testing.assert_allclose(camera.color, math.pi)
@@ -190,7 +190,7 @@ def storm_preview(diffuse, n, e, to_light, irradiance, roughness=0.5, metallic=0
 def test_preview_surface_is_storms(gl_context, material):
     """The quad's centre under a sun 35 degrees off the view, against evaluateLight."""
     stage = quad_stage(material, light_rotation=(35.0, 0.0, 0.0))
-    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam", warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam")
     try:
         color = engine.render_frame(float("nan"), 65, 65, wrinkles=False, samples=1)["color"]
     finally:
@@ -212,7 +212,7 @@ def test_the_fallback_surface_is_storms_simple_lighting(gl_context):
     with a directional viewer, and the ambient terms (glf simpleLighting)."""
     for rotation, display in (((35.0, 0.0, 0.0), (0.25, 0.5, 0.75)), (None, (0.5, 0.5, 0.5))):
         engine = WrinkleEngine(quad_stage(None, rotation, display), ctx=gl_context,
-                               camera="/Cam", warn=lambda m: None)
+                               camera="/Cam")
         try:
             pixel = engine.render_frame(float("nan"), 65, 65, wrinkles=False,
                                         samples=1)["color"].pixels[32, 32, :3]
@@ -240,7 +240,7 @@ def test_a_per_vertex_display_color_is_shaded_per_corner(gl_context):
     red, blue = np.array([0.9, 0.1, 0.1]), np.array([0.1, 0.2, 0.8])
     primvar = mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
     primvar.Set([Gf.Vec3f(*red), Gf.Vec3f(*blue), Gf.Vec3f(*blue), Gf.Vec3f(*red)])
-    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam", warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam")
     try:
         color = engine.render_frame(float("nan"), 65, 65, wrinkles=False,
                                     samples=1)["color"].pixels
@@ -268,7 +268,7 @@ def test_a_time_sampled_display_color_is_read_each_frame(gl_context):
     colours = {1.0: (0.9, 0.1, 0.1), 2.0: (0.1, 0.2, 0.8)}
     for frame, colour in colours.items():
         primvar.Set([Gf.Vec3f(*colour)] * 4, frame)
-    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam", warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam")
     try:
         pixels = {frame: engine.render_frame(frame, 65, 65, wrinkles=False,
                                              samples=1)["color"].pixels[32, 32, :3].copy()

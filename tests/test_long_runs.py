@@ -26,7 +26,7 @@ def rss_bytes() -> int:
 
 
 def test_200_frames_keep_memory_and_gpu_resources_flat(gl_context):
-    engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context)
     try:
         resources = None
         framebuffer = None
@@ -110,7 +110,7 @@ def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
     flat over a long shot, and every frame is written whole."""
     from usdwrinkle.shot import ImageOptions, render_frames
 
-    engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context)
     marks = {}
 
     def progress(items):

@@ -38,8 +38,7 @@ def save(path: Path, pixels: np.ndarray) -> None:
 def test_golden_frames(gl_context, regenerate_goldens, stage_name, frame):
     if not reference_rasterizer(gl_context):
         pytest.skip("goldens are defined on Mesa llvmpipe only (pygfx's convention)")
-    engine = WrinkleEngine(str(SAMPLES / f"{stage_name}.usda"), ctx=gl_context,
-                           warn=lambda m: None)
+    engine = WrinkleEngine(str(SAMPLES / f"{stage_name}.usda"), ctx=gl_context)
     try:
         width, height = engine.resolution(240, None, float(frame))
         buffers = engine.render_frame(float(frame), width, height)
@@ -68,7 +67,7 @@ def test_no_wrinkle_where_uncompressed(gl_context):
     rest, counts, indices = grid_sheet(15, 15, 2.0)
     stretched = rest * np.array([1.3, 1.1, 1.0], np.float32)
     stage = point_cache_stage(rest, {1: stretched}, counts, indices, width=0.3)
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context)
     try:
         buffers = engine.render_frame(1.0, 96, 96)
     finally:
@@ -81,7 +80,7 @@ def test_height_is_bounded_by_amplitude(gl_context):
     rest, counts, indices = grid_sheet(21, 21, 2.0)
     posed = rest * np.array([0.6, 1, 1], np.float32)
     stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.3, amplitude_scale=0.7)
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context)
     try:
         buffers = engine.render_frame(1.0, 128, 128)
     finally:
@@ -95,7 +94,7 @@ def test_height_is_bounded_by_amplitude(gl_context):
 
 def test_buffers_handed_out_are_never_overwritten(gl_context):
     """The framebuffer reuses its readback arrays only when nobody holds them."""
-    engine = WrinkleEngine(str(SAMPLES / "flag.usda"), ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(str(SAMPLES / "flag.usda"), ctx=gl_context)
     try:
         # the flag's waves must be longer than the band limit's 4 pixels to show (at
         # 64 x 48 they fade out and every frame is the same picture)

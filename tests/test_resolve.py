@@ -18,7 +18,7 @@ SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 @pytest.fixture(scope="module", params=[4, 1], ids=["4 samples", "1 sample"])
 def drawn(request, gl_context):
     """The shirt at frame 24, drawn; yields (engine, framebuffer, samples)."""
-    engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context)
     engine.render_frame(24.0, 160, 120, samples=request.param)
     yield engine, engine.framebuffer, request.param
     engine.release()

@@ -114,8 +114,7 @@ def test_lights_are_read():
 
 
 def test_texture_inside_usdz_is_read_through_ar(corpus):
-    scene = StageSceneDelegate(str(corpus / "usd-wg" / "CesiumMan.usdz"), all_meshes=True,
-                               warn=lambda m: None)
+    scene = StageSceneDelegate(str(corpus / "usd-wg" / "CesiumMan.usdz"), all_meshes=True)
     record = next(iter(scene.meshes.values()))
     texture = record.material.texture
     assert texture is not None and texture.shape == (1024, 1024, 4)
@@ -129,8 +128,10 @@ def test_missing_texture_warns_and_renders_untextured(tmp_path):
     stage.SetEditTarget(stage.GetSessionLayer())  # the sample's own layer stays as it is
     tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Plaid/diffuse_texture"))
     tex.GetInput("file").Set(Sdf.AssetPath("./textures/missing.png"))
-    warnings = []
-    scene = StageSceneDelegate(stage, warn=warnings.append)
+    from usdwrinkle.log import collect
+
+    with collect() as warnings:
+        scene = StageSceneDelegate(stage)
     record = scene.meshes["/World/Arm/Sleeve"]
     assert record.material.texture is None
     assert any("missing.png" in w and "untextured" in w for w in warnings)
@@ -150,7 +151,7 @@ def test_visibility_purpose_and_animated_transforms(gl_context):
     guide.CreatePurposeAttr(UsdGeom.Tokens.guide)
     cam = UsdGeom.Camera.Define(stage, "/cam")
     cam.AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
-    engine = WrinkleEngine(stage, ctx=gl_context, warn=lambda m: None)
+    engine = WrinkleEngine(stage, ctx=gl_context)
     try:
         assert list(engine.meshes) == ["/Sheet"]  # guide purpose is not rendered
         centers = []
@@ -257,7 +258,7 @@ def test_a_dropped_scene_delegate_frees_its_stage_at_once():
 
     gc.disable()
     try:
-        scene = StageSceneDelegate(str(SAMPLES / "shirt.usda"), warn=lambda m: None)
+        scene = StageSceneDelegate(str(SAMPLES / "shirt.usda"))
         scene.sample(1.0, 1.5)
         alive = weakref.ref(scene)
         del scene

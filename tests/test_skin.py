@@ -15,8 +15,7 @@ CASES = [("lbs.usda", range(1, 31)), ("dqs.usda", range(1, 31)),
 @pytest.mark.parametrize("name,frames", CASES, ids=[c[0] for c in CASES])
 def test_skin_matches_pixar_baseline(gl_context, corpus, name, frames):
     folder = corpus / "openusd-usdskel"
-    engine = WrinkleEngine(str(folder / name), all_meshes=True, ctx=gl_context,
-                           warn=lambda m: None)
+    engine = WrinkleEngine(str(folder / name), all_meshes=True, ctx=gl_context)
     baseline = Usd.Stage.Open(str(folder / "baseline" / name.replace(".usda", ".baked.usda")))
     skinned = [p for p, r in engine.meshes.items() if r.skin is not None]
     assert skinned, "no skinned mesh found"
@@ -54,8 +53,7 @@ USDSKEL_CASES = [("usd-wg/CesiumMan.usdz", (1.0, 17.0, 40.0)),
 def test_skin_matches_usdskel(gl_context, corpus, name, frames):
     """Real assets (joint mappers, subsets of joints, 4 influences): GPU skin equals
     UsdSkel's own ComputeSkinnedPoints, taken to prim space."""
-    engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context,
-                           warn=lambda m: None)
+    engine = WrinkleEngine(str(corpus / name), all_meshes=True, ctx=gl_context)
     stage = engine.stage
     skinned = [p for p, r in engine.meshes.items() if r.skin is not None]
     assert skinned

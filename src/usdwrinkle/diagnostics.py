@@ -9,6 +9,7 @@ file:line of a syntax error).
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import re
 import sys
@@ -61,9 +62,10 @@ def diagnostic_messages(text: str) -> list[str]:
 
 
 @contextlib.contextmanager
-def usd_diagnostics(warn=None):
-    """Capture what C++ prints on stderr inside the block; each message then goes to
-    ``warn`` (one line each), or is dropped when ``warn`` is None.
+def usd_diagnostics(forward: bool = False):
+    """Capture what C++ prints on stderr inside the block; with ``forward`` each message
+    is then logged as a warning of the caller's (one line each, usdwrinkle/log.py),
+    otherwise dropped.
 
     Yields a list that holds the messages once the block has ended.
     """
@@ -85,6 +87,6 @@ def usd_diagnostics(warn=None):
             capture.seek(0)
             text = capture.read().decode("utf-8", "replace")
             messages.extend(diagnostic_messages(text))
-            if warn is not None:
+            if forward:
                 for message in messages:
-                    warn(message)
+                    logging.getLogger("usdwrinkle.usd").warning("%s", message)

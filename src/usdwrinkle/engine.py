@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from .errors import UsdWrinkleError, print_warning
+from .errors import UsdWrinkleError
 from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
@@ -49,12 +49,11 @@ class WrinkleEngine:
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 camera: str | None = None, warn=print_warning, ctx=None, profile: bool = False,
+                 camera: str | None = None, ctx=None, profile: bool = False,
                  history_start: float | None = None, use_baked: bool = True,
                  preroll_progress=None):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
-                                        relax_iterations=relax_iterations, warn=warn,
-                                        use_baked=use_baked)
+                                        relax_iterations=relax_iterations, use_baked=use_baked)
         self.camera = camera
         find_camera(self.scene.stage, camera)  # a missing camera fails before any GPU work
         self.render_delegate = RenderDelegate(ctx, profile=profile)
@@ -103,10 +102,6 @@ class WrinkleEngine:
     def corner_primvar(self, path: str, name: str):
         """A primvar of ``path`` per triangle corner ([3t + c]), or None (scene side)."""
         return self.scene.corner_primvar(path, name)
-
-    def set_warn(self, warn) -> None:
-        """Where the scene's warnings go from now on (a farm worker collects them)."""
-        self.scene.warn = warn
 
     @property
     def ctx(self):

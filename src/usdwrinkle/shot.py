@@ -7,6 +7,7 @@ farm is made by exactly the code that renders it serially.
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -14,6 +15,8 @@ from dataclasses import dataclass
 from . import schema
 from .errors import UsdWrinkleError
 from .timecode import format_frame
+
+_log = logging.getLogger(__name__)
 
 #: the warning of a render that finds no wrinkled mesh (serial and farm)
 NO_WRINKLED_MESH = ("no mesh has WrinkleAPI applied; rendering without wrinkles "
@@ -33,14 +36,12 @@ class EngineOptions:
     #: time every pass (GL timer queries, or the wall clock between glFinish calls)
     profile: bool = False
 
-    def create(self, stage=None, warn=None, preroll_progress=None):
+    def create(self, stage=None, preroll_progress=None):
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
         ``preroll_progress`` wraps the list of preroll frames (a progress bar)."""
         from .engine import WrinkleEngine
 
-        kwargs = {"warn": warn} if warn is not None else {}
-        if preroll_progress is not None:
-            kwargs["preroll_progress"] = preroll_progress
+        kwargs = {} if preroll_progress is None else {"preroll_progress": preroll_progress}
         return WrinkleEngine(stage if stage is not None else self.stage,
                              all_meshes=self.all_meshes,
                              relax_iterations=self.relax_iterations, camera=self.camera,
@@ -126,12 +127,12 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
     return writer.written
 
 
-def bakeable_meshes(engine, warn) -> dict:
+def bakeable_meshes(engine) -> dict:
     """Path -> MeshRecord of the wrinkled meshes a layer can override."""
     wrinkled = {}
     for path in engine.wrinkled_paths:
         if engine.stage.GetPrimAtPath(path).IsInstanceProxy():
-            warn(f"mesh is inside an instance and cannot be overridden; skipped ({path})")
+            _log.warning(f"mesh is inside an instance and cannot be overridden; skipped ({path})")
             continue
         wrinkled[path] = engine.meshes[path]
     return wrinkled
@@ -160,8 +161,7 @@ class BakeRequest:
     geometry: object | None = None
 
 
-def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
-               progress: Callable = lambda items: items,
+def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: items,
                survey_progress: Callable | None = None) -> int:
     """Compute every frame of ``request`` in order (the phase history is sequential in
     time) and write the wrinkle fields to its output atomically; returns the number of
@@ -175,7 +175,7 @@ def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
     frame_spec = request.frame_spec or frame_spec_text(frames)
 
     engine.check_relax_work(frames)
-    wrinkled = bakeable_meshes(engine, warn)
+    wrinkled = bakeable_meshes(engine)
     if not wrinkled:  # a layer without wrinkle data is never what a bake is run for
         if engine.wrinkled_paths:
             raise UsdWrinkleError("every wrinkled mesh is inside an instance and cannot be "
@@ -191,7 +191,7 @@ def bake_layer(engine, request: BakeRequest, warn=lambda message: None,
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals
     # are baked (README: maps)
     scene = BakeScene(engine.stage, stage_path, output, tuple(frames), wrinkled,
-                      engine.meshes, engine.ctx, engine.corner_primvar, warn)
+                      engine.meshes, engine.ctx, engine.corner_primvar)
     sinks = [LayerBaker(scene, LayerOptions(
         with_points=request.with_points or maps is not None,
         display_color=request.display_color, sparse=request.sparse, frame_spec=frame_spec))]

@@ -159,17 +159,22 @@ def check_map_folder(folder: str) -> None:
 
 
 def run(args) -> int:
-    from ..outputs.atomic import check_writable
     from ..outputs.layers import check_layer_path
-    from ..scene.stage import inherited_range_note, open_stage, stage_frames
-    from ..shot import BakeRequest, bake_layer
 
     check_stage_args(args)
     maps = map_options(args)
     geometry = geometry_options(args)
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
-    reporter = Reporter(args.quiet)
+    with Reporter(args.quiet) as reporter:
+        return _bake(args, reporter, maps, geometry)
+
+
+def _bake(args, reporter, maps, geometry) -> int:
+    from ..outputs.atomic import check_writable
+    from ..scene.stage import inherited_range_note, open_stage, stage_frames
+    from ..shot import BakeRequest, bake_layer
+
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     refuse_overwriting_inputs(args.stage, [args.output], stage)
@@ -190,7 +195,7 @@ def run(args) -> int:
         request = BakeRequest(args.stage, args.output, tuple(frames), args.frames,
                               with_points=args.with_points, display_color=args.display_color,
                               sparse=args.sparse, maps=maps, geometry=geometry)
-        count = bake_layer(engine, request, warn=reporter.warn,
+        count = bake_layer(engine, request,
                            progress=lambda items: reporter.progress(items, "bake"),
                            survey_progress=lambda items: reporter.progress(items, "survey"))
         if not args.quiet:

@@ -86,11 +86,13 @@ def effective_widths(stage) -> list[dict]:
     metersPerUnit), as the scene delegate resolves it; none where the stage cannot be
     read that far (the findings say why)."""
     from ..errors import UsdWrinkleError
+    from ..log import silenced
     from ..scene.params import width_summary
     from ..scene.stage import StageSceneDelegate
 
     try:
-        scene = StageSceneDelegate(stage, warn=lambda message: None, use_baked=False)
+        with silenced():  # the findings report what is wrong
+            scene = StageSceneDelegate(stage, use_baked=False)
     except UsdWrinkleError:
         return []
     return [{"prim": path, **width_summary(record.params)}

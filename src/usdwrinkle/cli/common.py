@@ -45,11 +45,25 @@ from ..scene.stage import refuse_overwriting_inputs  # noqa: E402,F401  (the CLI
 
 
 class Reporter:
-    """Warnings to stderr (unless quiet) and a progress bar for multi-frame runs."""
+    """A command's warnings on stderr, each once, and a progress bar for multi-frame runs
+    (unless quiet). As a context manager it is where usdwrinkle's logged warnings go
+    (log.warnings_to) while the command runs."""
 
     def __init__(self, quiet: bool = False):
         self.quiet = quiet
         self.seen: set[str] = set()
+        self._sink = None
+
+    def __enter__(self) -> Reporter:
+        from ..log import warnings_to
+
+        self._sink = warnings_to(self.warn)
+        self._sink.__enter__()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._sink.__exit__(*exc)
+        self._sink = None
 
     def warn(self, message: str) -> None:
         if message in self.seen:
@@ -80,5 +94,5 @@ def start_engine(args, reporter: Reporter, stage, camera: str | None = None,
                  use_baked: bool = True):
     """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
     engine = engine_options(args, camera=camera, use_baked=use_baked).create(
-        stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
+        stage, lambda steps: reporter.progress(steps, "preroll"))
     return engine

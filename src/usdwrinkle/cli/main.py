@@ -112,10 +112,10 @@ def _one_line_warnings() -> None:
     """Python warnings (numpy's RuntimeWarning and the like) as our one-line warnings."""
     import warnings
 
-    from ..errors import print_warning
+    from ..log import warn
 
     def show(message, category, filename, lineno, file=None, line=None):
-        print_warning(f"{message} ({category.__name__})")
+        warn(f"{message} ({category.__name__})")
 
     warnings.showwarning = show
 

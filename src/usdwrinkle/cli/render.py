@@ -207,14 +207,18 @@ def run(args) -> int:
 def render_shot(args) -> list[str]:
     """The render command's work; returns the file of each frame of the shot (written, or
     kept by --skip-existing). usdwrinkle.api.render calls it too."""
+    check_render_args(args)
+    with Reporter(args.quiet) as reporter:
+        return _render_shot(args, reporter)
+
+
+def _render_shot(args, reporter) -> list[str]:
     from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
     from ..scene.baked import geometry_bake
     from ..scene.stage import inherited_range_note, open_stage, stage_frames
     from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames
 
-    check_render_args(args)
-    reporter = Reporter(args.quiet)
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)

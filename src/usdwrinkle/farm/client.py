@@ -34,6 +34,8 @@ from ..outputs.atomic import remove_temporaries
 from ..shot import NO_WRINKLED_MESH, BakeRequest, EngineOptions, ImageOptions, bake_layer
 from .worker import file_identity, render_chunk
 
+_log = logging.getLogger(__name__)
+
 #: how often Dask reruns a chunk whose worker died
 RETRIES = 2
 #: frames per chunk at most, when --chunk is not given
@@ -161,7 +163,8 @@ class FarmResult:
 
 def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     """Run a farm render. ``stage``: the opened Usd.Stage of ``job.stage_path``;
-    ``reporter``: warn(message), progress(items, desc) and quiet (cli/common.Reporter)."""
+    ``reporter``: progress(items, desc) and quiet (cli/common.Reporter); warnings are
+    logged (usdwrinkle/log.py), the workers' too."""
     from ..engine import image_size
     from ..scene.camera import find_camera
     from ..scene.stage import StageSceneDelegate, refuse_overwriting_inputs
@@ -172,14 +175,14 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     # the checks of a serial render, once, here (no GL context)
     scene = StageSceneDelegate(stage, all_meshes=job.engine.all_meshes,
                                relax_iterations=job.engine.relax_iterations,
-                               warn=reporter.warn, use_baked=wrinkles and not job.recompute)
+                               use_baked=wrinkles and not job.recompute)
     find_camera(stage, job.engine.camera)
     needs_bake = _needs_bake(scene, frames, wrinkles, job.recompute)
     layer = bake_path(job.output, job.stage_path) if needs_bake else None
     if layer is not None:
         refuse_overwriting_inputs(job.stage_path, [layer], stage)
     if wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
-        reporter.warn(NO_WRINKLED_MESH)
+        _log.warning(NO_WRINKLED_MESH)
     width, height = image_size(scene, job.engine.camera, job.image.width, job.image.height,
                                frames[0])
     image = dataclasses.replace(job.image, width=width, height=height)
@@ -200,11 +203,10 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
             bake_started = time.perf_counter()
             os.makedirs(os.path.dirname(layer), exist_ok=True)
             engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
-                stage, reporter.warn, lambda steps: reporter.progress(steps, "preroll"))
+                stage, lambda steps: reporter.progress(steps, "preroll"))
             try:
                 bake_layer(engine, BakeRequest(job.stage_path, layer, tuple(frames),
                                                job.frame_spec),
-                           warn=reporter.warn,
                            progress=lambda items: reporter.progress(items, "bake"))
             finally:
                 engine.release()
@@ -261,7 +263,7 @@ def _gather(distributed, futures, total: int, chunk: int,
                     f"Dask workers died {RETRIES + 1} times while rendering one chunk "
                     f"({exc}); see the workers' logs") from None
             for message in result["warnings"]:
-                reporter.warn(message)
+                _log.warning("%s", message)
             if result["error"] is not None:
                 error = result["error"]
                 raise UsdWrinkleError(error["what"], error["prim_path"], error["attribute"],

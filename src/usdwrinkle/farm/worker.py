@@ -17,24 +17,23 @@ import threading
 
 from ..errors import UsdWrinkleError
 from ..imagefiles import is_complete_image
+from ..log import warnings_to
 from ..shot import EngineOptions, ImageOptions, render_frames
 
 _lock = threading.Lock()
 _cached: dict = {"key": None, "engine": None}
 
 
-def _engine(options: EngineOptions, warnings: list[str]):
+def _engine(options: EngineOptions):
     """This process's engine for ``options`` (a new stage or options replaces it)."""
     key = (options, threading.get_ident())
     if _cached["key"] != key:
         if _cached["engine"] is not None:
             _cached["engine"].release()
             _cached["engine"] = _cached["key"] = None
-        _cached["engine"] = options.create(warn=warnings.append)
+        _cached["engine"] = options.create()
         _cached["key"] = key
-    engine = _cached["engine"]
-    engine.set_warn(warnings.append)
-    return engine
+    return _cached["engine"]
 
 
 def file_identity(path: str):
@@ -64,8 +63,7 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
 
     ``before``: each path's file identity when the run started (file_identity).
     """
-    warnings: list[str] = []
-    result = {"written": [], "skipped": [], "warnings": warnings, "error": None,
+    result = {"written": [], "skipped": [], "warnings": [], "error": None,
               "baked": [], "worker": os.getpid()}
     previous = dict(zip(paths, before, strict=True))
 
@@ -78,13 +76,15 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
 
     from ..render.context import create_context
 
-    with _lock:
+    # this chunk's warnings (also those of a cached engine's later frames) go back to the
+    # client, which prints each once
+    with _lock, warnings_to(result["warnings"].append):
         try:
             # current on this thread for the whole chunk: the previous chunk's exit made it
             # not current, and replacing the engine (a new job on a long-running worker)
             # releases and compiles GL objects
             with create_context():
-                engine = _engine(options, warnings)
+                engine = _engine(options)
                 result["written"] = render_frames(engine, image, frames, paths, skip=skip)
             result["baked"] = engine.baked_paths
         except UsdWrinkleError as exc:

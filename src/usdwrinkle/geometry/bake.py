@@ -14,6 +14,8 @@ those at 6 per wavelength took the shirt from 4 to 6 levels (1.7 M points instea
 """
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ..errors import UsdWrinkleError
@@ -30,6 +32,8 @@ from .subdivide import (
     levels_for,
     subdivide,
 )
+
+_log = logging.getLogger(__name__)
 
 #: bytes a fine point costs per frame while the layer is built (points, normals, the
 #: read-back copies)
@@ -85,7 +89,6 @@ class GeometryBake:
         self.meshes = scene.meshes
         self.options = options
         self.frames = list(scene.frames)
-        self.warn = scene.warn
         #: per mesh, the per-triangle phase advances of the surveyed frames
         self.advances: dict[str, list[np.ndarray]] = {path: [] for path in scene.meshes}
         self.writers: dict[str, FineMeshWriter] = {}
@@ -144,12 +147,12 @@ class GeometryBake:
                                               levels) > AUTO_FINE_POINTS:
             levels -= 1
         if levels < wanted:
-            self.warn(f"{path}: {wanted} subdivision levels would resolve its waves but make "
-                      f"{fine_point_count(len(record.rest_points), triangles, wanted):,} "
-                      f"fine points (more than {AUTO_FINE_POINTS:,}); baking {levels} levels, "
-                      "where waves shorter than 2 fine edges fade to the smooth surface "
-                      "(band limit); a smaller wrinkle:width asks for this, --levels sets "
-                      "the count")
+            _log.warning(f"{path}: {wanted} subdivision levels would resolve its waves but make "
+                         f"{fine_point_count(len(record.rest_points), triangles, wanted):,} "
+                         f"fine points (more than {AUTO_FINE_POINTS:,}); baking {levels} levels, "
+                         "where waves shorter than 2 fine edges fade to the smooth surface "
+                         "(band limit); a smaller wrinkle:width asks for this, --levels sets "
+                         "the count")
         return levels
 
     def add_frame(self, frame: float, fields: dict, resources: dict) -> None:

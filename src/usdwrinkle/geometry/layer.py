@@ -18,6 +18,8 @@ no skeleton and no joint influences, so UsdSkel does not skin it again (README).
 """
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
@@ -25,6 +27,8 @@ from ..outputs.layers import attribute_spec, bind_material, define_prim
 from ..outputs.sink import BakeScene
 from ..scene.material import corner_values
 from .subdivide import FineMesh
+
+_log = logging.getLogger(__name__)
 
 SUFFIX = "_wrinkled"
 #: primvars that are not carried: the wrinkle fields, skinning, the rest pose, normals
@@ -66,7 +70,6 @@ class FineMeshWriter:
         self.prim = scene.stage.GetPrimAtPath(coarse)
         self.fine = fine
         self.topology = scene.meshes[coarse].topology
-        self.warn = scene.warn
         self.xformable = UsdGeom.Xformable(self.prim)
         self.moves = bool(self.xformable.GetOrderedXformOps()) and \
             self.xformable.TransformMightBeTimeVarying()
@@ -125,8 +128,8 @@ class FineMeshWriter:
                 values = np.einsum("mjk,mkc->mjc", fine.corner_bary, coarse)
                 value = _array(type_name, values.reshape(-1, coarse.shape[-1]).squeeze())
             if value is None:
-                self.warn(f"primvar {name} ({type_name}) cannot be interpolated onto the "
-                          f"wrinkled mesh; not carried ({self.coarse})")
+                _log.warning(f"primvar {name} ({type_name}) cannot be interpolated onto the "
+                             f"wrinkled mesh; not carried ({self.coarse})")
                 continue
             attribute_spec(spec, name, type_name, value,
                            interpolation=UsdGeom.Tokens.faceVarying)

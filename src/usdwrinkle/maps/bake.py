@@ -5,6 +5,7 @@ from exactly the fields the bake writes as primvars.
 """
 from __future__ import annotations
 
+import logging
 import os
 from dataclasses import dataclass
 
@@ -30,6 +31,8 @@ from .files import (
 from .options import MapOptions
 from .raster import MapRasterizer
 from .tangents import corner_groups, mikktspace
+
+_log = logging.getLogger(__name__)
 
 #: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
 MIN_MAP_SIZE = 16
@@ -79,7 +82,6 @@ class MapBake:
         self.scene = scene
         self.options = options
         self.layer_path = scene.output
-        self.warn = warn = scene.warn
         self.folder = options.folder_for(scene.output)
         self.plans: dict[str, MeshMaps] = {}
         self.layer = None
@@ -88,14 +90,14 @@ class MapBake:
         for path in meshes:
             corner_uv = scene.corner_primvar(path, options.uv)
             if corner_uv is None or corner_uv.shape[-1] < 2:
-                warn(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
-                     f"maps for it ({path})")
+                _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
+                             f"maps for it ({path})")
                 continue
             corner_uv = np.ascontiguousarray(corner_uv[..., :2], np.float32)
             tiles, outside = uv_tiles(corner_uv)
             if outside:
-                warn(f"{outside} triangle(s) have texture coordinates outside the UDIM tiles "
-                     f"1001..1100; their wrinkle maps are not written ({path})")
+                _log.warning(f"{outside} triangle(s) have texture coordinates outside the UDIM "
+                             f"tiles 1001..1100; their wrinkle maps are not written ({path})")
             self.plans[path] = MeshMaps(path, stems[path], corner_uv, tiles)
         if meshes and not self.plans:
             raise UsdWrinkleError(
@@ -183,9 +185,9 @@ class MapBake:
             fraction = self._rasterizer.overlap(res, plan.corner_uv, tile)
             if fraction > OVERLAP_WARNING:
                 where = f" in UDIM tile {udim_number(tile)}" if plan.udim else ""
-                self.warn(f"texture coordinates '{self.options.uv}' overlap{where}: "
-                          f"{100 * fraction:.1f}% of the map's texels lie under more than one "
-                          f"triangle, and hold the wrinkles of only one of them ({plan.path})")
+                _log.warning(f"texture coordinates '{self.options.uv}' overlap{where}: "
+                             f"{100 * fraction:.1f}% of the map's texels lie under more than one "
+                             f"triangle, and hold the wrinkles of only one of them ({plan.path})")
 
     def finish(self) -> dict:
         """Write each mesh's material and binding into the layer (maps/material.py);
@@ -196,7 +198,7 @@ class MapBake:
         for path, plan in self.plans.items():
             target = MaterialTarget(path, material_path(stage, path, plan.stem),
                                     self.files[path], plan.udim)
-            author_material(self.layer, stage, target, self.options, self.warn)
+            author_material(self.layer, stage, target, self.options)
         return {"maps": self.metadata()}
 
     def commit(self) -> None:

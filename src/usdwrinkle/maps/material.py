@@ -20,6 +20,7 @@ API into the bake's layer: the source stage is read, never edited.
 """
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -28,6 +29,8 @@ from pxr import Sdf, Usd, UsdShade
 from ..outputs.layers import attribute_spec, bind_material, define_prim
 from ..scene.material import bound_surface, display_color
 from ..schema import MAP_INPUTS
+
+_log = logging.getLogger(__name__)
 
 SCOPE = "WrinkleMaterials"
 #: map kind -> (material interface input, texture shader name, its output, surface input)
@@ -81,7 +84,7 @@ class MaterialTarget:
 
 
 def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
-                    options, warn) -> None:
+                    options) -> None:
     """Write ``target``'s material and bind it to the mesh. ``options``
     (maps.options.MapOptions): the UV primvar the maps are laid out in, and whether the
     height map is also bound to ``inputs:displacement``."""
@@ -100,12 +103,12 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
         surface_spec = Sdf.CreatePrimInLayer(layer, surface)
         existing = UsdShade.Shader(stage.GetPrimAtPath(source_surface)).GetInput("normal")
         if existing and existing.HasConnectedSource():
-            warn(f"the mesh's material has a normal map; the wrinkle normal map replaces it "
-                 f"({mesh_path})")
+            _log.warning(f"the mesh's material has a normal map; the wrinkle normal map replaces "
+                         f"it ({mesh_path})")
     else:
         if source_material is not None:
-            warn(f"the mesh's material {source_material} has no UsdPreviewSurface; the "
-                 f"wrinkle material is a plain UsdPreviewSurface ({mesh_path})")
+            _log.warning(f"the mesh's material {source_material} has no UsdPreviewSurface; the "
+                         f"wrinkle material is a plain UsdPreviewSurface ({mesh_path})")
         surface = path.AppendChild("PreviewSurface")
         surface_spec = _shader(layer, surface, "UsdPreviewSurface")
         attribute_spec(surface_spec, "inputs:diffuseColor", VALUE_TYPES.Color3f,

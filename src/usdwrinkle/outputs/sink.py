@@ -22,10 +22,6 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 
-def _silent(message: str) -> None:
-    return None
-
-
 @dataclass(frozen=True)
 class BakeScene:
     """What the writers of one bake are given, gathered once by shot.bake_layer.
@@ -37,7 +33,7 @@ class BakeScene:
     ``meshes``: path -> MeshRecord of the wrinkled meshes the layer overrides;
     ``records``: path -> MeshRecord of every mesh of the stage. ``ctx``: the moderngl
     context the GPU sinks draw with. ``corner_primvar(path, name)``: the scene's reader
-    of a primvar per triangle corner (the maps' UVs). ``warn``: one line per message."""
+    of a primvar per triangle corner (the maps' UVs)."""
 
     stage: object
     stage_path: str
@@ -47,7 +43,6 @@ class BakeScene:
     records: dict = field(default_factory=dict)
     ctx: object = None
     corner_primvar: Callable | None = None
-    warn: Callable[[str], None] = _silent
 
 
 class BakeSink(Protocol):

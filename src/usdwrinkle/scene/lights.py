@@ -21,6 +21,7 @@ what differs):
 """
 from __future__ import annotations
 
+import logging
 import math
 from functools import lru_cache
 
@@ -30,6 +31,8 @@ from pxr import Usd, UsdGeom, UsdLux
 from ..errors import UsdWrinkleError
 from ..values import finite_in_float32, frame_of
 from .records import LightRecord
+
+_log = logging.getLogger(__name__)
 
 #: radiance beyond this is refused: the draw sums lights in float32 (max 3.4e38)
 MAX_RADIANCE = 1e30
@@ -120,8 +123,7 @@ LIGHT_TYPES = (UsdLux.DistantLight, UsdLux.SphereLight, UsdLux.DiskLight, UsdLux
                UsdLux.CylinderLight, UsdLux.DomeLight)
 
 
-def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache,
-                warn=None) -> list[LightRecord]:
+def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache) -> list[LightRecord]:
     """The stage's visible UsdLux lights at ``time``, as Storm approximates them."""
     lights = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
@@ -131,15 +133,14 @@ def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache,
                 UsdGeom.Imageable(prim).ComputeVisibility(time) == UsdGeom.Tokens.invisible:
             continue
         if not any(prim.IsA(kind) for kind in LIGHT_TYPES):
-            if warn is not None:
-                warn(f"{prim.GetTypeName() or 'this'} light is not supported; ignored "
-                     f"({prim.GetPath()})")
+            _log.warning(f"{prim.GetTypeName() or 'this'} light is not supported; ignored "
+                         f"({prim.GetPath()})")
             continue
-        lights.append(_light(prim, time, xform_cache, warn))
+        lights.append(_light(prim, time, xform_cache))
     return lights
 
 
-def _light(prim: Usd.Prim, time, xform_cache, warn) -> LightRecord:
+def _light(prim: Usd.Prim, time, xform_cache) -> LightRecord:
     path = str(prim.GetPath())
     api = UsdLux.LightAPI(prim)
     color = _color(api, path, time)
@@ -147,7 +148,7 @@ def _light(prim: Usd.Prim, time, xform_cache, warn) -> LightRecord:
     specular = float(_value(api.GetSpecularAttr(), time, 1.0))
     xf = _transform(prim, time, xform_cache)
     if prim.IsA(UsdLux.DomeLight):
-        sh, texture, key = dome_environment(UsdLux.DomeLight(prim), time, xf, warn)
+        sh, texture, key = dome_environment(UsdLux.DomeLight(prim), time, xf)
         return LightRecord("dome", color * diffuse, color * specular, dome_sh=sh * color,
                            dome_texture=texture, world_to_dome=_rotation(xf).T,
                            dome_key=key)
@@ -268,7 +269,7 @@ def _rotation(xf: np.ndarray) -> np.ndarray:
     return rotation / np.maximum(np.linalg.norm(rotation, axis=1, keepdims=True), 1e-30)
 
 
-def dome_environment(light: UsdLux.DomeLight, time, xf: np.ndarray, warn):
+def dome_environment(light: UsdLux.DomeLight, time, xf: np.ndarray):
     """(SH9 (9, 3) of the dome's radiance in world directions, its texture or None, the
     texture's key), without the light's colour. A dome without a texture (or with one
     that cannot be read: a warning) is a constant radiance of 1."""
@@ -278,9 +279,8 @@ def dome_environment(light: UsdLux.DomeLight, time, xf: np.ndarray, warn):
         return CONSTANT_SH, None, None
     path = str(light.GetPrim().GetPath())
     if not asset.resolvedPath:
-        if warn is not None:
-            warn(f"dome light texture '{asset.path}' not found; lit as a constant dome "
-                 f"({path})")
+        _log.warning(f"dome light texture '{asset.path}' not found; lit as a constant dome "
+                     f"({path})")
         return CONSTANT_SH, None, None
     rotation = _rotation(xf)
     from .material import load_texture
@@ -289,8 +289,7 @@ def dome_environment(light: UsdLux.DomeLight, time, xf: np.ndarray, warn):
         texture = load_texture(asset.resolvedPath, "auto")
         sh = _texture_sh(asset.resolvedPath, rotation.tobytes())
     except OSError as exc:
-        if warn is not None:
-            warn(f"{exc}; lit as a constant dome ({path})")
+        _log.warning(f"{exc}; lit as a constant dome ({path})")
         return CONSTANT_SH, None, None
     return sh, texture, asset.resolvedPath
 

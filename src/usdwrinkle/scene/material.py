@@ -8,6 +8,7 @@ triangle corner, whatever the primvar's interpolation.
 """
 from __future__ import annotations
 
+import logging
 import os
 import tempfile
 from functools import lru_cache
@@ -23,6 +24,8 @@ from ..values import static_flattened, static_value
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
 from .topology import Topology
+
+_log = logging.getLogger(__name__)
 
 DEFAULT_COLOR = np.array([0.6, 0.6, 0.6], np.float32)
 #: Storm's displayColor where a mesh authors none (measured: 0.5 grey)
@@ -159,7 +162,7 @@ def _color_space(tex: UsdShade.Shader, time) -> str:
     return str(value) if value in ("raw", "sRGB") else "auto"
 
 
-def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, warn):
+def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time):
     """(texture pixels, corner st, scale, bias) of a UsdUVTexture, or Nones when it cannot
     be used (with a warning: the mesh then renders untextured)."""
     scale, bias = _scale_bias(tex, time)
@@ -167,17 +170,18 @@ def _texture(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time, war
     if file_value is None:
         return None, None, scale, bias
     if not file_value.resolvedPath:
-        warn(f"texture '{file_value.path}' not found; rendering untextured ({prim.GetPath()})")
+        _log.warning(f"texture '{file_value.path}' not found; rendering untextured "
+                     f"({prim.GetPath()})")
         return None, None, scale, bias
     try:
         texture = load_texture(file_value.resolvedPath, _color_space(tex, time))
     except OSError as exc:
-        warn(f"{exc}; rendering untextured ({prim.GetPath()})")
+        _log.warning(f"{exc}; rendering untextured ({prim.GetPath()})")
         return None, None, scale, bias
     varname, st = _coordinates(prim, tex, topology, time)
     if st is None:
-        warn(f"texture coordinates '{varname}' missing; rendering untextured "
-             f"({prim.GetPath()})")
+        _log.warning(f"texture coordinates '{varname}' missing; rendering untextured "
+                     f"({prim.GetPath()})")
         return None, None, scale, bias
     return texture, st, scale, bias
 
@@ -215,7 +219,7 @@ def _tiles(file_value, attr, time) -> list[tuple[int, str]]:
     return tiles
 
 
-def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
+def read_normal_map(prim: Usd.Prim, topology: Topology, time,
                     shader: UsdShade.Shader | None = None) -> tuple:
     """(NormalMapRecord or None, whether its file is time-sampled) of a mesh's bound
     UsdPreviewSurface inputs:normal, when a UsdUVTexture feeds it."""
@@ -228,8 +232,8 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
         return None, False
     where = prim.GetPath()
     if tex.GetIdAttr().Get() != "UsdUVTexture":
-        warn(f"inputs:normal comes from a {tex.GetIdAttr().Get()} shader, not a UsdUVTexture; "
-             f"the normal map is ignored ({where})")
+        _log.warning(f"inputs:normal comes from a {tex.GetIdAttr().Get()} shader, not a "
+                     f"UsdUVTexture; the normal map is ignored ({where})")
         return None, False
     attr = _file_attribute(tex)
     file_value = static_value(attr, time) if attr else None
@@ -238,12 +242,12 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
     varies = attr.ValueMightBeTimeVarying()
     tiles = _tiles(file_value, attr, time)
     if not tiles:
-        warn(f"normal map '{file_value.path}' not found; rendered without it ({where})")
+        _log.warning(f"normal map '{file_value.path}' not found; rendered without it ({where})")
         return None, varies
     outside = [tile for tile, _ in tiles if not -1 <= tile < UDIM_TILES]
     if outside:
-        warn(f"normal map '{file_value.path}': UDIM tiles beyond "
-             f"{1000 + UDIM_TILES} are not drawn ({where})")
+        _log.warning(f"normal map '{file_value.path}': UDIM tiles beyond "
+                     f"{1000 + UDIM_TILES} are not drawn ({where})")
     color_space = _color_space(tex, time)
     loaded = []
     try:
@@ -251,16 +255,16 @@ def read_normal_map(prim: Usd.Prim, topology: Topology, time, warn,
             if -1 <= tile < UDIM_TILES:
                 loaded.append((tile, load_texture(resolved, color_space)))
     except OSError as exc:
-        warn(f"{exc}; rendered without the normal map ({where})")
+        _log.warning(f"{exc}; rendered without the normal map ({where})")
         return None, varies
     if len({pixels.shape for _, pixels in loaded}) > 1:
-        warn(f"normal map '{file_value.path}': its UDIM tiles differ in size; rendered "
-             f"without it ({where})")
+        _log.warning(f"normal map '{file_value.path}': its UDIM tiles differ in size; rendered "
+                     f"without it ({where})")
         return None, varies
     varname, st = _coordinates(prim, tex, topology, time)
     if st is None:
-        warn(f"texture coordinates '{varname}' of the normal map missing; rendered without "
-             f"it ({where})")
+        _log.warning(f"texture coordinates '{varname}' of the normal map missing; rendered without "
+                     f"it ({where})")
         return None, varies
     scale, bias = _scale_bias(tex, time)
     key = "|".join(resolved for _, resolved in tiles) + f"|{color_space}"
@@ -292,16 +296,16 @@ SURFACE_INPUTS = {"emissiveColor": "emissive_color",
                   "occlusion": "occlusion"}
 
 
-def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time, warn) -> SurfaceParams:
+def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time) -> SurfaceParams:
     """A UsdPreviewSurface's constant inputs; one that a texture (or another shader)
     drives keeps its fallback, with a warning naming it."""
     values = {}
     for name, field in SURFACE_INPUTS.items():
         value, source = _resolve(shader, name, time)
         if source is not None:
-            warn(f"inputs:{name} comes from a {source.GetIdAttr().Get() or 'shader'}; "
-                 f"usdwrinkle reads it as the constant {getattr(SurfaceParams, field)} "
-                 f"({prim.GetPath()})")
+            _log.warning(f"inputs:{name} comes from a {source.GetIdAttr().Get() or 'shader'}; "
+                         f"usdwrinkle reads it as the constant {getattr(SurfaceParams, field)} "
+                         f"({prim.GetPath()})")
             continue
         if value is None:
             continue
@@ -365,7 +369,7 @@ def _per_corner(colors) -> dict:
     return {"corner_colors": values, "color_varies": varies}
 
 
-def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRecord:
+def read_material(prim: Usd.Prim, topology: Topology, time) -> MaterialRecord:
     """Resolve the bound material of a mesh into a MaterialRecord: UsdPreviewSurface's
     diffuseColor, constant or from a UsdUVTexture, its normal map and its other inputs;
     without a UsdPreviewSurface, displayColor and displayOpacity for Storm's fallback
@@ -382,8 +386,8 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
             color = FALLBACK_DISPLAY_COLOR
         return MaterialRecord(np.asarray(color, np.float32)[:3],
                               opacity=display_opacity(prim, time))
-    surface = surface_params(shader, prim, time, warn)
-    normal_map, varies = read_normal_map(prim, topology, time, warn, shader)
+    surface = surface_params(shader, prim, time)
+    normal_map, varies = read_normal_map(prim, topology, time, shader)
     maps = bool(material.GetInput(MAP_INPUTS["normal"]))
     value, source = _resolve(shader, "diffuseColor", time)
     if source is None:
@@ -403,7 +407,7 @@ def read_material(prim: Usd.Prim, topology: Topology, time, warn) -> MaterialRec
         color = PREVIEW_DIFFUSE_FALLBACK if fallback is None else fallback
         return MaterialRecord(np.asarray(color, np.float32)[:3], normal_map=normal_map,
                               normal_map_varies=varies, wrinkle_maps=maps, surface=surface)
-    texture, st, scale, bias = _texture(prim, source, topology, time, warn)
+    texture, st, scale, bias = _texture(prim, source, topology, time)
     # untextured means a neutral clay, not the (often black) texture fallback
     color = DEFAULT_COLOR if texture is None else np.ones(3, np.float32)
     return MaterialRecord(np.asarray(color, np.float32)[:3], texture, st, scale, bias,

@@ -17,6 +17,7 @@ the surface is shaded with, and what the wave blend bends.
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,8 @@ from pxr import UsdGeom
 from ..errors import UsdWrinkleError
 from ..values import finite_in_float32, static_flattened, static_value
 from .topology import Topology
+
+_log = logging.getLogger(__name__)
 
 SOURCES = ("smooth", "faceted", "authored")
 
@@ -84,7 +87,7 @@ def _face_corners(counts: np.ndarray, indices: np.ndarray, keep: np.ndarray,
 
 
 def plan_normals(prim, topology: Topology, counts: np.ndarray, indices: np.ndarray,
-                 holes: np.ndarray | None, left_handed: bool, warn) -> NormalPlan:
+                 holes: np.ndarray | None, left_handed: bool) -> NormalPlan:
     """The NormalPlan of a Mesh prim (its faces as authored; ``holes``: hole faces)."""
     mesh = UsdGeom.Mesh(prim)
     path = str(prim.GetPath())
@@ -100,7 +103,7 @@ def plan_normals(prim, topology: Topology, counts: np.ndarray, indices: np.ndarr
         _, point, prev, nxt = _face_corners(counts, indices, keep, left_handed)
         return NormalPlan("smooth", n, topology.triangles.astype(np.int32),
                           _csr(point, np.stack([prev, nxt], axis=1), n, 2))
-    authored = _authored(prim, mesh, topology, counts, indices, path, warn)
+    authored = _authored(prim, mesh, topology, counts, indices, path)
     if authored is not None:
         return authored
     face_of, point, _, _ = _face_corners(counts, indices, keep, left_handed)
@@ -109,7 +112,7 @@ def plan_normals(prim, topology: Topology, counts: np.ndarray, indices: np.ndarr
         _csr(face_of, point[:, None], len(counts), 1))
 
 
-def _authored(prim, mesh, topology: Topology, counts, indices, path: str, warn):
+def _authored(prim, mesh, topology: Topology, counts, indices, path: str):
     """The NormalPlan of authored normals (primvars:normals wins over normals), or None
     when a polygonal mesh authors none (or authors them unusably: a warning)."""
     primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("normals")
@@ -142,8 +145,8 @@ def _authored(prim, mesh, topology: Topology, counts, indices, path: str, warn):
     elif interpolation == UsdGeom.Tokens.constant and len(values) == 1:
         entry_point, corner = np.zeros(1, np.int64), np.zeros_like(triangles)
     else:
-        warn(f"{name} has {len(values)} values for {interpolation} interpolation; shaded "
-             f"as if none were authored (faceted) ({path})")
+        _log.warning(f"{name} has {len(values)} values for {interpolation} interpolation; "
+                     f"shaded as if none were authored (faceted) ({path})")
         return None
     entries = len(values)
     csr = np.concatenate([np.arange(entries + 1) + entries + 1, entry_point]).astype(np.int32)

@@ -1,6 +1,8 @@
 """Wrinkle parameters from WrinkleAPI attributes, with fallbacks and validation."""
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 from pxr import Usd, UsdGeom
 
@@ -10,6 +12,8 @@ from ..validation import parameter_findings, refuse
 from ..values import static_flattened, static_value
 from .records import WrinkleParams
 from .topology import Topology, curvature, mean_edge_length
+
+_log = logging.getLogger(__name__)
 
 
 def _get(prim: Usd.Prim, name: str):
@@ -33,21 +37,20 @@ def _profile(prim, name):
 
 
 def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
-                relax_override: int | None = None, warn=None) -> WrinkleParams:
+                relax_override: int | None = None) -> WrinkleParams:
     """Resolve WrinkleAPI values for one mesh (also for --all-meshes, with fallbacks).
 
     Every value is checked as ``usdwrinkle check`` checks it, at the default time and at
     every time sample, and the first that breaks a rule is refused with a
     UsdWrinkleError naming the prim and the attribute. WrinkleAPI values do not
     animate: each is read once, at the default time, else at its first time sample; a
-    value that changes over time goes to ``warn``.
+    value that changes over time gets a warning (logged).
     """
     n = len(rest_points)
     findings = parameter_findings(prim, n)
     refuse([f for f in findings if f.severity == "error"])
-    if warn is not None:
-        for finding in findings:
-            warn(finding.one_line())
+    for finding in findings:
+        _log.warning("%s", finding.one_line())
 
     q = np.zeros((n, 3), np.float32)
     value = _primvar(prim, "wrinkle:q")

@@ -130,7 +130,7 @@ class FrameSampler:
         """The normal map of this frame, when its file is time-sampled (wrinkle maps)."""
         if not record.material.normal_map_varies:
             return None
-        return read_normal_map(prim, record.topology, time, self.scene.warn)[0]
+        return read_normal_map(prim, record.topology, time)[0]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World bounds of the rendered meshes over the stage's range (at most 9 samples).
@@ -185,7 +185,7 @@ class FrameSampler:
             if self._bounds is None:
                 self._bounds = self.bounds()
             cam = camera_mod.framing_camera(*self._bounds, self.scene.up_axis, aspect)
-        lights = read_lights(self.scene.stage, time, xform_cache, self.scene.warn) or \
+        lights = read_lights(self.scene.stage, time, xform_cache) or \
             default_lights(cam.view)
         return FrameRecord(frame, cam, tuple(lights), meshes)
 

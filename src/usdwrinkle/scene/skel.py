@@ -25,14 +25,14 @@ class SkelBindings:
     """All skel bindings of a stage: mesh path -> (skel query, skinning query).
 
     UsdSkel prints its own complaints about bindings (``ComputeJointInfluences``,
-    ``UsdSkelBlendShapeQuery``) on stderr; they reach ``warn`` as one line each.
+    ``UsdSkelBlendShapeQuery``) on stderr; they are logged as warnings, one line each.
     """
 
-    def __init__(self, stage: Usd.Stage, warn=None):
+    def __init__(self, stage: Usd.Stage):
         self.cache = UsdSkel.Cache()
         self.by_mesh: dict[str, tuple] = {}
         self.blend_queries: dict[str, UsdSkel.BlendShapeQuery] = {}
-        with usd_diagnostics(warn):
+        with usd_diagnostics(forward=True):
             self._populate(stage)
 
     def _populate(self, stage: Usd.Stage) -> None:

@@ -8,6 +8,7 @@ lights). Nothing downstream sees a Usd object.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import os
 from collections import OrderedDict
@@ -17,7 +18,7 @@ from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from .. import schema
 from ..diagnostics import usd_diagnostics, usd_error_text
-from ..errors import UsdWrinkleError, print_warning
+from ..errors import UsdWrinkleError
 from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE
 from ..values import (
     require_mesh_array,
@@ -35,6 +36,8 @@ from .records import FrameRecord, MeshFrame, MeshRecord
 from .sampling import RENDERED_PURPOSES, FrameSampler, finite_points
 from .skel import SkelBindings, skin_data
 from .topology import Topology, build_topology, vertex_normals
+
+_log = logging.getLogger(__name__)
 
 #: prims whose edits change the skinning of the meshes bound to them
 SKEL_TYPES = (UsdSkel.Root, UsdSkel.Skeleton, UsdSkel.Animation, UsdSkel.BlendShape)
@@ -60,16 +63,16 @@ def _keep_inputs(identifier: str, inputs: StageInputs) -> None:
         _INPUTS.popitem(last=False)
 
 
-def open_stage(path: str, warn=None) -> Usd.Stage:
+def open_stage(path: str) -> Usd.Stage:
     """Open a stage with one-line errors: a missing file, one that is not a regular file
     (anywhere in its layers and textures), an unreadable or malformed layer (with its
-    file:line). USD's warnings while opening go to ``warn`` as one line each."""
+    file:line). USD's warnings while opening are logged, one line each."""
     if not os.path.exists(path):
         raise UsdWrinkleError(f"stage file '{path}' does not exist")
     inputs = scan_inputs(path)
     root = inputs.layers[0]
     try:
-        with usd_diagnostics(warn or print_warning):
+        with usd_diagnostics(forward=True):
             stage = Usd.Stage.Open(root)
     except Tf.ErrorException as exc:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: "
@@ -199,8 +202,6 @@ class StageSceneDelegate:
         Treat every Mesh as if WrinkleAPI were applied (with fallbacks).
     relax_iterations : int or None
         Override every mesh's ``wrinkle:relaxIterations``.
-    warn : callable(str)
-        Receives degraded-input warnings.
     use_baked : bool
         Read the baked wave fields of meshes that hold them (scene/baked.py); such a mesh
         is wrinkled even without WrinkleAPI. False (``--recompute``, and the bake itself)
@@ -208,15 +209,14 @@ class StageSceneDelegate:
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
-                 warn=print_warning, use_baked: bool = True):
+                 use_baked: bool = True):
         self.stage = open_stage(stage) if isinstance(stage, (str, os.PathLike)) else stage
         self.all_meshes = all_meshes
-        self.warn = warn
         self.use_baked = use_baked
         #: mesh path -> its baked wave fields
         self.baked: dict[str, BakedSource] = {}
         self.up_axis = UsdGeom.GetStageUpAxis(self.stage)
-        self.skel = SkelBindings(self.stage, warn)
+        self.skel = SkelBindings(self.stage)
         self._relax_override = relax_iterations
         self._prims: dict[str, Usd.Prim] = {}
         #: per frame: the meshes, the camera and the lights (scene/sampling.py)
@@ -314,7 +314,7 @@ class StageSceneDelegate:
             for mesh in present:
                 mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
         if rebuild_skel:
-            self.skel = SkelBindings(self.stage, self.warn)
+            self.skel = SkelBindings(self.stage)
             for mesh, prim in self._prims.items():
                 if prim.HasAPI(UsdSkel.BindingAPI):
                     mark(mesh, DirtyBits.DIRTY_TOPOLOGY)
@@ -346,11 +346,11 @@ class StageSceneDelegate:
             baked, wrinkled = self._wrinkle_source(prim, len(record.rest_points))
             record = dataclasses.replace(
                 record, params=read_params(prim, record.rest_points, record.topology,
-                                           self._relax_override, self.warn),
+                                           self._relax_override),
                 wrinkled=wrinkled, baked_range=baked.range_text() if baked is not None else None)
         if bits & DirtyBits.DIRTY_MATERIAL:
             record = dataclasses.replace(
-                record, material=read_material(prim, record.topology, default, self.warn))
+                record, material=read_material(prim, record.topology, default))
         self.meshes[path] = record
         return True
 
@@ -364,7 +364,7 @@ class StageSceneDelegate:
         point_cached, rest_value, rest_attr_name = rest_pose(prim, skinned=binding is not None)
         has_rest = rest_attr_name == "primvars:rest"
         if rest_value is None or len(rest_value) == 0:
-            self.warn(f"mesh has no points; skipped ({path})")
+            _log.warning(f"mesh has no points; skipped ({path})")
             return None
         if len(rest_value) >= MAX_POINTS:  # before any per-point work
             raise UsdWrinkleError(f"mesh too large: {len(rest_value):,} points, usdwrinkle "
@@ -378,27 +378,27 @@ class StageSceneDelegate:
         faces = read_faces(prim)
         topology = read_topology(prim, rest, faces)
         if topology is None:
-            self.warn(f"mesh has no faces; skipped ({path})")
+            _log.warning(f"mesh has no faces; skipped ({path})")
             return None
-        normals = plan_normals(prim, topology, faces[0], faces[1], faces[2], faces[3],
-                               self.warn)
+        normals = plan_normals(prim, topology, faces[0], faces[1], faces[2], faces[3])
         skin = None
         if binding is not None:
             skel_query, skinning_query = binding
             if not skel_query:
-                self.warn(f"skel binding without a valid skeleton; treated as static ({path})")
+                _log.warning(f"skel binding without a valid skeleton; treated as static "
+                             f"({path})")
             else:
-                with usd_diagnostics(self.warn):  # ComputeJointInfluences' complaints
+                with usd_diagnostics(forward=True):  # ComputeJointInfluences' complaints
                     skin = skin_data(path, skel_query, skinning_query, len(rest),
                                      self.skel.blend_queries.get(path))
         elif prim.HasAPI("SkelBindingAPI") and prim.GetRelationship("skel:skeleton"):
             targets = prim.GetRelationship("skel:skeleton").GetTargets()
             if targets:
-                self.warn(f"skel binding to a missing or unusable skeleton; treated as "
-                          f"static ({path})")
+                _log.warning(f"skel binding to a missing or unusable skeleton; treated as "
+                             f"static ({path})")
         baked, wrinkled = self._wrinkle_source(prim, len(rest))
-        params = read_params(prim, rest, topology, relax_iterations, self.warn)
-        material = read_material(prim, topology, default, self.warn)
+        params = read_params(prim, rest, topology, relax_iterations)
+        material = read_material(prim, topology, default)
         return MeshRecord(path, topology, rest, vertex_normals(rest, topology), skin,
                           point_cached, wrinkled, params, material,
                           baked.range_text() if baked is not None else None, normals,

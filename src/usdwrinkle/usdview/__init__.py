@@ -128,6 +128,13 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
     stage's session layer; returns the baked mesh paths."""
     if not _in_process():
         return _bake_out_of_process(usdview_api)
+    from ..log import silenced
+
+    with silenced():  # the status line reports the outcome (as the out-of-process bake)
+        return _bake_in_process(usdview_api, ctx)
+
+
+def _bake_in_process(usdview_api, ctx) -> list[str]:
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
     from ..outputs.layers import LayerBaker, LayerOptions
@@ -135,9 +142,8 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
-    messages = []
     try:
-        engine = WrinkleEngine(stage, warn=messages.append, ctx=ctx)
+        engine = WrinkleEngine(stage, ctx=ctx)
     except UsdWrinkleError as exc:
         usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
         return []
@@ -207,15 +213,17 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
         return paths
     from ..engine import WrinkleEngine
     from ..errors import UsdWrinkleError
+    from ..log import silenced
     from ..outputs.images import write_image
 
     try:
-        engine = WrinkleEngine(stage, camera=camera, warn=lambda m: None, ctx=ctx)
-        try:
-            w, h = engine.resolution(width, None, frame)
-            buffers = engine.render_frame(frame, w, h)
-        finally:
-            engine.release()
+        with silenced():
+            engine = WrinkleEngine(stage, camera=camera, ctx=ctx)
+            try:
+                w, h = engine.resolution(width, None, frame)
+                buffers = engine.render_frame(frame, w, h)
+            finally:
+                engine.release()
         for path in paths:
             write_image(path, buffers)
     except UsdWrinkleError as exc:
