@@ -72,3 +72,17 @@ def test_no_function_takes_a_warn_callback():
                 found.append(f"{path.relative_to(PACKAGE)}:{node.lineno} field warn")
     assert found == []
     assert any(PACKAGE.rglob("*.py"))
+
+
+def test_progress_lines_and_warnings_each_print_once(capsys, monkeypatch):
+    """Progress lines had a handler on the package logger itself: once a farm's log mode
+    had shown progress, every later warning printed twice (once as 'usdwrinkle: ...')."""
+    from usdwrinkle.progress import counter
+
+    monkeypatch.setenv("USDWRINKLE_PROGRESS", "log")
+    bar = counter(2, "render")
+    bar.update(2)
+    bar.close()
+    log.warn("once")
+    assert capsys.readouterr().err.splitlines() == [
+        "usdwrinkle: render: 2/2 frame(s) (100%)", "usdwrinkle: warning: once"]

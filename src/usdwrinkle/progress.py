@@ -2,11 +2,11 @@
 
 On a terminal, tqdm redraws one line with carriage returns and cursor escapes. In a farm's
 log (stderr redirected to a file or a pipe) those control characters are noise. There,
-progress goes through the standard library's ``logging`` (logger ``usdwrinkle``, one
-handler on usdwrinkle's safe stderr) as whole lines: ``usdwrinkle: render: 12/48
-frame(s) (25%)``. It writes a line at every tenth of the run, at its end, and at least
-once a minute in between. ``USDWRINKLE_PROGRESS`` overrides the choice: ``bar``, ``log``
-or ``none``.
+progress goes through the standard library's ``logging`` (logger ``usdwrinkle.progress``,
+one handler on usdwrinkle's safe stderr; warnings have their own way, log.py) as whole
+lines: ``usdwrinkle: render: 12/48 frame(s) (25%)``. It writes a line at every tenth of
+the run, at its end, and at least once a minute in between. ``USDWRINKLE_PROGRESS``
+overrides the choice: ``bar``, ``log`` or ``none``.
 """
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ import time
 
 from .errors import STDERR
 
-LOGGER = logging.getLogger("usdwrinkle")
+LOGGER = logging.getLogger("usdwrinkle.progress")
 
 
 def _handler() -> None:
@@ -27,7 +27,7 @@ def _handler() -> None:
         handler.usdwrinkle = True
         LOGGER.addHandler(handler)
         LOGGER.setLevel(logging.INFO)
-        LOGGER.propagate = False
+        LOGGER.propagate = False  # the package logger's handler is the warnings' sink
 
 
 def mode() -> str:
