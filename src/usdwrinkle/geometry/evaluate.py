@@ -63,7 +63,7 @@ class GeometryEvaluator:
     def evaluate(self, res: MeshResources, fine: FineMesh, wrinkles: bool = True) -> FineFrame:
         """The fine mesh at the frame ``res`` holds (synced and computed)."""
         ranges, entries, points, normals = self._tables(res, fine)
-        shader = self.variants(TWO_SYSTEMS=res.systems > 1)
+        shader = self.variants(TWO_SYSTEMS=res.waves.systems > 1)
         set_uniforms(shader, {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_min_wavelength": float(BAND_LIMIT_EDGES * fine.edge_length),

@@ -124,7 +124,7 @@ class MapRasterizer:
             self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         else:
             self.ctx.disable(moderngl.BLEND)
-        variant = self.variants(TWO_SYSTEMS=res.systems > 1,
+        variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
                                 MIKKTSPACE=tangents is not None and not count)
         set_uniforms(variant.program, {
             "u_tile": (float(tile[0]), float(tile[1])),

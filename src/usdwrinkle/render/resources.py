@@ -14,20 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import (
-    FIELD_FLOATS,
-    FIELD_TEXELS,
-    JOINT_TEXELS,
-    UDIM_REPEAT,
-    UDIM_TILES,
-    WAVE_SYSTEMS,
-    WrinkleFields,
-)
+from ..contract import JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
 from ..errors import UsdWrinkleError
 from ..limits import MAX_POINTS
 from ..scene.records import MeshRecord
 from ..scene.topology import rest_tangents
 from .bindings import TABLE_WIDTH
+from .fields import WaveFields
 
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 
@@ -167,28 +160,8 @@ class MeshResources:
         self.rest_frame = self._table(2 * n, 4, data=frame)
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         self.hold = self._table(n, 4, data=_hold(record.params, n))
-        #: crest damping: each point's damped rest direction of the last frame
-        self.damped = self._table(n, 4, data=np.zeros((n, 4), np.float32))
-        # Two field tables alternate: crush writes this frame's, the seed step reads the
-        # previous frame's wave vectors to carry its phases over (phase history).
-        # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2 (contract.py)
-        self.field_tables = [self._table(FIELD_TEXELS * n, 4,
-                                         data=np.zeros((FIELD_TEXELS * n, 4), np.float32))
-                             for _ in range(2)]
-        self.current_fields = 0
-        #: phases per vertex and wave system (RG: systems 1, 2): crush's anchored start,
-        #: and the relaxed phase that draw and the bake read
-        self.anchor_phase = self._table(n, WAVE_SYSTEMS,
-                                        data=np.zeros((n, WAVE_SYSTEMS), np.float32))
-        self.phase = self._table(n, WAVE_SYSTEMS, data=np.zeros((n, WAVE_SYSTEMS), np.float32))
-        #: unit phasors during relaxation (ping-pong) and the per-edge rotations, laid
-        #: out for the wave systems relaxed (set_systems)
-        self.phasors: list[Table] = []
-        self.edge_rotations: Table | None = None
-        #: wave systems the passes run and draw: 2 with wrinkle:biaxial (or a bake of it)
-        self.systems = 0
-        self.set_systems(1)
-        self.baked_waves: Table | None = None  # write_baked() makes it
+        #: the wave fields' ping-pong, phases and relax tables (render/fields.py)
+        self.waves = WaveFields(n, self.num_edges, self._table, self._drop)
         self.corner_st = self._table(3 * self.num_triangles, 2,
                                      data=self._corner_st(record))  # [3t + c]
         #: colours per triangle corner ([3t + c], linear RGB) that multiply the diffuse
@@ -244,20 +217,6 @@ class MeshResources:
         #: the authored normals a skinned mesh's pass skins (rest values)
         self.authored_normals = self._table(plan.entries, 4, data=vec4(plan.authored, 0.0)) \
             if plan.authored is not None and record.skin is not None else None
-
-    def set_systems(self, systems: int) -> None:
-        """Lay the relax tables out for 1 or 2 wave systems: phasors RG (one system, as
-        in the paper) or RGBA (xy, zw: systems 1, 2), and one edge texel per edge and
-        system (relax.glsl). A change re-makes them (an edit of wrinkle:biaxial)."""
-        if systems == self.systems:
-            return
-        for table in [*self.phasors, self.edge_rotations]:
-            if table is not None:
-                self.tables.remove(table)
-                table.release()
-        self.systems = systems
-        self.phasors = [self._table(self.num_points, 2 * systems) for _ in range(2)]
-        self.edge_rotations = self._table(systems * self.num_edges, 4)
 
     def _profile_texture(self, table: np.ndarray):
         """A profile (height or gradient) as an N x 1 texture, repeating along the period."""
@@ -373,34 +332,15 @@ class MeshResources:
         self.texture.build_mipmaps()
         self.texture.repeat_x = self.texture.repeat_y = True
 
-    def write_baked(self, baked) -> None:
-        """Upload one frame's baked fields (scene.baked.BakedFields): waves into the baked
-        table ([4i] = (k, amplitude), [4i + 1] = (direction, r), [4i + 2], [4i + 3]: the
-        second system's), phases into the phase table that draw reads. The baked table is
-        made on first use."""
-        if self.baked_waves is None:
-            self.baked_waves = self._table(4 * self.num_points, 4)
-        block = np.zeros((self.num_points, 4, 4), np.float32)
-        block[:, 0, :3] = baked.wave_vector
-        block[:, 0, 3] = baked.amplitude
-        block[:, 1, :3] = baked.direction
-        block[:, 1, 3] = baked.compression
-        phases = np.zeros((self.num_points, WAVE_SYSTEMS), np.float32)
-        phases[:, 0] = baked.phase
-        self.set_systems(2 if baked.amplitude2 is not None else 1)
-        if baked.amplitude2 is not None:
-            block[:, 2, :3] = baked.wave_vector2
-            block[:, 2, 3] = baked.amplitude2
-            block[:, 3, :3] = baked.direction2
-            block[:, 3, 3] = baked.compression2
-            phases[:, 1] = baked.phase2
-        self.baked_waves.write(block)
-        self.phase.write(phases)
-
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
         table = Table(self.ctx, count, components, dtype, data, path=self.record.path)
         self.tables.append(table)
         return table
+
+    def _drop(self, table: Table) -> None:
+        """Release one table before the others (WaveFields re-lays its relax tables)."""
+        self.tables.remove(table)
+        table.release()
 
     def _buffer(self, array: np.ndarray):
         buf = self.ctx.buffer(_bytes(array))
@@ -424,19 +364,9 @@ class MeshResources:
         self.subshape_offsets.write(row.tobytes(), offset=subshape * self.num_points * 16)
         self.uploaded_subshapes.add(subshape)
 
-    @property
-    def fields(self) -> Table:
-        return self.field_tables[self.current_fields]
-
-    @property
-    def previous_fields(self) -> Table:
-        return self.field_tables[1 - self.current_fields]
-
     def read_fields(self) -> WrinkleFields:
         """Read back what the passes computed (the bake's single source of truth)."""
-        fields = self.fields.read().reshape(self.num_points, FIELD_FLOATS)
-        return WrinkleFields.from_tables(self.posed_points.read(), fields, self.phase.read(),
-                                         self.anchor_phase.read())
+        return self.waves.read(self.posed_points)
 
     def read_shading_normals(self) -> np.ndarray:
         """This frame's shading normals (the normals pass's table: one per NormalPlan

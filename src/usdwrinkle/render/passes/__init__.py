@@ -36,11 +36,12 @@ def bind_wave(units: dict, res, program) -> None:
     """Bind what the wave blend reads (include/wave.glsl; the WAVE units of bindings.py)
     and set its uniforms on ``program``."""
     set_uniforms(program, {"u_profile_samples": float(len(res.record.params.height_profile)),
-                           "u_systems": res.systems})
+                           "u_systems": res.waves.systems})
     res.profiles[0].use(location=units["WAVE_HEIGHT_PROFILE"])
     res.profiles[1].use(location=units["WAVE_GRADIENT_PROFILE"])
-    bind(units, reads={"WAVE_POSED_POINTS": res.posed_points, "WAVE_FIELDS": res.fields,
-                       "WAVE_PHASE": res.phase, "WAVE_TRIANGLES": res.triangles})
+    bind(units, reads={"WAVE_POSED_POINTS": res.posed_points,
+                       "WAVE_FIELDS": res.waves.current, "WAVE_PHASE": res.waves.phase,
+                       "WAVE_TRIANGLES": res.triangles})
 
 
 def groups(count: int, local_size: int) -> int:

@@ -47,10 +47,11 @@ class CrushPass:
         """Write this frame's fields into the other field buffer (the previous frame's
         stay readable for the relax pass's seed step) and the anchored phase.
         ``history``: the strain table holds the shot's previous frame (crest damping)."""
-        res.current_fields = 1 - res.current_fields
+        waves = res.waves
+        waves.advance()
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
-        res.set_systems(2 if params.biaxial > 0 else 1)
+        waves.set_systems(2 if params.biaxial > 0 else 1)
         set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
                                    "u_biaxial": float(params.biaxial),
                                    "u_tension": float(params.tension),
@@ -64,22 +65,22 @@ class CrushPass:
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
                            "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold},
-             writes={"CRUSH_FIELDS": res.fields, "CRUSH_PHASE": res.anchor_phase},
-             read_writes={"CRUSH_DAMPED": res.damped})
+             writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase},
+             read_writes={"CRUSH_DAMPED": waves.damped})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
 
     def run_baked(self, res: MeshResources, baked) -> None:
         """Fields of a frame drawn from a bake: posed normals computed, waves and phases
         as baked (``baked``: scene.baked.BakedFields)."""
-        res.current_fields = 1 - res.current_fields
-        res.write_baked(baked)
+        res.waves.advance()
+        res.waves.write_baked(baked)
         self._face_normals(res)
         set_uniforms(self.baked_shader, {"u_num_points": res.num_points,
                                          **res.topology_uniforms})
         bind(bindings.CRUSH, reads={"CRUSH_REST_FRAME": res.rest_frame,
                                     "CRUSH_FACE_NORMALS": res.face_normals,
-                                    "CRUSH_BAKED": res.baked_waves},
-             writes={"CRUSH_FIELDS": res.fields})
+                                    "CRUSH_BAKED": res.waves.baked_waves},
+             writes={"CRUSH_FIELDS": res.waves.current})
         self.baked_shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()

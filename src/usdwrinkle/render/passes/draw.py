@@ -149,7 +149,7 @@ class DrawPass:
         local_to_world = frame.local_to_world
         eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
         material = record.material
-        variant = self.variants(TWO_SYSTEMS=res.systems > 1,
+        variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
                                 NORMAL_MAP=res.normal_map is not None,
                                 FALLBACK_SURFACE=material.surface is None,
                                 TEXTURED=res.texture is not None, DOME=self.dome_lit,

@@ -26,31 +26,31 @@ class RelaxPass:
         self.seeds()
 
     def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
-        units = bindings.RELAX
+        units, waves = bindings.RELAX, res.waves
         count = groups(res.num_points, bindings.LOCAL_SIZE)
-        seed_shader, shader = self.seeds(TWO_SYSTEMS=res.systems > 1), self.steps(
-            TWO_SYSTEMS=res.systems > 1)
+        seed_shader, shader = self.seeds(TWO_SYSTEMS=waves.systems > 1), self.steps(
+            TWO_SYSTEMS=waves.systems > 1)
         set_uniforms(seed_shader, {"u_num_points": res.num_points,
-                                        "u_systems": res.systems,
+                                        "u_systems": waves.systems,
                                         "u_has_history": int(with_history),
                                         **res.topology_uniforms})
         bind(units, reads={
             "RELAX_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology,
-            "RELAX_FIELDS": res.fields, "RELAX_PREVIOUS_FIELDS": res.previous_fields,
-            "RELAX_ANCHOR": res.anchor_phase},
-            writes={"RELAX_Z_OUT": res.phasors[0], "RELAX_EDGES_OUT": res.edge_rotations},
-            read_writes={"RELAX_PHASE": res.phase})
+            "RELAX_FIELDS": waves.current, "RELAX_PREVIOUS_FIELDS": waves.previous,
+            "RELAX_ANCHOR": waves.anchor_phase},
+            writes={"RELAX_Z_OUT": waves.phasors[0], "RELAX_EDGES_OUT": waves.edge_rotations},
+            read_writes={"RELAX_PHASE": waves.phase})
         seed_shader.run(count)
         self.ctx.memory_barrier()
         if iterations <= 0:
             return  # the seed wrote the phase
-        set_uniforms(shader, {"u_num_points": res.num_points, "u_systems": res.systems,
+        set_uniforms(shader, {"u_num_points": res.num_points, "u_systems": waves.systems,
                               **res.topology_uniforms})
-        bind(units, reads={"RELAX_EDGES": res.edge_rotations})
+        bind(units, reads={"RELAX_EDGES": waves.edge_rotations})
         for step in range(iterations):
             src = step % 2
-            bind(units, reads={"RELAX_Z_IN": res.phasors[src]},
-                 writes={"RELAX_Z_OUT": res.phasors[1 - src]})
+            bind(units, reads={"RELAX_Z_IN": waves.phasors[src]},
+                 writes={"RELAX_Z_OUT": waves.phasors[1 - src]})
             set_uniforms(shader, {"u_write_phase": int(step == iterations - 1)})
             shader.run(count)
             self.ctx.memory_barrier()
