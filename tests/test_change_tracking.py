@@ -159,3 +159,45 @@ def test_wrinkle_api_attribute_change_is_a_parameter_edit(tracked):
     assert counts(engine)["params"] == synced["params"] + 1
     assert counts(engine)["resources"] == synced["resources"]
     assert_same(after, fresh_render(stage))
+
+
+def test_the_camera_and_lights_are_found_once_until_a_resync(tracked, monkeypatch):
+    """Issue 25: the camera and the lights were looked up by walking the whole stage at
+    every frame (and the camera three times a run). The prims are now kept until a prim
+    is resynced; a light or camera added later is still seen, and equals what a fresh
+    engine renders from the edited stage."""
+    from usdwrinkle.scene import sampling
+
+    stage, engine = tracked
+    walks = {"camera": 0, "lights": 0}
+    find_camera, light_prims = sampling.camera_mod.find_camera, sampling.light_prims
+
+    def counted(name, function):
+        def call(*args):
+            walks[name] += 1
+            return function(*args)
+        return call
+
+    monkeypatch.setattr(sampling.camera_mod, "find_camera", counted("camera", find_camera))
+    monkeypatch.setattr(sampling, "light_prims", counted("lights", light_prims))
+    for frame in (1.0, 2.0):
+        render(engine, frame)
+    assert walks == {"camera": 0, "lights": 1}  # the engine found the camera when made
+    # values are read per frame: no walk for an intensity edit
+    UsdLux.DistantLight(stage.GetPrimAtPath("/Key")).GetIntensityAttr().Set(2.0)
+    intensity = render(engine, 3.0)
+    assert walks == {"camera": 0, "lights": 1}
+    assert_same(intensity, fresh_render(stage, 3.0))
+    # a new light and a new camera: prims resynced, walked again, and both are used
+    fill = UsdLux.SphereLight.Define(stage, "/Fill")
+    fill.CreateIntensityAttr(3.0)
+    UsdGeom.Xformable(fill).AddTranslateOp().Set(Gf.Vec3d(0, 0, 3))
+    camera = UsdGeom.Camera.Define(stage, "/Cam")
+    UsdGeom.Xformable(camera).AddTranslateOp().Set(Gf.Vec3d(0.3, 0, 6))
+    before = dict(walks)  # fresh_render's own engine walked its stage once too
+    after = render(engine, 4.0)  # the next frame: the same phase history as a fresh run
+    assert walks == {"camera": before["camera"] + 1, "lights": before["lights"] + 1}
+    assert engine.sample(4.0, WIDTH / HEIGHT).camera.path == "/Cam"
+    assert len(engine.sample(4.0, WIDTH / HEIGHT).lights) == 2
+    assert np.abs(after["color"] - intensity["color"]).max() > 0.05
+    assert_same(after, fresh_render(stage, 4.0))

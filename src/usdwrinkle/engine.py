@@ -14,7 +14,6 @@ from .errors import UsdWrinkleError
 from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
-from .scene.camera import find_camera
 from .scene.dirty import DirtyBits
 from .scene.stage import StageSceneDelegate
 
@@ -55,7 +54,7 @@ class WrinkleEngine:
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, use_baked=use_baked)
         self.camera = camera
-        find_camera(self.scene.stage, camera)  # a missing camera fails before any GPU work
+        self.scene.camera(camera)  # a missing camera fails before any GPU work
         self.render_delegate = RenderDelegate(ctx, profile=profile)
         self.render_pass = RenderPass(self.render_delegate)
         self._dirty = {}

@@ -166,7 +166,6 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     ``reporter``: progress(items, desc) and quiet (cli/common.Reporter); warnings are
     logged (usdwrinkle/log.py), the workers' too."""
     from ..engine import image_size
-    from ..scene.camera import find_camera
     from ..scene.stage import StageSceneDelegate, refuse_overwriting_inputs
 
     distributed = _import_dask()
@@ -176,7 +175,7 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     scene = StageSceneDelegate(stage, all_meshes=job.engine.all_meshes,
                                relax_iterations=job.engine.relax_iterations,
                                use_baked=wrinkles and not job.recompute)
-    find_camera(stage, job.engine.camera)
+    scene.camera(job.engine.camera)  # a missing camera fails before any worker starts
     needs_bake = _needs_bake(scene, frames, wrinkles, job.recompute)
     layer = bake_path(job.output, job.stage_path) if needs_bake else None
     if layer is not None:

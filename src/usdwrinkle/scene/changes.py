@@ -22,11 +22,17 @@ class ChangeTracker:
         self.resynced: set[Sdf.Path] = set()
         #: property paths whose values or metadata changed
         self.changed: set[Sdf.Path] = set()
+        #: how many notices resynced a prim (never reset): what is cached from a walk of
+        #: the stage (the camera, the lights) is valid while this stays the same
+        self.prim_resyncs = 0
         self._listener = Tf.Notice.Register(Usd.Notice.ObjectsChanged, self._on_changed,
                                             stage)
 
     def _on_changed(self, notice, sender) -> None:
-        self.resynced.update(notice.GetResyncedPaths())
+        resynced = notice.GetResyncedPaths()
+        if any(not path.IsPropertyPath() for path in resynced):
+            self.prim_resyncs += 1
+        self.resynced.update(resynced)
         self.changed.update(notice.GetChangedInfoOnlyPaths())
 
     def take(self) -> tuple[set, set]:

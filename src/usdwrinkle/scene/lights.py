@@ -123,12 +123,18 @@ LIGHT_TYPES = (UsdLux.DistantLight, UsdLux.SphereLight, UsdLux.DiskLight, UsdLux
                UsdLux.CylinderLight, UsdLux.DomeLight)
 
 
-def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache) -> list[LightRecord]:
-    """The stage's visible UsdLux lights at ``time``, as Storm approximates them."""
+def light_prims(stage: Usd.Stage) -> list[Usd.Prim]:
+    """The prims with UsdLux's LightAPI (one walk of the stage; valid until a resync)."""
+    return [prim for prim in stage.Traverse(Usd.TraverseInstanceProxies())
+            if prim.HasAPI(UsdLux.LightAPI)]
+
+
+def read_lights(stage: Usd.Stage, time, xform_cache: UsdGeom.XformCache,
+                prims: list[Usd.Prim] | None = None) -> list[LightRecord]:
+    """The stage's visible UsdLux lights at ``time``, as Storm approximates them.
+    ``prims``: its light_prims, when the caller keeps them (else the stage is walked)."""
     lights = []
-    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
-        if not prim.HasAPI(UsdLux.LightAPI):
-            continue
+    for prim in light_prims(stage) if prims is None else prims:
         if prim.IsA(UsdGeom.Imageable) and \
                 UsdGeom.Imageable(prim).ComputeVisibility(time) == UsdGeom.Tokens.invisible:
             continue

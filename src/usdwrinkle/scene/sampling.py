@@ -14,7 +14,7 @@ from ..errors import UsdWrinkleError
 from ..limits import MAX_WORLD_COORDINATE
 from ..values import finite_in_float32, frame_of, static_value
 from . import camera as camera_mod
-from .lights import default_lights, read_lights
+from .lights import default_lights, light_prims, read_lights
 from .material import corner_colors, read_normal_map
 from .normals import sample_normals
 from .records import FrameRecord, MeshFrame, MeshRecord
@@ -53,7 +53,9 @@ def finite_points(points, path, attribute, time=None):
 class FrameSampler:
     """Samples the scene delegate ``scene``'s meshes, camera and lights at a frame. The
     meshes' bounds for the automatic framing are made on first use and kept until
-    :meth:`forget_bounds` (an edit of the shapes)."""
+    :meth:`forget_bounds` (an edit of the shapes). The camera prim and the light prims
+    come from a walk of the stage, kept until a prim is resynced (added, removed,
+    re-typed: ``scene.tracker.prim_resyncs``), as Hydra keeps its sprims."""
 
     def __init__(self, scene):
         # a proxy, not a reference: the delegate owns its sampler, and a cycle would keep
@@ -61,6 +63,27 @@ class FrameSampler:
         # later Usd.Stage.Open of the same file would see) alive until a GC pass
         self.scene = weakref.proxy(scene)
         self._bounds = None
+        self._walked = -1  # the tracker's prim_resyncs when the prims below were found
+        self._cameras: dict = {}  # --camera spec -> its prim (or None: the framing)
+        self._lights: list | None = None
+
+    def _walk_is_current(self) -> None:
+        resyncs = self.scene.tracker.prim_resyncs
+        if resyncs != self._walked:
+            self._walked, self._cameras, self._lights = resyncs, {}, None
+
+    def camera_prim(self, camera_spec: str | None):
+        """find_camera's prim for ``camera_spec`` (a missing camera raises each time)."""
+        self._walk_is_current()
+        if camera_spec not in self._cameras:
+            self._cameras[camera_spec] = camera_mod.find_camera(self.scene.stage, camera_spec)
+        return self._cameras[camera_spec]
+
+    def light_prims(self) -> list:
+        self._walk_is_current()
+        if self._lights is None:
+            self._lights = light_prims(self.scene.stage)
+        return self._lights
 
     def forget_bounds(self) -> None:
         self._bounds = None
@@ -163,7 +186,7 @@ class FrameSampler:
         return lo, hi
 
     def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
-        prim = camera_mod.find_camera(self.scene.stage, camera_spec)
+        prim = self.camera_prim(camera_spec)
         return camera_mod.camera_aspect(prim, time_code(frame)) if prim else None
 
     def sample_meshes(self, frame: float, xform_cache=None, with_baked: bool = True) -> dict:
@@ -178,14 +201,14 @@ class FrameSampler:
         time = time_code(frame)
         xform_cache = UsdGeom.XformCache(time)
         meshes = self.sample_meshes(frame, xform_cache)
-        prim = camera_mod.find_camera(self.scene.stage, camera_spec)
+        prim = self.camera_prim(camera_spec)
         if prim is not None:
             cam = camera_mod.usd_camera(prim, time, aspect)
         else:
             if self._bounds is None:
                 self._bounds = self.bounds()
             cam = camera_mod.framing_camera(*self._bounds, self.scene.up_axis, aspect)
-        lights = read_lights(self.scene.stage, time, xform_cache) or \
+        lights = read_lights(self.scene.stage, time, xform_cache, self.light_prims()) or \
             default_lights(cam.view)
         return FrameRecord(frame, cam, tuple(lights), meshes)
 

@@ -438,6 +438,11 @@ class StageSceneDelegate:
     def camera_aspect(self, camera_spec: str | None, frame: float) -> float | None:
         return self.sampler.camera_aspect(camera_spec, frame)
 
+    def camera(self, camera_spec: str | None):
+        """The camera prim ``--camera`` names (or the primary, or the first; None: no
+        camera), kept until a resync; a missing one raises UsdWrinkleError."""
+        return self.sampler.camera_prim(camera_spec)
+
     def corner_primvar(self, path: str, name: str) -> np.ndarray | None:
         """A primvar of a mesh as one value per triangle corner, (m, 3, c), at its
         default time (or first sample); None when the mesh has no usable such primvar."""
