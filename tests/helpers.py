@@ -86,3 +86,61 @@ def scratch_frames_since(started: float) -> list[str]:
     """Frames encoded in memory (/dev/shm) since ``started`` and left behind."""
     return [p.name for p in Path("/dev/shm").glob(".usdwrinkle-frame.*")
             if p.stat().st_mtime >= started]
+
+
+def baked(layer_path, prim_path, frame):
+    """({primvar name: values} of a baked mesh at ``frame``, with its points; the stage)."""
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(layer_path))
+    prim = stage.GetPrimAtPath(prim_path)
+    primvars = UsdGeom.PrimvarsAPI(prim)
+    out = {}
+    for name in ("amplitude", "compression", "waveVector", "phase", "direction"):
+        primvar = primvars.GetPrimvar(f"wrinkle:{name}")
+        assert primvar.GetInterpolation() == UsdGeom.Tokens.vertex
+        out[name] = np.asarray(primvar.Get(frame), np.float64)
+    out["points"] = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(frame), np.float64)
+    return out, stage
+
+
+def interior(points, margin):
+    """The points more than ``margin`` inside the x-y bounding box."""
+    lo, hi = points.min(0), points.max(0)
+    return np.all((points[:, :2] > lo[:2] + margin) & (points[:, :2] < hi[:2] - margin), axis=1)
+
+
+def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
+    """(the computed fields as arrays, the MeshRecord) of one mesh at ``frame``."""
+    from usdwrinkle.engine import WrinkleEngine
+
+    engine = WrinkleEngine(stage, ctx=ctx)
+    try:
+        engine.compute_frame(frame)
+        return engine.read_fields(path).arrays(), engine.meshes[path]
+    finally:
+        engine.release()
+
+
+def random_cloth(seed):
+    """An icosphere squashed by a smooth random field, with random painted q."""
+    import trimesh
+
+    rng = np.random.default_rng(seed)
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    rest = np.asarray(sphere.vertices, np.float32)
+    faces = np.asarray(sphere.faces, np.int32)
+    bend = rng.normal(size=(3, 3)) * 0.25
+    posed = rest @ (np.eye(3) + bend) + 0.15 * np.sin(3 * rest[:, [1, 2, 0]])
+    q = np.zeros_like(rest)
+    painted = rng.random(len(rest)) < 0.3
+    q[painted] = rng.normal(size=(painted.sum(), 3))
+    q[painted] *= (rng.random(painted.sum()) * 0.9 / np.linalg.norm(q[painted], axis=1))[:, None]
+    return rest, posed.astype(np.float32), faces, q.astype(np.float32)
+
+
+def read_pixels(path) -> np.ndarray:
+    """An image file's pixels as float (OpenImageIO), failing when it cannot be read."""
+    pixels = oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)
+    assert pixels.size, f"cannot read {path}"
+    return pixels

@@ -13,22 +13,9 @@ from usdwrinkle.reference.relax import phase_misfit, wrap
 from usdwrinkle.scene.topology import build_topology
 
 from conftest import grid_sheet
-from helpers import point_cache_stage, rotation_matrix
+from helpers import baked, interior, point_cache_stage, rotation_matrix
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
-
-
-def baked(layer_path, prim_path, frame):
-    stage = Usd.Stage.Open(str(layer_path))
-    prim = stage.GetPrimAtPath(prim_path)
-    primvars = UsdGeom.PrimvarsAPI(prim)
-    out = {}
-    for name in ("amplitude", "compression", "waveVector", "phase", "direction"):
-        primvar = primvars.GetPrimvar(f"wrinkle:{name}")
-        assert primvar.GetInterpolation() == UsdGeom.Tokens.vertex
-        out[name] = np.asarray(primvar.Get(frame), np.float64)
-    out["points"] = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(frame), np.float64)
-    return out, stage
 
 
 def bake_sheet(tmp_path, rest, posed, counts, indices, *args, **kwargs):
@@ -38,11 +25,6 @@ def bake_sheet(tmp_path, rest, posed, counts, indices, *args, **kwargs):
     out = tmp_path / "sheet_wrinkles.usda"
     assert main(["bake", str(source), str(out), "--quiet", *args]) == 0
     return out
-
-
-def interior(points, margin):
-    lo, hi = points.min(0), points.max(0)
-    return np.all((points[:, :2] > lo[:2] + margin) & (points[:, :2] < hi[:2] - margin), axis=1)
 
 
 def test_uniform_compression_bakes_the_analytic_wave(gl_context, tmp_path):

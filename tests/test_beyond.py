@@ -193,7 +193,7 @@ def test_pillow_bake_holds_the_second_system_and_renders_from_it(gl_context, tmp
         out = tmp_path / f"{name}.exr"
         assert main(["render", str(stage), str(out), "--frames", "24", "--width", "160",
                      "--quiet"]) == 0
-        from test_maps import read
+        from helpers import read_pixels as read
         images[name] = read(out)
     assert np.abs(images["direct"][..., :3] - images["baked"][..., :3]).max() < 1e-4
 

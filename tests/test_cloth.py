@@ -8,8 +8,6 @@ import json
 import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
-from test_bake import baked, interior
-from test_crush_relax import gpu_fields, random_cloth
 
 from usdwrinkle import schema
 from usdwrinkle.authoring.builders import grid_faces
@@ -21,7 +19,7 @@ from usdwrinkle.scene.topology import build_topology, curvature, mean_edge_lengt
 from usdwrinkle.validation import wrinkle_findings
 
 from conftest import grid_sheet
-from helpers import point_cache_stage, rotation_matrix
+from helpers import baked, gpu_fields, interior, point_cache_stage, random_cloth, rotation_matrix
 
 
 def sheet_file(tmp_path, meters=None, name="sheet.usda", **kwargs):

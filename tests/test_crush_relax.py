@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import trimesh
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.reference.crush import crush as crush_reference
@@ -11,36 +10,7 @@ from usdwrinkle.reference.relax import phase_misfit, relax_shot, wrap
 from usdwrinkle.render.delegate import COLD_START_FACTOR
 
 from conftest import grid_sheet
-from helpers import point_cache_stage, rotation_matrix
-
-
-def gpu_fields(ctx, stage, frame=1.0, path="/Sheet"):
-    engine = WrinkleEngine(stage, ctx=ctx)
-    try:
-        engine.compute_frame(frame)
-        return engine.read_fields(path).arrays(), engine.meshes[path]
-    finally:
-        engine.release()
-
-
-def interior(points, margin):
-    lo, hi = points.min(0), points.max(0)
-    return np.all((points[:, :2] > lo[:2] + margin) & (points[:, :2] < hi[:2] - margin), axis=1)
-
-
-def random_cloth(seed):
-    """An icosphere squashed by a smooth random field, with random painted q."""
-    rng = np.random.default_rng(seed)
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
-    rest = np.asarray(sphere.vertices, np.float32)
-    faces = np.asarray(sphere.faces, np.int32)
-    bend = rng.normal(size=(3, 3)) * 0.25
-    posed = rest @ (np.eye(3) + bend) + 0.15 * np.sin(3 * rest[:, [1, 2, 0]])
-    q = np.zeros_like(rest)
-    painted = rng.random(len(rest)) < 0.3
-    q[painted] = rng.normal(size=(painted.sum(), 3))
-    q[painted] *= (rng.random(painted.sum()) * 0.9 / np.linalg.norm(q[painted], axis=1))[:, None]
-    return rest, posed.astype(np.float32), faces, q.astype(np.float32)
+from helpers import gpu_fields, interior, point_cache_stage, random_cloth, rotation_matrix
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

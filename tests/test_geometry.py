@@ -183,7 +183,7 @@ def test_render_of_the_layer_shows_wrinkles_on_the_silhouette(gl_context, shirt,
         out = tmp_path / f"{name}.exr"
         assert main(["render", str(source), str(out), "--frames", "24", "--width", "320",
                      "--no-wrinkles", "--quiet"]) == 0
-        from test_maps import read
+        from helpers import read_pixels as read
         outs[name] = read(out)[..., 3]
     changed = np.abs(outs["fine"] - outs["coarse"]) > 0.5
     assert changed.sum() > 50  # pixels in or out of the outline: a bumpy silhouette

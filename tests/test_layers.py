@@ -91,3 +91,18 @@ def test_every_bake_sink_has_the_one_protocol_and_few_parameters():
     for function in (FineMeshWriter.__init__, FineMeshWriter.define, FineMeshWriter.add_frame,
                      author_material, save_layer, bake_layer):
         assert len(_parameters(function)) <= 5, function.__qualname__
+
+
+def test_test_modules_share_helpers_only_through_helpers_and_conftest():
+    """Issue 25: test modules imported each other's helpers (test_cloth from test_bake
+    and test_crush_relax, test_beyond and test_geometry from test_maps)."""
+    import ast
+    from pathlib import Path
+
+    found = []
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            found += [f"{path.name}: {n}" for n in names if n.startswith("test_")]
+    assert found == []

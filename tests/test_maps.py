@@ -16,17 +16,12 @@ from usdwrinkle.scene.material import load_texture
 
 from conftest import grid_sheet
 from helpers import point_cache_stage, rotation_matrix
+from helpers import read_pixels as read
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 SHIRT = str(SAMPLES / "shirt.usda")
 WIDTH = 0.3
 SIZE = 256
-
-
-def read(path) -> np.ndarray:
-    pixels = oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)
-    assert pixels.size, f"cannot read {path}"
-    return pixels
 
 
 def sheet_stage(tmp_path, ratio, rotation=None, st=None, frames=(1,), name="sheet.usda",
