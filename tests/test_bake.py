@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, UsdSkel, Vt
 
 from usdwrinkle.cli.main import main
 from usdwrinkle.reference.relax import phase_misfit, wrap
@@ -214,3 +214,32 @@ def test_the_layer_names_its_source_relative_to_itself(tmp_path, monkeypatch):
     layer = Sdf.Layer.FindOrOpen(str(out))
     assert layer.customLayerData["usdwrinkle"]["source"] == "../shots/sheet.usda"
     assert list(layer.subLayerPaths) == ["../shots/sheet.usda"]
+
+
+def test_with_points_bakes_indexed_primvar_normals_flattened(gl_context, tmp_path):
+    """A mesh whose primvars:normals are indexed gets its posed normals flattened in the
+    same primvar and interpolation, with the indices blocked; the bake takes both facts
+    from the scene's reading of the mesh (NormalPlan), not from the stage per frame."""
+    rest, counts, indices = grid_sheet(5, 5, 1.0)
+    posed = rest * np.array([0.8, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed, 2: posed}, counts, indices, width=0.3)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # a subdivision surface's are not
+    primvar = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+        "normals", Sdf.ValueTypeNames.Normal3fArray, UsdGeom.Tokens.faceVarying)
+    primvar.Set(Vt.Vec3fArray([Gf.Vec3f(0, 0, 1)]))
+    primvar.SetIndices(Vt.IntArray([0] * len(indices)))
+    source, out = tmp_path / "sheet.usda", tmp_path / "sheet_wrinkles.usda"
+    stage.GetRootLayer().Export(str(source))
+    assert main(["bake", str(source), str(out), "--with-points", "--frames", "1:2",
+                 "--quiet"]) == 0
+    layer = Sdf.Layer.FindOrOpen(str(out))
+    layer_prim = layer.GetPrimAtPath("/Sheet")
+    spec = layer_prim.properties["primvars:normals"]
+    assert spec.GetInfo("interpolation") == UsdGeom.Tokens.faceVarying
+    assert isinstance(layer_prim.properties["primvars:normals:indices"].default, Sdf.ValueBlock)
+    baked_stage = Usd.Stage.Open(str(out))
+    composed = UsdGeom.PrimvarsAPI(baked_stage.GetPrimAtPath("/Sheet"))
+    normals = np.asarray(composed.GetPrimvar("normals").Get(2.0), np.float64)
+    assert normals.shape == (len(indices), 3)
+    np.testing.assert_allclose(normals, np.tile([0.0, 0.0, 1.0], (len(indices), 1)), atol=1e-6)

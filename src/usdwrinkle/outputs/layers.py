@@ -232,17 +232,11 @@ class LayerBaker:
         if plan.source != "authored":
             return
         normals = res.read_shading_normals()
-        prim = self.stage.GetPrimAtPath(path)
-        if plan.attribute == "primvars:normals":
-            interpolation = UsdGeom.Primvar(prim.GetAttribute(plan.attribute)).GetInterpolation()
-            if UsdGeom.Primvar(prim.GetAttribute(plan.attribute)).IsIndexed():
-                indices = self._attr(path, "primvars:normals:indices",
-                                     Sdf.ValueTypeNames.IntArray)
-                self.layer.GetAttributeAtPath(indices).default = Sdf.ValueBlock()
-        else:
-            interpolation = UsdGeom.Mesh(prim).GetNormalsInterpolation()
+        if plan.indexed:  # the plan is the scene's reading of the mesh: no stage read here
+            indices = self._attr(path, "primvars:normals:indices", Sdf.ValueTypeNames.IntArray)
+            self.layer.GetAttributeAtPath(indices).default = Sdf.ValueBlock()
         attr = self._attr(path, plan.attribute, Sdf.ValueTypeNames.Normal3fArray,
-                          interpolation)
+                          plan.interpolation)
         self._set(attr, frame, Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(normals,
                                                                              np.float32)))
 

@@ -46,6 +46,7 @@ class NormalPlan:
     attribute : the authored attribute ("primvars:normals" or "normals"), or None.
     time_varying : authored values sampled per frame (a point cache's normals).
     interpolation : the authored values' interpolation (authored), or None.
+    indexed : the authored primvar has indices (a bake of posed normals blocks them).
     """
 
     source: str
@@ -56,6 +57,7 @@ class NormalPlan:
     attribute: str | None = None
     time_varying: bool = False
     interpolation: str | None = None
+    indexed: bool = False
 
 
 def _csr(keys: np.ndarray, values: np.ndarray, entries: int, width: int) -> np.ndarray:
@@ -116,9 +118,11 @@ def _authored(prim, mesh, topology: Topology, counts, indices, path: str):
     """The NormalPlan of authored normals (primvars:normals wins over normals), or None
     when a polygonal mesh authors none (or authors them unusably: a warning)."""
     primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("normals")
+    indexed = False
     if primvar and primvar.HasAuthoredValue():
         attr, interpolation = primvar.GetAttr(), primvar.GetInterpolation()
         values = static_flattened(primvar)
+        indexed = bool(primvar.IsIndexed())
     else:
         attr = mesh.GetNormalsAttr()
         if not attr or not attr.HasAuthoredValue():
@@ -152,7 +156,7 @@ def _authored(prim, mesh, topology: Topology, counts, indices, path: str):
     csr = np.concatenate([np.arange(entries + 1) + entries + 1, entry_point]).astype(np.int32)
     return NormalPlan("authored", entries, np.asarray(corner, np.int32), csr,
                       values.astype(np.float32), name,
-                      attr.ValueMightBeTimeVarying(), str(interpolation))
+                      attr.ValueMightBeTimeVarying(), str(interpolation), indexed)
 
 
 def sample_normals(prim, plan: NormalPlan, time, frame) -> np.ndarray | None:
