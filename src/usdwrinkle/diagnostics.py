@@ -15,6 +15,8 @@ import re
 import sys
 import tempfile
 
+from .errors import fold
+
 _DIAGNOSTIC = re.compile(r"^(?:Warning|Error|Runtime Error|Coding Error|Status):?"
                          r"(?: in [^-]*?)?(?: at line \d+ of \S+)? -- (.*)$")
 _FILE_LINE = re.compile(r"([^\s'@]+:\d+:\d+: .*)")
@@ -24,7 +26,7 @@ _USD_CODE = re.compile(r"^\s*Error in '[^']*' at line \d+ in file \S+ : '?(.*?)'
 
 def one_line(text: str) -> str:
     """Whitespace folded, and USD's '(instantiating stage on stage @x@ <0x...>)' dropped."""
-    return _CONTEXT.sub("", " ".join(str(text).split()))
+    return _CONTEXT.sub("", fold(text))
 
 
 def usd_error_text(exc: BaseException | str) -> str:

@@ -7,6 +7,11 @@ and exits with code 2. Anything else that escapes is a bug in usdwrinkle.
 from __future__ import annotations
 
 
+def fold(text) -> str:
+    """``text`` as one line: every run of whitespace (newlines too) becomes one space."""
+    return " ".join(str(text).split())
+
+
 class UsdWrinkleError(Exception):
     """A problem with the user's input or environment, reported as one line."""
 
@@ -29,7 +34,7 @@ class UsdWrinkleError(Exception):
 
             frame = format_frame(self.frame)
             where = f"{where} at frame {frame}" if where else f"at frame {frame}"
-        what = " ".join(str(self.what).split())  # one line, whatever a library said
+        what = fold(self.what)  # one line, whatever a library said
         return f"{what} ({where})" if where else what
 
 
@@ -86,7 +91,7 @@ def print_stderr(text: str) -> None:
 def print_warning(message: str) -> None:
     """The one way a warning reaches the user: ``usdwrinkle: warning: <message>`` on stderr
     (cli/common.Reporter adds de-duplication and --quiet on top)."""
-    print_stderr(f"usdwrinkle: warning: {' '.join(str(message).split())}")
+    print_stderr(f"usdwrinkle: warning: {fold(message)}")
 
 
 class GLContextError(UsdWrinkleError):

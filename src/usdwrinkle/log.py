@@ -5,8 +5,9 @@ logger and its children); nothing threads a ``warn`` callback through the layers
 more. Each warning then reaches:
 
 - the innermost ``warnings_to(sink)`` block (any thread): the CLI's reporter prints each
-  message once, usdview's plugin collects them for its dialog, a farm worker sends them
-  to its client, ``collect()`` gathers them in a list, ``silenced()`` drops them;
+  message once, a farm worker sends them to its client, ``collect()`` gathers them in a
+  list, ``silenced()`` drops them (usdview's plugin and ``check``, whose status line and
+  findings say what matters);
 - outside every block, stderr, as usdwrinkle's one line
   ``usdwrinkle: warning: <message>`` (errors.print_warning);
 - and in both cases the host's own logging, if it configured any (the records propagate
@@ -22,16 +23,12 @@ import logging
 import threading
 from collections.abc import Callable, Iterator
 
-from .errors import print_warning
+from .errors import fold, print_warning
 
 LOGGER = logging.getLogger("usdwrinkle")
 
 _SINKS: list[Callable[[str], None]] = []
 _LOCK = threading.Lock()
-
-
-def one_line(message) -> str:
-    return " ".join(str(message).split())
 
 
 class _SinkHandler(logging.Handler):
@@ -42,7 +39,7 @@ class _SinkHandler(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            message = one_line(record.getMessage())
+            message = fold(record.getMessage())
         except (TypeError, ValueError):  # a malformed %-format: logging's own report
             self.handleError(record)
             return
@@ -53,8 +50,7 @@ class _SinkHandler(logging.Handler):
 
 # once per process, also if this module is reloaded; a handler on the package logger
 # sees its children's records, and keeps Python's lastResort from printing them again
-if not any(isinstance(h, logging.Handler) and type(h).__name__ == "_SinkHandler"
-           for h in LOGGER.handlers):
+if not any(type(h).__name__ == "_SinkHandler" for h in LOGGER.handlers):
     LOGGER.addHandler(_SinkHandler())
 
 
