@@ -36,8 +36,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--with-points", action="store_true",
                    help="also write the posed points and extent in each mesh's local space, "
                         "and the posed normals of the meshes that author normals, in their "
-                        "own attribute (as UsdSkelBakeSkinning), and retype the affected "
-                        "SkelRoots to Xform so that the composed stage is not skinned twice "
+                        "own attribute (as UsdSkelBakeSkinning); each baked skinned mesh then "
+                        "binds no skeleton, so the composed stage is not skinned twice "
                         "(--maps implies it)")
     p.add_argument("--display-color", choices=("amplitude", "compression"),
                    help="also write primvars:displayColor (vertex) as a viridis ramp of that "
