@@ -286,3 +286,60 @@ def test_the_largest_geometry_the_render_can_draw_on_any_gl45_gpu():
         per_point = len(block) / len(fine.points)
         assert 12.0 < per_point < 14.5
         assert MAX_FINE_POINTS * per_point <= capacity < 4_000_000 * per_point
+
+
+def test_the_fine_mesh_repeats_what_the_coarse_mesh_authors(gl_context, tmp_path):
+    """The fine mesh takes a free name beside the coarse mesh, its authored doubleSided and
+    orientation, its primvars (constant: copied; vertex: interpolated to the fine corners)
+    and its transform: the reset of the transform stack, and a moving transform sampled at
+    every baked frame. The scene reads these once (scene/overrides.py); the writer is
+    handed them and never sees the stage."""
+    from pxr import Gf, Sdf, Vt
+
+    rest, counts, indices = grid_sheet(9, 9, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    stage = point_cache_stage(rest, {1: posed, 2: posed, 3: posed}, counts, indices,
+                              width=0.5)
+    UsdGeom.Xform.Define(stage, "/Sheet_wrinkled")  # the usual name is taken
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
+    mesh.CreateDoubleSidedAttr(True)
+    mesh.CreateOrientationAttr(UsdGeom.Tokens.leftHanded)
+    xformable = UsdGeom.Xformable(mesh)
+    xformable.SetResetXformStack(True)
+    translate = xformable.AddTranslateOp()
+    translate.Set(Gf.Vec3d(0, 0, 0), 1)
+    translate.Set(Gf.Vec3d(1, 2, 3), 3)
+    primvars = UsdGeom.PrimvarsAPI(mesh)
+    primvars.CreatePrimvar("tag", Sdf.ValueTypeNames.Float, UsdGeom.Tokens.constant).Set(2.5)
+    primvars.CreatePrimvar("heat", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(
+        Vt.FloatArray.FromNumpy(np.ascontiguousarray(rest[:, 0])))
+    source = tmp_path / "sheet.usda"
+    stage.GetRootLayer().Export(str(source))
+
+    layer = bake(source, tmp_path / "g.usda", "--levels", "1")
+    fine = layer.GetPrimAtPath("/Sheet_wrinkled2")
+    assert fine.IsA(UsdGeom.Mesh)
+    assert UsdGeom.Imageable(fine).GetProxyPrimRel().GetTargets() == [Sdf.Path("/Sheet")]
+    fine_mesh = UsdGeom.Mesh(fine)
+    assert fine_mesh.GetDoubleSidedAttr().Get() is True
+    assert fine_mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded
+    fine_xformable = UsdGeom.Xformable(fine)
+    assert fine_xformable.GetResetXformStack()
+    assert fine_xformable.GetXformOpOrderAttr().Get() == Vt.TokenArray(
+        ["!resetXformStack!", "xformOp:transform"])
+    assert fine_xformable.GetOrderedXformOps()[0].GetAttr().GetTimeSamples() == [1, 2, 3]
+    coarse = UsdGeom.Xformable(layer.GetPrimAtPath("/Sheet"))
+    for frame in (1, 2, 3):
+        np.testing.assert_allclose(
+            np.asarray(fine_xformable.GetLocalTransformation(frame)),
+            np.asarray(coarse.GetLocalTransformation(frame)))
+    assert np.asarray(coarse.GetLocalTransformation(2))[3, :3].tolist() == [0.5, 1, 1.5]
+    fine_primvars = UsdGeom.PrimvarsAPI(fine)
+    tag = fine_primvars.GetPrimvar("tag")
+    assert tag.GetInterpolation() == UsdGeom.Tokens.constant and tag.Get() == 2.5
+    heat = fine_primvars.GetPrimvar("heat")
+    assert heat.GetInterpolation() == UsdGeom.Tokens.faceVarying
+    corners = np.asarray(fine_mesh.GetFaceVertexIndicesAttr().Get())
+    points = fine_points(layer, "/Sheet_wrinkled2", 1)
+    # heat is the rest x, linear: the fine corners carry it exactly (posed x = 0.7 rest x)
+    np.testing.assert_allclose(np.asarray(heat.Get()), points[corners, 0] / 0.7, atol=1e-5)

@@ -106,3 +106,37 @@ def test_test_modules_share_helpers_only_through_helpers_and_conftest():
                 [node.module or ""] if isinstance(node, ast.ImportFrom) else []
             found += [f"{path.name}: {n}" for n in names if n.startswith("test_")]
     assert found == []
+
+
+def test_no_bake_writer_reads_the_stage():
+    """Issue 25: the writers (outputs/, maps/, geometry/) re-read the stage while they
+    wrote (SkelRoots, default prim, bound materials, transforms, primvars). The scene
+    now reads those facts once (scene/overrides.py) and the writers author from them:
+    none imports the stage-reading modules of pxr (Usd, UsdShade, UsdSkel; UsdGeom for
+    its tokens only) or the scene, and BakeScene hands them no stage."""
+    import ast
+    import dataclasses
+    from pathlib import Path
+
+    import usdwrinkle
+    from usdwrinkle.outputs.sink import BakeScene
+
+    package = Path(usdwrinkle.__file__).parent
+    found = []
+    for folder in ("outputs", "maps", "geometry"):
+        for path in sorted((package / folder).glob("*.py")):
+            where = f"{folder}/{path.name}"
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                if isinstance(node, ast.ImportFrom) and node.module == "pxr":
+                    found += [f"{where}: pxr.{a.name}" for a in node.names
+                              if a.name in ("Usd", "UsdShade", "UsdSkel", "UsdLux")]
+                if isinstance(node, ast.ImportFrom) and node.level and \
+                        (node.module or "").split(".")[0] in ("scene", "engine", "shot"):
+                    found += [f"{where}: ..{node.module}"]
+                if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
+                        node.value.id == "UsdGeom" and node.attr != "Tokens":
+                    found.append(f"{where}: UsdGeom.{node.attr}")
+                if isinstance(node, ast.Attribute) and node.attr == "stage":
+                    found.append(f"{where}: .stage")
+    assert found == []
+    assert "stage" not in {f.name for f in dataclasses.fields(BakeScene)}

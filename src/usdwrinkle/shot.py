@@ -169,6 +169,7 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
     survey of them."""
     from .outputs.layers import LayerBaker, LayerOptions, new_layer, save_layer
     from .outputs.sink import BakeScene
+    from .scene.overrides import read_overrides
 
     stage_path, output, frames = request.stage_path, request.output, list(request.frames)
     maps, geometry = request.maps, request.geometry
@@ -190,8 +191,10 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
     # the maps are relative to the posed shading normals, which renderers must shade with:
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals
     # are baked (README: maps)
-    scene = BakeScene(engine.stage, stage_path, output, tuple(frames), wrinkled,
-                      engine.meshes, engine.ctx, engine.corner_primvar)
+    facts = read_overrides(engine.stage, stage_path, wrinkled, frames,
+                           carry_primvars=geometry is not None)
+    scene = BakeScene(facts, output, tuple(frames), wrinkled, engine.meshes, engine.ctx,
+                      engine.corner_primvar)
     sinks = [LayerBaker(scene, LayerOptions(
         with_points=request.with_points or maps is not None,
         display_color=request.display_color, sparse=request.sparse, frame_spec=frame_spec))]

@@ -21,30 +21,30 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+from pxr import Sdf, UsdGeom, Vt
 
 from ..outputs.layers import attribute_spec, bind_material, define_prim
 from ..outputs.sink import BakeScene
-from ..scene.material import corner_values
 from .subdivide import FineMesh
 
 _log = logging.getLogger(__name__)
 
 SUFFIX = "_wrinkled"
-#: primvars that are not carried: the wrinkle fields, skinning, the rest pose, normals
-SKIPPED_PRIMVARS = ("primvars:wrinkle:", "primvars:skel:", "primvars:rest", "primvars:normals")
 VT = Sdf.ValueTypeNames
+#: the authored uniform attributes of the coarse mesh that the fine mesh repeats
+UNIFORM_TYPES = {"doubleSided": VT.Bool, "orientation": VT.Token}
 
 
-def fine_path(stage: Usd.Stage, coarse: str) -> Sdf.Path:
-    """``<coarse>_wrinkled`` beside the coarse mesh (a free name)."""
+def fine_path(coarse: str, siblings) -> Sdf.Path:
+    """``<coarse>_wrinkled`` beside the coarse mesh: a name none of ``siblings`` (the
+    names of the prims beside it) has."""
     path = Sdf.Path(coarse)
-    candidate = path.GetParentPath().AppendChild(path.name + SUFFIX)
+    name = path.name + SUFFIX
     index = 2
-    while stage.GetPrimAtPath(candidate):
-        candidate = path.GetParentPath().AppendChild(f"{path.name}{SUFFIX}{index}")
+    while name in siblings:
+        name = f"{path.name}{SUFFIX}{index}"
         index += 1
-    return candidate
+    return path.GetParentPath().AppendChild(name)
 
 
 def _array(type_name, values: np.ndarray):
@@ -61,18 +61,18 @@ def _array(type_name, values: np.ndarray):
 
 
 class FineMeshWriter:
-    """Authors one fine mesh: :meth:`define` once, :meth:`add_frame` per frame."""
+    """Authors one fine mesh: :meth:`define` once, :meth:`add_frame` per frame, from what
+    the scene read of the coarse mesh (``scene.facts.meshes[coarse]``,
+    scene/overrides.MeshFacts)."""
 
     def __init__(self, scene: BakeScene, coarse: str, fine: FineMesh):
         self.layer: Sdf.Layer | None = None
         self.coarse = coarse
-        self.path = fine_path(scene.stage, coarse)
-        self.prim = scene.stage.GetPrimAtPath(coarse)
+        self.mesh = scene.facts.meshes[coarse]
+        self.path = fine_path(coarse, self.mesh.siblings)
         self.fine = fine
-        self.topology = scene.meshes[coarse].topology
-        self.xformable = UsdGeom.Xformable(self.prim)
-        self.moves = bool(self.xformable.GetOrderedXformOps()) and \
-            self.xformable.TransformMightBeTimeVarying()
+        self.transform = self.mesh.transform
+        self.moves = self.transform is not None and self.transform.moves
 
     def define(self, layer: Sdf.Layer) -> None:
         self.layer = layer
@@ -84,47 +84,36 @@ class FineMeshWriter:
             np.ascontiguousarray(fine.faces.ravel(), np.int32)))
         attribute_spec(spec, "subdivisionScheme", VT.Token, UsdGeom.Tokens.none, uniform=True)
         attribute_spec(spec, "purpose", VT.Token, UsdGeom.Tokens.render, uniform=True)
-        mesh = UsdGeom.Mesh(self.prim)
-        for attr, type_name in ((mesh.GetDoubleSidedAttr(), VT.Bool),
-                                (mesh.GetOrientationAttr(), VT.Token)):
-            if attr.HasAuthoredValue():
-                attribute_spec(spec, attr.GetName(), type_name, attr.Get(), uniform=True)
+        for name, value in self.mesh.uniform.items():
+            attribute_spec(spec, name, UNIFORM_TYPES[name], value, uniform=True)
         proxy = Sdf.RelationshipSpec(spec, "proxyPrim", custom=False)
         proxy.targetPathList.explicitItems = [Sdf.Path(self.coarse)]
         coarse = Sdf.CreatePrimInLayer(layer, self.coarse)
         attribute_spec(coarse, "purpose", VT.Token, UsdGeom.Tokens.proxy, uniform=True)
-        if self.xformable.GetOrderedXformOps() or self.xformable.GetResetXformStack():
-            order = (["!resetXformStack!"] if self.xformable.GetResetXformStack() else []) + \
-                ["xformOp:transform"]
+        transform = self.transform
+        if transform is not None:
+            order = (["!resetXformStack!"] if transform.reset else []) + ["xformOp:transform"]
             attribute_spec(spec, "xformOpOrder", VT.TokenArray, Vt.TokenArray(order),
                            uniform=True)
-            if not self.moves:
-                attribute_spec(spec, "xformOp:transform", VT.Matrix4d,
-                               self.xformable.GetLocalTransformation(Usd.TimeCode.Default()))
-        material, _ = UsdShade.MaterialBindingAPI(self.prim).ComputeBoundMaterial()
-        if material:
-            bind_material(layer, self.path, material.GetPath())
+            if not transform.moves:
+                attribute_spec(spec, "xformOp:transform", VT.Matrix4d, transform.static)
+        if self.mesh.material:
+            bind_material(layer, self.path, self.mesh.material)
         self._primvars(spec)
 
     def _primvars(self, spec: Sdf.PrimSpec) -> None:
         """The coarse mesh's primvars on the fine mesh: face-varying, interpolated with
         each fine corner's barycentrics in its coarse triangle; constant ones copied."""
-        time = Usd.TimeCode.EarliestTime()
         fine = self.fine
-        for primvar in UsdGeom.PrimvarsAPI(self.prim).GetPrimvarsWithValues():
-            name = primvar.GetAttr().GetName()
-            if name.startswith(SKIPPED_PRIMVARS):
-                continue
-            type_name = primvar.GetTypeName()
-            if primvar.GetInterpolation() == UsdGeom.Tokens.constant:
-                attribute_spec(spec, name, type_name, primvar.ComputeFlattened(time),
+        for primvar in self.mesh.primvars:
+            name, type_name = primvar.name, primvar.type_name
+            if primvar.constant:
+                attribute_spec(spec, name, type_name, primvar.value,
                                interpolation=UsdGeom.Tokens.constant)
                 continue
-            corners = corner_values(primvar, self.topology, time) if type_name.isArray \
-                else None
             value = None
-            if corners is not None:
-                coarse = corners[fine.face_triangle]                        # (m, 3, c)
+            if primvar.value is not None:
+                coarse = primvar.value[fine.face_triangle]                  # (m, 3, c)
                 values = np.einsum("mjk,mkc->mjc", fine.corner_bary, coarse)
                 value = _array(type_name, values.reshape(-1, coarse.shape[-1]).squeeze())
             if value is None:
@@ -146,9 +135,7 @@ class FineMeshWriter:
                 np.stack([points.min(0), points.max(0)]).astype(np.float32))),
         }
         if self.moves:
-            time = Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
-            values["xformOp:transform"] = (VT.Matrix4d, None,
-                                           self.xformable.GetLocalTransformation(time))
+            values["xformOp:transform"] = (VT.Matrix4d, None, self.transform.at(frame))
         for name, (type_name, interpolation, value) in values.items():
             attr = attribute_spec(spec, name, type_name, interpolation=interpolation)
             if np.isnan(frame):

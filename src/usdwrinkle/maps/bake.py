@@ -15,7 +15,6 @@ from ..errors import UsdWrinkleError
 from ..memory import require_memory
 from ..outputs.sink import BakeScene
 from ..outputs.writer import FrameWriter
-from ..scene.stage import stage_inputs
 from .files import (
     MAP_KINDS,
     MapStaging,
@@ -111,9 +110,8 @@ class MapBake:
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None
         self._checked_overlap: set[str] = set()
-        inputs = stage_inputs(scene.stage)
         for name in self.file_names(list(scene.frames)):
-            if inputs.protects(name):
+            if scene.facts.inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
                                       "reads (choose another --map-dir)")
 
@@ -194,11 +192,11 @@ class MapBake:
         returns the layer's record of the maps."""
         from .material import MaterialTarget, author_material, material_path
 
-        stage = self.scene.stage
+        facts = self.scene.facts
         for path, plan in self.plans.items():
-            target = MaterialTarget(path, material_path(stage, path, plan.stem),
-                                    self.files[path], plan.udim)
-            author_material(self.layer, stage, target, self.options)
+            target = MaterialTarget(facts.meshes[path], material_path(
+                facts.default_prim_path, path, plan.stem), self.files[path], plan.udim)
+            author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
 
     def commit(self) -> None:

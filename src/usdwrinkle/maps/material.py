@@ -16,7 +16,8 @@ For each mesh, a Material ``WrinkleMaterials/<mesh>``:
   with, no UsdPreviewSurface input takes it).
 
 The mesh's ``material:binding`` is overridden to the new material. Written with the Sdf
-API into the bake's layer: the source stage is read, never edited.
+API into the bake's layer, from what the scene read of the mesh's materials before the
+first frame (scene/overrides.MeshFacts): the source stage is neither read here nor edited.
 """
 from __future__ import annotations
 
@@ -24,10 +25,9 @@ import logging
 import math
 from dataclasses import dataclass
 
-from pxr import Sdf, Usd, UsdShade
+from pxr import Sdf
 
 from ..outputs.layers import attribute_spec, bind_material, define_prim
-from ..scene.material import bound_surface, display_color
 from ..schema import MAP_INPUTS
 
 _log = logging.getLogger(__name__)
@@ -45,13 +45,13 @@ READER = "WrinkleUV"
 VALUE_TYPES = Sdf.ValueTypeNames
 
 
-def material_path(stage: Usd.Stage, mesh_path: str, stem: str) -> Sdf.Path:
-    """Under the stage's default prim when the mesh is inside it (a reference to the
-    layer then brings the material along), else at the root."""
-    default = stage.GetDefaultPrim()
+def material_path(default_prim: str | None, mesh_path: str, stem: str) -> Sdf.Path:
+    """Under the stage's default prim (its path, or None) when the mesh is inside it (a
+    reference to the layer then brings the material along), else at the root."""
     mesh = Sdf.Path(mesh_path)
-    if default and mesh.HasPrefix(default.GetPath()) and mesh != default.GetPath():
-        return default.GetPath().AppendChild(SCOPE).AppendChild(stem)
+    if default_prim and mesh.HasPrefix(Sdf.Path(default_prim)) and mesh != Sdf.Path(
+            default_prim):
+        return Sdf.Path(default_prim).AppendChild(SCOPE).AppendChild(stem)
     return Sdf.Path.absoluteRootPath.AppendChild(SCOPE).AppendChild(stem)
 
 
@@ -61,37 +61,27 @@ def _shader(layer: Sdf.Layer, path: Sdf.Path, shader_id: str) -> Sdf.PrimSpec:
     return spec
 
 
-def _source_surface(prim: Usd.Prim):
-    """(bound material path, its UsdPreviewSurface's path inside it) or Nones."""
-    material, shader = bound_surface(prim)
-    if not material:
-        return None, None
-    if shader is None or not shader.GetPath().HasPrefix(material.GetPath()):
-        return material.GetPath(), None
-    return material.GetPath(), shader.GetPath()
-
-
 @dataclass(frozen=True)
 class MaterialTarget:
-    """One mesh's wrinkle material: the mesh, the material's path (material_path), its
-    map files (kind -> [(frame, asset path)], frames in order; NaN: default only), and
-    whether they are UDIM sets (a tile's edge is clamped; one texture repeats)."""
+    """One mesh's wrinkle material: the mesh (scene/overrides.MeshFacts), the material's
+    path (material_path), its map files (kind -> [(frame, asset path)], frames in order;
+    NaN: default only), and whether they are UDIM sets (a tile's edge is clamped; one
+    texture repeats)."""
 
-    mesh_path: str
+    mesh: object
     path: Sdf.Path
     files: dict
     udim: bool = False
 
 
-def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
-                    options) -> None:
+def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
     """Write ``target``'s material and bind it to the mesh. ``options``
     (maps.options.MapOptions): the UV primvar the maps are laid out in, and whether the
     height map is also bound to ``inputs:displacement``."""
-    mesh_path, path, files, udim = target.mesh_path, target.path, target.files, target.udim
-    uv_name, displacement = options.uv, options.displacement
-    prim = stage.GetPrimAtPath(mesh_path)
-    source_material, source_surface = _source_surface(prim)
+    mesh, path, files, udim = target.mesh, target.path, target.files, target.udim
+    mesh_path, uv_name, displacement = mesh.path, options.uv, options.displacement
+    source_material = Sdf.Path(mesh.material) if mesh.material else None
+    source_surface = Sdf.Path(mesh.surface) if mesh.surface else None
     scope = Sdf.CreatePrimInLayer(layer, path.GetParentPath())
     if not scope.typeName:
         scope.specifier = Sdf.SpecifierDef
@@ -101,8 +91,7 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
         material.referenceList.Prepend(Sdf.Reference(primPath=source_material))
         surface = path.AppendPath(source_surface.MakeRelativePath(source_material))
         surface_spec = Sdf.CreatePrimInLayer(layer, surface)
-        existing = UsdShade.Shader(stage.GetPrimAtPath(source_surface)).GetInput("normal")
-        if existing and existing.HasConnectedSource():
+        if mesh.surface_normal_mapped:
             _log.warning(f"the mesh's material has a normal map; the wrinkle normal map replaces "
                          f"it ({mesh_path})")
     else:
@@ -112,10 +101,10 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
         surface = path.AppendChild("PreviewSurface")
         surface_spec = _shader(layer, surface, "UsdPreviewSurface")
         attribute_spec(surface_spec, "inputs:diffuseColor", VALUE_TYPES.Color3f,
-                   tuple(float(c) for c in display_color(prim, Usd.TimeCode.Default())))
+                       mesh.display_color)
         attribute_spec(surface_spec, "outputs:surface", VALUE_TYPES.Token)
         attribute_spec(material, "outputs:surface", VALUE_TYPES.Token,
-                   connect=surface.AppendProperty("outputs:surface"))
+                       connect=surface.AppendProperty("outputs:surface"))
     reader = path.AppendChild(READER)
     reader_spec = _shader(layer, reader, "UsdPrimvarReader_float2")
     attribute_spec(reader_spec, "inputs:varname", VALUE_TYPES.String, uv_name)
@@ -133,7 +122,7 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
         spec = _shader(layer, texture, "UsdUVTexture")
         attribute_spec(spec, "inputs:file", VALUE_TYPES.Asset, connect=file_input.path)
         attribute_spec(spec, "inputs:st", VALUE_TYPES.Float2,
-                   connect=reader.AppendProperty("outputs:result"))
+                       connect=reader.AppendProperty("outputs:result"))
         attribute_spec(spec, "inputs:sourceColorSpace", VALUE_TYPES.Token, "raw")
         # the wrap the maps were made for: a seam across the 0/1 border reads the other
         # side (UsdUVTexture's fallback, "useMetadata", is a black border in Storm)
@@ -148,10 +137,10 @@ def author_material(layer: Sdf.Layer, stage: Usd.Stage, target: MaterialTarget,
         input_name, input_type = surface_input
         type_name = VALUE_TYPES.Normal3f if input_type == "normal3f" else VALUE_TYPES.Float
         attribute_spec(surface_spec, f"inputs:{input_name}", type_name,
-                   connect=texture.AppendProperty(f"outputs:{output_name}"))
+                       connect=texture.AppendProperty(f"outputs:{output_name}"))
     bind_material(layer, mesh_path, path)
-    preview, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(UsdShade.Tokens.preview)
-    if preview and (not source_material or preview.GetPath() != source_material):
+    preview = mesh.preview_material
+    if preview and (not source_material or Sdf.Path(preview) != source_material):
         # the mesh binds another material for the preview purpose, which usdview's Storm
         # resolves first: the maps are bound for it too
         bind_material(layer, mesh_path, path, purpose="preview")

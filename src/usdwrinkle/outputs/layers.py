@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
-from pxr import Sdf, Usd, UsdGeom, UsdSkel, Vt
+from pxr import Sdf, UsdGeom, Vt
 
 from .. import __version__, schema
 from ..colour import srgb_decode
@@ -100,8 +100,7 @@ class LayerBaker:
     mesh's fields as vertex primvars; at the end, the layer's metadata."""
 
     def __init__(self, scene: BakeScene, options: LayerOptions):
-        self.stage = scene.stage
-        self.stage_path = scene.stage_path
+        self.facts = scene.facts
         self.output = scene.output
         self.wrinkled = scene.meshes
         self.options = options
@@ -123,12 +122,7 @@ class LayerBaker:
         """Nothing held."""
 
     def _collect_point_meshes(self, records: dict) -> None:
-        roots = set()
-        for path in self.wrinkled:
-            prim = self.stage.GetPrimAtPath(path)
-            for ancestor in _ancestors(prim):
-                if ancestor.IsA(UsdSkel.Root):
-                    roots.add(str(ancestor.GetPath()))
+        roots = {root for path in self.wrinkled for root in self.facts.meshes[path].skel_roots}
         self.skel_roots = sorted(roots)
         for path, record in records.items():
             skinned_here = record.skin is not None and any(
@@ -198,8 +192,8 @@ class LayerBaker:
         mesh given the ramp binds, for the preview purpose that Storm resolves first, a
         UsdPreviewSurface whose diffuseColor reads primvars:displayColor. Renderers of
         the full purpose keep the mesh's own material."""
-        default = self.stage.GetDefaultPrim()
-        root = default.GetPath() if default else Sdf.Path.absoluteRootPath
+        default = self.facts.default_prim_path
+        root = Sdf.Path(default) if default else Sdf.Path.absoluteRootPath
         scope = root.AppendChild("WrinkleMaterials")
         path = scope.AppendChild("DisplayColor")
         scope_spec = Sdf.CreatePrimInLayer(self.layer, scope)
@@ -244,22 +238,20 @@ class LayerBaker:
         """The layer's metadata (time codes, up axis, units, default prim, the sublayered
         input), the display-colour material, and the skinned meshes' unbound skeletons;
         returns what customLayerData records of this bake."""
-        output_path, options = self.output, self.options
-        root = self.stage.GetRootLayer()
+        output_path, options, facts = self.output, self.options, self.facts
         layer = self.layer
-        layer.timeCodesPerSecond = self.stage.GetTimeCodesPerSecond()
-        layer.framesPerSecond = self.stage.GetFramesPerSecond()
+        layer.timeCodesPerSecond = facts.time_codes_per_second
+        layer.framesPerSecond = facts.frames_per_second
         timed = [f for f in self.frames if not math.isnan(f)]
         if timed:
             layer.startTimeCode = min(timed)
             layer.endTimeCode = max(timed)
-        for key in ("upAxis", "metersPerUnit"):
-            if root.pseudoRoot.HasInfo(key):
-                layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
-        if root.defaultPrim:
-            layer.defaultPrim = root.defaultPrim
+        for key, value in facts.layer_info.items():
+            layer.pseudoRoot.SetInfo(key, value)
+        if facts.default_prim:
+            layer.defaultPrim = facts.default_prim
         # the source stage as the layer's own paths are: relative to the layer's folder
-        source_path = os.path.relpath(os.path.abspath(self.stage_path), os.path.dirname(
+        source_path = os.path.relpath(os.path.abspath(facts.path), os.path.dirname(
             os.path.abspath(output_path))).replace(os.sep, "/")
         if not options.sparse:
             layer.subLayerPaths.append(source_path)
@@ -329,13 +321,6 @@ def _first_write_error(text: str) -> str | None:
 
     match = re.search(r"Error occurred writing file: ([^'\n]+)", text)
     return match.group(1).strip() if match else None
-
-
-def _ancestors(prim: Usd.Prim):
-    prim = prim.GetParent()
-    while prim and not prim.IsPseudoRoot():
-        yield prim
-        prim = prim.GetParent()
 
 
 def define_prim(layer: Sdf.Layer, path, type_name: str) -> Sdf.PrimSpec:

@@ -26,17 +26,17 @@ from typing import Protocol
 class BakeScene:
     """What the writers of one bake are given, gathered once by shot.bake_layer.
 
-    ``stage``: the input Usd.Stage, read for what the layer overrides (prims, their
-    materials, primvars and transforms) and for the layer's metadata. ``stage_path``:
-    where it lives (the layer sublayers it by a relative path). ``output``: the layer's
-    path (side files are placed beside it). ``frames``: the bake's frames, in order.
-    ``meshes``: path -> MeshRecord of the wrinkled meshes the layer overrides;
-    ``records``: path -> MeshRecord of every mesh of the stage. ``ctx``: the moderngl
-    context the GPU sinks draw with. ``corner_primvar(path, name)``: the scene's reader
-    of a primvar per triangle corner (the maps' UVs)."""
+    ``facts``: what the layer needs to know of the input stage, read before the first
+    frame (scene/overrides.StageFacts: its path, metadata, default prim, input files,
+    and per wrinkled mesh its SkelRoots, materials, transform, sibling names and
+    primvars); no writer holds the stage. ``output``: the layer's path (side files are
+    placed beside it). ``frames``: the bake's frames, in order. ``meshes``: path ->
+    MeshRecord of the wrinkled meshes the layer overrides; ``records``: path ->
+    MeshRecord of every mesh of the stage. ``ctx``: the moderngl context the GPU sinks
+    draw with. ``corner_primvar(path, name)``: the scene's reader of a primvar per
+    triangle corner (the maps' UVs)."""
 
-    stage: object
-    stage_path: str
+    facts: object
     output: str
     frames: tuple = ()
     meshes: dict = field(default_factory=dict)

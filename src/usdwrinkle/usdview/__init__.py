@@ -139,6 +139,7 @@ def _bake_in_process(usdview_api, ctx) -> list[str]:
     from ..errors import UsdWrinkleError
     from ..outputs.layers import LayerBaker, LayerOptions
     from ..outputs.sink import BakeScene
+    from ..scene.overrides import read_overrides
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
@@ -154,8 +155,8 @@ def _bake_in_process(usdview_api, ctx) -> list[str]:
             return []
         engine.compute_frame(frame)
         records = {path: engine.meshes[path] for path in targets}
-        scene = BakeScene(stage, stage.GetRootLayer().realPath or "", "", (frame,), records,
-                          engine.meshes)
+        facts = read_overrides(stage, stage.GetRootLayer().realPath or "", records, (frame,))
+        scene = BakeScene(facts, "", (frame,), records, engine.meshes)
         baker = LayerBaker(scene, LayerOptions(display_color="amplitude"))
         baker.begin(stage.GetSessionLayer())
         baker.add_frame(frame, {path: engine.read_fields(path) for path in targets}, {})

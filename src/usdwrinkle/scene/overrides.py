@@ -1,0 +1,182 @@
+"""What a bake layer must know of the stage it overrides, read once before the first frame.
+
+shot.bake_layer reads these facts with :func:`read_overrides` and hands them to the bake's
+writers (outputs/layers.py, maps/, geometry/) in ``outputs.sink.BakeScene``: the writers
+author the layer from plain values and never hold the stage, so the data of a bake only
+flows down (scene -> GPU -> writers), as it does for a render.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from pxr import Usd, UsdGeom, UsdShade, UsdSkel
+
+from .material import bound_surface, corner_values, display_color
+from .stage import stage_inputs
+
+
+def frame_key(frame: float):
+    """A frame as a dict key: None for the default time (NaN equals nothing)."""
+    return None if math.isnan(frame) else float(frame)
+
+
+def _time(frame: float) -> Usd.TimeCode:
+    return Usd.TimeCode.Default() if math.isnan(frame) else Usd.TimeCode(frame)
+
+
+@dataclass(frozen=True)
+class CarriedPrimvar:
+    """A primvar of a coarse mesh that its fine render mesh carries (geometry/layer.py).
+    ``value``: a constant primvar's flattened value; else its values per triangle corner
+    (m, 3, c), or None where they cannot be read per corner."""
+
+    name: str
+    type_name: object  # Sdf.ValueTypeName
+    constant: bool
+    value: object
+
+
+@dataclass(frozen=True)
+class MeshTransform:
+    """A mesh's local transform, as a layer repeats it on another prim beside the mesh:
+    ``reset`` (the mesh resets the transform stack); ``static`` (the default-time matrix)
+    when it does not move, else ``samples`` (frame_key -> matrix) at the bake's frames."""
+
+    reset: bool
+    moves: bool
+    static: object = None
+    samples: dict = field(default_factory=dict)
+
+    def at(self, frame: float):
+        return self.samples[frame_key(frame)]
+
+
+@dataclass(frozen=True)
+class MeshFacts:
+    """One wrinkled mesh as its overrides need it.
+
+    ``skel_roots``: the SkelRoots above it. ``material``: its bound material (all
+    purposes); ``surface``: that material's UsdPreviewSurface when it lies inside the
+    material, with ``surface_normal_mapped`` when its ``inputs:normal`` is connected;
+    ``preview_material``: the material bound for the preview purpose. ``display_color``:
+    its first displayColor (linear). ``siblings``: the names of the prims beside it (a
+    new prim needs a free name). ``uniform``: its authored doubleSided and orientation.
+    ``transform``: None when it authors no xformOps and no reset. ``primvars``: its
+    CarriedPrimvars (read only when the bake asks for them)."""
+
+    path: str
+    skel_roots: tuple = ()
+    material: str | None = None
+    surface: str | None = None
+    surface_normal_mapped: bool = False
+    preview_material: str | None = None
+    display_color: tuple = (0.5, 0.5, 0.5)
+    siblings: frozenset = frozenset()
+    uniform: dict = field(default_factory=dict)
+    transform: MeshTransform | None = None
+    primvars: tuple = ()
+
+
+@dataclass(frozen=True)
+class StageFacts:
+    """The input stage as a bake layer overrides it: ``path`` (the layer sublayers it by a
+    relative path), its time codes and frames per second, ``layer_info`` (upAxis and
+    metersPerUnit where its root layer authors them), ``default_prim`` (the root layer's
+    defaultPrim name, or "") and ``default_prim_path`` (the stage's default prim, when it
+    exists), ``inputs`` (scene/inputs.StageInputs: every file it reads, which no output
+    may overwrite) and ``meshes`` (path -> MeshFacts)."""
+
+    path: str
+    time_codes_per_second: float = 24.0
+    frames_per_second: float = 24.0
+    layer_info: dict = field(default_factory=dict)
+    default_prim: str = ""
+    default_prim_path: str | None = None
+    inputs: object = None
+    meshes: dict = field(default_factory=dict)
+
+
+def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
+                   carry_primvars: bool = False) -> StageFacts:
+    """The facts of ``stage`` (at ``stage_path``) that a layer overriding the meshes of
+    ``records`` (path -> MeshRecord) at ``frames`` needs; each mesh's primvars too when
+    ``carry_primvars`` (the displaced render meshes carry them)."""
+    root = stage.GetRootLayer()
+    default = stage.GetDefaultPrim()
+    return StageFacts(
+        path=stage_path,
+        time_codes_per_second=stage.GetTimeCodesPerSecond(),
+        frames_per_second=stage.GetFramesPerSecond(),
+        layer_info={key: root.pseudoRoot.GetInfo(key) for key in ("upAxis", "metersPerUnit")
+                    if root.pseudoRoot.HasInfo(key)},
+        default_prim=root.defaultPrim or "",
+        default_prim_path=str(default.GetPath()) if default else None,
+        inputs=stage_inputs(stage),
+        meshes={path: _mesh_facts(stage.GetPrimAtPath(path), record, tuple(frames),
+                                  carry_primvars)
+                for path, record in records.items()})
+
+
+def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> MeshFacts:
+    material, shader = bound_surface(prim)
+    surface = shader.GetPath() if shader is not None and material and \
+        shader.GetPath().HasPrefix(material.GetPath()) else None
+    normal = shader.GetInput("normal") if surface is not None else None
+    preview, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(UsdShade.Tokens.preview)
+    mesh = UsdGeom.Mesh(prim)
+    uniform = {attr.GetName(): attr.Get()
+               for attr in (mesh.GetDoubleSidedAttr(), mesh.GetOrientationAttr())
+               if attr.HasAuthoredValue()}
+    return MeshFacts(
+        path=str(prim.GetPath()),
+        skel_roots=tuple(str(a.GetPath()) for a in _ancestors(prim) if a.IsA(UsdSkel.Root)),
+        material=str(material.GetPath()) if material else None,
+        surface=str(surface) if surface is not None else None,
+        surface_normal_mapped=bool(normal) and normal.HasConnectedSource(),
+        preview_material=str(preview.GetPath()) if preview else None,
+        display_color=tuple(float(c) for c in display_color(prim, Usd.TimeCode.Default())),
+        siblings=frozenset(prim.GetParent().GetAllChildrenNames()),
+        uniform=uniform,
+        transform=_transform(UsdGeom.Xformable(prim), frames),
+        primvars=_primvars(prim, record.topology) if carry_primvars else ())
+
+
+def _ancestors(prim: Usd.Prim):
+    prim = prim.GetParent()
+    while prim and not prim.IsPseudoRoot():
+        yield prim
+        prim = prim.GetParent()
+
+
+def _transform(xformable: UsdGeom.Xformable, frames: tuple) -> MeshTransform | None:
+    has_ops, reset = bool(xformable.GetOrderedXformOps()), xformable.GetResetXformStack()
+    if not (has_ops or reset):
+        return None
+    if has_ops and xformable.TransformMightBeTimeVarying():
+        return MeshTransform(reset, True, samples={
+            frame_key(f): xformable.GetLocalTransformation(_time(f)) for f in frames})
+    return MeshTransform(reset, False, xformable.GetLocalTransformation(Usd.TimeCode.Default()))
+
+
+#: primvars a fine mesh does not carry: the wrinkle fields, skinning, the rest pose, normals
+SKIPPED_PRIMVARS = ("primvars:wrinkle:", "primvars:skel:", "primvars:rest", "primvars:normals")
+
+
+def _primvars(prim: Usd.Prim, topology) -> tuple:
+    """The primvars a fine mesh carries, at the earliest time: constant ones flattened,
+    the others per triangle corner (array-valued ones only)."""
+    time = Usd.TimeCode.EarliestTime()
+    carried = []
+    for primvar in UsdGeom.PrimvarsAPI(prim).GetPrimvarsWithValues():
+        name = primvar.GetAttr().GetName()
+        if name.startswith(SKIPPED_PRIMVARS):
+            continue
+        type_name = primvar.GetTypeName()
+        if primvar.GetInterpolation() == UsdGeom.Tokens.constant:
+            carried.append(CarriedPrimvar(name, type_name, True,
+                                          primvar.ComputeFlattened(time)))
+            continue
+        corners = corner_values(primvar, topology, time) if type_name.isArray else None
+        carried.append(CarriedPrimvar(name, type_name, False, corners))
+    return tuple(carried)
