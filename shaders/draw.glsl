@@ -63,9 +63,8 @@ void main() {
     // weights and face-varying st are per corner. (Indexed, with the weights computed per
     // fragment from the three corners, was no faster on llvmpipe: docs/benchmarks.md.)
     int corner = gl_VertexID;
-    int t = corner / 3;
-    int c = corner - 3 * t;
-    int i = fetch(triangles, t)[c];
+    DrawCorner dc = draw_corner(triangles, corner);
+    int t = dc.t, c = dc.c, i = dc.i;
     vec3 p = fetch(posed_points, i).xyz;  // posed, local space
     v_local = p;
     v_local_footprint = p;

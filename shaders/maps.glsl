@@ -30,9 +30,8 @@ out vec4 v_tangent;
 
 void main() {
     int corner = gl_VertexID;
-    int t = corner / 3;
-    int c = corner - 3 * t;
-    int i = fetch(triangles, t)[c];
+    DrawCorner dc = draw_corner(triangles, corner);
+    int t = dc.t, c = dc.c, i = dc.i;
     v_local = fetch(posed_points, i).xyz;             // posed, local space
     vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;

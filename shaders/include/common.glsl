@@ -22,6 +22,17 @@ ivec4 fetch(isampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 
 // wave system s (0: the strongest compression or tension, 1: the second compression)
 #define FIELD_WAVE_OF(i, s) (FIELD_TEXELS * (i) + ((s) == 0 ? FIELD_WAVE_TEXEL : FIELD_WAVE2_TEXEL))
 
+// A corner of a draw that is not indexed (corner = gl_VertexID = 3 t + c): its triangle t,
+// its place c in the triangle, and the point i the triangles table gives it there.
+struct DrawCorner { int t; int c; int i; };
+DrawCorner draw_corner(isampler2D triangles, int corner) {
+    DrawCorner dc;
+    dc.t = corner / 3;
+    dc.c = corner - 3 * dc.t;
+    dc.i = fetch(triangles, dc.t)[dc.c];
+    return dc;
+}
+
 // Which wave system of a vertex partners system ``own`` (wave vector k) of another: the
 // one with an amplitude whose wave vector is most parallel to k (the two eigenvectors can
 // swap between neighbours and between frames). With none within 60 degrees, the same
