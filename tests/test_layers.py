@@ -140,3 +140,26 @@ def test_no_bake_writer_reads_the_stage():
                     found.append(f"{where}: .stage")
     assert found == []
     assert "stage" not in {f.name for f in dataclasses.fields(BakeScene)}
+
+
+def test_a_baked_frame_value_is_set_in_one_place():
+    """Issue 25: "set the default at the default time, else a time sample" was written
+    in three writers. outputs.layers.set_value is the one place; the maps' material sets
+    its file inputs' default and samples on purpose (readers that ignore time samples
+    get the first frame's file), and is the only other caller of SetTimeSample."""
+    import ast
+    from pathlib import Path
+
+    import usdwrinkle
+
+    package = Path(usdwrinkle.__file__).parent
+    callers = []
+    for path in sorted(package.rglob("*.py")):
+        tree = ast.parse(path.read_text(), str(path))
+        for function in ast.walk(tree):
+            if not isinstance(function, ast.FunctionDef):
+                continue
+            for node in ast.walk(function):
+                if isinstance(node, ast.Attribute) and node.attr == "SetTimeSample":
+                    callers.append(f"{path.relative_to(package).as_posix()}:{function.name}")
+    assert sorted(callers) == ["maps/material.py:author_material", "outputs/layers.py:set_value"]

@@ -23,7 +23,7 @@ import logging
 import numpy as np
 from pxr import Sdf, UsdGeom, Vt
 
-from ..outputs.layers import attribute_spec, bind_material, define_prim
+from ..outputs.layers import attribute_spec, bind_material, define_prim, set_value
 from ..outputs.sink import BakeScene
 from .subdivide import FineMesh
 
@@ -138,7 +138,4 @@ class FineMeshWriter:
             values["xformOp:transform"] = (VT.Matrix4d, None, self.transform.at(frame))
         for name, (type_name, interpolation, value) in values.items():
             attr = attribute_spec(spec, name, type_name, interpolation=interpolation)
-            if np.isnan(frame):
-                attr.default = value
-            else:
-                layer.SetTimeSample(attr.path, frame, value)
+            set_value(layer, attr.path, frame, value)

@@ -141,10 +141,7 @@ class LayerBaker:
         return spec.path
 
     def _set(self, attr_path, frame: float, value) -> None:
-        if math.isnan(frame):
-            self.layer.GetAttributeAtPath(attr_path).default = value
-        else:
-            self.layer.SetTimeSample(attr_path, frame, value)
+        set_value(self.layer, attr_path, frame, value)
 
     def add_frame(self, frame: float, fields: dict, resources: dict) -> None:
         """Record one frame: ``fields[path]`` (the wrinkled meshes'), the point meshes'
@@ -347,6 +344,15 @@ def attribute_spec(prim_spec: Sdf.PrimSpec, name: str, type_name, value=None, *,
     if connect is not None:
         spec.connectionPathList.explicitItems = [connect]
     return spec
+
+
+def set_value(layer: Sdf.Layer, attr_path, frame: float, value) -> None:
+    """A baked frame's value of the attribute at ``attr_path``: its time sample at
+    ``frame``, or its default when the frame is the default time (NaN)."""
+    if math.isnan(frame):
+        layer.GetAttributeAtPath(attr_path).default = value
+    else:
+        layer.SetTimeSample(attr_path, frame, value)
 
 
 def bind_material(layer: Sdf.Layer, prim_path, material_path, purpose: str = "") -> None:
