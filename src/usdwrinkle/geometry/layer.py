@@ -72,7 +72,6 @@ class FineMeshWriter:
         self.path = fine_path(coarse, self.mesh.siblings)
         self.fine = fine
         self.transform = self.mesh.transform
-        self.moves = self.transform is not None and self.transform.moves
 
     def define(self, layer: Sdf.Layer) -> None:
         self.layer = layer
@@ -134,7 +133,7 @@ class FineMeshWriter:
             "extent": (VT.Float3Array, None, Vt.Vec3fArray.FromNumpy(
                 np.stack([points.min(0), points.max(0)]).astype(np.float32))),
         }
-        if self.moves:
+        if self.transform is not None and self.transform.moves:
             values["xformOp:transform"] = (VT.Matrix4d, None, self.transform.at(frame))
         for name, (type_name, interpolation, value) in values.items():
             attr = attribute_spec(spec, name, type_name, interpolation=interpolation)

@@ -13,16 +13,13 @@ from dataclasses import dataclass, field
 from pxr import Usd, UsdGeom, UsdShade, UsdSkel
 
 from .material import bound_surface, corner_values, display_color
+from .sampling import time_code
 from .stage import stage_inputs
 
 
 def frame_key(frame: float):
     """A frame as a dict key: None for the default time (NaN equals nothing)."""
     return None if math.isnan(frame) else float(frame)
-
-
-def _time(frame: float) -> Usd.TimeCode:
-    return Usd.TimeCode.Default() if math.isnan(frame) else Usd.TimeCode(frame)
 
 
 @dataclass(frozen=True)
@@ -71,7 +68,7 @@ class MeshFacts:
     surface: str | None = None
     surface_normal_mapped: bool = False
     preview_material: str | None = None
-    display_color: tuple = (0.5, 0.5, 0.5)
+    display_color: tuple = ()
     siblings: frozenset = frozenset()
     uniform: dict = field(default_factory=dict)
     transform: MeshTransform | None = None
@@ -155,7 +152,7 @@ def _transform(xformable: UsdGeom.Xformable, frames: tuple) -> MeshTransform | N
         return None
     if has_ops and xformable.TransformMightBeTimeVarying():
         return MeshTransform(reset, True, samples={
-            frame_key(f): xformable.GetLocalTransformation(_time(f)) for f in frames})
+            frame_key(f): xformable.GetLocalTransformation(time_code(f)) for f in frames})
     return MeshTransform(reset, False, xformable.GetLocalTransformation(Usd.TimeCode.Default()))
 
 
