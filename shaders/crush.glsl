@@ -33,6 +33,9 @@ layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
 // held edges (wrinkle:held, scene/params.py held_weights): x the damping strength in
 // [0, 1], yzw the unit rest vector u from the holder to the point (0 on a held point)
 layout(binding = CRUSH_HOLD) uniform sampler2D hold;
+// x: what the rest surface's curvature multiplies the amplitude by (scene/params.py
+// curved_gain; 1 on flat cloth)
+layout(binding = CRUSH_GAIN) uniform sampler2D gain;
 // xy: the damped rest direction d of the shot's previous frame (T1, T2 coordinates),
 // z: 1 once written; read and written in place
 layout(rgba32f, binding = CRUSH_DAMPED) uniform image2D damped;
@@ -212,10 +215,12 @@ void main() {
     vec4 holder = fetch(hold, i);
     float along = dot(normalize(d3), holder.yzw);
     float held = 1.0 - holder.x * (1.0 - along * along);
+    // curved cloth folds steeper for its width (docs/method.md): the point's gain
+    float local = held * fetch(gain, i).x;
     // slack (docs/method.md): the cloth takes the first compression in-plane; the
     // amplitude law reads r_b = min(r / (1 - slack), 1), the wavelength keeps r
     float r_b = min(r / (1.0 - u_slack), 1.0);
-    float amplitude = held * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r_b * r_b, 0.0));
+    float amplitude = local * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r_b * r_b, 0.0));
     float wavelength = W;  // rest space
 
     // Tension (docs/method.md): across the largest stretch s1 = sqrt(lambda2) beyond the
@@ -225,7 +230,7 @@ void main() {
     float strain = stretch - 1.0 - u_tension_threshold;
     if (u_tension > 0.0 && usable && strain > 0.0) {
         float tension_wavelength = W * pow(strain / TENSION_REFERENCE_STRAIN, -0.25);
-        float tension_amplitude = held * u_amplitude_scale * u_tension * TENSION_SLOPE
+        float tension_amplitude = local * u_amplitude_scale * u_tension * TENSION_SLOPE
             * sqrt(strain) * tension_wavelength;
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
@@ -238,7 +243,7 @@ void main() {
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
     float r2_b = min(r2 / (1.0 - u_slack), 1.0);
     float amplitude2 = u_biaxial > 0.0
-        ? held * u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2_b * r2_b, 0.0))
+        ? local * u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2_b * r2_b, 0.0))
         : 0.0;
     vec3 k2 = wave_vector(M, e, W, t1, t2);
 

@@ -8,6 +8,7 @@
 
 layout(binding = MAPS_UV) uniform sampler2D corner_uv;   // [3t + c].xy, the baked UV set
 layout(binding = MAPS_Q_WIDTH) uniform sampler2D q_width;  // .w: rest wavelength W
+layout(binding = MAPS_GAIN) uniform sampler2D gain;  // .x: the curved-cloth gain g
 // the draw pass's shading normals (normals pass) and each corner's entry: the maps are
 // relative to the normal every renderer shades with, which the bake layer authors
 layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
@@ -23,7 +24,7 @@ layout(binding = MAPS_TANGENTS) uniform sampler2D corner_tangents;
 out vec3 v_local;
 out vec3 v_normal_local;
 out vec3 v_bary;
-out float v_width;
+out float v_full;  // g W / 4: the amplitude where the cloth is crushed flat, over s
 #if defined MIKKTSPACE
 out vec4 v_tangent;
 #endif
@@ -36,7 +37,7 @@ void main() {
     vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
-    v_width = fetch(q_width, i).w;
+    v_full = fetch(q_width, i).w * fetch(gain, i).x / 4.0;
 #if defined MIKKTSPACE
     v_tangent = fetch(corner_tangents, corner);
 #endif
@@ -49,7 +50,7 @@ void main() {
 in vec3 v_local;
 in vec3 v_normal_local;
 in vec3 v_bary;
-in float v_width;
+in float v_full;
 #if defined MIKKTSPACE
 in vec4 v_tangent;
 #endif
@@ -58,7 +59,7 @@ uniform float u_amplitude_scale;  // s
 uniform int u_count;              // 1: count the triangles over each texel (overlaps)
 
 layout(location = 0) out vec4 out_normal;   // xyz: tangent-space unit normal; w: coverage
-layout(location = 1) out vec4 out_wrinkle;  // x: height h; y: a / (s W / 4); w: coverage
+layout(location = 1) out vec4 out_wrinkle;  // x: height h; y: a / (s g W / 4); w: coverage
 
 void main() {
     if (u_count != 0) {  // additive blending sums these
@@ -86,7 +87,7 @@ void main() {
         encoded = safe_normalize(inverse(mikk) * shading, encoded);
     }
 #endif
-    float full = u_amplitude_scale * v_width / 4.0;
+    float full = u_amplitude_scale * v_full;
     out_normal = vec4(encoded, 1.0);
     out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 0.0, 1.0);
 }

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from pxr import Sdf, Usd, UsdGeom
+from pxr import Sdf, Usd, UsdGeom, Vt
 
 from usdwrinkle import schema
 from usdwrinkle.authoring.builders import grid_faces
@@ -20,6 +20,7 @@ from usdwrinkle.validation import wrinkle_findings
 
 from conftest import grid_sheet
 from helpers import baked, gpu_fields, interior, point_cache_stage, random_cloth, rotation_matrix
+from helpers import read_pixels as read
 
 
 def sheet_file(tmp_path, meters=None, name="sheet.usda", **kwargs):
@@ -145,6 +146,79 @@ def test_the_fallback_width_narrows_on_curved_cloth(tmp_path, radius, meters):
         assert width * meters == pytest.approx(0.0298, abs=1e-4)
 
 
+@pytest.mark.parametrize("radius, meters", [(0.06, 1.0), (0.10, 0.01), (0.15, 1.0),
+                                            (0.005, 1.0), (0.5, 1.0)])
+def test_curved_cloth_folds_steeper(gl_context, tmp_path, radius, meters):
+    """On a tube of radius R (metres) every wave's amplitude is multiplied by (R / 23 cm)
+    ^ -0.37, R held in [6, 23] cm: a 10 cm sleeve 1.36x, a 0.5 cm strap as a 6 cm tube,
+    a 50 cm drum 1x (docs/method.md). Measured on the GPU's amplitudes against the same
+    tube with wrinkle:cloth = mesh (no gain), both with the same authored W."""
+    path = tube_file(tmp_path, radius, meters)
+    assert (schema.CURVED_AMPLITUDE_EXPONENT, schema.CURVED_AMPLITUDE_RADIUS_MIN_M) == \
+        (0.37, 0.06)
+    expected = (min(max(radius, 0.06), 0.23) / 0.23) ** -0.37
+    amplitudes = []
+    for cloth in (None, schema.MESH_CLOTH):
+        stage = Usd.Stage.Open(str(path))
+        prim = stage.GetPrimAtPath("/Sheet")
+        UsdGeom.PrimvarsAPI(prim).CreatePrimvar(
+            "wrinkle:width", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.constant).Set(
+            [0.05 / meters])
+        if cloth is not None:
+            prim.CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token).Set(cloth)
+        fields, record = gpu_fields(gl_context, stage)
+        amplitudes.append(fields["amplitude"])
+        gain = record.params.amplitude_gain
+        if cloth is None and radius < 0.23:
+            np.testing.assert_allclose(gain, expected, rtol=1e-4)
+        else:
+            assert gain is None
+    curved, plain = amplitudes
+    waves = plain > 1e-3 * plain.max()
+    assert waves.sum() > len(plain) // 2
+    np.testing.assert_allclose(curved[waves] / plain[waves], expected, rtol=1e-4)
+    np.testing.assert_array_equal(curved[~waves] == 0, plain[~waves] == 0)
+    if radius == 0.10:
+        assert expected == pytest.approx(1.361, abs=1e-3)
+
+
+def test_the_amplitude_mask_and_ramp_leave_the_gain_out(gl_context, tmp_path):
+    """The maps' amplitude mask and the --display-color amplitude ramp divide by s g W / 4,
+    so on curved cloth they still read sqrt(1 - r^2) in [0, 1] while the baked amplitude
+    carries the gain: a 10 cm tube (g = 1.361) squeezed to 0.8 along its axis."""
+    from usdwrinkle.outputs.layers import viridis
+
+    rows, cols, width = 9, 12, 0.05
+    points, counts, indices = tube(rows, cols, 0.10, 0.8)
+    posed = points * np.array([1, 1, 0.8])
+    stage = point_cache_stage(points.astype(np.float32), {1: posed.astype(np.float32)},
+                              counts, indices, width=width)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    corners = np.asarray(indices).reshape(-1, 4)
+    col, row = corners % cols, corners // cols
+    wraps = (col.max(1) == cols - 1) & (col.min(1) == 0)
+    col = np.where(wraps[:, None] & (col == 0), cols, col)   # the seam's far side: s = 1
+    st = np.stack([col / cols, row / (rows - 1)], -1).reshape(-1, 2)
+    UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying).Set(
+        Vt.Vec2fArray.FromNumpy(st.astype(np.float32)))
+    source = tmp_path / "tube.usda"
+    stage.GetRootLayer().Export(str(source))
+    layer = tmp_path / "tube_maps.usda"
+    assert main(["bake", str(source), str(layer), "--quiet", "--maps", "amplitude",
+                 "--map-size", "128", "--display-color", "amplitude"]) == 0
+    gain = (0.10 / 0.23) ** -0.37
+    result = Usd.Stage.Open(str(layer))
+    mesh = result.GetPrimAtPath("/Sheet")
+    amplitude = np.asarray(mesh.GetAttribute("primvars:wrinkle:amplitude").Get(1))
+    np.testing.assert_allclose(amplitude, gain * width / 4 * 0.6, rtol=2e-3)
+    colour = np.asarray(mesh.GetAttribute("primvars:displayColor").Get(1))
+    np.testing.assert_allclose(colour, np.broadcast_to(viridis(np.array([0.6])), colour.shape),
+                               atol=2e-3)
+    mask = read(tmp_path / "tube_maps_maps" / "Sheet.amplitude.0001.png")[..., 0]
+    np.testing.assert_allclose(mask[16:-16], 0.6, atol=0.01)
+
+
 def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_path, capsys):
     path, *_ = sheet_file(tmp_path, 0.01)
     cm = 100 * schema.CLOTH_WIDTHS_M["cotton"]
@@ -155,10 +229,11 @@ def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_pa
     curved = tube_file(tmp_path, 0.06, 0.01)
     assert main(["check", str(curved), "--wrinkles-only"]) == 0
     assert ("W = 2.98 scene units (cotton 8.5 cm flat, narrower where curved under 23 cm "
-            "(metersPerUnit 0.01))") in capsys.readouterr().out
+            "(metersPerUnit 0.01)); amplitude x1.64 where curved") in capsys.readouterr().out
     assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
     widths = json.loads(capsys.readouterr().out)["widths"]
     assert widths[0]["prim"] == "/Sheet" and widths[0]["width"] == pytest.approx([cm, cm])
+    assert widths[0]["amplitude_gain"] == [1.0, 1.0]   # flat cloth
     assert main(["bake", str(path), str(tmp_path / "baked.usda")]) == 0
     assert f"  /Sheet: W = {cm:.4g} scene units (cotton" in capsys.readouterr().out
 
@@ -213,9 +288,10 @@ def test_slack_and_held_edges_match_the_numpy_reference(gl_context, seed):
     hold = record.params.hold
     assert hold is not None and 0.0 < hold[:, 0].mean() < 1.0
     ref = crush_reference(rest, posed, record.topology, q, record.params.width, slack=0.1,
-                          hold=hold)
+                          hold=hold, gain=record.params.amplitude_gain)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
-    plain = crush_reference(rest, posed, record.topology, q, record.params.width)
+    plain = crush_reference(rest, posed, record.topology, q, record.params.width,
+                            gain=record.params.amplitude_gain)
     assert np.abs(ours["amplitude"] - plain["amplitude"]).max() > 1e-3   # it did something
 
 

@@ -20,7 +20,8 @@ def test_crush_matches_numpy_reference(gl_context, seed):
                               width=0.2, relax_iterations=0)
     ours, record = gpu_fields(gl_context, stage)
     ref = crush_reference(rest, posed, record.topology, q, record.params.width,
-                          slack=record.params.slack, hold=record.params.hold)
+                          slack=record.params.slack, hold=record.params.hold,
+                          gain=record.params.amplitude_gain)
     assert np.all(ours["usable"] == ref["usable"])
     np.testing.assert_allclose(ours["compression"], ref["compression"], atol=2e-4)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
@@ -54,7 +55,7 @@ def test_relax_matches_numpy_reference(gl_context):
     finally:
         engine.release()
     starts = [crush_reference(rest, frames[f], record.topology, q, record.params.width,
-                              slack=record.params.slack)
+                              slack=record.params.slack, gain=record.params.amplitude_gain)
               for f in (1, 2, 3)]
     for fields, f in zip(starts, (1, 2, 3), strict=True):
         fields["points"] = frames[f]

@@ -6,6 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.scene.params import curved_gain
 
 from conftest import grid_sheet
 from helpers import point_cache_stage
@@ -46,8 +47,12 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
         engine.compute_frame(1.0)
         fields = engine.read_fields("/Sheet").arrays()
         image = engine.render_frame(1.0, 48, 48)
+        # the law's bound, s g W / 4: g is what the rest curvature multiplies it by
+        gain = engine.meshes["/Sheet"].params.amplitude_gain
     finally:
         engine.release()
+    gain = np.ones(len(rest)) if gain is None else np.asarray(gain, np.float64)
+    assert np.all((gain >= 1.0) & (gain <= curved_gain(np.array([1e9]))[0] * (1 + 1e-6)))
     for name, value in fields.items():
         assert np.all(np.isfinite(value)), name
     for name, aov in image.items():
@@ -56,10 +61,11 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
     width, scale = params["width"], params["scale"]
     amplitude = fields["amplitude"]
     assert np.all(amplitude >= 0)
-    assert np.all(amplitude <= scale * width / 4 * (1 + 1e-5))
+    assert np.all(amplitude <= scale * gain * width / 4 * (1 + 1e-5))
     compression = fields["compression"]
     assert np.all((compression > 0) & (compression <= 1))
     wrinkled = amplitude > 0
     k = np.linalg.norm(fields["wave_vector"], axis=1)
     assert np.all(k[wrinkled] >= 2 * np.pi / width * (1 - 1e-3))
-    assert np.all(np.abs(image["wrinkle.height"].pixels) <= scale * width / 4 * (1 + 1e-4))
+    assert np.all(np.abs(image["wrinkle.height"].pixels)
+                  <= scale * gain.max() * width / 4 * (1 + 1e-4))

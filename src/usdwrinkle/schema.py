@@ -81,6 +81,14 @@ CLOTH_WIDTHS_M = {"silk": 0.079, "cotton": 0.085, "denim": 0.101, "leather": 0.1
 CURVED_RADIUS_M = 0.23
 CURVED_EXPONENT = 0.78
 CURVED_RADIUS_MIN_M = 0.02
+#: Curved cloth also folds steeper for its width: at matched W the oracle's sleeves fold
+#: higher than the flat shots for the same coarse compression, as (R / CURVED_RADIUS_M)
+#: ** -CURVED_AMPLITUDE_EXPONENT, so every width's amplitude is multiplied by that gain
+#: (R held in [CURVED_AMPLITUDE_RADIUS_MIN_M, CURVED_RADIUS_M]: not extrapolated beyond the
+#: sleeves it was fitted to, radius 6, 10 and 15 cm at coarse spacings of 8 and 4 cm;
+#: docs/method.md, docs/physics.md)
+CURVED_AMPLITUDE_EXPONENT = 0.37
+CURVED_AMPLITUDE_RADIUS_MIN_M = 0.06
 DEFAULT_CLOTH = "cotton"
 #: wrinkle:cloth = "mesh": the width follows the mesh, this multiple of its mean rest edge
 #: length (the fallback before the cloth oracle)

@@ -54,7 +54,8 @@ class MapPixels:
 
     normal : (h, w, 3) float32, tangent-space unit normal ((0, 0, 1) off the islands).
     height : (h, w) float32, the wrinkle height h in scene units.
-    amplitude : (h, w) float32, the amplitude over s W / 4, in [0, 1].
+    amplitude : (h, w) float32, the amplitude over s g W / 4 (g the curved-cloth gain),
+        in [0, 1].
     covered : (h, w) bool, texels a triangle covers (before padding).
     """
 
@@ -133,7 +134,7 @@ class MapRasterizer:
         })
         units = bindings.MAPS
         bind_wave(units, res, variant.program)
-        bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width,
+        bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width, "MAPS_GAIN": res.gain,
                            "MAPS_SHADING_NORMALS": res.shading_normals,
                            "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:

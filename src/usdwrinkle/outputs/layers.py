@@ -53,7 +53,8 @@ def viridis(values: np.ndarray) -> np.ndarray:
 def display_values(field: str, fields: dict, params) -> np.ndarray:
     """The [0, 1] quantity shown by --display-color."""
     if field == "amplitude":
-        full = np.maximum(params.amplitude_scale * params.width / 4.0, 1e-30)
+        gain = 1.0 if params.amplitude_gain is None else params.amplitude_gain
+        full = np.maximum(params.amplitude_scale * gain * params.width / 4.0, 1e-30)
         return fields.amplitude / full
     return (1.0 - fields.compression) / (1.0 - MIN_RATIO)  # r in [MIN_RATIO, 1] -> [1, 0]
 

@@ -23,9 +23,10 @@ def _normalize(v, fallback):
 
 def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray,
           width: np.ndarray, amplitude_scale: float = 1.0, slack: float = 0.0,
-          hold: np.ndarray | None = None) -> dict:
+          hold: np.ndarray | None = None, gain: np.ndarray | None = None) -> dict:
     """Per-vertex wave fields, as crush.glsl computes them (``slack``: wrinkle:slack;
-    ``hold``: what held edges leave each point, scene.params.held_weights).
+    ``hold``: what held edges leave each point, scene.params.held_weights; ``gain``: what
+    the rest curvature multiplies the amplitude by, scene.params.curved_gain).
 
     Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
     direction (n,3), compression (n,), phase (n,), usable (n,) bool.
@@ -88,6 +89,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
         hold = np.asarray(hold, np.float64)
         along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
         amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
+    if gain is not None:
+        amplitude = amplitude * np.asarray(gain, np.float64)
     md = np.einsum("nij,nj->ni", M, d)
     sigma = np.linalg.norm(md, axis=1)
     k2 = (2 * np.pi / width)[:, None] * md / (np.maximum(sigma, 1e-30)

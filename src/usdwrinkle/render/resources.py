@@ -56,6 +56,13 @@ def _hold(params, n: int) -> np.ndarray:
     return np.asarray(params.hold, np.float32)
 
 
+def _gain(params, n: int) -> np.ndarray:
+    """What the rest curvature multiplies each point's amplitude by (ones: flat cloth)."""
+    if params.amplitude_gain is None:
+        return np.ones((n, 1), np.float32)
+    return np.asarray(params.amplitude_gain, np.float32).reshape(n, 1)
+
+
 def _bytes(array: np.ndarray) -> bytes:
     data = np.ascontiguousarray(array).tobytes()
     return data if data else b"\0" * 16  # GL buffers cannot be empty
@@ -160,6 +167,7 @@ class MeshResources:
         self.rest_frame = self._table(2 * n, 4, data=frame)
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         self.hold = self._table(n, 4, data=_hold(record.params, n))
+        self.gain = self._table(n, 1, data=_gain(record.params, n))
         #: the wave fields' ping-pong, phases and relax tables (render/fields.py)
         self.waves = WaveFields(n, self.num_edges, self._table, self._drop)
         self.corner_st = self._table(3 * self.num_triangles, 2,
@@ -239,6 +247,7 @@ class MeshResources:
         self.record = record
         self.q_width.write(vec4(record.params.q, record.params.width))
         self.hold.write(_hold(record.params, self.num_points))
+        self.gain.write(_gain(record.params, self.num_points))
         for index, table in enumerate((record.params.height_profile,
                                        record.params.gradient_profile)):
             old = self.profiles[index]

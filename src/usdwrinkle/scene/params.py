@@ -57,13 +57,21 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     if value is not None:
         q = np.asarray(value, dtype=np.float32).reshape(-1, 3)
 
+    cloth = _get(prim, schema.CLOTH)
+    cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
+    # the rest surface's largest curvature (1/m), for a cloth's width and amplitude gain
+    kappa = None if cloth == schema.MESH_CLOTH else curvature(rest_points, topology) / \
+        UsdGeom.GetStageMetersPerUnit(prim.GetStage())
     value = _primvar(prim, "wrinkle:width")
     if value is not None:
         arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
         width = np.broadcast_to(arr, (n,)).astype(np.float32)
         width_note = "wrinkle:width"
     else:
-        width, width_note = cloth_width(prim, rest_points, topology)
+        width, width_note = cloth_width(prim, cloth, kappa, rest_points, topology)
+    gain = None if kappa is None else curved_gain(kappa)
+    if gain is not None and not np.any(gain > 1.0):
+        gain = None
 
     slack = _get(prim, schema.SLACK)
     slack = schema.DEFAULT_SLACK if slack is None else float(slack)
@@ -96,28 +104,37 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         controls.append(fallback if value is None else float(value))
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,
-                         crest_damping=damping)
+                         crest_damping=damping, amplitude_gain=gain)
 
 
 def width_summary(params: WrinkleParams) -> dict:
     """The effective width of one mesh as ``check`` and the bake summary print it: the
-    smallest and largest W (scene units) and where it came from."""
+    smallest and largest W (scene units), where it came from, and the smallest and largest
+    amplitude gain of curved cloth (curved_gain)."""
     width = np.asarray(params.width, np.float64)
     low, high = (float(width.min()), float(width.max())) if width.size else (0.0, 0.0)
-    text = f"{low:.4g}" if high <= low * (1 + 1e-6) else f"{low:.4g}..{high:.4g}"
-    return {"width": [low, high], "source": params.width_note,
-            "text": f"W = {text} scene units ({params.width_note})"}
+    text = f"W = {_span(low, high)} scene units ({params.width_note})"
+    gain = params.amplitude_gain
+    gains = [1.0, 1.0] if gain is None else [float(np.min(gain)), float(np.max(gain))]
+    if gains[1] > 1.0:
+        text += f"; amplitude x{_span(*gains, digits=3)} where curved"
+    return {"width": [low, high], "source": params.width_note, "amplitude_gain": gains,
+            "text": text}
 
 
-def cloth_width(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology) -> tuple:
+def _span(low: float, high: float, digits: int = 4) -> str:
+    return f"{low:.{digits}g}" if high <= low * (1 + 1e-6) else \
+        f"{low:.{digits}g}..{high:.{digits}g}"
+
+
+def cloth_width(prim: Usd.Prim, cloth: str, kappa: np.ndarray | None,
+                rest_points: np.ndarray, topology: Topology) -> tuple:
     """The fallback width W per point, (n,) float32 in scene units, and how it was found:
-    the cloth's fold wavelength on flat cloth (wrinkle:cloth, cotton unless authored)
+    the fold wavelength on flat cloth of ``cloth`` (wrinkle:cloth, cotton unless authored)
     through the stage's metersPerUnit, narrowed where the rest surface curves tighter than
-    schema.CURVED_RADIUS_M (curved_width); with wrinkle:cloth = "mesh", a multiple of the
-    mean rest edge length."""
+    schema.CURVED_RADIUS_M (curved_width; ``kappa``: its largest curvature in 1/m); with
+    wrinkle:cloth = "mesh", a multiple of the mean rest edge length."""
     n = len(rest_points)
-    cloth = _get(prim, schema.CLOTH)
-    cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
     if cloth == schema.MESH_CLOTH:
         width = schema.WIDTH_EDGE_MULTIPLE * mean_edge_length(rest_points, topology)
         width = width if width > 0 else 1.0
@@ -127,7 +144,7 @@ def cloth_width(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology) -> 
     meters = UsdGeom.GetStageMetersPerUnit(stage)
     authored = UsdGeom.StageHasAuthoredMetersPerUnit(stage)
     metres = schema.CLOTH_WIDTHS_M[cloth]
-    width = curved_width(metres, curvature(rest_points, topology) / meters) / meters
+    width = curved_width(metres, kappa) / meters
     units = f"metersPerUnit {meters:g}" + ("" if authored else ", USD's fallback: unauthored")
     note = f"{cloth} {100 * metres:g} cm flat"
     if width.size and width.min() < metres / meters * (1 - 1e-6):
@@ -144,6 +161,18 @@ def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
     radius = 1.0 / np.maximum(kappa, 1.0 / schema.CURVED_RADIUS_M)
     radius = np.maximum(radius, schema.CURVED_RADIUS_MIN_M)
     return flat * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
+
+
+def curved_gain(kappa: np.ndarray) -> np.ndarray:
+    """What the curvature multiplies the amplitude by at points whose largest rest
+    curvature is ``kappa`` (1/m), (n,) float32: (R / R_c) ** -q with R = 1 / kappa held in
+    [schema.CURVED_AMPLITUDE_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], q =
+    schema.CURVED_AMPLITUDE_EXPONENT; 1 on cloth flatter than R_c (docs/method.md)."""
+    kappa = np.asarray(kappa, np.float64)
+    radius = 1.0 / np.maximum(kappa, 1.0 / schema.CURVED_RADIUS_M)
+    radius = np.maximum(radius, schema.CURVED_AMPLITUDE_RADIUS_MIN_M)
+    return ((radius / schema.CURVED_RADIUS_M) ** -schema.CURVED_AMPLITUDE_EXPONENT).astype(
+        np.float32)
 
 
 def held_weights(rest_points: np.ndarray, held: np.ndarray, width: np.ndarray) -> np.ndarray:

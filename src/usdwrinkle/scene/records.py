@@ -82,6 +82,8 @@ class WrinkleParams:
     width_note : str, where the width came from (check and the bake summary print it).
     crest_damping : float, the time constant in frames with which small changes of the
         strain are followed (wrinkle:crestDamping; 0: none).
+    amplitude_gain : (n,) float32 or None, what the rest surface's curvature multiplies
+        each point's amplitude by (params.curved_gain); None: 1 everywhere.
     """
 
     q: np.ndarray
@@ -97,6 +99,7 @@ class WrinkleParams:
     hold: np.ndarray | None = None
     width_note: str = ""
     crest_damping: float = 0.0
+    amplitude_gain: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -64,7 +64,8 @@ class CrushPass:
         self._face_normals(res)
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
-                           "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold},
+                           "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold,
+                           "CRUSH_GAIN": res.gain},
              writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase},
              read_writes={"CRUSH_DAMPED": waves.damped})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
