@@ -157,9 +157,7 @@ def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
     whose largest rest curvature is ``kappa`` (1/m): flat * (R / R_c) ** p with R = 1 /
     kappa held in [schema.CURVED_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], p =
     schema.CURVED_EXPONENT (docs/method.md: the cloth's width)."""
-    kappa = np.asarray(kappa, np.float64)
-    radius = 1.0 / np.maximum(kappa, 1.0 / schema.CURVED_RADIUS_M)
-    radius = np.maximum(radius, schema.CURVED_RADIUS_MIN_M)
+    radius = _curved_radius(kappa, schema.CURVED_RADIUS_MIN_M)
     return flat * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
 
 
@@ -168,11 +166,16 @@ def curved_gain(kappa: np.ndarray) -> np.ndarray:
     curvature is ``kappa`` (1/m), (n,) float32: (R / R_c) ** -q with R = 1 / kappa held in
     [schema.CURVED_AMPLITUDE_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], q =
     schema.CURVED_AMPLITUDE_EXPONENT; 1 on cloth flatter than R_c (docs/method.md)."""
-    kappa = np.asarray(kappa, np.float64)
-    radius = 1.0 / np.maximum(kappa, 1.0 / schema.CURVED_RADIUS_M)
-    radius = np.maximum(radius, schema.CURVED_AMPLITUDE_RADIUS_MIN_M)
+    radius = _curved_radius(kappa, schema.CURVED_AMPLITUDE_RADIUS_MIN_M)
     return ((radius / schema.CURVED_RADIUS_M) ** -schema.CURVED_AMPLITUDE_EXPONENT).astype(
         np.float32)
+
+
+def _curved_radius(kappa: np.ndarray, smallest: float) -> np.ndarray:
+    """The rest radius of curvature 1 / ``kappa`` (1/m) held in [``smallest``,
+    schema.CURVED_RADIUS_M], where the curvature laws start and stop."""
+    radius = 1.0 / np.maximum(np.asarray(kappa, np.float64), 1.0 / schema.CURVED_RADIUS_M)
+    return np.maximum(radius, smallest)
 
 
 def held_weights(rest_points: np.ndarray, held: np.ndarray, width: np.ndarray) -> np.ndarray:
