@@ -118,9 +118,16 @@ def amplitude_fit(cache: Path, shots: dict) -> dict:
                 "amplitude_ratio"]
             gain = coarse_gain(shot)
             rows.append((radius, stride * shot.spacing, ratio / gain, gain, ratio))
-    x = np.log(np.array([r[0] for r in rows]) / schema.CURVED_RADIUS_M)
-    y = np.log(np.array([r[2] for r in rows]))
-    return {"rows": rows, "exponent": float((x @ y) / (x @ x))}
+    return {"rows": rows, "exponent": steepness_fit([r[0] for r in rows], [r[2] for r in rows])}
+
+
+def steepness_fit(radii, ratios) -> float:
+    """The exponent q of ratio = (R / R_c) ** q through tubes' (radius, amplitude ratio
+    without the gain): a line through the logs and through 1 at R_c =
+    schema.CURVED_RADIUS_M, where cloth counts as flat."""
+    x = np.log(np.asarray(radii, np.float64) / schema.CURVED_RADIUS_M)
+    y = np.log(np.asarray(ratios, np.float64))
+    return float((x @ y) / (x @ x))
 
 
 #: the slacks the sweep bakes at the default W, beside the fallback's own
