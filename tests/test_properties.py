@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from usdwrinkle.engine import WrinkleEngine
@@ -27,6 +27,9 @@ deformations = st.fixed_dictionaries({
 @settings(max_examples=30, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(deformations)
+# found by hypothesis: a denormal scale, where float32 rounds the product up
+@example({"seed": 0, "stretch_x": 1.0, "stretch_y": 1.0, "shear": 0.0, "noise": 0.0,
+          "collapse": True, "width": 50.0, "scale": 1.401298464324817e-45, "q_amount": 0.0})
 def test_fields_stay_finite_and_bounded(gl_context, params):
     rng = np.random.default_rng(params["seed"])
     rest, counts, indices = grid_sheet(9, 9, 1.0)
@@ -61,11 +64,14 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
     width, scale = params["width"], params["scale"]
     amplitude = fields["amplitude"]
     assert np.all(amplitude >= 0)
-    assert np.all(amplitude <= scale * gain * width / 4 * (1 + 1e-5))
+    # float32's precision: relative 1e-5, and below its smallest normal number (a scale of
+    # 1e-45 leaves denormals, rounded by up to an ulp at each product) none
+    tiny = float(np.finfo(np.float32).tiny)
+    assert np.all(amplitude <= scale * gain * width / 4 * (1 + 1e-5) + tiny)
     compression = fields["compression"]
     assert np.all((compression > 0) & (compression <= 1))
     wrinkled = amplitude > 0
     k = np.linalg.norm(fields["wave_vector"], axis=1)
     assert np.all(k[wrinkled] >= 2 * np.pi / width * (1 - 1e-3))
     assert np.all(np.abs(image["wrinkle.height"].pixels)
-                  <= scale * gain.max() * width / 4 * (1 + 1e-4))
+                  <= scale * gain.max() * width / 4 * (1 + 1e-4) + tiny)
