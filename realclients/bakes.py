@@ -337,16 +337,19 @@ def our_normals(path) -> tuple[np.ndarray, np.ndarray]:
     return _unit(n), erode(alpha >= 0.999)
 
 
-def blender_normals(path, up_axis: str) -> tuple[np.ndarray, np.ndarray]:
+def blender_normals(path, up_axis: str, layer: str = "Normal") -> tuple[np.ndarray, np.ndarray]:
     """(shading normals in the stage's axes, fully covered) from Blender's multilayer EXR
-    (its Normal pass: world space, Z up; the importer turned a Y-up stage by +90 degrees
-    about X, which is undone here)."""
+    (its ``layer``: the Normal pass, XYZ, or the Decoded AOV, RGB; world space, Z up; the
+    importer turned a Y-up stage by +90 degrees about X, which is undone here)."""
     import OpenEXR
 
     parts = {part.name(): part for part in OpenEXR.File(str(path)).parts}
-    channels = parts["ViewLayer.Normal"].channels
-    n = np.dstack([channels[f"ViewLayer.Normal.{c}"].pixels for c in "XYZ"]).astype(
-        np.float64)
+    channels = parts[f"ViewLayer.{layer}"].channels
+    if layer == "Normal":
+        n = np.dstack([channels[f"ViewLayer.Normal.{c}"].pixels for c in "XYZ"])
+    else:  # the binding groups an AOV's RGB(A) into one channel
+        n = np.asarray(channels[f"ViewLayer.{layer}"].pixels)[..., :3]
+    n = n.astype(np.float64)
     combined = parts["ViewLayer.Combined"].channels["ViewLayer.Combined"].pixels
     if up_axis == "Y":
         n = np.dstack([n[..., 0], n[..., 2], -n[..., 1]])
@@ -430,13 +433,16 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     height = our_normals(ours["maps"])[1].shape[0]
     jobs = [{"stage": str(layers[k]), "camera": p.camera, "frame": shot.frame,
              "width": shot.width, "height": height, "out": str(p.base(f"cycles_{k}.exr")),
-             "purposes": ["default", "render"] if k == "geometry" else None}
+             "purposes": ["default", "render"] if k == "geometry" else None,
+             "decoded": k == "maps"}
             for k in layers]
     failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
     if failed:
         raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
     views = {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
              for k in layers}
+    views["decoded"] = (views["maps"][0], blender_normals(p.base("cycles_maps.exr"), up_axis,
+                                                          "Decoded"))
     views["plain"] = plain
     views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     return views

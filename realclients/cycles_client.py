@@ -14,8 +14,11 @@ default none), "light_scale" (the importer's light_intensity_scale, default 1),
 usdview's default complexity shows it), "engine" ("CYCLES", default, or "BLENDER_EEVEE"),
 "samples" (default 16),
 "purposes" (default ["default", "proxy"]: Blender's importer defaults; add "render" for
-the geometry layer's render mesh)}. One line "ok OUT" or "failed OUT: reason" per job on
-stdout, and "seconds S OUT": the time the render took.
+the geometry layer's render mesh), "decoded" (default false: with an .exr, a shader AOV
+"Decoded" holds the world-space output of every Normal Map node, the normal decoded from
+the map before the BSDF's ensure_valid_specular_reflection tilts it: Cycles' decoded
+normal itself, where the Normal pass shows what the BSDF shades with)}. One line "ok OUT"
+or "failed OUT: reason" per job on stdout, and "seconds S OUT": the time the render took.
 
 The importer converts a Y-up stage to Blender's Z-up by rotating the root objects; the
 Normal pass is turned back into the stage's axes, so that it compares with usdwrinkle's.
@@ -66,6 +69,8 @@ def render(job: dict) -> None:
     if scene.world is None:
         scene.world = bpy.data.worlds.new("World")
     exr = job["out"].endswith(".exr")
+    if exr and job.get("decoded"):
+        decoded_aov(scene)
     if exr:
         scene.view_layers[0].use_pass_normal = True
         scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
@@ -78,6 +83,20 @@ def render(job: dict) -> None:
     bpy.ops.render.render(write_still=True)
     if not os.path.isfile(job["out"]):
         raise RuntimeError("Blender wrote no image")
+
+
+def decoded_aov(scene) -> None:
+    """A shader AOV "Decoded" fed by each material's Normal Map node (the importer makes
+    one per UsdPreviewSurface whose normal input reads a texture)."""
+    aov = scene.view_layers[0].aovs.add()
+    aov.name, aov.type = "Decoded", "COLOR"
+    for material in {slot.material for o in scene.objects for slot in o.material_slots
+                     if slot.material is not None and slot.material.node_tree is not None}:
+        tree = material.node_tree
+        for node in [n for n in tree.nodes if n.type == "NORMAL_MAP"]:
+            out = tree.nodes.new("ShaderNodeOutputAOV")
+            out.aov_name = "Decoded"
+            tree.links.new(node.outputs["Normal"], out.inputs["Color"])
 
 
 def main(jobs_path: str) -> None:

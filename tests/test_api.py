@@ -33,9 +33,10 @@ def test_bake_writes_the_layer_with_its_options(gl_context, tmp_path):
     from pxr import Sdf
 
     layer = api.bake(SHIRT, tmp_path / "shirt.usda", frames="24", maps=["normal"],
-                     map_size=64, with_points=True)
+                     map_size=64, map_layout="asset", with_points=True)
     data = Sdf.Layer.FindOrOpen(layer).customLayerData["usdwrinkle"]
     assert data["withPoints"] and data["maps"]["size"] == 64
+    assert data["maps"]["uv"] == "st" and data["maps"]["islands"] == ""
     assert (tmp_path / "shirt_maps" / "Sleeve.normal.0024.png").is_file()
 
 

@@ -206,7 +206,8 @@ def test_the_amplitude_mask_and_ramp_leave_the_gain_out(gl_context, tmp_path):
     stage.GetRootLayer().Export(str(source))
     layer = tmp_path / "tube_maps.usda"
     assert main(["bake", str(source), str(layer), "--quiet", "--maps", "amplitude",
-                 "--map-size", "128", "--display-color", "amplitude"]) == 0
+                 "--map-size", "128", "--map-layout", "asset", "--display-color",
+                 "amplitude"]) == 0
     gain = (0.10 / 0.23) ** -0.37
     result = Usd.Stage.Open(str(layer))
     mesh = result.GetPrimAtPath("/Sheet")

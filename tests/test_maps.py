@@ -45,8 +45,11 @@ def sheet_stage(tmp_path, ratio, rotation=None, st=None, frames=(1,), name="shee
 
 
 def bake_maps(source, layer, *args, kinds="normal,height,amplitude", size=SIZE):
+    """bake --maps; in the mesh's own texture coordinates unless ``args`` choose a layout
+    (these tests read the maps' texels at the asset's UVs)."""
+    layout = () if "--map-layout" in args else ("--map-layout", "asset")
     return main(["bake", str(source), str(layer), "--quiet", "--maps", kinds,
-                 "--map-size", str(size), *args])
+                 "--map-size", str(size), *layout, *args])
 
 
 def sheet_maps(tmp_path, ratio, rotation=None):
@@ -215,7 +218,8 @@ def test_mesh_without_uvs_is_named_and_maps_of_none_are_refused(gl_context, tmp_
     is skipped with a warning naming it."""
     source = sheet_stage(tmp_path, 0.7, st=False)
     layer = tmp_path / "out.usda"
-    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64"]) == 2
+    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64",
+                 "--map-layout", "asset"]) == 2
     err = capsys.readouterr().err
     assert "no wrinkled mesh has the texture coordinates 'st'" in err and "/Sheet" in err
     assert "--uv" in err and not layer.exists()
@@ -224,7 +228,7 @@ def test_mesh_without_uvs_is_named_and_maps_of_none_are_refused(gl_context, tmp_
     both.DefinePrim("/WithUVs").GetReferences().AddReference(str(with_uvs), "/Sheet")
     both.Save()
     assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64",
-                 "--all-meshes"]) == 0
+                 "--all-meshes", "--map-layout", "asset"]) == 0
     err = capsys.readouterr().err
     assert "no texture coordinates 'st'" in err and "/Sheet" in err
     baked = Usd.Stage.Open(str(layer))
@@ -237,7 +241,8 @@ def test_overlapping_uvs_warn_and_the_bake_goes_on(gl_context, tmp_path, capsys)
     st = np.stack([np.abs(rest[:, 0]), (rest[:, 1] + 1) / 2], 1)  # mirrored halves
     source = sheet_stage(tmp_path, 0.7, st=st)
     layer = tmp_path / "out.usda"
-    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64"]) == 0
+    assert main(["bake", str(source), str(layer), "--maps", "normal", "--map-size", "64",
+                 "--map-layout", "asset"]) == 0
     err = capsys.readouterr().err
     assert "overlap" in err and "/Sheet" in err
     assert (tmp_path / "out_maps" / "Sheet.normal.0001.png").is_file()
@@ -259,7 +264,7 @@ def test_a_failed_bake_leaves_neither_maps_nor_layer(gl_context, tmp_path, capsy
     stage.GetRootLayer().Export(str(source))
     out = tmp_path / "out" / "layer.usda"
     assert main(["bake", str(source), str(out), "--quiet", "--maps", "normal",
-                 "--map-size", "32"]) == 2
+                 "--map-size", "32", "--map-layout", "asset"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "frame 3" in err[0]
     assert not out.exists()

@@ -261,7 +261,7 @@ def test_renders_and_bakes_under_a_2_gib_address_space(gl_context, tmp_path, alo
     assert_every_file_is_its_frame(out, "png", alone)
     result = subprocess.run([sys.executable, "-m", "usdwrinkle", "bake", SHIRT,
                              str(tmp_path / "b.usdc"), "--frames", "1:3", "--maps", "normal",
-                             "--map-size", "256", "--quiet"], capture_output=True, text=True,
+                             "--map-size", "512", "--quiet"], capture_output=True, text=True,
                             timeout=600, preexec_fn=limit)
     assert result.returncode == 0 and result.stderr == "", result.stderr
 

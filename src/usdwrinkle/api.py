@@ -65,7 +65,7 @@ def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
     ("amplitude" or "compression"), ``sparse``, ``all_meshes``, ``relax_iterations``,
     ``history_start``, ``maps`` ("normal,height,amplitude" or a list), ``map_size``,
     ``map_dir``, ``map_format``, ``map_padding``, ``uv``, ``tangent_space``,
-    ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``."""
+    ``map_layout``, ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``."""
     if "maps" in options and options["maps"] is not None and \
             not isinstance(options["maps"], str):
         options["maps"] = ",".join(options["maps"])

@@ -59,6 +59,9 @@ def baked_names_text() -> str:
             f"{short(BAKED_SECOND_SYSTEM)}")
 
 
+#: the wrinkle maps' own texture coordinates (bake --map-layout islands; faceVarying):
+#: one island per face, maps/islands.py
+MAP_ST = "wrinkleMapST"
 MAP_INPUTS = {"normal": "wrinkleNormalFile", "height": "wrinkleHeightFile",
               "amplitude": "wrinkleAmplitudeFile"}
 #: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain

@@ -7,8 +7,8 @@ import time
 
 from ..errors import UsdWrinkleError
 from ..geometry.options import GeometryOptions
-from ..maps.options import TANGENT_SPACES, MapOptions
-from ..schema import baked_names_text
+from ..maps.options import LAYOUTS, TANGENT_SPACES, MapOptions
+from ..schema import MAP_ST, baked_names_text
 from .common import (
     Reporter,
     add_shot_args,
@@ -63,9 +63,18 @@ def add_parser(subparsers) -> None:
                       help="texels by which UV islands are grown, so that filtering at their "
                            f"borders does not reach the background; default "
                            f"{MAP_DEFAULTS.padding}")
+    maps.add_argument("--map-layout", choices=LAYOUTS,
+                      help="islands: every face its own island in texture coordinates of "
+                           f"the bake's own (primvars:{MAP_ST}), so that usdview's Storm "
+                           "decodes each face in one continuous frame and never reads a "
+                           "neighbour's texels; asset: the mesh's own texture coordinates "
+                           "(--uv), so that the maps line up with its textures and Blender, "
+                           "which decodes normal maps in the mesh's first UV set, decodes "
+                           "them; default: asset, islands for a mesh without --uv "
+                           "(docs/method.md: map layout)")
     maps.add_argument("--uv", metavar="NAME",
-                      help="the texture coordinates (primvar) the maps are laid out in; "
-                           f"default {MAP_DEFAULTS.uv}")
+                      help="the texture coordinates (primvar) the maps are laid out in "
+                           f"unless --map-layout islands; default {MAP_DEFAULTS.uv}")
     maps.add_argument("--tangent-space", choices=TANGENT_SPACES,
                       help="the tangent frame the normal maps are written in: triangle (per "
                            "triangle, as usdview's Storm and usdwrinkle decode them) or "
@@ -110,6 +119,7 @@ def _given(args, flags: dict) -> dict:
 
 MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
              "--map-padding": "padding", "--uv": "uv", "--tangent-space": "tangent_space",
+             "--map-layout": "layout",
              "--map-displacement": "displacement"}
 GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
 

@@ -15,6 +15,7 @@ from ..errors import UsdWrinkleError
 from ..memory import require_memory
 from ..outputs.sink import BakeScene
 from ..outputs.writer import FrameWriter
+from ..schema import MAP_ST
 from .files import (
     MAP_KINDS,
     MapStaging,
@@ -27,6 +28,7 @@ from .files import (
     udim_number,
     uv_tiles,
 )
+from .islands import MIN_ISLAND, island_layout
 from .options import MapOptions
 from .raster import MapRasterizer
 from .tangents import corner_groups, mikktspace
@@ -66,6 +68,9 @@ class MeshMaps:
     tiles: list
     #: MikkTSpace's corner groups (maps/tangents.corner_groups), made on the first frame
     groups: tuple | None = None
+    #: the islands layout per face corner (faceVarying, authored as primvars:wrinkleMapST),
+    #: or None: the mesh's own texture coordinates
+    face_uv: np.ndarray | None = None
 
     @property
     def udim(self) -> bool:
@@ -87,10 +92,20 @@ class MapBake:
         meshes = scene.meshes
         stems = mesh_file_names(meshes)
         for path in meshes:
-            corner_uv = scene.corner_primvar(path, options.uv)
+            corner_uv = None if options.layout == "islands" else scene.corner_primvar(
+                path, options.uv)
             if corner_uv is None or corner_uv.shape[-1] < 2:
-                _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no wrinkle "
-                             f"maps for it ({path})")
+                if options.layout == "asset":
+                    _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no "
+                                 f"wrinkle maps for it (--map-layout islands needs none) ({path})")
+                    continue
+                if options.layout is None:
+                    _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv): its "
+                                 f"wrinkle maps are laid out in islands, primvars:{MAP_ST} "
+                                 f"({path})")
+                plan = self._island_plan(path, stems[path])
+                if plan is not None:
+                    self.plans[path] = plan
                 continue
             corner_uv = np.ascontiguousarray(corner_uv[..., :2], np.float32)
             tiles, outside = uv_tiles(corner_uv)
@@ -101,8 +116,9 @@ class MapBake:
         if meshes and not self.plans:
             raise UsdWrinkleError(
                 f"no wrinkled mesh has the texture coordinates '{options.uv}' that --maps "
-                f"lays the maps out in ({', '.join(sorted(meshes))}): author them, or pass "
-                "--uv with the name of the mesh's texture coordinates")
+                f"lays the maps out in ({', '.join(sorted(meshes))}): author them, pass "
+                "--uv with the name of the mesh's texture coordinates, or use --map-layout "
+                "islands")
         #: path -> kind -> [(frame, asset path)]
         self.files: dict[str, dict[str, list]] = {p: {k: [] for k in options.kinds}
                                                   for p in self.plans}
@@ -114,6 +130,31 @@ class MapBake:
             if scene.facts.inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
                                       "reads (choose another --map-dir)")
+
+    def uv_name(self, plan: MeshMaps) -> str:
+        """The texture coordinates ``plan``'s maps are laid out in."""
+        return MAP_ST if plan.face_uv is not None else self.options.uv
+
+    def _island_plan(self, path: str, stem: str) -> MeshMaps | None:
+        """The islands layout of a mesh (maps/islands.py), from its rest pose."""
+        record = self.scene.meshes[path]
+        counts = self.scene.facts.meshes[path].face_counts
+        topology = record.topology
+        if not len(topology.triangles):
+            return None
+        try:
+            face_uv, padding, typical = island_layout(
+                record.rest_points, topology.triangles, topology.triangle_face,
+                topology.corner_face_vertex, counts, self.options.size, self.options.padding)
+        except ValueError as exc:
+            raise UsdWrinkleError(f"{exc}: raise --map-size, or use --map-layout asset",
+                                  path) from None
+        if typical < MIN_ISLAND:
+            _log.warning(f"{len(counts)} faces on a {self.options.size}-texel map: the wrinkle "
+                         f"maps' islands are {typical:.0f} texels across and {padding} apart "
+                         f"(raise --map-size) ({path})")
+        corner_uv = np.ascontiguousarray(face_uv[topology.corner_face_vertex], np.float32)
+        return MeshMaps(path, stem, corner_uv, [(0, 0)], face_uv=face_uv)
 
     def file_names(self, frames: list[float]) -> list[str]:
         """Every map file the bake will write (to refuse overwriting an input)."""
@@ -183,19 +224,22 @@ class MapBake:
             fraction = self._rasterizer.overlap(res, plan.corner_uv, tile)
             if fraction > OVERLAP_WARNING:
                 where = f" in UDIM tile {udim_number(tile)}" if plan.udim else ""
-                _log.warning(f"texture coordinates '{self.options.uv}' overlap{where}: "
+                _log.warning(f"texture coordinates '{self.uv_name(plan)}' overlap{where}: "
                              f"{100 * fraction:.1f}% of the map's texels lie under more than one "
                              f"triangle, and hold the wrinkles of only one of them ({plan.path})")
 
     def finish(self) -> dict:
         """Write each mesh's material and binding into the layer (maps/material.py);
         returns the layer's record of the maps."""
-        from .material import MaterialTarget, author_material, material_path
+        from .material import MaterialTarget, author_islands, author_material, material_path
 
         facts = self.scene.facts
         for path, plan in self.plans.items():
+            if plan.face_uv is not None:
+                author_islands(self.layer, path, plan.face_uv)
             target = MaterialTarget(facts.meshes[path], material_path(
-                facts.default_prim_path, path, plan.stem), self.files[path], plan.udim)
+                facts.default_prim_path, path, plan.stem), self.files[path], plan.udim,
+                MAP_ST if plan.face_uv is not None else self.options.uv)
             author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
 
@@ -211,6 +255,8 @@ class MapBake:
                 "folder": relative_asset(self.folder, self.layer_path),
                 "format": self.options.fmt, "padding": self.options.padding,
                 "uv": self.options.uv, "meshes": ",".join(sorted(self.plans)),
+                "islands": ",".join(sorted(p for p, plan in self.plans.items()
+                                           if plan.face_uv is not None)),
                 "tangentSpace": self.options.tangent_space,
                 "displacement": self.options.displacement}
 

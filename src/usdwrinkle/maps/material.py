@@ -72,14 +72,28 @@ class MaterialTarget:
     path: Sdf.Path
     files: dict
     udim: bool = False
+    #: the texture coordinates the maps are laid out in (the primvar the reader reads)
+    st: str = "st"
+
+
+def author_islands(layer: Sdf.Layer, mesh_path: str, face_uv) -> None:
+    """The islands layout on the mesh: ``primvars:wrinkleMapST``, texCoord2f[],
+    faceVarying, one value per face corner (static: made from the rest pose)."""
+    from pxr import Vt
+
+    from ..schema import MAP_ST
+
+    attribute_spec(Sdf.CreatePrimInLayer(layer, Sdf.Path(mesh_path)), f"primvars:{MAP_ST}",
+                   VALUE_TYPES.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(face_uv),
+                   interpolation="faceVarying")
 
 
 def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
     """Write ``target``'s material and bind it to the mesh. ``options``
-    (maps.options.MapOptions): the UV primvar the maps are laid out in, and whether the
-    height map is also bound to ``inputs:displacement``."""
+    (maps.options.MapOptions): whether the height map is also bound to
+    ``inputs:displacement``."""
     mesh, path, files, udim = target.mesh, target.path, target.files, target.udim
-    mesh_path, uv_name, displacement = mesh.path, options.uv, options.displacement
+    mesh_path, uv_name, displacement = mesh.path, target.st, options.displacement
     source_material = Sdf.Path(mesh.material) if mesh.material else None
     source_surface = Sdf.Path(mesh.surface) if mesh.surface else None
     scope = Sdf.CreatePrimInLayer(layer, path.GetParentPath())

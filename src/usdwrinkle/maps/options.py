@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 #: the --tangent-space choices
 TANGENT_SPACES = ("triangle", "mikktspace")
+#: the --map-layout choices
+LAYOUTS = ("islands", "asset")
 
 
 @dataclass(frozen=True)
@@ -28,6 +30,14 @@ class MapOptions:
     #: them) or "mikktspace" (per vertex, interpolated, as Blender's Cycles and EEVEE,
     #: Unreal, Substance and glTF viewers decode them); docs/method.md has the trade-off
     tangent_space: str = "triangle"
+    #: where the maps' texels lie: "islands" (one island per face, in texture coordinates
+    #: of the bake's own, primvars:wrinkleMapST: no renderer reads a neighbouring face's
+    #: texels, and each face's frame is continuous, which Storm decodes best;
+    #: maps/islands.py) or "asset" (the mesh's own texture coordinates, ``uv``: the maps
+    #: line up with its textures, and Blender's importer, which decodes a normal map in the
+    #: mesh's first UV set whatever the texture reads, decodes them); None: asset, and
+    #: islands for a mesh without ``uv``
+    layout: str | None = None
 
     def folder_for(self, layer_path: str) -> str:
         if self.folder:

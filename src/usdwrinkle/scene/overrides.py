@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
 from pxr import Usd, UsdGeom, UsdShade, UsdSkel
 
 from .material import bound_surface, corner_values, display_color
@@ -60,7 +61,8 @@ class MeshFacts:
     its first displayColor (linear). ``siblings``: the names of the prims beside it (a
     new prim needs a free name). ``uniform``: its authored doubleSided and orientation.
     ``transform``: None when it authors no xformOps and no reset. ``primvars``: its
-    CarriedPrimvars (read only when the bake asks for them)."""
+    CarriedPrimvars (read only when the bake asks for them). ``face_counts``: its
+    faceVertexCounts (the length of a faceVarying primvar the bake authors)."""
 
     path: str
     skel_roots: tuple = ()
@@ -73,6 +75,7 @@ class MeshFacts:
     uniform: dict = field(default_factory=dict)
     transform: MeshTransform | None = None
     primvars: tuple = ()
+    face_counts: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 @dataclass(frozen=True)
@@ -136,7 +139,9 @@ def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> 
         siblings=frozenset(prim.GetParent().GetAllChildrenNames()),
         uniform=uniform,
         transform=_transform(UsdGeom.Xformable(prim), frames),
-        primvars=_primvars(prim, record.topology) if carry_primvars else ())
+        primvars=_primvars(prim, record.topology) if carry_primvars else (),
+        face_counts=np.asarray(mesh.GetFaceVertexCountsAttr().Get(Usd.TimeCode.EarliestTime())
+                               or [], np.int64))
 
 
 def _ancestors(prim: Usd.Prim):
