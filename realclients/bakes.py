@@ -299,12 +299,14 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
-                 tangent_space: str = "triangle", slack: float | None = 0.0) -> dict:
+                 tangent_space: str = "triangle", slack: float | None = 0.0,
+                 layout: str = "asset") -> dict:
     """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer (its
-    normal maps in ``tangent_space``), each decoded by photometric stereo."""
+    normal maps in ``tangent_space`` and --map-layout ``layout``), each decoded by
+    photometric stereo."""
     p = prepare(shot, folder, slack)
     maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
-                  "--tangent-space", tangent_space)
+                  "--tangent-space", tangent_space, "--map-layout", layout)
     ours, theirs, jobs = {}, {}, []
     for axis in AXES:
         tag = axis.replace("+", "p").replace("-", "m")

@@ -250,12 +250,13 @@ def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, 
     assert match.correlation >= least and match.iou >= 0.99, match
 
 
-@pytest.mark.parametrize("frame,slack,bounds", [
-    ("triangle", 0.0, (0.6, 2.0, 11.0, 17.0)),      # measured 0.45, 1.52, 9.75; 15.2
-    ("mikktspace", 0.0, (0.6, 2.3, 22.0, 30.0)),    # measured 0.46, 1.82, 19.7; 27.6
-    ("triangle", None, (0.6, 2.0, 11.0, 16.0)),     # measured 0.49, 1.47, 9.09; 13.4
+@pytest.mark.parametrize("frame,slack,layout,bounds", [
+    ("triangle", 0.0, "asset", (0.6, 2.0, 11.0, 17.0)),    # measured 0.45, 1.52, 9.75; 15.2
+    ("mikktspace", 0.0, "asset", (0.6, 2.3, 22.0, 30.0)),  # measured 0.46, 1.82, 19.7; 27.6
+    ("triangle", None, "asset", (0.6, 2.0, 11.0, 16.0)),   # measured 0.49, 1.47, 9.09; 13.4
+    ("triangle", 0.0, "islands", (0.6, 1.8, 8.0, 13.5)),   # measured 0.36, 1.33, 6.73; 11.8
 ])
-def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, bounds):
+def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layout, bounds):
     """The shading normals Storm decodes from the maps against usdwrinkle's, both by
     photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z), for
     each tangent frame of --tangent-space: median, p90 and p99 over the shirt at 640
@@ -270,10 +271,17 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, bound
     decoded in Storm's frame is off by the frames' difference (10 degrees median at the
     elbow) times the tilt. This test holds the measured values, so that a change for
     the worse fails; issue 23's 3 degrees is not met. ``slack`` None keeps the fallback
-    wrinkle:slack (the other comparisons author 0): Storm agrees as well with it."""
+    wrinkle:slack (the other comparisons author 0): Storm agrees as well with it.
+
+    --map-layout islands (maps/islands.py) removes both causes: no face reads another's
+    texels, and a quad's frame is one across its diagonal. What is left at 640 pixels is
+    the elbow's pinch, where the folds are 2-3 pixels across and Storm's mip filtering
+    and usdwrinkle's band limit fade them differently; at 1280 pixels the islands give
+    0.17 / 0.45 / 1.96 and 3.7 at the elbow (asset UVs: 0.27 / 0.55 / 4.43 and 7.5)."""
     from realclients.bakes import MAP_SHOTS, angles, normal_views
 
-    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame, slack=slack)
+    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame, slack=slack,
+                         layout=layout)
     degrees, mask = angles(views["usdwrinkle"], views["storm"])
     assert mask.sum() > 40000
     lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
@@ -353,6 +361,35 @@ def test_maps_normals_in_cycles_as_measured(cycles_shirt, frame, bounds):
         elbow <= bounds[3], angles
     (_, p90, p99), elbow = angles["clamped"]
     assert p90 <= bounds[4] and p99 <= bounds[5] and elbow <= bounds[6], angles
+
+
+@pytest.mark.parametrize("frame,bounds", [
+    # (median, p90, p99, elbow p99), measured + margin
+    ("triangle", (0.3, 4.0, 23.0, 26.0)),     # measured 0.13, 3.19, 20.96; 23.65
+    ("mikktspace", (0.3, 3.0, 11.0, 11.5)),   # measured 0.10, 2.29, 9.57; 9.99
+])
+def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, bounds):
+    """Cycles' decoded normal itself: the output of the Normal Map node (a shader AOV,
+    cycles_client's "decoded"), before the BSDF's reflection clamp that the Normal pass
+    above includes, against usdwrinkle's N AOV. The MikkTSpace maps decode to within
+    10 degrees at the elbow (p99), the per-triangle ones do not (23.7).
+
+    What is left in the MikkTSpace maps is mostly the base normal: the shirt is a
+    catmullClark mesh without authored normals, so every renderer makes its own smooth
+    normals, Storm and usdwrinkle from corner cross products (scene/normals.py), Blender
+    angle-weighted (11 degrees apart at p99 over the elbow's posed vertices). With
+    usdwrinkle's posed normals authored over the --with-points layer, Blender takes them
+    and the elbow's p99 falls to 6.3 (measured by hand; the rest is the pinch's 2-3 pixel
+    folds). Issue 23's 5 degrees is not met."""
+    from realclients.bakes import front_angles
+
+    degrees, mask = front_angles(*cycles_shirt[frame]["decoded"])
+    assert mask.sum() > 40000
+    lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
+    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
+    elbow = np.percentile(degrees[lower], 99)
+    assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \
+        elbow <= bounds[3], (median, p90, p99, elbow)
 
 
 def test_mikktspace_matches_blenders_calc_tangents(realclient, tmp_path):
