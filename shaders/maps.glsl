@@ -17,6 +17,9 @@ uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
 #if defined MIKKTSPACE
 // MikkTSpace per triangle corner ([3t + c]): unit tangent, bitangent sign (maps/tangents.py)
 layout(binding = MAPS_TANGENTS) uniform sampler2D corner_tangents;
+// the normal a MikkTSpace renderer builds that frame about, per corner: the shading normal,
+// or Blender's own smooth normal where the mesh authors none (maps/tangents.py)
+layout(binding = MAPS_FRAME_NORMALS) uniform sampler2D corner_frame_normals;
 #endif
 
 #if defined VERTEX_SHADER
@@ -27,6 +30,7 @@ out vec3 v_bary;
 out float v_full;  // g W / 4: the amplitude where the cloth is crushed flat, over s
 #if defined MIKKTSPACE
 out vec4 v_tangent;
+out vec3 v_frame_normal;
 #endif
 
 void main() {
@@ -40,6 +44,7 @@ void main() {
     v_full = fetch(q_width, i).w * fetch(gain, i).x / 4.0;
 #if defined MIKKTSPACE
     v_tangent = fetch(corner_tangents, corner);
+    v_frame_normal = fetch(corner_frame_normals, corner).xyz;
 #endif
     vec2 uv = fetch(corner_uv, corner).xy - u_tile;   // [0, 1] inside the tile
     gl_Position = vec4(uv * 2.0 - 1.0, 0.0, 1.0);     // row 0 of the target is t = 0
@@ -53,6 +58,7 @@ in vec3 v_bary;
 in float v_full;
 #if defined MIKKTSPACE
 in vec4 v_tangent;
+in vec3 v_frame_normal;
 #endif
 
 uniform float u_amplitude_scale;  // s
@@ -79,10 +85,10 @@ void main() {
     // the frame a MikkTSpace renderer decodes in (Cycles' normal-map node): T and N
     // interpolated and not renormalised, B = sign * cross(N, T); the decoded normal is
     // normalize(x T + y B + z N), so the map holds the direction of that frame's inverse
-    // applied to the shading normal
+    // applied to the shading normal. N is the renderer's own normal (v_frame_normal).
     vec3 T = v_tangent.xyz;
-    vec3 B = (v_tangent.w < 0.0 ? -1.0 : 1.0) * cross(v_normal_local, T);
-    mat3 mikk = mat3(T, B, v_normal_local);
+    vec3 B = (v_tangent.w < 0.0 ? -1.0 : 1.0) * cross(v_frame_normal, T);
+    mat3 mikk = mat3(T, B, v_frame_normal);
     if (dot(T, T) > 1e-6 && abs(determinant(mikk)) > 1e-6) {
         encoded = safe_normalize(inverse(mikk) * shading, encoded);
     }

@@ -31,7 +31,12 @@ from .files import (
 from .islands import MIN_ISLAND, island_layout
 from .options import MapOptions
 from .raster import MapRasterizer
-from .tangents import corner_groups, mikktspace
+from .tangents import (
+    blender_vertex_normals,
+    corner_groups,
+    mikktspace,
+    mikktspace_triangles,
+)
 
 _log = logging.getLogger(__name__)
 
@@ -206,17 +211,30 @@ class MapBake:
                     self._writer.submit(frame, self._staging.path(name),
                                         (kind, getattr(pixels, kind), self._staging.final(name)))
 
-    @staticmethod
-    def _tangents(plan: MeshMaps, res) -> np.ndarray:
-        """This frame's MikkTSpace tangents per triangle corner, from the posed points
-        and the shading normals the passes made (maps/tangents.py)."""
+    def _tangents(self, plan: MeshMaps, res) -> tuple[np.ndarray, np.ndarray]:
+        """This frame's MikkTSpace tangents per triangle corner, and the normals they are
+        built about (maps/tangents.py): the shading normals the passes made, except on a
+        mesh that authors none and is smooth (a subdivision mesh), where Blender makes its
+        own, angle-weighted, and decodes the map about those; over the triangles
+        mikktspace.c sums over (a quad split along its shorter diagonal)."""
+        topology = res.record.topology
         corner_entry = res.normal_plan.corner_entry.reshape(-1)
-        triangles = res.record.topology.triangles
+        triangles = topology.triangles
         if plan.groups is None:
             plan.groups = corner_groups(triangles, corner_entry, plan.corner_uv)
         points = res.posed_points.read()[:, :3]
         normals = res.read_shading_normals()[corner_entry]
-        return mikktspace(points, triangles, normals, plan.corner_uv, plan.groups)
+        if res.normal_plan.source == "smooth":
+            counts = self.scene.facts.meshes[plan.path].face_counts
+            indices = np.zeros(int(np.sum(counts)), np.int64)
+            indices[topology.corner_face_vertex] = triangles
+            own = blender_vertex_normals(points, counts, indices)[triangles.reshape(-1)]
+            # the winding Blender imports (a leftHanded mesh is turned): the mesh's side
+            # that ours face, by most corners (a pinched fold may face either way)
+            agree = np.sum(own * normals, axis=-1) >= 0.0
+            normals = own if np.count_nonzero(agree) >= agree.size / 2 else -own
+        ids = mikktspace_triangles(points, triangles, topology.triangle_face, plan.corner_uv)
+        return mikktspace(points, triangles, normals, plan.corner_uv, plan.groups, ids), normals
 
     def _check_overlap(self, plan: MeshMaps, res) -> None:
         self._checked_overlap.add(plan.path)

@@ -83,6 +83,8 @@ class MapRasterizer:
         self.uv_tables: dict[str, Table] = {}
         #: MikkTSpace tangents per triangle corner, by mesh path (written each frame)
         self.tangent_tables: dict[str, Table] = {}
+        #: the normals those frames are built about, per triangle corner (each frame)
+        self.frame_tables: dict[str, Table] = {}
         #: (mesh path, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -111,8 +113,16 @@ class MapRasterizer:
         table.write(np.asarray(tangents, np.float32).reshape(-1, 4))
         return table
 
+    def frame_table(self, res: MeshResources, normals: np.ndarray) -> Table:
+        """This frame's normals of the MikkTSpace frames ([3t + c]: xyz) on the GPU."""
+        table, _ = self._corner_table(self.frame_tables, res, 4)
+        padded = np.zeros((3 * res.num_triangles, 4), np.float32)
+        padded[:, :3] = np.asarray(normals, np.float32).reshape(-1, 3)
+        table.write(padded)
+        return table
+
     def _draw(self, res: MeshResources, uv: Table, tile: tuple[int, int], count: bool,
-              tangents: Table | None = None) -> None:
+              tangents: tuple[Table, Table] | None = None) -> None:
         import moderngl
 
         fbo = self.framebuffer
@@ -138,7 +148,7 @@ class MapRasterizer:
                            "MAPS_SHADING_NORMALS": res.shading_normals,
                            "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:
-            bind(units, reads={"MAPS_TANGENTS": tangents})
+            bind(units, reads={"MAPS_TANGENTS": tangents[0], "MAPS_FRAME_NORMALS": tangents[1]})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
@@ -155,13 +165,15 @@ class MapRasterizer:
         return float(np.count_nonzero(counts > 1.5) / covered) if covered else 0.0
 
     def render(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
-               padding: int = 8, tangents: np.ndarray | None = None) -> MapPixels:
+               padding: int = 8, tangents: tuple | None = None) -> MapPixels:
         """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``; the
-        normal map in MikkTSpace when this frame's ``tangents`` are given
-        (maps/tangents.py), else in the per-triangle frame."""
+        normal map in MikkTSpace when this frame's ``tangents`` are given ((tangents,
+        the normals their frames are built about), per triangle corner;
+        maps/tangents.py), else in the per-triangle frame."""
         uv = self.uv_table(res, corner_uv)
         if res.num_triangles:
-            table = self.tangent_table(res, tangents) if tangents is not None else None
+            table = (self.tangent_table(res, tangents[0]), self.frame_table(res, tangents[1])) \
+                if tangents is not None else None
             self._draw(res, uv, tile, count=False, tangents=table)
         else:
             self.framebuffer.clear(0.0, 0.0, 0.0, 0.0)
@@ -186,10 +198,12 @@ class MapRasterizer:
         return np.frombuffer(texture.read(), np.float32).reshape(self.size, self.size, 4).copy()
 
     def release(self) -> None:
-        for table in [*self.uv_tables.values(), *self.tangent_tables.values()]:
+        for table in [*self.uv_tables.values(), *self.tangent_tables.values(),
+                      *self.frame_tables.values()]:
             table.release()
         self.uv_tables.clear()
         self.tangent_tables.clear()
+        self.frame_tables.clear()
         self.framebuffer.release()
         for tex in self.targets:
             tex.release()
