@@ -250,13 +250,16 @@ def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, 
     assert match.correlation >= least and match.iou >= 0.99, match
 
 
-@pytest.mark.parametrize("frame,slack,layout,bounds", [
-    ("triangle", 0.0, "asset", (0.6, 2.0, 11.0, 17.0)),    # measured 0.45, 1.52, 9.75; 15.2
-    ("mikktspace", 0.0, "asset", (0.6, 2.3, 22.0, 30.0)),  # measured 0.46, 1.82, 19.7; 27.6
-    ("triangle", None, "asset", (0.6, 2.0, 11.0, 16.0)),   # measured 0.49, 1.47, 9.09; 13.4
-    ("triangle", 0.0, "islands", (0.6, 1.8, 8.0, 13.5)),   # measured 0.36, 1.33, 6.73; 11.8
+@pytest.mark.parametrize("frame,slack,layout,width,bounds", [
+    # measured: median, p90, p99; the elbow's p99
+    ("triangle", 0.0, "asset", 640, (0.6, 2.0, 11.0, 17.0)),     # 0.45, 1.52, 9.75; 15.2
+    ("mikktspace", 0.0, "asset", 640, (0.7, 4.0, 23.0, 30.0)),   # 0.49, 3.28, 20.6; 27.8
+    ("triangle", None, "asset", 640, (0.6, 2.0, 11.0, 16.0)),    # 0.49, 1.47, 9.09; 13.4
+    ("triangle", 0.0, "islands", 640, (0.6, 1.8, 8.0, 13.5)),    # 0.36, 1.33, 6.73; 11.8
+    ("triangle", 0.0, "islands", 1280, (0.3, 0.7, 2.5, 4.3)),    # 0.17, 0.45, 1.96; 3.68
 ])
-def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layout, bounds):
+def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layout, width,
+                                       bounds):
     """The shading normals Storm decodes from the maps against usdwrinkle's, both by
     photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z), for
     each tangent frame of --tangent-space: median, p90 and p99 over the shirt at 640
@@ -275,15 +278,20 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layou
 
     --map-layout islands (maps/islands.py) removes both causes: no face reads another's
     texels, and a quad's frame is one across its diagonal. What is left at 640 pixels is
-    the elbow's pinch, where the folds are 2-3 pixels across and Storm's mip filtering
-    and usdwrinkle's band limit fade them differently; at 1280 pixels the islands give
-    0.17 / 0.45 / 1.96 and 3.7 at the elbow (asset UVs: 0.27 / 0.55 / 4.43 and 7.5)."""
+    texture filtering of the elbow's pinch, whose folds are a few pixels across: usdwrinkle
+    drawing the very same islands map differs from Storm by 9.8 degrees at the elbow's
+    p99 (llvmpipe's filtering against usdwrinkle's GPU-style one), and its analytic
+    band limit from its own drawing of the map by 5.4. At 1280 pixels the islands meet
+    the 3 degrees but for the grazing fold contours (2.8 without the pixels within one of
+    |n.v| < 0.1); the asset's UVs give 0.27 / 0.55 / 4.43 and 7.5 there."""
+    import dataclasses
+
     from realclients.bakes import MAP_SHOTS, angles, normal_views
 
-    views = normal_views(MAP_SHOTS[0], tmp_path, tangent_space=frame, slack=slack,
-                         layout=layout)
+    shot = dataclasses.replace(MAP_SHOTS[0], width=width)
+    views = normal_views(shot, tmp_path, tangent_space=frame, slack=slack, layout=layout)
     degrees, mask = angles(views["usdwrinkle"], views["storm"])
-    assert mask.sum() > 40000
+    assert mask.sum() > 40000 * (width / 640) ** 2
     lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
     median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
     elbow = np.percentile(degrees[lower], 99)
