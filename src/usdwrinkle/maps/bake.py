@@ -228,7 +228,9 @@ class MapBake:
             counts = self.scene.facts.meshes[plan.path].face_counts
             indices = np.zeros(int(np.sum(counts)), np.int64)
             indices[topology.corner_face_vertex] = triangles
-            own = blender_vertex_normals(points, counts, indices)[triangles.reshape(-1)]
+            drawn = np.zeros(len(counts), bool)
+            drawn[topology.triangle_face] = True   # not holes
+            own = blender_vertex_normals(points, counts, indices, drawn)[triangles.reshape(-1)]
             # the winding Blender imports (a leftHanded mesh is turned): the mesh's side
             # that ours face, by most corners (a pinched fold may face either way)
             agree = np.sum(own * normals, axis=-1) >= 0.0
@@ -257,7 +259,7 @@ class MapBake:
                 author_islands(self.layer, path, plan.face_uv)
             target = MaterialTarget(facts.meshes[path], material_path(
                 facts.default_prim_path, path, plan.stem), self.files[path], plan.udim,
-                MAP_ST if plan.face_uv is not None else self.options.uv)
+                self.uv_name(plan))
             author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
 

@@ -98,17 +98,20 @@ def mikktspace(points: np.ndarray, triangles: np.ndarray, corner_normals: np.nda
     result[:, 3] = np.repeat(np.where(orient, 1.0, -1.0), 3)
     return result
 
-def blender_vertex_normals(points: np.ndarray, counts: np.ndarray,
-                           indices: np.ndarray) -> np.ndarray:
+def blender_vertex_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray,
+                           faces: np.ndarray | None = None) -> np.ndarray:
     """(n, 3) float64 unit vertex normals as Blender makes them for a smooth mesh without
     custom normals: per point, the sum over its face corners of the corner's angle times
     the face's unit normal (Newell's, over the whole polygon), normalised. Blender's USD
     importer gives a subdivision mesh these (it authors no normals); Storm and usdwrinkle
-    sum corner cross products instead (scene/normals.py)."""
+    sum corner cross products instead (scene/normals.py). ``faces``: the faces that count
+    (a mask; default every face of 3 corners or more: holes are left out by the caller)."""
     points = np.asarray(points, np.float64)
     counts = np.asarray(counts, np.int64)
     indices = np.asarray(indices, np.int64)
     keep = counts >= 3
+    if faces is not None:
+        keep &= np.asarray(faces, bool)
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else counts
     faces = np.flatnonzero(keep)
     k = counts[faces]
