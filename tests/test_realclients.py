@@ -4,11 +4,11 @@ Cycles (Blender's USD importer). Marker ``realclient``; without a Python that ha
 bpy these tests are skipped with the reason, and the run's summary says the tier did not
 run (``--require-realclients``, which .ci/run passes, makes that an error).
 
-Cost on this 2-core machine, 75 s in all: about 20 s for the plain frames (8 shots x 2
-frames), 5 s for the probes, 40 s for the bake outputs in Storm (3 shots: 3-4 bakes and
-3 renders each, and six more renders each side for the decoded normals) and 10 s for
-Cycles (one shot, 16 samples).
-"""
+Cost on this 2-core machine: 75 s for 36 tests in an earlier session, 287 s for these 40
+in a session when the machine ran 2.7 times slower throughout: the plain frames (8 shots x
+2 frames) 28 s, the probes 19 s, the bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3
+renders each), the five decoded-normal cases in Storm 20-26 s each (six renders each side;
+the 1280-pixel one the most) and Cycles 40 s (one shot, two tangent frames, 16 samples)."""
 from __future__ import annotations
 
 from pathlib import Path
