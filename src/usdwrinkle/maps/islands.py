@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .tangents import _unit
+
 #: the MikkTSpace split: |uv2 - uv0|^2 must stay below this share of |uv3 - uv1|^2
 DIAGONAL_MARGIN = 0.9
 #: the most a quad's t is stretched to make its 0-2 diagonal the shorter one
@@ -34,11 +36,6 @@ MAX_STRETCH = 4.0
 MIN_ISLAND = 16
 #: the smallest island side (texels) a layout is made with, whatever the padding
 SMALLEST_ISLAND = 6
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(v, axis=-1, keepdims=True)
-    return np.divide(v, length, out=np.zeros_like(v), where=length > 1e-30)
 
 
 def _place(origin_3d, edge_end_3d, new_3d, origin_2d, edge_end_2d, side: float):
@@ -105,16 +102,15 @@ def _project(points, triangles, corners, uv) -> None:
     uv[corners] = np.stack([rel @ s, rel @ t], axis=-1)
 
 
-def split_on_first_diagonal(uv: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def split_on_first_diagonal(uv: np.ndarray, counts: np.ndarray) -> None:
     """Stretch t of each quad whose diagonal 0 -> 2 is not the shorter one in UV (in
-    place; returns the stretch per face, 1 where none): MikkTSpace splits a quad along its
-    shorter UV diagonal, every renderer's triangulation along 0 -> 2."""
+    place): MikkTSpace splits a quad along its shorter UV diagonal, every renderer's
+    triangulation along 0 -> 2."""
     counts = np.asarray(counts, np.int64)
-    stretch = np.ones(len(counts))
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else counts
     quads = np.flatnonzero(counts == 4)
     if not len(quads):
-        return stretch
+        return
     base = starts[quads]
     q = uv[base[:, None] + np.arange(4)]                      # (k, 4, 2)
     d02 = np.sum((q[:, 2] - q[:, 0]) ** 2, -1)
@@ -123,9 +119,20 @@ def split_on_first_diagonal(uv: np.ndarray, counts: np.ndarray) -> np.ndarray:
     need = d02 / DIAGONAL_MARGIN - ds ** 2                    # what dt^2 k^2 must exceed
     k = np.sqrt(np.maximum(need, 0.0)) / np.maximum(dt, 1e-30)
     k = np.clip(np.where(need > dt ** 2, k * 1.01, 1.0), 1.0, MAX_STRETCH)
-    stretch[quads] = k
     uv[base[:, None] + np.arange(4), 1] *= k[:, None]
-    return stretch
+
+
+def _face_boxes(uv: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) corner of each face's box in ``uv`` ((faces, 2) each; a face of no
+    corners gets the origin)."""
+    face_of = np.repeat(np.arange(len(counts)), counts)
+    lo = np.full((len(counts), 2), np.inf)
+    hi = np.full((len(counts), 2), -np.inf)
+    np.minimum.at(lo, face_of, uv)
+    np.maximum.at(hi, face_of, uv)
+    empty = ~np.isfinite(lo[:, 0])
+    lo[empty] = hi[empty] = 0.0
+    return lo, hi
 
 
 def pack_islands(uv: np.ndarray, counts: np.ndarray, size: int, padding: int) -> np.ndarray:
@@ -134,12 +141,7 @@ def pack_islands(uv: np.ndarray, counts: np.ndarray, size: int, padding: int) ->
     as fits; returns the packed (face_vertices, 2) float32 layout."""
     counts = np.asarray(counts, np.int64)
     face_of = np.repeat(np.arange(len(counts)), counts)
-    lo = np.full((len(counts), 2), np.inf)
-    hi = np.full((len(counts), 2), -np.inf)
-    np.minimum.at(lo, face_of, uv)
-    np.maximum.at(hi, face_of, uv)
-    empty = ~np.isfinite(lo[:, 0])
-    lo[empty] = hi[empty] = 0.0
+    lo, hi = _face_boxes(uv, counts)
     extent = hi - lo
     gap = (2.0 * padding + 1.0) / size                        # between islands, in UV
     order = np.argsort(-extent[:, 1], kind="stable")          # tallest first
@@ -206,10 +208,5 @@ def island_layout(points, triangles, triangle_face, corner_face_vertex,
 
 def _typical_island(uv: np.ndarray, counts: np.ndarray, size: int) -> float:
     """The median longer side of the faces' islands, in texels."""
-    face_of = np.repeat(np.arange(len(counts)), counts)
-    lo = np.full((len(counts), 2), np.inf)
-    hi = np.full((len(counts), 2), -np.inf)
-    np.minimum.at(lo, face_of, uv)
-    np.maximum.at(hi, face_of, uv)
-    sides = (hi - lo).max(axis=1)
-    return float(np.median(sides[np.isfinite(sides)]) * size) if len(sides) else 0.0
+    lo, hi = _face_boxes(uv, counts)
+    return float(np.median((hi - lo).max(axis=1)) * size) if len(counts) else 0.0
