@@ -276,6 +276,8 @@ def test_a_failed_bake_leaves_neither_maps_nor_layer(gl_context, tmp_path, capsy
     (["--maps", "normal,wrinkles"], "--maps takes"),
     (["--maps", "normal", "--map-size", "8"], "--map-size must be in"),
     (["--maps", "normal", "--map-padding", "-1"], "--map-padding must be in"),
+    (["--maps", "normal", "--map-layout", "islands", "--uv", "st"],
+     "--uv names the texture coordinates of --map-layout asset"),
     (["--map-dir", "x"], "--map-dir need --maps"),
 ])
 def test_map_options_are_checked(tmp_path, capsys, args, fragment):

@@ -140,6 +140,9 @@ def map_options(args):
     from ..maps.bake import check_map_options
     from ..maps.files import parse_map_kinds
 
+    if args.map_layout == "islands" and args.uv is not None:
+        raise UsdWrinkleError("--uv names the texture coordinates of --map-layout asset; "
+                              "--map-layout islands lays the maps out in their own")
     options = dataclasses.replace(MAP_DEFAULTS, kinds=parse_map_kinds(args.maps),
                                   **_given(args, MAP_FLAGS))
     check_map_options(options)
