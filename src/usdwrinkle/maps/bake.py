@@ -225,16 +225,16 @@ class MapBake:
         points = res.posed_points.read()[:, :3]
         normals = res.read_shading_normals()[corner_entry]
         if res.normal_plan.source == "smooth":
-            counts = self.scene.facts.meshes[plan.path].face_counts
+            facts = self.scene.facts.meshes[plan.path]
+            counts = facts.face_counts
             indices = np.zeros(int(np.sum(counts)), np.int64)
             indices[topology.corner_face_vertex] = triangles
             drawn = np.zeros(len(counts), bool)
             drawn[topology.triangle_face] = True   # not holes
             own = blender_vertex_normals(points, counts, indices, drawn)[triangles.reshape(-1)]
-            # the winding Blender imports (a leftHanded mesh is turned): the mesh's side
-            # that ours face, by most corners (a pinched fold may face either way)
-            agree = np.sum(own * normals, axis=-1) >= 0.0
-            normals = own if np.count_nonzero(agree) >= agree.size / 2 else -own
+            # Blender's importer turns a leftHanded mesh's winding, and so its normals
+            left = facts.uniform.get("orientation") == "leftHanded"
+            normals = -own if left else own
         ids = mikktspace_triangles(points, triangles, topology.triangle_face, plan.corner_uv)
         return mikktspace(points, triangles, normals, plan.corner_uv, plan.groups, ids), normals
 
