@@ -30,22 +30,30 @@ uniform vec3 u_eye_local;        // camera position in the mesh's local space
 uniform vec3 u_eye_world;        // camera position in world space
 uniform int u_wrinkles;          // 0: same shading, no wrinkles
 
+// centroid: under multisampling, evaluate inside the covered part of the pixel, so that
+// barycentrics never extrapolate past a triangle's edge; the pixel is shaded once.
+// SHADE_SAMPLES (render --shade-samples): sample, every covered multisample is shaded at
+// its own position (supersampled shading: the pixel averages what its samples see, as a
+// texture's filtering averages a map over the pixel; also never past an edge).
+#if defined SHADE_SAMPLES
+#define INTERPOLATED sample
+#else
+#define INTERPOLATED centroid
+#endif
+
 #if defined VERTEX_SHADER
 
-// centroid: under multisampling, evaluate inside the covered part of the pixel, so that
-// barycentrics never extrapolate past a triangle's edge.
-
-centroid out vec3 v_local;
-out vec3 v_local_footprint;  // the same, not centroid: derivatives of centroid are skewed
-centroid out vec3 v_world;
-centroid out vec3 v_normal_local;
-centroid out vec3 v_bary;
-centroid out vec2 v_st;
+INTERPOLATED out vec3 v_local;
+out vec3 v_local_footprint;  // the same at the pixel's centre: derivatives of centroid are skewed
+INTERPOLATED out vec3 v_world;
+INTERPOLATED out vec3 v_normal_local;
+INTERPOLATED out vec3 v_bary;
+INTERPOLATED out vec2 v_st;
 #if defined NORMAL_MAP
-centroid out vec2 v_normal_st;
+INTERPOLATED out vec2 v_normal_st;
 #endif
 #if defined VERTEX_COLOR
-centroid out vec3 v_color;
+INTERPOLATED out vec3 v_color;
 #endif
 // per triangle, the same at its three corners (the draw is not indexed): the corner
 // waves (wave.glsl: CornerWaves), gathered here once instead of in every fragment
@@ -107,17 +115,17 @@ void main() {
 
 #elif defined FRAGMENT_SHADER
 
-centroid in vec3 v_local;
+INTERPOLATED in vec3 v_local;
 in vec3 v_local_footprint;
-centroid in vec3 v_world;
-centroid in vec3 v_normal_local;
-centroid in vec3 v_bary;
-centroid in vec2 v_st;
+INTERPOLATED in vec3 v_world;
+INTERPOLATED in vec3 v_normal_local;
+INTERPOLATED in vec3 v_bary;
+INTERPOLATED in vec2 v_st;
 #if defined NORMAL_MAP
-centroid in vec2 v_normal_st;
+INTERPOLATED in vec2 v_normal_st;
 #endif
 #if defined VERTEX_COLOR
-centroid in vec3 v_color;
+INTERPOLATED in vec3 v_color;
 #endif
 flat in vec4 v_wave[WAVE_SLOTS];
 flat in vec3 v_phase[SYSTEMS_MAX];

@@ -63,6 +63,8 @@ class ImageOptions:
     #: EXR compression and half-float colour and normals (outputs/images.py)
     exr_compression: str = "zip"
     exr_half: bool = True
+    #: shade every multisample instead of once per pixel (render --shade-samples)
+    shade_samples: bool = False
 
 
 @contextlib.contextmanager
@@ -115,7 +117,8 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
             with at_frame(frame):
                 frame_image = engine.render_image(frame, image.width, image.height,
                                                   layout_for(path, image.exr_half),
-                                                  image.wrinkles, image.samples)
+                                                  image.wrinkles, image.samples,
+                                                  image.shade_samples)
             if stats is not None:
                 rows[path] = {"frame": frame, **engine.last_timings,
                               "render": (time.perf_counter() - started) * 1e3}

@@ -38,6 +38,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--samples", type=int, default=4, metavar="N",
                    help="multisamples per pixel for anti-aliased edges, a power of two (4; 1 "
                         "turns it off)")
+    p.add_argument("--shade-samples", action="store_true",
+                   help="shade every multisample instead of once per pixel: wrinkles a few "
+                        "pixels across are averaged over the pixel, as a renderer's texture "
+                        "filtering averages a baked map (about 1.3x the time on llvmpipe; "
+                        "README: render options)")
     p.add_argument("--write-threads", type=int, default=1, metavar="N",
                    help="threads that encode and write frames while the next ones render "
                         "(1; at most 2 frames in flight; 0 writes each frame before the next "
@@ -132,7 +137,8 @@ def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[st
         engine=engine_options(args, camera=args.camera,
                               use_baked=not (args.recompute or args.no_wrinkles)),
         image=ImageOptions(args.width, args.height, args.samples, not args.no_wrinkles,
-                           args.write_threads, args.exr_compression, args.exr_half),
+                           args.write_threads, args.exr_compression, args.exr_half,
+                           args.shade_samples),
         frame_spec=args.frames, recompute=args.recompute, skip_existing=args.skip_existing,
         scheduler=args.dask, workers=args.workers, chunk=args.chunk)
     result = render_on_dask(job, stage, reporter)
@@ -256,7 +262,8 @@ def _render_shot(args, reporter) -> list[str]:
                           f"pass --no-wrinkles to draw the maps alone ({mapped[0]})")
         width, height = engine.resolution(args.width, args.height, frames[0])
         image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
-                             args.write_threads, args.exr_compression, args.exr_half)
+                             args.write_threads, args.exr_compression, args.exr_half,
+                             args.shade_samples)
         started = time.perf_counter()
         stats = {} if args.stats else None
         written = render_frames(

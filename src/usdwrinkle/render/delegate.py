@@ -144,6 +144,8 @@ class RenderPassState:
     wrinkles: bool = True
     samples: int = 4
     aovs: tuple = AOV_BLOCKS
+    #: shade every multisample instead of once per pixel (render --shade-samples)
+    shade_samples: bool = False
     timings: dict = field(default_factory=dict)
     #: read the frame back as an image file stores it instead of as float AOVs
     image: ImageLayout | None = None
@@ -282,6 +284,7 @@ class RenderPass:
                                               state.width, state.height), state.image)
             ctx.enable(ctx.DEPTH_TEST)
             ctx.disable(ctx.CULL_FACE)
+            d.draw.shade_samples = state.shade_samples and state.samples > 1
             d.draw.begin(state.camera, state.lights, state.wrinkles)
             translucent = [mesh for mesh in drawn if mesh.resources.record.material.translucent]
             for mesh in drawn:

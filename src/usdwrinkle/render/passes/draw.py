@@ -86,6 +86,8 @@ class DrawPass:
         self.variants = Variants(lambda extra: DrawableProgram(
             ctx, program(ctx, "draw.glsl", {**defines, **extra})))
         self.variants()  # the paper's variant always; the other on first use
+        #: shade every multisample (render --shade-samples; draw.glsl: SHADE_SAMPLES)
+        self.shade_samples = False
         self.frame_uniforms: dict = {}
         self.dome_lit = False
         #: a textured dome's environment, uploaded once per file: (key, texture, levels)
@@ -154,6 +156,7 @@ class DrawPass:
                                 FALLBACK_SURFACE=material.surface is None,
                                 TEXTURED=res.texture is not None, DOME=self.dome_lit,
                                 VERTEX_COLOR=res.corner_colors is not None,
+                                SHADE_SAMPLES=self.shade_samples,
                                 MASKED=material.surface is not None and
                                 material.surface.opacity_threshold > 0.0)
         if variant.frame_uniforms is not self.frame_uniforms:  # a variant made this frame
