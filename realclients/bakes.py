@@ -300,18 +300,22 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
                  tangent_space: str = "triangle", slack: float | None = 0.0,
-                 layout: str = "asset") -> dict:
-    """{renderer: (normals, mask)} for usdwrinkle's render and Storm's maps layer (its
-    normal maps in ``tangent_space`` and --map-layout ``layout``), each decoded by
-    photometric stereo."""
+                 layout: str = "asset", map_format: str = "png",
+                 shade_samples: bool = False) -> dict:
+    """{renderer: (normals, mask)} for usdwrinkle's render (``shade_samples``: render
+    --shade-samples) and Storm's maps layer (its normal maps in ``tangent_space``,
+    --map-layout ``layout`` and --map-format ``map_format``), each decoded by photometric
+    stereo."""
     p = prepare(shot, folder, slack)
     maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
-                  "--tangent-space", tangent_space, "--map-layout", layout)
+                  "--tangent-space", tangent_space, "--map-layout", layout,
+                  "--map-format", map_format)
+    shading = ("--shade-samples",) if shade_samples else ()
     ours, theirs, jobs = {}, {}, []
     for axis in AXES:
         tag = axis.replace("+", "p").replace("-", "m")
         ours[axis] = p.render(lit_by(p.stage, axis, p.base(f"lit{tag}.usda")),
-                              p.base(f"ours_{tag}.exr"))
+                              p.base(f"ours_{tag}.exr"), *shading)
         theirs[axis] = p.base(f"storm_{tag}.exr")
         jobs.append({**p.storm_job(lit_by(maps, axis, p.base(f"maps_lit{tag}.usda")),
                                    theirs[axis]), "camera_light": False})

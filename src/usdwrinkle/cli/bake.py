@@ -57,8 +57,9 @@ def add_parser(subparsers) -> None:
                       help="where the maps go (default: <layer name>_maps beside the layer); "
                            "the layer names them relative to itself")
     maps.add_argument("--map-format", choices=("png", "exr"),
-                      help="normal and amplitude maps as 16-bit PNG (default) or float EXR; "
-                           "the height map is always float EXR")
+                      help="normal and amplitude maps as 16-bit PNG (default) or float EXR "
+                           "(usdview's Storm reads a 16-bit PNG at 8 bits); the height map "
+                           "is always float EXR")
     maps.add_argument("--map-padding", type=int, metavar="N",
                       help="texels by which UV islands are grown, so that filtering at their "
                            f"borders does not reach the background; default "
