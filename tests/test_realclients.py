@@ -4,8 +4,8 @@ Cycles (Blender's USD importer). Marker ``realclient``; without a Python that ha
 bpy these tests are skipped with the reason, and the run's summary says the tier did not
 run (``--require-realclients``, which .ci/run passes, makes that an error).
 
-Cost on this 2-core machine: 75 s for 36 tests in an earlier session, 287 s for these 40
-in a session when the machine ran 2.7 times slower throughout: the plain frames (8 shots x
+Cost on this 2-core machine: 75 s for 36 tests in an earlier session, 287 s for 40 (the
+sixth decoded-normal case, added since, about 30 s more) in a session when the machine ran 2.7 times slower throughout: the plain frames (8 shots x
 2 frames) 28 s, the probes 19 s, the bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3
 renders each), the five decoded-normal cases in Storm 20-26 s each (six renders each side;
 the 1280-pixel one the most) and Cycles 40 s (one shot, two tangent frames, 16 samples)."""
