@@ -277,7 +277,7 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layou
     frame, which turns by 29 degrees (median) across the elbow's quads. A MikkTSpace map
     decoded in Storm's frame is off by the frames' difference (10 degrees median at the
     elbow) times the tilt. This test holds the measured values, so that a change for
-    the worse fails; issue 23's 3 degrees is not met. ``slack`` None keeps the fallback
+    the worse fails; shaded once per pixel, issue 23's 3 degrees is not met (see below). ``slack`` None keeps the fallback
     wrinkle:slack (the other comparisons author 0): Storm agrees as well with it.
 
     --map-layout islands (maps/islands.py) removes both causes: no face reads another's
