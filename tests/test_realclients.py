@@ -5,7 +5,8 @@ bpy these tests are skipped with the reason, and the run's summary says the tier
 run (``--require-realclients``, which .ci/run passes, makes that an error).
 
 Cost on this 2-core machine: 75 s for 36 tests in an earlier session, 287 s for 40 (the
-sixth decoded-normal case, added since, about 30 s more) in a session when the machine ran 2.7 times slower throughout: the plain frames (8 shots x
+sixth decoded-normal case, added since, about 30 s more) in a session when the machine ran
+2.7 times slower throughout: the plain frames (8 shots x
 2 frames) 28 s, the probes 19 s, the bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3
 renders each), the five decoded-normal cases in Storm 20-26 s each (six renders each side;
 the 1280-pixel one the most) and Cycles 40 s (one shot, two tangent frames, 16 samples)."""
@@ -277,8 +278,9 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layou
     frame, which turns by 29 degrees (median) across the elbow's quads. A MikkTSpace map
     decoded in Storm's frame is off by the frames' difference (10 degrees median at the
     elbow) times the tilt. This test holds the measured values, so that a change for
-    the worse fails; shaded once per pixel, issue 23's 3 degrees is not met (see below). ``slack`` None keeps the fallback
-    wrinkle:slack (the other comparisons author 0): Storm agrees as well with it.
+    the worse fails; shaded once per pixel, issue 23's 3 degrees is not met (see below).
+    ``slack`` None keeps the fallback wrinkle:slack (the other comparisons author 0):
+    Storm agrees as well with it.
 
     --map-layout islands (maps/islands.py) removes both causes: no face reads another's
     texels, and a quad's frame is one across its diagonal. What is left at 640 pixels is
