@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..polygons import face_corners
+
 
 def corner_groups(triangles: np.ndarray, normal_entries: np.ndarray,
                   corner_uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +100,7 @@ def mikktspace(points: np.ndarray, triangles: np.ndarray, corner_normals: np.nda
     result[:, 3] = np.repeat(np.where(orient, 1.0, -1.0), 3)
     return result
 
+
 def blender_vertex_normals(points: np.ndarray, counts: np.ndarray, indices: np.ndarray,
                            faces: np.ndarray | None = None) -> np.ndarray:
     """(n, 3) float64 unit vertex normals as Blender makes them for a smooth mesh without
@@ -108,26 +111,18 @@ def blender_vertex_normals(points: np.ndarray, counts: np.ndarray, indices: np.n
     (a mask; default every face of 3 corners or more: holes are left out by the caller)."""
     points = np.asarray(points, np.float64)
     counts = np.asarray(counts, np.int64)
-    indices = np.asarray(indices, np.int64)
     keep = counts >= 3
     if faces is not None:
         keep &= np.asarray(faces, bool)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else counts
-    faces = np.flatnonzero(keep)
-    k = counts[faces]
-    face_of = np.repeat(np.arange(len(faces)), k)
-    local = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
-    base = np.repeat(starts[faces], k)
-    size = np.repeat(k, k)
-    here = points[indices[base + local]]
-    prev = points[indices[base + (local - 1) % size]]
-    nxt = points[indices[base + (local + 1) % size]]
-    face_normal = np.zeros((len(faces), 3))
-    np.add.at(face_normal, face_of, np.cross(here, nxt))     # Newell
+    face_of, point, prev, nxt = face_corners(counts, np.asarray(indices, np.int64), keep)
+    here = points[point]
+    face_normal = np.zeros((len(counts), 3))
+    np.add.at(face_normal, face_of, np.cross(here, points[nxt]))     # Newell
     face_normal = _unit(face_normal)
-    angle = np.arccos(np.clip(np.sum(_unit(prev - here) * _unit(nxt - here), -1), -1.0, 1.0))
+    angle = np.arccos(np.clip(np.sum(_unit(points[prev] - here) * _unit(points[nxt] - here),
+                                     -1), -1.0, 1.0))
     normals = np.zeros_like(points)
-    np.add.at(normals, indices[base + local], angle[:, None] * face_normal[face_of])
+    np.add.at(normals, point, angle[:, None] * face_normal[face_of])
     return _unit(normals)
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from pxr import UsdGeom
 
 from ..errors import UsdWrinkleError
+from ..polygons import face_corners
 from ..values import finite_in_float32, static_flattened, static_value
 from .topology import Topology
 
@@ -68,26 +69,6 @@ def _csr(keys: np.ndarray, values: np.ndarray, entries: int, width: int) -> np.n
     return np.concatenate([offsets, values[order].reshape(-1)]).astype(np.int32)
 
 
-def _face_corners(counts: np.ndarray, indices: np.ndarray, keep: np.ndarray,
-                  left_handed: bool):
-    """(face of each kept corner, point, previous point, next point) over every corner
-    of the kept faces, in the right-handed winding Storm converts meshes to."""
-    counts = np.asarray(counts, np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    faces = np.nonzero(keep)[0]
-    k = counts[faces]
-    face_of = np.repeat(faces, k)
-    local = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
-    base = np.repeat(starts[faces], k)
-    size = np.repeat(k, k)
-    point = indices[base + local]
-    prev = indices[base + (local - 1) % size]
-    nxt = indices[base + (local + 1) % size]
-    if left_handed:
-        prev, nxt = nxt, prev
-    return face_of, point, prev, nxt
-
-
 def plan_normals(prim, topology: Topology, counts: np.ndarray, indices: np.ndarray,
                  holes: np.ndarray | None, left_handed: bool) -> NormalPlan:
     """The NormalPlan of a Mesh prim (its faces as authored; ``holes``: hole faces)."""
@@ -102,13 +83,13 @@ def plan_normals(prim, topology: Topology, counts: np.ndarray, indices: np.ndarr
         keep[holes[(holes >= 0) & (holes < len(counts))]] = False
     scheme = static_value(mesh.GetSubdivisionSchemeAttr()) or UsdGeom.Tokens.catmullClark
     if scheme != UsdGeom.Tokens.none:
-        _, point, prev, nxt = _face_corners(counts, indices, keep, left_handed)
+        _, point, prev, nxt = face_corners(counts, indices, keep, left_handed)
         return NormalPlan("smooth", n, topology.triangles.astype(np.int32),
                           _csr(point, np.stack([prev, nxt], axis=1), n, 2))
     authored = _authored(prim, mesh, topology, counts, indices, path)
     if authored is not None:
         return authored
-    face_of, point, _, _ = _face_corners(counts, indices, keep, left_handed)
+    face_of, point, _, _ = face_corners(counts, indices, keep, left_handed)
     return NormalPlan("faceted", len(counts), np.repeat(
         topology.triangle_face[:, None], 3, axis=1).astype(np.int32),
         _csr(face_of, point[:, None], len(counts), 1))
