@@ -9,7 +9,7 @@ import pytest
 
 from usdwrinkle.engine import WrinkleEngine
 
-from conftest import grid_sheet
+from conftest import REPO, grid_sheet
 from helpers import point_cache_stage
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
@@ -121,17 +121,14 @@ def test_shade_samples_average_the_pixel(tmp_path):
     With one sample per pixel the switch changes nothing."""
     from usdwrinkle.cli.main import main
 
-    from helpers import read_exr
-
-    root = Path(__file__).resolve().parents[1]
+    from helpers import read_pixels
 
     def draw(name, width, height, *extra):
         out = tmp_path / f"{name}.####.exr"
-        assert main(["render", str(root / "sample_stages" / "pull.usda"), str(out),
+        assert main(["render", str(REPO / "sample_stages" / "pull.usda"), str(out),
                      "--frames", "24", "--width", str(width), "--height", str(height),
                      "--quiet", *extra]) == 0
-        channels = read_exr(tmp_path / f"{name}.0024.exr")
-        return np.dstack([channels[c] for c in "RGBA"])
+        return read_pixels(tmp_path / f"{name}.0024.exr")[..., :4]   # R, G, B, A first
 
     fine = draw("fine", 1280, 800, "--samples", "1")
     reference = fine.reshape(200, 4, 320, 4, 4).mean(axis=(1, 3))
