@@ -44,7 +44,7 @@ uniform int u_wrinkles;          // 0: same shading, no wrinkles
 #if defined VERTEX_SHADER
 
 INTERPOLATED out vec3 v_local;
-out vec3 v_local_footprint;  // the same at the pixel's centre: derivatives of centroid are skewed
+out vec3 v_local_footprint;  // the same, not centroid: derivatives of centroid are skewed
 INTERPOLATED out vec3 v_world;
 INTERPOLATED out vec3 v_normal_local;
 INTERPOLATED out vec3 v_bary;
