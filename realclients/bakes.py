@@ -419,7 +419,9 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     """{output: (usdwrinkle's normals, Cycles' normals)} for the maps layer (its normal
     maps in ``tangent_space``; against usdwrinkle's wrinkled render) and the geometry
     layer (against usdwrinkle's render of that layer), from each renderer's world-space
-    normal AOV; also "plain": usdwrinkle's unwrinkled normals and "view": the directions
+    normal AOV; also "decoded": Cycles' decoded map normal (its Normal Map nodes' output)
+    against usdwrinkle's, "decoded_shaded": the same against usdwrinkle's render
+    --shade-samples, "plain": usdwrinkle's unwrinkled normals and "view": the directions
     toward the camera (for cycles_reflection_clamp). Cycles imports the layers through
     Blender's USD importer (coarse meshes: no subdivision, as usdview's default
     complexity), the render purpose on for the geometry layer."""
@@ -447,8 +449,10 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
     views = {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
              for k in layers}
-    views["decoded"] = (views["maps"][0], blender_normals(p.base("cycles_maps.exr"), up_axis,
-                                                          "Decoded"))
+    decoded = blender_normals(p.base("cycles_maps.exr"), up_axis, "Decoded")
+    views["decoded"] = (views["maps"][0], decoded)
+    views["decoded_shaded"] = (our_normals(p.render(p.stage, p.base("ours_shaded.exr"),
+                                                    "--shade-samples")), decoded)
     views["plain"] = plain
     views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     return views

@@ -387,12 +387,13 @@ def test_maps_normals_in_cycles_as_measured(cycles_shirt, frame, bounds):
     assert p90 <= bounds[4] and p99 <= bounds[5] and elbow <= bounds[6], angles
 
 
-@pytest.mark.parametrize("frame,bounds", [
+@pytest.mark.parametrize("frame,view,bounds", [
     # (median, p90, p99, elbow p99), measured + margin
-    ("triangle", (0.3, 4.0, 23.0, 26.0)),     # measured 0.13, 3.19, 20.96; 23.65
-    ("mikktspace", (0.2, 1.0, 6.0, 5.0)),     # measured 0.04, 0.38, 4.95; 4.82
+    ("triangle", "decoded", (0.3, 4.0, 23.0, 26.0)),        # 0.13, 3.19, 20.96; 23.65
+    ("mikktspace", "decoded", (0.2, 1.0, 6.0, 5.0)),        # 0.04, 0.38, 4.95; 4.82
+    ("mikktspace", "decoded_shaded", (0.1, 0.5, 3.0, 3.0)),  # 0.03, 0.17, 2.06; 1.81
 ])
-def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, bounds):
+def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, view, bounds):
     """Cycles' decoded normal itself: the output of the Normal Map node (a shader AOV,
     cycles_client's "decoded"), before the BSDF's reflection clamp that the Normal pass
     above includes, against usdwrinkle's N AOV. Issue 23 asks for p99 <= 5 degrees at
@@ -405,10 +406,13 @@ def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, bounds):
     elbow's posed vertices), and the map is encoded about those; and mikktspace.c sums
     a quad's tangents over its split along the shorter UV diagonal, by posed length
     where the UV diagonals tie (a rectangle), not along 0-2. Without them: 0.10 / 2.29 /
-    9.57, elbow 9.99."""
+    9.57, elbow 9.99.
+
+    "decoded_shaded": against usdwrinkle's render --shade-samples, which averages its
+    normals over the pixel as Cycles' 16 samples do: the elbow's p99 falls to 1.8."""
     from realclients.bakes import front_angles
 
-    degrees, mask = front_angles(*cycles_shirt[frame]["decoded"])
+    degrees, mask = front_angles(*cycles_shirt[frame][view])
     assert mask.sum() > 40000
     lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
     median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
