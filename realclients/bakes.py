@@ -301,16 +301,16 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
                  tangent_space: str = "triangle", slack: float | None = 0.0,
                  layout: str = "asset", map_format: str = "png",
-                 shade_samples: bool = False) -> dict:
-    """{renderer: (normals, mask)} for usdwrinkle's render (``shade_samples``: render
-    --shade-samples) and Storm's maps layer (its normal maps in ``tangent_space``,
+                 shade_samples: bool = True) -> dict:
+    """{renderer: (normals, mask)} for usdwrinkle's render (``shade_samples`` False: render
+    --no-shade-samples) and Storm's maps layer (its normal maps in ``tangent_space``,
     --map-layout ``layout`` and --map-format ``map_format``), each decoded by photometric
     stereo."""
     p = prepare(shot, folder, slack)
     maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
                   "--tangent-space", tangent_space, "--map-layout", layout,
                   "--map-format", map_format)
-    shading = ("--shade-samples",) if shade_samples else ()
+    shading = () if shade_samples else ("--no-shade-samples",)
     ours, theirs, jobs = {}, {}, []
     for axis in AXES:
         tag = axis.replace("+", "p").replace("-", "m")
@@ -420,8 +420,8 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     maps in ``tangent_space``; against usdwrinkle's wrinkled render) and the geometry
     layer (against usdwrinkle's render of that layer), from each renderer's world-space
     normal AOV; also "decoded": Cycles' decoded map normal (its Normal Map nodes' output)
-    against usdwrinkle's, "decoded_shaded": the same against usdwrinkle's render
-    --shade-samples, "plain": usdwrinkle's unwrinkled normals and "view": the directions
+    against usdwrinkle's, "decoded_per_pixel": the same against usdwrinkle's render
+    --no-shade-samples, "plain": usdwrinkle's unwrinkled normals and "view": the directions
     toward the camera (for cycles_reflection_clamp). Cycles imports the layers through
     Blender's USD importer (coarse meshes: no subdivision, as usdview's default
     complexity), the render purpose on for the geometry layer."""
@@ -451,8 +451,8 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
              for k in layers}
     decoded = blender_normals(p.base("cycles_maps.exr"), up_axis, "Decoded")
     views["decoded"] = (views["maps"][0], decoded)
-    views["decoded_shaded"] = (our_normals(p.render(p.stage, p.base("ours_shaded.exr"),
-                                                    "--shade-samples")), decoded)
+    views["decoded_per_pixel"] = (our_normals(p.render(p.stage, p.base("ours_per_pixel.exr"),
+                                                       "--no-shade-samples")), decoded)
     views["plain"] = plain
     views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     return views

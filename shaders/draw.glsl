@@ -30,11 +30,12 @@ uniform vec3 u_eye_local;        // camera position in the mesh's local space
 uniform vec3 u_eye_world;        // camera position in world space
 uniform int u_wrinkles;          // 0: same shading, no wrinkles
 
-// centroid: under multisampling, evaluate inside the covered part of the pixel, so that
-// barycentrics never extrapolate past a triangle's edge; the pixel is shaded once.
-// SHADE_SAMPLES (render --shade-samples): sample, every covered multisample is shaded at
-// its own position (supersampled shading: the pixel averages what its samples see, as a
-// texture's filtering averages a map over the pixel; also never past an edge).
+// SHADE_SAMPLES (the default; off with render --no-shade-samples or --samples 1): sample,
+// every covered multisample is shaded at its own position (supersampled shading: the pixel
+// averages what its samples see, as a texture's filtering averages a map over the pixel;
+// never past a triangle's edge). Otherwise centroid: under multisampling, evaluate inside
+// the covered part of the pixel, so that barycentrics never extrapolate past an edge; the
+// pixel is shaded once.
 #if defined SHADE_SAMPLES
 #define INTERPOLATED sample
 #else

@@ -113,12 +113,13 @@ def test_buffers_handed_out_are_never_overwritten(gl_context):
 
 
 def test_shade_samples_average_the_pixel(tmp_path):
-    """render --shade-samples shades each of the 4 multisamples where it lies, so a pixel
+    """render shades each of the 4 multisamples where it lies (the default), so a pixel
     is the average over its area: the pulled sheet (waves many pixels long, so that no
     band limit differs between the two sizes) at 320x200 against a numpy 4x4 box average
     of the same frame drawn at 1280x800 with one sample per pixel (measured: mean colour
     error 0.0004 shaded per sample, 0.004 shaded once per pixel; p99 0.0037 and 0.038).
-    With one sample per pixel the switch changes nothing."""
+    --no-shade-samples shades once per pixel; with one sample per pixel the switch
+    changes nothing."""
     from usdwrinkle.cli.main import main
 
     from helpers import read_pixels
@@ -133,7 +134,7 @@ def test_shade_samples_average_the_pixel(tmp_path):
     fine = draw("fine", 1280, 800, "--samples", "1")
     reference = fine.reshape(200, 4, 320, 4, 4).mean(axis=(1, 3))
     errors = {}
-    for name, extra in {"pixel": (), "sample": ("--shade-samples",)}.items():
+    for name, extra in {"pixel": ("--no-shade-samples",), "sample": ()}.items():
         image = draw(name, 320, 200, *extra)
         inside = (reference[..., 3] > 0.999) & (image[..., 3] > 0.999)
         assert inside.sum() > 25000
@@ -141,5 +142,5 @@ def test_shade_samples_average_the_pixel(tmp_path):
     assert errors["sample"].mean() <= 0.001 and np.percentile(errors["sample"], 99) <= 0.01
     assert errors["sample"].mean() * 4 <= errors["pixel"].mean()
     single = draw("single", 320, 200, "--samples", "1")
-    single_shaded = draw("single_shaded", 320, 200, "--samples", "1", "--shade-samples")
-    assert np.array_equal(single, single_shaded)
+    single_once = draw("single_once", 320, 200, "--samples", "1", "--no-shade-samples")
+    assert np.array_equal(single, single_once)

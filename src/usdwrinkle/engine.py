@@ -291,25 +291,25 @@ class WrinkleEngine:
         return record
 
     def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True,
-                     samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = False):
+                     samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):
         """Compute and draw ``frame``; returns {aov name: RenderBuffer}.
 
         ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
         ``aovs``: the render buffers to read back (an 8-bit image needs only colour).
-        ``shade_samples``: shade every multisample, not once per pixel (supersampled
-        shading; render --shade-samples).
+        ``shade_samples``: shade every multisample where it lies (the default), or once
+        per pixel at its centroid (render --no-shade-samples).
         """
         return self._render(frame, width, height, wrinkles, samples, tuple(aovs), None,
                             shade_samples)
 
     def render_image(self, frame: float, width: int, height: int, layout,
-                     wrinkles: bool = True, samples: int = 4, shade_samples: bool = False):
+                     wrinkles: bool = True, samples: int = 4, shade_samples: bool = True):
         """Compute and draw ``frame``; returns it as an image file stores it
         (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for)."""
         return self._render(frame, width, height, wrinkles, samples, (), layout, shade_samples)
 
     def _render(self, frame, width, height, wrinkles, samples, aovs, layout,
-                shade_samples=False):
+                shade_samples=True):
         record = self.compute_frame(frame, width / height, wrinkles)
         state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples,
                                 aovs, image=layout, shade_samples=shade_samples)

@@ -63,8 +63,9 @@ class ImageOptions:
     #: EXR compression and half-float colour and normals (outputs/images.py)
     exr_compression: str = "zip"
     exr_half: bool = True
-    #: shade every multisample instead of once per pixel (render --shade-samples)
-    shade_samples: bool = False
+    #: shade every multisample where it lies, not once per pixel (render
+    #: --no-shade-samples turns it off)
+    shade_samples: bool = True
 
 
 @contextlib.contextmanager

@@ -1,6 +1,7 @@
 """usdwrinkle render STAGE OUTPUT: render frames headlessly to images."""
 from __future__ import annotations
 
+import argparse
 import os
 import time
 
@@ -38,11 +39,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--samples", type=int, default=4, metavar="N",
                    help="multisamples per pixel for anti-aliased edges, a power of two (4; 1 "
                         "turns it off)")
-    p.add_argument("--shade-samples", action="store_true",
-                   help="shade every multisample instead of once per pixel: wrinkles a few "
+    p.add_argument("--shade-samples", action=argparse.BooleanOptionalAction, default=True,
+                   help="shade every multisample where it lies (the default): wrinkles a few "
                         "pixels across are averaged over the pixel, as a renderer's texture "
-                        "filtering averages a baked map (about 1.3x the time on llvmpipe; "
-                        "README: render options)")
+                        "filtering averages a baked map; --no-shade-samples shades each "
+                        "pixel once, at its centroid (about 1.3x faster on llvmpipe, jagged "
+                        "fold crests; README: render options)")
     p.add_argument("--write-threads", type=int, default=1, metavar="N",
                    help="threads that encode and write frames while the next ones render "
                         "(1; at most 2 frames in flight; 0 writes each frame before the next "

@@ -144,8 +144,9 @@ class RenderPassState:
     wrinkles: bool = True
     samples: int = 4
     aovs: tuple = AOV_BLOCKS
-    #: shade every multisample instead of once per pixel (render --shade-samples)
-    shade_samples: bool = False
+    #: shade every multisample where it lies, not once per pixel (render
+    #: --no-shade-samples turns it off)
+    shade_samples: bool = True
     timings: dict = field(default_factory=dict)
     #: read the frame back as an image file stores it instead of as float AOVs
     image: ImageLayout | None = None
