@@ -183,6 +183,13 @@ class BakeViews:
         return contribution(i["ours"], i["ours_plain"], i["storm_maps"], i["storm_points"])
 
 
+def map_set_flags(tangent_space: str | None, layout: str | None = None) -> tuple:
+    """bake's flags for one map set in ``tangent_space`` and ``layout``; with neither, none
+    (the default bake's set per material purpose)."""
+    return (("--tangent-space", tangent_space) if tangent_space else ()) + \
+        (("--map-layout", layout) if layout else ())
+
+
 def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
                geometry: bool = True, display_color: bool = False,
                tangent_space: str | None = None) -> BakeViews:
@@ -191,9 +198,8 @@ def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     p = prepare(shot, folder)
     images = {"ours": p.render(p.stage, p.base("ours.png")),
               "ours_plain": p.render(p.stage, p.base("ours_plain.png"), "--no-wrinkles")}
-    frame = ("--tangent-space", tangent_space) if tangent_space else ()
     layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
-                             map_size, *frame),
+                             map_size, *map_set_flags(tangent_space)),
               "points": p.bake(p.base("points.usda"), "--with-points")}
     purposes = {}
     if geometry:
@@ -299,17 +305,16 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
-                 tangent_space: str = "triangle", slack: float | None = 0.0,
-                 layout: str = "asset", map_format: str = "png",
+                 tangent_space: str | None = "triangle", slack: float | None = 0.0,
+                 layout: str | None = "asset", map_format: str = "png",
                  shade_samples: bool = True) -> dict:
     """{renderer: (normals, mask)} for usdwrinkle's render (``shade_samples`` False: render
     --no-shade-samples) and Storm's maps layer (its normal maps in ``tangent_space``,
-    --map-layout ``layout`` and --map-format ``map_format``), each decoded by photometric
-    stereo."""
+    --map-layout ``layout`` (both None: the default bake, whose preview set Storm
+    shows) and --map-format ``map_format``), each decoded by photometric stereo."""
     p = prepare(shot, folder, slack)
     maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
-                  "--tangent-space", tangent_space, "--map-layout", layout,
-                  "--map-format", map_format)
+                  *map_set_flags(tangent_space, layout), "--map-format", map_format)
     shading = () if shade_samples else ("--no-shade-samples",)
     ours, theirs, jobs = {}, {}, []
     for axis in AXES:
@@ -415,9 +420,10 @@ def cycles_reflection_clamp(n: np.ndarray, ng: np.ndarray, i: np.ndarray) -> np.
 
 
 def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
-                 tangent_space: str = "triangle") -> dict:
+                 tangent_space: str | None = "triangle") -> dict:
     """{output: (usdwrinkle's normals, Cycles' normals)} for the maps layer (its normal
-    maps in ``tangent_space``; against usdwrinkle's wrinkled render) and the geometry
+    maps in ``tangent_space``, None: the default bake, whose all-purpose set Blender
+    imports; against usdwrinkle's wrinkled render) and the geometry
     layer (against usdwrinkle's render of that layer), from each renderer's world-space
     normal AOV; also "decoded": Cycles' decoded map normal (its Normal Map nodes' output)
     against usdwrinkle's, "decoded_per_pixel": the same against usdwrinkle's render
@@ -432,7 +438,7 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     p = prepare(shot, folder)
     up_axis = UsdGeom.GetStageUpAxis(Usd.Stage.Open(str(p.stage)))
     layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
-                             map_size, "--tangent-space", tangent_space),
+                             map_size, *map_set_flags(tangent_space)),
               "geometry": p.bake(p.base("geometry.usda"), "--geometry", "--with-points")}
     ours = {"maps": p.render(p.stage, p.base("ours.exr")),
             "geometry": p.render(layers["geometry"], p.base("ours_geometry.exr"),

@@ -395,6 +395,92 @@ def test_mikktspace_maps_of_the_analytic_sheet_equal_the_triangle_maps(gl_contex
     assert np.abs(maps["mikktspace"] - maps["triangle"]).max() <= 1.5 / 255
 
 
+def test_default_maps_are_a_set_per_material_purpose(gl_context, tmp_path):
+    """Without --tangent-space and --map-layout the bake writes two map sets: for final
+    renderers (the all-purpose binding, which Blender's importer reads) the MikkTSpace
+    maps in the asset's UVs, and for usdview's Storm (material:binding:preview, which
+    Storm resolves first) the per-triangle maps in islands. Each is, to the byte, what
+    the one-set bake in that frame and layout writes, which the real-client tier
+    measures in Cycles and Storm (tests/test_realclients.py)."""
+    def bake(name, *args):
+        layer = tmp_path / f"{name}.usda"
+        assert main(["bake", SHIRT, str(layer), "--quiet", "--frames", "24", "--maps",
+                     "normal", "--map-size", "256", *args]) == 0
+        return layer, tmp_path / f"{name}_maps"
+
+    layer, folder = bake("default")
+    assert sorted(os.listdir(folder)) == ["Sleeve.normal.0024.png",
+                                          "Sleeve.preview.normal.0024.png"]
+    _, full = bake("full", "--tangent-space", "mikktspace", "--map-layout", "asset")
+    _, preview = bake("preview", "--tangent-space", "triangle", "--map-layout", "islands")
+    assert sorted(os.listdir(full)) == sorted(os.listdir(preview)) == ["Sleeve.normal.0024.png"]
+    default_full = read(folder / "Sleeve.normal.0024.png")
+    default_preview = read(folder / "Sleeve.preview.normal.0024.png")
+    assert np.array_equal(default_full, read(full / "Sleeve.normal.0024.png"))
+    assert np.array_equal(default_preview, read(preview / "Sleeve.normal.0024.png"))
+    assert not np.array_equal(default_full, default_preview)
+
+    stage = Usd.Stage.Open(str(layer))
+    binding = UsdShade.MaterialBindingAPI(stage.GetPrimAtPath("/World/Arm/Sleeve"))
+    readers = {}
+    for purpose in (UsdShade.Tokens.preview, UsdShade.Tokens.full, UsdShade.Tokens.allPurpose):
+        material, _ = binding.ComputeBoundMaterial(purpose)
+        reader = UsdShade.Shader(material.GetPrim().GetChild("WrinkleUV"))
+        _, files = file_samples(stage, material.GetPath(), "wrinkleNormalFile")
+        readers[purpose] = (str(material.GetPath()), reader.GetInput("varname").Get(),
+                            os.path.basename(files[-1].path))
+    assert readers[UsdShade.Tokens.preview] == (
+        "/World/WrinkleMaterials/Sleeve_preview", "wrinkleMapST", "Sleeve.preview.normal.0024.png")
+    assert readers[UsdShade.Tokens.full] == readers[UsdShade.Tokens.allPurpose] == (
+        "/World/WrinkleMaterials/Sleeve", "st", "Sleeve.normal.0024.png")
+    data = Sdf.Layer.FindOrOpen(str(layer)).customLayerData["usdwrinkle"]["maps"]
+    assert (data["purpose"], data["tangentSpace"], data["islands"]) == ("full", "mikktspace", "")
+    assert dict(data["preview"]) == {"meshes": "/World/Arm/Sleeve", "islands": "/World/Arm/Sleeve",
+                                     "tangentSpace": "triangle"}
+
+
+def test_display_color_keeps_the_preview_purpose_from_the_maps(gl_context, tmp_path):
+    """With --display-color, usdview is to show the ramp (bound for the preview purpose):
+    the default bake then writes no preview map set, and final renderers still get the
+    MikkTSpace maps."""
+    layer = tmp_path / "both.usda"
+    assert main(["bake", SHIRT, str(layer), "--quiet", "--frames", "24", "--maps", "normal",
+                 "--map-size", "256", "--display-color", "amplitude"]) == 0
+    assert os.listdir(tmp_path / "both_maps") == ["Sleeve.normal.0024.png"]
+    stage = Usd.Stage.Open(str(layer))
+    binding = UsdShade.MaterialBindingAPI(stage.GetPrimAtPath("/World/Arm/Sleeve"))
+    bound = {purpose: str(binding.ComputeBoundMaterial(purpose)[0].GetPath())
+             for purpose in (UsdShade.Tokens.preview, UsdShade.Tokens.full)}
+    assert bound == {UsdShade.Tokens.preview: "/World/WrinkleMaterials/DisplayColor",
+                     UsdShade.Tokens.full: "/World/WrinkleMaterials/Sleeve"}
+    data = Sdf.Layer.FindOrOpen(str(layer)).customLayerData["usdwrinkle"]["maps"]
+    assert data["tangentSpace"] == "mikktspace" and "preview" not in data
+
+
+def test_preview_maps_fall_back_to_the_asset_uvs_where_islands_do_not_fit(gl_context,
+                                                                           tmp_path, capfd):
+    """900 faces on a 64-texel map leave islands too small to hold a wave: the default
+    bake does not fail for the preview set (it did not before it had one), but lays that
+    set out in the mesh's UVs, per triangle, and says so; the full set is as ever."""
+    source = sheet_stage(tmp_path, 0.7)
+    layers = {name: tmp_path / f"{name}.usda" for name in ("default", "triangle")}
+    assert main(["bake", str(source), str(layers["default"]), "--quiet", "--maps", "normal",
+                 "--map-size", "64"]) == 0
+    assert "the preview maps are laid out in 'st'" in capfd.readouterr().err
+    assert main(["bake", str(source), str(layers["triangle"]), "--quiet", "--maps", "normal",
+                 "--map-size", "64", "--tangent-space", "triangle", "--map-layout",
+                 "asset"]) == 0
+    preview = read(tmp_path / "default_maps" / "Sheet.preview.normal.0001.png")
+    assert np.array_equal(preview, read(tmp_path / "triangle_maps" / "Sheet.normal.0001.png"))
+    stage = Usd.Stage.Open(str(layers["default"]))
+    material = UsdShade.Material(stage.GetPrimAtPath("/WrinkleMaterials/Sheet_preview"))
+    reader = UsdShade.Shader(material.GetPrim().GetChild("WrinkleUV"))
+    assert reader.GetInput("varname").Get() == "st"
+    assert not stage.GetPrimAtPath("/Sheet").HasAttribute("primvars:wrinkleMapST")
+    data = Sdf.Layer.FindOrOpen(str(layers["default"])).customLayerData["usdwrinkle"]["maps"]
+    assert data["preview"]["islands"] == "" and data["preview"]["meshes"] == "/Sheet"
+
+
 def _smooth_normals(points, quads):
     """Per point the sum over its quads' corners of cross(next - p, prev - p), as the
     normals pass makes a polygonal mesh's smooth normals (scene/normals.py)."""

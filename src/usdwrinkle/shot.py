@@ -10,7 +10,7 @@ import contextlib
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from . import schema
 from .errors import UsdWrinkleError
@@ -207,6 +207,10 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
         if maps is not None:
             from .maps.bake import MapBake
 
+            if request.display_color:
+                # the preview purpose shows the display-colour ramp (LayerBaker), so no
+                # map set is made for it
+                maps = replace(maps, preview=False)
             sinks.append(MapBake(scene, maps))
         if geometry is not None:
             from .geometry.bake import GeometryBake

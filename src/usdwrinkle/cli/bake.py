@@ -71,8 +71,8 @@ def add_parser(subparsers) -> None:
                            "neighbour's texels; asset: the mesh's own texture coordinates "
                            "(--uv), so that the maps line up with its textures and Blender, "
                            "which decodes normal maps in the mesh's first UV set, decodes "
-                           "them; default: asset, islands for a mesh without --uv "
-                           "(docs/method.md: map layout)")
+                           "them. Given, the bake writes one map set in it, bound for every "
+                           "purpose (docs/method.md: map layout)")
     maps.add_argument("--uv", metavar="NAME",
                       help="the texture coordinates (primvar) the maps are laid out in "
                            f"unless --map-layout islands; default {MAP_DEFAULTS.uv}")
@@ -80,8 +80,12 @@ def add_parser(subparsers) -> None:
                       help="the tangent frame the normal maps are written in: triangle (per "
                            "triangle, as usdview's Storm and usdwrinkle decode them) or "
                            "mikktspace (per vertex, as Blender's Cycles and EEVEE, Unreal, "
-                           "Substance and glTF viewers decode them); default "
-                           f"{MAP_DEFAULTS.tangent_space} (docs/method.md: tangent frames)")
+                           "Substance and glTF viewers decode them). Given, the bake writes "
+                           "one map set in it, bound for every purpose. Without it and "
+                           "--map-layout, two sets: mikktspace in the mesh's UVs for final "
+                           "renderers (material:binding) and triangle in islands for "
+                           "usdview's Storm (material:binding:preview) (docs/method.md: "
+                           "tangent frames)")
     maps.add_argument("--map-displacement", action="store_true", default=None,
                       help="also bind the height map to UsdPreviewSurface's "
                            "inputs:displacement, for renderers that subdivide and displace "

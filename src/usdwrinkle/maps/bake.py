@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -29,7 +29,7 @@ from .files import (
     uv_tiles,
 )
 from .islands import MIN_ISLAND, island_layout
-from .options import MapOptions
+from .options import MapOptions, MapSet
 from .raster import MapRasterizer
 from .tangents import (
     blender_vertex_normals,
@@ -65,12 +65,16 @@ def check_map_options(options: MapOptions, max_texture_size: int | None = None) 
 
 @dataclass
 class MeshMaps:
-    """One mesh's map plan: its file stem, UVs per triangle corner and UDIM tiles."""
+    """One mesh's plan for one map set (maps/options.MapSet): its file stem, UVs per
+    triangle corner and UDIM tiles."""
 
     path: str
     stem: str
     corner_uv: np.ndarray
     tiles: list
+    map_set: MapSet = MapSet("all", "triangle", None)
+    #: kind -> [(frame, asset path)], frames in order
+    files: dict = field(default_factory=dict)
     #: MikkTSpace's corner groups (maps/tangents.corner_groups), made on the first frame
     groups: tuple | None = None
     #: the islands layout per face corner (faceVarying, authored as primvars:wrinkleMapST),
@@ -92,45 +96,26 @@ class MapBake:
         self.options = options
         self.layer_path = scene.output
         self.folder = options.folder_for(scene.output)
-        self.plans: dict[str, MeshMaps] = {}
-        self.layer = None
+        self.plans: list[MeshMaps] = []
         meshes = scene.meshes
         stems = mesh_file_names(meshes)
-        for path in meshes:
-            corner_uv = None if options.layout == "islands" else scene.corner_primvar(
-                path, options.uv)
-            if corner_uv is None or corner_uv.shape[-1] < 2:
-                if options.layout == "asset":
-                    _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no "
-                                 f"wrinkle maps for it (--map-layout islands needs none) ({path})")
-                    continue
-                if options.layout is None:
-                    _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv): its "
-                                 f"wrinkle maps are laid out in islands, primvars:{MAP_ST} "
-                                 f"({path})")
-                plan = self._island_plan(path, stems[path])
+        islands: dict[str, MeshMaps | None] = {}   # one layout per mesh, for every set
+        for map_set in options.sets:
+            for path in meshes:
+                plan = self._plan(path, stems[path], map_set, islands)
                 if plan is not None:
-                    self.plans[path] = plan
-                continue
-            corner_uv = np.ascontiguousarray(corner_uv[..., :2], np.float32)
-            tiles, outside = uv_tiles(corner_uv)
-            if outside:
-                _log.warning(f"{outside} triangle(s) have texture coordinates outside the UDIM "
-                             f"tiles 1001..1100; their wrinkle maps are not written ({path})")
-            self.plans[path] = MeshMaps(path, stems[path], corner_uv, tiles)
+                    plan.files = {k: [] for k in options.kinds}
+                    self.plans.append(plan)
         if meshes and not self.plans:
             raise UsdWrinkleError(
                 f"no wrinkled mesh has the texture coordinates '{options.uv}' that --maps "
                 f"lays the maps out in ({', '.join(sorted(meshes))}): author them, pass "
                 "--uv with the name of the mesh's texture coordinates, or use --map-layout "
                 "islands")
-        #: path -> kind -> [(frame, asset path)]
-        self.files: dict[str, dict[str, list]] = {p: {k: [] for k in options.kinds}
-                                                  for p in self.plans}
         self._rasterizer: MapRasterizer | None = None
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None
-        self._checked_overlap: set[str] = set()
+        self._checked_overlap: set[tuple] = set()
         for name in self.file_names(list(scene.frames)):
             if scene.facts.inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
@@ -139,6 +124,55 @@ class MapBake:
     def uv_name(self, plan: MeshMaps) -> str:
         """The texture coordinates ``plan``'s maps are laid out in."""
         return MAP_ST if plan.face_uv is not None else self.options.uv
+
+    def _plan(self, path: str, stem: str, map_set: MapSet, islands: dict) -> MeshMaps | None:
+        """``path``'s plan for ``map_set``: in the mesh's UVs, or in islands (made once per
+        mesh, ``islands``: path -> plan, and shared by the sets that use them); None
+        where the mesh gets no maps of that set. Where the islands do not fit the map,
+        the preview set is laid out in the mesh's UVs instead (a default bake that did
+        without islands before does not fail for them)."""
+        options = self.options
+        corner_uv = None if map_set.layout == "islands" else self._own_uv(path)
+        if corner_uv is not None:
+            plan = self._asset_plan(path, stem, corner_uv)
+        elif map_set.layout == "asset":
+            _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no "
+                         f"wrinkle maps for it (--map-layout islands needs none) ({path})")
+            return None
+        else:
+            if map_set.layout is None:
+                _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv): its "
+                             f"wrinkle maps are laid out in islands, primvars:{MAP_ST} "
+                             f"({path})")
+            try:
+                if path not in islands:
+                    islands[path] = self._island_plan(path, stem)
+                plan = islands[path]
+            except UsdWrinkleError:
+                own = self._own_uv(path) if map_set.purpose == "preview" else None
+                if own is None:
+                    raise
+                _log.warning(f"{len(self.scene.facts.meshes[path].face_counts)} faces leave "
+                             f"islands too small on a {options.size}-texel map: the preview "
+                             f"maps are laid out in '{options.uv}' instead (raise --map-size "
+                             f"for islands, which usdview's Storm decodes best) ({path})")
+                plan = self._asset_plan(path, stem, own)
+        return None if plan is None else replace(plan, stem=map_set.file_stem(stem),
+                                                 map_set=map_set)
+
+    def _own_uv(self, path: str) -> np.ndarray | None:
+        """The mesh's texture coordinates (--uv) per triangle corner, or None."""
+        corner_uv = self.scene.corner_primvar(path, self.options.uv)
+        if corner_uv is None or corner_uv.shape[-1] < 2:
+            return None
+        return np.ascontiguousarray(corner_uv[..., :2], np.float32)
+
+    def _asset_plan(self, path: str, stem: str, corner_uv: np.ndarray) -> MeshMaps:
+        tiles, outside = uv_tiles(corner_uv)
+        if outside:
+            _log.warning(f"{outside} triangle(s) have texture coordinates outside the UDIM "
+                         f"tiles 1001..1100; their wrinkle maps are not written ({path})")
+        return MeshMaps(path, stem, corner_uv, tiles)
 
     def _island_plan(self, path: str, stem: str) -> MeshMaps | None:
         """The islands layout of a mesh (maps/islands.py), from its rest pose."""
@@ -164,7 +198,7 @@ class MapBake:
     def file_names(self, frames: list[float]) -> list[str]:
         """Every map file the bake will write (to refuse overwriting an input)."""
         names = []
-        for plan in self.plans.values():
+        for plan in self.plans:
             for kind in self.options.kinds:
                 for frame in frames:
                     name = map_file_name(plan.stem, kind, frame_token(frame), self.options.fmt,
@@ -192,19 +226,19 @@ class MapBake:
             return
         self._start()
         token = frame_token(frame)
-        for path, plan in self.plans.items():
-            res = resources[path]
-            if path not in self._checked_overlap:
+        for plan in self.plans:
+            res = resources[plan.path]
+            if (plan.path, plan.stem) not in self._checked_overlap:
                 self._check_overlap(plan, res)
             for kind in self.options.kinds:
                 name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
-                self.files[path][kind].append(
+                plan.files[kind].append(
                     (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
             tangents = self._tangents(plan, res) \
-                if self.options.tangent_space == "mikktspace" else None
+                if plan.map_set.tangent_space == "mikktspace" else None
             for tile in plan.tiles:
                 pixels = self._rasterizer.render(res, plan.corner_uv, tile,
-                                                 self.options.padding, tangents)
+                                                 self.options.padding, tangents, plan.stem)
                 for kind in self.options.kinds:
                     name = tile_file_name(
                         map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
@@ -239,9 +273,9 @@ class MapBake:
         return mikktspace(points, triangles, normals, plan.corner_uv, plan.groups, ids), normals
 
     def _check_overlap(self, plan: MeshMaps, res) -> None:
-        self._checked_overlap.add(plan.path)
+        self._checked_overlap.add((plan.path, plan.stem))
         for tile in plan.tiles:
-            fraction = self._rasterizer.overlap(res, plan.corner_uv, tile)
+            fraction = self._rasterizer.overlap(res, plan.corner_uv, tile, plan.stem)
             if fraction > OVERLAP_WARNING:
                 where = f" in UDIM tile {udim_number(tile)}" if plan.udim else ""
                 _log.warning(f"texture coordinates '{self.uv_name(plan)}' overlap{where}: "
@@ -254,12 +288,16 @@ class MapBake:
         from .material import MaterialTarget, author_islands, author_material, material_path
 
         facts = self.scene.facts
-        for path, plan in self.plans.items():
-            if plan.face_uv is not None:
+        stems = mesh_file_names(self.scene.meshes)
+        authored = set()
+        for plan in self.plans:
+            path = plan.path
+            if plan.face_uv is not None and path not in authored:
                 author_islands(self.layer, path, plan.face_uv)
+                authored.add(path)
             target = MaterialTarget(facts.meshes[path], material_path(
-                facts.default_prim_path, path, plan.stem), self.files[path], plan.udim,
-                self.uv_name(plan))
+                facts.default_prim_path, path, plan.map_set.material_name(stems[path])),
+                plan.files, plan.udim, self.uv_name(plan), plan.map_set.purpose)
             author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
 
@@ -271,14 +309,24 @@ class MapBake:
             self._staging.commit()
 
     def metadata(self) -> dict:
-        return {"kinds": ",".join(self.options.kinds), "size": self.options.size,
+        """The shared set's (the one set's, or final renderers') frame and islands; a
+        second set's under its purpose."""
+        def described(map_set: MapSet) -> dict:
+            plans = [plan for plan in self.plans if plan.map_set == map_set]
+            return {"meshes": ",".join(sorted(plan.path for plan in plans)),
+                    "islands": ",".join(sorted(plan.path for plan in plans
+                                               if plan.face_uv is not None)),
+                    "tangentSpace": map_set.tangent_space}
+
+        shared, *others = self.options.sets
+        data = {"kinds": ",".join(self.options.kinds), "size": self.options.size,
                 "folder": relative_asset(self.folder, self.layer_path),
                 "format": self.options.fmt, "padding": self.options.padding,
-                "uv": self.options.uv, "meshes": ",".join(sorted(self.plans)),
-                "islands": ",".join(sorted(p for p, plan in self.plans.items()
-                                           if plan.face_uv is not None)),
-                "tangentSpace": self.options.tangent_space,
-                "displacement": self.options.displacement}
+                "uv": self.options.uv, **described(shared),
+                "purpose": shared.purpose, "displacement": self.options.displacement}
+        for map_set in others:
+            data[map_set.purpose] = described(map_set)
+        return data
 
     def release(self) -> None:
         """Free the GPU targets; staged maps not committed are removed."""

@@ -15,9 +15,12 @@ For each mesh, a Material ``WrinkleMaterials/<mesh>``:
   which streaks); the amplitude map is named on the material only (a mask to composite
   with, no UsdPreviewSurface input takes it).
 
-The mesh's ``material:binding`` is overridden to the new material. Written with the Sdf
-API into the bake's layer, from what the scene read of the mesh's materials before the
-first frame (scene/overrides.MeshFacts): the source stage is neither read here nor edited.
+The mesh's ``material:binding`` is overridden to the new material; a second map set made
+for usdview's Storm (maps/options.MapSet "preview": ``WrinkleMaterials/<mesh>_preview``)
+is bound as ``material:binding:preview``, which Storm resolves first and final renderers
+ignore. Written with the Sdf API into the bake's layer, from what the scene read of the
+mesh's materials before the first frame (scene/overrides.MeshFacts): the source stage is
+neither read here nor edited.
 """
 from __future__ import annotations
 
@@ -74,6 +77,9 @@ class MaterialTarget:
     udim: bool = False
     #: the texture coordinates the maps are laid out in (the primvar the reader reads)
     st: str = "st"
+    #: the material purpose it is bound for (maps/options.MapSet): "all", "full" (the
+    #: all-purpose binding only) or "preview"
+    purpose: str = "all"
 
 
 def author_islands(layer: Sdf.Layer, mesh_path: str, face_uv) -> None:
@@ -152,9 +158,13 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         type_name = VALUE_TYPES.Normal3f if input_type == "normal3f" else VALUE_TYPES.Float
         attribute_spec(surface_spec, f"inputs:{input_name}", type_name,
                        connect=texture.AppendProperty(f"outputs:{output_name}"))
+    if target.purpose == "preview":
+        bind_material(layer, mesh_path, path, purpose="preview")
+        return
     bind_material(layer, mesh_path, path)
     preview = mesh.preview_material
-    if preview and (not source_material or Sdf.Path(preview) != source_material):
+    if target.purpose == "all" and preview and (
+            not source_material or Sdf.Path(preview) != source_material):
         # the mesh binds another material for the preview purpose, which usdview's Storm
         # resolves first: the maps are bound for it too
         bind_material(layer, mesh_path, path, purpose="preview")

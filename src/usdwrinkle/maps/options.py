@@ -12,6 +12,33 @@ LAYOUTS = ("islands", "asset")
 
 
 @dataclass(frozen=True)
+class MapSet:
+    """One set of maps, in one tangent frame and layout, and the material purpose its
+    material is bound for: "all" (the one set: every purpose), "full" (the all-purpose
+    binding, which final renderers resolve: Blender's importer, for Cycles and EEVEE,
+    takes ``material:binding:full`` if authored, else the all-purpose one) or "preview"
+    (``material:binding:preview``, which usdview's Storm resolves first)."""
+
+    purpose: str
+    tangent_space: str
+    #: "islands", "asset", or None: asset, islands for a mesh without the UVs
+    layout: str | None
+
+    @property
+    def shared(self) -> bool:
+        """The set final renderers see, named as the mesh alone."""
+        return self.purpose in ("all", "full")
+
+    def file_stem(self, stem: str) -> str:
+        """``Sleeve`` (the shared set) or ``Sleeve.preview``: prim names hold no dot, so no
+        mesh's stem is another set's."""
+        return stem if self.shared else f"{stem}.{self.purpose}"
+
+    def material_name(self, stem: str) -> str:
+        return stem if self.shared else f"{stem}_{self.purpose}"
+
+
+@dataclass(frozen=True)
 class MapOptions:
     """What ``--maps`` and its options ask for."""
 
@@ -28,8 +55,9 @@ class MapOptions:
     #: the tangent frame the normal maps are expressed in, recorded in the layer's
     #: metadata: "triangle" (per triangle, from dP/ds, as Storm and usdwrinkle decode
     #: them) or "mikktspace" (per vertex, interpolated, as Blender's Cycles and EEVEE,
-    #: Unreal, Substance and glTF viewers decode them); docs/method.md has the trade-off
-    tangent_space: str = "triangle"
+    #: Unreal, Substance and glTF viewers decode them); docs/method.md has the trade-off.
+    #: With neither this nor ``layout`` given, the bake writes a set per purpose (sets)
+    tangent_space: str | None = None
     #: where the maps' texels lie: "islands" (one island per face, in texture coordinates
     #: of the bake's own, primvars:wrinkleMapST: no renderer reads a neighbouring face's
     #: texels, and each face's frame is continuous, which Storm decodes best;
@@ -38,6 +66,21 @@ class MapOptions:
     #: mesh's first UV set whatever the texture reads, decodes them); None: asset, and
     #: islands for a mesh without ``uv``
     layout: str | None = None
+    #: the default's second set, for usdview's Storm (off where the preview purpose
+    #: shows bake --display-color's ramp instead)
+    preview: bool = True
+
+    @property
+    def sets(self) -> tuple[MapSet, ...]:
+        """The map sets the bake writes. By default two, each in what its renderers
+        decode: for final renderers (the all-purpose binding) MikkTSpace maps in the
+        asset's UVs, for usdview's Storm (the preview binding) per-triangle maps in
+        islands. A tangent frame or layout chosen by hand gives one set, bound for every
+        purpose."""
+        if self.tangent_space is None and self.layout is None:
+            full = MapSet("full", "mikktspace", None)
+            return (full, MapSet("preview", "triangle", "islands")) if self.preview else (full,)
+        return (MapSet("all", self.tangent_space or "triangle", self.layout),)
 
     def folder_for(self, layer_path: str) -> str:
         if self.folder:

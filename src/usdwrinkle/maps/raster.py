@@ -80,29 +80,35 @@ class MapRasterizer:
         shape = (self.size, self.size)
         self.targets = [ctx.texture(shape, 4, dtype="f4") for _ in range(2)]  # normal, wrinkle
         self.framebuffer = ctx.framebuffer(color_attachments=self.targets)
+        #: UVs per triangle corner, by layout (a mesh's path, or the name its map set
+        #: gives it: a mesh may be mapped in more than one layout)
         self.uv_tables: dict[str, Table] = {}
         #: MikkTSpace tangents per triangle corner, by mesh path (written each frame)
         self.tangent_tables: dict[str, Table] = {}
         #: the normals those frames are built about, per triangle corner (each frame)
         self.frame_tables: dict[str, Table] = {}
-        #: (mesh path, tile, padding) -> padding_plan
+        #: (layout, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
-    def _corner_table(self, store: dict, res: MeshResources, components: int) -> tuple:
-        """(the mesh's table of one value per triangle corner in ``store``, made now);
-        a table of another size is replaced."""
-        table = store.get(res.record.path)
+    def _corner_table(self, store: dict, res: MeshResources, components: int,
+                      key: str | None = None) -> tuple:
+        """(the mesh's table of one value per triangle corner in ``store`` under ``key``
+        (default: the mesh's path), made now); a table of another size is replaced."""
+        key = key or res.record.path
+        table = store.get(key)
         if table is not None and table.count == 3 * res.num_triangles:
             return table, False
         if table is not None:
             table.release()
-        table = store[res.record.path] = Table(self.ctx, 3 * res.num_triangles, components,
-                                               path=res.record.path)
+        table = store[key] = Table(self.ctx, 3 * res.num_triangles, components,
+                                   path=res.record.path)
         return table, True
 
-    def uv_table(self, res: MeshResources, corner_uv: np.ndarray) -> Table:
-        """The mesh's UVs per triangle corner ([3t + c]) on the GPU, uploaded once."""
-        table, new = self._corner_table(self.uv_tables, res, 2)
+    def uv_table(self, res: MeshResources, corner_uv: np.ndarray,
+                 layout: str | None = None) -> Table:
+        """The mesh's UVs per triangle corner ([3t + c]) on the GPU, uploaded once per
+        ``layout`` (default: the mesh's path)."""
+        table, new = self._corner_table(self.uv_tables, res, 2, layout)
         if new:
             table.write(np.asarray(corner_uv, np.float32).reshape(-1, 2))
         return table
@@ -153,24 +159,28 @@ class MapRasterizer:
         if count:
             self.ctx.disable(moderngl.BLEND)
 
-    def overlap(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0)) -> float:
+    def overlap(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
+                layout: str | None = None) -> float:
         """The fraction of the covered texels of ``tile`` that more than one triangle
         covers: overlapping UV islands (shared edges count once, by GL's rasterisation
         rules)."""
         if res.num_triangles == 0:
             return 0.0
-        self._draw(res, self.uv_table(res, corner_uv), tile, count=True)
+        self._draw(res, self.uv_table(res, corner_uv, layout), tile, count=True)
         counts = np.frombuffer(self.targets[0].read(), np.float32)[3::4]
         covered = np.count_nonzero(counts > 0.5)
         return float(np.count_nonzero(counts > 1.5) / covered) if covered else 0.0
 
     def render(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
-               padding: int = 8, tangents: tuple | None = None) -> MapPixels:
+               padding: int = 8, tangents: tuple | None = None,
+               layout: str | None = None) -> MapPixels:
         """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``; the
         normal map in MikkTSpace when this frame's ``tangents`` are given ((tangents,
         the normals their frames are built about), per triangle corner;
-        maps/tangents.py), else in the per-triangle frame."""
-        uv = self.uv_table(res, corner_uv)
+        maps/tangents.py), else in the per-triangle frame. ``layout`` names the layout
+        of ``corner_uv`` (default: the mesh's path): its UV table and padding plan are
+        made once per name."""
+        uv = self.uv_table(res, corner_uv, layout)
         if res.num_triangles:
             table = (self.tangent_table(res, tangents[0]), self.frame_table(res, tangents[1])) \
                 if tangents is not None else None
@@ -180,7 +190,7 @@ class MapRasterizer:
         normal = self._read(self.targets[0])
         wrinkle = self._read(self.targets[1])
         covered = wrinkle[..., 3] > 0.0
-        key = (res.record.path, tuple(tile), int(padding))
+        key = (layout or res.record.path, tuple(tile), int(padding))
         plan = self.plans.get(key)
         if plan is None:
             plan = self.plans[key] = padding_plan(covered, padding)
