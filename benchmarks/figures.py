@@ -2,9 +2,9 @@
 
     python -m benchmarks.figures [OUTDIR]      (default docs/images)
 
-- ``maps_shirt.png``: frame 24 of the shirt drawn with wrinkles, next to the normal map
-  that ``bake --maps`` wrote for that frame (the sleeve's UVs: around the arm across,
-  shoulder to cuff upwards).
+- ``maps_shirt.png``: frame 24 of the shirt drawn with wrinkles, next to the full set's
+  normal map that ``bake --maps`` wrote for that frame (MikkTSpace, in the sleeve's UVs:
+  around the arm across, shoulder to cuff upwards).
 - ``geometry_elbow.png``: the shirt's elbow at frame 24, cropped: shading-only wrinkles
   (``render shirt.usda``) next to the displaced render mesh of ``bake --geometry``
   (``render LAYER --no-wrinkles``), whose outline carries the folds.
