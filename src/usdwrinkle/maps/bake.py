@@ -97,14 +97,15 @@ class MapBake:
         self.layer_path = scene.output
         self.folder = options.folder_for(scene.output)
         self.plans: list[MeshMaps] = []
+        self.layer = None
         meshes = scene.meshes
-        stems = mesh_file_names(meshes)
+        #: mesh path -> its file stem (the full set's, and its material's name)
+        self.stems = mesh_file_names(meshes)
         islands: dict[str, MeshMaps | None] = {}   # one layout per mesh, for every set
         for map_set in options.sets:
             for path in meshes:
-                plan = self._plan(path, stems[path], map_set, islands)
+                plan = self._plan(path, self.stems[path], map_set, islands)
                 if plan is not None:
-                    plan.files = {k: [] for k in options.kinds}
                     self.plans.append(plan)
         if meshes and not self.plans:
             raise UsdWrinkleError(
@@ -157,8 +158,10 @@ class MapBake:
                              f"maps are laid out in '{options.uv}' instead (raise --map-size "
                              f"for islands, which usdview's Storm decodes best) ({path})")
                 plan = self._asset_plan(path, stem, own)
-        return None if plan is None else replace(plan, stem=map_set.file_stem(stem),
-                                                 map_set=map_set)
+        if plan is None:
+            return None
+        return replace(plan, stem=map_set.file_stem(stem), map_set=map_set,
+                       files={kind: [] for kind in options.kinds})
 
     def _own_uv(self, path: str) -> np.ndarray | None:
         """The mesh's texture coordinates (--uv) per triangle corner, or None."""
@@ -288,7 +291,6 @@ class MapBake:
         from .material import MaterialTarget, author_islands, author_material, material_path
 
         facts = self.scene.facts
-        stems = mesh_file_names(self.scene.meshes)
         authored = set()
         for plan in self.plans:
             path = plan.path
@@ -296,7 +298,7 @@ class MapBake:
                 author_islands(self.layer, path, plan.face_uv)
                 authored.add(path)
             target = MaterialTarget(facts.meshes[path], material_path(
-                facts.default_prim_path, path, plan.map_set.material_name(stems[path])),
+                facts.default_prim_path, path, plan.map_set.material_name(self.stems[path])),
                 plan.files, plan.udim, self.uv_name(plan), plan.map_set.purpose)
             author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
