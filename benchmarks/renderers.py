@@ -51,6 +51,7 @@ def wrinkle_maps(quick: bool, ctx) -> dict:
     sizes = (256, 512) if quick else (1024, 2048)
     base = _bake_seconds(ctx, frames)[0]
     rows = []
+    sets = MapOptions().sets
     for size in sizes:
         options = MapOptions(kinds=("normal", "height"), size=size)
         seconds, size_bytes, _, _ = _bake_seconds(ctx, frames, options)
@@ -59,7 +60,8 @@ def wrinkle_maps(quick: bool, ctx) -> dict:
                      "total_ms_per_frame": seconds * 1e3 / len(frames),
                      "mb_per_frame": size_bytes / 1e6 / len(frames)})
     return {"frames": len(frames), "fields_only_ms_per_frame": base * 1e3 / len(frames),
-            "rows": rows}
+            "rows": rows, "sets": [f"{s.purpose}: {s.tangent_space}, {s.layout or 'asset'}"
+                                   for s in sets]}
 
 
 def displaced_geometry(quick: bool, ctx, corpus: Path | None) -> dict:
@@ -104,7 +106,9 @@ def markdown(result: dict) -> list[str]:
 def _maps_markdown(maps: dict) -> list[str]:
     lines = ["", "## Wrinkle maps (`bake --maps normal,height`)", "",
              f"The shirt, {maps['frames']} frames baked in one process; the wave fields alone "
-             f"take {maps['fields_only_ms_per_frame']:.0f} ms a frame. Map time = (bake with "
+             f"take {maps['fields_only_ms_per_frame']:.0f} ms a frame. " +
+             (f"The bake's default map sets ({'; '.join(maps['sets'])}), each a normal and a "
+              "height map per frame. " if "sets" in maps else "") + "Map time = (bake with "
              "maps - bake without) per frame: UV-space rasterisation of the wave blend, "
              "padding, readback, and the 16-bit PNG normal and float EXR height encodes "
              "(overlapped with the next frame).", "",
