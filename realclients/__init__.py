@@ -95,6 +95,11 @@ def blender_tangents(jobs: list[dict], timeout: float = 300) -> dict[str, str]:
     return _run("tangents_client.py", jobs, timeout)
 
 
+def blender_import(jobs: list[dict], timeout: float = 300) -> dict[str, str]:
+    """The materials Blender's USD importer gives each job's meshes (import_client.py)."""
+    return _run("import_client.py", jobs, timeout)
+
+
 if __name__ == "__main__":  # python -m realclients: say whether the clients can run here
     try:
         print(bpy_python())

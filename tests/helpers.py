@@ -144,3 +144,25 @@ def read_pixels(path) -> np.ndarray:
     pixels = oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)
     assert pixels.size, f"cannot read {path}"
     return pixels
+
+
+#: material name -> (diffuse colour, the purpose it is bound for) (bind_purpose_looks)
+PURPOSE_LOOKS = {"Look": ((1, 0, 0), "allPurpose"), "Final": ((0, 0, 1), "full"),
+                 "Proxy": ((0, 1, 0), "preview")}
+
+
+def bind_purpose_looks(stage, prim_path: str) -> None:
+    """Bind ``prim_path`` to a UsdPreviewSurface material per purpose (PURPOSE_LOOKS, under
+    /Looks): all purposes red, full blue, preview green, as a pipeline binds a light
+    look for viewers and a final one for renderers."""
+    from pxr import Gf, Sdf, UsdShade
+
+    binding = UsdShade.MaterialBindingAPI.Apply(stage.GetPrimAtPath(prim_path))
+    for name, (colour, purpose) in PURPOSE_LOOKS.items():
+        material = UsdShade.Material.Define(stage, f"/Looks/{name}")
+        surface = UsdShade.Shader.Define(stage, f"/Looks/{name}/Surface")
+        surface.CreateIdAttr("UsdPreviewSurface")
+        surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*colour))
+        material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+        binding.Bind(material, materialPurpose=getattr(UsdShade.Tokens, purpose))
+

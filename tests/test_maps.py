@@ -15,7 +15,7 @@ from usdwrinkle.cli.main import main
 from usdwrinkle.scene.material import load_texture
 
 from conftest import grid_sheet
-from helpers import point_cache_stage, rotation_matrix
+from helpers import bind_purpose_looks, point_cache_stage, rotation_matrix
 from helpers import read_pixels as read
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
@@ -479,6 +479,33 @@ def test_preview_maps_fall_back_to_the_asset_uvs_where_islands_do_not_fit(gl_con
     assert not stage.GetPrimAtPath("/Sheet").HasAttribute("primvars:wrinkleMapST")
     data = Sdf.Layer.FindOrOpen(str(layers["default"])).customLayerData["usdwrinkle"]["maps"]
     assert data["preview"]["islands"] == "" and data["preview"]["meshes"] == "/Sheet"
+
+
+def test_each_set_keeps_the_look_its_renderers_resolve(gl_context, tmp_path):
+    """A mesh that binds a material per purpose (all red, full blue, preview green): the
+    full set's material takes the full look and is bound for the full purpose too (Blender
+    and final renderers resolve full first, and would otherwise show the blue material
+    without wrinkles), the preview set's takes the preview look; the displaced render mesh
+    keeps the coarse mesh's full binding."""
+    source = sheet_stage(tmp_path, 0.7)
+    stage = Usd.Stage.Open(str(source))
+    bind_purpose_looks(stage, "/Sheet")
+    stage.Save()
+    layer = tmp_path / "looks.usda"
+    assert main(["bake", str(source), str(layer), "--quiet", "--maps", "normal", "--map-size",
+                 "256", "--geometry", "--levels", "1"]) == 0
+    baked = Usd.Stage.Open(str(layer))
+    mesh = UsdShade.MaterialBindingAPI(baked.GetPrimAtPath("/Sheet"))
+    seen = {}
+    for purpose in (UsdShade.Tokens.full, UsdShade.Tokens.preview):
+        material, _ = mesh.ComputeBoundMaterial(purpose)
+        surface = material.ComputeSurfaceSource()[0]
+        seen[purpose] = (str(material.GetPath()), tuple(surface.GetInput("diffuseColor").Get()),
+                         surface.GetInput("normal").HasConnectedSource())
+    assert seen == {UsdShade.Tokens.full: ("/WrinkleMaterials/Sheet", (0, 0, 1), True),
+                    UsdShade.Tokens.preview: ("/WrinkleMaterials/Sheet_preview", (0, 1, 0), True)}
+    fine = UsdShade.MaterialBindingAPI(baked.GetPrimAtPath("/Sheet_wrinkled"))
+    assert str(fine.ComputeBoundMaterial(UsdShade.Tokens.full)[0].GetPath()) == "/Looks/Final"
 
 
 def _smooth_normals(points, quads):

@@ -4,12 +4,13 @@ Cycles (Blender's USD importer). Marker ``realclient``; without a Python that ha
 bpy these tests are skipped with the reason, and the run's summary says the tier did not
 run (``--require-realclients``, which .ci/run passes, makes that an error).
 
-Cost on this 2-core machine: 75 s for 36 tests in an earlier session, 287 s for 40 (the
-sixth decoded-normal case, added since, about 30 s more) in a session when the machine ran
-2.7 times slower throughout: the plain frames (8 shots x
-2 frames) 28 s, the probes 19 s, the bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3
-renders each), the five decoded-normal cases in Storm 20-26 s each (six renders each side;
-the 1280-pixel one the most) and Cycles 40 s (one shot, two tangent frames, 16 samples)."""
+Cost on this 2-core machine: 207 s for 43 tests on 2026-11-27 (75 s for 36 in an earlier
+session, 287 s for 40 in one when the machine ran 2.7 times slower throughout). The split,
+from that slower session: the plain frames (8 shots x 2 frames) 28 s, the probes 19 s, the
+bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3 renders each), the decoded-normal
+cases in Storm 20-30 s each (six renders each side; the three 1280-pixel ones the most)
+and Cycles 40 s (one shot, two bakes, 16 samples); Blender's import of a look per purpose
+about 20 s."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -434,6 +435,42 @@ def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, view, bounds):
     elbow = np.percentile(degrees[lower], 99)
     assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \
         elbow <= bounds[3], (median, p90, p99, elbow)
+
+
+def test_blender_imports_the_full_map_set_with_the_full_look(realclient, tmp_path):
+    """Blender's USD importer resolves material:binding:full, else the all-purpose binding,
+    and ignores the preview purpose: the shirt binding a look per purpose (all red, full
+    blue, preview green; tests/helpers.bind_purpose_looks), baked with the default maps,
+    imports with the full set's material (MikkTSpace maps) and the full look (blue), never
+    the preview set's (per-triangle islands maps, which Cycles decodes at p99 81 degrees).
+    Without the full binding that the bake adds, Blender would keep the blue material
+    and show no wrinkles."""
+    import json
+
+    from pxr import Sdf, Usd
+
+    from realclients import blender_import
+    from realclients.shots import SAMPLES
+    from usdwrinkle.cli.main import main
+
+    from helpers import bind_purpose_looks
+
+    shot = tmp_path / "shot.usda"
+    root = Sdf.Layer.CreateNew(str(shot))
+    root.subLayerPaths = [str(SAMPLES / "shirt.usda")]
+    root.Save()
+    stage = Usd.Stage.Open(str(shot))
+    bind_purpose_looks(stage, "/World/Arm/Sleeve")
+    stage.Save()
+    layer = tmp_path / "maps.usda"
+    assert main(["bake", str(shot), str(layer), "--quiet", "--frames", "24", "--maps",
+                 "normal", "--map-size", "256"]) == 0
+    out = tmp_path / "imported.json"
+    results = blender_import([{"stage": str(layer), "out": str(out)}])
+    assert results[str(out)] == "ok", results
+    sleeve = json.loads(out.read_text())["Sleeve"]
+    assert sleeve == {"materials": ["Sleeve"], "normal_images": ["Sleeve.normal.0024.png"],
+                      "base_colours": [[0.0, 0.0, 1.0, 1.0]]}, sleeve
 
 
 def test_mikktspace_matches_blenders_calc_tangents(realclient, tmp_path):

@@ -98,6 +98,9 @@ class FineMeshWriter:
                 attribute_spec(spec, "xformOp:transform", VT.Matrix4d, transform.static)
         if self.mesh.material:
             bind_material(layer, self.path, self.mesh.material)
+        for purpose, look in self.mesh.looks.items():
+            if look.material:   # the coarse mesh's own binding for that purpose
+                bind_material(layer, self.path, look.material, purpose=purpose)
         self._primvars(spec)
 
     def _primvars(self, spec: Sdf.PrimSpec) -> None:

@@ -2,10 +2,11 @@
 
 For each mesh, a Material ``WrinkleMaterials/<mesh>``:
 
-- references the mesh's bound material when its surface is a UsdPreviewSurface inside
-  it, so the rest of the look (diffuse texture, roughness, ...) is the original's, and
-  later edits of the original flow through; otherwise it holds a plain UsdPreviewSurface
-  with the mesh's displayColor;
+- references the material the mesh binds for that set's renderers (the full purpose's,
+  or the preview purpose's for the preview set, each falling back to the all-purpose
+  binding) when its surface is a UsdPreviewSurface inside it, so the rest of the look
+  (diffuse texture, roughness, ...) is the original's, and later edits of the original
+  flow through; otherwise it holds a plain UsdPreviewSurface with the mesh's displayColor;
 - has ``inputs:wrinkleNormalFile`` (and ``wrinkleHeightFile``, ``wrinkleAmplitudeFile``)
   as interface inputs, time-sampled per frame, with the first frame's file as default;
 - reads the normal map through a UsdUVTexture (sourceColorSpace raw, scale (2, 2, 2, 1),
@@ -100,8 +101,14 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
     ``inputs:displacement``."""
     mesh, path, files, udim = target.mesh, target.path, target.files, target.udim
     mesh_path, uv_name, displacement = mesh.path, target.st, options.displacement
-    source_material = Sdf.Path(mesh.material) if mesh.material else None
-    source_surface = Sdf.Path(mesh.surface) if mesh.surface else None
+    # the look this set's renderers would resolve without the bake: the preview set the
+    # preview purpose's material, the others the full purpose's (each falling back to the
+    # all-purpose one)
+    look = mesh.looks.get("preview" if target.purpose == "preview" else "full")
+    material_of, surface_of, normal_mapped = (look.material, look.surface, look.normal_mapped) \
+        if look is not None else (mesh.material, mesh.surface, mesh.surface_normal_mapped)
+    source_material = Sdf.Path(material_of) if material_of else None
+    source_surface = Sdf.Path(surface_of) if surface_of else None
     scope = Sdf.CreatePrimInLayer(layer, path.GetParentPath())
     if not scope.typeName:
         scope.specifier = Sdf.SpecifierDef
@@ -111,7 +118,7 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         material.referenceList.Prepend(Sdf.Reference(primPath=source_material))
         surface = path.AppendPath(source_surface.MakeRelativePath(source_material))
         surface_spec = Sdf.CreatePrimInLayer(layer, surface)
-        if mesh.surface_normal_mapped:
+        if normal_mapped:
             _log.warning(f"the mesh's material has a normal map; the wrinkle normal map replaces "
                          f"it ({mesh_path})")
     else:
@@ -162,9 +169,9 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         bind_material(layer, mesh_path, path, purpose="preview")
         return
     bind_material(layer, mesh_path, path)
-    preview = mesh.preview_material
-    if target.purpose == "all" and preview and (
-            not source_material or Sdf.Path(preview) != source_material):
-        # the mesh binds another material for the preview purpose, which usdview's Storm
-        # resolves first: the maps are bound for it too
-        bind_material(layer, mesh_path, path, purpose="preview")
+    # where the mesh binds another material for a purpose (preview: usdview's Storm
+    # resolves it first; full: final renderers and Blender's importer do), the maps are
+    # bound for it too; the preview purpose only when no set is made for it
+    for purpose in ("full",) + (("preview",) if target.purpose == "all" else ()):
+        if purpose in mesh.looks:
+            bind_material(layer, mesh_path, path, purpose=purpose)

@@ -24,6 +24,16 @@ def frame_key(frame: float):
 
 
 @dataclass(frozen=True)
+class SourceLook:
+    """The material a mesh binds for one purpose: its path, its UsdPreviewSurface's path
+    when that lies inside it, and whether that surface's ``inputs:normal`` is connected."""
+
+    material: str | None = None
+    surface: str | None = None
+    normal_mapped: bool = False
+
+
+@dataclass(frozen=True)
 class CarriedPrimvar:
     """A primvar of a coarse mesh that its fine render mesh carries (geometry/layer.py).
     ``value``: a constant primvar's flattened value; else its values per triangle corner
@@ -56,10 +66,12 @@ class MeshFacts:
 
     ``skel_roots``: the SkelRoots above it. ``material``: its bound material (all
     purposes); ``surface``: that material's UsdPreviewSurface when it lies inside the
-    material, with ``surface_normal_mapped`` when its ``inputs:normal`` is connected;
-    ``preview_material``: the material bound for the preview purpose. ``display_color``:
-    its first displayColor (linear). ``siblings``: the names of the prims beside it (a
-    new prim needs a free name). ``uniform``: its authored doubleSided and orientation.
+    material, with ``surface_normal_mapped`` when its ``inputs:normal`` is connected.
+    ``looks``: for "preview" and "full", where that purpose resolves another material
+    than ``material``, its SourceLook (the look a bake's material for that purpose
+    takes). ``display_color``: its first displayColor (linear). ``siblings``: the names
+    of the prims beside it (a new prim needs a free name). ``uniform``: its authored
+    doubleSided and orientation.
     ``transform``: None when it authors no xformOps and no reset. ``primvars``: its
     CarriedPrimvars (read only when the bake asks for them). ``face_counts``: its
     faceVertexCounts (the length of a faceVarying primvar the bake authors)."""
@@ -69,7 +81,7 @@ class MeshFacts:
     material: str | None = None
     surface: str | None = None
     surface_normal_mapped: bool = False
-    preview_material: str | None = None
+    looks: dict = field(default_factory=dict)
     display_color: tuple = ()
     siblings: frozenset = frozenset()
     uniform: dict = field(default_factory=dict)
@@ -118,12 +130,20 @@ def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
                 for path, record in records.items()})
 
 
-def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> MeshFacts:
-    material, shader = bound_surface(prim)
+def _look(prim: Usd.Prim, purpose: str) -> SourceLook:
+    material, shader = bound_surface(prim, purpose)
     surface = shader.GetPath() if shader is not None and material and \
         shader.GetPath().HasPrefix(material.GetPath()) else None
     normal = shader.GetInput("normal") if surface is not None else None
-    preview, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(UsdShade.Tokens.preview)
+    return SourceLook(str(material.GetPath()) if material else None,
+                      str(surface) if surface is not None else None,
+                      bool(normal) and normal.HasConnectedSource())
+
+
+def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> MeshFacts:
+    look = _look(prim, UsdShade.Tokens.allPurpose)
+    looks = {purpose: other for purpose in ("preview", "full")
+             if (other := _look(prim, purpose)).material != look.material}
     mesh = UsdGeom.Mesh(prim)
     uniform = {attr.GetName(): attr.Get()
                for attr in (mesh.GetDoubleSidedAttr(), mesh.GetOrientationAttr())
@@ -131,10 +151,10 @@ def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> 
     return MeshFacts(
         path=str(prim.GetPath()),
         skel_roots=tuple(str(a.GetPath()) for a in _ancestors(prim) if a.IsA(UsdSkel.Root)),
-        material=str(material.GetPath()) if material else None,
-        surface=str(surface) if surface is not None else None,
-        surface_normal_mapped=bool(normal) and normal.HasConnectedSource(),
-        preview_material=str(preview.GetPath()) if preview else None,
+        material=look.material,
+        surface=look.surface,
+        surface_normal_mapped=look.normal_mapped,
+        looks=looks,
         display_color=tuple(float(c) for c in display_color(prim, Usd.TimeCode.Default())),
         siblings=frozenset(prim.GetParent().GetAllChildrenNames()),
         uniform=uniform,
