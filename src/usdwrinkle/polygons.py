@@ -6,13 +6,19 @@ from __future__ import annotations
 import numpy as np
 
 
+def face_starts(counts) -> np.ndarray:
+    """(f,) int64: where each face's corners start in faceVertexIndices."""
+    counts = np.asarray(counts, np.int64)
+    return np.cumsum(counts) - counts
+
+
 def face_corners(counts: np.ndarray, indices: np.ndarray, keep: np.ndarray,
                  left_handed: bool = False):
     """(face of each kept corner, point, previous point, next point) over every corner
     of the faces ``keep`` selects (a mask over ``counts``), in the right-handed winding
     Storm converts meshes to (``left_handed``: the authored winding turned)."""
     counts = np.asarray(counts, np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    starts = face_starts(counts)
     faces = np.nonzero(keep)[0]
     k = counts[faces]
     face_of = np.repeat(faces, k)

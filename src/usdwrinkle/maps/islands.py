@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..polygons import face_starts
 from .tangents import _unit
 
 #: the MikkTSpace split: |uv2 - uv0|^2 must stay below this share of |uv3 - uv1|^2
@@ -107,7 +108,7 @@ def split_on_first_diagonal(uv: np.ndarray, counts: np.ndarray) -> None:
     place): MikkTSpace splits a quad along its shorter UV diagonal, every renderer's
     triangulation along 0 -> 2."""
     counts = np.asarray(counts, np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else counts
+    starts = face_starts(counts)
     quads = np.flatnonzero(counts == 4)
     if not len(quads):
         return

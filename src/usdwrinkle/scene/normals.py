@@ -24,7 +24,7 @@ import numpy as np
 from pxr import UsdGeom
 
 from ..errors import UsdWrinkleError
-from ..polygons import face_corners
+from ..polygons import face_corners, face_starts
 from ..values import finite_in_float32, static_flattened, static_value
 from .topology import Topology
 
@@ -117,7 +117,7 @@ def _authored(prim, mesh, topology: Topology, counts, indices, path: str):
     if not finite_in_float32(values):
         raise UsdWrinkleError("normals are not finite (NaN or Inf)", path, name)
     n = topology.num_points
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    starts = face_starts(counts)
     triangles = topology.triangles
     if interpolation in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(values) == n:
         entry_point, corner = np.arange(n), triangles

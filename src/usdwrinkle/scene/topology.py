@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import UsdWrinkleError
 from ..limits import MAX_FACE_CORNERS
+from ..polygons import face_starts
 
 
 @dataclass(frozen=True)
@@ -153,7 +154,7 @@ def triangulate(counts: np.ndarray, indices: np.ndarray, points: np.ndarray,
     """
     counts = np.asarray(counts, dtype=np.int64)
     indices = np.asarray(indices, dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if counts.size else np.zeros(0, np.int64)
+    starts = face_starts(counts)
     keep = counts >= 3
     if hole_indices is not None and len(hole_indices):
         holes = np.asarray(hole_indices, dtype=np.int64)
