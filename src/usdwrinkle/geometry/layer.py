@@ -96,8 +96,8 @@ class FineMeshWriter:
                            uniform=True)
             if not transform.moves:
                 attribute_spec(spec, "xformOp:transform", VT.Matrix4d, transform.static)
-        if self.mesh.material:
-            bind_material(layer, self.path, self.mesh.material)
+        if self.mesh.look.material:
+            bind_material(layer, self.path, self.mesh.look.material)
         for purpose, look in self.mesh.looks.items():
             if look.material:   # the coarse mesh's own binding for that purpose
                 bind_material(layer, self.path, look.material, purpose=purpose)

@@ -104,11 +104,9 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
     # the look this set's renderers would resolve without the bake: the preview set the
     # preview purpose's material, the others the full purpose's (each falling back to the
     # all-purpose one)
-    look = mesh.looks.get("preview" if target.purpose == "preview" else "full")
-    material_of, surface_of, normal_mapped = (look.material, look.surface, look.normal_mapped) \
-        if look is not None else (mesh.material, mesh.surface, mesh.surface_normal_mapped)
-    source_material = Sdf.Path(material_of) if material_of else None
-    source_surface = Sdf.Path(surface_of) if surface_of else None
+    look = mesh.look_for("preview" if target.purpose == "preview" else "full")
+    source_material = Sdf.Path(look.material) if look.material else None
+    source_surface = Sdf.Path(look.surface) if look.surface else None
     scope = Sdf.CreatePrimInLayer(layer, path.GetParentPath())
     if not scope.typeName:
         scope.specifier = Sdf.SpecifierDef
@@ -118,7 +116,7 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         material.referenceList.Prepend(Sdf.Reference(primPath=source_material))
         surface = path.AppendPath(source_surface.MakeRelativePath(source_material))
         surface_spec = Sdf.CreatePrimInLayer(layer, surface)
-        if normal_mapped:
+        if look.normal_mapped:
             _log.warning(f"the mesh's material has a normal map; the wrinkle normal map replaces "
                          f"it ({mesh_path})")
     else:

@@ -64,23 +64,18 @@ class MeshTransform:
 class MeshFacts:
     """One wrinkled mesh as its overrides need it.
 
-    ``skel_roots``: the SkelRoots above it. ``material``: its bound material (all
-    purposes); ``surface``: that material's UsdPreviewSurface when it lies inside the
-    material, with ``surface_normal_mapped`` when its ``inputs:normal`` is connected.
-    ``looks``: for "preview" and "full", where that purpose resolves another material
-    than ``material``, its SourceLook (the look a bake's material for that purpose
-    takes). ``display_color``: its first displayColor (linear). ``siblings``: the names
-    of the prims beside it (a new prim needs a free name). ``uniform``: its authored
-    doubleSided and orientation.
-    ``transform``: None when it authors no xformOps and no reset. ``primvars``: its
+    ``skel_roots``: the SkelRoots above it. ``look``: its bound material for all
+    purposes (a SourceLook). ``looks``: for "preview" and "full", where that purpose
+    resolves another material than ``look``'s, its SourceLook (look_for).
+    ``display_color``: its first displayColor (linear). ``siblings``: the names of the
+    prims beside it (a new prim needs a free name). ``uniform``: its authored doubleSided
+    and orientation. ``transform``: None when it authors no xformOps and no reset. ``primvars``: its
     CarriedPrimvars (read only when the bake asks for them). ``face_counts``: its
     faceVertexCounts (the length of a faceVarying primvar the bake authors)."""
 
     path: str
     skel_roots: tuple = ()
-    material: str | None = None
-    surface: str | None = None
-    surface_normal_mapped: bool = False
+    look: SourceLook = SourceLook()
     looks: dict = field(default_factory=dict)
     display_color: tuple = ()
     siblings: frozenset = frozenset()
@@ -88,6 +83,10 @@ class MeshFacts:
     transform: MeshTransform | None = None
     primvars: tuple = ()
     face_counts: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    def look_for(self, purpose: str) -> SourceLook:
+        """The material ``purpose`` resolves: its own binding, else the all-purpose one."""
+        return self.looks.get(purpose, self.look)
 
 
 @dataclass(frozen=True)
@@ -151,9 +150,7 @@ def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> 
     return MeshFacts(
         path=str(prim.GetPath()),
         skel_roots=tuple(str(a.GetPath()) for a in _ancestors(prim) if a.IsA(UsdSkel.Root)),
-        material=look.material,
-        surface=look.surface,
-        surface_normal_mapped=look.normal_mapped,
+        look=look,
         looks=looks,
         display_color=tuple(float(c) for c in display_color(prim, Usd.TimeCode.Default())),
         siblings=frozenset(prim.GetParent().GetAllChildrenNames()),
