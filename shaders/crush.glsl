@@ -36,9 +36,10 @@ layout(binding = CRUSH_HOLD) uniform sampler2D hold;
 // x: what the rest surface's curvature multiplies the amplitude by (scene/params.py
 // curved_gain; 1 on flat cloth)
 layout(binding = CRUSH_GAIN) uniform sampler2D gain;
-// xy: the damped rest direction d of the shot's previous frame (T1, T2 coordinates),
-// z: 1 once written; read and written in place
-layout(rgba32f, binding = CRUSH_DAMPED) uniform image2D damped;
+// xy: the damped rest direction d (T1, T2 coordinates), z: 1 once written. Read from the
+// wave state of the shot's previous grid frame, written into this frame's state
+layout(binding = CRUSH_DAMPED_IN) uniform sampler2D damped_in;
+layout(rgba32f, binding = CRUSH_DAMPED) writeonly uniform image2D damped;
 layout(rgba32f, binding = CRUSH_FIELDS) writeonly uniform image2D fields;
 layout(rg32f, binding = CRUSH_PHASE) writeonly uniform image2D phase;  // x, y: systems 1, 2
 #endif
@@ -55,7 +56,7 @@ uniform float u_slack;              // wrinkle:slack, compression taken in-plane
 // u_damping_deadband radians, at once where by twice that; 1: off
 uniform float u_damping_alpha;
 uniform float u_damping_deadband;
-uniform int u_has_history;          // the previous frame's damped direction is in the table
+uniform int u_has_history;          // damped_in holds the previous grid frame's directions
 
 #if defined FACE_NORMALS
 
@@ -190,7 +191,7 @@ void main() {
     // Crest damping (docs/method.md): the rest direction turns towards the strain's by
     // the share u_damping_alpha a frame while it turns by less than u_damping_deadband
     // radians a frame, at once when by twice that; r is then the compression along it
-    vec4 before = imageLoad(damped, TABLE_TEXEL(i));
+    vec4 before = u_has_history != 0 ? fetch(damped_in, i) : vec4(0.0);
     if (u_has_history != 0 && u_damping_alpha < 1.0 && before.z > 0.5) {
         vec2 d_before = dot(before.xy, d) < 0.0 ? -before.xy : before.xy;
         float turn = acos(clamp(dot(d_before, d), 0.0, 1.0));

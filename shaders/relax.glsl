@@ -57,9 +57,10 @@ vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(
 
 layout(binding = RELAX_PREVIOUS_FIELDS) uniform sampler2D previous_fields;
 layout(binding = RELAX_ANCHOR) uniform sampler2D anchor_phase;
-// in place: each vertex reads its own last-frame phases and writes its seeds (the result
-// when there are no iterations)
-layout(rg32f, binding = RELAX_PHASE) uniform image2D phase;
+// the relaxed phases of the shot's previous grid frame (its wave state, read only), and
+// this frame's phases: the seeds (the result when there are no iterations)
+layout(binding = RELAX_PREVIOUS_PHASE) uniform sampler2D previous_phase;
+layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
 layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rgba32f, binding = RELAX_EDGES_OUT) writeonly uniform image2D edges;
@@ -70,17 +71,18 @@ void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
     vec2 anchor = fetch(anchor_phase, i).xy;
-    vec2 previous = imageLoad(phase, TABLE_TEXEL(i)).xy;
-    vec4 before0 = wave_of(previous_fields, i, 0);
+    bool history = u_has_history != 0;
+    vec2 previous = history ? fetch(previous_phase, i).xy : vec2(0.0);
+    vec4 before0 = history ? wave_of(previous_fields, i, 0) : vec4(0.0);
 #if defined TWO_SYSTEMS
-    vec4 before1 = wave_of(previous_fields, i, 1);
+    vec4 before1 = history ? wave_of(previous_fields, i, 1) : vec4(0.0);
 #endif
     vec2 start = anchor;
     vec4 z = vec4(0.0);
     vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
     for (int s = 0; s < SYSTEMS; ++s) {
         vec3 k_i = wave_of(fields, i, s).xyz;
-        if (u_has_history != 0) {
+        if (history) {
             // keep last frame's phase of the partner system; flip it where k flipped
 #if defined TWO_SYSTEMS
             int was = partner_system(k_i, s, before0, before1);

@@ -10,7 +10,9 @@ import time
 
 import numpy as np
 
+from .contract import FIELD_TEXELS, WAVE_SYSTEMS
 from .errors import UsdWrinkleError
+from .history import WaveHistory, cache_capacity, on_grid, reads_index
 from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
@@ -45,12 +47,15 @@ class WrinkleEngine:
         no relax and no preroll for those meshes. False recomputes everything.
     preroll_progress : callable or None
         Wraps the list of preroll frames (the CLI's progress bar).
+    history_cache : int or None
+        How many grid frames' wave states to keep (default: HISTORY_CACHE_FRAMES, fewer
+        where they would take more than HISTORY_CACHE_BYTES of GPU memory).
     """
 
     def __init__(self, stage, all_meshes: bool = False, relax_iterations: int | None = None,
                  camera: str | None = None, ctx=None, profile: bool = False,
                  history_start: float | None = None, use_baked: bool = True,
-                 preroll_progress=None):
+                 preroll_progress=None, history_cache: int | None = None):
         self.scene = StageSceneDelegate(stage, all_meshes=all_meshes,
                                         relax_iterations=relax_iterations, use_baked=use_baked)
         self.camera = camera
@@ -63,9 +68,20 @@ class WrinkleEngine:
             self._dirty[path] = DirtyBits.ALL
         self.last_timings: dict[str, float] = {}
         self._history_start = history_start
-        self._history_frame: float | None = None
+        #: the wave states of grid frames this engine keeps (history.py)
+        self.history = WaveHistory(history_cache if history_cache is not None else
+                                   cache_capacity(self._state_bytes()))
+        #: frames computed (drawn or not) and of them preroll steps, since creation
+        self.computed_count = 0
+        self.preroll_count = 0
         #: wraps the list of preroll frames (the CLI shows a progress bar)
         self.preroll_progress = preroll_progress or (lambda frames: frames)
+
+    def _state_bytes(self) -> int:
+        """GPU bytes of one grid frame's wave state, all meshes (render/fields.py)."""
+        per_point = (FIELD_TEXELS * 4 + WAVE_SYSTEMS + 4) * 4
+        return sum(len(record.rest_points) for record in self.scene.meshes.values()) * \
+            per_point
 
     @property
     def wrinkled_paths(self) -> list[str]:
@@ -140,8 +156,12 @@ class WrinkleEngine:
 
     @property
     def history_frame(self) -> float | None:
-        """The frame the phase history has reached (None: the next frame restarts it)."""
-        return self._history_frame
+        """The grid frame whose wave state was recorded last (None: none is kept, the
+        next frame restarts the history)."""
+        start = self.history_start()
+        if self.history.last is None or start is None:
+            return None
+        return start + self.history.last
 
     def sample(self, frame: float, aspect: float):
         """The scene's FrameRecord at ``frame`` through this engine's camera (what
@@ -183,7 +203,7 @@ class WrinkleEngine:
                 "accepted (lower wrinkle:relaxIterations or --relax-iterations, render fewer "
                 "frames, or pass --history-start nearer the first frame)")
 
-    # -- phase history --------------------------------------------------------------
+    # -- phase history (history.py: the wave states of grid frames, as values) ----------
     def history_start(self) -> float | None:
         """The frame where the shot's phase history starts (None: every frame cold)."""
         if self._history_start is not None:
@@ -191,39 +211,45 @@ class WrinkleEngine:
         frames = self.scene.frame_range()
         return None if math.isnan(frames[0]) else frames[0]
 
-    def _history_plan(self, frame: float) -> tuple[list[float], bool, bool]:
-        """Frames to compute before ``frame``, whether ``frame`` then has history, and
-        whether the chain of frames computed so far goes on (False: replay it from the
-        start). Plans only: the caller applies it.
+    def _history_plan(self, frame: float) -> tuple[list[int], int | None]:
+        """The grid frames (as indices: frame - start) to compute before ``frame``, and
+        the index of the kept state the first of them (or ``frame`` itself) reads (None:
+        a cold start). Plans only: the caller applies it.
 
-        The history runs on the integer grid start, start+1, ... A frame's phases are
-        therefore a deterministic function of the shot, whichever frames a run renders:
-        a farm chunk that starts at frame f replays start..f-1 (compute only, no draw).
+        The history runs on the integer grid start, start+1, ... A frame starts from the
+        state of the grid frame before it (a sub-frame from the grid frame below it), so
+        its phases are a deterministic function of the shot, whichever frames a run
+        renders: a farm chunk that starts at frame f replays start..f-1 (compute only, no
+        draw), and a frame whose state is kept replays nothing.
         """
         start = self.history_start()
-        if start is None or math.isnan(frame) or frame < start:
-            return [], False, True
-        last = self._history_frame
-        # continue the chain from the last grid frame, or replay it from the start
-        chained = not (last is None or last > frame or (last - start) != int(last - start))
-        if not chained:
-            last = None
-        first = start if last is None else last + 1
-        if frame == first and last is None:
-            return [], False, chained  # the shot's first frame: a cold start
-        if frame - first > MAX_HISTORY_FRAMES:
+        if start is None or math.isnan(frame):
+            return [], None
+        needed = reads_index(frame, start)
+        if needed is None:
+            return [], None
+        if needed in self.history:
+            return [], needed
+        base = self.history.nearest_below(needed)
+        first = 0 if base is None else base + 1
+        if needed - first + 1 > MAX_HISTORY_FRAMES:
             raise UsdWrinkleError(
-                f"frame {frame:g} is {frame - first:,.0f} frames after the phase history's "
-                f"start {first:g}; more than {MAX_HISTORY_FRAMES:,} frames of history are "
-                "refused (pass --history-start nearer, or bake the shot)")
-        # grid frames before ``frame``; a subframe is one step from its grid frame
-        steps = np.arange(first, frame, 1.0) if frame > first else []
-        return [float(f) for f in steps], True, chained
+                f"frame {frame:g} is {frame - (start + first):,.0f} frames after the phase "
+                f"history's start {start + first:g}; more than {MAX_HISTORY_FRAMES:,} frames "
+                "of history are refused (pass --history-start nearer, or bake the shot)")
+        return list(range(first, needed + 1)), base
 
-    def _compute_only(self, frame: float, history: bool, wrinkles: bool) -> None:
+    def _compute_only(self, frame: float, write: int, read: int | None,
+                      wrinkles: bool) -> None:
         """A preroll step: the meshes that have no baked fields, compute only."""
         self._sync(self.scene.sample_meshes(frame, with_baked=False))
-        self.render_pass.compute(wrinkles, None, history, skip=frozenset(self.scene.baked))
+        self.render_pass.compute(wrinkles, None, write, read, skip=frozenset(self.scene.baked))
+
+    @property
+    def kept_history(self) -> list[float]:
+        """The grid frames whose wave states this engine keeps (ascending)."""
+        start = self.history_start()
+        return [] if start is None else [start + i for i in self.history.indices]
 
     def pull_changes(self) -> None:
         """Turn the stage's edits since the last frame into dirty bits (scene/changes.py):
@@ -241,7 +267,7 @@ class WrinkleEngine:
             self._dirty[path] = self._dirty.get(path, DirtyBits.CLEAN) | value
         if removed or any(value & (DirtyBits.DIRTY_TOPOLOGY | DirtyBits.DIRTY_PRIMVAR)
                           for value in self._dirty.values()):
-            self._history_frame = None
+            self.history.clear()
 
     def _sync(self, meshes: dict) -> None:
         """Sync every rprim to the scene's sample ``meshes`` (path -> MeshFrame)."""
@@ -253,42 +279,57 @@ class WrinkleEngine:
     def compute_frame(self, frame: float, aspect: float | None = None, wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
 
-        With wrinkles, earlier frames of the shot that this engine has not computed yet
-        are computed first (see :meth:`_history_plan`), so that the result does not
-        depend on which frames were rendered before.
+        With wrinkles, the frame starts from the kept wave state of the grid frame before
+        it; grid frames of the shot that this engine does not keep are computed first
+        (see :meth:`_history_plan`), so that the result does not depend on which frames
+        were rendered before, nor on how often. A grid frame's own state is then kept
+        (:meth:`advance`); the state it read is never changed.
         """
         self.pull_changes()
-        history = False
-        steps: list[float] = []
+        read: int | None = None
+        steps: list[int] = []
+        start = self.history_start()
         # meshes drawn from a bake need no history; the others replay the shot's start
         needs_history = any(p not in self.scene.baked for p in self.wrinkled_paths)
         if wrinkles and needs_history:
-            steps, history, chained = self._history_plan(frame)
-            if not chained:
-                self._history_frame = None
-            for index, step in enumerate(self.preroll_progress(steps)):
-                step_history = index > 0 or self._history_frame is not None
-                self._compute_only(step, step_history, wrinkles)
-                self._history_frame = step
+            steps, base = self._history_plan(frame)
+            read = None if base is None else self.history.slot(base)
+            # the progress bar counts frames; the history keeps grid indices
+            for step, index in zip(self.preroll_progress([start + i for i in steps]), steps,
+                                   strict=True):
+                write = self.history.work_slot(keep=read)
+                self._compute_only(step, write, read, wrinkles)
+                self.advance(index, write)
+                read = write
         profile = self.render_delegate.profile
         started = time.perf_counter()
         if aspect is None:
             aspect = FRAMING_ASPECT
         record = self.scene.sample(frame, aspect, self.camera)
-        read = time.perf_counter()
+        read_at = time.perf_counter()
         self._sync(record.meshes)
         synced = time.perf_counter()
         self.last_timings = {}
         if profile:
-            self.last_timings["usd_read"] = (read - started) * 1e3
-            self.last_timings["sync"] = (synced - read) * 1e3
+            self.last_timings["usd_read"] = (read_at - started) * 1e3
+            self.last_timings["sync"] = (synced - read_at) * 1e3
             self.last_timings["preroll_frames"] = float(len(steps))
-        self.render_pass.compute(wrinkles, self.last_timings, history)
-        start = self.history_start()
-        on_grid = start is not None and not math.isnan(frame) and frame >= start \
-            and float(frame - start).is_integer()
-        self._history_frame = frame if (wrinkles and on_grid) else None
+        self.preroll_count += len(steps)
+        write = self.history.work_slot(keep=read)
+        self.render_pass.compute(wrinkles, self.last_timings, write, read)
+        self.computed_count += 1 + len(steps)
+        if wrinkles and needs_history and on_grid(frame, start):
+            self.advance(int(frame - start), write)
         return record
+
+    def advance(self, index: int, slot: int) -> None:
+        """Keep the wave state just computed into ``slot`` as grid frame ``index``'s (the
+        chain advances to it): the explicit step after computing a grid frame."""
+        self.history.commit(index, slot)
+        keep = self.history.slots
+        for mesh in self.render_delegate.rprims.values():
+            if mesh.resources is not None and mesh.resources.waves.slots > keep:
+                mesh.resources.waves.release_slots(keep)
 
     def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True,
                      samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):

@@ -62,22 +62,38 @@ def seed(wave_vector, previous_wave_vector, previous_phase):
     return np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
 
 
+def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations: int,
+                cold_start_factor: int = COLD_START_FACTOR) -> tuple[np.ndarray, dict]:
+    """One frame of the phase history, as the engine computes it (history.py).
+
+    ``fields``: the frame's points, wave_vector, amplitude and phase (crush's anchored
+    phase). ``state``: the wave state of the shot's previous grid frame (its wave_vector
+    and relaxed phase; the GPU's also holds crest damping's directions), or None for a
+    cold start. Returns the relaxed phases and this frame's state. ``state`` is read,
+    never changed: the same frame from the same state is the same frame.
+    """
+    if state is None:
+        start, count = fields["phase"], iterations * cold_start_factor
+    else:
+        start = seed(fields["wave_vector"], state["wave_vector"], state["phase"])
+        count = iterations
+    phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
+                  topology, count)
+    return phase, {"wave_vector": np.array(fields["wave_vector"], copy=True), "phase": phase}
+
+
 def relax_shot(frames: list, topology: Topology, iterations: int,
                cold_start_factor: int = COLD_START_FACTOR):
-    """Phase history over a shot, as the engine computes it.
+    """Phase history over a shot's grid frames, as the engine computes it: each frame
+    from the state of the one before (:func:`relax_frame`).
 
     ``frames``: per frame, a dict with points, wave_vector, amplitude and phase (the
     anchored phase from crush). Returns the relaxed phases of every frame.
     """
-    out = []
-    for index, fields in enumerate(frames):
-        if index == 0:
-            start, count = fields["phase"], iterations * cold_start_factor
-        else:
-            start = seed(fields["wave_vector"], frames[index - 1]["wave_vector"], out[-1])
-            count = iterations
-        out.append(relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
-                         topology, count))
+    out, state = [], None
+    for fields in frames:
+        phase, state = relax_frame(fields, state, topology, iterations, cold_start_factor)
+        out.append(phase)
     return out
 
 

@@ -38,10 +38,12 @@ NORMALS = {"NORMALS_PLAN": 0, "NORMALS_POSED_POINTS": 2, "NORMALS_AUTHORED": 4,
 CRUSH = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "TOPOLOGY_TABLE": 2,
          "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FACE_NORMALS": 5,
          "CRUSH_TRIANGLES": 6, "CRUSH_BAKED": 7, "CRUSH_HOLD": 8, "CRUSH_GAIN": 9,
+         "CRUSH_DAMPED_IN": 10,
          # image units
          "CRUSH_FIELDS": 0, "CRUSH_PHASE": 1, "CRUSH_FACE_NORMALS_OUT": 2, "CRUSH_DAMPED": 3}
 RELAX = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
          "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_EDGES": 5, "RELAX_Z_IN": 6,
+         "RELAX_PREVIOUS_PHASE": 7,
          # image units
          "RELAX_PHASE": 0, "RELAX_Z_OUT": 1, "RELAX_EDGES_OUT": 2}
 #: the wave blend (include/wave.glsl): the same units in every pass that includes it

@@ -69,15 +69,20 @@ class Mesh:
             self.sync_counts["frame"] += 1
         return DirtyBits.CLEAN
 
-    def compute(self, wrinkles: bool, timer=None, history: bool = False) -> None:
-        """Run skin, crush and relax for the synced frame.
+    def compute(self, wrinkles: bool, timer=None, write: int = 0,
+                read: int | None = None) -> None:
+        """Run skin, crush and relax for the synced frame, into the wave state in slot
+        ``write``.
 
-        ``history``: the resources hold the relaxed phases of the shot's previous frame;
-        relaxation then starts from them (``relaxIterations`` steps). Without history it
-        starts from the material-anchored phase and runs COLD_START_FACTOR times longer.
+        ``read``: the slot of the wave state of the shot's previous grid frame (read,
+        never written); relaxation then starts from its phases (``relaxIterations``
+        steps). Without one (None) it starts from the material-anchored phase and runs
+        COLD_START_FACTOR times longer.
         """
         d = self.delegate
         res = self.resources
+        history = read is not None
+        res.waves.begin(write, read)
         with _timed(timer, "skin", self.timings):
             d.skin.run(res, self.frame)
             d.normals.run(res, self.frame)
@@ -217,16 +222,17 @@ class RenderPass:
     def __init__(self, delegate: RenderDelegate):
         self.delegate = delegate
 
-    def compute(self, wrinkles: bool, timings: dict | None = None,
-                history: bool = False, skip: frozenset = frozenset()) -> None:
+    def compute(self, wrinkles: bool, timings: dict | None = None, write: int = 0,
+                read: int | None = None, skip: frozenset = frozenset()) -> None:
         """Skin, crush and relax every rprim but those in ``skip`` (a preroll leaves out
-        the meshes drawn from baked fields)."""
+        the meshes drawn from baked fields), each into its wave state in slot ``write``,
+        from the one in slot ``read`` (None: a cold start)."""
         timer = self.delegate.ctx if self.delegate.profile else None
         for path, mesh in self.delegate.rprims.items():
             if path in skip:
                 continue
             mesh.timings = {}
-            mesh.compute(wrinkles, timer, history)
+            mesh.compute(wrinkles, timer, write, read)
             if timings is not None:
                 for key, value in mesh.timings.items():
                     timings[key] = value if isinstance(value, str) else \

@@ -44,11 +44,10 @@ class CrushPass:
             self.ctx.memory_barrier()
 
     def run(self, res: MeshResources, wrinkles: bool = True, history: bool = False) -> None:
-        """Write this frame's fields into the other field buffer (the previous frame's
-        stay readable for the relax pass's seed step) and the anchored phase.
-        ``history``: the strain table holds the shot's previous frame (crest damping)."""
+        """Write this frame's fields and damped directions into the wave state it writes
+        (``res.waves.begin`` named it), and the anchored phase. ``history``: crest damping
+        reads the damped directions of the shot's previous grid frame's state."""
         waves = res.waves
-        waves.advance()
         params = res.record.params
         scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
         waves.set_systems(2 if params.biaxial > 0 else 1)
@@ -65,16 +64,16 @@ class CrushPass:
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
                            "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
                            "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold,
-                           "CRUSH_GAIN": res.gain},
-             writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase},
-             read_writes={"CRUSH_DAMPED": waves.damped})
+                           "CRUSH_GAIN": res.gain,
+                           "CRUSH_DAMPED_IN": waves.history.damped},
+             writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase,
+                     "CRUSH_DAMPED": waves.written.damped})
         self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
         self.ctx.memory_barrier()
 
     def run_baked(self, res: MeshResources, baked) -> None:
         """Fields of a frame drawn from a bake: posed normals computed, waves and phases
         as baked (``baked``: scene.baked.BakedFields)."""
-        res.waves.advance()
         res.waves.write_baked(baked)
         self._face_normals(res)
         set_uniforms(self.baked_shader, {"u_num_points": res.num_points,

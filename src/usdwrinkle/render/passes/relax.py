@@ -1,9 +1,9 @@
 """Relax pass: seed the phasors and edge rotations, then Jacobi steps (ping-pong).
 
-Seed: with phase history (the previous frame of the shot was computed), each vertex
-starts from its previous phase, sign-aligned to its new wave vector, so crests ride
-with the cloth; otherwise from crush's material-anchored phase. The last step writes
-the phase that draw and the bake read.
+Seed: with phase history (the wave state of the shot's previous grid frame, read and
+never written), each vertex starts from its previous phase, sign-aligned to its new wave
+vector, so crests ride with the cloth; otherwise from crush's material-anchored phase.
+The last step writes the phase that draw and the bake read.
 """
 from __future__ import annotations
 
@@ -36,10 +36,10 @@ class RelaxPass:
                                         **res.topology_uniforms})
         bind(units, reads={
             "RELAX_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology,
-            "RELAX_FIELDS": waves.current, "RELAX_PREVIOUS_FIELDS": waves.previous,
-            "RELAX_ANCHOR": waves.anchor_phase},
-            writes={"RELAX_Z_OUT": waves.phasors[0], "RELAX_EDGES_OUT": waves.edge_rotations},
-            read_writes={"RELAX_PHASE": waves.phase})
+            "RELAX_FIELDS": waves.current, "RELAX_PREVIOUS_FIELDS": waves.history.fields,
+            "RELAX_PREVIOUS_PHASE": waves.history.phase, "RELAX_ANCHOR": waves.anchor_phase},
+            writes={"RELAX_Z_OUT": waves.phasors[0], "RELAX_EDGES_OUT": waves.edge_rotations,
+                    "RELAX_PHASE": waves.phase})
         seed_shader.run(count)
         self.ctx.memory_barrier()
         if iterations <= 0:
