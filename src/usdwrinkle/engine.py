@@ -344,19 +344,57 @@ class WrinkleEngine:
                             shade_samples)
 
     def render_image(self, frame: float, width: int, height: int, layout,
-                     wrinkles: bool = True, samples: int = 4, shade_samples: bool = True):
+                     wrinkles: bool = True, samples: int = 4, shade_samples: bool = True,
+                     camera=None):
         """Compute and draw ``frame``; returns it as an image file stores it
-        (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for)."""
-        return self._render(frame, width, height, wrinkles, samples, (), layout, shade_samples)
+        (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for).
+        ``camera``: a CameraRecord to look through instead of the engine's (a viewer's
+        orbit camera)."""
+        return self._render(frame, width, height, wrinkles, samples, (), layout, shade_samples,
+                            camera)
 
     def _render(self, frame, width, height, wrinkles, samples, aovs, layout,
-                shade_samples=True):
+                shade_samples=True, camera=None):
         record = self.compute_frame(frame, width / height, wrinkles)
-        state = RenderPassState(record.camera, record.lights, width, height, wrinkles, samples,
+        state = RenderPassState(camera if camera is not None else record.camera,
+                                record.lights, width, height, wrinkles, samples,
                                 aovs, image=layout, shade_samples=shade_samples)
         result = self.render_pass.execute(state)
         self.last_timings.update(state.timings)
         return result
+
+    def preview_params(self, path: str, **changes) -> None:
+        """Draw ``path`` with some wrinkle parameters changed (WrinkleParams fields: q,
+        width, amplitude_scale, slack) without an edit of the stage, and without dropping
+        the kept wave states: a live preview (the paint window while a stroke or a slider
+        moves), exact for the frame's own crush, approximate in its history. The next edit
+        of the stage's wrinkle parameters replaces it and restarts the history."""
+        from dataclasses import replace
+
+        from .render.resources import vec4
+
+        mesh = self.render_delegate.rprims[path]
+        record = mesh.resources.record if mesh.resources is not None else \
+            self.scene.meshes[path]
+        params = replace(record.params, **changes)
+        if mesh.resources is None:
+            return
+        mesh.resources.record = replace(record, params=params)
+        if "q" in changes or "width" in changes:
+            mesh.resources.q_width.write(vec4(params.q, params.width))
+
+    def posed_points(self, path: str) -> np.ndarray:
+        """``path``'s posed points at the last computed frame, world space, (n, 3)
+        float64 (a viewer's picking)."""
+        mesh = self.render_delegate.rprims[path]
+        local = np.asarray(mesh.resources.posed_points.read(), np.float64)[:, :3]
+        return local @ mesh.frame.local_to_world[:3, :3] + mesh.frame.local_to_world[3, :3]
+
+    def visible_paths(self) -> list[str]:
+        """The meshes drawn at the last computed frame."""
+        return [path for path, mesh in self.render_delegate.rprims.items()
+                if mesh.resources is not None and mesh.frame is not None and
+                mesh.frame.visible and mesh.resources.num_triangles]
 
     def read_fields(self, path: str) -> dict:
         """Per-vertex fields of ``path`` as computed for the last frame (numpy)."""

@@ -278,6 +278,10 @@ class RenderPass:
                            3 if attachments is None else max(attachments) + 1,
                            "f2" if eight_bit else "f4")
         timer = ctx if d.profile else None
+        # a host's GL state is not ours (Qt enters paintGL with blending on): reset what
+        # the draw relies on
+        ctx.disable(ctx.BLEND)
+        ctx.scissor = None
         with _timed(timer, "draw", state.timings):
             drawn = [mesh for mesh in d.rprims.values() if mesh.resources is not None and
                      mesh.frame is not None and mesh.frame.visible and

@@ -1,0 +1,352 @@
+"""The brush: what a stamp does to q (and W) on one mesh's rest pose. numpy only: no Qt,
+no GL, no USD, so another front end (a DCC, a test) paints with the same code.
+
+q is the method's painted rest-space vector (docs/method.md: the crush biases the fitted
+map by ``M (I - q q^T)``). It is a line, not an arrow: q and -q paint the same wrinkles,
+so a stamp aligns its direction's sign with the q already there before blending.
+
+A stamp at a rest-space point c with radius R gives each vertex i a weight
+``strength * pressure * falloff(d_i / R)``, d_i its rest-space distance from c: geodesic
+(shortest paths along the mesh's edges, seeded from the hit triangle's corners) or
+Euclidean. Front-facing only: vertices whose posed normal faces away from the eye get
+none. Symmetry: a second stamp through a rest-space plane, its direction mirrored.
+"""
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+MODES = ("comb", "smooth", "erase", "width")
+FALLOFFS = ("smooth", "linear", "constant", "sphere")
+MIRROR_AXES = (None, "x", "y", "z")
+
+
+def falloff(name: str, t: np.ndarray) -> np.ndarray:
+    """The stamp's profile over t = distance / radius in [0, 1] (0 beyond)."""
+    t = np.clip(np.asarray(t, np.float64), 0.0, 1.0)
+    if name == "smooth":
+        value = (1.0 - t * t) ** 2
+    elif name == "linear":
+        value = 1.0 - t
+    elif name == "constant":
+        value = np.ones_like(t)
+    elif name == "sphere":
+        value = np.sqrt(np.maximum(1.0 - t * t, 0.0))
+    else:
+        raise ValueError(f"unknown falloff {name!r} (one of {', '.join(FALLOFFS)})")
+    return np.where(t < 1.0, value, 0.0)
+
+
+@dataclass(frozen=True)
+class BrushSettings:
+    """What the artist sets: mode, size, strength, profile, symmetry."""
+
+    mode: str = "comb"
+    #: rest-space radius (scene units of the mesh's local space)
+    radius: float = 0.1
+    #: how far one stamp moves a vertex towards its target, in [0, 1]
+    strength: float = 0.5
+    #: |q| that comb paints, in [0, 1]
+    amount: float = 1.0
+    falloff: str = "smooth"
+    #: distances along the surface (True) or straight through space
+    geodesic: bool = True
+    front_facing_only: bool = True
+    #: mirror plane through the rest-space origin: None, "x", "y" or "z" (its normal)
+    mirror: str | None = None
+    #: stamps per radius along a stroke (Maya's stamp spacing)
+    spacing: float = 0.25
+    #: the W that the width mode paints
+    width: float = 0.05
+
+    def __post_init__(self):
+        if self.mode not in MODES:
+            raise ValueError(f"unknown brush mode {self.mode!r} (one of {', '.join(MODES)})")
+        if self.falloff not in FALLOFFS:
+            raise ValueError(f"unknown falloff {self.falloff!r}")
+        if not (self.radius > 0 and np.isfinite(self.radius)):
+            raise ValueError(f"brush radius {self.radius} must be finite and > 0")
+        if not 0.0 <= self.strength <= 1.0 or not 0.0 <= self.amount <= 1.0:
+            raise ValueError("brush strength and amount must be in [0, 1]")
+        if self.mirror not in MIRROR_AXES:
+            raise ValueError(f"mirror plane must be x, y, z or none, not {self.mirror!r}")
+        if not self.spacing > 0:
+            raise ValueError("stamp spacing must be > 0")
+
+    def with_radius(self, radius: float) -> BrushSettings:
+        return replace(self, radius=float(radius))
+
+
+@dataclass
+class Hit:
+    """Where a ray met a mesh: the triangle, its barycentrics, the rest-space point."""
+
+    path: str
+    triangle: int
+    barycentric: np.ndarray
+    rest_point: np.ndarray
+    distance: float
+
+
+@dataclass
+class PaintMesh:
+    """One mesh's rest pose as the brush needs it (local space), and its paint."""
+
+    path: str
+    rest_points: np.ndarray      # (n, 3) float64
+    rest_normals: np.ndarray     # (n, 3) float64, unit
+    triangles: np.ndarray        # (m, 3) int
+    q: np.ndarray                # (n, 3) float32, |q| <= 1
+    width: np.ndarray            # (n,) float32
+    _neighbours: list = field(default_factory=list, repr=False)
+
+    def __post_init__(self):
+        self.rest_points = np.asarray(self.rest_points, np.float64)
+        self.rest_normals = np.asarray(self.rest_normals, np.float64)
+        self.triangles = np.asarray(self.triangles, np.int64).reshape(-1, 3)
+        self.q = np.array(self.q, np.float32).reshape(-1, 3)
+        self.width = np.array(self.width, np.float32).reshape(-1)
+        n = len(self.rest_points)
+        edges = np.concatenate([self.triangles[:, [0, 1]], self.triangles[:, [1, 2]],
+                                self.triangles[:, [2, 0]]])
+        edges = np.unique(np.sort(edges, axis=1), axis=0)
+        lengths = np.linalg.norm(self.rest_points[edges[:, 0]] - self.rest_points[edges[:, 1]],
+                                 axis=1)
+        self._neighbours = [[] for _ in range(n)]
+        for (a, b), length in zip(edges.tolist(), lengths.tolist(), strict=True):
+            self._neighbours[a].append((b, length))
+            self._neighbours[b].append((a, length))
+        self._mirror_maps: dict[str, np.ndarray] = {}
+
+    @property
+    def count(self) -> int:
+        return len(self.rest_points)
+
+    def neighbours(self, i: int) -> list[int]:
+        return [j for j, _ in self._neighbours[i]]
+
+    def distances(self, hit_point: np.ndarray, triangle: int | None, radius: float,
+                  geodesic: bool) -> np.ndarray:
+        """Rest-space distance of every vertex from ``hit_point`` (inf beyond
+        ``radius``): along the edges from the hit triangle's corners, or straight."""
+        straight = np.linalg.norm(self.rest_points - hit_point, axis=1)
+        if not geodesic or triangle is None:
+            return np.where(straight <= radius, straight, np.inf)
+        out = np.full(self.count, np.inf)
+        heap = []
+        for corner in self.triangles[triangle]:
+            d = float(straight[corner])
+            if d < out[corner]:
+                out[corner] = d
+                heapq.heappush(heap, (d, int(corner)))
+        while heap:
+            d, i = heapq.heappop(heap)
+            if d > out[i] or d > radius:
+                continue
+            for j, length in self._neighbours[i]:
+                nd = d + length
+                if nd < out[j] and nd <= radius:
+                    out[j] = nd
+                    heapq.heappush(heap, (nd, j))
+        # a path along edges is never shorter than the straight line
+        return np.where(out <= radius, np.maximum(out, straight), np.inf)
+
+    def mirror_map(self, axis: str) -> np.ndarray:
+        """Each vertex's mirror partner through the plane ``axis`` = 0 (the nearest
+        vertex to its mirror image; -1 where none lies within a hundredth of the mean
+        edge length)."""
+        if axis in self._mirror_maps:
+            return self._mirror_maps[axis]
+        k = "xyz".index(axis)
+        mirrored = self.rest_points.copy()
+        mirrored[:, k] *= -1.0
+        tolerance = 1e-2 * self.mean_edge()
+        partner = np.full(self.count, -1, np.int64)
+        for lo in range(0, self.count, 512):
+            block = mirrored[lo:lo + 512]
+            d2 = ((block[:, None, :] - self.rest_points[None, :, :]) ** 2).sum(-1)
+            nearest = d2.argmin(axis=1)
+            ok = d2[np.arange(len(block)), nearest] <= tolerance ** 2
+            partner[lo:lo + 512] = np.where(ok, nearest, -1)
+        self._mirror_maps[axis] = partner
+        return partner
+
+    def mean_edge(self) -> float:
+        lengths = [length for row in self._neighbours for _, length in row]
+        return float(np.mean(lengths)) if lengths else 1.0
+
+
+def mirror_vector(v: np.ndarray, axis: str | None) -> np.ndarray:
+    """``v`` reflected through the plane whose normal is ``axis``."""
+    out = np.array(v, np.float64, copy=True)
+    if axis is not None:
+        out[..., "xyz".index(axis)] *= -1.0
+    return out
+
+
+def tangent_directions(mesh: PaintMesh, direction: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``direction`` projected onto the rest tangent plane of each vertex in ``index``,
+    unit length (zero where it is along the normal)."""
+    n = mesh.rest_normals[index]
+    d = np.asarray(direction, np.float64)[None, :] - \
+        (n @ np.asarray(direction, np.float64))[:, None] * n
+    length = np.linalg.norm(d, axis=1, keepdims=True)
+    return np.where(length > 1e-12, d / np.maximum(length, 1e-300), 0.0)
+
+
+def stamp(mesh: PaintMesh, brush: BrushSettings, centre: np.ndarray, triangle: int | None,
+          direction: np.ndarray | None, facing: np.ndarray | None = None,
+          pressure: float = 1.0) -> np.ndarray:
+    """Apply one stamp (and its mirror) to ``mesh`` in place; returns the indices of the
+    vertices it touched (weight > 0). ``direction``: the stroke's rest-space tangent
+    (comb); ``facing``: per vertex, whether it faces the eye (front-facing only)."""
+    weight = _weights(mesh, brush, np.asarray(centre, np.float64), triangle, facing, pressure)
+    touched = []
+    index = np.nonzero(weight > 0.0)[0]
+    if len(index):
+        _apply(mesh, brush, index, weight[index], direction)
+        touched.append(index)
+    if brush.mirror is not None:
+        # the mirror stamp: each vertex takes its mirror partner's weight (exactly
+        # symmetric on a mesh whose rest pose is), the direction mirrored; a vertex with
+        # no partner is weighed from the mirrored centre
+        partner = mesh.mirror_map(brush.mirror)
+        mirrored = np.where(partner >= 0, weight[np.maximum(partner, 0)], 0.0)
+        lone = partner < 0
+        if lone.any():
+            centre_m = mirror_vector(centre, brush.mirror)
+            mirrored[lone] = _weights(mesh, brush, centre_m, _nearest_triangle(mesh, centre_m),
+                                      None, pressure)[lone]
+        index = np.nonzero(mirrored > 0.0)[0]
+        if len(index):
+            _apply(mesh, brush, index, mirrored[index],
+                   None if direction is None else mirror_vector(direction, brush.mirror))
+            touched.append(index)
+    return np.unique(np.concatenate(touched)) if touched else np.zeros(0, np.int64)
+
+
+def _weights(mesh: PaintMesh, brush: BrushSettings, centre: np.ndarray, triangle: int | None,
+             facing, pressure: float) -> np.ndarray:
+    """Each vertex's weight under a stamp at ``centre``."""
+    if triangle is None and brush.geodesic:
+        triangle = _nearest_triangle(mesh, centre)
+    distance = mesh.distances(centre, triangle, brush.radius, brush.geodesic)
+    weight = brush.strength * float(np.clip(pressure, 0.0, 1.0)) * \
+        falloff(brush.falloff, distance / brush.radius)
+    if facing is not None and brush.front_facing_only:
+        weight = np.where(facing, weight, 0.0)
+    return weight
+
+
+def _nearest_triangle(mesh: PaintMesh, point: np.ndarray) -> int | None:
+    if not len(mesh.triangles):
+        return None
+    centres = mesh.rest_points[mesh.triangles].mean(axis=1)
+    return int(np.argmin(np.linalg.norm(centres - point, axis=1)))
+
+
+def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.ndarray,
+           direction: np.ndarray | None) -> None:
+    q = mesh.q[index].astype(np.float64)
+    w = weight[:, None]
+    if brush.mode == "comb":
+        if direction is None or not np.any(direction):
+            return
+        target = brush.amount * tangent_directions(mesh, direction, index)
+        # a line, not an arrow: take the sign nearer the q already there
+        flip = np.sum(target * q, axis=1) < 0.0
+        target[flip] *= -1.0
+        q = q + w * (target - q)
+    elif brush.mode == "erase":
+        q = q * (1.0 - w)
+    elif brush.mode == "smooth":
+        q = q + w * (_neighbour_mean(mesh, index) - q)
+    elif brush.mode == "width":
+        mesh.width[index] = (mesh.width[index] + weight * (brush.width - mesh.width[index])
+                             ).astype(np.float32)
+        return
+    mesh.q[index] = clamp_unit(q).astype(np.float32)
+
+
+def _neighbour_mean(mesh: PaintMesh, index: np.ndarray) -> np.ndarray:
+    """The mean of each vertex's neighbours' q (and its own), each sign-aligned to the
+    vertex's own q first (q is a line)."""
+    out = np.zeros((len(index), 3))
+    for row, i in enumerate(index.tolist()):
+        own = mesh.q[i].astype(np.float64)
+        total = own.copy()
+        for j in mesh.neighbours(i):
+            other = mesh.q[j].astype(np.float64)
+            total += -other if other @ own < 0.0 else other
+        out[row] = total / (1 + len(mesh.neighbours(i)))
+    return out
+
+
+def flood(mesh: PaintMesh, brush: BrushSettings, direction: np.ndarray | None) -> np.ndarray:
+    """The brush's mode over every vertex at its strength (comb: along ``direction``,
+    projected per vertex); returns the indices changed."""
+    index = np.arange(mesh.count)
+    _apply(mesh, brush, index, np.full(mesh.count, brush.strength), direction)
+    return index
+
+
+def clamp_unit(q: np.ndarray) -> np.ndarray:
+    """Shorten vectors longer than 1 to length 1 (the schema's |q| <= 1); float32 safe."""
+    q = np.asarray(q, np.float64)
+    length = np.linalg.norm(q, axis=1, keepdims=True)
+    return np.where(length > 1.0, q / np.maximum(length, 1e-300) * (1.0 - 1e-7), q)
+
+
+def spread(q: np.ndarray, index: np.ndarray) -> float:
+    """How much q's direction varies over ``index``: 1 - the largest eigenvalue share of
+    the (sign-free) direction tensor sum q q^T / |q|^2 (0: all parallel)."""
+    v = np.asarray(q, np.float64)[index]
+    length = np.linalg.norm(v, axis=1)
+    v = v[length > 1e-9] / length[length > 1e-9, None]
+    if not len(v):
+        return 0.0
+    tensor = v.T @ v / len(v)
+    return float(1.0 - np.linalg.eigvalsh(tensor)[-1])
+
+
+class Stroke:
+    """Stamps spaced along a drag: each new sample places stamps every
+    ``spacing * radius`` of rest-space travel since the last one, each combing along
+    the travel's direction."""
+
+    def __init__(self, mesh: PaintMesh, brush: BrushSettings):
+        self.mesh, self.brush = mesh, brush
+        self.last: np.ndarray | None = None
+        self.direction: np.ndarray | None = None
+        self.touched: set[int] = set()
+        self.stamps = 0
+
+    def add(self, hit: Hit, facing: np.ndarray | None, pressure: float = 1.0) -> int:
+        """A new sample of the drag; returns the stamps placed."""
+        point = np.asarray(hit.rest_point, np.float64)
+        if self.last is None:
+            self.last = point
+            if self.brush.mode != "comb":  # comb needs a direction: the first move gives it
+                self._stamp(point, hit.triangle, None, facing, pressure)
+                return 1
+            return 0
+        travel = point - self.last
+        length = float(np.linalg.norm(travel))
+        step = self.brush.spacing * self.brush.radius
+        if length < step:
+            return 0
+        self.direction = travel / length
+        count = int(length // step)
+        for k in range(1, count + 1):
+            centre = self.last + travel * (k * step / length)
+            tri = hit.triangle if k == count else None
+            self._stamp(centre, tri, self.direction, facing, pressure)
+        self.last = self.last + travel * (count * step / length)
+        return count
+
+    def _stamp(self, centre, triangle, direction, facing, pressure) -> None:
+        touched = stamp(self.mesh, self.brush, centre, triangle, direction, facing, pressure)
+        self.touched.update(touched.tolist())
+        self.stamps += 1

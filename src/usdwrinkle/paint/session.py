@@ -1,0 +1,537 @@
+"""A paint session: one stage, the layer its strokes go to, the engine that draws it, the
+brush, and undo. No Qt: the window (paint/window.py) is one front end on it, a test or a
+script another.
+
+Strokes are held here while the button is down and written straight into the engine's
+GPU tables (``WrinkleEngine.preview_params``): the view shows the current frame at once,
+computed from the kept wave state of the frame before it. When a stroke ends it is
+authored through the WrinkleAPI (its checks apply) on the session's edit layer; the
+engine's change tracking then restarts the phase history, so the refined frame is the one
+``usdwrinkle render`` gives for the saved layer.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from pxr import Sdf, Usd, UsdGeom
+
+from .. import schema
+from ..errors import UsdWrinkleError
+from .brush import BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
+from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
+
+#: the live controls: WrinkleParams field -> (schema attribute, lowest, highest)
+CONTROLS = {"width": (schema.WIDTH, 1e-4, None),
+            "amplitude_scale": (schema.AMPLITUDE_SCALE, 0.0, 10.0),
+            "slack": (schema.SLACK, 0.0, 0.95)}
+CLOTH_PRESETS = (*schema.CLOTH_WIDTHS_M, schema.MESH_CLOTH)
+
+
+@dataclass
+class Edit:
+    """One undoable step: a mesh's values before and after (q and width arrays, or one
+    control)."""
+
+    path: str
+    name: str
+    before: object
+    after: object
+
+
+@dataclass
+class Quality:
+    """How a frame is drawn: the full quality of ``usdwrinkle render``, or the reduced
+    preview shown while the button is down."""
+
+    samples: int = 4
+    scale: float = 1.0
+
+    @property
+    def preview(self) -> bool:
+        return self.samples == 1 and self.scale < 1.0
+
+
+FULL = Quality(4, 1.0)
+PREVIEW = Quality(1, 0.5)
+
+
+@dataclass
+class Frame:
+    """What the view shows: RGBA codes (row 0 at the top), its size and camera."""
+
+    pixels: np.ndarray
+    width: int
+    height: int
+    camera: object
+    quality: Quality
+    frame: float
+    seconds: float = 0.0
+    timings: dict = field(default_factory=dict)
+
+
+def open_paint_stage(stage_path: str, output: str | None):
+    """(stage, edit layer, save path) for ``usdwrinkle paint STAGE [-o LAYER]``.
+
+    - ``-o`` a layer that does not exist yet: a new layer that sublayers the stage (so it
+      renders on its own) and holds the strokes as overs; written on save.
+    - ``-o`` an existing layer whose layer stack holds the stage (an earlier paint
+      layer): opened as the stage, strokes added to it.
+    - ``-o`` any other existing layer: an overrides layer over the stage (as ``apply
+      -o``); only it is written.
+    - no ``-o``: the stage's root layer is edited and written in place.
+    """
+    from ..scene.inputs import open_layer, require_regular_file
+    from ..scene.stage import open_stage
+
+    stage = open_stage(stage_path)
+    if output is None:
+        root = stage.GetRootLayer()
+        save = root.realPath if root.realPath and not root.realPath.lower().endswith(
+            ".usdz") else None
+        return stage, root, save
+    from ..outputs.layers import check_layer_path
+
+    check_layer_path(output)
+    if os.path.realpath(output) == os.path.realpath(stage_path):
+        return stage, stage.GetRootLayer(), os.path.realpath(output)
+    if not os.path.exists(output):
+        layer = Sdf.Layer.CreateAnonymous(".usda")
+        layer.subLayerPaths.append(os.path.realpath(stage_path))
+        _copy_stage_metadata(stage, layer)
+        painted = Usd.Stage.Open(layer)
+        return painted, layer, os.path.realpath(output)
+    require_regular_file(output, "paint layer")
+    layer = open_layer(output, f"cannot open paint layer '{output}' (an existing file that "
+                               "is not a USD layer?)")
+    painted = Usd.Stage.Open(layer)
+    wanted = os.path.realpath(stage.GetRootLayer().realPath or stage_path)
+    stack = [os.path.realpath(item.realPath) for item in painted.GetLayerStack()
+             if item.realPath]
+    if wanted in stack:
+        return painted, layer, os.path.realpath(output)
+    over = Usd.Stage.Open(stage.GetRootLayer(), layer)
+    return over, layer, os.path.realpath(output)
+
+
+def _copy_stage_metadata(stage: Usd.Stage, layer: Sdf.Layer) -> None:
+    """A layer over the stage keeps its time range, frame rate, units and up axis (a
+    stage reads them from its root layer only)."""
+    root = stage.GetRootLayer()
+    if root.HasStartTimeCode():
+        layer.startTimeCode = root.startTimeCode
+    if root.HasEndTimeCode():
+        layer.endTimeCode = root.endTimeCode
+    if root.HasTimeCodesPerSecond():
+        layer.timeCodesPerSecond = root.timeCodesPerSecond
+    if root.HasFramesPerSecond():
+        layer.framesPerSecond = root.framesPerSecond
+    for key in ("metersPerUnit", "upAxis"):
+        if root.pseudoRoot.HasInfo(key):
+            layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
+
+
+class PaintSession:
+    """Paints q and W on the wrinkled meshes of one stage.
+
+    ``stage``: an open Usd.Stage whose edit target is ``layer`` (the strokes' layer);
+    ``save_path``: where :meth:`save` writes ``layer`` (None: it lives in memory, as
+    usdview's session layer does; :meth:`save` then only marks the session clean).
+    """
+
+    def __init__(self, stage: Usd.Stage, layer: Sdf.Layer, save_path: str | None = None,
+                 prim: str | None = None, frame: float | None = None,
+                 camera: str | None = None, all_meshes: bool = False, ctx=None,
+                 history_cache: int = 32):
+        from ..engine import WrinkleEngine
+        from ..outputs.images import layout_for
+        from ..schema import require_schema
+
+        require_schema()
+        self.stage = stage
+        self.layer = layer
+        self.save_path = save_path
+        self.stage.SetEditTarget(Usd.EditTarget(layer))
+        self.engine = WrinkleEngine(stage, all_meshes=all_meshes, camera=camera, ctx=ctx,
+                                    history_cache=history_cache)
+        self._layout = layout_for("view.png")
+        paths = self.engine.wrinkled_paths
+        if not paths:
+            self.engine.release()
+            raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to "
+                                  "paint (pass --all-meshes to paint every mesh)")
+        if prim is not None and prim not in paths:
+            self.engine.release()
+            raise UsdWrinkleError(f"--prim {prim} is not a wrinkled mesh of the stage "
+                                  f"(wrinkled: {', '.join(paths)})")
+        self.paths = [prim] if prim is not None else paths
+        self.meshes = {path: self._paint_mesh(path) for path in self.paths}
+        self.active = self.paths[0]
+        frames = self.engine.scene.frame_range()
+        #: the frames the timeline offers ([default] for a stage without a time range)
+        self.frames = [float(f) for f in frames]
+        self.frame_range = (self.frames[0], self.frames[-1])
+        end = self.frames[-1]
+        self.frame = float(frame if frame is not None else end)
+        self.brush = BrushSettings(radius=0.1 * self._size(), width=float(
+            np.median(self.meshes[self.active].width)))
+        self.orbit: OrbitCamera | None = OrbitCamera(np.zeros(3), 1.0,
+                                                     up_axis=UsdGeom.GetStageUpAxis(stage))
+        #: look through the stage's camera (what render shows) instead of the orbit
+        self.stage_camera = False
+        self.undo_stack: list[Edit] = []
+        self.redo_stack: list[Edit] = []
+        self._saved_at = 0
+        self._stroke: Stroke | None = None
+        self._stroke_before: tuple | None = None
+        self._live: dict | None = None
+        self._camera = None
+        self._posed: dict[str, tuple[float, np.ndarray]] = {}
+        self.last_frame: Frame | None = None
+        self._framed = False
+
+    # -- the meshes ---------------------------------------------------------------
+    def _paint_mesh(self, path: str) -> PaintMesh:
+        record = self.engine.meshes[path]
+        return PaintMesh(path, record.rest_points, record.rest_normals,
+                         record.topology.triangles, record.params.q, record.params.width)
+
+    def _size(self) -> float:
+        points = self.meshes[self.active].rest_points
+        return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) or 1.0
+
+    @property
+    def mesh(self) -> PaintMesh:
+        return self.meshes[self.active]
+
+    @property
+    def dirty(self) -> bool:
+        """Strokes or control changes not saved yet."""
+        return len(self.undo_stack) != self._saved_at
+
+    def reload(self) -> None:
+        """Re-read q and W from the stage (after an undo, or an outside edit)."""
+        self.engine.pull_changes()
+        for path in self.paths:
+            self.meshes[path] = self._paint_mesh(path)
+
+    # -- the view -------------------------------------------------------------------
+    def frame_view(self, aspect: float) -> None:
+        """Frame the orbit camera on the wrinkled meshes at the current frame (F)."""
+        self._ensure_posed()
+        boxes = [self._posed_points(path) for path in self.paths]
+        lo = np.min([b.min(axis=0) for b in boxes], axis=0)
+        hi = np.max([b.max(axis=0) for b in boxes], axis=0)
+        self.orbit.frame(lo, hi, aspect)
+        self._framed = True
+
+    def camera_record(self, width: int, height: int):
+        """The camera the view draws through (the orbit, or the stage's as render)."""
+        if self.stage_camera:
+            return self.engine.sample(self.frame, width / height).camera
+        if not self._framed:
+            self.frame_view(width / height)
+        return self.orbit.record(width / height)
+
+    def render(self, width: int, height: int, quality: Quality = FULL) -> Frame:
+        """Draw the current frame: RGBA codes, as ``usdwrinkle render`` writes a PNG
+        (with the stage's camera and FULL quality, the same codes)."""
+        import time
+
+        started = time.perf_counter()
+        w = max(1, int(round(width * quality.scale)))
+        h = max(1, int(round(height * quality.scale)))
+        camera = self.camera_record(w, h)
+        image = self.engine.render_image(self.frame, w, h, self._layout,
+                                         samples=quality.samples,
+                                         shade_samples=quality.samples > 1, camera=camera)
+        pixels = np.array(image.planes["RGBA"], copy=True)
+        image.release()
+        self._camera = (camera, w, h)
+        self._posed.clear()
+        self.last_frame = Frame(pixels, w, h, camera, quality, self.frame,
+                                time.perf_counter() - started, dict(self.engine.last_timings))
+        return self.last_frame
+
+    def _ensure_posed(self) -> None:
+        if self.engine.render_delegate.rprims[self.active].frame is None:
+            self.engine.compute_frame(self.frame)
+
+    def _posed_points(self, path: str) -> np.ndarray:
+        if path not in self._posed:
+            self._posed[path] = self.engine.posed_points(path)
+        return self._posed[path]
+
+    # -- picking --------------------------------------------------------------------
+    def pick(self, x: float, y: float, width: int, height: int) -> Hit | None:
+        """The nearest wrinkled-mesh point under pixel (x, y) of a ``width`` x ``height``
+        view of the last drawn frame (the same camera), or None."""
+        if self._camera is None:
+            return None
+        camera, w, h = self._camera
+        origin, direction = pixel_ray(camera, x * w / width, y * h / height, w, h)
+        best: Hit | None = None
+        for path in self.engine.visible_paths():
+            points = self._posed_points(path)
+            triangles = self.engine.meshes[path].topology.triangles
+            found = ray_triangles(origin, direction, points, triangles)
+            if found is None or (best is not None and found[1] >= best.distance):
+                continue
+            tri, distance, bary = found
+            rest = self.engine.meshes[path].rest_points[triangles[tri]].astype(np.float64)
+            best = Hit(path, tri, bary, bary @ rest, distance)
+        if best is not None and best.path not in self.meshes:
+            return None  # an occluder that is not painted
+        return best
+
+    def facing(self, path: str) -> np.ndarray:
+        """Per vertex of ``path``: whether its posed normal faces the eye."""
+        camera = self._camera[0]
+        points = self._posed_points(path)
+        normals = vertex_normals(points, self.engine.meshes[path].topology.triangles)
+        return np.einsum("ij,ij->i", normals, camera.position - points) > 0.0
+
+    # -- strokes --------------------------------------------------------------------
+    def begin_stroke(self, x: float, y: float, width: int, height: int,
+                     pressure: float = 1.0) -> bool:
+        """Start a stroke at pixel (x, y); False where it misses every painted mesh."""
+        hit = self.pick(x, y, width, height)
+        if hit is None:
+            return False
+        self.active = hit.path
+        mesh = self.mesh
+        self._stroke = Stroke(mesh, self.brush)
+        self._stroke_before = (mesh.q.copy(), mesh.width.copy())
+        self._stroke_facing = self.facing(hit.path)
+        self._stroke.add(hit, self._stroke_facing, pressure)
+        self._preview_mesh(mesh)
+        return True
+
+    def drag(self, x: float, y: float, width: int, height: int,
+             pressure: float = 1.0) -> int:
+        """The drag moved to pixel (x, y); returns the stamps placed."""
+        if self._stroke is None:
+            return 0
+        hit = self.pick(x, y, width, height)
+        if hit is None or hit.path != self.active:
+            return 0
+        placed = self._stroke.add(hit, self._stroke_facing, pressure)
+        if placed:
+            self._preview_mesh(self.mesh)
+        return placed
+
+    @property
+    def stroking(self) -> bool:
+        return self._stroke is not None
+
+    def end_stroke(self) -> Edit | None:
+        """End the stroke: author it (one undo step); None if it changed nothing."""
+        stroke, before = self._stroke, self._stroke_before
+        self._stroke = self._stroke_before = None
+        if stroke is None:
+            return None
+        mesh = self.mesh
+        if np.array_equal(before[0], mesh.q) and np.array_equal(before[1], mesh.width):
+            return None
+        return self._record(Edit(mesh.path, "paint", before,
+                                 (mesh.q.copy(), mesh.width.copy())))
+
+    def cancel_stroke(self) -> None:
+        """Drop the stroke in progress (Esc): the values before it come back."""
+        if self._stroke is None:
+            return
+        mesh = self.mesh
+        mesh.q[:], mesh.width[:] = self._stroke_before
+        self._stroke = self._stroke_before = None
+        self._author(mesh.path, "paint", (mesh.q.copy(), mesh.width.copy()))
+
+    def flood(self) -> Edit | None:
+        """The brush's mode over the whole active mesh (one undo step); comb floods
+        along the last stroke's direction, else the view's horizontal axis."""
+        mesh = self.mesh
+        before = (mesh.q.copy(), mesh.width.copy())
+        direction = None
+        if self.brush.mode == "comb":
+            direction = self._last_direction()
+        flood(mesh, self.brush, direction)
+        if np.array_equal(before[0], mesh.q) and np.array_equal(before[1], mesh.width):
+            return None
+        return self._record(Edit(mesh.path, "paint", before,
+                                 (mesh.q.copy(), mesh.width.copy())))
+
+    def _last_direction(self) -> np.ndarray:
+        if self._last_stroke_direction is not None:
+            return self._last_stroke_direction
+        if self.orbit is not None:
+            return self.orbit.basis()[1]
+        return np.array([1.0, 0.0, 0.0])
+
+    _last_stroke_direction: np.ndarray | None = None
+
+    def _preview_mesh(self, mesh: PaintMesh) -> None:
+        if self._stroke is not None and self._stroke.direction is not None:
+            self._last_stroke_direction = self._stroke.direction
+        self.engine.preview_params(mesh.path, q=clamp_unit(mesh.q).astype(np.float32),
+                                   width=mesh.width.copy())
+
+    # -- live controls ------------------------------------------------------------------
+    def control(self, name: str) -> float:
+        """A live control's value on the active mesh (width: the median W)."""
+        params = self.engine.meshes[self.active].params
+        value = getattr(params, name)
+        return float(np.median(value)) if name == "width" else float(value)
+
+    def set_control(self, name: str, value: float, live: bool = False) -> Edit | None:
+        """Set a control of the active mesh: ``live`` while the slider moves (drawn at
+        once, not authored), else authored (one undo step, from the value before the
+        slider moved)."""
+        if name not in CONTROLS:
+            raise UsdWrinkleError(f"unknown control {name!r} (one of {', '.join(CONTROLS)})")
+        _, low, high = CONTROLS[name]
+        value = float(value)
+        if not np.isfinite(value) or value < low or (high is not None and value > high):
+            raise UsdWrinkleError(f"{name} {value:g} must be in [{low:g}, "
+                                  f"{'inf' if high is None else f'{high:g}'}]", self.active)
+        mesh = self.mesh
+        if self._live is None or self._live["name"] != name:
+            self._live = {"name": name, "before": self._control_value(name)}
+        if name == "width":
+            mesh.width[:] = value
+            self.engine.preview_params(mesh.path, width=mesh.width.copy())
+        else:
+            self.engine.preview_params(mesh.path, **{name: value})
+        if live:
+            return None
+        before = self._live["before"]
+        self._live = None
+        after = self._control_value(name) if name == "width" else value
+        return self._record(Edit(mesh.path, name, before, after))
+
+    def _control_value(self, name: str):
+        if name == "width":
+            return self.mesh.width.copy()
+        return self.control(name)
+
+    def set_cloth(self, preset: str) -> Edit | None:
+        """Author ``wrinkle:cloth`` (the width follows it where none is authored)."""
+        if preset not in CLOTH_PRESETS:
+            raise UsdWrinkleError(f"unknown cloth {preset!r} (one of {', '.join(CLOTH_PRESETS)})")
+        prim = self.stage.GetPrimAtPath(self.active)
+        attr = prim.GetAttribute(schema.CLOTH)
+        before = attr.Get() if attr and attr.HasAuthoredValue() else None
+        return self._record(Edit(self.active, "cloth", before, preset))
+
+    # -- undo -----------------------------------------------------------------------
+    def _record(self, edit: Edit) -> Edit:
+        self._author(edit.path, edit.name, edit.after)
+        if len(self.undo_stack) < self._saved_at:
+            self._saved_at = -1  # the saved state is gone from the stack
+        self.undo_stack.append(edit)
+        self.redo_stack.clear()
+        return edit
+
+    def undo(self) -> Edit | None:
+        if not self.undo_stack:
+            return None
+        edit = self.undo_stack.pop()
+        self._author(edit.path, edit.name, edit.before)
+        self.redo_stack.append(edit)
+        return edit
+
+    def redo(self) -> Edit | None:
+        if not self.redo_stack:
+            return None
+        edit = self.redo_stack.pop()
+        self._author(edit.path, edit.name, edit.after)
+        self.undo_stack.append(edit)
+        return edit
+
+    def _author(self, path: str, name: str, value) -> None:
+        """Author one step's values on the edit layer through the WrinkleAPI (checked
+        as ``check`` checks them); the engine sees the edit at the next frame."""
+        from ..authoring import WrinkleAPI
+
+        prim = self.stage.GetPrimAtPath(path)
+        api = WrinkleAPI(prim) if schema.has_wrinkle_api(prim) else WrinkleAPI.Apply(prim)
+        mesh = self.meshes[path]
+        with Sdf.ChangeBlock():
+            if name == "paint":
+                q, width = value
+                mesh.q[:], mesh.width[:] = q, width
+                api.set_q(q)
+                self._author_width(api, width)
+            elif name == "width":
+                mesh.width[:] = value
+                self._author_width(api, value)
+            elif name == "cloth":
+                attr = prim.GetAttribute(schema.CLOTH)
+                if value is None:
+                    if attr:
+                        prim.RemoveProperty(schema.CLOTH)
+                else:
+                    api.CreateClothAttr(value)
+            elif name == "amplitude_scale":
+                api.CreateAmplitudeScaleAttr(float(value))
+            elif name == "slack":
+                api.CreateSlackAttr(float(value))
+        if name == "cloth":
+            self.reload()  # the width follows the preset
+        self._live = None
+
+    def _author_width(self, api, width: np.ndarray) -> None:
+        """W as authored: one value when it is the same everywhere, else per point; not
+        authored where it equals what the stage gives already (a cloth preset, say)."""
+        current = self.engine.meshes[api.GetPath().pathString].params.width
+        if np.array_equal(np.asarray(current, np.float32), width):
+            return
+        values = width[:1] if np.all(width == width[0]) else width
+        api.CreateWidthPrimvar(np.asarray(values, np.float32))
+
+    # -- save -----------------------------------------------------------------------
+    def save(self, path: str | None = None) -> str | None:
+        """Write the edit layer atomically to ``path`` (default: the session's save path);
+        returns where it went (None: an in-memory layer, only marked saved)."""
+        from ..outputs.atomic import atomic_path
+        from ..outputs.layers import check_layer_path, export_layer
+
+        target = path or self.save_path
+        if target is None:
+            if self.layer.anonymous or self.layer.realPath == "":
+                self._saved_at = len(self.undo_stack)
+                return None
+            target = self.layer.realPath
+        check_layer_path(target)
+        layer = self.layer
+        if layer.anonymous:
+            # the sublayer of the painted stage, relative to where the layer is written
+            layer = Sdf.Layer.CreateAnonymous(".usda")
+            layer.TransferContent(self.layer)
+            folder = os.path.dirname(os.path.realpath(target))
+            paths = [os.path.relpath(p, folder) if os.path.isabs(p) else p
+                     for p in self.layer.subLayerPaths]
+            layer.subLayerPaths.clear()
+            for item in paths:
+                layer.subLayerPaths.append(item)
+        layer.customLayerData = {**dict(layer.customLayerData),
+                                 "usdwrinkle": {"painted": True}}
+        with atomic_path(target) as tmp:
+            export_layer(layer, tmp, target)
+        self.save_path = target
+        self._saved_at = len(self.undo_stack)
+        return target
+
+    def release(self) -> None:
+        self.engine.release()
+
+
+def session_for(stage_path: str, output: str | None = None, **kwargs) -> PaintSession:
+    """The session of ``usdwrinkle paint STAGE [-o LAYER]`` (open_paint_stage)."""
+    stage, layer, save = open_paint_stage(stage_path, output)
+    return PaintSession(stage, layer, save, **kwargs)
+
+
+def with_brush(session: PaintSession, **changes) -> BrushSettings:
+    """Change the session's brush (checked); returns it."""
+    session.brush = replace(session.brush, **changes)
+    return session.brush
