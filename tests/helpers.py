@@ -166,3 +166,14 @@ def bind_purpose_looks(stage, prim_path: str) -> None:
         material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
         binding.Bind(material, materialPurpose=getattr(UsdShade.Tokens, purpose))
 
+
+
+def sheet_stage(path, nx: int = 41) -> str:
+    """A flat, still, symmetric sheet (2 x 2, z up) with WrinkleAPI and W = 0.2, written
+    to ``path`` (the paint window's mirror and width tests)."""
+    from usdwrinkle.authoring.builders import grid_sheet
+
+    points, counts, indices = grid_sheet(nx, nx, 2.0)
+    stage = point_cache_stage(points, {1.0: points, 2.0: points}, counts, indices, width=0.2)
+    stage.GetRootLayer().Export(str(path))
+    return str(path)

@@ -29,7 +29,7 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import apply, bake, bench, check, demo, info, render
+    from . import apply, bake, bench, check, demo, info, paint, render
 
     parser = OneLineParser(
         prog="usdwrinkle",
@@ -38,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"usdwrinkle {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (render, bake, apply, check, bench, info, demo):
+    for module in (render, bake, apply, paint, check, bench, info, demo):
         module.add_parser(sub)
     for command in sub.choices.values():
         # also after the subcommand; SUPPRESS: unset here must not undo it given before

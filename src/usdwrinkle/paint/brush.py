@@ -321,7 +321,8 @@ class Stroke:
         self.last: np.ndarray | None = None
         self.direction: np.ndarray | None = None
         self.touched: set[int] = set()
-        self.stamps = 0
+        #: the rest-space centre of every stamp placed
+        self.centres: list[np.ndarray] = []
 
     def add(self, hit: Hit, facing: np.ndarray | None, pressure: float = 1.0) -> int:
         """A new sample of the drag; returns the stamps placed."""
@@ -349,4 +350,4 @@ class Stroke:
     def _stamp(self, centre, triangle, direction, facing, pressure) -> None:
         touched = stamp(self.mesh, self.brush, centre, triangle, direction, facing, pressure)
         self.touched.update(touched.tolist())
-        self.stamps += 1
+        self.centres.append(np.array(centre, np.float64))

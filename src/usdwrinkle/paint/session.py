@@ -143,7 +143,7 @@ class PaintSession:
     def __init__(self, stage: Usd.Stage, layer: Sdf.Layer, save_path: str | None = None,
                  prim: str | None = None, frame: float | None = None,
                  camera: str | None = None, all_meshes: bool = False, ctx=None,
-                 history_cache: int = 32):
+                 history_cache: int = 32, in_memory: bool = False):
         from ..engine import WrinkleEngine
         from ..outputs.images import layout_for
         from ..schema import require_schema
@@ -152,6 +152,9 @@ class PaintSession:
         self.stage = stage
         self.layer = layer
         self.save_path = save_path
+        #: the strokes' layer lives in memory (usdview's session layer): saving marks the
+        #: session clean and writes nothing, unless a path is given
+        self.in_memory = in_memory
         self.stage.SetEditTarget(Usd.EditTarget(layer))
         self.engine = WrinkleEngine(stage, all_meshes=all_meshes, camera=camera, ctx=ctx,
                                     history_cache=history_cache)
@@ -190,6 +193,9 @@ class PaintSession:
         self._posed: dict[str, tuple[float, np.ndarray]] = {}
         self.last_frame: Frame | None = None
         self._framed = False
+        #: the last stroke's stamp centres (rest space) and the vertices it touched
+        self.stamp_centres: list[np.ndarray] = []
+        self.last_touched = np.zeros(0, np.int64)
 
     # -- the meshes ---------------------------------------------------------------
     def _paint_mesh(self, path: str) -> PaintMesh:
@@ -331,6 +337,8 @@ class PaintSession:
         self._stroke = self._stroke_before = None
         if stroke is None:
             return None
+        self.stamp_centres = list(stroke.centres)
+        self.last_touched = np.array(sorted(stroke.touched), np.int64)
         mesh = self.mesh
         if np.array_equal(before[0], mesh.q) and np.array_equal(before[1], mesh.width):
             return None
@@ -497,10 +505,11 @@ class PaintSession:
 
         target = path or self.save_path
         if target is None:
-            if self.layer.anonymous or self.layer.realPath == "":
-                self._saved_at = len(self.undo_stack)
-                return None
-            target = self.layer.realPath
+            if not self.in_memory:
+                raise UsdWrinkleError("this session has no layer file to save to (a "
+                                      "package is not edited in place): save as a new layer")
+            self._saved_at = len(self.undo_stack)
+            return None
         check_layer_path(target)
         layer = self.layer
         if layer.anonymous:
@@ -513,8 +522,6 @@ class PaintSession:
             layer.subLayerPaths.clear()
             for item in paths:
                 layer.subLayerPaths.append(item)
-        layer.customLayerData = {**dict(layer.customLayerData),
-                                 "usdwrinkle": {"painted": True}}
         with atomic_path(target) as tmp:
             export_layer(layer, tmp, target)
         self.save_path = target

@@ -1,0 +1,798 @@
+"""The paint window (PySide6): the engine's own frame in a QOpenGLWidget, a brush on the
+surface, live controls, a timeline. Every Qt override and slot runs through
+:func:`guarded`, so a Python error becomes a message in the window, never a dead process
+(PySide6 6.12 aborts on an exception that leaves an override).
+
+Mouse (usdview and Maya): left button paints; Alt+left tumbles, middle (or Alt+middle)
+tracks, right (or Alt+right) and the wheel dolly. Keys: Ctrl+S save, Ctrl+Shift+S save
+as, Ctrl+Z undo, Ctrl+Shift+Z redo, F frames the meshes, [ and ] the radius, Esc drops
+the stroke in progress, Space plays.
+"""
+from __future__ import annotations
+
+import functools
+import time
+import traceback
+
+import numpy as np
+
+try:
+    from PySide6 import QtCore, QtGui, QtWidgets
+    from PySide6.QtOpenGLWidgets import QOpenGLWidget
+except ImportError as exc:  # the optional extra
+    from ..errors import UsdWrinkleError
+
+    raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
+                          f"({exc})") from None
+
+from .brush import FALLOFFS, MIRROR_AXES, MODES
+from .session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
+from .view import project
+
+Qt = QtCore.Qt
+
+#: the view's background (linear grey, under the frame's alpha), as usdview's
+BACKGROUND = (0.18, 0.18, 0.2)
+
+
+def guarded(method):
+    """Run a Qt override or slot; an exception is shown in the window (and logged),
+    and the window goes on."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        try:
+            return method(self, *args, **kwargs)
+        except Exception as exc:  # noqa: BLE001 (a Qt override must never raise)
+            owner = self if hasattr(self, "show_error") else getattr(self, "owner", None)
+            text = exc.one_line() if hasattr(exc, "one_line") else f"{type(exc).__name__}: {exc}"
+            detail = traceback.format_exc()
+            # the traceback's frames hold the Qt objects of the override's call: let them go
+            # now (kept, they outlive the GL context and crash the interpreter's exit)
+            traceback.clear_frames(exc.__traceback__)
+            exc.__traceback__ = None
+            if owner is not None:
+                owner.show_error(text, detail)
+            return None
+
+    return wrapper
+
+
+_QUAD_VERTEX = """
+#version 330
+out vec2 uv;
+void main() {
+    vec2 corner = vec2(float(gl_VertexID & 1), float((gl_VertexID >> 1) & 1));
+    uv = vec2(corner.x, 1.0 - corner.y);  // the frame's row 0 is its top
+    gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+"""
+_QUAD_FRAGMENT = """
+#version 330
+uniform sampler2D frame;
+uniform vec3 background;
+in vec2 uv;
+out vec4 colour;
+void main() {
+    vec4 c = texture(frame, uv);  // sRGB codes, straight alpha, as the PNG holds them
+    colour = vec4(mix(background, c.rgb, c.a), 1.0);
+}
+"""
+
+
+class PaintView(QOpenGLWidget):
+    """The engine draws into this widget's own GL context (moderngl attaches to it in
+    initializeGL): the frame is resolved to the codes ``usdwrinkle render`` writes and
+    shown, then the brush outline and q are drawn over it."""
+
+    def __init__(self, owner: PaintWindow, make_session):
+        super().__init__()
+        self.owner = owner
+        self._make_session = make_session
+        self.session: PaintSession | None = None
+        self.ctx = None
+        self.setMouseTracking(True)
+        self.setFocusPolicy(Qt.StrongFocus)
+        self.setMinimumSize(320, 180)
+        self.cursor_pos: QtCore.QPointF | None = None
+        self.pressure = 1.0
+        self.show_q = False
+        self.interacting = False  # a stroke or a live slider: draw the preview
+        self.last_frame = None
+        self._drag = None
+        self._texture = None
+        self._program = None
+        self._vao = None
+        #: injected faults for the tests: "paint", "brush" or "save" raises there
+        self.fault: str | None = None
+        self.frame_times: list[float] = []
+
+    # -- GL ---------------------------------------------------------------------------
+    @guarded
+    def initializeGL(self):  # noqa: N802 (Qt naming)
+        import moderngl
+
+        self.ctx = moderngl.create_context(require=430)
+        self._program = self.ctx.program(vertex_shader=_QUAD_VERTEX,
+                                         fragment_shader=_QUAD_FRAGMENT)
+        self._vao = self.ctx.vertex_array(self._program, [])
+        if self.session is None:
+            self.session = self._make_session(self.ctx)
+            self.owner.session_ready(self.session)
+
+    def release(self) -> None:
+        """Free the engine and the view's GL objects in their own context (before Qt
+        destroys it: freed after, they crash the process)."""
+        if self.ctx is None:
+            return
+        self.makeCurrent()
+        try:
+            if self.session is not None:
+                self.session.release()
+                self.session = None
+            for item in (self._texture, self._vao, self._program):
+                if item is not None:
+                    item.release()
+            self._texture = self._vao = self._program = None
+        finally:
+            self.doneCurrent()
+            self.ctx = None
+
+    def gl_size(self) -> tuple[int, int]:
+        ratio = self.devicePixelRatioF()
+        return max(1, int(self.width() * ratio)), max(1, int(self.height() * ratio))
+
+    @guarded
+    def paintGL(self):  # noqa: N802
+        if self.fault == "paint":
+            self.fault = None
+            raise RuntimeError("injected fault in paintGL")
+        if self.session is None or self.ctx is None:
+            return
+        started = time.perf_counter()
+        width, height = self.gl_size()
+        quality = PREVIEW if self.interacting else FULL
+        frame = self.session.render(width, height, quality)
+        self.last_frame = frame
+        self._show(frame, width, height)
+        self.frame_times.append(time.perf_counter() - started)
+        self.owner.frame_drawn(frame)
+        self._overlay()
+
+    def _show(self, frame, width: int, height: int) -> None:
+        import moderngl
+
+        ctx = self.ctx
+        if self._texture is None or self._texture.size != (frame.width, frame.height):
+            if self._texture is not None:
+                self._texture.release()
+            self._texture = ctx.texture((frame.width, frame.height), 4, dtype="f1")
+            self._texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._texture.write(np.ascontiguousarray(frame.pixels).tobytes())
+        target = ctx.detect_framebuffer(self.defaultFramebufferObject())
+        target.use()
+        ctx.viewport = (0, 0, width, height)
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
+        ctx.scissor = None
+        self._texture.use(0)
+        self._program["frame"] = 0
+        self._program["background"] = BACKGROUND
+        self._vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
+
+    def _overlay(self) -> None:
+        """The brush outline on the surface under the cursor, and q as segments."""
+        session = self.session
+        painter = QtGui.QPainter(self)
+        try:
+            painter.setRenderHint(QtGui.QPainter.Antialiasing)
+            if self.show_q:
+                self._draw_q(painter)
+            if self.cursor_pos is not None and not self._drag:
+                self._draw_outline(painter, session)
+        finally:
+            painter.end()
+
+    def _to_view(self, points, frame):
+        """World points -> widget pixels (logical), and whether in front."""
+        xy, front = project(frame.camera, points, frame.width, frame.height)
+        xy[:, 0] *= self.width() / frame.width
+        xy[:, 1] *= self.height() / frame.height
+        return xy, front
+
+    def _draw_outline(self, painter, session) -> None:
+        frame = self.last_frame
+        if frame is None:
+            return
+        hit = session.pick(self.cursor_pos.x(), self.cursor_pos.y(), self.width(), self.height())
+        if hit is None:
+            return
+        posed = session._posed_points(hit.path)
+        tri = session.engine.meshes[hit.path].topology.triangles[hit.triangle]
+        corners = posed[tri]
+        centre = hit.barycentric @ corners
+        normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+        normal /= max(np.linalg.norm(normal), 1e-12)
+        u = np.cross(normal, [0.0, 0.0, 1.0] if abs(normal[2]) < 0.9 else [1.0, 0.0, 0.0])
+        u /= np.linalg.norm(u)
+        v = np.cross(normal, u)
+        angles = np.linspace(0, 2 * np.pi, 49)
+        radius = session.brush.radius * _scale_of(session, hit.path)
+        ring = centre + radius * (np.cos(angles)[:, None] * u + np.sin(angles)[:, None] * v)
+        xy, front = self._to_view(ring, frame)
+        if not front.all():
+            return
+        painter.setPen(QtGui.QPen(QtGui.QColor(255, 220, 80), 1.5))
+        painter.drawPolyline(QtGui.QPolygonF([QtCore.QPointF(*p) for p in xy]))
+
+    def _draw_q(self, painter) -> None:
+        session, frame = self.session, self.last_frame
+        if frame is None:
+            return
+        painter.setPen(QtGui.QPen(QtGui.QColor(80, 230, 255), 1.2))
+        for path in session.paths:
+            mesh = session.meshes[path]
+            length = np.linalg.norm(mesh.q, axis=1)
+            show = np.nonzero(length > 0.02)[0]
+            if not len(show):
+                continue
+            posed = session._posed_points(path)
+            facing = session.facing(path)
+            show = show[facing[show]]
+            directions = posed_directions(mesh, posed, mesh.q)
+            half = 0.5 * mesh.mean_edge() * length[show, None] * directions[show]
+            a, fa = self._to_view(posed[show] - half, frame)
+            b, fb = self._to_view(posed[show] + half, frame)
+            lines = [QtCore.QLineF(QtCore.QPointF(*p), QtCore.QPointF(*r))
+                     for p, r, ok in zip(a, b, fa & fb, strict=True) if ok]
+            painter.drawLines(lines)
+
+    # -- input ------------------------------------------------------------------------
+    @guarded
+    def tabletEvent(self, event):  # noqa: N802
+        self.pressure = float(event.pressure()) if event.pressure() > 0 else 1.0
+        event.ignore()  # Qt then sends the mouse events the brush reads
+
+    @guarded
+    def mousePressEvent(self, event):  # noqa: N802
+        pos = event.position()
+        alt = bool(event.modifiers() & Qt.AltModifier)
+        button = event.button()
+        if button == Qt.LeftButton and not alt:
+            if self.fault == "brush":
+                self.fault = None
+                raise RuntimeError("injected fault in the brush")
+            # a stroke may start off the mesh: it begins where the drag first meets it
+            self._drag = ("paint", pos)
+            self.interacting = True
+            self.session.begin_stroke(pos.x(), pos.y(), self.width(), self.height(),
+                                      self.pressure)
+            self.update()
+            return
+        kind = {Qt.LeftButton: "tumble", Qt.MiddleButton: "track",
+                Qt.RightButton: "dolly"}.get(button)
+        if kind is not None:
+            self.session.stage_camera = False
+            self.owner.sync_view_mode()
+            self._drag = (kind, pos)
+            self.interacting = True
+
+    @guarded
+    def mouseMoveEvent(self, event):  # noqa: N802
+        pos = event.position()
+        self.cursor_pos = pos
+        if self._drag is None:
+            self.update()  # the brush outline follows
+            return
+        kind, last = self._drag
+        dx, dy = pos.x() - last.x(), pos.y() - last.y()
+        if kind == "paint":
+            if not self.session.stroking:
+                self.session.begin_stroke(pos.x(), pos.y(), self.width(), self.height(),
+                                          self.pressure)
+            elif self.session.drag(pos.x(), pos.y(), self.width(), self.height(),
+                                   self.pressure):
+                self.owner.mark_dirty()
+        elif kind == "tumble":
+            self.session.orbit.tumble(dx, dy)
+        elif kind == "track":
+            self.session.orbit.track(dx, dy, self.height())
+        elif kind == "dolly":
+            self.session.orbit.dolly(-dy / 40.0)
+        self._drag = (kind, pos)
+        self.update()
+
+    @guarded
+    def mouseReleaseEvent(self, event):  # noqa: N802
+        if self._drag is None:
+            return
+        kind, _ = self._drag
+        self._drag = None
+        self.interacting = False
+        if kind == "paint":
+            self.session.end_stroke()
+            self.owner.after_edit()
+        self.update()  # refine: the full-quality frame
+
+    @guarded
+    def wheelEvent(self, event):  # noqa: N802
+        self.session.stage_camera = False
+        self.owner.sync_view_mode()
+        self.session.orbit.dolly(event.angleDelta().y() / 120.0)
+        self.update()
+
+    @guarded
+    def leaveEvent(self, event):  # noqa: N802
+        self.cursor_pos = None
+        self.update()
+
+
+def _scale_of(session, path: str) -> float:
+    """How many world units one rest-space unit of ``path`` is (its local-to-world)."""
+    frame = session.engine.render_delegate.rprims[path].frame
+    matrix = frame.local_to_world[:3, :3] if frame is not None else np.eye(3)
+    return float(np.cbrt(abs(np.linalg.det(matrix)))) or 1.0
+
+
+def posed_directions(mesh, posed: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """Rest-space vectors carried to the posed mesh: per vertex, the least-squares map of
+    its rest edges onto its posed edges (unit results; zero where undefined)."""
+    tri = mesh.triangles
+    edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    edges = np.concatenate([edges, edges[:, ::-1]])
+    a = mesh.rest_points[edges[:, 1]] - mesh.rest_points[edges[:, 0]]
+    b = posed[edges[:, 1]] - posed[edges[:, 0]]
+    aa = np.zeros((mesh.count, 3, 3))
+    ba = np.zeros((mesh.count, 3, 3))
+    np.add.at(aa, edges[:, 0], a[:, :, None] * a[:, None, :])
+    np.add.at(ba, edges[:, 0], b[:, :, None] * a[:, None, :])
+    jac = ba @ np.linalg.pinv(aa, rcond=1e-6)
+    out = np.einsum("nij,nj->ni", jac, np.asarray(vectors, np.float64))
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(length > 1e-12, out / np.maximum(length, 1e-300), 0.0)
+
+
+class _Slider(QtWidgets.QWidget):
+    """A labelled float slider: ``moved(value)`` while dragged, ``released(value)``."""
+
+    def __init__(self, label: str, low: float, high: float, value: float, decimals: int = 3,
+                 log: bool = False):
+        super().__init__()
+        self.low, self.high, self.log, self.decimals = low, high, log, decimals
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.label = QtWidgets.QLabel(label)
+        self.label.setMinimumWidth(70)
+        self.slider = QtWidgets.QSlider(Qt.Horizontal)
+        self.slider.setRange(0, 1000)
+        self.value_label = QtWidgets.QLabel()
+        self.value_label.setMinimumWidth(52)
+        layout.addWidget(self.label)
+        layout.addWidget(self.slider, 1)
+        layout.addWidget(self.value_label)
+        self.set_value(value)
+        self.slider.valueChanged.connect(self._show)
+
+    def _to_value(self, position: int) -> float:
+        t = position / 1000.0
+        if self.log:
+            return float(self.low * (self.high / self.low) ** t)
+        return float(self.low + t * (self.high - self.low))
+
+    def _to_position(self, value: float) -> int:
+        value = min(max(value, self.low), self.high)
+        if self.log:
+            t = np.log(value / self.low) / np.log(self.high / self.low)
+        else:
+            t = (value - self.low) / (self.high - self.low) if self.high > self.low else 0.0
+        return int(round(1000 * t))
+
+    def value(self) -> float:
+        return self._to_value(self.slider.value())
+
+    def set_value(self, value: float) -> None:
+        blocked = self.slider.blockSignals(True)
+        self.slider.setValue(self._to_position(value))
+        self.slider.blockSignals(blocked)
+        self._show()
+
+    def _show(self, *_):
+        self.value_label.setText(f"{self.value():.{self.decimals}g}")
+
+
+class PaintWindow(QtWidgets.QMainWindow):
+    """``usdwrinkle paint``: the view, the brush and control panel, the timeline."""
+
+    def __init__(self, make_session, title: str = "usdwrinkle paint"):
+        super().__init__()
+        self.setWindowTitle(title)
+        self._title = title
+        self.session: PaintSession | None = None
+        self.errors: list[str] = []
+        #: asked when closing with unsaved strokes: returns "save", "discard" or "cancel"
+        #: (a dialog by default; tests answer it)
+        self.confirm_close = self._ask_close
+        self.view = PaintView(self, make_session)
+        self.setCentralWidget(self.view)
+        self.error_banner = QtWidgets.QLabel()
+        self.error_banner.setStyleSheet("background:#7a1f1f;color:white;padding:4px")
+        self.error_banner.setWordWrap(True)
+        self.error_banner.hide()
+        self.statusBar().addPermanentWidget(self.error_banner, 1)
+        self._build_controls()
+        self._build_timeline()
+        self._build_actions()
+        self._play = QtCore.QTimer(self)
+        self._play.timeout.connect(self._step_play)
+        self.resize(1200, 700)
+
+    # -- building -------------------------------------------------------------------
+    def _build_controls(self) -> None:
+        dock = QtWidgets.QDockWidget("Brush and wrinkles", self)
+        dock.setFeatures(QtWidgets.QDockWidget.NoDockWidgetFeatures)
+        panel = QtWidgets.QWidget()
+        form = QtWidgets.QVBoxLayout(panel)
+        self.mode = QtWidgets.QComboBox()
+        self.mode.addItems(MODES)
+        self.falloff = QtWidgets.QComboBox()
+        self.falloff.addItems(FALLOFFS)
+        self.mirror = QtWidgets.QComboBox()
+        self.mirror.addItems(["none" if axis is None else axis for axis in MIRROR_AXES])
+        self.geodesic = QtWidgets.QCheckBox("distance along the surface")
+        self.geodesic.setChecked(True)
+        self.front_only = QtWidgets.QCheckBox("front-facing only")
+        self.front_only.setChecked(True)
+        self.show_q = QtWidgets.QCheckBox("show q")
+        self.radius = _Slider("radius", 1e-3, 10.0, 0.1, log=True)
+        self.strength = _Slider("strength", 0.0, 1.0, 0.5)
+        self.amount = _Slider("amount", 0.0, 1.0, 1.0)
+        self.flood_button = QtWidgets.QPushButton("Flood")
+        self.width_slider = _Slider("W", 1e-3, 10.0, 0.1, log=True)
+        self.amplitude = _Slider("amplitude", 0.0, 4.0, 1.0)
+        self.slack = _Slider("slack", 0.0, 0.9, 0.06)
+        self.cloth = QtWidgets.QComboBox()
+        self.cloth.addItems(["(as authored)", *CLOTH_PRESETS])
+        self.view_mode = QtWidgets.QComboBox()
+        self.view_mode.addItems(["orbit", "stage camera"])
+        for label, widget in (("mode", self.mode), ("falloff", self.falloff),
+                              ("mirror", self.mirror)):
+            row = QtWidgets.QHBoxLayout()
+            row.addWidget(QtWidgets.QLabel(label))
+            row.addWidget(widget, 1)
+            form.addLayout(row)
+        for widget in (self.radius, self.strength, self.amount, self.geodesic,
+                       self.front_only, self.flood_button, self.show_q):
+            form.addWidget(widget)
+        form.addWidget(QtWidgets.QLabel("<b>Wrinkles</b>"))
+        for widget in (self.width_slider, self.amplitude, self.slack):
+            form.addWidget(widget)
+        for label, widget in (("cloth", self.cloth), ("view", self.view_mode)):
+            row = QtWidgets.QHBoxLayout()
+            row.addWidget(QtWidgets.QLabel(label))
+            row.addWidget(widget, 1)
+            form.addLayout(row)
+        form.addStretch(1)
+        dock.setWidget(panel)
+        self.addDockWidget(Qt.RightDockWidgetArea, dock)
+        for combo in (self.mode, self.falloff, self.mirror):
+            combo.currentTextChanged.connect(self._brush_changed)
+        for box in (self.geodesic, self.front_only):
+            box.toggled.connect(self._brush_changed)
+        for slider in (self.radius, self.strength, self.amount):
+            slider.slider.valueChanged.connect(self._brush_changed)
+        self.show_q.toggled.connect(self._show_q)
+        self.flood_button.clicked.connect(self._flood)
+        for name, slider in self._controls().items():
+            slider.slider.valueChanged.connect(functools.partial(self._control_moved, name))
+            slider.slider.sliderReleased.connect(functools.partial(self._control_released,
+                                                                   name))
+        self.cloth.currentTextChanged.connect(self._cloth_changed)
+        self.view_mode.currentTextChanged.connect(self._view_mode_changed)
+
+    def _controls(self) -> dict:
+        return {"width": self.width_slider, "amplitude_scale": self.amplitude,
+                "slack": self.slack}
+
+    def _build_timeline(self) -> None:
+        bar = QtWidgets.QToolBar("Timeline", self)
+        bar.setMovable(False)
+        self.play_button = QtWidgets.QPushButton("Play")
+        self.play_button.setCheckable(True)
+        self.timeline = QtWidgets.QSlider(Qt.Horizontal)
+        self.frame_label = QtWidgets.QLabel()
+        self.frame_label.setMinimumWidth(80)
+        bar.addWidget(self.play_button)
+        bar.addWidget(self.timeline)
+        bar.addWidget(self.frame_label)
+        self.addToolBar(Qt.BottomToolBarArea, bar)
+        self.timeline.valueChanged.connect(self._scrub)
+        self.play_button.toggled.connect(self._toggle_play)
+
+    def _build_actions(self) -> None:
+        menu = self.menuBar().addMenu("&File")
+        edit = self.menuBar().addMenu("&Edit")
+        view = self.menuBar().addMenu("&View")
+        specs = (
+            (menu, "&Save", QtGui.QKeySequence.Save, self.save),
+            (menu, "Save &As...", QtGui.QKeySequence("Ctrl+Shift+S"), self.save_as),
+            (menu, "&Close", QtGui.QKeySequence.Close, self.close),
+            (edit, "&Undo", QtGui.QKeySequence("Ctrl+Z"), self.undo),
+            (edit, "&Redo", QtGui.QKeySequence("Ctrl+Shift+Z"), self.redo),
+            (edit, "Drop stroke", QtGui.QKeySequence(Qt.Key_Escape), self._cancel_stroke),
+            (edit, "Smaller brush", QtGui.QKeySequence(Qt.Key_BracketLeft),
+             functools.partial(self._resize_brush, 1 / 1.15)),
+            (edit, "Larger brush", QtGui.QKeySequence(Qt.Key_BracketRight),
+             functools.partial(self._resize_brush, 1.15)),
+            (view, "&Frame meshes", QtGui.QKeySequence(Qt.Key_F), self.frame_meshes),
+            (view, "Play", QtGui.QKeySequence(Qt.Key_Space),
+             lambda: self.play_button.toggle()),
+        )
+        self.actions_by_name = {}
+        for owner, text, keys, slot in specs:
+            action = QtGui.QAction(text, self)
+            action.setShortcut(keys)
+            action.setShortcutContext(Qt.WindowShortcut)
+            action.triggered.connect(self._guard_slot(slot))
+            owner.addAction(action)
+            self.actions_by_name[text.replace("&", "")] = action
+
+    def _guard_slot(self, slot):
+        def run(*_):
+            try:
+                slot()
+            except Exception as exc:  # noqa: BLE001 (a slot must never raise into Qt)
+                text = exc.one_line() if hasattr(exc, "one_line") else \
+                    f"{type(exc).__name__}: {exc}"
+                self.show_error(text, traceback.format_exc())
+        return run
+
+    # -- the session ------------------------------------------------------------------
+    def session_ready(self, session: PaintSession) -> None:
+        """The view made its session (initializeGL): fill the controls from it."""
+        self.session = session
+        brush = session.brush
+        self.radius.low, self.radius.high = brush.radius / 100, brush.radius * 20
+        self.radius.set_value(brush.radius)
+        self.strength.set_value(brush.strength)
+        self.amount.set_value(brush.amount)
+        width = session.control("width")
+        self.width_slider.low, self.width_slider.high = width / 20, width * 20
+        self._fill_controls()
+        frames = session.frames
+        if len(frames) > 1 and not np.isnan(frames[0]):
+            blocked = self.timeline.blockSignals(True)
+            self.timeline.setRange(int(frames[0]), int(frames[-1]))
+            self.timeline.setValue(int(round(session.frame)))
+            self.timeline.blockSignals(blocked)
+        else:
+            self.timeline.setEnabled(False)
+            self.play_button.setEnabled(False)
+        self.sync_view_mode()
+        self._update_title()
+        self._update_frame_label()
+
+    def _fill_controls(self) -> None:
+        for name, slider in self._controls().items():
+            slider.set_value(self.session.control(name))
+
+    @guarded
+    def _brush_changed(self, *_):
+        if self.session is None:
+            return
+        from .session import with_brush
+
+        with_brush(self.session, mode=self.mode.currentText(),
+                   falloff=self.falloff.currentText(),
+                   mirror=None if self.mirror.currentText() == "none" else
+                   self.mirror.currentText(),
+                   geodesic=self.geodesic.isChecked(),
+                   front_facing_only=self.front_only.isChecked(),
+                   radius=self.radius.value(), strength=self.strength.value(),
+                   amount=self.amount.value(), width=self.width_slider.value())
+        self.view.update()
+
+    def _resize_brush(self, factor: float) -> None:
+        self.radius.slider.setValue(self.radius._to_position(self.radius.value() * factor))
+
+    @guarded
+    def _show_q(self, on: bool):
+        self.view.show_q = bool(on)
+        self.view.update()
+
+    @guarded
+    def _control_moved(self, name: str, *_):
+        if self.session is None:
+            return
+        slider = self._controls()[name]
+        live = slider.slider.isSliderDown()
+        self.view.interacting = live
+        self.session.set_control(name, slider.value(), live=live)
+        if not live:
+            self.after_edit()
+        self.view.update()
+
+    @guarded
+    def _control_released(self, name: str):
+        if self.session is None:
+            return
+        self.view.interacting = False
+        self.session.set_control(name, self._controls()[name].value(), live=False)
+        self.after_edit()
+        self.view.update()
+
+    @guarded
+    def _cloth_changed(self, text: str):
+        if self.session is None or text.startswith("("):
+            return
+        self.session.set_cloth(text)
+        self._fill_controls()
+        self.after_edit()
+        self.view.update()
+
+    @guarded
+    def _view_mode_changed(self, text: str):
+        if self.session is None:
+            return
+        self.session.stage_camera = text == "stage camera"
+        self.view.update()
+
+    def sync_view_mode(self) -> None:
+        blocked = self.view_mode.blockSignals(True)
+        self.view_mode.setCurrentText("stage camera" if self.session.stage_camera else "orbit")
+        self.view_mode.blockSignals(blocked)
+
+    @guarded
+    def _flood(self, *_):
+        self.session.flood()
+        self.after_edit()
+        self.view.update()
+
+    def _cancel_stroke(self) -> None:
+        if self.session is not None and self.session.stroking:
+            self.session.cancel_stroke()
+            self.view._drag = None
+            self.view.interacting = False
+            self.view.update()
+
+    def frame_meshes(self) -> None:
+        self.session.stage_camera = False
+        self.sync_view_mode()
+        self.session.frame_view(self.view.width() / max(self.view.height(), 1))
+        self.view.update()
+
+    # -- timeline -------------------------------------------------------------------
+    @guarded
+    def _scrub(self, value: int):
+        if self.session is None:
+            return
+        self.session.frame = float(value)
+        self._update_frame_label()
+        self.view.update()
+
+    def _update_frame_label(self) -> None:
+        if self.session is not None:
+            self.frame_label.setText(f"frame {self.session.frame:g}")
+
+    @guarded
+    def _toggle_play(self, on: bool):
+        self.play_button.setText("Pause" if on else "Play")
+        if on:
+            self._play.start(0)
+        else:
+            self._play.stop()
+
+    @guarded
+    def _step_play(self):
+        value = self.timeline.value() + 1
+        if value > self.timeline.maximum():
+            value = self.timeline.minimum()
+        self.timeline.setValue(value)
+
+    # -- undo, save, close ----------------------------------------------------------
+    def undo(self) -> None:
+        if self.session.undo() is not None:
+            self.after_edit()
+            self._fill_controls()
+            self.view.update()
+
+    def redo(self) -> None:
+        if self.session.redo() is not None:
+            self.after_edit()
+            self._fill_controls()
+            self.view.update()
+
+    def save(self) -> bool:
+        if self.view.fault == "save":
+            self.view.fault = None
+            raise RuntimeError("injected fault in save")
+        if self.session.save_path is None and not self.session.in_memory:
+            return self.save_as()
+        where = self.session.save()
+        self.statusBar().showMessage(f"saved {where}" if where else "saved (in memory)",
+                                     5000)
+        self._update_title()
+        return True
+
+    def save_as(self) -> bool:
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(
+            self, "Save the painted layer", "painted.usda", "USD layers (*.usda *.usdc *.usd)")
+        if not path:
+            return False
+        where = self.session.save(path)
+        self.statusBar().showMessage(f"saved {where}", 5000)
+        self._update_title()
+        return True
+
+    def mark_dirty(self) -> None:
+        self._update_title()
+
+    def after_edit(self) -> None:
+        self.error_banner.hide()
+        self._update_title()
+
+    def _update_title(self) -> None:
+        if self.session is None:
+            return
+        where = self.session.save_path or "(unsaved layer)"
+        self.setWindowTitle(f"{self._title} - {where}[*]")
+        self.setWindowModified(self.session.dirty)
+
+    def frame_drawn(self, frame) -> None:
+        kind = "preview" if frame.quality.preview else "full"
+        self.statusBar().showMessage(
+            f"frame {frame.frame:g}, {frame.width}x{frame.height} {kind} in "
+            f"{1e3 * frame.seconds:.0f} ms; radius {self.session.brush.radius:.3g}; "
+            f"mesh {self.session.active}")
+
+    def show_error(self, text: str, detail: str = "") -> None:
+        """A Python error inside a Qt override or slot: shown in the window, logged, and
+        the window goes on."""
+        self.errors.append(text)
+        print(f"usdwrinkle paint: error: {text}\n{detail}", flush=True)
+        # shown from the event loop, not here: inside paintGL a new banner re-lays the
+        # window out and resizes the GL widget while it paints, which crashed the process
+        # (measured: 3 of 4 runs, PySide6 6.12 on llvmpipe)
+        QtCore.QTimer.singleShot(0, functools.partial(self._show_banner, text))
+
+    def _show_banner(self, text: str) -> None:
+        self.error_banner.setText(f"error: {text}")
+        self.error_banner.show()
+
+    def _ask_close(self) -> str:
+        box = QtWidgets.QMessageBox(self)
+        box.setWindowTitle("Unsaved strokes")
+        box.setText("The painted layer has unsaved strokes. Save them before closing?")
+        box.setStandardButtons(QtWidgets.QMessageBox.Save | QtWidgets.QMessageBox.Discard |
+                               QtWidgets.QMessageBox.Cancel)
+        answer = box.exec()
+        return {QtWidgets.QMessageBox.Save: "save",
+                QtWidgets.QMessageBox.Discard: "discard"}.get(answer, "cancel")
+
+    @guarded
+    def closeEvent(self, event):  # noqa: N802
+        if self.session is not None and self.session.dirty:
+            answer = self.confirm_close()
+            if answer == "cancel" or (answer == "save" and not self.save()):
+                event.ignore()
+                return
+        self._play.stop()
+        self.view.release()
+        self.session = None
+        event.accept()
+
+
+def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700)) -> int:
+    """Open the paint window on a session made in its GL context; returns Qt's exit code."""
+    from PySide6.QtGui import QSurfaceFormat
+
+    fmt = QSurfaceFormat()
+    fmt.setVersion(4, 3)
+    fmt.setProfile(QSurfaceFormat.CoreProfile)
+    fmt.setDepthBufferSize(24)
+    QSurfaceFormat.setDefaultFormat(fmt)
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["usdwrinkle paint"])
+    window = PaintWindow(make_session, title)
+    window.resize(*size)
+    window.show()
+    code = app.exec()
+    window.view.release()
+    return code

@@ -1,0 +1,381 @@
+"""Drives the paint window as an artist does, in a process of its own under Xvfb (Qt's
+xcb platform: QOpenGLWidget needs a real window): real QMouseEvents and key presses,
+the window's own frames and screenshots. tests/test_paint_window.py runs it:
+
+    python tests/paint_driver.py SCENARIO OUTDIR [STAGE]
+
+and reads OUTDIR/result.json. Each scenario is one function below. The process never
+shares GL with pytest's own context (Qt's GLX context and moderngl's EGL one in one
+thread would take each other's place)."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("QT_QPA_PLATFORM", "xcb")
+
+from PySide6 import QtCore, QtGui, QtWidgets  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
+
+Qt = QtCore.Qt
+REPO = Path(__file__).resolve().parents[1]
+SHIRT = REPO / "sample_stages" / "shirt.usda"
+
+
+def application() -> QtWidgets.QApplication:
+    fmt = QtGui.QSurfaceFormat()
+    fmt.setVersion(4, 3)
+    fmt.setProfile(QtGui.QSurfaceFormat.CoreProfile)
+    fmt.setDepthBufferSize(24)
+    QtGui.QSurfaceFormat.setDefaultFormat(fmt)
+    return QtWidgets.QApplication.instance() or QtWidgets.QApplication(["paint-driver"])
+
+
+def open_window(stage: str, output: str, size=(1200, 700), **kwargs):
+    from usdwrinkle.paint.session import PaintSession, open_paint_stage
+    from usdwrinkle.paint.window import PaintWindow
+
+    stage_, layer, save = open_paint_stage(stage, output)
+    window = PaintWindow(lambda ctx: PaintSession(stage_, layer, save, ctx=ctx, **kwargs))
+    window.resize(*size)
+    window.show()
+    window.confirm_close = lambda: "discard"
+    window.activateWindow()
+    window.raise_()
+    window.view.setFocus()
+    wait_for(lambda: window.view.last_frame is not None, "the first frame")
+    wait_for(window.isActiveWindow, "the window to take the keyboard")
+    settle(window)
+    return window
+
+
+def wait_for(condition, what: str, timeout: float = 60.0) -> None:
+    app = QtWidgets.QApplication.instance()
+    deadline = time.monotonic() + timeout
+    while not condition():
+        app.processEvents(QtCore.QEventLoop.AllEvents, 50)
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"waited {timeout} s for {what}")
+        time.sleep(0.01)
+
+
+def settle(window, quality: str = "full") -> None:
+    """Let the view draw until its last frame is of ``quality`` and nothing is pending."""
+    view = window.view
+    view.update()
+    count = len(view.frame_times)
+    wait_for(lambda: len(view.frame_times) > count, "a frame")
+    wait_for(lambda: view.last_frame is not None and
+             view.last_frame.quality.preview == (quality == "preview"), f"a {quality} frame")
+
+
+def mouse(widget, kind, x: float, y: float, button=Qt.LeftButton, buttons=None,
+          modifiers=Qt.NoModifier) -> None:
+    """A real QMouseEvent, through the application's event dispatch."""
+    local = QtCore.QPointF(x, y)
+    if buttons is None:
+        buttons = Qt.NoButton if kind == QtCore.QEvent.MouseButtonRelease else button
+    event = QtGui.QMouseEvent(kind, local, widget.mapToGlobal(local), button, buttons,
+                              modifiers)
+    QtWidgets.QApplication.sendEvent(widget, event)
+    QtWidgets.QApplication.instance().processEvents()
+
+
+def drag(window, points, button=Qt.LeftButton, modifiers=Qt.NoModifier) -> list[float]:
+    """Press at the first point, move through the others (drawing between moves as
+    the event loop does), release at the last; returns the seconds between frames."""
+    view = window.view
+    stamps = []
+    mouse(view, QtCore.QEvent.MouseButtonPress, *points[0], button, modifiers=modifiers)
+    for x, y in points[1:]:
+        count = len(view.frame_times)
+        mouse(view, QtCore.QEvent.MouseMove, x, y, Qt.NoButton, button, modifiers)
+        wait_for(lambda c=count: len(view.frame_times) > c, "a preview frame")
+        stamps.append(time.perf_counter())
+    mouse(view, QtCore.QEvent.MouseButtonRelease, *points[-1], button, modifiers=modifiers)
+    settle(window)
+    return list(np.diff(stamps))
+
+
+def line(a, b, steps: int = 30) -> list[tuple[float, float]]:
+    return [tuple(np.asarray(a) + (np.asarray(b) - np.asarray(a)) * k / steps)
+            for k in range(steps + 1)]
+
+
+def view_pixels(window, path: str, mask: np.ndarray) -> np.ndarray:
+    """The mean widget position of the posed vertices in ``mask`` (logical pixels)."""
+    from usdwrinkle.paint.view import project
+
+    session, frame = window.session, window.view.last_frame
+    xy, _ = project(frame.camera, session._posed_points(path)[mask], frame.width, frame.height)
+    xy[:, 0] *= window.view.width() / frame.width
+    xy[:, 1] *= window.view.height() / frame.height
+    return xy.mean(axis=0)
+
+
+def key(window, key_code, modifiers=Qt.NoModifier) -> None:
+    QTest.keyClick(window.view, key_code, modifiers)
+    settle(window)
+
+
+def screenshot(window, path: Path) -> str:
+    """The window as the screen shows it (QWidget.grab re-renders a QOpenGLWidget
+    without what QPainter draws over it: the brush outline and q)."""
+    QtWidgets.QApplication.instance().processEvents()
+    screen = QtWidgets.QApplication.instance().primaryScreen()
+    screen.grabWindow(window.winId()).save(str(path))
+    return str(path)
+
+
+def upper_arm_stroke(window):
+    """Pixels of a stroke along the rest x axis over the shirt's upper arm (rest x from
+    0.3 to 1.0, on its front), and the facing flags at the start."""
+    session = window.session
+    path = session.active
+    rest = session.mesh.rest_points
+    facing = session.facing(path)
+    a = view_pixels(window, path, facing & (np.abs(rest[:, 0] - 0.3) < 0.1))
+    b = view_pixels(window, path, facing & (np.abs(rest[:, 0] - 1.0) < 0.1))
+    return line(a, b), facing
+
+
+def distance_to_segment(points, a, b) -> np.ndarray:
+    ab = b - a
+    t = np.clip(((points - a) @ ab) / max(ab @ ab, 1e-30), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+
+
+# -- scenarios -------------------------------------------------------------------------
+from helpers import sheet_stage  # noqa: E402,F401  (the tests' symmetric sheet)
+
+
+def scenario_stroke(out: Path, stage: str) -> dict:
+    """Comb along rest x over the upper arm, undo, redo, erase, smooth; screenshots."""
+    window = open_window(stage, str(out / "painted.usda"))
+    session = window.session
+    screenshot(window, out / "before.png")
+    path = session.active
+    q0 = session.mesh.q.copy()
+    points, facing = upper_arm_stroke(window)
+    gaps = drag(window, points)
+    q1 = session.mesh.q.copy()
+    changed = np.nonzero(np.any(q1 != q0, axis=1))[0]
+    length = np.linalg.norm(q1[changed], axis=1)
+    rest = session.mesh.rest_points
+    result = {
+        "touched": int(len(changed)),
+        "alignment_min": float((np.abs(q1[changed, 0]) / length).min()) if len(changed) else 0,
+        "back_facing_touched": int((~facing[changed]).sum()),
+        "q_max": float(np.linalg.norm(q1, axis=1).max()),
+        "radius": session.brush.radius,
+        "errors": list(window.errors),
+        "preview_gaps": gaps,
+    }
+    centres = np.array(session.stamp_centres)
+    far = [float(np.min(np.linalg.norm(centres - rest[i], axis=1))) for i in changed]
+    result["farthest_touched"] = max(far) if far else 0.0
+    window.show_q.setChecked(True)
+    settle(window)
+    screenshot(window, out / "after.png")
+    window.show_q.setChecked(False)
+    key(window, Qt.Key_Z, Qt.ControlModifier)
+    session.engine.pull_changes()
+    result["undo_exact"] = bool(np.array_equal(session.mesh.q, q0)) and bool(
+        np.array_equal(session.engine.meshes[path].params.q, q0))
+    key(window, Qt.Key_Z, Qt.ControlModifier | Qt.ShiftModifier)
+    session.engine.pull_changes()
+    result["redo_exact"] = bool(np.array_equal(session.mesh.q, q1)) and bool(
+        np.array_equal(session.engine.meshes[path].params.q, q1))
+    # erase: full strength, a constant profile, the same stroke
+    window.mode.setCurrentText("erase")
+    window.falloff.setCurrentText("constant")
+    window.strength.set_value(1.0)
+    window._brush_changed()
+    drag(window, points)
+    q2 = session.mesh.q
+    erased = session.last_touched
+    result["erased"] = int(len(erased))
+    result["erased_max"] = float(np.abs(q2[erased]).max()) if len(erased) else 1.0
+    # smooth: over a region of scattered directions
+    key(window, Qt.Key_Z, Qt.ControlModifier)
+    from usdwrinkle.paint.brush import spread
+
+    rng = np.random.default_rng(7)
+    noisy = session.mesh.q.copy()
+    region = np.nonzero(distance_to_segment(rest, np.array([0.3, 0, 0]),
+                                            np.array([1.0, 0, 0])) < 0.6)[0]
+    # along x, scattered: each vertex's direction off by a random tangent part
+    scattered = np.array([1.0, 0.0, 0.0]) + 0.7 * rng.normal(size=(len(region), 3))
+    noisy[region] = 0.8 * scattered / np.linalg.norm(scattered, axis=1)[:, None]
+    from usdwrinkle.paint.session import Edit
+
+    session._record(Edit(path, "paint", (session.mesh.q.copy(), session.mesh.width.copy()),
+                         (noisy.astype(np.float32), session.mesh.width.copy())))
+    window.mode.setCurrentText("smooth")
+    window.falloff.setCurrentText("smooth")
+    window.strength.set_value(1.0)
+    window._brush_changed()
+    before_smooth = session.mesh.q.copy()
+    for _ in range(3):
+        drag(window, points)
+    touched = session.last_touched
+    result["spread_before"] = spread(before_smooth, touched)
+    result["spread_after"] = spread(session.mesh.q, touched)
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
+def scenario_mirror(out: Path, stage: str) -> dict:
+    """A stroke on one half of a symmetric sheet with the mirror through x = 0."""
+    window = open_window(stage, str(out / "mirror.usda"))
+    session = window.session
+    window.mirror.setCurrentText("x")
+    window._brush_changed()
+    rest = session.mesh.rest_points
+    path = session.active
+    facing = session.facing(path)
+    a = view_pixels(window, path, facing & (np.abs(rest[:, 0] - 0.3) < 0.06) &
+                    (np.abs(rest[:, 1] + 0.4) < 0.06))
+    b = view_pixels(window, path, facing & (np.abs(rest[:, 0] - 0.6) < 0.06) &
+                    (np.abs(rest[:, 1] - 0.3) < 0.06))
+    drag(window, line(a, b))
+    q = session.mesh.q.astype(np.float64)
+    partner = session.mesh.mirror_map("x")
+    paired = partner >= 0
+    mirrored = q[partner[paired]] * np.array([-1.0, 1.0, 1.0])
+    result = {"pairs": int(paired.sum()), "touched": int(np.any(q != 0, axis=1).sum()),
+              "mirror_error": float(np.abs(q[paired] - mirrored).max()),
+              "errors": list(window.errors)}
+    screenshot(window, out / "mirror.png")
+    window.close()
+    return result
+
+
+def crest_count(pixels: np.ndarray, row: int, lo: int, hi: int, band: int = 40) -> float:
+    """Crests along a line of the frame (row ``row``, columns lo..hi): the number of
+    wavelengths of the strongest periodic part of the luminance across it (a Hann-windowed
+    spectrum, 16x zero-padded; the rows within ``band`` of it summed). A count of peaks
+    would be fooled by the flat tops of the height profile and the light's falloff."""
+    rows = slice(max(row - band, 0), row + band)
+    luminance = pixels[rows, lo:hi, :3].astype(np.float64) @ [0.2126, 0.7152, 0.0722]
+    luminance -= luminance.mean(axis=1, keepdims=True)
+    n = luminance.shape[1]
+    spectrum = np.abs(np.fft.rfft(luminance * np.hanning(n), n=16 * n, axis=1)).sum(axis=0)
+    frequency = np.fft.rfftfreq(16 * n)
+    spectrum[frequency < 2.0 / n] = 0.0  # the mean and the shading's slow change
+    return float(frequency[np.argmax(spectrum)] * n)
+
+
+def scenario_width(out: Path, stage: str) -> dict:
+    """Flood q over a flat sheet, then halve W with its slider: the crests along a line
+    across the painted area, counted in the widget's own frame."""
+    window = open_window(stage, str(out / "width.usda"), size=(1000, 700))
+    session = window.session
+    session.orbit.yaw, session.orbit.pitch = 0.0, 89.0  # straight down onto the sheet
+    session.frame_view(window.view.width() / window.view.height())
+    window.strength.set_value(0.6)
+    window.amount.set_value(0.6)
+    window._brush_changed()
+    session._last_stroke_direction = np.array([1.0, 0.0, 0.0])
+    window.flood_button.click()
+    settle(window)
+    frame = window.view.last_frame
+    covered = np.nonzero(frame.pixels[frame.height // 2, :, 3] == 255)[0]
+    row, lo, hi = frame.height // 2, int(covered.min()) + 4, int(covered.max()) - 4
+    counts = [crest_count(frame.pixels, row, lo, hi)]
+    np.save(out / "width_full.npy", frame.pixels)
+    screenshot(window, out / "width_full.png")
+    slider = window.width_slider
+    width = slider.value()
+    slider.slider.setSliderDown(True)
+    slider.slider.setValue(slider._to_position(width / 2))
+    settle(window, "preview")
+    slider.slider.setSliderDown(False)
+    slider.slider.sliderReleased.emit()
+    settle(window)
+    frame = window.view.last_frame
+    counts.append(crest_count(frame.pixels, row, lo, hi))
+    np.save(out / "width_half.npy", frame.pixels)
+    screenshot(window, out / "width_half.png")
+    result = {"counts": counts, "widths": [width, session.control("width")],
+              "errors": list(window.errors)}
+    window.close()
+    return result
+
+
+def scenario_faults(out: Path, stage: str) -> dict:
+    """An exception inside paintGL, the brush and save: shown, and the window goes on."""
+    window = open_window(stage, str(out / "faults.usda"))
+    result = {"seen": []}
+    for fault in ("paint", "brush", "save"):
+        before = len(window.errors)
+        window.view.fault = fault
+        if fault == "paint":
+            window.view.update()
+            wait_for(lambda b=before: len(window.errors) > b, "the paint error")
+        elif fault == "brush":
+            mouse(window.view, QtCore.QEvent.MouseButtonPress, 400, 300)
+            mouse(window.view, QtCore.QEvent.MouseButtonRelease, 400, 300)
+        else:
+            QTest.keyClick(window.view, Qt.Key_S, Qt.ControlModifier)
+            QtWidgets.QApplication.instance().processEvents()
+        result["seen"].append(window.errors[before:])
+        result[f"banner_{fault}"] = window.error_banner.isVisible() and \
+            "injected" in window.error_banner.text()
+    # and it still draws and paints
+    count = len(window.view.frame_times)
+    settle(window)
+    result["drew_after"] = len(window.view.frame_times) > count
+    screenshot(window, out / "faults.png")
+    window.close()
+    result["closed"] = True
+    return result
+
+
+def scenario_render_equal(out: Path, stage: str) -> dict:
+    """Paint, save with Ctrl+S, and keep the widget's full-quality frames through the
+    stage's camera at two frames (the test renders the saved layer and compares)."""
+    layer = out / "equal.usda"
+    window = open_window(stage, str(layer), size=(1000, 640))
+    points, _ = upper_arm_stroke(window)
+    drag(window, points)
+    key(window, Qt.Key_S, Qt.ControlModifier)
+    window.view_mode.setCurrentText("stage camera")
+    frames = {}
+    for frame in (24, 12):
+        window.timeline.setValue(frame)
+        settle(window)
+        pixels = window.view.last_frame
+        np.save(out / f"widget.{frame}.npy", pixels.pixels)
+        frames[frame] = [pixels.width, pixels.height]
+    q = window.session.mesh.q.copy()
+    np.save(out / "q.npy", q)
+    result = {"sizes": frames, "saved": layer.exists(), "dirty": window.session.dirty,
+              "errors": list(window.errors)}
+    window.close()
+    # reopen the saved layer, as the artist does the next day
+    window = open_window(stage, str(layer), size=(600, 400))
+    result["reopened_same_q"] = bool(np.array_equal(window.session.mesh.q, q))
+    window.close()
+    return result
+
+
+def main(argv: list[str]) -> int:
+    scenario, out = argv[0], Path(argv[1])
+    stage = argv[2] if len(argv) > 2 else str(SHIRT)
+    out.mkdir(parents=True, exist_ok=True)
+    app = application()
+    result = globals()[f"scenario_{scenario}"](out, stage)
+    (out / "result.json").write_text(json.dumps(result, indent=1, default=float))
+    app.processEvents()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,235 @@
+"""The paint window tried as an artist uses it (issue 43): a real window under Xvfb on
+Qt's xcb platform, real mouse and key events, the window's own frames and screenshots.
+
+Each test runs tests/paint_driver.py (or ``usdwrinkle paint`` itself, driven by xdotool)
+in a process of its own, on an X server this module starts. The tier needs Xvfb,
+libxcb-icccm4, libxcb-keysyms1 and xdotool (Debian; .ci/run installs them) and PySide6
+(the test extra). Where they are missing it is skipped, saying so at the end of the run;
+with USDWRINKLE_REQUIRE_PAINT=1 (CI) it fails instead. About 90 s in all here.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pxr import Usd
+
+from usdwrinkle.authoring import WrinkleAPI
+
+from helpers import sheet_stage
+
+REPO = Path(__file__).resolve().parents[1]
+DRIVER = REPO / "tests" / "paint_driver.py"
+SHIRT = REPO / "sample_stages" / "shirt.usda"
+
+pytestmark = pytest.mark.slow
+
+
+def paint_problem() -> str | None:
+    """Why the paint-window tier cannot run here (None: it can)."""
+    missing = [tool for tool in ("Xvfb", "xdotool") if shutil.which(tool) is None]
+    if missing:
+        return (f"{' and '.join(missing)} not found (apt-get install xvfb xdotool "
+                "libxcb-icccm4 libxcb-keysyms1)")
+    try:
+        import PySide6  # noqa: F401
+    except ImportError:
+        return "PySide6 is not installed (pip install -e '.[test]')"
+    return None
+
+
+@pytest.fixture(scope="module")
+def display():
+    """An X server of this module's own: its DISPLAY."""
+    problem = paint_problem()
+    if problem is not None:
+        if os.environ.get("USDWRINKLE_REQUIRE_PAINT") == "1":
+            pytest.fail(f"the paint-window tier cannot run: {problem}")
+        pytest.skip(f"paint-window tier not run: {problem}")
+    read, write = os.pipe()
+    server = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0",
+                               "1600x1000x24", "-nolisten", "tcp"], pass_fds=(write,),
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write)
+    number = b""
+    deadline = time.monotonic() + 30
+    while not number.endswith(b"\n") and time.monotonic() < deadline:
+        chunk = os.read(read, 16)
+        if not chunk:
+            break
+        number += chunk
+    os.close(read)
+    if not number.strip():
+        server.kill()
+        pytest.fail("Xvfb did not start")
+    yield f":{number.decode().strip()}"
+    server.terminate()
+    server.wait(10)
+
+
+def x_env(display: str) -> dict:
+    return {**os.environ, "DISPLAY": display, "QT_QPA_PLATFORM": "xcb"}
+
+
+def drive(display: str, scenario: str, out: Path, stage: Path | str = SHIRT) -> dict:
+    proc = subprocess.run([sys.executable, str(DRIVER), scenario, str(out), str(stage)],
+                          env=x_env(display), capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return json.loads((out / "result.json").read_text())
+
+
+def screenshot_codes(path: Path) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    return oiio.ImageBuf(str(path)).get_pixels(oiio.UINT8)
+
+
+def png_codes(path) -> np.ndarray:
+    """A PNG's stored codes (straight alpha, as written; OpenImageIO would associate)."""
+    import OpenImageIO as oiio
+
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    image = oiio.ImageInput.open(str(path), config)
+    try:
+        return image.read_image(0, 0, 0, 4, oiio.UINT8)
+    finally:
+        image.close()
+
+
+def test_a_comb_stroke_along_the_upper_arm(display, tmp_path):
+    result = drive(display, "stroke", tmp_path)
+    assert result["errors"] == []
+    # every touched vertex combed along rest x, none on the far side, none beyond R
+    assert result["touched"] >= 10
+    assert result["alignment_min"] >= 0.95
+    assert result["back_facing_touched"] == 0
+    assert result["farthest_touched"] <= result["radius"] * (1 + 1e-9)
+    assert result["q_max"] <= 1.0
+    assert result["undo_exact"] and result["redo_exact"]
+    # erase returns q to zero under the brush; smooth lowers the spread of q's direction
+    assert result["erased"] >= 10 and result["erased_max"] == 0.0
+    assert result["spread_after"] < 0.75 * result["spread_before"]
+    # the preview keeps up while dragging (a bound far above the benchmark's figure, so
+    # that a loaded machine does not fail it: the figure is in docs/benchmarks.md)
+    assert np.median(result["preview_gaps"]) < 1.0
+    # the screenshots show the stroke: the view changed where the upper arm is
+    before = screenshot_codes(tmp_path / "before.png")
+    after = screenshot_codes(tmp_path / "after.png")
+    changed = np.abs(before[..., :3].astype(int) - after[..., :3]).max(-1) > 24
+    assert changed.sum() > 2000
+
+
+def test_a_mirrored_stroke_is_mirrored(display, tmp_path):
+    stage = sheet_stage(tmp_path / "sheet.usda")
+    result = drive(display, "mirror", tmp_path, stage)
+    assert result["errors"] == []
+    assert result["pairs"] == 41 * 41 and result["touched"] > 100
+    assert result["mirror_error"] <= 1e-6
+
+
+def test_halving_w_doubles_the_crests(display, tmp_path):
+    stage = sheet_stage(tmp_path / "sheet.usda")
+    result = drive(display, "width", tmp_path, stage)
+    assert result["errors"] == []
+    full, half = result["counts"]
+    assert result["widths"][1] == pytest.approx(result["widths"][0] / 2, rel=0.01)
+    assert full >= 5
+    assert 1.8 <= half / full <= 2.2, result
+
+
+def test_errors_show_in_the_window_and_it_goes_on(display, tmp_path):
+    result = drive(display, "faults", tmp_path)
+    for fault in ("paint", "brush", "save"):
+        assert result[f"banner_{fault}"], (fault, result)
+    assert result["seen"] == [["RuntimeError: injected fault in paintGL"],
+                              ["RuntimeError: injected fault in the brush"],
+                              ["RuntimeError: injected fault in save"]]
+    assert result["drew_after"] and result["closed"]
+
+
+def test_the_saved_layer_renders_as_the_window_drew_it(display, tmp_path):
+    from usdwrinkle.cli.main import main
+
+    result = drive(display, "render_equal", tmp_path)
+    assert result["errors"] == [] and result["saved"] and not result["dirty"]
+    assert result["reopened_same_q"]
+    for frame, (width, height) in result["sizes"].items():
+        out = tmp_path / f"render.{int(frame):04d}.png"
+        assert main(["render", str(tmp_path / "equal.usda"), str(out), "--frames", frame,
+                     "--width", str(width), "--height", str(height), "--quiet"]) == 0
+        widget = np.load(tmp_path / f"widget.{frame}.npy")
+        assert np.array_equal(widget, png_codes(out)), frame
+
+
+def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -> str:
+    return subprocess.run(["xdotool", *args], env=x_env(display), capture_output=True,
+                          text=True, timeout=timeout, check=check).stdout
+
+
+def test_an_artist_paints_and_saves(display, tmp_path):
+    """usdwrinkle paint shirt.usda -o out.usda; a left-button drag across the window's
+    middle (X events from xdotool); Ctrl+S; Ctrl+W. The layer holds the stroke's q, and
+    render of it differs from the plain shirt."""
+    from usdwrinkle.cli.main import main
+
+    out = tmp_path / "out.usda"
+    log = open(tmp_path / "paint.log", "w")
+    proc = subprocess.Popen([sys.executable, "-m", "usdwrinkle", "paint", str(SHIRT), "-o",
+                             str(out), "--size", "1000x650"], env=x_env(display),
+                            stdout=log, stderr=subprocess.STDOUT)
+    try:
+        # the main window (Qt also makes hidden helper windows of that name)
+        window = xdotool(display, "search", "--sync", "--onlyvisible", "--name",
+                         "usdwrinkle paint").split()[0]
+        xdotool(display, "windowfocus", "--sync", window)
+        time.sleep(4)  # the first frame (llvmpipe)
+        geometry = dict(line.split("=") for line in
+                        xdotool(display, "getwindowgeometry", "--shell", window).split())
+        width, height = int(geometry["WIDTH"]), int(geometry["HEIGHT"])
+        y = height // 2
+        xdotool(display, "mousemove", "--window", window, str(width // 6), str(y))
+        xdotool(display, "mousedown", "1")
+        for step in range(1, 25):
+            x = width // 6 + step * (width // 2) // 24
+            xdotool(display, "mousemove", "--window", window, str(x), str(y))
+            time.sleep(0.05)
+        xdotool(display, "mouseup", "1")
+        time.sleep(2)  # the full-quality frame after release
+        subprocess.run(["import", "-window", "root", str(tmp_path / "artist.png")],
+                       env=x_env(display), timeout=60, check=False)
+        xdotool(display, "key", "--window", window, "ctrl+s")
+        deadline = time.monotonic() + 30
+        while not out.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert out.exists(), (tmp_path / "paint.log").read_text()
+        # the window closes (nothing unsaved); xdotool may then miss its window
+        xdotool(display, "key", "--window", window, "ctrl+w", check=False)
+        assert proc.wait(30) == 0, (tmp_path / "paint.log").read_text()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        log.close()
+    painted = Usd.Stage.Open(str(out))
+    plain = Usd.Stage.Open(str(SHIRT))
+    path = "/World/Arm/Sleeve"
+    q = WrinkleAPI(painted.GetPrimAtPath(path)).get_q()
+    q0 = WrinkleAPI(plain.GetPrimAtPath(path)).get_q()
+    changed = np.any(q != q0, axis=1)
+    assert changed.sum() >= 10
+    assert np.linalg.norm(q[changed], axis=1).min() > 0.0
+    assert np.linalg.norm(q, axis=1).max() <= 1.0
+    # the layer stands on its own: it sublayers the shirt by a relative path
+    assert not os.path.isabs(painted.GetRootLayer().subLayerPaths[0])
+    for stage, name in ((out, "painted"), (SHIRT, "plain")):
+        assert main(["render", str(stage), str(tmp_path / f"{name}.png"), "--frames", "24",
+                     "--width", "320", "--quiet"]) == 0
+    a, b = png_codes(tmp_path / "painted.png"), png_codes(tmp_path / "plain.png")
+    assert (np.abs(a.astype(int) - b).max(-1) > 8).sum() > 200
