@@ -62,6 +62,12 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         terminalreporter.write_line(
             f"REAL-CLIENT TIER NOT RUN ({len(skipped)} tests): {realclient_problem()}",
             yellow=True, bold=True)
+    paint = [report for report in terminalreporter.stats.get("skipped", [])
+             if "paint-window tier not run" in str(report.longrepr)]
+    if paint:
+        reason = str(paint[0].longrepr).split("paint-window tier not run: ")[-1].rstrip("')")
+        terminalreporter.write_line(f"PAINT-WINDOW TIER NOT RUN ({len(paint)} tests): {reason}",
+                                    yellow=True, bold=True)
     if corpus_problem():
         terminalreporter.write_line(f"CORPUS MISSING: {corpus_problem()}", red=True, bold=True)
 

@@ -366,6 +366,38 @@ def scenario_render_equal(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_usdview(out: Path, stage: str) -> dict:
+    """Wrinkles > Paint... in usdview's own process (a stand-in usdviewApi on an open
+    stage): a stroke, Ctrl+S; the strokes are in usdview's session layer."""
+    from types import SimpleNamespace
+
+    from pxr import Usd
+
+    from usdwrinkle import usdview
+
+    held = Usd.Stage.Open(stage)
+    status: list[str] = []
+    api = SimpleNamespace(stage=held, frame=Usd.TimeCode(24), selectedPrims=[],
+                          PrintStatus=status.append)
+    window = usdview.paint_current_stage(api)
+    window.confirm_close = lambda: "discard"
+    window.resize(1200, 700)
+    window.activateWindow()
+    wait_for(lambda: window.view.last_frame is not None, "the first frame")
+    wait_for(window.isActiveWindow, "the window to take the keyboard")
+    settle(window)
+    points, _ = upper_arm_stroke(window)
+    drag(window, points)
+    key(window, Qt.Key_S, Qt.ControlModifier)
+    path = window.session.active
+    spec = held.GetSessionLayer().GetPropertyAtPath(f"{path}.primvars:wrinkle:q")
+    result = {"status": status, "in_session_layer": spec is not None,
+              "root_dirty": held.GetRootLayer().dirty, "dirty": window.session.dirty,
+              "frame": window.session.frame, "errors": list(window.errors)}
+    window.close()
+    return result
+
+
 def main(argv: list[str]) -> int:
     scenario, out = argv[0], Path(argv[1])
     stage = argv[2] if len(argv) > 2 else str(SHIRT)

@@ -233,3 +233,73 @@ def test_an_artist_paints_and_saves(display, tmp_path):
                      "--width", "320", "--quiet"]) == 0
     a, b = png_codes(tmp_path / "painted.png"), png_codes(tmp_path / "plain.png")
     assert (np.abs(a.astype(int) - b).max(-1) > 8).sum() > 200
+
+
+def test_usdview_paints_in_its_own_process(display, tmp_path):
+    result = drive(display, "usdview", tmp_path)
+    assert result["errors"] == [] and result["in_session_layer"], result
+    assert not result["root_dirty"] and not result["dirty"] and result["frame"] == 24.0
+    assert "strokes go to the session layer" in result["status"][-1]
+
+
+def test_usdview_paints_through_usdwrinkle_python(display, tmp_path, monkeypatch):
+    """From a usdview whose Python cannot import usdwrinkle's dependencies: the window is
+    usdwrinkle paint in USDWRINKLE_PYTHON, and its saved strokes reach usdview's stage
+    through an overrides layer that the session layer sublayers."""
+    from types import SimpleNamespace
+
+    from pxr import Sdf
+
+    from usdwrinkle import usdview
+
+    monkeypatch.setattr(usdview, "_in_process", lambda: False)
+    monkeypatch.setenv("USDWRINKLE_PYTHON", sys.executable)
+    stage = Usd.Stage.Open(str(SHIRT))
+    sleeve = stage.GetPrimAtPath("/World/Arm/Sleeve")
+    status: list[str] = []
+    api = SimpleNamespace(stage=stage, frame=Usd.TimeCode(24), selectedPrims=[sleeve],
+                          PrintStatus=status.append)
+    launched = []
+
+    def launcher(args):
+        launched.append(args)
+        return subprocess.Popen(args, env=x_env(display), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+
+    process = usdview.paint_current_stage(api, launcher=launcher)
+    args = launched[0]
+    assert args[:4] == [sys.executable, "-m", "usdwrinkle", "paint"]
+    assert args[args.index("--prim") + 1] == "/World/Arm/Sleeve" and "--frame=24.0" in args
+    strokes = args[args.index("-o") + 1]
+    assert stage.GetSessionLayer().subLayerPaths[0] == strokes
+    q0 = WrinkleAPI(sleeve).get_q()
+    try:
+        window = xdotool(display, "search", "--sync", "--onlyvisible", "--name",
+                         "usdwrinkle paint").split()[0]
+        xdotool(display, "windowfocus", "--sync", window)
+        time.sleep(4)
+        geometry = dict(line.split("=") for line in
+                        xdotool(display, "getwindowgeometry", "--shell", window).split())
+        width, height = int(geometry["WIDTH"]), int(geometry["HEIGHT"])
+        xdotool(display, "mousemove", "--window", window, str(width // 6), str(height // 2))
+        xdotool(display, "mousedown", "1")
+        for step in range(1, 25):
+            xdotool(display, "mousemove", "--window", window,
+                    str(width // 6 + step * (width // 2) // 24), str(height // 2))
+            time.sleep(0.05)
+        xdotool(display, "mouseup", "1")
+        time.sleep(2)
+        before = os.path.getmtime(strokes)
+        xdotool(display, "key", "--window", window, "ctrl+s")
+        deadline = time.monotonic() + 30
+        while os.path.getmtime(strokes) == before and time.monotonic() < deadline:
+            time.sleep(0.2)
+        xdotool(display, "key", "--window", window, "ctrl+w", check=False)
+        assert process.wait(30) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+    Sdf.Layer.Find(strokes).Reload()  # what the plugin's timer does inside usdview
+    q = WrinkleAPI(sleeve).get_q()
+    assert np.any(q != q0, axis=1).sum() >= 10
+    assert not stage.GetRootLayer().dirty

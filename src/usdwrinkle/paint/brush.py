@@ -339,7 +339,7 @@ class Stroke:
         if length < step:
             return 0
         self.direction = travel / length
-        count = int(length // step)
+        count = int(length / step + 1e-9)  # 0.5 / 0.05 is 10 stamps, not 9
         for k in range(1, count + 1):
             centre = self.last + travel * (k * step / length)
             tri = hit.triangle if k == count else None

@@ -1,4 +1,5 @@
-"""usdview plugin: a "Wrinkles" menu with "Bake current frame" and "Render current frame".
+"""usdview plugin: a "Wrinkles" menu with "Bake current frame", "Render current frame" and
+"Paint..." (the paint window on usdview's stage).
 
 usdview finds it when ``PXR_PLUGINPATH_NAME`` names this folder and ``PYTHONPATH``
 can import ``usdwrinkle`` (``usdwrinkle info`` prints both). usd-core has no
@@ -235,6 +236,121 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     return paths
 
 
+#: paint windows opened in usdview's process (kept alive while open)
+_PAINT_WINDOWS: list = []
+
+
+def _has_pyside6() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("PySide6") is not None
+
+
+def _paint_prim(usdview_api) -> str | None:
+    """The one selected mesh (the paint window's --prim), or None (every wrinkled mesh)."""
+    selected = [p for p in (usdview_api.selectedPrims or []) if p.GetTypeName() == "Mesh"]
+    return str(selected[0].GetPath()) if len(selected) == 1 else None
+
+
+def paint_current_stage(usdview_api, launcher=subprocess.Popen):
+    """Open the paint window on usdview's stage at its current frame (the selected mesh,
+    or every wrinkled mesh).
+
+    In usdview's process (usdwrinkle's dependencies and PySide6 import): the window
+    paints usdview's stage itself, its strokes land in usdview's session layer (Save As
+    writes them to a file). Otherwise ``usdwrinkle paint`` runs in USDWRINKLE_PYTHON on
+    the stage as usdview holds it, its strokes saved into an overrides layer that the
+    session layer sublayers; usdview reloads it whenever the window saves. Returns the
+    window, or the process."""
+    stage = usdview_api.stage
+    frame = _frame(usdview_api)
+    prim = _paint_prim(usdview_api)
+    if _in_process() and _has_pyside6():
+        from ..errors import UsdWrinkleError
+        from ..paint.session import PaintSession
+        from ..paint.window import PaintWindow
+
+        def make_session(ctx):
+            return PaintSession(stage, stage.GetSessionLayer(), None, prim=prim,
+                                frame=None if math.isnan(frame) else frame, ctx=ctx,
+                                in_memory=True)
+
+        try:
+            window = PaintWindow(make_session, "usdwrinkle paint (usdview)")
+        except UsdWrinkleError as exc:
+            usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
+            return None
+        from PySide6.QtCore import Qt
+
+        window.setAttribute(Qt.WA_DeleteOnClose)
+        window.destroyed.connect(lambda *_: _PAINT_WINDOWS.remove(window)
+                                 if window in _PAINT_WINDOWS else None)
+        _PAINT_WINDOWS.append(window)
+        window.show()
+        usdview_api.PrintStatus("Wrinkles: painting in a window of its own; strokes go to "
+                                "the session layer")
+        return window
+    from pxr import Sdf
+
+    python = _usdwrinkle_python()
+    if python is None:
+        usdview_api.PrintStatus("Wrinkles: usdwrinkle's dependencies are not importable in "
+                                "usdview's Python; set USDWRINKLE_PYTHON to the Python "
+                                "usdwrinkle is installed in (usdwrinkle info prints it)")
+        return None
+    folder = tempfile.mkdtemp(prefix="usdwrinkle-paint-")
+    held = _held_stage(stage, folder)
+    strokes = os.path.join(folder, "strokes.usda")
+    Sdf.Layer.CreateNew(strokes).Save()
+    args = [python, "-m", "usdwrinkle", "paint", held, "-o", strokes]
+    if not math.isnan(frame):
+        args.append(f"--frame={frame!r}")
+    if prim is not None:
+        args += ["--prim", prim]
+    process = launcher(args)
+    stage.GetSessionLayer().subLayerPaths.insert(0, strokes)
+    _watch_layer(strokes, process)
+    usdview_api.PrintStatus("Wrinkles: painting in usdwrinkle paint; each save shows here "
+                            f"({strokes})")
+    return process
+
+
+def _watch_layer(path: str, process) -> None:
+    """Reload ``path`` in usdview whenever the paint process saves it (a Qt timer, where
+    usdview's Qt imports; a reload by hand otherwise)."""
+    try:
+        from PySide6 import QtCore
+    except ImportError:
+        try:
+            from PySide2 import QtCore
+        except ImportError:
+            return
+    if QtCore.QCoreApplication.instance() is None:
+        return
+    from pxr import Sdf
+
+    seen = {"mtime": os.path.getmtime(path)}
+    timer = QtCore.QTimer()
+
+    def poll():
+        try:
+            mtime = os.path.getmtime(path)
+        except OSError:
+            mtime = seen["mtime"]
+        if mtime != seen["mtime"]:
+            seen["mtime"] = mtime
+            layer = Sdf.Layer.Find(path)
+            if layer is not None:
+                layer.Reload()
+        if process.poll() is not None:
+            timer.stop()
+            _PAINT_WINDOWS.remove(timer)
+
+    timer.timeout.connect(poll)
+    timer.start(1000)
+    _PAINT_WINDOWS.append(timer)
+
+
 class WrinklePluginContainer(_PluginBase):
     """usdview's entry point: registers the commands and the "Wrinkles" menu."""
 
@@ -243,11 +359,14 @@ class WrinklePluginContainer(_PluginBase):
             "Wrinkles.BakeCurrentFrame", "Bake current frame", bake_current_frame)
         self._render = plugRegistry.registerCommandPlugin(
             "Wrinkles.RenderCurrentFrame", "Render current frame", render_current_frame)
+        self._paint = plugRegistry.registerCommandPlugin(
+            "Wrinkles.Paint", "Paint...", paint_current_stage)
 
     def configureView(self, plugRegistry, plugUIBuilder):  # noqa: N802, N803 (usdview API)
         menu = plugUIBuilder.findOrCreateMenu("Wrinkles")
         menu.addItem(self._bake)
         menu.addItem(self._render)
+        menu.addItem(self._paint)
 
 
 if _PluginBase is not object:  # register with usdview's plugin system

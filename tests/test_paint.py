@@ -1,0 +1,288 @@
+"""The paint mode's core without Qt (paint/brush.py, paint/session.py): what a stamp does
+to q, against numbers worked out by hand, and a session's strokes, undo, controls and save
+on the engine (tests/test_paint_window.py drives the window itself)."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from pxr import Usd
+
+from usdwrinkle.authoring import WrinkleAPI
+from usdwrinkle.authoring.builders import grid_sheet
+from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.paint.brush import (
+    BrushSettings,
+    Hit,
+    PaintMesh,
+    Stroke,
+    falloff,
+    flood,
+    spread,
+    stamp,
+)
+from usdwrinkle.paint.session import FULL, PaintSession, open_paint_stage
+from usdwrinkle.paint.view import OrbitCamera, pixel_ray, project, ray_triangles
+
+from helpers import sheet_stage
+
+
+def sheet(nx=21, size=2.0, flip_diagonals=False) -> PaintMesh:
+    points, counts, indices = grid_sheet(nx, nx, size)
+    quads = np.asarray(indices).reshape(-1, 4)
+    if flip_diagonals:  # every quad split along the other diagonal: no mirror symmetry
+        tris = np.concatenate([quads[:, [0, 1, 3]], quads[:, [1, 2, 3]]])
+    else:
+        tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    return PaintMesh("/Sheet", points, normals, tris, np.zeros((len(points), 3)),
+                     np.full(len(points), 0.2))
+
+
+def test_falloff_profiles():
+    t = np.array([0.0, 0.5, 1.0, 1.5])
+    np.testing.assert_allclose(falloff("smooth", t), [1.0, 0.5625, 0.0, 0.0])
+    np.testing.assert_allclose(falloff("linear", t), [1.0, 0.5, 0.0, 0.0])
+    np.testing.assert_allclose(falloff("constant", t), [1.0, 1.0, 0.0, 0.0])
+    np.testing.assert_allclose(falloff("sphere", t), [1.0, np.sqrt(0.75), 0.0, 0.0])
+    with pytest.raises(ValueError):
+        falloff("spiky", t)
+
+
+def test_comb_projects_the_stroke_onto_each_tangent_plane():
+    mesh = sheet()
+    brush = BrushSettings(radius=0.35, strength=1.0, amount=0.8, falloff="constant",
+                          geodesic=False)
+    touched = stamp(mesh, brush, np.zeros(3), None, np.array([1.0, 1.0, 0.5]))
+    inside = np.linalg.norm(mesh.rest_points, axis=1) < 0.35
+    assert set(touched.tolist()) == set(np.nonzero(inside)[0].tolist())
+    expected = 0.8 * np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)  # the normal's part dropped
+    np.testing.assert_allclose(mesh.q[inside], np.tile(expected, (inside.sum(), 1)), atol=1e-6)
+    assert not mesh.q[~inside].any()
+
+
+def test_comb_takes_the_sign_of_the_q_already_there():
+    mesh = sheet()
+    mesh.q[:] = [-0.5, 0.0, 0.0]
+    brush = BrushSettings(radius=0.35, strength=0.5, falloff="constant", geodesic=False)
+    stamp(mesh, brush, np.zeros(3), None, np.array([1.0, 0.0, 0.0]))
+    inside = np.linalg.norm(mesh.rest_points, axis=1) < 0.35
+    # a line, not an arrow: towards -x (length 1), not through zero towards +x
+    np.testing.assert_allclose(mesh.q[inside, 0], -0.75, atol=1e-6)
+
+
+def test_q_never_grows_past_one():
+    mesh = sheet()
+    brush = BrushSettings(radius=0.5, strength=1.0, amount=1.0, geodesic=False)
+    for _ in range(20):
+        stamp(mesh, brush, np.zeros(3), None, np.array([0.3, 1.0, 0.0]))
+    assert np.linalg.norm(mesh.q, axis=1).max() <= 1.0
+
+
+def test_erase_and_smooth():
+    mesh = sheet()
+    mesh.q[:] = [0.6, 0.0, 0.0]
+    brush = BrushSettings(mode="erase", radius=0.3, strength=1.0, falloff="constant",
+                          geodesic=False)
+    touched = stamp(mesh, brush, np.zeros(3), None, None)
+    assert len(touched) > 5 and not mesh.q[touched].any()
+    rng = np.random.default_rng(3)
+    noisy = np.array([1.0, 0.0, 0.0]) + 0.8 * rng.normal(size=(mesh.count, 3)) * [1, 1, 0]
+    mesh.q[:] = 0.7 * noisy / np.linalg.norm(noisy, axis=1)[:, None]
+    before = spread(mesh.q, touched)
+    smooth = BrushSettings(mode="smooth", radius=0.3, strength=1.0, geodesic=False)
+    for _ in range(3):
+        stamp(mesh, smooth, np.zeros(3), None, None)
+    assert spread(mesh.q, touched) < 0.75 * before  # measured 0.32 -> 0.22
+
+
+def test_geodesic_distance_stays_on_the_surface():
+    """A strip folded into a U: its arms 0.1 apart in space, 2 apart along the cloth."""
+    xs = np.linspace(0.0, 1.0, 11)
+    arm_a = np.stack([xs, np.zeros(11), np.zeros(11)], 1)
+    arm_b = np.stack([xs[::-1], np.zeros(11), np.full(11, 0.1)], 1)
+    points = np.concatenate([arm_a, arm_b, arm_a + [0, 0.1, 0], arm_b + [0, 0.1, 0]])
+    n = 22
+    strip = []
+    for i in range(n - 1):  # quads between row 0 (y = 0) and row 1 (y = 0.1)
+        a, b, c, d = i, i + 1, n + i + 1, n + i
+        strip += [[a, b, c], [a, c, d]]
+    mesh = PaintMesh("/U", points, np.tile([0.0, 0.0, 1.0], (2 * n, 1)), np.array(strip),
+                     np.zeros((2 * n, 3)), np.full(2 * n, 0.1))
+    straight = mesh.distances(points[0], 0, 0.3, geodesic=False)
+    along = mesh.distances(points[0], 0, 0.3, geodesic=True)
+    other_arm = np.r_[11:22, 33:44]
+    assert np.isfinite(straight[other_arm]).any()  # 0.1 away through the air
+    assert not np.isfinite(along[other_arm]).any()  # 2 away along the cloth
+    near = np.isfinite(along)
+    assert (along[near] >= straight[near] - 1e-12).all()
+
+
+def test_a_mirrored_stamp_is_exact_on_an_asymmetric_triangulation():
+    mesh = sheet(flip_diagonals=True)  # symmetric points, asymmetric edges
+    brush = BrushSettings(radius=0.4, strength=0.7, mirror="x")
+    stamp(mesh, brush, np.array([0.5, 0.2, 0.0]), None, np.array([1.0, 0.4, 0.0]))
+    partner = mesh.mirror_map("x")
+    assert (partner >= 0).all()
+    mirrored = mesh.q[partner].astype(np.float64) * [-1.0, 1.0, 1.0]
+    assert np.abs(mesh.q - mirrored).max() <= 1e-6
+    painted = np.linalg.norm(mesh.q, axis=1) > 0.05
+    x = mesh.rest_points[:, 0]
+    assert painted[x > 0.2].sum() > 5 and painted[x < -0.2].sum() == painted[x > 0.2].sum()
+
+
+def test_stamps_are_spaced_along_the_drag():
+    mesh = sheet()
+    brush = BrushSettings(radius=0.2, spacing=0.25, geodesic=False)
+    stroke = Stroke(mesh, brush)
+
+    def hit(x):
+        return Hit("/Sheet", 0, np.array([1.0, 0, 0]), np.array([x, 0.0, 0.0]), 1.0)
+
+    assert stroke.add(hit(-0.5), None) == 0  # comb waits for a direction
+    assert stroke.add(hit(-0.48), None) == 0  # less than a spacing (0.05)
+    assert stroke.add(hit(0.0), None) == 10  # 0.5 of travel: a stamp every 0.05
+    np.testing.assert_allclose(np.diff([c[0] for c in stroke.centres]), 0.05)
+
+
+def test_flood_combs_every_vertex():
+    mesh = sheet()
+    brush = BrushSettings(strength=1.0, amount=0.5)
+    flood(mesh, brush, np.array([0.0, 1.0, 0.0]))
+    np.testing.assert_allclose(mesh.q, np.tile([0.0, 0.5, 0.0], (mesh.count, 1)), atol=1e-7)
+
+
+def test_rays_and_projection_agree():
+    camera = OrbitCamera(np.zeros(3), 5.0, yaw=30.0, pitch=20.0).record(16 / 9)
+    points = np.array([[0.2, 0.1, -0.3], [0.0, 0.0, 0.0]])
+    xy, front = project(camera, points, 320, 180)
+    assert front.all()
+    for point, (x, y) in zip(points, xy, strict=True):
+        origin, direction = pixel_ray(camera, x, y, 320, 180)
+        closest = origin + direction * ((point - origin) @ direction)
+        assert np.linalg.norm(closest - point) < 1e-9
+    tri = np.array([[0, 1, 2]])
+    corners = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    found = ray_triangles(np.array([0.0, 0.0, 3.0]), np.array([0.0, 0.0, -1.0]), corners, tri)
+    assert found[0] == 0 and found[1] == pytest.approx(3.0)
+    np.testing.assert_allclose(found[2] @ corners, [0.0, 0.0, 0.0], atol=1e-12)
+
+
+# -- the session on the engine ------------------------------------------------------
+@pytest.fixture
+def sheet_session(gl_context, tmp_path):
+    stage_path = sheet_stage(tmp_path / "sheet.usda", nx=21)
+    out = tmp_path / "painted.usda"
+    stage, layer, save = open_paint_stage(stage_path, str(out))
+    session = PaintSession(stage, layer, save, ctx=gl_context)
+    session.orbit.yaw, session.orbit.pitch = 0.0, 89.0
+    session.frame_view(16 / 9)
+    yield session, stage_path, out
+    session.release()
+
+
+def sheet_pixel(session, point, width=320, height=180):
+    frame = session.last_frame
+    posed = np.asarray(point, np.float64)
+    xy, _ = project(frame.camera, posed[None], frame.width, frame.height)
+    return xy[0, 0] * width / frame.width, xy[0, 1] * height / frame.height
+
+
+def test_a_session_stroke_is_authored_undone_and_saved(sheet_session):
+    session, stage_path, out = sheet_session
+    session.render(320, 180, FULL)
+    path = session.active
+    q0 = session.mesh.q.copy()
+    assert session.begin_stroke(*sheet_pixel(session, [-0.5, 0.0, 0.0]), 320, 180)
+    for x in np.linspace(-0.45, 0.5, 12):
+        session.drag(*sheet_pixel(session, [x, 0.0, 0.0]), 320, 180)
+    edit = session.end_stroke()
+    assert edit is not None and session.dirty
+    q1 = session.mesh.q.copy()
+    touched = session.last_touched
+    assert len(touched) > 20
+    assert (np.abs(q1[touched, 0]) / np.linalg.norm(q1[touched], axis=1)).min() >= 0.99
+    # authored through the WrinkleAPI on the paint layer; the engine reads it back
+    session.engine.pull_changes()
+    np.testing.assert_array_equal(session.engine.meshes[path].params.q, q1)
+    session.undo()
+    session.engine.pull_changes()
+    np.testing.assert_array_equal(session.engine.meshes[path].params.q, q0)
+    assert not session.dirty
+    session.redo()
+    assert session.save() == str(out)
+    assert not session.dirty
+    saved = Usd.Stage.Open(str(out))
+    np.testing.assert_array_equal(WrinkleAPI(saved.GetPrimAtPath(path)).get_q(), q1)
+    assert saved.GetRootLayer().subLayerPaths[0] == os.path.basename(stage_path)
+    assert saved.GetStartTimeCode() == 1.0 and saved.GetEndTimeCode() == 2.0
+
+
+def test_reopening_the_paint_layer_paints_on(sheet_session, gl_context):
+    session, stage_path, out = sheet_session
+    session.flood()
+    session.save()
+    stage, layer, save = open_paint_stage(stage_path, str(out))
+    assert save == str(out) and layer.realPath == str(out)  # painted further, in place
+    again = PaintSession(stage, layer, save, ctx=gl_context)
+    try:
+        np.testing.assert_array_equal(again.mesh.q, session.mesh.q)
+    finally:
+        again.release()
+
+
+def test_live_controls_preview_then_author(sheet_session):
+    session, _, _ = sheet_session
+    prim = session.stage.GetPrimAtPath(session.active)
+    first = session.render(320, 180, FULL).pixels
+    assert session.set_control("amplitude_scale", 3.0, live=True) is None
+    assert not prim.GetAttribute("wrinkle:amplitudeScale").HasAuthoredValue()
+    session.set_control("amplitude_scale", 2.0, live=True)
+    edit = session.set_control("amplitude_scale", 2.0)
+    assert (edit.before, edit.after) == (1.0, 2.0)
+    assert prim.GetAttribute("wrinkle:amplitudeScale").Get() == 2.0
+    session.undo()
+    assert prim.GetAttribute("wrinkle:amplitudeScale").Get() == 1.0
+    np.testing.assert_array_equal(session.render(320, 180, FULL).pixels, first)
+    with pytest.raises(UsdWrinkleError, match="slack 2 must be in"):
+        session.set_control("slack", 2.0)
+    session.set_cloth("denim")
+    assert prim.GetAttribute("wrinkle:cloth").Get() == "denim"
+
+
+def test_a_live_preview_keeps_the_history_and_the_edit_restarts_it(sheet_session,
+                                                                   gl_context, tmp_path):
+    """A stroke previews the current frame from the kept state; once authored, the frame
+    is the one a fresh engine renders from the painted stage."""
+    from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.outputs.images import layout_for
+
+    session, _, out = sheet_session
+    session.render(320, 180, FULL)
+    kept = session.engine.kept_history
+    session.flood()  # authored: the history restarts at the next frame
+    mesh = session.mesh
+    session.engine.preview_params(mesh.path, q=mesh.q * 0.5)
+    assert session.engine.kept_history == kept
+    session.save()
+    session.stage_camera = True
+    ours = session.render(320, 180, FULL).pixels
+    fresh = WrinkleEngine(str(out), ctx=gl_context)
+    try:
+        image = fresh.render_image(session.frame, 320, 180, layout_for("x.png"))
+        np.testing.assert_array_equal(ours, image.planes["RGBA"])
+    finally:
+        fresh.release()
+
+
+def test_a_session_refuses_what_it_cannot_paint(gl_context, tmp_path):
+    stage_path = sheet_stage(tmp_path / "sheet.usda", nx=5)
+    stage, layer, save = open_paint_stage(stage_path, None)
+    assert save == os.path.realpath(stage_path)  # no -o: the root layer, in place
+    with pytest.raises(UsdWrinkleError, match="--prim /Nope is not a wrinkled mesh"):
+        PaintSession(stage, layer, save, prim="/Nope", ctx=gl_context)
+    with pytest.raises(UsdWrinkleError, match="cannot open paint layer"):
+        bad = tmp_path / "bad.usda"
+        bad.write_text("not usd")
+        open_paint_stage(stage_path, str(bad))
