@@ -1,6 +1,6 @@
 """usdwrinkle's benchmarks: the paper's timing table, scaling, baselines, end to end,
-the farm rows, the peer row against usdview's Storm, triangulation and the floors,
-measured in one run.
+the farm rows, the peer row against usdview's Storm, the paint window, triangulation and
+the floors, measured in one run.
 
     python -m benchmarks [--json PATH] [--markdown PATH] [--quick] ...
 
@@ -63,6 +63,9 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
     progress("bench: against Storm")
     from .peers import storm_peer
     result["peers"] = storm_peer(quick, corpus)
+    progress("bench: the paint window")
+    from .paint import paint
+    result["paint"] = paint(quick, ctx, corpus)
     progress("bench: triangulation")
     result["triangulation"] = triangulation(quick)
     progress("bench: floors")

@@ -63,6 +63,9 @@ def targets(result: dict) -> list[dict]:
                                "960x540, PNG)", "target": ">= 3x Storm's frame rate",
                     "value": f"{peers['lead']:.2f}x" if peers["ran"] else
                     f"not run: {peers['why']}", "met": peers["ran"] and peers["lead"] >= 3.0})
+    from .paint import paint_targets
+
+    out += paint_targets(result)
     return out
 
 
@@ -202,6 +205,9 @@ def markdown(result: dict) -> str:
     lines += cpu_nodes_report(result)
     lines += renderers_report(result)
     lines += beyond_report(result)
+    from .paint import paint_markdown
+
+    lines += paint_markdown(result)
     tri = result.get("triangulation")
     if tri:
         lines += ["", "## Triangulation of hostile meshes", "",

@@ -398,13 +398,78 @@ def scenario_usdview(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_bench(out: Path, stage: str) -> dict:
+    """The window's own latencies with a 960x540 view (benchmarks/paint.py runs it):
+    frame intervals while dragging across the view's middle, release to the full-quality
+    frame, and a move of the W slider to the frame that shows it."""
+    all_meshes = os.environ.get("PAINT_BENCH_ALL_MESHES") == "1"
+    window = open_window(stage, str(out / "bench.usda"), all_meshes=all_meshes)
+    window.view.setFixedSize(960, 540)
+    settle(window)
+    view = window.view
+    y = view.height() / 2
+    points = line((view.width() * 0.1, y), (view.width() * 0.9, y), 40)
+    mouse(view, QtCore.QEvent.MouseButtonPress, *points[0])
+    gaps, last = [], time.perf_counter()
+    for x, yy in points[1:]:
+        count = len(view.frame_times)
+        mouse(view, QtCore.QEvent.MouseMove, x, yy, Qt.NoButton, Qt.LeftButton)
+        wait_for(lambda c=count: len(view.frame_times) > c, "a preview frame")
+        now = time.perf_counter()
+        gaps.append(now - last)
+        last = now
+    started = time.perf_counter()
+    mouse(view, QtCore.QEvent.MouseButtonRelease, *points[-1])
+    settle(window)
+    release = time.perf_counter() - started
+    slider = window.width_slider
+    width = slider.value()
+    moves = []
+    for factor in (0.8, 0.64, 0.8, 1.0):
+        count = len(view.frame_times)
+        started = time.perf_counter()
+        slider.slider.setSliderDown(True)
+        slider.slider.setValue(slider._to_position(width * factor))
+        wait_for(lambda c=count: len(view.frame_times) > c, "the W frame")
+        moves.append(time.perf_counter() - started)
+    slider.slider.setSliderDown(False)
+    slider.slider.sliderReleased.emit()
+    settle(window)
+    frame = view.last_frame
+    result = {"view": [frame.width, frame.height], "stroked": window.session.dirty,
+              "drag_gaps": gaps[1:], "release": release, "width_moves": moves,
+              "vertices": int(sum(m.count for m in window.session.meshes.values())),
+              "errors": list(window.errors)}
+    window.close()
+    return result
+
+
+def scenario_figures(out: Path, stage: str) -> dict:
+    """The README's screenshots (python tests/paint_driver.py figures docs/images, under
+    xvfb-run): the window before and after a comb stroke along the shirt's upper arm,
+    q shown as segments."""
+    window = open_window(stage, str(out / "paint_figures.usda"), size=(1100, 620))
+    screenshot(window, out / "paint_before.png")
+    points, _ = upper_arm_stroke(window)
+    drag(window, points)
+    window.show_q.setChecked(True)
+    window.view.cursor_pos = QtCore.QPointF(*points[len(points) // 2])
+    settle(window)
+    screenshot(window, out / "paint_after.png")
+    window.session.dirty and window.session.undo()
+    window.close()
+    (out / "paint_figures.usda").unlink(missing_ok=True)
+    return {"written": ["paint_before.png", "paint_after.png"]}
+
+
 def main(argv: list[str]) -> int:
     scenario, out = argv[0], Path(argv[1])
     stage = argv[2] if len(argv) > 2 else str(SHIRT)
     out.mkdir(parents=True, exist_ok=True)
     app = application()
     result = globals()[f"scenario_{scenario}"](out, stage)
-    (out / "result.json").write_text(json.dumps(result, indent=1, default=float))
+    if scenario != "figures":  # the figures' folder holds the README's images only
+        (out / "result.json").write_text(json.dumps(result, indent=1, default=float))
     app.processEvents()
     return 0
 

@@ -26,7 +26,9 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     result = json.loads(out_json.read_text())
     assert result["quick"] is True
     assert {"machine", "command", "date", "paper_table", "scaling", "skin_baseline",
-            "numpy_baseline", "end_to_end", "preroll", "farm", "floors", "targets"} <= set(result)
+            "numpy_baseline", "end_to_end", "preroll", "farm", "floors", "targets",
+            "paint"} <= set(result)
+    assert [r["case"] for r in result["paint"]["engine"]] == ["shirt", "CesiumMan"]
     assert [r["case"] for r in result["paper_table"]] == ["shirt", "zeppelin", "curtain", "A", "B"]
     for section, keys in FIELDS.items():
         for row in result[section]:
