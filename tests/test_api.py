@@ -48,3 +48,24 @@ def test_mistakes_are_the_commands_errors(tmp_path):
     with pytest.raises(UsdWrinkleError, match="does not exist"):
         api.bake(tmp_path / "missing.usda", tmp_path / "out.usda")
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("call,options,message", [
+    ("render", {"width": "wide"}, "width='wide' must be an integer"),
+    ("render", {"width": 3.5}, "width=3.5 must be an integer"),
+    ("render", {"exr_compression": "bogus"}, "exr_compression='bogus' is not one of zip"),
+    ("render", {"frames": []}, "frames is empty"),
+    ("bake", {"maps": "normal", "tangent_space": "MikkTSpace"},
+     "tangent_space='MikkTSpace' is not one of triangle, mikktspace"),
+    ("bake", {"display_color": "red"}, "display_color='red' is not one of amplitude"),
+    ("bake", {"maps": "normal", "map_format": "jpg"}, "map_format='jpg' is not one of png"),
+    ("bake", {"maps": "normal", "map_layout": "x"}, "map_layout='x' is not one of islands"),
+])
+def test_the_api_refuses_what_the_command_refuses(tmp_path, call, options, message):
+    """Issue 42, finding 5: these gave per-triangle maps, the whole shot, a raw TypeError
+    or a KeyError; each is now the command line's kind of one-line error, before any
+    output exists."""
+    output = tmp_path / ("x.####.png" if call == "render" else "x.usda")
+    with pytest.raises(UsdWrinkleError, match=message.replace("(", r"\(")):
+        getattr(api, call)(SHIRT, output, **options)
+    assert not any(tmp_path.iterdir())

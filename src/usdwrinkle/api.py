@@ -37,11 +37,38 @@ def _namespace(command: str, stage, output, frames, options: dict) -> argparse.N
                         f"{', '.join(unknown)}; it takes {', '.join(sorted(known))}")
     if frames is not None and not isinstance(frames, str):
         frames = ",".join(repr(float(f)) for f in frames)
+    if frames is not None and not frames.strip():
+        from .errors import UsdWrinkleError
+
+        raise UsdWrinkleError("frames is empty (None renders the stage's time range)")
     args.frames = frames
+    actions = {action.dest: action for action in build_parser().commands[command]._actions}
     for name, value in options.items():
-        setattr(args, name, value)
+        setattr(args, name, _checked(name, value, actions.get(name)))
     args.debug = False
     return args
+
+
+def _checked(name: str, value, action):
+    """``value`` as the command line would take it for option ``name``: its choices and
+    its type (an int option refuses "wide" and 3.5), else UsdWrinkleError."""
+    from .errors import UsdWrinkleError
+
+    if action is None or value is None:
+        return value
+    if action.choices is not None and value not in action.choices:
+        raise UsdWrinkleError(f"{name}={value!r} is not one of "
+                              f"{', '.join(map(str, action.choices))}")
+    kind = action.type
+    if kind in (int, float) and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                 or (kind is int and not float(value).is_integer())):
+        raise UsdWrinkleError(f"{name}={value!r} must be "
+                              f"{'an integer' if kind is int else 'a number'}")
+    if kind in (int, float):
+        return kind(value)
+    if action.nargs == 0 and not isinstance(value, bool):
+        raise UsdWrinkleError(f"{name}={value!r} must be True or False")
+    return value
 
 
 def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list[str]:

@@ -40,6 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in (render, bake, apply, paint, check, bench, info, demo):
         module.add_parser(sub)
+    #: each subcommand's parser (usdwrinkle.api checks its keywords with them)
+    parser.commands = dict(sub.choices)
     for command in sub.choices.values():
         # also after the subcommand; SUPPRESS: unset here must not undo it given before
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
