@@ -65,10 +65,12 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
+    findings += units_findings(stage)
     widths = effective_widths(stage)
     if args.json:
-        json.dump({"stage": args.stage, "findings": findings, "clean": not findings,
-                   "widths": widths}, sys.stdout, indent=2)
+        # strict JSON: a value that is not finite is null (NaN is not JSON)
+        json.dump(_finite({"stage": args.stage, "findings": findings, "clean": not findings,
+                           "widths": widths}), sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")
     else:
         for f in findings:
@@ -79,6 +81,32 @@ def run(args) -> int:
         print(f"usdwrinkle: {len(findings)} finding(s) in {args.stage}" if findings
               else f"usdwrinkle: {args.stage} is clean")
     return 1 if findings else 0
+
+
+def _finite(value):
+    """``value`` with every float that is not finite replaced by None."""
+    import math
+
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {key: _finite(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(item) for item in value]
+    return value
+
+
+def units_findings(stage) -> list[dict]:
+    """The stage's metersPerUnit where render and bake refuse it (as a finding)."""
+    from ..errors import UsdWrinkleError
+    from ..scene.params import stage_meters
+
+    try:
+        stage_meters(stage)
+    except UsdWrinkleError as exc:
+        return [{"prim": "/", "attribute": "metersPerUnit", "message": exc.what,
+                 "type": "error", "validator": "usdWrinkleValidators:Units"}]
+    return []
 
 
 def effective_widths(stage) -> list[dict]:

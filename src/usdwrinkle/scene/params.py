@@ -16,6 +16,22 @@ from .topology import Topology, curvature, mean_edge_length
 _log = logging.getLogger(__name__)
 
 
+def stage_meters(stage: Usd.Stage) -> float:
+    """The stage's metersPerUnit, which a cloth preset's width and the curvature gain
+    divide by: refused in one line unless finite and > 0 (0 divided by zero, NaN and inf
+    gave NaN or infinite widths, and -1 negative ones)."""
+    import math
+
+    from ..errors import UsdWrinkleError
+
+    meters = UsdGeom.GetStageMetersPerUnit(stage)
+    if not (math.isfinite(meters) and meters > 0):
+        raise UsdWrinkleError(f"metersPerUnit {meters:g} must be finite and > 0 (the cloth "
+                              "presets' widths are converted through it)",
+                              stage.GetRootLayer().identifier, "metersPerUnit")
+    return meters
+
+
 def _get(prim: Usd.Prim, name: str):
     """An authored WrinkleAPI value by the static rule (None if unauthored)."""
     attr = prim.GetAttribute(name)
@@ -61,7 +77,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
     # the rest surface's largest curvature (1/m), for a cloth's width and amplitude gain
     kappa = None if cloth == schema.MESH_CLOTH else curvature(rest_points, topology) / \
-        UsdGeom.GetStageMetersPerUnit(prim.GetStage())
+        stage_meters(prim.GetStage())
     value = _primvar(prim, "wrinkle:width")
     if value is not None:
         arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
@@ -141,7 +157,7 @@ def cloth_width(prim: Usd.Prim, cloth: str, kappa: np.ndarray | None,
         return np.full(n, width, np.float32), (f"{schema.WIDTH_EDGE_MULTIPLE:g} x the mean "
                                                f"rest edge (wrinkle:cloth = mesh)")
     stage = prim.GetStage()
-    meters = UsdGeom.GetStageMetersPerUnit(stage)
+    meters = stage_meters(stage)
     authored = UsdGeom.StageHasAuthoredMetersPerUnit(stage)
     metres = schema.CLOTH_WIDTHS_M[cloth]
     width = curved_width(metres, kappa) / meters

@@ -1,0 +1,43 @@
+"""metersPerUnit that no width can be converted through (issue 42, findings 7, 12, 21):
+render, bake and check refuse it in one line (it was a ZeroDivisionError, NaN widths,
+negative widths, or a clean check), and check --json stays strict JSON."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from pxr import Usd
+
+from usdwrinkle.cli.main import main
+
+CURTAIN = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+
+
+def shot(tmp_path, meters: float) -> str:
+    """The curtain (a cloth preset's width, no authored W) under a root layer with
+    ``meters``."""
+    path = tmp_path / "shot.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    stage.GetRootLayer().subLayerPaths.append(str(CURTAIN))
+    stage.GetRootLayer().pseudoRoot.SetInfo("metersPerUnit", float(meters))
+    stage.Save()
+    return str(path)
+
+
+@pytest.mark.parametrize("meters", [float("nan"), float("inf"), -1.0, 0.0])
+def test_unusable_units_are_refused_everywhere(tmp_path, capsys, meters):
+    stage = shot(tmp_path, meters)
+    expected = f"metersPerUnit {meters:g} must be finite and > 0"
+    assert main(["render", stage, str(tmp_path / "x.png"), "--frames", "3", "--width",
+                 "32"]) == 2
+    assert expected in capsys.readouterr().err
+    assert main(["bake", stage, str(tmp_path / "b.usda"), "--frames", "3"]) == 2
+    assert expected in capsys.readouterr().err
+    assert not list(tmp_path.glob("x*")) and not list(tmp_path.glob("b*"))
+    assert main(["check", stage, "--wrinkles-only", "--json"]) == 1
+    report = json.loads(capsys.readouterr().out,
+                        parse_constant=lambda name: pytest.fail(f"{name} is not JSON"))
+    assert not report["clean"]
+    assert any(f["attribute"] == "metersPerUnit" and expected in f["message"]
+               for f in report["findings"])
