@@ -398,6 +398,28 @@ def scenario_usdview(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_close(out: Path, stage: str) -> dict:
+    """Closing with an unsaved stroke asks first: Cancel keeps the window and the stroke,
+    Save writes the layer and closes."""
+    layer = out / "close.usda"
+    window = open_window(stage, str(layer))
+    points, _ = upper_arm_stroke(window)
+    drag(window, points)
+    asked = []
+    window.confirm_close = lambda: asked.append("cancel") or "cancel"
+    window.close()
+    QtWidgets.QApplication.instance().processEvents()
+    result = {"asked": list(asked), "open_after_cancel": window.isVisible(),
+              "dirty_after_cancel": window.session.dirty, "saved_after_cancel": layer.exists(),
+              "title_modified": window.isWindowModified()}
+    window.confirm_close = lambda: asked.append("save") or "save"
+    window.close()
+    QtWidgets.QApplication.instance().processEvents()
+    result.update({"asked": asked, "open_after_save": window.isVisible(),
+                   "saved": layer.exists(), "errors": list(window.errors)})
+    return result
+
+
 def scenario_bench(out: Path, stage: str) -> dict:
     """The window's own latencies with a 960x540 view (benchmarks/paint.py runs it):
     frame intervals while dragging across the view's middle, release to the full-quality

@@ -155,6 +155,14 @@ def test_errors_show_in_the_window_and_it_goes_on(display, tmp_path):
     assert result["drew_after"] and result["closed"]
 
 
+def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
+    result = drive(display, "close", tmp_path)
+    assert result["asked"] == ["cancel", "save"] and result["errors"] == []
+    assert result["open_after_cancel"] and result["dirty_after_cancel"]
+    assert not result["saved_after_cancel"] and result["title_modified"]
+    assert result["saved"] and not result["open_after_save"]
+
+
 def test_the_saved_layer_renders_as_the_window_drew_it(display, tmp_path):
     from usdwrinkle.cli.main import main
 
