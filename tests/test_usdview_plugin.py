@@ -94,9 +94,12 @@ def test_plugin_registers_a_wrinkles_menu():
     container = usdview.WrinklePluginContainer()
     container.registerPlugins(Registry(), None)
     container.configureView(Registry(), Builder())
-    assert [c[1] for c in commands] == ["Bake current frame", "Render current frame"]
+    assert [c[1] for c in commands] == ["Bake current frame", "Render current frame",
+                                        "Paint..."]
     assert commands[0][2] is usdview.bake_current_frame
-    assert menus["Wrinkles"].items == ["Wrinkles.BakeCurrentFrame", "Wrinkles.RenderCurrentFrame"]
+    assert commands[2][2] is usdview.paint_current_stage
+    assert menus["Wrinkles"].items == ["Wrinkles.BakeCurrentFrame", "Wrinkles.RenderCurrentFrame",
+                                       "Wrinkles.Paint"]
 
 
 def test_plug_info_names_the_container():
