@@ -241,9 +241,11 @@ _PAINT_WINDOWS: list = []
 
 
 def _has_pyside6() -> bool:
+    """PySide6 imports, and usdview does not run on PySide2 (two Qt bindings cannot share
+    one process: the window then runs out of process)."""
     import importlib.util
 
-    return importlib.util.find_spec("PySide6") is not None
+    return "PySide2" not in sys.modules and importlib.util.find_spec("PySide6") is not None
 
 
 def _paint_prim(usdview_api) -> str | None:
