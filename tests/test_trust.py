@@ -156,7 +156,8 @@ def test_a_full_output_folder_is_one_error_and_frames_before_it_are_whole(gl_con
     out.mkdir()
     result = in_mount_namespace(
         f"mount -t tmpfs -o size=512k tmpfs {out} && {sys.executable} -m usdwrinkle render "
-        f"{SHIRT} {out}/m.####.{fmt} --frames 1:60 --width {WIDTH} --quiet; code=$?; "
+        f"{SHIRT} {out}/m.####.{fmt} --frames 1:60 --history-start 1 --width {WIDTH} "
+        "--quiet; code=$?; "
         f"{sys.executable} -c \"import sys, OpenImageIO as o, glob; "
         f"paths = sorted(glob.glob('{out}/*.{fmt}')); "
         "bad = [p for p in paths if o.ImageBuf(p).get_pixels(o.FLOAT) is None]; "

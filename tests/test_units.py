@@ -41,3 +41,16 @@ def test_unusable_units_are_refused_everywhere(tmp_path, capsys, meters):
     assert not report["clean"]
     assert any(f["attribute"] == "metersPerUnit" and expected in f["message"]
                for f in report["findings"])
+
+
+def test_frames_outside_the_shot_are_said(tmp_path, capsys):
+    """Issue 42, finding 19: --frames 100:102 on a 1..24 shot rendered after a 99-frame
+    preroll without a word."""
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+    assert main(["render", shirt, str(tmp_path / "x.####.png"), "--frames", "100:101",
+                 "--width", "32", "--samples", "1", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "2 of the 2 frame(s) lie outside the stage's time range 1..24 (first: 100)" in err
+    assert main(["render", shirt, str(tmp_path / "y.####.png"), "--frames", "23:24",
+                 "--width", "32", "--samples", "1", "--quiet"]) == 0
+    assert "outside" not in capsys.readouterr().err

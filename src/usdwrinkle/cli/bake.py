@@ -191,7 +191,12 @@ def run(args) -> int:
 
 def _bake(args, reporter, maps, geometry) -> int:
     from ..outputs.atomic import check_writable
-    from ..scene.stage import inherited_range_note, open_stage, stage_frames
+    from ..scene.stage import (
+        inherited_range_note,
+        open_stage,
+        outside_range_note,
+        stage_frames,
+    )
     from ..shot import BakeRequest, bake_layer
 
     # everything that can be refused without the GPU is checked first
@@ -202,6 +207,9 @@ def _bake(args, reporter, maps, geometry) -> int:
         check_map_folder(maps.folder_for(args.output))
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
+        reporter.warn(note)
+    if args.frames and args.history_start is None and \
+            (note := outside_range_note(stage, frames)):
         reporter.warn(note)
     # a bake always computes: fields already baked into the input are not its input
     engine = start_engine(args, reporter, stage, use_baked=False)

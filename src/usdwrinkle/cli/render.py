@@ -224,13 +224,21 @@ def _render_shot(args, reporter) -> list[str]:
     from ..imagefiles import is_complete_image
     from ..outputs.atomic import check_writable
     from ..scene.baked import geometry_bake
-    from ..scene.stage import inherited_range_note, open_stage, stage_frames
+    from ..scene.stage import (
+        inherited_range_note,
+        open_stage,
+        outside_range_note,
+        stage_frames,
+    )
     from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames
 
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
+        reporter.warn(note)
+    if args.frames and args.history_start is None and \
+            (note := outside_range_note(stage, frames)):
         reporter.warn(note)
     outputs = frame_paths(args.output, frames)
     extra = [args.stats] if args.stats else []

@@ -119,6 +119,27 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
     return point_cached, static_value(points_attr), "points"
 
 
+def outside_range_note(stage: Usd.Stage, frames: list[float]) -> str | None:
+    """A warning when --frames asks for frames outside the stage's authored time range:
+    they hold the animation's last (or first) pose, and the phase history runs from the
+    start up to them (a long preroll). None when every frame lies inside, or the stage
+    has no range."""
+    finite = [f for f in frames if not math.isnan(f)]
+    if not finite or not stage.HasAuthoredTimeCodeRange():
+        return None
+    start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
+    outside = [f for f in finite if f < start or f > end]
+    if not outside:
+        return None
+    from ..timecode import format_frame
+
+    return (f"{len(outside)} of the {len(finite)} frame(s) lie outside the stage's time range "
+            f"{format_frame(start)}..{format_frame(end)} (first: {format_frame(outside[0])}): "
+            "they show the animation held at its ends, and the phase history is computed "
+            f"from frame {format_frame(start)} up to them (pass --history-start to begin it "
+            "elsewhere)")
+
+
 def stage_frames(stage: Usd.Stage) -> list[float]:
     """The stage's authored start..end frames (step 1), or [NaN] for the default time.
 
