@@ -263,7 +263,8 @@ def _render_shot(args, reporter) -> list[str]:
         _warn_geometry(engine, reporter, args, frames)
         if not engine.wrinkled_paths and not args.no_wrinkles and \
                 geometry_bake(engine.stage) is None:
-            reporter.warn(NO_WRINKLED_MESH)
+            reporter.warn("the stage has no Mesh to wrinkle; rendering without wrinkles"
+                          if args.all_meshes else NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
                   if engine.meshes[path].material.wrinkle_maps]
         if mapped and not args.no_wrinkles:

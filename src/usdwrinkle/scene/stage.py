@@ -243,8 +243,18 @@ class StageSceneDelegate:
         #: per frame: the meshes, the camera and the lights (scene/sampling.py)
         self.sampler = FrameSampler(self)
         self.meshes: dict[str, MeshRecord] = {}
-        for prim in self._rendered_meshes(self.stage.GetPseudoRoot()):
-            self._add_mesh(prim)
+        #: gprims a render leaves out: not Mesh prims (Sphere, Cube, BasisCurves, ...)
+        self.undrawn: list[tuple[str, str]] = []
+        for prim in self._rendered_gprims(self.stage.GetPseudoRoot()):
+            if prim.IsA(UsdGeom.Mesh):
+                self._add_mesh(prim)
+            else:
+                self.undrawn.append((str(prim.GetPath()), prim.GetTypeName()))
+        if self.undrawn:
+            shown = ", ".join(f"{path} ({kind})" for path, kind in self.undrawn[:4])
+            more = f" and {len(self.undrawn) - 4} more" if len(self.undrawn) > 4 else ""
+            _log.warning(f"{len(self.undrawn)} gprim(s) are not drawn: usdwrinkle draws Mesh "
+                         f"prims only ({shown}{more}); convert them to meshes to see them")
         #: edits of the stage from now on (process_changes)
         self.tracker = ChangeTracker(self.stage)
 
@@ -252,8 +262,16 @@ class StageSceneDelegate:
     def _rendered_meshes(root: Usd.Prim):
         """The Mesh prims at or under ``root`` that a render draws (purpose default or
         render), instance proxies included."""
+        for prim in StageSceneDelegate._rendered_gprims(root):
+            if prim.IsA(UsdGeom.Mesh):
+                yield prim
+
+    @staticmethod
+    def _rendered_gprims(root: Usd.Prim):
+        """The gprims at or under ``root`` of purpose default or render, instance proxies
+        included (a render draws the Mesh prims among them)."""
         for prim in Usd.PrimRange(root, Usd.TraverseInstanceProxies()):
-            if prim.IsA(UsdGeom.Mesh) and \
+            if prim.IsA(UsdGeom.Gprim) and \
                     UsdGeom.Imageable(prim).ComputePurpose() in RENDERED_PURPOSES:
                 yield prim
 

@@ -1,0 +1,30 @@
+"""Trust, round 4 (issue 42): what a render leaves out is said."""
+from __future__ import annotations
+
+from pxr import Usd, UsdGeom
+
+from usdwrinkle.cli.main import main
+
+
+def test_gprims_that_are_not_meshes_are_named(tmp_path, capsys):
+    """Finding 8: a Sphere and BasisCurves vanished without a word, and a stage with no
+    Mesh told the user to pass the --all-meshes they had passed."""
+    path = tmp_path / "props.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    stage.SetStartTimeCode(1)
+    stage.SetEndTimeCode(2)
+    UsdGeom.Sphere.Define(stage, "/World/Ball")
+    UsdGeom.Cube.Define(stage, "/World/Box")
+    curves = UsdGeom.BasisCurves.Define(stage, "/World/Hair")
+    curves.CreateCurveVertexCountsAttr([2])
+    curves.CreatePointsAttr([(0, 0, 0), (0, 1, 0)])
+    guide = UsdGeom.Cube.Define(stage, "/World/Guide")
+    guide.CreatePurposeAttr(UsdGeom.Tokens.guide)  # not drawn by renders anyway: not named
+    stage.Save()
+    assert main(["render", str(path), str(tmp_path / "x.png"), "--frames", "1", "--width",
+                 "32", "--all-meshes"]) == 0
+    err = capsys.readouterr().err
+    assert ("3 gprim(s) are not drawn: usdwrinkle draws Mesh prims only (/World/Ball "
+            "(Sphere), /World/Box (Cube), /World/Hair (BasisCurves))") in err
+    assert "Guide" not in err
+    assert "the stage has no Mesh to wrinkle" in err and "use --all-meshes" not in err
