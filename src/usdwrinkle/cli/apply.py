@@ -200,6 +200,12 @@ def edit_target(args, stage):
                                   "use -o LAYER")
         return stage, target
     check_layer_path(args.output)
+    root = stage.GetRootLayer()
+    if root.realPath and os.path.realpath(args.output) == os.path.realpath(root.realPath):
+        if root.realPath.lower().endswith(".usdz"):
+            raise UsdWrinkleError(f"cannot edit '{args.stage}' in place (a .usdz package); "
+                                  "use -o LAYER")
+        return stage, root  # -o the stage itself: edited in place, as without -o
     try:
         refuse_overwriting_inputs(args.stage, [args.output], stage)
     except UsdWrinkleError:
