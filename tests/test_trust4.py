@@ -46,3 +46,25 @@ def test_apply_o_the_stage_itself_edits_it_in_place(tmp_path, capsys):
     width = stage.GetPrimAtPath("/World/Arm/Sleeve").GetAttribute("primvars:wrinkle:width")
     assert list(width.Get()) == [pytest.approx(0.3)]
     assert "applied WrinkleAPI to 1 mesh(es)" in capsys.readouterr().out
+
+
+def test_held_from_a_primvar_authored_as_time_samples(tmp_path):
+    """Finding 18: --held-from-primvar on a primvar whose only value is a time sample of
+    0.5 was refused as 'must be in [0, 1]' (its default time read nothing)."""
+    import numpy as np
+    from pxr import Sdf
+
+    from usdwrinkle.authoring import WrinkleAPI
+    from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
+
+    points, counts, indices = grid_sheet(3, 3)
+    stage = point_cache_stage(points, {1.0: points}, counts, indices, width=0.2)
+    primvar = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+        "pin", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.constant)
+    primvar.Set([0.5], 1.0)
+    path = tmp_path / "sheet.usda"
+    stage.GetRootLayer().Export(str(path))
+    assert main(["apply", str(path), "/Sheet", "--held-from-primvar", "pin"]) == 0
+    applied = Usd.Stage.Open(str(path))
+    held = WrinkleAPI(applied.GetPrimAtPath("/Sheet")).GetHeldPrimvar()
+    np.testing.assert_allclose(np.asarray(held.ComputeFlattened()), 0.5)

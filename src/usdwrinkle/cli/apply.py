@@ -370,8 +370,15 @@ def held_from_primvar(prim, name: str) -> np.ndarray:
                                           UsdGeom.Tokens.constant):
         raise UsdWrinkleError(f"primvar {name!r} must have vertex or constant interpolation "
                               "to give held weights per point", str(prim.GetPath()))
+    from pxr import Usd
+
+    # held edges are a rest-pose property: the default value, else the first time sample
+    # (a primvar authored only as time samples has no default)
+    value = primvar.ComputeFlattened(Usd.TimeCode.Default())
+    if value is None:
+        value = primvar.ComputeFlattened(Usd.TimeCode.EarliestTime())
     try:
-        return np.atleast_1d(np.asarray(primvar.ComputeFlattened(), np.float32)).ravel()
+        return np.atleast_1d(np.asarray(value, np.float32)).ravel()
     except (TypeError, ValueError) as exc:
         raise UsdWrinkleError(f"primvar {name!r} is not a float array ({exc})",
                               str(prim.GetPath())) from None
