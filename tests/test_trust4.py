@@ -68,3 +68,16 @@ def test_held_from_a_primvar_authored_as_time_samples(tmp_path):
     applied = Usd.Stage.Open(str(path))
     held = WrinkleAPI(applied.GetPrimAtPath("/Sheet")).GetHeldPrimvar()
     np.testing.assert_allclose(np.asarray(held.ComputeFlattened()), 0.5)
+
+
+def test_a_cloth_preset_under_an_authored_width_is_said(tmp_path, capsys):
+    """Finding 19: apply --cloth denim on a mesh that authors its width changed nothing,
+    silently (the authored width wins)."""
+    from pathlib import Path
+
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    out = tmp_path / "over.usda"
+    assert main(["apply", str(shirt), "/World/Arm/Sleeve", "-o", str(out), "--cloth",
+                 "denim"]) == 0
+    err = capsys.readouterr().err
+    assert "--cloth denim sets no width on /World/Arm/Sleeve" in err

@@ -323,6 +323,15 @@ def plan_edits(args, meshes: list, q_spec=None, profile=None) -> list[MeshEdit]:
         findings += check_crest_damping(plan.crest_damping, path)
         findings += check_held(plan.held, count, path)
         refuse(findings)
+        from pxr import UsdGeom
+
+        from ..errors import print_warning
+
+        if plan.cloth is not None and plan.width is None and \
+                UsdGeom.PrimvarsAPI(prim).GetPrimvar("wrinkle:width").HasAuthoredValue():
+            print_warning(f"--cloth {plan.cloth} sets no width on {path}: it authors "
+                          "primvars:wrinkle:width, which wins over the cloth preset (pass "
+                          "--width too, or remove that primvar)")
         plans.append(plan)
     return plans
 
