@@ -81,3 +81,30 @@ def test_a_cloth_preset_under_an_authored_width_is_said(tmp_path, capsys):
                  "denim"]) == 0
     err = capsys.readouterr().err
     assert "--cloth denim sets no width on /World/Arm/Sleeve" in err
+
+
+def test_skip_existing_renders_damaged_frames_again(tmp_path):
+    """Finding 6: --skip-existing kept an EXR without its AOV channels and PNG data named
+    .exr as if they were frames."""
+    import os
+    import shutil
+    from pathlib import Path
+
+    import OpenImageIO as oiio
+
+    from usdwrinkle.imagefiles import is_complete_image
+
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+    args = ["--width", "32", "--height", "20", "--samples", "1", "--quiet"]
+    pattern = str(tmp_path / "f.####.exr")
+    assert main(["render", shirt, pattern, "--frames", "1:3", *args]) == 0
+    assert main(["render", shirt, str(tmp_path / "p.png"), "--frames", "1", *args]) == 0
+    oiio.ImageBuf(oiio.ImageSpec(32, 20, 4, oiio.HALF)).write(str(tmp_path / "f.0001.exr"))
+    shutil.copy(tmp_path / "p.png", tmp_path / "f.0002.exr")
+    kept = os.stat(tmp_path / "f.0003.exr").st_mtime_ns
+    assert not is_complete_image(str(tmp_path / "f.0001.exr"), 32, 20)
+    assert not is_complete_image(str(tmp_path / "f.0002.exr"), 32, 20)
+    assert main(["render", shirt, pattern, "--frames", "1:3", "--skip-existing", *args]) == 0
+    for frame in (1, 2, 3):
+        assert is_complete_image(str(tmp_path / f"f.{frame:04d}.exr"), 32, 20), frame
+    assert os.stat(tmp_path / "f.0003.exr").st_mtime_ns == kept

@@ -63,11 +63,39 @@ def _decode(oiio, path: str, max_size: int | None, keep_8bit: bool,
     return pixels, eight_bit
 
 
+#: the first bytes of each format a frame is written in
+_MAGIC = {".exr": (b"\x76\x2f\x31\x01",), ".png": (b"\x89PNG\r\n\x1a\n",),
+          ".jpg": (b"\xff\xd8\xff",), ".jpeg": (b"\xff\xd8\xff",),
+          ".tif": (b"II*\x00", b"MM\x00*"), ".tiff": (b"II*\x00", b"MM\x00*")}
+
+
 def is_complete_image(path: str, width: int, height: int) -> bool:
-    """True when ``path`` decodes whole at width x height (``--skip-existing`` trusts only
-    such a file; a truncated or foreign one is rendered again)."""
+    """True when ``path`` is a frame as render writes it: the format its extension names
+    (PNG data named .exr is not), decoding whole at width x height, and for an EXR every
+    channel a frame holds (one missing its AOVs is not). ``--skip-existing`` trusts only
+    such a file; any other is rendered again."""
+    from .aovs import EXR_CHANNELS
+
+    ext = os.path.splitext(path)[1].lower()
     try:
+        with open(path, "rb") as handle:
+            head = handle.read(8)
+        if ext in _MAGIC and not head.startswith(_MAGIC[ext]):
+            return False
         pixels, _ = read_float_image(path, strict=True)
     except OSError:
         return False
-    return pixels.shape[:2] == (height, width)
+    if pixels.shape[:2] != (height, width):
+        return False
+    if ext == ".exr":
+        import OpenImageIO as oiio
+
+        image = oiio.ImageInput.open(path)
+        if image is None:
+            return False
+        try:
+            channels = set(image.spec().channelnames)
+        finally:
+            image.close()
+        return set(EXR_CHANNELS) <= channels
+    return True
