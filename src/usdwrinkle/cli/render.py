@@ -43,7 +43,7 @@ def add_parser(subparsers) -> None:
                    help="shade every multisample where it lies (the default): wrinkles a few "
                         "pixels across are averaged over the pixel, as a renderer's texture "
                         "filtering averages a baked map; --no-shade-samples shades each "
-                        "pixel once, at its centroid (about 1.3x faster on llvmpipe, jagged "
+                        "pixel once, at its centroid (about 1.4x faster on llvmpipe, jagged "
                         "fold crests; README: render options)")
     p.add_argument("--write-threads", type=int, default=1, metavar="N",
                    help="threads that encode and write frames while the next ones render "
