@@ -4,6 +4,7 @@ on the engine (tests/test_paint_window.py drives the window itself)."""
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -286,3 +287,18 @@ def test_a_session_refuses_what_it_cannot_paint(gl_context, tmp_path):
         bad = tmp_path / "bad.usda"
         bad.write_text("not usd")
         open_paint_stage(stage_path, str(bad))
+
+
+def test_paint_refuses_in_one_line_before_any_window(tmp_path, capsys, corpus):
+    from usdwrinkle.cli.main import main
+
+    lbs = str(corpus / "openusd-usdskel" / "lbs.usda")
+    assert main(["paint", lbs, "-o", str(tmp_path / "p.usda")]) == 2
+    assert "no mesh has WrinkleAPI applied, so there is nothing to paint" in \
+        capsys.readouterr().err
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+    assert main(["paint", shirt, "--prim", "/World/Nope"]) == 2
+    assert "--prim /World/Nope is not a Mesh of the stage" in capsys.readouterr().err
+    assert main(["paint", shirt, "--size", "10x10"]) == 2
+    assert "--size 10x10 must be between" in capsys.readouterr().err
+    assert not (tmp_path / "p.usda").exists()

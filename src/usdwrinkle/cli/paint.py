@@ -41,6 +41,22 @@ def _size(text: str) -> tuple[int, int]:
     return width, height
 
 
+def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
+    """Refuse, before a window opens, a stage with nothing to paint, or a --prim that is
+    not a mesh of it (the session would say so inside an empty window)."""
+    from pxr import Usd, UsdGeom
+
+    from .. import schema
+
+    meshes = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Mesh)]
+    if prim is not None and str(prim) not in {str(p.GetPath()) for p in meshes}:
+        raise UsdWrinkleError(f"--prim {prim} is not a Mesh of the stage")
+    if not all_meshes and not any(schema.has_wrinkle_api(p) for p in meshes):
+        raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to paint "
+                              "(pass --all-meshes to paint every mesh, or apply WrinkleAPI "
+                              "with usdwrinkle apply)")
+
+
 def check_display() -> None:
     """Refuse, in one line, a Linux session with no display: Qt's xcb platform would
     abort the process instead."""
@@ -63,6 +79,7 @@ def run(args) -> int:
     if args.frame is not None:
         check_time_code(args.frame, "--frame")
     stage, layer, save = open_paint_stage(args.stage, args.output)
+    check_paintable(stage, args.prim, args.all_meshes)
     check_display()
     from ..paint.window import run_window  # a one-line error without PySide6
 
