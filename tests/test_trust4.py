@@ -108,3 +108,91 @@ def test_skip_existing_renders_damaged_frames_again(tmp_path):
     for frame in (1, 2, 3):
         assert is_complete_image(str(tmp_path / f"f.{frame:04d}.exr"), 32, 20), frame
     assert os.stat(tmp_path / "f.0003.exr").st_mtime_ns == kept
+
+
+def _two_sheets(tmp_path, first: str, second: str) -> str:
+    """Two still sheets with WrinkleAPI and painted q at ``first`` and ``second``."""
+    import numpy as np
+    from pxr import Sdf, Vt
+
+    from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
+
+    points, counts, indices = grid_sheet(5, 5)
+    q = np.tile([0.6, 0.0, 0.0], (len(points), 1))
+    stage = point_cache_stage(points, {1.0: points}, counts, indices, q=q, width=0.5,
+                              path=first)
+    other = point_cache_stage(points + [0, 0, 0.5], {1.0: points + [0, 0, 0.5]}, counts,
+                              indices, q=q, width=0.5, path=second)
+    UsdGeom.Xform.Define(stage, Sdf.Path(second).GetParentPath())
+    Sdf.CopySpec(other.GetRootLayer(), second, stage.GetRootLayer(), second)
+    for path in (first, second):
+        UsdGeom.Mesh(stage.GetPrimAtPath(path)).CreateExtentAttr(
+            Vt.Vec3fArray([(-1, -1, 0), (1, 1, 0.5)]))
+    path = tmp_path / "two.usda"
+    stage.GetRootLayer().Export(str(path))
+    return str(path)
+
+
+@pytest.mark.parametrize("first,second,extra", [
+    # a mesh's preview set is another's full set
+    ("/World/Cloth", "/World/Cloth_preview", []),
+    ("/World/A_B/C", "/World/Z/A/B/C", []),                      # joined names
+    ("/World/Ärmel", "/World/Örmel", []),                        # file-safe characters
+    # the display-colour ramp's material
+    ("/World/DisplayColor", "/World/Other", ["--display-color", "amplitude"]),
+])
+def test_every_mesh_binds_its_own_maps(gl_context, tmp_path, first, second, extra):
+    """Finding 3: meshes whose names met after joining, sanitising or a set's suffix
+    were bound to each other's maps, or failed with a misleading 'cannot write'."""
+    from pxr import UsdShade
+
+    stage_path = _two_sheets(tmp_path, first, second)
+    layer = tmp_path / "baked.usda"
+    assert main(["bake", stage_path, str(layer), "--quiet", "--maps", "normal", "--map-size",
+                 "32", *extra]) == 0
+    baked = Usd.Stage.Open(str(layer))
+    seen = {}
+    for mesh in (first, second):
+        for purpose in (UsdShade.Tokens.full, UsdShade.Tokens.preview):
+            material, _ = UsdShade.MaterialBindingAPI(baked.GetPrimAtPath(mesh)) \
+                .ComputeBoundMaterial(purpose)
+            seen[(mesh, purpose)] = str(material.GetPath())
+    bound = list(seen.values())
+    # each mesh its own maps material for final renderers, never the ramp's (which the
+    # preview purpose shares by design)
+    full = [seen[(mesh, UsdShade.Tokens.full)] for mesh in (first, second)]
+    assert len(set(full)) == 2 and not any(p.endswith("WrinkleMaterials/DisplayColor")
+                                           for p in full), seen
+    maps = [path for path in bound if not path.endswith("WrinkleMaterials/DisplayColor")]
+    assert len(set(maps)) == len(maps) and "" not in bound, seen
+    files = [p.name for p in (tmp_path / "baked_maps").iterdir()]
+    assert len(files) == (2 if extra else 4), files
+
+
+def test_a_bake_of_a_bake_makes_no_reference_cycle(gl_context, tmp_path):
+    """Finding 3: baking maps from a maps bake wrote WrinkleMaterials/Cloth referencing
+    itself."""
+    stage_path = _two_sheets(tmp_path, "/World/Cloth", "/World/Other")
+    first, second = tmp_path / "first.usda", tmp_path / "second.usda"
+    assert main(["bake", stage_path, str(first), "--quiet", "--maps", "normal",
+                 "--map-size", "32", "--tangent-space", "triangle"]) == 0
+    assert main(["bake", str(first), str(second), "--quiet", "--maps", "normal",
+                 "--map-size", "32", "--tangent-space", "triangle",
+                 "--map-dir", str(tmp_path / "second_maps")]) == 0
+    layer = Sdf_layer(second)
+    for prim in layer.rootPrims:
+        for spec in _walk(prim):
+            for ref in spec.referenceList.GetAddedOrExplicitItems():
+                assert ref.primPath != spec.path, spec.path
+
+
+def Sdf_layer(path):  # noqa: N802
+    from pxr import Sdf
+
+    return Sdf.Layer.FindOrOpen(str(path))
+
+
+def _walk(spec):
+    yield spec
+    for child in spec.nameChildren:
+        yield from _walk(child)

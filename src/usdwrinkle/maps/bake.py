@@ -100,7 +100,7 @@ class MapBake:
         self.layer = None
         meshes = scene.meshes
         #: mesh path -> its file stem (the full set's, and its material's name)
-        self.stems = mesh_file_names(meshes)
+        self.stems = mesh_file_names(meshes, getattr(scene.facts, "material_names", ()))
         islands: dict[str, MeshMaps | None] = {}   # one layout per mesh, for every set
         for map_set in options.sets:
             for path in meshes:

@@ -47,11 +47,22 @@ def extension(kind: str, fmt: str) -> str:
     return ".exr" if kind == "height" or fmt == "exr" else ".png"
 
 
-def mesh_file_names(paths) -> dict[str, str]:
-    """Mesh prim path -> a file-name stem, unique among ``paths``: the prim's name, with
-    as many parent names as it takes to tell meshes of the same name apart."""
+#: the names a bake's material scope holds besides the meshes' (outputs/layers.py: the
+#: display-colour ramp)
+RESERVED_NAMES = ("DisplayColor",)
+#: the suffixes the map sets add to a mesh's name for their materials (maps/options.py)
+SET_SUFFIXES = ("", "_preview")
+
+
+def mesh_file_names(paths, taken=()) -> dict[str, str]:
+    """Mesh prim path -> a name for its map files and materials: the prim's name, with as
+    many parent names as it takes to tell meshes of the same name apart, in file-safe
+    characters. One allocator for every name a bake makes: no two meshes get one name,
+    no mesh's name with a set's suffix (``Cloth`` + ``_preview``) is another's, and none
+    is in ``taken`` (names the bake's material scope already holds, and RESERVED_NAMES):
+    a clash gets ``_2``, ``_3``... in the order of the prim paths, so names are stable."""
     parts = {path: [p for p in path.split("/") if p] for path in paths}
-    names = {}
+    wanted = {}
     for path, segments in parts.items():
         depth = 1
         while True:
@@ -61,8 +72,20 @@ def mesh_file_names(paths) -> dict[str, str]:
             if not clash or depth >= len(segments):
                 break
             depth += 1
-        names[path] = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
-    return names
+        wanted[path] = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
+    used = {name for name in (*taken, *RESERVED_NAMES)}
+    names = {}
+    for path in sorted(parts):  # the ordering that keeps names stable between bakes
+        base = wanted[path] or "mesh"
+        name, count = base, 1
+        while any(f"{name}{suffix}" in used for suffix in SET_SUFFIXES) or any(
+                name == f"{other}{suffix}" for other in names.values()
+                for suffix in SET_SUFFIXES[1:]):
+            count += 1
+            name = f"{base}_{count}"
+        names[path] = name
+        used.update(f"{name}{suffix}" for suffix in SET_SUFFIXES)
+    return {path: names[path] for path in parts}
 
 
 def uv_tiles(corner_uv: np.ndarray) -> tuple[list[tuple[int, int]], int]:

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from pxr import Usd, UsdGeom, UsdShade, UsdSkel
+from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from .material import bound_surface, corner_values, display_color
 from .sampling import time_code
@@ -106,6 +106,9 @@ class StageFacts:
     default_prim_path: str | None = None
     inputs: object = None
     meshes: dict = field(default_factory=dict)
+    #: the names of the prims the stage already has in the bake's material scope
+    #: (<default prim>/WrinkleMaterials): a bake of a bake must not define them again
+    material_names: frozenset = frozenset()
 
 
 def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
@@ -126,7 +129,20 @@ def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
         inputs=stage_inputs(stage),
         meshes={path: _mesh_facts(stage.GetPrimAtPath(path), record, tuple(frames),
                                   carry_primvars)
-                for path, record in records.items()})
+                for path, record in records.items()},
+        material_names=_material_names(stage, default))
+
+
+def _material_names(stage: Usd.Stage, default) -> frozenset:
+    """The children of the stage's WrinkleMaterials scopes (where a bake defines its
+    materials: under the default prim, or at the root), by name."""
+    roots = [Sdf.Path.absoluteRootPath] + ([default.GetPath()] if default else [])
+    names = set()
+    for root in roots:
+        scope = stage.GetPrimAtPath(root.AppendChild("WrinkleMaterials"))
+        if scope:
+            names.update(child.GetName() for child in scope.GetAllChildren())
+    return frozenset(names)
 
 
 def _look(prim: Usd.Prim, purpose: str) -> SourceLook:
