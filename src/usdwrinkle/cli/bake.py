@@ -208,11 +208,11 @@ def _bake(args, reporter, maps, geometry) -> int:
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
         reporter.warn(note)
-    if args.frames and args.history_start is None and \
-            (note := outside_range_note(stage, frames)):
-        reporter.warn(note)
     # a bake always computes: fields already baked into the input are not its input
     engine = start_engine(args, reporter, stage, use_baked=False)
+    if args.frames and args.history_start is None and engine.wrinkled_paths and \
+            (note := outside_range_note(stage, frames)):
+        reporter.warn(note)
     try:
         if maps is not None:
             from ..maps.bake import check_map_options

@@ -237,9 +237,6 @@ def _render_shot(args, reporter) -> list[str]:
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
         reporter.warn(note)
-    if args.frames and args.history_start is None and \
-            (note := outside_range_note(stage, frames)):
-        reporter.warn(note)
     outputs = frame_paths(args.output, frames)
     extra = [args.stats] if args.stats else []
     if args.stats and os.path.realpath(args.stats) in {os.path.realpath(o) for o in outputs}:
@@ -259,6 +256,11 @@ def _render_shot(args, reporter) -> list[str]:
                           use_baked=not (args.recompute or args.no_wrinkles))
     try:
         engine.check_baked(frames)
+        computed = not args.no_wrinkles and any(path not in engine.baked
+                                                for path in engine.wrinkled_paths)
+        if computed and args.frames and args.history_start is None and \
+                (note := outside_range_note(stage, frames)):
+            reporter.warn(note)  # a preroll from the shot's start (not for baked frames)
         _warn_unbaked(engine, reporter, args)
         _warn_geometry(engine, reporter, args, frames)
         if not engine.wrinkled_paths and not args.no_wrinkles and \
