@@ -196,3 +196,82 @@ def _walk(spec):
     yield spec
     for child in spec.nameChildren:
         yield from _walk(child)
+
+
+def _held_shot(tmp_path):
+    """The curtain under a root layer with metersPerUnit 1 and no authored W (its cloth
+    preset's width goes through the units), opened as usdview holds it."""
+    from pathlib import Path
+
+    curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    path = tmp_path / "shot.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    stage.GetRootLayer().subLayerPaths.append(str(curtain))
+    stage.GetRootLayer().pseudoRoot.SetInfo("metersPerUnit", 1.0)
+    stage.GetRootLayer().pseudoRoot.SetInfo("upAxis", "Y")
+    stage.SetStartTimeCode(1)
+    stage.SetEndTimeCode(24)
+    cloth = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
+    cloth.GetAttribute("primvars:wrinkle:width").Block()
+    stage.Save()
+    return Usd.Stage.Open(str(path)), str(cloth.GetPath())
+
+
+def _stand_in(stage, frame):
+    from types import SimpleNamespace
+
+    status: list[str] = []
+    return SimpleNamespace(stage=stage, frame=Usd.TimeCode(frame), selectedPrims=[],
+                           cameraPrim=None, PrintStatus=status.append), status
+
+
+def test_usdview_out_of_process_keeps_units_and_unsaved_edits(gl_context, tmp_path,
+                                                              monkeypatch):
+    """Finding 4: the out-of-process bake dropped metersPerUnit (amplitudes 100x) and
+    baked the file on disk, not usdview's unsaved edits."""
+    import sys
+
+    import numpy as np
+
+    from usdwrinkle import usdview
+
+    inside, path = _held_shot(tmp_path)
+    inside.GetPrimAtPath(path).GetAttribute("wrinkle:amplitudeScale").Set(2.0)  # unsaved
+    assert inside.GetRootLayer().dirty
+    api, _ = _stand_in(inside, 12)
+    assert usdview.bake_current_frame(api, ctx=gl_context) == [path]
+    expected = np.asarray(UsdGeom.PrimvarsAPI(inside.GetPrimAtPath(path))
+                          .GetPrimvar("wrinkle:amplitude").Get(12))
+    (tmp_path / "again").mkdir()
+    outside, _ = _held_shot(tmp_path / "again")
+    outside.GetPrimAtPath(path).GetAttribute("wrinkle:amplitudeScale").Set(2.0)
+    monkeypatch.setattr(usdview, "_in_process", lambda: False)
+    monkeypatch.setenv("USDWRINKLE_PYTHON", sys.executable)
+    api, status = _stand_in(outside, 12)
+    assert usdview.bake_current_frame(api) == [path], status
+    got = np.asarray(UsdGeom.PrimvarsAPI(outside.GetPrimAtPath(path))
+                     .GetPrimvar("wrinkle:amplitude").Get(12))
+    assert expected.max() > 0
+    np.testing.assert_allclose(got, expected, rtol=1e-5, atol=1e-7)
+
+
+def test_usdview_out_of_process_says_when_nothing_was_written(tmp_path, monkeypatch):
+    """Finding 4: with a USDWRINKLE_PYTHON that writes nothing, Render reported success
+    and opened a missing PNG, Bake raised AttributeError, and a folder was left behind."""
+    import tempfile
+
+    from usdwrinkle import usdview
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.setattr(usdview, "_in_process", lambda: False)
+    monkeypatch.setenv("USDWRINKLE_PYTHON", "/bin/true")
+    stage, _ = _held_shot(tmp_path)
+    api, status = _stand_in(stage, 12)
+    assert usdview.bake_current_frame(api) == []
+    assert "wrote no layer" in status[-1]
+    opened = []
+    assert usdview.render_current_frame(api, outdir=str(tmp_path), opener=opened.append) == []
+    assert "wrote no frame" in status[-1] and opened == []
+    assert not list(scratch.iterdir())  # nothing left in TMPDIR

@@ -69,9 +69,23 @@ def _held_stage(stage, folder: str) -> str:
     session = os.path.join(folder, "session.usda")
     stage.GetSessionLayer().Export(session)
     root = stage.GetRootLayer()
+    source = root.realPath or root.identifier
+    if root.dirty and not source.lower().endswith(".usdz"):
+        # usdview's unsaved edits of the root layer: a copy with its asset paths (sublayers,
+        # references, textures) anchored where the layer is, so they resolve from here
+        from pxr import UsdUtils
+
+        copy = Sdf.Layer.CreateAnonymous(".usda")
+        copy.TransferContent(root)
+        UsdUtils.ModifyAssetPaths(copy, lambda path: root.ComputeAbsolutePath(path)
+                                  if path else path)
+        source = os.path.join(folder, "root.usda")
+        copy.Export(source)
     shot = Sdf.Layer.CreateNew(os.path.join(folder, "shot.usda"))
-    shot.subLayerPaths = [session, root.realPath or root.identifier]
-    for key in ("startTimeCode", "endTimeCode", "timeCodesPerSecond", "framesPerSecond"):
+    shot.subLayerPaths = [session, source]
+    # a stage reads these from its root layer only: the held stage keeps usdview's
+    for key in ("startTimeCode", "endTimeCode", "timeCodesPerSecond", "framesPerSecond",
+                "metersPerUnit", "upAxis"):
         if root.pseudoRoot.HasInfo(key):
             shot.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
     shot.Save()
@@ -106,13 +120,21 @@ def _bake_out_of_process(usdview_api) -> list[str]:
     stage = usdview_api.stage
     frame = _frame(usdview_api)
     # the layer stays (the session layer sublayers it); the held stage goes
-    layer = os.path.join(tempfile.mkdtemp(prefix="usdwrinkle-usdview-"), "wrinkles.usda")
+    folder = tempfile.mkdtemp(prefix="usdwrinkle-usdview-")
+    layer = os.path.join(folder, "wrinkles.usda")
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-usdview-") as held:
-        if not _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, held), layer,
-                                             "--sparse", "--display-color", "amplitude",
-                                             *_frame_args(frame)]):
-            return []
-    baked = Sdf.Layer.FindOrOpen(layer)
+        ran = _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, held), layer,
+                                            "--sparse", "--display-color", "amplitude",
+                                            *_frame_args(frame)])
+    baked = Sdf.Layer.FindOrOpen(layer) if ran and os.path.isfile(layer) else None
+    if baked is None:
+        if ran:
+            usdview_api.PrintStatus("Wrinkles: usdwrinkle reported success but wrote no "
+                                    "layer (is USDWRINKLE_PYTHON usdwrinkle's Python?)")
+        import shutil
+
+        shutil.rmtree(folder, ignore_errors=True)  # nothing of a failed bake is left
+        return []
     targets = []
     baked.Traverse(Sdf.Path.absoluteRootPath, lambda path: targets.append(str(path.GetPrimPath()))
                    if path.IsPropertyPath() and path.name == "primvars:wrinkle:amplitude"
@@ -210,6 +232,10 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
                         "render", held, path, "--width", str(width),
                         *(["--camera", camera] if camera else []), *_frame_args(frame)]):
                     return []
+        if not all(os.path.isfile(path) for path in paths):
+            usdview_api.PrintStatus("Wrinkles: usdwrinkle reported success but wrote no "
+                                    "frame (is USDWRINKLE_PYTHON usdwrinkle's Python?)")
+            return []
         opener(paths[1])
         usdview_api.PrintStatus(f"Wrinkles: rendered {paths[0]} and {paths[1]}")
         return paths
