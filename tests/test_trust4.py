@@ -275,3 +275,16 @@ def test_usdview_out_of_process_says_when_nothing_was_written(tmp_path, monkeypa
     assert usdview.render_current_frame(api, outdir=str(tmp_path), opener=opened.append) == []
     assert "wrote no frame" in status[-1] and opened == []
     assert not list(scratch.iterdir())  # nothing left in TMPDIR
+
+
+def test_a_map_size_no_gl_target_holds_is_refused(tmp_path, capsys):
+    """Finding 12: bake --maps --map-size 11600 passed both checks and exited 3 on an
+    incomplete framebuffer (llvmpipe refuses targets of 2 GiB and more)."""
+    from pathlib import Path
+
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+    assert main(["bake", shirt, str(tmp_path / "b.usda"), "--maps", "normal", "--map-size",
+                 "11600", "--frames", "1"]) == 2
+    assert "--map-size 11600 needs render targets of 2.01 GiB each; at most 11585" in \
+        capsys.readouterr().err
+    assert not list(tmp_path.iterdir())

@@ -43,6 +43,11 @@ _log = logging.getLogger(__name__)
 #: the smallest map side; at most the GPU's GL_MAX_TEXTURE_SIZE
 MIN_MAP_SIZE = 16
 MAX_PADDING = 256
+#: one map target's bytes per texel (RGBA float, maps/raster.py), and the most one target
+#: may hold: Mesa's llvmpipe refuses a framebuffer of 2 GiB or more as incomplete (measured:
+#: --map-size 11600 exited 3), and GL offers no query for it
+TARGET_BYTES_PER_TEXEL = 16
+MAX_TARGET_BYTES = 2**31
 #: bytes per texel: two float targets, their read-back copies, the planes handed to the
 #: writer (up to two frames in flight) and the encoded ones
 BYTES_PER_TEXEL = 2 * 16 + 2 * 16 + 2 * 16 + 16
@@ -59,6 +64,12 @@ def check_map_options(options: MapOptions, max_texture_size: int | None = None) 
     if not 0 <= options.padding <= MAX_PADDING:
         raise UsdWrinkleError(f"--map-padding must be in 0..{MAX_PADDING} "
                               f"(got {options.padding})")
+    target = options.size * options.size * TARGET_BYTES_PER_TEXEL
+    if target >= MAX_TARGET_BYTES:
+        largest = int((MAX_TARGET_BYTES // TARGET_BYTES_PER_TEXEL) ** 0.5)
+        raise UsdWrinkleError(f"--map-size {options.size} needs render targets of "
+                              f"{target / 2**30:.2f} GiB each; at most {largest} fits "
+                              "the 2 GiB a GL target may hold (llvmpipe refuses larger)")
     require_memory(options.size * options.size * BYTES_PER_TEXEL,
                    f"{options.size}x{options.size} maps need", "lower --map-size")
 
