@@ -78,7 +78,7 @@ def run(args) -> int:
     from usdwrinkle.outputs.atomic import atomic_path
 
     if args.from_json:
-        result = json.loads(Path(args.from_json).read_text())
+        result = _saved_run(args.from_json)
         result["targets"] = targets(result)  # the words of this report's version
     else:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
@@ -106,6 +106,25 @@ def run(args) -> int:
         with atomic_path(args.json) as tmp:
             Path(tmp).write_text(json.dumps(result, indent=2, default=float) + "\n")
     return 0
+
+
+def _saved_run(path: str) -> dict:
+    """A run saved with --json, or a one-line error naming what is wrong with the file."""
+    from usdwrinkle.errors import UsdWrinkleError
+
+    try:
+        result = json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise UsdWrinkleError(f"cannot read --from-json '{path}': {exc.strerror}") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise UsdWrinkleError(f"--from-json '{path}' is not JSON ({exc})") from None
+    missing = [key for key in ("machine", "paper_table", "skin_baseline", "numpy_baseline",
+                               "scaling", "end_to_end")
+               if not isinstance(result, dict) or key not in result]
+    if missing:
+        raise UsdWrinkleError(f"--from-json '{path}' is not a saved run of python -m "
+                              f"benchmarks --json (it lacks {', '.join(missing)})")
+    return result
 
 
 def build_parser() -> argparse.ArgumentParser:

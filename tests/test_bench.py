@@ -111,3 +111,28 @@ def test_usdwrinkle_bench_runs_the_checkouts_benchmarks(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "usdwrinkle", "bench", "--no-such-option"],
                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "--no-such-option" in bad.stderr
+
+
+def test_from_json_on_a_file_that_is_no_saved_run_is_one_line(tmp_path, capsys):
+    """Issue 42, finding 13: bench --from-json on garbage printed a traceback."""
+    garbage, other = tmp_path / "g.json", tmp_path / "o.json"
+    garbage.write_text("garbage")
+    other.write_text('{"a": 1}')
+    for path, said in ((garbage, "is not JSON"), (other, "is not a saved run"),
+                       (tmp_path / "missing.json", "cannot read --from-json")):
+        assert main(["--from-json", str(path), "--markdown", str(tmp_path / "x.md")]) == 2
+        err = capsys.readouterr().err
+        assert said in err and "Traceback" not in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "x.md").exists()
+
+
+def test_the_committed_report_is_its_json_s(tmp_path):
+    """docs/benchmarks.md is the output of its command: rewritten from docs/benchmarks.json
+    it is the same file."""
+    from pathlib import Path
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    out = tmp_path / "b.md"
+    assert main(["--from-json", str(docs / "benchmarks.json"), "--markdown", str(out),
+                 "--history", str(docs / "bench")]) == 0
+    assert out.read_text() == (docs / "benchmarks.md").read_text()
