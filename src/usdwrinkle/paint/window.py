@@ -369,8 +369,9 @@ class _Slider(QtWidgets.QWidget):
         layout.addWidget(self.label)
         layout.addWidget(self.slider, 1)
         layout.addWidget(self.value_label)
+        self._exact: float | None = None
         self.set_value(value)
-        self.slider.valueChanged.connect(self._show)
+        self.slider.valueChanged.connect(self._moved)
 
     def _to_value(self, position: int) -> float:
         t = position / 1000.0
@@ -387,12 +388,18 @@ class _Slider(QtWidgets.QWidget):
         return int(round(1000 * t))
 
     def value(self) -> float:
-        return self._to_value(self.slider.value())
+        """The value set (exactly), or the slider's position once it moved."""
+        return self._exact if self._exact is not None else self._to_value(self.slider.value())
 
     def set_value(self, value: float) -> None:
         blocked = self.slider.blockSignals(True)
         self.slider.setValue(self._to_position(value))
         self.slider.blockSignals(blocked)
+        self._exact = float(value)  # the label shows 0.06, not the nearest step's 0.0603
+        self._show()
+
+    def _moved(self, *_):
+        self._exact = None
         self._show()
 
     def _show(self, *_):
