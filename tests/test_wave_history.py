@@ -196,3 +196,23 @@ def test_which_state_a_frame_reads():
     assert on_grid(3.0, 1.0) and not on_grid(3.5, 1.0) and not on_grid(0.0, 1.0)
     assert cache_capacity(1 << 20) == 8 and cache_capacity(1 << 30) == 1
     assert cache_capacity(100 << 20, frames=8, budget=256 << 20) == 2
+
+
+def test_a_frame_never_changes_the_state_it_reads(gl_context):
+    """The state of grid frame 9 (fields, phases, damped directions), read back before and
+    after frame 10, 9.5 and 10 again are computed from it: byte for byte the same."""
+    engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context)
+    try:
+        engine.compute_frame(9.0)
+        path = engine.wrinkled_paths[0]
+        index = 9 - 1  # the shirt's history starts at frame 1
+        waves = engine.mesh_resources(path).waves
+        before = waves.state(engine.history.slot(index)).read()
+        for frame in (10.0, 9.5, 10.0):
+            engine.compute_frame(frame)
+        after = waves.state(engine.history.slot(index)).read()
+        for name in ("fields", "phase", "damped"):
+            assert before[name].tobytes() == after[name].tobytes(), name
+        assert before["damped"][:, 2].min() == 1.0  # crest damping wrote every point
+    finally:
+        engine.release()

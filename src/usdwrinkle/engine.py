@@ -374,11 +374,10 @@ class WrinkleEngine:
         from .render.resources import vec4
 
         mesh = self.render_delegate.rprims[path]
-        record = mesh.resources.record if mesh.resources is not None else \
-            self.scene.meshes[path]
-        params = replace(record.params, **changes)
-        if mesh.resources is None:
+        if mesh.resources is None:  # not synced yet: the first frame reads the stage
             return
+        record = mesh.resources.record
+        params = replace(record.params, **changes)
         mesh.resources.record = replace(record, params=params)
         if "q" in changes or "width" in changes:
             mesh.resources.q_width.write(vec4(params.q, params.width))

@@ -99,11 +99,6 @@ class WaveHistory:
             self._states.popitem(last=False)
 
 
-def grid_index(frame: float, start: float) -> float:
-    """``frame`` on the history's grid: frame - start (an integer on the grid)."""
-    return frame - start
-
-
 def on_grid(frame: float, start: float | None) -> bool:
     """Whether ``frame`` is a frame of the history's grid start, start + 1, ..."""
     return start is not None and not math.isnan(frame) and frame >= start and \

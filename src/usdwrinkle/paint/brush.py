@@ -14,7 +14,7 @@ none. Symmetry: a second stamp through a rest-space plane, its direction mirrore
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -74,9 +74,6 @@ class BrushSettings:
             raise ValueError(f"mirror plane must be x, y, z or none, not {self.mirror!r}")
         if not self.spacing > 0:
             raise ValueError("stamp spacing must be > 0")
-
-    def with_radius(self, radius: float) -> BrushSettings:
-        return replace(self, radius=float(radius))
 
 
 @dataclass

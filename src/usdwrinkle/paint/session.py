@@ -188,9 +188,13 @@ class PaintSession:
         self._saved_at = 0
         self._stroke: Stroke | None = None
         self._stroke_before: tuple | None = None
+        self._stroke_facing: np.ndarray | None = None
+        #: the last stroke's rest-space direction (what comb floods along)
+        self._last_stroke_direction: np.ndarray | None = None
         self._live: dict | None = None
         self._camera = None
-        self._posed: dict[str, tuple[float, np.ndarray]] = {}
+        #: per mesh: its posed points (world) at the last drawn frame, read on first use
+        self._posed: dict[str, np.ndarray] = {}
         self.last_frame: Frame | None = None
         self._framed = False
         #: the last stroke's stamp centres (rest space) and the vertices it touched
@@ -374,8 +378,6 @@ class PaintSession:
         if self.orbit is not None:
             return self.orbit.basis()[1]
         return np.array([1.0, 0.0, 0.0])
-
-    _last_stroke_direction: np.ndarray | None = None
 
     def _preview_mesh(self, mesh: PaintMesh) -> None:
         if self._stroke is not None and self._stroke.direction is not None:
