@@ -54,3 +54,32 @@ def test_frames_outside_the_shot_are_said(tmp_path, capsys):
     assert main(["render", shirt, str(tmp_path / "y.####.png"), "--frames", "23:24",
                  "--width", "32", "--samples", "1", "--quiet"]) == 0
     assert "outside" not in capsys.readouterr().err
+
+
+def test_unauthored_and_mismatched_units_are_said(tmp_path, capsys, corpus):
+    """Issue 42, finding 2: the README's CesiumMan recipe (a shot without metersPerUnit
+    over a .usdz in metres) rendered W 100x too wide, and a sublayer's other units changed
+    the amplitude, with no word from render, bake or check."""
+    shot = tmp_path / "shot.usda"
+    stage = Usd.Stage.CreateNew(str(shot))
+    stage.GetRootLayer().subLayerPaths.append(str(corpus / "usd-wg" / "CesiumMan.usdz"))
+    stage.Save()
+    assert main(["render", str(shot), str(tmp_path / "x.png"), "--frames", "1", "--width",
+                 "32", "--all-meshes", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "the stage's root layer authors no metersPerUnit, so the cloth preset's width" in err
+    assert "CesiumMan.usdz' authors metersPerUnit 1 but the stage uses its root layer's " \
+        "0.01" in err
+    assert main(["check", str(shot), "--wrinkles-only", "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert any(f["attribute"] == "metersPerUnit" and f["type"] == "warning" and
+               "authors metersPerUnit 1" in f["message"] for f in report["findings"])
+    # the curtain, whose own layer authors metres, under a root layer that agrees: silent
+    agreeing = shot.parent / "agree.usda"
+    stage = Usd.Stage.CreateNew(str(agreeing))
+    stage.GetRootLayer().subLayerPaths.append(str(CURTAIN))
+    stage.GetRootLayer().pseudoRoot.SetInfo("metersPerUnit", 1.0)
+    stage.Save()
+    assert main(["render", str(agreeing), str(tmp_path / "y.png"), "--frames", "3",
+                 "--width", "32", "--quiet"]) == 0
+    assert "metersPerUnit" not in capsys.readouterr().err

@@ -106,7 +106,18 @@ def units_findings(stage) -> list[dict]:
     except UsdWrinkleError as exc:
         return [{"prim": "/", "attribute": "metersPerUnit", "message": exc.what,
                  "type": "error", "validator": "usdWrinkleValidators:Units"}]
-    return []
+    from ..log import silenced
+    from ..scene.params import units_notes
+    from ..scene.stage import StageSceneDelegate
+
+    try:
+        with silenced():
+            scene = StageSceneDelegate(stage, use_baked=False)
+    except UsdWrinkleError:
+        return []  # the other findings say why the stage cannot be read
+    return [{"prim": "/", "attribute": "metersPerUnit", "message": note, "type": "warning",
+             "validator": "usdWrinkleValidators:Units"}
+            for note in units_notes(stage, scene.meshes)]
 
 
 def effective_widths(stage) -> list[dict]:

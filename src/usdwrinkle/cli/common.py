@@ -93,6 +93,11 @@ def engine_options(args, stage_path: str | None = None, camera: str | None = Non
 def start_engine(args, reporter: Reporter, stage, camera: str | None = None,
                  use_baked: bool = True):
     """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
+    from ..scene.params import units_notes
+
     engine = engine_options(args, camera=camera, use_baked=use_baked).create(
         stage, lambda steps: reporter.progress(steps, "preroll"))
+    for note in units_notes(engine.stage, {path: engine.meshes[path]
+                                           for path in engine.wrinkled_paths}):
+        reporter.warn(note)
     return engine

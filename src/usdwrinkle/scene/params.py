@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 from pxr import Usd, UsdGeom
@@ -20,8 +21,6 @@ def stage_meters(stage: Usd.Stage) -> float:
     """The stage's metersPerUnit, which a cloth preset's width and the curvature gain
     divide by: refused in one line unless finite and > 0 (0 divided by zero, NaN and inf
     gave NaN or infinite widths, and -1 negative ones)."""
-    import math
-
     from ..errors import UsdWrinkleError
 
     meters = UsdGeom.GetStageMetersPerUnit(stage)
@@ -30,6 +29,32 @@ def stage_meters(stage: Usd.Stage) -> float:
                               "presets' widths are converted through it)",
                               stage.GetRootLayer().identifier, "metersPerUnit")
     return meters
+
+
+def units_notes(stage: Usd.Stage, records: dict) -> list[str]:
+    """Warnings about the units a cloth preset's width goes through (issue 42): the root
+    layer's metersPerUnit unauthored (USD's fallback 0.01 then makes W 100x what a
+    stage in metres wants), or a sublayer authoring other units than the root's (a stage
+    reads them from its root layer only, so that sublayer's sizes are taken as the
+    root's). ``records``: path -> MeshRecord of the wrinkled meshes."""
+    presets = [path for path, record in records.items() if record.wrinkled and
+               "metersPerUnit" in record.params.width_note]
+    notes = []
+    if presets and not UsdGeom.StageHasAuthoredMetersPerUnit(stage):
+        notes.append(f"the stage's root layer authors no metersPerUnit, so the cloth "
+                     f"preset's width of {len(presets)} mesh(es) assumes USD's fallback of "
+                     "0.01 (centimetres); author the stage's units (1 for metres) "
+                     f"({presets[0]})")
+    meters = UsdGeom.GetStageMetersPerUnit(stage)
+    for layer in stage.GetLayerStack(includeSessionLayers=False)[1:]:
+        if layer.pseudoRoot.HasInfo("metersPerUnit"):
+            theirs = float(layer.pseudoRoot.GetInfo("metersPerUnit"))
+            if not math.isclose(theirs, meters, rel_tol=1e-6):
+                notes.append(f"sublayer '{layer.identifier}' authors metersPerUnit "
+                             f"{theirs:g} but the stage uses its root layer's {meters:g} "
+                             "(a stage reads its units from the root layer only): author the "
+                             "root layer's units to match")
+    return notes
 
 
 def _get(prim: Usd.Prim, name: str):
