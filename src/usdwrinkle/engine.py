@@ -10,12 +10,12 @@ import time
 
 import numpy as np
 
-from .contract import FIELD_TEXELS, WAVE_SYSTEMS
 from .errors import UsdWrinkleError
 from .history import WaveHistory, cache_capacity, on_grid, reads_index
 from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass, RenderPassState
+from .render.fields import STATE_BYTES_PER_POINT
 from .scene.dirty import DirtyBits
 from .scene.stage import StageSceneDelegate
 
@@ -79,9 +79,8 @@ class WrinkleEngine:
 
     def _state_bytes(self) -> int:
         """GPU bytes of one grid frame's wave state, all meshes (render/fields.py)."""
-        per_point = (FIELD_TEXELS * 4 + WAVE_SYSTEMS + 4) * 4
         return sum(len(record.rest_points) for record in self.scene.meshes.values()) * \
-            per_point
+            STATE_BYTES_PER_POINT
 
     @property
     def wrinkled_paths(self) -> list[str]:

@@ -65,8 +65,9 @@ def run(args) -> int:
     stage = open_stage(args.stage)
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
-    findings += units_findings(stage)
-    widths = effective_widths(stage)
+    scene = read_scene(stage)
+    findings += units_findings(stage, scene)
+    widths = effective_widths(scene)
     if args.json:
         # strict JSON: a value that is not finite is null (NaN is not JSON)
         json.dump(_finite({"stage": args.stage, "findings": findings, "clean": not findings,
@@ -96,43 +97,45 @@ def _finite(value):
     return value
 
 
-def units_findings(stage) -> list[dict]:
-    """The stage's metersPerUnit where render and bake refuse it (as a finding)."""
+def read_scene(stage):
+    """The scene delegate's reading of ``stage`` (what render resolves), read once for the
+    units and widths below; None where the stage cannot be read that far (the findings
+    say why)."""
     from ..errors import UsdWrinkleError
-    from ..scene.params import stage_meters
+    from ..log import silenced
+    from ..scene.stage import StageSceneDelegate
+
+    try:
+        with silenced():  # the findings report what is wrong
+            return StageSceneDelegate(stage, use_baked=False)
+    except UsdWrinkleError:
+        return None
+
+
+def units_findings(stage, scene) -> list[dict]:
+    """The stage's metersPerUnit where render and bake refuse it (an error), or where
+    they warn about it (a warning: scene.params.units_notes)."""
+    from ..errors import UsdWrinkleError
+    from ..scene.params import stage_meters, units_notes
 
     try:
         stage_meters(stage)
     except UsdWrinkleError as exc:
         return [{"prim": "/", "attribute": "metersPerUnit", "message": exc.what,
                  "type": "error", "validator": "usdWrinkleValidators:Units"}]
-    from ..log import silenced
-    from ..scene.params import units_notes
-    from ..scene.stage import StageSceneDelegate
-
-    try:
-        with silenced():
-            scene = StageSceneDelegate(stage, use_baked=False)
-    except UsdWrinkleError:
-        return []  # the other findings say why the stage cannot be read
+    if scene is None:
+        return []
     return [{"prim": "/", "attribute": "metersPerUnit", "message": note, "type": "warning",
              "validator": "usdWrinkleValidators:Units"}
             for note in units_notes(stage, scene.meshes)]
 
 
-def effective_widths(stage) -> list[dict]:
+def effective_widths(scene) -> list[dict]:
     """The width W each wrinkled mesh gets (authored, or its cloth's through the stage's
-    metersPerUnit), as the scene delegate resolves it; none where the stage cannot be
-    read that far (the findings say why)."""
-    from ..errors import UsdWrinkleError
-    from ..log import silenced
+    metersPerUnit), as the scene delegate resolves it; none without a scene."""
     from ..scene.params import width_summary
-    from ..scene.stage import StageSceneDelegate
 
-    try:
-        with silenced():  # the findings report what is wrong
-            scene = StageSceneDelegate(stage, use_baked=False)
-    except UsdWrinkleError:
+    if scene is None:
         return []
     return [{"prim": path, **width_summary(record.params)}
             for path, record in sorted(scene.meshes.items()) if record.wrinkled]

@@ -83,7 +83,6 @@ def run(args) -> int:
     check_display()
     from ..paint.window import run_window  # a one-line error without PySide6
 
-
     def make_session(ctx):
         return PaintSession(stage, layer, save, prim=args.prim, frame=args.frame,
                             camera=args.camera, all_meshes=args.all_meshes, ctx=ctx)

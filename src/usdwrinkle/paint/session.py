@@ -19,6 +19,7 @@ from pxr import Sdf, Usd, UsdGeom
 
 from .. import schema
 from ..errors import UsdWrinkleError
+from ..layerinfo import copy_stage_info
 from .brush import BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 
@@ -99,7 +100,7 @@ def open_paint_stage(stage_path: str, output: str | None):
     if not os.path.exists(output):
         layer = Sdf.Layer.CreateAnonymous(".usda")
         layer.subLayerPaths.append(os.path.realpath(stage_path))
-        _copy_stage_metadata(stage, layer)
+        copy_stage_info(stage.GetRootLayer(), layer)
         painted = Usd.Stage.Open(layer)
         return painted, layer, os.path.realpath(output)
     require_regular_file(output, "paint layer")
@@ -113,23 +114,6 @@ def open_paint_stage(stage_path: str, output: str | None):
         return painted, layer, os.path.realpath(output)
     over = Usd.Stage.Open(stage.GetRootLayer(), layer)
     return over, layer, os.path.realpath(output)
-
-
-def _copy_stage_metadata(stage: Usd.Stage, layer: Sdf.Layer) -> None:
-    """A layer over the stage keeps its time range, frame rate, units and up axis (a
-    stage reads them from its root layer only)."""
-    root = stage.GetRootLayer()
-    if root.HasStartTimeCode():
-        layer.startTimeCode = root.startTimeCode
-    if root.HasEndTimeCode():
-        layer.endTimeCode = root.endTimeCode
-    if root.HasTimeCodesPerSecond():
-        layer.timeCodesPerSecond = root.timeCodesPerSecond
-    if root.HasFramesPerSecond():
-        layer.framesPerSecond = root.framesPerSecond
-    for key in ("metersPerUnit", "upAxis"):
-        if root.pseudoRoot.HasInfo(key):
-            layer.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
 
 
 class PaintSession:

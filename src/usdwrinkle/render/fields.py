@@ -14,6 +14,10 @@ import numpy as np
 
 from ..contract import FIELD_FLOATS, FIELD_TEXELS, WAVE_SYSTEMS, WrinkleFields
 
+#: GPU bytes of one wave state per point: FIELD_TEXELS RGBA float texels, the phases
+#: (WAVE_SYSTEMS floats) and the damped direction (RGBA float) (WaveFields.state)
+STATE_BYTES_PER_POINT = (FIELD_TEXELS * 4 + WAVE_SYSTEMS + 4) * 4
+
 
 @dataclass
 class WaveState:

@@ -83,11 +83,9 @@ def _held_stage(stage, folder: str) -> str:
         copy.Export(source)
     shot = Sdf.Layer.CreateNew(os.path.join(folder, "shot.usda"))
     shot.subLayerPaths = [session, source]
-    # a stage reads these from its root layer only: the held stage keeps usdview's
-    for key in ("startTimeCode", "endTimeCode", "timeCodesPerSecond", "framesPerSecond",
-                "metersPerUnit", "upAxis"):
-        if root.pseudoRoot.HasInfo(key):
-            shot.pseudoRoot.SetInfo(key, root.pseudoRoot.GetInfo(key))
+    from ..layerinfo import copy_stage_info
+
+    copy_stage_info(root, shot)  # read from the root layer only: the held stage keeps them
     shot.Save()
     return shot.realPath
 
