@@ -211,7 +211,7 @@ def test_skip_existing_counts_the_frames_it_kept(gl_context, tmp_path, capsys):
     (tmp_path / "s.0002.png").unlink()
     capsys.readouterr()
     assert main(args + ["--skip-existing"]) == 0
-    line = [t for t in capsys.readouterr().out.splitlines() if "wrote" in t][0]
+    line = [t for t in capsys.readouterr().err.splitlines() if "wrote" in t][0]
     assert "wrote 1 frame(s)" in line and "kept 2 complete frame(s)" in line, line
 
 
@@ -251,3 +251,52 @@ def test_frames_that_name_the_same_frame_are_refused(tmp_path, capsys):
     assert main(["render", str(SAMPLES / "shirt.usda"), str(out), "--frames", "1,1.5",
                  "--width", "32", "--quiet"]) == 0
     assert {p.name for p in tmp_path.iterdir()} == {"x.0001.png", "x.0001.500.png"}
+
+
+@pytest.mark.parametrize("name,code,said", [("SIGINT", 130, "interrupted"),
+                                            ("SIGTERM", 143, "terminated")])
+def test_a_stop_signal_during_start_up_is_one_line(tmp_path, name, code, said):
+    """Issue 42, finding 13: a Ctrl-C or SIGTERM while usdwrinkle and USD load printed a
+    traceback (or, inside a USD callback, was swallowed and the render went on to exit 0).
+    The console script takes the signals first (src/usdwrinkle_cli.py). Whenever the
+    signal lands (loading, parsing, the first frame), the run ends with the shell's code
+    and one line."""
+    import shutil
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = Path(sys.executable).with_name("usdwrinkle")
+    script = str(script) if script.exists() else shutil.which("usdwrinkle")
+    assert script, "the usdwrinkle console script is not installed"
+    for delay in (0.0, 0.1, 0.25, 0.5, 0.8):
+        process = subprocess.Popen(
+            [script, "render", str(SAMPLES / "shirt.usda"), str(tmp_path / "f.####.png"),
+             "--frames", "1:24", "--width", "64"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        _wait_until_caught(process.pid, signal.SIGTERM)  # the console script's first lines
+        time.sleep(delay)
+        process.send_signal(getattr(signal, name))
+        out, err = process.communicate(timeout=120)
+        lines = err.decode().splitlines()
+        assert process.returncode == code, (delay, lines)
+        assert lines and lines[-1].startswith(f"usdwrinkle: {said}"), (delay, lines)
+        assert not [line for line in lines if not line.startswith("usdwrinkle: ")], lines
+        assert not list(tmp_path.glob("*.tmp*")) and not list(tmp_path.glob(".*"))
+
+
+def _wait_until_caught(pid: int, sig) -> None:
+    """Wait until process ``pid`` catches ``sig`` (Linux: SigCgt of /proc/PID/status). A
+    signal before that lands in Python's own start-up, which no program can take."""
+    import time
+
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        with open(f"/proc/{pid}/status") as status:
+            caught = next(int(line.split()[1], 16) for line in status
+                          if line.startswith("SigCgt:"))
+        if caught >> (int(sig) - 1) & 1:
+            return
+        time.sleep(0.001)
+    raise AssertionError(f"process {pid} never caught {sig!r}")

@@ -236,7 +236,7 @@ def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_pa
     assert widths[0]["prim"] == "/Sheet" and widths[0]["width"] == pytest.approx([cm, cm])
     assert widths[0]["amplitude_gain"] == [1.0, 1.0]   # flat cloth
     assert main(["bake", str(path), str(tmp_path / "baked.usda")]) == 0
-    assert f"  /Sheet: W = {cm:.4g} scene units (cotton" in capsys.readouterr().out
+    assert f"  /Sheet: W = {cm:.4g} scene units (cotton" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("name, type_name, value, message", [
@@ -272,6 +272,32 @@ def test_held_weights_fall_off_over_the_reach():
     np.testing.assert_allclose(out[:, 0], [1.0, 0.5, 0.0, 0.0], atol=1e-6)
     np.testing.assert_allclose(out[1, 1:], [1, 0, 0], atol=1e-6)
     np.testing.assert_allclose(out[0, 1:], [0, 0, 0])
+
+
+@pytest.mark.parametrize("held", ["random", "all", "constant", "band", "none"])
+def test_held_weights_grid_equals_every_pair(held):
+    """Issue 42, finding 10: held_weights searched every (point, holder) pair, quadratic
+    in the points (22,500 points, all held: 49 s). The grid search must give exactly what
+    the all-pairs definition gives, ties included (coincident points, equal weights)."""
+    from usdwrinkle.scene.params import _held_all_pairs
+
+    rng = np.random.default_rng(7)
+    n = 2000
+    points = rng.random((n, 3)) * np.array([2.0, 1.0, 0.1])
+    points[100:110] = points[50]  # coincident points: ties at distance 0
+    weights = {"random": (rng.random(n) < 0.2) * rng.random(n), "all": np.array([1.0]),
+               "constant": np.array([0.7]), "band": (points[:, 0] < 0.3) * 1.0,
+               "none": np.zeros(n)}[held].astype(np.float32)
+    width = rng.random(n) * 0.05 + 0.01
+    got = held_weights(points, weights, width)
+    full = np.broadcast_to(np.atleast_1d(weights).astype(np.float64), (n,))
+    if held == "none":
+        assert not got.any()
+        return
+    want = _held_all_pairs(points, full, np.flatnonzero(full > 0),
+                           schema.HELD_REACH * width, np.zeros((n, 4), np.float32))
+    np.testing.assert_array_equal(got, want)
+    assert got[:, 0].max() > 0
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -56,11 +56,11 @@ def test_render_from_bake_equals_direct_render(gl_context, tmp_path, with_points
 def test_summary_names_the_baked_meshes(gl_context, tmp_path, shirt_bake, capsys):
     assert main(["render", str(shirt_bake), str(tmp_path / "s.####.png"), "--frames", "3:4",
                  "--width", "64"]) == 0
-    out = capsys.readouterr().out
+    out = capsys.readouterr().err
     assert f"baked wave fields: {SLEEVE}" in out
     assert main(["render", str(shirt_bake), str(tmp_path / "s.####.png"), "--frames", "3:4",
                  "--width", "64", "--recompute"]) == 0
-    assert "baked wave fields" not in capsys.readouterr().out
+    assert "baked wave fields" not in capsys.readouterr().err
 
 
 def perturbed_copy(layer: Path, out: Path, seed: int = 7) -> Path:

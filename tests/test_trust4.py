@@ -45,7 +45,7 @@ def test_apply_o_the_stage_itself_edits_it_in_place(tmp_path, capsys):
     stage = Usd.Stage.Open(str(copy))
     width = stage.GetPrimAtPath("/World/Arm/Sleeve").GetAttribute("primvars:wrinkle:width")
     assert list(width.Get()) == [pytest.approx(0.3)]
-    assert "applied WrinkleAPI to 1 mesh(es)" in capsys.readouterr().out
+    assert "applied WrinkleAPI to 1 mesh(es)" in capsys.readouterr().err
 
 
 def test_held_from_a_primvar_authored_as_time_samples(tmp_path):
@@ -288,3 +288,133 @@ def test_a_map_size_no_gl_target_holds_is_refused(tmp_path, capsys):
     assert "--map-size 11600 needs render targets of 2.01 GiB each; at most 11585" in \
         capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+def _shirt_copy(tmp_path, edit=None):
+    """The sample shirt copied (with its texture) into tmp_path, its text edited."""
+    import shutil
+    from pathlib import Path
+
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    shutil.copytree(shirt.parent / "textures", tmp_path / "textures")
+    text = shirt.read_text()
+    if edit is not None:
+        edited = edit(text)
+        assert edited != text
+        text = edited
+    copy = tmp_path / "shirt.usda"
+    copy.write_text(text)
+    return copy
+
+
+def test_wrinkle_api_listed_twice_is_named(tmp_path, capfd):
+    """Finding 17: WrinkleAPI prepended twice made USD drop the whole apiSchemas list, and
+    the render said only 'no mesh has WrinkleAPI applied'."""
+    stage = _shirt_copy(tmp_path, lambda text: text.replace(
+        '"SkelBindingAPI", "WrinkleAPI"]', '"SkelBindingAPI", "WrinkleAPI", "WrinkleAPI"]'))
+    assert main(["render", str(stage), str(tmp_path / "f.####.png"), "--frames", "3",
+                 "--width", "64"]) == 0
+    err = capfd.readouterr().err
+    assert ("usdwrinkle: warning: /World/Arm/Sleeve authors wrinkle controls but WrinkleAPI "
+            "is not applied: USD discards an apiSchemas list that names an item twice") in err
+    assert "no mesh has WrinkleAPI applied" not in err
+    # no raw USD line (the binding without MaterialBindingAPI is one usdwrinkle warning)
+    assert not [line for line in err.splitlines() if not line.startswith("usdwrinkle: ")]
+    assert main(["check", str(stage), "--wrinkles-only"]) == 1
+    out = capfd.readouterr().out
+    assert "error: /World/Arm/Sleeve.apiSchemas: authors wrinkle controls but WrinkleAPI " \
+           "is not applied" in out
+    assert main(["bake", str(stage), str(tmp_path / "bake.usda"), "--frames", "3"]) == 2
+    err = capfd.readouterr().err
+    last = err.splitlines()[-1]
+    assert last.startswith("usdwrinkle: error: ") and "authors wrinkle controls" in last
+    assert not [line for line in err.splitlines() if not line.startswith("usdwrinkle: ")]
+    assert not (tmp_path / "bake.usda").exists()
+
+
+def test_usd_warnings_about_cameras_are_one_line(tmp_path, capfd):
+    """Finding 14: an unknown camera projection and an ill-formed --camera path printed
+    USD's raw 'Warning: in ... at line ... of camera.cpp' lines."""
+    stage = _shirt_copy(tmp_path, lambda text: text.replace(
+        'def Camera "main_cam"\n    {', 'def Camera "main_cam"\n    {\n'
+        '        token projection = "fisheye"', 1))
+    assert main(["render", str(stage), str(tmp_path / "f.####.png"), "--frames", "3:4",
+                 "--width", "64"]) == 0
+    err = capfd.readouterr().err
+    assert err.count("projection is 'fisheye'") == 1, err
+    assert not [line for line in err.splitlines() if not line.startswith("usdwrinkle: ")]
+    assert main(["render", str(stage), str(tmp_path / "g.####.png"), "--frames", "3",
+                 "--camera", "/World/ bad//x"]) == 2
+    err = capfd.readouterr().err
+    assert err.startswith("usdwrinkle: error: camera '/World/ bad//x' is not a prim path")
+    assert err.count("\n") == 1
+
+
+def test_indices_outside_a_wrinkle_primvar_are_refused(tmp_path, capfd):
+    """Finding 7: out-of-range indices on primvars:wrinkle:held: check was clean, render
+    ignored the weights, and USD's raw warnings printed."""
+    from pxr import Sdf, Vt
+
+    stage_path = _shirt_copy(tmp_path)
+    stage = Usd.Stage.Open(str(stage_path))
+    mesh = stage.GetPrimAtPath("/World/Arm/Sleeve")
+    count = len(mesh.GetAttribute("points").Get())
+    held = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("wrinkle:held", Sdf.ValueTypeNames.FloatArray,
+                                                   UsdGeom.Tokens.vertex)
+    held.Set(Vt.FloatArray([1.0, 0.5]))
+    held.SetIndices(Vt.IntArray([0, 7] * (count // 2) + [0] * (count % 2)))
+    stage.Save()
+    assert main(["check", str(stage_path), "--wrinkles-only"]) == 1
+    out = capfd.readouterr().out
+    assert ("error: /World/Arm/Sleeve.primvars:wrinkle:held: primvars:wrinkle:held has "
+            f"{count // 2} index(es) outside its 2 value(s) (index 7 at position 1)") in out
+    assert main(["render", str(stage_path), str(tmp_path / "f.####.png"), "--frames",
+                 "3"]) == 2
+    err = capfd.readouterr().err
+    assert err.startswith("usdwrinkle: error: primvars:wrinkle:held has") and \
+        err.count("\n") == 1, err
+    assert not list(tmp_path.glob("f.*.png"))
+
+
+def test_a_texture_value_out_of_range_is_named(tmp_path, capfd):
+    """Finding 15: a NaN or huge UsdUVTexture scale/bias, or a NaN in an EXR texture,
+    failed the frame with 'N non-finite values ... a camera, light, transform or wrinkle
+    value', naming neither the texture nor the attribute."""
+    import numpy as np
+    import OpenImageIO as oiio
+    from pxr import Gf, Sdf
+
+    stage_path = _shirt_copy(tmp_path)
+    stage = Usd.Stage.Open(str(stage_path))
+    texture = stage.GetPrimAtPath("/World/Looks/Plaid/diffuse_texture")
+    scale = texture.CreateAttribute("inputs:scale", Sdf.ValueTypeNames.Float4)
+    scale.Set(Gf.Vec4f(float("nan"), 1, 1, 1))
+    stage.Save()
+    assert main(["render", str(stage_path), str(tmp_path / "f.####.png"), "--frames",
+                 "3"]) == 2
+    err = capfd.readouterr().err
+    assert err.startswith("usdwrinkle: error: UsdUVTexture inputs:scale (nan, 1.0, 1.0, 1.0) "
+                          "must be finite and within +-1e15 (/World/Looks/Plaid/"
+                          "diffuse_texture.inputs:scale)"), err
+    scale.Set(Gf.Vec4f(1, 1, 1, 1))
+    texture.CreateAttribute("inputs:bias", Sdf.ValueTypeNames.Float4).Set(
+        Gf.Vec4f(0, 3e38, 0, 0))
+    stage.Save()
+    assert main(["render", str(stage_path), str(tmp_path / "f.####.png"), "--frames",
+                 "3"]) == 2
+    assert "inputs:bias (0.0, 3" in capfd.readouterr().err
+    texture.GetAttribute("inputs:bias").Clear()
+    pixels = np.full((8, 8, 3), 0.5, np.float32)
+    pixels[2, 3, 1] = np.nan
+    pixels[5, 5, 0] = np.inf
+    exr = tmp_path / "textures" / "bad.exr"
+    out = oiio.ImageOutput.create(str(exr))
+    assert out.open(str(exr), oiio.ImageSpec(8, 8, 3, "float"))
+    assert out.write_image(pixels) and out.close()
+    texture.GetAttribute("inputs:file").Set(Sdf.AssetPath("textures/bad.exr"))
+    stage.Save()
+    assert main(["render", str(stage_path), str(tmp_path / "f.####.png"), "--frames",
+                 "3"]) == 0
+    err = capfd.readouterr().err
+    assert "bad.exr' has 2 pixel value(s) that are NaN, Inf or beyond +-1e15; rendering " \
+           "untextured (/World/Arm/Sleeve)" in err, err

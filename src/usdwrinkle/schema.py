@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 
-from pxr import Plug, Usd
+from pxr import Plug, Tf, Usd
 
 from ._resources import resource_dir
 from .errors import SchemaRegistrationError
@@ -123,7 +123,18 @@ def register() -> bool:
     if not _state["registered"]:
         Plug.Registry().RegisterPlugins(schema_dir())
         _state["registered"] = True
-    _state["usable"] = Usd.SchemaRegistry().FindAppliedAPIPrimDefinition(API_NAME) is not None
+    try:
+        registry = Usd.SchemaRegistry()
+    except Tf.ErrorException as exc:
+        # a plugInfo.json on PXR_PLUGINPATH_NAME that cannot be read: USD raises once,
+        # skips that plugin, and the registry it built serves every later call
+        from .diagnostics import usd_error_text
+        from .log import warn
+
+        warn(f"USD skipped a plugin ({usd_error_text(exc)}); check "
+             "PXR_PLUGINPATH_NAME")
+        registry = Usd.SchemaRegistry()
+    _state["usable"] = registry.FindAppliedAPIPrimDefinition(API_NAME) is not None
     return _state["usable"]
 
 
@@ -135,6 +146,36 @@ def require_schema() -> None:
         "the WrinkleAPI schema is not known to USD: the schema registry was built before "
         "usdwrinkle registered its plugin. Import usdwrinkle before anything else that uses "
         f"USD schemas, or set PXR_PLUGINPATH_NAME={schema_dir()}{os.pathsep}$PXR_PLUGINPATH_NAME")
+
+
+#: the artist's controls: a prim authoring one of these is meant to be wrinkled
+CONTROL_ATTRIBUTES = (Q, WIDTH, AMPLITUDE_SCALE, HEIGHT_PROFILE, GRADIENT_PROFILE,
+                      RELAX_ITERATIONS, BIAXIAL, TENSION, TENSION_THRESHOLD, CLOTH, SLACK,
+                      HELD, CREST_DAMPING)
+
+
+def unapplied_controls(stage: Usd.Stage) -> list[str]:
+    """Meshes that author WrinkleAPI's controls without WrinkleAPI applied.
+
+    The usual cause is an ``apiSchemas`` list op that names an item twice: USD drops
+    such a list whole when it reads the layer, with no message, so the mesh loses every
+    API schema it listed (WrinkleAPI, MaterialBindingAPI, SkelBindingAPI)."""
+    found = []
+    for prim in stage.Traverse():
+        if prim.GetTypeName() != "Mesh" or has_wrinkle_api(prim):
+            continue
+        if any(prim.GetAttribute(name).HasAuthoredValue() for name in CONTROL_ATTRIBUTES
+               if prim.HasAttribute(name)):
+            found.append(str(prim.GetPath()))
+    return found
+
+
+def unapplied_message(paths: list[str]) -> str:
+    """One sentence naming the meshes of :func:`unapplied_controls`."""
+    shown = ", ".join(paths[:3]) + (f" and {len(paths) - 3} more" if len(paths) > 3 else "")
+    return (f"{shown} author{'s' if len(paths) == 1 else ''} wrinkle controls but "
+            "WrinkleAPI is not applied: USD discards an apiSchemas list that names an item "
+            "twice, with no message; list WrinkleAPI once (or run usdwrinkle apply)")
 
 
 def has_wrinkle_api(prim: Usd.Prim) -> bool:

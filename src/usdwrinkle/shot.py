@@ -23,6 +23,13 @@ NO_WRINKLED_MESH = ("no mesh has WrinkleAPI applied; rendering without wrinkles 
                     "(use --all-meshes to wrinkle every mesh)")
 
 
+def unapplied_note(stage) -> str | None:
+    """A warning naming meshes that author wrinkle controls without WrinkleAPI (None if
+    there are none): render, bake, the farm and paint say it; check reports it."""
+    paths = schema.unapplied_controls(stage)
+    return schema.unapplied_message(paths) if paths else None
+
+
 @dataclass(frozen=True)
 class EngineOptions:
     """What a WrinkleEngine is made with (picklable: a farm task carries it)."""
@@ -189,6 +196,8 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
         if any(schema.has_wrinkle_api(prim) for prim in engine.stage.Traverse()):
             raise UsdWrinkleError("no mesh with WrinkleAPI can be wrinkled (each was skipped: "
                                   "see the warnings), so the layer would hold no wrinkle data")
+        if note := unapplied_note(engine.stage):
+            raise UsdWrinkleError(f"{note}; the layer would hold no wrinkle data")
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so the layer would hold no "
                               "wrinkle data: pass --all-meshes to wrinkle every mesh, or apply "
                               "WrinkleAPI to the cloth (usdwrinkle apply)")

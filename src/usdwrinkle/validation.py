@@ -26,6 +26,7 @@ from .values import (
     FLOAT3_TYPES,
     INT_TYPES,
     finite_in_float32,
+    flattened,
     frame_of,
     static_flattened,
     static_time,
@@ -225,7 +226,7 @@ def check_held(values, point_count: int | None, path: str) -> list[Finding]:
 def _value_check(name: str, path: str, count: int | None):
     """check(attr, time) -> findings for the value of WrinkleAPI attribute ``name``."""
     def primvar_value(attr, time):
-        return UsdGeom.Primvar(attr).ComputeFlattened(time)
+        return flattened(UsdGeom.Primvar(attr), time)
 
     return {
         schema.Q: lambda attr, time: check_q(primvar_value(attr, time),
@@ -265,10 +266,15 @@ def attribute_findings(attr: Usd.Attribute, path: str, count: int | None) -> lis
     findings: list[Finding] = []
     values = []
     for time in _times(attr):
-        findings += [dataclasses.replace(f, frame=frame_of(time)) for f in check(attr, time)]
-        value = UsdGeom.Primvar(attr).ComputeFlattened(time) \
-            if name in (schema.Q, schema.WIDTH, schema.HELD) \
-            else attr.Get(time)
+        try:
+            findings += [dataclasses.replace(f, frame=frame_of(time))
+                         for f in check(attr, time)]
+            value = flattened(UsdGeom.Primvar(attr), time) \
+                if name in (schema.Q, schema.WIDTH, schema.HELD) \
+                else attr.Get(time)
+        except UsdWrinkleError as exc:  # indices outside the array (values.flattened)
+            findings.append(Finding(path, name, exc.what, frame=frame_of(time)))
+            continue
         if value is not None:
             values.append(value)
     if not findings and any(_differs(values[0], other) for other in values[1:]):

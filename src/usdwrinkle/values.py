@@ -25,11 +25,31 @@ def static_value(attr: Usd.Attribute, time: Usd.TimeCode | None = None):
     return attr.Get(time)
 
 
+def flattened(primvar, time: Usd.TimeCode):
+    """``primvar.ComputeFlattened(time)``, refusing indices outside the authored array
+    with one line naming the prim and the primvar (USD prints a raw multi-line warning
+    and returns nothing, so the value would silently fall back)."""
+    indices = primvar.GetIndices(time) if primvar.IsIndexed() else None
+    if indices is not None and len(indices):
+        values = primvar.GetAttr().Get(time)
+        size = 0 if values is None else len(values) // max(primvar.GetElementSize(), 1)
+        idx = np.asarray(indices, dtype=np.int64)
+        bad = np.flatnonzero((idx < 0) | (idx >= size))
+        if len(bad):
+            attr = primvar.GetAttr()
+            raise UsdWrinkleError(
+                f"{attr.GetName()} has {len(bad)} index(es) outside its {size} value(s) "
+                f"(index {int(idx[bad[0]])} at position {int(bad[0])})",
+                str(attr.GetPrim().GetPath()), f"{attr.GetName()}:indices",
+                None if time.IsEarliestTime() else frame_of(time))
+    return primvar.ComputeFlattened(time)
+
+
 def static_flattened(primvar, time: Usd.TimeCode | None = None):
     """A primvar's flattened value by static_value's rule (None when it has none)."""
     if time is None or time.IsDefault():
         time = static_time(primvar.GetAttr())
-    return primvar.ComputeFlattened(time)
+    return flattened(primvar, time)
 
 
 #: float triples any point reader takes

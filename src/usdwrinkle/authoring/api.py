@@ -33,6 +33,7 @@ from ..validation import (
     point_count,
     refuse,
 )
+from ..values import flattened
 
 
 class WrinkleAPI:
@@ -237,7 +238,7 @@ class WrinkleAPI:
     def get_q(self, time=Usd.TimeCode.Default()) -> np.ndarray:  # noqa: B008
         """(n, 3) float32; zeros when q is not authored."""
         primvar = self.GetQPrimvar()
-        value = primvar.ComputeFlattened(time) if primvar and primvar.HasAuthoredValue() \
+        value = flattened(primvar, time) if primvar and primvar.HasAuthoredValue() \
             else None
         if value is None:
             return np.zeros((self._point_count() or 0, 3), np.float32)

@@ -15,6 +15,7 @@ from ..errors import UsdWrinkleError
 from ..scene.material import corner_values
 from ..scene.stage import read_topology, rest_pose
 from ..scene.topology import Topology, vertex_normals
+from ..values import static_flattened
 
 CHANNELS = {"R": 0, "G": 1, "B": 2, "A": 3}
 
@@ -155,7 +156,7 @@ def q_from_primvar(surface: MeshSurface, name: str) -> np.ndarray:
     primvar = UsdGeom.PrimvarsAPI(surface.prim).GetPrimvar(name)
     if not primvar or not primvar.HasValue():
         raise UsdWrinkleError(f"primvar '{name}' not found", surface.path, f"primvars:{name}")
-    values = primvar.ComputeFlattened(Usd.TimeCode.Default())
+    values = static_flattened(primvar)
     arr = np.asarray(values, np.float64)
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise UsdWrinkleError(f"primvar '{name}' must hold 3-vectors or colours",

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import schema
+from ..errors import print_stderr
 
 
 def add_parser(subparsers) -> None:
@@ -379,13 +380,12 @@ def held_from_primvar(prim, name: str) -> np.ndarray:
                                           UsdGeom.Tokens.constant):
         raise UsdWrinkleError(f"primvar {name!r} must have vertex or constant interpolation "
                               "to give held weights per point", str(prim.GetPath()))
-    from pxr import Usd
 
     # held edges are a rest-pose property: the default value, else the first time sample
     # (a primvar authored only as time samples has no default)
-    value = primvar.ComputeFlattened(Usd.TimeCode.Default())
-    if value is None:
-        value = primvar.ComputeFlattened(Usd.TimeCode.EarliestTime())
+    from ..values import static_flattened
+
+    value = static_flattened(primvar)
     try:
         return np.atleast_1d(np.asarray(value, np.float32)).ravel()
     except (TypeError, ValueError) as exc:
@@ -418,6 +418,6 @@ def run(args) -> int:
     author(plans)
     destination = args.output or target.realPath
     export(target, destination)
-    print(f"usdwrinkle: applied WrinkleAPI to {len(plans)} mesh(es) in "
+    print_stderr(f"usdwrinkle: applied WrinkleAPI to {len(plans)} mesh(es) in "
           f"{os.path.realpath(destination)}")
     return 0

@@ -5,7 +5,7 @@ import dataclasses
 import os
 import time
 
-from ..errors import UsdWrinkleError
+from ..errors import UsdWrinkleError, print_stderr
 from ..geometry.options import GeometryOptions
 from ..maps.options import LAYOUTS, TANGENT_SPACES, MapOptions
 from ..schema import MAP_ST, baked_names_text
@@ -228,11 +228,11 @@ def _bake(args, reporter, maps, geometry) -> int:
         if not args.quiet:
             from ..scene.params import width_summary
 
-            print(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
-                  f"{args.output} in {time.perf_counter() - started:.1f} s", flush=True)
+            print_stderr(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
+                  f"{args.output} in {time.perf_counter() - started:.1f} s")
             for path, record in sorted(engine.meshes.items()):
                 if record.wrinkled:
-                    print(f"  {path}: {width_summary(record.params)['text']}", flush=True)
+                    print_stderr(f"  {path}: {width_summary(record.params)['text']}")
     finally:
         engine.release()
     return 0

@@ -66,7 +66,7 @@ def run(args) -> int:
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
     scene = read_scene(stage)
-    findings += units_findings(stage, scene)
+    findings += units_findings(stage, scene) + unapplied_findings(stage)
     widths = effective_widths(scene)
     if args.json:
         # strict JSON: a value that is not finite is null (NaN is not JSON)
@@ -128,6 +128,19 @@ def units_findings(stage, scene) -> list[dict]:
     return [{"prim": "/", "attribute": "metersPerUnit", "message": note, "type": "warning",
              "validator": "usdWrinkleValidators:Units"}
             for note in units_notes(stage, scene.meshes)]
+
+
+def unapplied_findings(stage) -> list[dict]:
+    """Meshes authoring wrinkle controls without WrinkleAPI (schema.unapplied_controls):
+    render draws them unwrinkled."""
+    from .. import schema
+
+    return [{"prim": path, "attribute": "apiSchemas", "type": "error",
+             "validator": "usdWrinkleValidators:WrinkleAPI",
+             "message": "authors wrinkle controls but WrinkleAPI is not applied, so it "
+                        "renders without wrinkles (USD discards an apiSchemas list that "
+                        "names an item twice, with no message)"}
+            for path in schema.unapplied_controls(stage)]
 
 
 def effective_widths(scene) -> list[dict]:

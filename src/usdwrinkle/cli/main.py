@@ -124,7 +124,14 @@ def _one_line_warnings() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     previous = _install_stop_handlers()
-    code = _main(argv)
+    try:
+        code = _main(argv)
+    except KeyboardInterrupt:  # before the command ran (start-up: imports, parsing)
+        print_stderr("usdwrinkle: interrupted")
+        code = 130
+    except Terminated:
+        print_stderr("usdwrinkle: terminated")
+        code = 143
     if code not in (130, 143):  # after a stop, the process exits: stay deaf to more
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -52,6 +52,8 @@ def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
     if prim is not None and str(prim) not in {str(p.GetPath()) for p in meshes}:
         raise UsdWrinkleError(f"--prim {prim} is not a Mesh of the stage")
     if not all_meshes and not any(schema.has_wrinkle_api(p) for p in meshes):
+        if paths := schema.unapplied_controls(stage):
+            raise UsdWrinkleError(schema.unapplied_message(paths))
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to paint "
                               "(pass --all-meshes to paint every mesh, or apply WrinkleAPI "
                               "with usdwrinkle apply)")

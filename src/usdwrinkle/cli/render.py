@@ -5,7 +5,7 @@ import argparse
 import os
 import time
 
-from ..errors import UsdWrinkleError
+from ..errors import UsdWrinkleError, print_stderr
 from ..limits import LOCAL_WORKERS_PER_CORE
 from ..outputs.images import EXR_COMPRESSIONS
 from .common import (
@@ -145,12 +145,11 @@ def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[st
         scheduler=args.dask, workers=args.workers, chunk=args.chunk)
     result = render_on_dask(job, stage, reporter)
     if not reporter.quiet:
-        print(summary(result.written, result.width, result.height, args.output, frames,
+        print_stderr(summary(result.written, result.width, result.height, args.output, frames,
                       result.elapsed, result.baked,
                       f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
                       f"{result.workers} Dask worker(s), chunks of {result.chunk})",
-                      skipped=result.skipped),
-              flush=True)
+                      skipped=result.skipped))
 
 
 def write_stats(path: str, stats: dict) -> None:
@@ -230,7 +229,7 @@ def _render_shot(args, reporter) -> list[str]:
         outside_range_note,
         stage_frames,
     )
-    from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames
+    from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames, unapplied_note
 
     # everything that can be refused without the GPU is checked first
     stage = open_stage(args.stage)
@@ -262,9 +261,13 @@ def _render_shot(args, reporter) -> list[str]:
                 (note := outside_range_note(stage, frames)):
             reporter.warn(note)  # a preroll from the shot's start (not for baked frames)
         _warn_unbaked(engine, reporter, args)
+        if not args.all_meshes and not args.no_wrinkles and \
+                (note := unapplied_note(engine.stage)):
+            reporter.warn(note)
         _warn_geometry(engine, reporter, args, frames)
         if not engine.wrinkled_paths and not args.no_wrinkles and \
-                geometry_bake(engine.stage) is None:
+                geometry_bake(engine.stage) is None and \
+                (args.all_meshes or unapplied_note(engine.stage) is None):
             reporter.warn("the stage has no Mesh to wrinkle; rendering without wrinkles"
                           if args.all_meshes else NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
@@ -287,10 +290,9 @@ def _render_shot(args, reporter) -> list[str]:
         if stats is not None:
             write_stats(args.stats, stats)
         if not args.quiet:
-            print(summary(len(written), width, height, args.output, frames,
+            print_stderr(summary(len(written), width, height, args.output, frames,
                           time.perf_counter() - started, engine.baked_paths,
-                          skipped=len(frames) - len(written) if args.skip_existing else 0),
-                  flush=True)
+                          skipped=len(frames) - len(written) if args.skip_existing else 0))
     finally:
         engine.release()
     return outputs

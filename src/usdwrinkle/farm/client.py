@@ -29,9 +29,16 @@ import time
 import uuid
 from dataclasses import dataclass
 
-from ..errors import UsdWrinkleError
+from ..errors import UsdWrinkleError, print_stderr
 from ..outputs.atomic import remove_temporaries
-from ..shot import NO_WRINKLED_MESH, BakeRequest, EngineOptions, ImageOptions, bake_layer
+from ..shot import (
+    NO_WRINKLED_MESH,
+    BakeRequest,
+    EngineOptions,
+    ImageOptions,
+    bake_layer,
+    unapplied_note,
+)
 from .worker import file_identity, render_chunk
 
 _log = logging.getLogger(__name__)
@@ -75,6 +82,11 @@ def _has_bokeh() -> bool:
     return importlib.util.find_spec("bokeh") is not None
 
 
+#: the Dask comm protocols a scheduler address may name (ucx needs ucx-py, inproc is
+#: in-process only)
+DASK_SCHEMES = ("tcp", "tls", "ws", "wss")
+
+
 def _connect(distributed, address: str, workers: int | None):
     """(client, cluster or None, worker count)."""
     if address == "local":
@@ -92,9 +104,14 @@ def _connect(distributed, address: str, workers: int | None):
             local_directory=scratch)
         cluster.usdwrinkle_scratch = scratch
         return distributed.Client(cluster), cluster, count
+    scheme = address.split("://", 1)[0].lower() if "://" in address else "tcp"
+    if scheme not in DASK_SCHEMES:
+        raise UsdWrinkleError(f"--dask {address}: the '{scheme}' protocol is not supported "
+                              f"(use {', '.join(s + '://' for s in DASK_SCHEMES)} HOST:PORT "
+                              "or 'local')")
     try:
         client = distributed.Client(address, timeout="20s")
-    except (OSError, TimeoutError, ValueError) as exc:
+    except (OSError, TimeoutError, ValueError, TypeError, ImportError) as exc:
         raise UsdWrinkleError(f"cannot reach the Dask scheduler at '{address}' "
                               f"({type(exc).__name__}: {exc})") from None
     try:
@@ -180,7 +197,10 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
     layer = bake_path(job.output, job.stage_path) if needs_bake else None
     if layer is not None:
         refuse_overwriting_inputs(job.stage_path, [layer], stage)
-    if wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
+    note = None if job.engine.all_meshes or not wrinkles else unapplied_note(stage)
+    if note:
+        _log.warning(note)
+    elif wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
         _log.warning(NO_WRINKLED_MESH)
     width, height = image_size(scene, job.engine.camera, job.image.width, job.image.height,
                                frames[0])
@@ -195,8 +215,8 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
             where = "a local cluster" if cluster is not None else job.scheduler
             dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
                 else "none (pip install bokeh for Dask's dashboard)"
-            print(f"usdwrinkle: rendering on {where}, {workers} worker(s); dashboard: "
-                  f"{dashboard}", flush=True)
+            print_stderr(f"usdwrinkle: rendering on {where}, {workers} worker(s); "
+                         f"dashboard: {dashboard}")
         render_stage = job.stage_path
         if layer is not None:
             bake_started = time.perf_counter()
@@ -210,8 +230,8 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
             finally:
                 engine.release()
             if not reporter.quiet:
-                print(f"usdwrinkle: baked wave fields to {layer} in "
-                      f"{time.perf_counter() - bake_started:.1f} s", flush=True)
+                print_stderr(f"usdwrinkle: baked wave fields to {layer} in "
+                             f"{time.perf_counter() - bake_started:.1f} s")
             render_stage = layer
         options = dataclasses.replace(job.engine, stage=os.path.abspath(render_stage),
                                       use_baked=wrinkles)

@@ -35,7 +35,7 @@ def create_context(backend: str | None = None):
     options = {}
     device = os.environ.get("USDWRINKLE_EGL_DEVICE", "").strip()
     if device and backend == "egl":  # which GPU of a multi-GPU node (EGL's device list)
-        if not device.isdigit():
+        if not (device.isascii() and device.isdigit()):
             raise GLContextError(f"USDWRINKLE_EGL_DEVICE must be a device index (0, 1, ...), "
                                  f"not '{device}'")
         options["device_index"] = int(device)

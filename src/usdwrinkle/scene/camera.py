@@ -6,11 +6,13 @@ differs from the camera's aperture aspect, the vertical extent is adjusted
 """
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
-from pxr import Gf, Usd, UsdGeom, UsdUtils
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils
 
+from ..diagnostics import usd_diagnostics
 from ..errors import UsdWrinkleError
 from ..values import finite_in_float32, frame_of
 from .records import CameraRecord
@@ -22,6 +24,10 @@ def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
                if p.IsA(UsdGeom.Camera)]
     if spec:
         if spec.startswith("/"):
+            valid, why = Sdf.Path.IsValidPathString(spec)
+            if not valid or not Sdf.Path(spec).IsPrimPath():
+                raise UsdWrinkleError(f"camera '{spec}' is not a prim path"
+                                      + (f" ({why.rstrip('.')})" if why else ""))
             prim = stage.GetPrimAtPath(spec)
             if not prim or not prim.IsA(UsdGeom.Camera):
                 raise UsdWrinkleError(f"camera '{spec}' not found on the stage", spec)
@@ -38,8 +44,29 @@ def find_camera(stage: Usd.Stage, spec: str | None) -> Usd.Prim | None:
     return cameras[0] if cameras else None
 
 
+_log = logging.getLogger(__name__)
+_PROJECTIONS = ("perspective", "orthographic")
+_warned_projection: set[str] = set()
+
+
+def gf_camera(prim: Usd.Prim, time) -> Gf.Camera:
+    """UsdGeom's Gf.Camera at ``time``; an unknown ``projection`` token (USD prints a raw
+    warning per call and uses perspective) is one usdwrinkle warning, naming the prim."""
+    attr = UsdGeom.Camera(prim).GetProjectionAttr()
+    token = attr.Get(time) if attr else None
+    if token is not None and token not in _PROJECTIONS:
+        key = f"{prim.GetPath()}:{token}"
+        if key not in _warned_projection:
+            _warned_projection.add(key)
+            _log.warning("%s.projection is '%s', which USD does not know: drawn as "
+                         "perspective (use perspective or orthographic)", prim.GetPath(), token)
+        with usd_diagnostics():
+            return UsdGeom.Camera(prim).GetCamera(time)
+    return UsdGeom.Camera(prim).GetCamera(time)
+
+
 def camera_aspect(prim: Usd.Prim, time) -> float:
-    cam = UsdGeom.Camera(prim).GetCamera(time)
+    cam = gf_camera(prim, time)
     aspect = cam.aspectRatio
     return aspect if math.isfinite(aspect) and 1e-3 < aspect < 1e3 else 1.0
 
@@ -70,7 +97,7 @@ def check_camera(prim: Usd.Prim, gf_cam: Gf.Camera, time) -> None:
 def usd_camera(prim: Usd.Prim, time, aspect: float) -> CameraRecord:
     """A UsdGeom.Camera at ``time`` as view and projection matrices (its clippingRange
     is the projection's near and far planes)."""
-    gf_cam = UsdGeom.Camera(prim).GetCamera(time)
+    gf_cam = gf_camera(prim, time)
     check_camera(prim, gf_cam, time)
     return camera_record(str(prim.GetPath()), gf_cam, aspect)
 

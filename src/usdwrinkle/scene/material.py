@@ -18,9 +18,10 @@ from pxr import Ar, Usd, UsdGeom, UsdShade
 
 from ..colour import srgb_decode
 from ..contract import UDIM_TILES
+from ..errors import UsdWrinkleError
 from ..limits import MAX_TEXTURE_SIZE
 from ..schema import MAP_INPUTS
-from ..values import static_flattened, static_value
+from ..values import frame_of, static_flattened, static_value
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
 from .topology import Topology
@@ -94,6 +95,11 @@ def _decode_texture(resolved_path: str, color_space: str, identity) -> TextureIm
     rgba = np.ascontiguousarray(rgba[::-1])
     if eight_bit:
         return TextureImage(rgba, encoded_srgb)
+    with np.errstate(invalid="ignore"):
+        bad = int(np.count_nonzero(~(np.abs(rgba) <= 1e15)))
+    if bad:  # NaN, Inf or beyond what scale and bias keep finite
+        raise OSError(f"texture '{resolved_path}' has {bad:,} pixel value(s) that are NaN, "
+                      "Inf or beyond +-1e15")
     if encoded_srgb:
         rgba[..., :3] = srgb_decode(rgba[..., :3])
     return TextureImage(rgba)
@@ -152,9 +158,16 @@ def _coordinates(prim: Usd.Prim, tex: UsdShade.Shader, topology: Topology, time)
 def _scale_bias(tex: UsdShade.Shader, time) -> tuple[np.ndarray, np.ndarray]:
     scale, _ = _resolve(tex, "scale", time)
     bias, _ = _resolve(tex, "bias", time)
-    scale = np.ones(4, np.float32) if scale is None else np.asarray(scale, np.float32)
-    bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float32)
-    return scale, bias
+    scale = np.ones(4, np.float32) if scale is None else np.asarray(scale, np.float64)
+    bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float64)
+    for name, value in (("scale", scale), ("bias", bias)):
+        # a texel (at most 1e15 by load_texture) times scale, plus bias, stays finite in
+        # float32 (the frame used to say only "non-finite values" of the whole scene)
+        if not (np.all(np.isfinite(value)) and np.all(np.abs(value) <= 1e15)):
+            raise UsdWrinkleError(f"UsdUVTexture inputs:{name} {tuple(value.tolist())} must "
+                                  "be finite and within +-1e15", str(tex.GetPath()),
+                                  f"inputs:{name}", frame_of(time))
+    return scale.astype(np.float32), bias.astype(np.float32)
 
 
 def _color_space(tex: UsdShade.Shader, time) -> str:
@@ -321,7 +334,10 @@ def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time) -> SurfacePara
 def bound_surface(prim: Usd.Prim, purpose: str = UsdShade.Tokens.allPurpose):
     """(the mesh's bound Material or None, its UsdPreviewSurface or None), for the material
     ``purpose`` (a purpose's own binding, else the all-purpose one)."""
-    material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(purpose)
+    from ..diagnostics import usd_diagnostics
+
+    with usd_diagnostics(forward=True):  # e.g. bindings without MaterialBindingAPI
+        material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(purpose)
     if not material:
         return None, None
     shader = material.ComputeSurfaceSource()[0]

@@ -25,7 +25,7 @@ from pxr import UsdGeom
 
 from ..errors import UsdWrinkleError
 from ..polygons import face_corners, face_starts
-from ..values import finite_in_float32, static_flattened, static_value
+from ..values import finite_in_float32, flattened, static_flattened, static_value
 from .topology import Topology
 
 _log = logging.getLogger(__name__)
@@ -146,7 +146,7 @@ def sample_normals(prim, plan: NormalPlan, time, frame) -> np.ndarray | None:
         return None
     attr = prim.GetAttribute(plan.attribute)
     if plan.attribute == "primvars:normals":
-        values = UsdGeom.Primvar(attr).ComputeFlattened(time)
+        values = flattened(UsdGeom.Primvar(attr), time)
     else:
         values = attr.Get(time)
     values = np.asarray(values if values is not None else plan.authored, np.float64)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
 
+from ..values import flattened
 from .material import bound_surface, corner_values, display_color
 from .sampling import time_code
 from .stage import stage_inputs
@@ -210,7 +211,7 @@ def _primvars(prim: Usd.Prim, topology) -> tuple:
         type_name = primvar.GetTypeName()
         if primvar.GetInterpolation() == UsdGeom.Tokens.constant:
             carried.append(CarriedPrimvar(name, type_name, True,
-                                          primvar.ComputeFlattened(time)))
+                                          flattened(primvar, time)))
             continue
         corners = corner_values(primvar, topology, time) if type_name.isArray else None
         carried.append(CarriedPrimvar(name, type_name, False, corners))

@@ -294,6 +294,21 @@ def mean_edge_length(points: np.ndarray, topology: Topology) -> float:
     return float(np.linalg.norm(pts[edges[:, 1]] - pts[edges[:, 0]], axis=1).mean())
 
 
+def weld_ids(points: np.ndarray) -> np.ndarray:
+    """One id per point, equal for points at equal float32 positions (-0 and 0 equal): a
+    sort of the positions' bits (np.unique over rows took 11 s on 2 million points)."""
+    bits = (np.asarray(points, np.float32).reshape(-1, 3) + np.float32(0)).view(np.uint32)
+    bits = bits.astype(np.uint64)
+    high = (bits[:, 0] << np.uint64(32)) | bits[:, 1]
+    order = np.lexsort((bits[:, 2], high))
+    high, low = high[order], bits[order, 2]
+    new = np.ones(len(order), bool)
+    new[1:] = (high[1:] != high[:-1]) | (low[1:] != low[:-1])
+    ids = np.empty(len(order), np.int64)
+    ids[order] = np.cumsum(new) - 1
+    return ids
+
+
 def closed_orientation(points: np.ndarray, triangles: np.ndarray) -> int:
     """+1 when the triangles close a surface wound outward (points at equal positions welded),
     -1 when they close one wound inward, 0 when the surface is open, non-manifold, wound
@@ -303,8 +318,7 @@ def closed_orientation(points: np.ndarray, triangles: np.ndarray) -> int:
     tri = np.asarray(triangles, np.int64).reshape(-1, 3)
     if not len(tri) or not len(pts):
         return 0
-    _, weld = np.unique(pts, axis=0, return_inverse=True)
-    welded = weld.reshape(-1)[tri]
+    welded = weld_ids(pts)[tri]
     keep = (welded[:, 0] != welded[:, 1]) & (welded[:, 1] != welded[:, 2]) & \
         (welded[:, 2] != welded[:, 0])
     welded, tri = welded[keep], tri[keep]
@@ -315,7 +329,9 @@ def closed_orientation(points: np.ndarray, triangles: np.ndarray) -> int:
     directed = np.sort(a * n + b)
     if np.any(directed[1:] == directed[:-1]):
         return 0  # an edge used twice in one direction: non-manifold or flipped faces
-    if not np.all(np.isin(b * n + a, directed, assume_unique=False)):
+    reverse = b * n + a
+    found = np.minimum(np.searchsorted(directed, reverse), len(directed) - 1)
+    if not np.array_equal(directed[found], reverse):
         return 0  # a boundary edge: an open surface
     p = pts.astype(np.float64)[tri]
     volume = float(np.einsum("ij,ij->", p[:, 0], np.cross(p[:, 1], p[:, 2]))) / 6.0
