@@ -165,9 +165,13 @@ void main() {
     for (int c = 0; c < OFFSET_SLOTS; ++c) {
         vec2 v = vec2(channel(a, c), channel(b, c));
         if (is_half(c)) {
-            uint word = packHalf2x16(v);
-            words[u_offset[c] + pair] = word;
-            v = unpackHalf2x16(word);  // check what the file will hold
+            // what the file will hold: NaN, or infinite where the value rounds beyond
+            // half float's largest (65504; from 65520 up). Checked on the float, not on
+            // the packed word: packHalf2x16 of an out-of-range value is undefined, and an
+            // NVIDIA driver clamps it to 65504 where llvmpipe gives Inf
+            bad += uint(any(isnan(v)) || any(greaterThanEqual(abs(v), vec2(65520.0))));
+            words[u_offset[c] + pair] = packHalf2x16(v);
+            continue;
         } else {
             words[u_offset[c] + first] = floatBitsToUint(v.x);
             if (second) words[u_offset[c] + first + 1] = floatBitsToUint(v.y);

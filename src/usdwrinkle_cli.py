@@ -24,10 +24,21 @@ def _stop(signum, frame):  # pragma: no cover - runs in a subprocess (tests/test
     os._exit(code)
 
 
+def _standard_descriptors() -> None:
+    """Open /dev/null on a closed stdin, stdout or stderr (``2>&-``): otherwise the first
+    file the run opens would get that number, and what is written to "stderr" (USD's
+    diagnostics, from C++) would land in it."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            os.open(os.devnull, os.O_RDWR)  # the lowest free descriptor: this one
+
+
 def entry_point() -> None:
-    for name in _CODES:
-        if hasattr(signal, name) and signal.getsignal(getattr(signal, name)) is not \
-                signal.SIG_IGN:  # a background job's ignored SIGINT stays ignored
+    _standard_descriptors()
+    for name in _CODES:  # as cli/main.py does for the whole run
+        if hasattr(signal, name):
             signal.signal(getattr(signal, name), _stop)
     from usdwrinkle.cli.main import entry_point as run
 

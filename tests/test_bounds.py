@@ -273,5 +273,5 @@ def test_weld_ids_partition_points_as_numpy_unique_does():
     _, want = np.unique(points + np.float32(0), axis=0, return_inverse=True)
     want = want.reshape(-1)
     # the same partition: equal ids exactly where numpy's ids are equal
-    pairs = set(zip(ids.tolist(), want.tolist()))
+    pairs = set(zip(ids.tolist(), want.tolist(), strict=True))
     assert len(pairs) == len(set(ids.tolist())) == len(set(want.tolist())) < 5000

@@ -237,6 +237,15 @@ def test_a_farm_log_holds_whole_lines_and_the_summary(tmp_path):
     assert progress[-1] == "usdwrinkle: render: 48/48 frame(s) (100%)"
     assert 8 <= len(progress) <= 12, progress
     assert lines[-1].startswith("usdwrinkle: wrote 48 frame(s) 64x")
+    # the header says what ran where (issue 42, finding 20: a farm log could not tell a
+    # GPU node from llvmpipe)
+    from usdwrinkle import __version__
+    from usdwrinkle.render.context import renderer_info
+
+    header = (f"usdwrinkle: version {__version__}, render {SAMPLES / 'shirt.usda'}, GL "
+              f"renderer {renderer_info()['renderer']} (OpenGL {renderer_info()['version']})")
+    assert lines.count(header) == 1
+    assert lines.index(header) < lines.index(progress[0])  # before the frames
 
 
 def test_frames_that_name_the_same_frame_are_refused(tmp_path, capsys):

@@ -68,9 +68,12 @@ def test_chunk_recipe_in_shuffled_processes_equals_a_serial_render(gl_context, t
 
 def test_dask_local_cluster_equals_a_serial_render_from_the_same_bake(gl_context, tmp_path):
     out = tmp_path / "dask"
+    scratch = tmp_path / "tmpdir"
+    scratch.mkdir()
     done = cli("render", SHIRT, out / "s.####.exr", "--dask", "--workers", "2",
-               "--width", "160")
+               "--width", "160", env={**os.environ, "TMPDIR": str(scratch)})
     assert done.returncode == 0, done.stderr
+    assert not list(scratch.iterdir())  # no dask-scratch-space left behind (issue 42)
     layer = out / "usdwrinkle_bake" / "shirt.wrinkles.usdc"
     assert len(list(out.glob("*"))) == 24 + 1   # the frames, and the bake's folder
     assert f"baked wave fields to {layer}" in done.stderr
@@ -166,7 +169,7 @@ def test_remote_scheduler_survives_a_killed_worker(gl_context, tmp_path):
         out = tmp_path / "frames"
         render = subprocess.Popen(
             [sys.executable, "-m", "usdwrinkle", "render", str(layer), str(out / "s.####.exr"),
-             "--dask", address, "--chunk", "3", "--width", "480", "--quiet"],
+             "--dask", address, "--chunk", "3", "--width", "480"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         procs.append(render)
         deadline = time.time() + 300
@@ -176,6 +179,9 @@ def test_remote_scheduler_survives_a_killed_worker(gl_context, tmp_path):
         before = {p.name: p.stat().st_ino for p in out.glob("s.*.exr")}
         _, err = render.communicate(timeout=300)
         assert render.returncode == 0, err
+        # the frames a dead worker's attempt wrote count as written (the summary said
+        # "kept 6 complete frame(s) (--skip-existing)" without that flag)
+        assert "wrote 24 frame(s)" in err and "--skip-existing" not in err, err
         names = sorted(p.name for p in out.glob("s.*.exr"))
         assert names == [f"s.{f:04d}.exr" for f in range(1, 25)]
         for name in names:

@@ -418,3 +418,122 @@ def test_a_texture_value_out_of_range_is_named(tmp_path, capfd):
     err = capfd.readouterr().err
     assert "bad.exr' has 2 pixel value(s) that are NaN, Inf or beyond +-1e15; rendering " \
            "untextured (/World/Arm/Sleeve)" in err, err
+
+
+def test_a_mistyped_uv_set_is_refused(tmp_path, capsys):
+    """Finding 19: bake --maps --uv uv2 (a typo) warned and fell back to islands, where
+    --map-layout asset refused the same name."""
+    from pathlib import Path
+
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    out = tmp_path / "out" / "b.usda"
+    assert main(["bake", str(shirt), str(out), "--maps", "normal", "--uv", "uv2",
+                 "--frames", "1:2"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == ("usdwrinkle: error: --uv uv2: no wrinkled mesh has texture coordinates "
+                       "of that name (/World/Arm/Sleeve); name the meshes' own (st by "
+                       "default), or use --map-layout islands")
+    assert not out.exists() and not list(tmp_path.rglob("*.png"))
+    # the mesh's own name still bakes in it (no islands)
+    assert main(["bake", str(shirt), str(out), "--maps", "normal", "--uv", "st",
+                 "--frames", "1:2"]) == 0
+    assert "islands" not in capsys.readouterr().err
+
+
+def test_a_stronger_ancestor_binding_is_said(tmp_path, capsys):
+    """Finding 3: a parent binding with bindMaterialAs = strongerThanDescendants won over
+    the maps' material the bake binds on the mesh, with no warning. UsdShade is the
+    oracle: the baked mesh resolves the ancestor's material."""
+    from pxr import UsdShade
+
+    stage_path = _shirt_copy(tmp_path)
+    stage = Usd.Stage.Open(str(stage_path))
+    world = stage.GetPrimAtPath("/World")
+    UsdShade.MaterialBindingAPI.Apply(world).Bind(
+        UsdShade.Material(stage.GetPrimAtPath("/World/Looks/Plaid")),
+        UsdShade.Tokens.strongerThanDescendants)
+    stage.Save()
+    out = tmp_path / "b.usda"
+    assert main(["bake", str(stage_path), str(out), "--maps", "normal", "--frames",
+                 "1:2"]) == 0
+    err = capsys.readouterr().err
+    assert ("the wrinkle maps' material bound to /World/Arm/Sleeve never resolves: /World "
+            "binds its material with bindMaterialAs = strongerThanDescendants") in err
+    baked = Usd.Stage.Open(str(out))
+    material, _ = UsdShade.MaterialBindingAPI(
+        baked.GetPrimAtPath("/World/Arm/Sleeve")).ComputeBoundMaterial()
+    assert material.GetPath() == "/World/Looks/Plaid"  # what the warning says
+    # without the stronger binding: no warning, and the maps' material resolves
+    stage = Usd.Stage.Open(str(stage_path))
+    UsdShade.MaterialBindingAPI(stage.GetPrimAtPath("/World")).UnbindAllBindings()
+    stage.Save()
+    assert main(["bake", str(stage_path), str(tmp_path / "c.usda"), "--maps", "normal",
+                 "--frames", "1:2"]) == 0
+    assert "never resolves" not in capsys.readouterr().err
+    baked = Usd.Stage.Open(str(tmp_path / "c.usda"))
+    material, _ = UsdShade.MaterialBindingAPI(
+        baked.GetPrimAtPath("/World/Arm/Sleeve")).ComputeBoundMaterial()
+    assert "WrinkleMaterials" in str(material.GetPath())
+
+
+def test_a_killed_runs_temporary_frame_is_swept_by_the_next_run(tmp_path):
+    """Finding 6: a SIGKILLed render left '.f.0003.<random>.tmp.png' beside its frames, and
+    later runs of the same frames never removed it. A temporary file now names its
+    writer's pid; a run removes those of its frames whose writer is dead, and keeps
+    those of a live one (another run writing the same folder now)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    dead_pid = int(dead.stdout)
+    left = tmp_path / f".f.0003.{dead_pid}.k3x_9qzz.tmp.png"
+    live = tmp_path / f".f.0003.{os.getpid()}.a1b2c3d4.tmp.png"
+    other = tmp_path / f".g.0003.{dead_pid}.k3x_9qzz.tmp.png"  # not a frame of this run
+    for path in (left, live, other):
+        path.write_bytes(b"half a frame")
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    assert main(["render", str(shirt), str(tmp_path / "f.####.png"), "--frames", "3",
+                 "--width", "32"]) == 0
+    assert not left.exists()
+    assert live.exists() and other.exists()
+    assert (tmp_path / "f.0003.png").exists()
+
+
+def test_info_puts_a_site_packages_with_pxr_last(tmp_path, monkeypatch, capsys):
+    """Finding 4: for a non-editable install, info's PYTHONPATH line put the venv's whole
+    site-packages first, so usd-core's pxr (no Usdviewq) shadowed the studio's USD."""
+    import os
+
+    import usdwrinkle
+    from usdwrinkle.cli.info import environment_lines
+
+    site = tmp_path / "site-packages"
+    (site / "pxr").mkdir(parents=True)
+    (site / "usdwrinkle").mkdir()
+    monkeypatch.setattr(usdwrinkle, "__file__", str(site / "usdwrinkle" / "__init__.py"))
+    monkeypatch.setenv("PYTHONPATH", "/studio/usd/lib/python")
+    line = [x for x in environment_lines() if "PYTHONPATH=" in x][0]
+    assert line.startswith(f"  export PYTHONPATH=/studio/usd/lib/python{os.pathsep}{site}  #")
+    # an editable install's src folder has no pxr: first, as before
+    src = tmp_path / "src"
+    (src / "usdwrinkle").mkdir(parents=True)
+    monkeypatch.setattr(usdwrinkle, "__file__", str(src / "usdwrinkle" / "__init__.py"))
+    line = [x for x in environment_lines() if "PYTHONPATH=" in x][0]
+    assert line == f"  export PYTHONPATH={src}{os.pathsep}/studio/usd/lib/python"
+
+
+def test_a_refusal_with_stderr_closed_still_exits_2(tmp_path):
+    """Finding 13: with stderr closed (2>&-), Python starts with sys.stderr None, and a
+    refusal exited 1 (the write of its message raised) instead of 2."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(sys.executable).with_name("usdwrinkle")
+    done = subprocess.run(f"'{script}' render '{tmp_path}/nope.usda' '{tmp_path}/x.png' 2>&-",
+                          shell=True, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert done.stdout == ""

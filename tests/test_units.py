@@ -25,10 +25,11 @@ def shot(tmp_path, meters: float) -> str:
     return str(path)
 
 
-@pytest.mark.parametrize("meters", [float("nan"), float("inf"), -1.0, 0.0])
+@pytest.mark.parametrize("meters", [float("nan"), float("inf"), -1.0, 0.0, 1e-30, 1e12])
 def test_unusable_units_are_refused_everywhere(tmp_path, capsys, meters):
+    """1e-30 gave W = 8.5e28 scene units, beyond the documented 1e15 of any width."""
     stage = shot(tmp_path, meters)
-    expected = f"metersPerUnit {meters:g} must be finite and > 0"
+    expected = f"metersPerUnit {meters:g} must be finite and within 1e-09..1e+09"
     assert main(["render", stage, str(tmp_path / "x.png"), "--frames", "3", "--width",
                  "32"]) == 2
     assert expected in capsys.readouterr().err

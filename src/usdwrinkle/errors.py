@@ -51,8 +51,8 @@ class _SafeStderr:
             written = sys.stderr.write(text)
             sys.stderr.flush()
             return written
-        except (OSError, ValueError):
-            self._silence()
+        except (OSError, ValueError, AttributeError):  # AttributeError: started with fd 2
+            self._silence()                           # closed, Python's sys.stderr is None
             return len(text)
 
     def flush(self) -> None:
@@ -60,7 +60,7 @@ class _SafeStderr:
 
         try:
             sys.stderr.flush()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):
             self._silence()
 
     def isatty(self) -> bool:
@@ -68,7 +68,7 @@ class _SafeStderr:
 
         try:
             return sys.stderr.isatty()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):
             return False
 
     @staticmethod

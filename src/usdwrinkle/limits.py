@@ -21,6 +21,9 @@ MAX_AMPLITUDE_SCALE = 1e3
 #: |coordinate| in world space, and the largest wrinkle width: the GPU works in float32,
 #: and squares of lengths must stay finite (3.4e38)
 MAX_WORLD_COORDINATE = 1e15
+#: the stage's metersPerUnit that cloth presets convert through: nanometres to gigametres
+#: (1e-30 gave W = 8.5e28 scene units, beyond MAX_WORLD_COORDINATE)
+METERS_PER_UNIT_RANGE = (1e-9, 1e9)
 #: texture width or height (the GL 4.5 minimum of GL_MAX_TEXTURE_SIZE)
 MAX_TEXTURE_SIZE = 16384
 #: corners of one face: concave faces are ear-clipped (mapbox-earcut), whose time grows

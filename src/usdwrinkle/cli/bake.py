@@ -149,7 +149,7 @@ def map_options(args):
         raise UsdWrinkleError("--uv names the texture coordinates of --map-layout asset; "
                               "--map-layout islands lays the maps out in their own")
     options = dataclasses.replace(MAP_DEFAULTS, kinds=parse_map_kinds(args.maps),
-                                  **_given(args, MAP_FLAGS))
+                                  uv_named=args.uv is not None, **_given(args, MAP_FLAGS))
     check_map_options(options)
     return options
 
@@ -218,6 +218,8 @@ def _bake(args, reporter, maps, geometry) -> int:
             from ..maps.bake import check_map_options
 
             check_map_options(maps, engine.max_texture_size)
+        engine.check_relax_work(frames)  # a refusal: before the header
+        reporter.header(args.command, args.stage)
         started = time.perf_counter()
         request = BakeRequest(args.stage, args.output, tuple(frames), args.frames,
                               with_points=args.with_points, display_color=args.display_color,

@@ -71,6 +71,21 @@ class Reporter:
         self.seen.add(message)
         print_warning(message)
 
+    def header(self, command: str, stage_path: str) -> None:
+        """The line that starts a run's work (after every check that may refuse it, so a
+        refusal stays one line), so that a farm log says what ran where: the version, the
+        command, the stage, and the GL renderer (a GPU node or llvmpipe)."""
+        if self.quiet:
+            return
+        from .. import __version__
+        from ..errors import print_stderr
+        from ..render.context import renderer_info
+
+        info = renderer_info()
+        print_stderr(f"usdwrinkle: version {__version__}, {command} "
+                     f"{os.path.abspath(stage_path)}, GL renderer {info['renderer']} "
+                     f"(OpenGL {info['version']})")
+
     def progress(self, items, desc: str):
         if self.quiet or len(items) < 2:
             return items

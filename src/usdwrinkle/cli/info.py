@@ -68,18 +68,25 @@ def environment_lines() -> list[str]:
     from .. import schema
     from ..usdview import plugin_dir
 
-    def joined(name, *dirs):
+    def joined(name, *dirs, last=False):
         current = os.environ.get(name, "")
         parts = [d for d in dirs if d not in current.split(os.pathsep)]
-        return os.pathsep.join(parts + ([current] if current else []))
+        ordered = ([current] if current else []) + parts if last else \
+            parts + ([current] if current else [])
+        return os.pathsep.join(ordered)
 
     package_parent = os.path.dirname(os.path.dirname(os.path.abspath(usdwrinkle.__file__)))
     plugin_path = joined("PXR_PLUGINPATH_NAME", schema.schema_dir(), plugin_dir())
+    # a non-editable install's folder is a site-packages that also holds usd-core's pxr:
+    # first on PYTHONPATH it would shadow the studio's USD, whose pxr has Usdviewq
+    shadows = os.path.isdir(os.path.join(package_parent, "pxr"))
     import sys
 
     return ["environment for other USD processes (usdview, usdcat):",
             f"  export PXR_PLUGINPATH_NAME={plugin_path}",
-            f"  export PYTHONPATH={joined('PYTHONPATH', package_parent)}",
+            f"  export PYTHONPATH={joined('PYTHONPATH', package_parent, last=shadows)}"
+            + ("  # last: this folder also holds usd-core's pxr, which must not come "
+               "before usdview's" if shadows else ""),
             # usdview's Python may lack numpy, moderngl and OpenImageIO: the plugin's
             # commands then run usdwrinkle in this Python
             f"  export USDWRINKLE_PYTHON={sys.executable}"]

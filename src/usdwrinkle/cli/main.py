@@ -6,6 +6,7 @@ error, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM, SIGHUP).
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -88,11 +89,34 @@ def _on_stop(signum, frame):
     exits: a second Ctrl-C a few milliseconds after the first used to land in the middle
     of that cleanup, or in the GL and thread teardown after it, and abort the process
     (SIGABRT) instead of exit 130."""
+    if _fragile(frame):
+        # an exception raised here would land inside a C extension's module init
+        # (OpenImageIO's nanobind enums abort the process, USD's boost.python swallows
+        # it) or inside moderngl's wrapper of a GL object being made (a half-made object
+        # whose release segfaulted, about once in 150 Ctrl-Cs): ask again in 20 ms
+        threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
+        return
     for other in _stop_signals():
         signal.signal(other, signal.SIG_IGN)
     if signum == signal.SIGINT:
         raise KeyboardInterrupt()
     raise Terminated()
+
+
+#: where a stop signal's exception must not be raised (see _on_stop)
+_FRAGILE_MODULES = ("moderngl", "glcontext")
+
+
+def _fragile(frame) -> bool:
+    """True when ``frame`` runs inside an import (importlib's bootstrap is on its stack)
+    or inside moderngl's own Python code."""
+    while frame is not None:
+        filename = frame.f_code.co_filename
+        if filename.startswith("<frozen importlib._bootstrap") or \
+                frame.f_globals.get("__name__", "").split(".")[0] in _FRAGILE_MODULES:
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _install_stop_handlers() -> dict:
@@ -120,6 +144,12 @@ def _one_line_warnings() -> None:
         warn(f"{message} ({category.__name__})")
 
     warnings.showwarning = show
+    # numpy's floating-point warnings ("overflow encountered in multiply") tell a user
+    # nothing: every value that matters is checked for NaN and Inf where it is read or
+    # written, and refused there naming its prim and attribute
+    import numpy
+
+    numpy.seterr(all="ignore")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -191,11 +221,29 @@ def _main(argv: list[str] | None) -> int:
                      "the number of meshes, or free memory)")
         return 2
     except Exception as exc:  # a bug in usdwrinkle: still one line, unless --debug
+        stop = _stop_in_chain(exc)
+        if stop is not None:  # a stop signal raised inside a library's Python callback
+            said = "interrupted" if isinstance(stop, KeyboardInterrupt) else "terminated"
+            print_stderr(f"usdwrinkle: {said}{_AFTER_INTERRUPT.get(args.command, '')}")
+            return 130 if said == "interrupted" else 143
         if args.debug:
             traceback.print_exc()
         print_stderr(f"usdwrinkle: internal error: {type(exc).__name__}: {exc} (rerun with "
                      "--debug for a traceback, and please report it)")
         return 3
+
+
+def _stop_in_chain(exc: BaseException) -> BaseException | None:
+    """A KeyboardInterrupt or Terminated that ``exc`` wraps: Boost.Python (USD) turns one
+    raised inside a callback into 'SystemError: ... returned a result with an exception
+    set', chained as its cause."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if isinstance(exc, (KeyboardInterrupt, Terminated)):
+            return exc
+        exc = exc.__cause__ or exc.__context__
+    return None
 
 
 def entry_point() -> None:

@@ -221,7 +221,7 @@ def render_shot(args) -> list[str]:
 
 def _render_shot(args, reporter) -> list[str]:
     from ..imagefiles import is_complete_image
-    from ..outputs.atomic import check_writable
+    from ..outputs.atomic import check_writable, sweep_dead_temporaries
     from ..scene.baked import geometry_bake
     from ..scene.stage import (
         inherited_range_note,
@@ -243,6 +243,7 @@ def _render_shot(args, reporter) -> list[str]:
                               "writes; choose another file for the timings")
     refuse_overwriting_inputs(args.stage, outputs + extra, stage)
     check_writable(outputs + extra)
+    sweep_dead_temporaries(outputs)  # what a killed run of these frames left behind
     if args.dask is not None:
         if args.stats:
             reporter.warn("--stats applies to a serial render; ignored with --dask")
@@ -280,6 +281,8 @@ def _render_shot(args, reporter) -> list[str]:
         image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
                              args.write_threads, args.exr_compression, args.exr_half,
                              args.shade_samples)
+        engine.check_relax_work(frames, not args.no_wrinkles)  # a refusal: before the header
+        reporter.header(args.command, args.stage)
         started = time.perf_counter()
         stats = {} if args.stats else None
         written = render_frames(

@@ -98,10 +98,15 @@ def _connect(distributed, address: str, workers: int | None):
         # the workers' spill folder: a temporary folder of ours, not dask-scratch-space in
         # the user's working folder (removed with the cluster, _close)
         scratch = tempfile.mkdtemp(prefix="usdwrinkle-dask-")
-        cluster = distributed.LocalCluster(
-            n_workers=count, threads_per_worker=1, processes=True,
-            silence_logs=logging.CRITICAL, dashboard_address=dashboard,
-            local_directory=scratch)
+        import dask
+
+        # the scheduler's own scratch folder too (Dask's default: TMPDIR/dask-scratch-space,
+        # which it leaves behind)
+        with dask.config.set({"temporary-directory": scratch}):
+            cluster = distributed.LocalCluster(
+                n_workers=count, threads_per_worker=1, processes=True,
+                silence_logs=logging.CRITICAL, dashboard_address=dashboard,
+                local_directory=scratch)
         cluster.usdwrinkle_scratch = scratch
         return distributed.Client(cluster), cluster, count
     scheme = address.split("://", 1)[0].lower() if "://" in address else "tcp"
@@ -287,11 +292,12 @@ def _gather(distributed, futures, total: int, chunk: int,
                 error = result["error"]
                 raise UsdWrinkleError(error["what"], error["prim_path"], error["attribute"],
                                       error["frame"])
-            written += len(result["written"])
+            written += len(result["written"]) + len(result["earlier"])
             skipped += len(result["skipped"])
             baked.update(result["baked"])
             if bar is not None:
-                bar.update(len(result["written"]) + len(result["skipped"]))
+                bar.update(len(result["written"]) + len(result["earlier"]) +
+                           len(result["skipped"]))
     finally:
         if bar is not None:
             bar.close()

@@ -58,21 +58,24 @@ def written_this_run(path: str, before) -> bool:
 
 def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float],
                  paths: list[str], before: list, skip_existing: bool) -> dict:
-    """Render ``frames`` to ``paths``; returns {"written", "skipped", "warnings", "error",
-    "baked", "worker"}.
+    """Render ``frames`` to ``paths``; returns {"written", "earlier", "skipped", "warnings",
+    "error", "baked", "worker"}: "earlier" are frames this run wrote in an attempt at the
+    chunk whose worker died, "skipped" the complete frames --skip-existing kept.
 
     ``before``: each path's file identity when the run started (file_identity).
     """
-    result = {"written": [], "skipped": [], "warnings": [], "error": None,
+    result = {"written": [], "earlier": [], "skipped": [], "warnings": [], "error": None,
               "baked": [], "worker": os.getpid()}
     previous = dict(zip(paths, before, strict=True))
 
     def skip(path: str) -> bool:
-        done = written_this_run(path, previous[path]) or \
-            (skip_existing and is_complete_image(path, image.width, image.height))
-        if done:
+        if written_this_run(path, previous[path]):  # by an attempt whose worker died
+            result["earlier"].append(path)
+            return True
+        if skip_existing and is_complete_image(path, image.width, image.height):
             result["skipped"].append(path)
-        return done
+            return True
+        return False
 
     from ..render.context import create_context
 

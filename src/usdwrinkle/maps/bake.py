@@ -112,6 +112,12 @@ class MapBake:
         meshes = scene.meshes
         #: mesh path -> its file stem (the full set's, and its material's name)
         self.stems = mesh_file_names(meshes, getattr(scene.facts, "material_names", ()))
+        if options.uv_named and meshes and options.layout != "islands" and \
+                not any(self._own_uv(path) is not None for path in meshes):
+            raise UsdWrinkleError(
+                f"--uv {options.uv}: no wrinkled mesh has texture coordinates of that name "
+                f"({', '.join(sorted(meshes))}); name the meshes' own (st by default), or "
+                "use --map-layout islands")
         islands: dict[str, MeshMaps | None] = {}   # one layout per mesh, for every set
         for map_set in options.sets:
             for path in meshes:
@@ -124,6 +130,14 @@ class MapBake:
                 f"lays the maps out in ({', '.join(sorted(meshes))}): author them, pass "
                 "--uv with the name of the mesh's texture coordinates, or use --map-layout "
                 "islands")
+        for path in dict.fromkeys(plan.path for plan in self.plans):
+            facts = scene.facts.meshes.get(path)
+            if facts is not None and getattr(facts, "stronger_ancestor", None):
+                _log.warning(f"the wrinkle maps' material bound to {path} never resolves: "
+                             f"{facts.stronger_ancestor} binds its material with "
+                             "bindMaterialAs = strongerThanDescendants, which wins over the "
+                             "mesh's own binding; bind the maps' material there, or make "
+                             "that binding weakerThanDescendants")
         self._rasterizer: MapRasterizer | None = None
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None

@@ -49,6 +49,9 @@ class MapOptions:
     fmt: str = "png"
     padding: int = 8
     uv: str = "st"
+    #: ``uv`` was named (--uv): a name no wrinkled mesh has is a typo, refused, not a
+    #: reason to fall back to islands (as an unnamed default's absence is)
+    uv_named: bool = False
     #: also bind the height map to UsdPreviewSurface's inputs:displacement (opt-in: Storm
     #: and most real-time renderers displace the coarse corners and keep their normals)
     displacement: bool = False

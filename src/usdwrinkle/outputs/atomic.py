@@ -4,14 +4,13 @@ from __future__ import annotations
 import contextlib
 import glob
 import os
-import signal
+import re
 import tempfile
 
 from ..errors import UsdWrinkleError
 
-#: the signals that stop a run (Ctrl-C, a scheduler, a closed terminal); held back while
-#: a finished file is renamed into place or a temporary file is removed
-STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+# held back while a finished file is renamed into place or a temporary file is removed
+from ..signals import STOP_SIGNALS, signals_held  # noqa: E402,F401
 
 
 def _umask() -> int:
@@ -25,6 +24,47 @@ def _temporary_affixes(path: str) -> tuple[str, str, str]:
     folder = os.path.dirname(os.path.abspath(path)) or "."
     base, ext = os.path.splitext(os.path.basename(path))
     return folder, f".{base}.", f".tmp{ext}"
+
+
+#: a temporary file's name: ``.<base>.<pid>.<random>.tmp<ext>`` (atomic_path); the pid
+#: tells a later run whether its writer is still alive
+_TEMPORARY = re.compile(r"^\.(?P<base>.+)\.(?P<pid>\d+)\.[^.]+\.tmp(?P<ext>\.[^.]*)?$")
+
+
+def sweep_dead_temporaries(paths: list[str]) -> int:
+    """Remove the temporary files of ``paths`` whose writing process no longer runs (a
+    SIGKILLed or crashed run of the same frames); one listing per folder. Returns how many
+    were removed. Those of live processes (another run writing now) stay."""
+    wanted: dict[str, set[str]] = {}
+    for path in paths:
+        folder = os.path.dirname(os.path.abspath(path)) or "."
+        wanted.setdefault(folder, set()).add(os.path.basename(path))
+    removed = 0
+    for folder, names in wanted.items():
+        try:
+            entries = os.listdir(folder)
+        except OSError:
+            continue
+        for entry in entries:
+            match = _TEMPORARY.match(entry)
+            if not match or match["base"] + (match["ext"] or "") not in names:
+                continue
+            if _alive(int(match["pid"])):
+                continue
+            with contextlib.suppress(OSError):
+                os.unlink(os.path.join(folder, entry))
+                removed += 1
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # alive, but another user's
+    return True
 
 
 def remove_temporaries(path: str) -> None:
@@ -87,20 +127,6 @@ def check_writable(paths) -> None:
 
 
 @contextlib.contextmanager
-def signals_held():
-    """Hold back stop signals for a short critical section; they arrive when it ends."""
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
-    except (AttributeError, OSError, ValueError):  # no POSIX signal masks here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-@contextlib.contextmanager
 def atomic_path(path: str, verify=None):
     """Yield a temporary path beside ``path`` (same extension); rename on success.
 
@@ -114,7 +140,8 @@ def atomic_path(path: str, verify=None):
         os.makedirs(folder, exist_ok=True)
         if os.path.isdir(path):
             raise IsADirectoryError(21, "it is a folder")
-        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f"{prefix}{os.getpid()}.", suffix=suffix,
+                                   dir=folder)
         os.close(fd)
     except OSError as exc:
         raise write_error(path, exc) from None

@@ -754,7 +754,9 @@ class PaintWindow(QtWidgets.QMainWindow):
         """A Python error inside a Qt override or slot: shown in the window, logged, and
         the window goes on."""
         self.errors.append(text)
-        print(f"usdwrinkle paint: error: {text}\n{detail}", flush=True)
+        from ..errors import print_stderr
+
+        print_stderr(f"usdwrinkle: paint: error: {text}" + (f"\n{detail}" if detail else ""))
         # shown from the event loop, not here: inside paintGL a new banner re-lays the
         # window out and resizes the GL widget while it paints, which crashed the process
         # (measured: 3 of 4 runs, PySide6 6.12 on llvmpipe)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 
 from ..errors import GLContextError
+from ..signals import signals_held
 
 REQUIRED_VERSION = 430
 
@@ -40,8 +41,10 @@ def create_context(backend: str | None = None):
                                  f"not '{device}'")
         options["device_index"] = int(device)
     try:
-        ctx = moderngl.create_standalone_context(backend=backend, require=REQUIRED_VERSION,
-                                                 **options)
+        # the driver's threads start here and inherit the held signals for good
+        with signals_held():
+            ctx = moderngl.create_standalone_context(backend=backend,
+                                                     require=REQUIRED_VERSION, **options)
     except Exception as exc:  # moderngl raises plain Exceptions from glcontext
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise GLContextError(

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from .._resources import resource_dir
 from ..errors import ShaderError
+from ..signals import signals_held
 
 MAX_INCLUDE_DEPTH = 8
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
@@ -87,7 +88,8 @@ def compute_shader(ctx, name: str, defines: dict, root: Path | None = None):
     """A compute shader from ``root`` (default: the package's shaders/)."""
     source = ShaderSource(name, defines, root)
     try:
-        return ctx.compute_shader(source.text())
+        with signals_held():  # LLVM compiling it (llvmpipe) must not take a signal
+            return ctx.compute_shader(source.text())
     except Exception as exc:
         raise source.map_error(str(exc)) from None
 
@@ -96,8 +98,9 @@ def program(ctx, name: str, defines: dict):
     """A vertex+fragment program from one file with VERTEX_SHADER/FRAGMENT_SHADER sections."""
     source = ShaderSource(name, defines)
     try:
-        return ctx.program(vertex_shader=source.text("VERTEX_SHADER"),
-                           fragment_shader=source.text("FRAGMENT_SHADER"))
+        with signals_held():
+            return ctx.program(vertex_shader=source.text("VERTEX_SHADER"),
+                               fragment_shader=source.text("FRAGMENT_SHADER"))
     except Exception as exc:
         raise source.map_error(str(exc)) from None
 

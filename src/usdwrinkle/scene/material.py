@@ -78,8 +78,10 @@ def _decode_texture(resolved_path: str, color_space: str, identity) -> TextureIm
     try:
         pixels, eight_bit = read_float_image(tmp, MAX_TEXTURE_SIZE, keep_8bit=True)
     except OSError as exc:
-        raise OSError(f"cannot decode texture '{resolved_path}': "
-                      f"{str(exc).split(': ', 1)[-1]}") from None
+        # the decoder's words name the temporary copy: name the texture instead
+        detail = str(exc).split(": ", 1)[-1].replace(tmp, resolved_path).replace(
+            os.path.basename(tmp), os.path.basename(inner))
+        raise OSError(f"cannot decode texture '{resolved_path}': {detail}") from None
     finally:
         os.unlink(tmp)
     encoded_srgb = color_space == "sRGB" or (color_space != "raw" and eight_bit)

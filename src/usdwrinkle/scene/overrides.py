@@ -84,6 +84,10 @@ class MeshFacts:
     transform: MeshTransform | None = None
     primvars: tuple = ()
     face_counts: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    #: the nearest ancestor that binds a material with bindMaterialAs =
+    #: strongerThanDescendants (for any purpose): a binding the bake authors on the mesh
+    #: never resolves under it
+    stronger_ancestor: str | None = None
 
     def look_for(self, purpose: str) -> SourceLook:
         """The material ``purpose`` resolves: its own binding, else the all-purpose one."""
@@ -175,7 +179,23 @@ def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> 
         transform=_transform(UsdGeom.Xformable(prim), frames),
         primvars=_primvars(prim, record.topology) if carry_primvars else (),
         face_counts=np.asarray(mesh.GetFaceVertexCountsAttr().Get(Usd.TimeCode.EarliestTime())
-                               or [], np.int64))
+                               or [], np.int64),
+        stronger_ancestor=_stronger_ancestor(prim))
+
+
+def _stronger_ancestor(prim: Usd.Prim) -> str | None:
+    """The nearest ancestor of ``prim`` with a direct binding of strength
+    strongerThanDescendants (UsdShade's rule: it wins over the bindings below it)."""
+    for ancestor in _ancestors(prim):
+        for rel in ancestor.GetRelationships():
+            name = rel.GetName()
+            if not name.startswith("material:binding") or name.startswith(
+                    "material:binding:collection") or not rel.GetTargets():
+                continue
+            if UsdShade.MaterialBindingAPI.GetMaterialBindingStrength(rel) == \
+                    UsdShade.Tokens.strongerThanDescendants:
+                return str(ancestor.GetPath())
+    return None
 
 
 def _ancestors(prim: Usd.Prim):

@@ -22,12 +22,14 @@ def stage_meters(stage: Usd.Stage) -> float:
     divide by: refused in one line unless finite and > 0 (0 divided by zero, NaN and inf
     gave NaN or infinite widths, and -1 negative ones)."""
     from ..errors import UsdWrinkleError
+    from ..limits import METERS_PER_UNIT_RANGE
 
     meters = UsdGeom.GetStageMetersPerUnit(stage)
-    if not (math.isfinite(meters) and meters > 0):
-        raise UsdWrinkleError(f"metersPerUnit {meters:g} must be finite and > 0 (the cloth "
-                              "presets' widths are converted through it)",
-                              stage.GetRootLayer().identifier, "metersPerUnit")
+    low, high = METERS_PER_UNIT_RANGE
+    if not (math.isfinite(meters) and low <= meters <= high):
+        raise UsdWrinkleError(f"metersPerUnit {meters:g} must be finite and within "
+                              f"{low:g}..{high:g} (the cloth presets' widths are converted "
+                              "through it)", stage.GetRootLayer().identifier, "metersPerUnit")
     return meters
 
 
