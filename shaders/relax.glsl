@@ -81,8 +81,13 @@ void main() {
     vec4 z = vec4(0.0);
     vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
     for (int s = 0; s < SYSTEMS; ++s) {
-        vec3 k_i = wave_of(fields, i, s).xyz;
-        if (history) {
+        vec4 wave_i = wave_of(fields, i, s);
+        vec3 k_i = wave_i.xyz;
+        // a point with a wave keeps last frame's phase; one without (amplitude 0) starts
+        // again from its material-anchored phase: the flip test below decided the sign of
+        // such a point's meaningless k by rounding, and a wrinkle that grew there later
+        // inherited it (docs/method.md: stability)
+        if (history && wave_i.w > 0.0) {
             // keep last frame's phase of the partner system; flip it where k flipped
 #if defined TWO_SYSTEMS
             int was = partner_system(k_i, s, before0, before1);

@@ -55,11 +55,18 @@ def phase_misfit(points, wave_vector, phase, topology: Topology, mask=None) -> f
     return float(np.sqrt(np.mean(residual ** 2)))
 
 
-def seed(wave_vector, previous_wave_vector, previous_phase):
-    """The warm start of a frame: previous phases, flipped where k flipped."""
+def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anchor=None):
+    """The warm start of a frame: previous phases, flipped where k flipped; with
+    ``amplitude`` and ``anchor`` (crush's material-anchored phase), a point without a wave
+    (amplitude 0) starts from its anchor instead (issue 46: the flip test on the
+    meaningless k of such a point decided its sign by rounding, and a wrinkle that grew
+    there later inherited it, so a 0.01 degree change of a joint moved crests)."""
     flip = np.sum(np.asarray(wave_vector, np.float64)
                   * np.asarray(previous_wave_vector, np.float64), 1) < 0
-    return np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
+    start = np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
+    if amplitude is not None:
+        start = np.where(np.asarray(amplitude) > 0, start, np.asarray(anchor, np.float64))
+    return start
 
 
 def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations: int,
@@ -75,7 +82,8 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
     if state is None:
         start, count = fields["phase"], iterations * cold_start_factor
     else:
-        start = seed(fields["wave_vector"], state["wave_vector"], state["phase"])
+        start = seed(fields["wave_vector"], state["wave_vector"], state["phase"],
+                     fields["amplitude"], fields["phase"])
         count = iterations
     phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
                   topology, count)
