@@ -69,3 +69,21 @@ def test_the_api_refuses_what_the_command_refuses(tmp_path, call, options, messa
     with pytest.raises(UsdWrinkleError, match=message.replace("(", r"\(")):
         getattr(api, call)(SHIRT, output, **options)
     assert not any(tmp_path.iterdir())
+
+
+def test_the_api_warns_through_the_library_logger(gl_context, tmp_path, capfd):
+    """Issue 44: with log.collect() around api.render, the messages stayed empty and the
+    warning went to stderr (the API pushed the command line's reporter); and
+    UsdWrinkleError could not be imported from usdwrinkle or usdwrinkle.api."""
+    import usdwrinkle
+    from usdwrinkle import api, log
+    from usdwrinkle.errors import UsdWrinkleError
+
+    assert api.UsdWrinkleError is UsdWrinkleError is usdwrinkle.UsdWrinkleError
+    with log.collect() as messages:
+        api.render(str(SHIRT), str(tmp_path / "f.####.png"), frames=[30], width=32)
+    assert any("outside" in m for m in messages), messages
+    assert "warning" not in capfd.readouterr().err
+    # without a collector, the warning is usdwrinkle's one line on stderr
+    api.render(str(SHIRT), str(tmp_path / "g.####.png"), frames=[30], width=32)
+    assert "usdwrinkle: warning: " in capfd.readouterr().err

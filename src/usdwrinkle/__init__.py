@@ -14,7 +14,10 @@ from ._address_space import prepare as _prepare_address_space  # noqa: E402
 #: why usdwrinkle cannot run in this process (None: it can); checked before USD loads
 UNUSABLE = _prepare_address_space()
 
-__all__ = ["WrinkleAPI", "__version__", "profile_from_curve", "profile_preset"]
+__all__ = ["UsdWrinkleError", "WrinkleAPI", "__version__", "profile_from_curve",
+           "profile_preset"]
+
+from .errors import UsdWrinkleError  # noqa: E402  (standard library only)
 
 if UNUSABLE is None:
     _lean_usd()
@@ -37,7 +40,5 @@ if UNUSABLE is None:
 else:
     def __getattr__(name: str):
         if name in __all__:
-            from .errors import UsdWrinkleError
-
             raise UsdWrinkleError(UNUSABLE)
         raise AttributeError(name)

@@ -12,8 +12,11 @@ the option's long name with ``_`` for ``-``: ``no_wrinkles=True``, ``all_meshes=
 ``skip_existing=True``, ``dask="local"``. ``frames`` takes the command line's text
 ("1:24", "1,5,9", "1:24x2") or a list of numbers. A problem with the input raises
 :class:`usdwrinkle.errors.UsdWrinkleError` with the command line's one-line message.
-Warnings go to stderr, as on the command line; ``quiet`` (True by default here) leaves out
-the progress bars and the closing line.
+Warnings go through the ``usdwrinkle`` logger (usdwrinkle/log.py): on stderr as
+``usdwrinkle: warning: ...`` unless the caller collects them
+(``with usdwrinkle.log.collect() as messages: api.render(...)``) or silences them.
+``quiet`` (True by default here) leaves out the progress bars and the closing line.
+``usdwrinkle.api.UsdWrinkleError`` is the error type.
 
 Authoring is :class:`usdwrinkle.WrinkleAPI` (and ``usdwrinkle apply`` on the command
 line).
@@ -22,7 +25,9 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["bake", "render"]
+from .errors import UsdWrinkleError
+
+__all__ = ["UsdWrinkleError", "bake", "render"]
 
 
 def _namespace(command: str, stage, output, frames, options: dict) -> argparse.Namespace:
@@ -46,6 +51,7 @@ def _namespace(command: str, stage, output, frames, options: dict) -> argparse.N
     for name, value in options.items():
         setattr(args, name, _checked(name, value, actions.get(name)))
     args.debug = False
+    args.library = True  # warnings through the library's logger (log.collect sees them)
     return args
 
 

@@ -185,7 +185,7 @@ def run(args) -> int:
     geometry = geometry_options(args)
     refuse_overwriting_inputs(args.stage, [args.output])
     check_layer_path(args.output)
-    with Reporter(args.quiet) as reporter:
+    with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
         return _bake(args, reporter, maps, geometry)
 
 

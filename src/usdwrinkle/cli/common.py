@@ -49,27 +49,37 @@ class Reporter:
     (unless quiet). As a context manager it is where usdwrinkle's logged warnings go
     (log.warnings_to) while the command runs."""
 
-    def __init__(self, quiet: bool = False):
+    def __init__(self, quiet: bool = False, library: bool = False):
         self.quiet = quiet
+        #: called from Python (usdwrinkle.api): warnings go to the library's logger, so
+        #: that the caller's own ``log.collect()`` or logging sees them, not to stderr
+        self.library = library
         self.seen: set[str] = set()
         self._sink = None
 
     def __enter__(self) -> Reporter:
         from ..log import warnings_to
 
-        self._sink = warnings_to(self.warn)
-        self._sink.__enter__()
+        if not self.library:
+            self._sink = warnings_to(self.warn)
+            self._sink.__enter__()
         return self
 
     def __exit__(self, *exc) -> None:
-        self._sink.__exit__(*exc)
+        if self._sink is not None:
+            self._sink.__exit__(*exc)
         self._sink = None
 
     def warn(self, message: str) -> None:
         if message in self.seen:
             return
         self.seen.add(message)
-        print_warning(message)
+        if self.library:
+            from ..log import warn
+
+            warn(message)
+        else:
+            print_warning(message)
 
     def header(self, command: str, stage_path: str) -> None:
         """The line that starts a run's work (after every check that may refuse it, so a

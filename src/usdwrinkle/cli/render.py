@@ -215,7 +215,7 @@ def render_shot(args) -> list[str]:
     """The render command's work; returns the file of each frame of the shot (written, or
     kept by --skip-existing). usdwrinkle.api.render calls it too."""
     check_render_args(args)
-    with Reporter(args.quiet) as reporter:
+    with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
         return _render_shot(args, reporter)
 
 
