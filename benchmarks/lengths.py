@@ -14,19 +14,20 @@ replaces the table between the markers in docs/method.md.
 from __future__ import annotations
 
 import os
-import re
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from .blocks import emit, markers
+
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
 WIDTH = 0.3
 RATIOS = (0.5, 0.7, 0.9)
 LEVELS = 3
-BEGIN, END = "<!-- lengths:begin -->", "<!-- lengths:end -->"
+BEGIN, END = markers("lengths")
 
 
 def _bake(source: str, layer: str, *args: str) -> None:
@@ -130,16 +131,7 @@ def main(argv=None) -> int:
         rows = [sheet_lengths(preset, ratio, folder) for preset in PRESETS for ratio in RATIOS]
         shirt = elbow(folder)
     text = table(rows, shirt)
-    if args[:1] == ["--write"]:
-        path = Path(args[1])
-        doc = path.read_text()
-        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-        if not pattern.search(doc):
-            raise SystemExit(f"{path} has no {BEGIN} ... {END} block")
-        path.write_text(pattern.sub(lambda _: text, doc))
-        print(f"wrote {path}")
-    else:
-        print(text)
+    emit(args, "lengths", text)
     return 0
 
 

@@ -19,12 +19,13 @@ wrapper layer):
 """
 from __future__ import annotations
 
-import re
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from .blocks import emit, markers
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
@@ -34,7 +35,7 @@ SIZE = (640, 360)
 #: a pixel's crest moved: its height changed by more than this share of the largest
 #: amplitude (the issue's 0.01 of the shirt's 0.068)
 HEIGHT_SHARE = 0.15
-BEGIN, END = "<!-- stability:begin -->", "<!-- stability:end -->"
+BEGIN, END = markers("stability")
 
 
 def corpus_dir() -> Path:
@@ -218,16 +219,7 @@ def table(result: dict) -> str:
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     text = table(measure())
-    if args[:1] == ["--write"]:
-        path = Path(args[1])
-        doc = path.read_text()
-        pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-        if not pattern.search(doc):
-            raise SystemExit(f"{path} has no {BEGIN} ... {END} block")
-        path.write_text(pattern.sub(lambda _: text, doc))
-        print(f"wrote {path}")
-    else:
-        print(text)
+    emit(args, "stability", text)
     return 0
 
 
