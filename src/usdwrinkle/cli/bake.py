@@ -13,6 +13,7 @@ from .common import (
     Reporter,
     add_shot_args,
     check_stage_args,
+    composition_of,
     refuse_overwriting_inputs,
     start_engine,
 )
@@ -200,7 +201,7 @@ def _bake(args, reporter, maps, geometry) -> int:
     from ..shot import BakeRequest, bake_layer
 
     # everything that can be refused without the GPU is checked first
-    stage = open_stage(args.stage)
+    stage = open_stage(args.stage, composition_of(args))
     refuse_overwriting_inputs(args.stage, [args.output], stage)
     check_writable([args.output])
     if maps is not None:

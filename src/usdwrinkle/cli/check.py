@@ -17,6 +17,9 @@ def add_parser(subparsers) -> None:
                     "usdWrinkleValidators:WrinkleAPIChecker). Exit 0 when clean, 1 with "
                     "findings, 2 on usage errors.")
     p.add_argument("stage", help="the USD stage")
+    from .common import add_composition_args
+
+    add_composition_args(p)
     p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
     p.add_argument("--wrinkles-only", action="store_true",
                    help="run only usdwrinkle's WrinkleAPI checker, so that the exit code "
@@ -61,8 +64,9 @@ def collect(stage, keywords=KEYWORDS) -> list[dict]:
 
 def run(args) -> int:
     from ..scene.stage import open_stage
+    from .common import composition_of
 
-    stage = open_stage(args.stage)
+    stage = open_stage(args.stage, composition_of(args))
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
     scene = read_scene(stage)

@@ -19,14 +19,43 @@ def add_stage_args(parser) -> None:
                              "from here on; every chunk of a shot must use the same value")
 
 
+def add_composition_args(parser) -> None:
+    """How the stage is composed, without a shot file (scene/composition.py)."""
+    group = parser.add_argument_group(
+        "composition", "open the stage as a shot composes it, without writing a shot file")
+    group.add_argument("--sublayer", action="append", metavar="LAYER", default=None,
+                       help="a layer over the stage, e.g. overrides of a read-only .usdz "
+                            "(repeatable; the first is the strongest)")
+    group.add_argument("--variant", action="append", metavar="PRIM{SET=NAME}",
+                       default=None,
+                       help="a variant selection in USD's path syntax, e.g. "
+                            "'/Kitchen{modelingVariant=Full}' (repeatable)")
+    group.add_argument("--mask", metavar="PRIM[,PRIM...]",
+                       help="open only these prims and their ancestors (a population mask, "
+                            "as usdview's --mask)")
+
+
+def composition_of(args):
+    """The Composition of the command's options (empty without them)."""
+    from ..scene.composition import Composition
+
+    mask = getattr(args, "mask", None)
+    if isinstance(mask, str):
+        mask = [part.strip() for part in mask.split(",") if part.strip()]
+    return Composition(tuple(getattr(args, "sublayer", None) or ()),
+                       tuple(getattr(args, "variant", None) or ()), tuple(mask or ()))
+
+
 def add_shot_args(parser, output_help: str) -> None:
-    """What render and bake both take: STAGE OUTPUT, --frames and the stage options."""
+    """What render and bake both take: STAGE OUTPUT, --frames, the stage options and the
+    composition options."""
     from .frames import add_frame_args
 
     parser.add_argument("stage", help="the USD stage (.usd, .usda, .usdc, .usdz)")
     parser.add_argument("output", help=output_help)
     add_frame_args(parser)
     add_stage_args(parser)
+    add_composition_args(parser)
 
 
 def check_stage_args(args) -> None:

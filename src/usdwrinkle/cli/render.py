@@ -12,6 +12,7 @@ from .common import (
     Reporter,
     add_shot_args,
     check_stage_args,
+    composition_of,
     engine_options,
     refuse_overwriting_inputs,
     start_engine,
@@ -232,7 +233,12 @@ def _render_shot(args, reporter) -> list[str]:
     from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames, unapplied_note
 
     # everything that can be refused without the GPU is checked first
-    stage = open_stage(args.stage)
+    composition = composition_of(args)
+    if composition and args.dask is not None:
+        raise UsdWrinkleError("--sublayer, --variant and --mask apply to a serial render; "
+                              "for --dask, write them into a shot layer (or bake first: a "
+                              "bake records them, and --dask renders its layer)")
+    stage = open_stage(args.stage, composition)
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
         reporter.warn(note)

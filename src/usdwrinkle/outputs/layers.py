@@ -252,7 +252,15 @@ class LayerBaker:
         source_path = os.path.relpath(os.path.abspath(facts.path), os.path.dirname(
             os.path.abspath(output_path))).replace(os.sep, "/")
         if not options.sparse:
+            # the layers the stage was composed with (--sublayer), stronger than it, and
+            # its variant selections: the layer renders as the composed stage did
+            for sublayer in getattr(facts, "sublayers", ()):
+                layer.subLayerPaths.append(os.path.relpath(sublayer, os.path.dirname(
+                    os.path.abspath(output_path))).replace(os.sep, "/"))
             layer.subLayerPaths.append(source_path)
+            for prim_path, variant_set, name in getattr(facts, "variant_selections", ()):
+                spec = Sdf.CreatePrimInLayer(layer, prim_path)
+                spec.variantSelections[variant_set] = name
         if options.display_color and self.wrinkled:
             self._display_color_material()
         for path, record in self.point_meshes.items():

@@ -114,6 +114,11 @@ class StageFacts:
     #: the names of the prims the stage already has in the bake's material scope
     #: (<default prim>/WrinkleMaterials): a bake of a bake must not define them again
     material_names: frozenset = frozenset()
+    #: the composition the stage was opened with (scene/composition.py): absolute paths of
+    #: the layers over it, strongest first, and (prim, set, name) variant selections; a
+    #: bake layer records them, so that it renders as the composed stage did
+    sublayers: tuple = ()
+    variant_selections: tuple = ()
 
 
 def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
@@ -135,7 +140,15 @@ def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
         meshes={path: _mesh_facts(stage.GetPrimAtPath(path), record, tuple(frames),
                                   carry_primvars)
                 for path, record in records.items()},
-        material_names=_material_names(stage, default))
+        material_names=_material_names(stage, default),
+        **_composition(stage))
+
+
+def _composition(stage: Usd.Stage) -> dict:
+    from .composition import recorded
+
+    sublayers, selections = recorded(stage)
+    return {"sublayers": tuple(sublayers), "variant_selections": tuple(selections)}
 
 
 def _material_names(stage: Usd.Stage, default) -> frozenset:

@@ -63,22 +63,45 @@ def _keep_inputs(identifier: str, inputs: StageInputs) -> None:
         _INPUTS.popitem(last=False)
 
 
-def open_stage(path: str) -> Usd.Stage:
+def open_stage(path: str, composition=None) -> Usd.Stage:
     """Open a stage with one-line errors: a missing file, one that is not a regular file
     (anywhere in its layers and textures), an unreadable or malformed layer (with its
-    file:line). USD's warnings while opening are logged, one line each."""
+    file:line). USD's warnings while opening are logged, one line each. ``composition``
+    (scene/composition.Composition): sublayers over it, variant selections and a
+    population mask, in an anonymous session layer."""
     if not os.path.exists(path):
         raise UsdWrinkleError(f"stage file '{path}' does not exist")
     inputs = scan_inputs(path)
     root = inputs.layers[0]
+    session = mask = None
+    if composition:
+        from .composition import population_mask, session_layer
+
+        session = session_layer(composition, path)
+        mask = population_mask(composition)
+        for sublayer in session.subLayerPaths:  # also what the sublayers read
+            extra = scan_inputs(sublayer)
+            inputs.files |= extra.files
+            inputs.inodes |= extra.inodes
+            inputs.missing |= extra.missing
     try:
         with usd_diagnostics(forward=True):
-            stage = Usd.Stage.Open(root)
+            if mask is not None:
+                stage = Usd.Stage.OpenMasked(root, session, mask) if session is not None \
+                    else Usd.Stage.OpenMasked(root, mask)
+            elif session is not None:
+                stage = Usd.Stage.Open(root, session)
+            else:
+                stage = Usd.Stage.Open(root)
     except Tf.ErrorException as exc:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage: "
                               f"{usd_error_text(exc)}") from None
     if stage is None:
         raise UsdWrinkleError(f"cannot open '{path}' as a USD stage")
+    if composition:
+        from .composition import check_composed
+
+        check_composed(stage, composition)
     inputs.layers = []  # the stage holds what it uses; a cache must not keep stale layers
     _keep_inputs(root.identifier, inputs)
     return stage
