@@ -164,13 +164,34 @@ def test_compositions_that_select_nothing_are_refused(tmp_path, composition, fra
     assert fragment in str(caught.value)
 
 
-def test_the_stage_itself_is_no_sublayer_and_dask_says_so(tmp_path, capsys):
+def test_the_stage_itself_is_no_sublayer(tmp_path):
     shot = _variant_shot(tmp_path)
     with pytest.raises(UsdWrinkleError, match="is the stage itself"):
         open_stage(str(shot), Composition(sublayers=(str(shot),)))
-    assert main(["render", str(shot), str(tmp_path / "f.####.png"), "--variant",
-                 "/World{fold=coarse}", "--dask", "local"]) == 2
-    assert "apply to a serial render" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("wrinkles", [True, False])
+def test_a_farm_render_composes_the_stage_as_a_serial_one(gl_context, tmp_path, wrinkles):
+    """--dask with --variant and --mask: the client bakes the composed stage (its layer
+    carries the selection) and the workers mask as it did; without wrinkles there is no
+    bake and the workers open the stage with the whole composition. Frames equal the
+    serial render's."""
+    shot = _variant_shot(tmp_path)
+    extra = ["--variant", "/World{fold=coarse}", "--mask", f"{SLEEVE},/World/main_cam",
+             "--frames", "2:3", "--width", "96", "--quiet"]
+    if not wrinkles:
+        extra.append("--no-wrinkles")
+    assert main(["render", str(shot), str(tmp_path / "s" / "f.####.exr"), *extra]) == 0
+    assert main(["render", str(shot), str(tmp_path / "d" / "f.####.exr"), *extra,
+                 "--dask", "local", "--workers", "1"]) == 0
+    for frame in (2, 3):
+        serial = read_exr(tmp_path / "s" / f"f.{frame:04d}.exr")
+        farm = read_exr(tmp_path / "d" / f"f.{frame:04d}.exr")
+        for name in ("R", "G", "B", "A", "wrinkle.height"):
+            np.testing.assert_allclose(farm[name], serial[name], atol=1e-5, err_msg=name)
+    height = read_exr(tmp_path / "s" / "f.0003.exr")["wrinkle.height"]
+    assert (np.abs(height).max() > 1e-3) == wrinkles
 
 
 def test_parse_variant():

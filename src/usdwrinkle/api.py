@@ -83,7 +83,9 @@ def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list
     or kept by ``skip_existing``). The options are render's: ``width`` (640), ``height``,
     ``camera``, ``samples`` (4), ``no_wrinkles``, ``all_meshes``, ``recompute``,
     ``relax_iterations``, ``history_start``, ``write_threads``, ``exr_compression``,
-    ``exr_half``, ``skip_existing``, ``stats``, ``dask``, ``workers``, ``chunk``."""
+    ``exr_half``, ``skip_existing``, ``stats``, ``dask``, ``workers``, ``chunk``; and the
+    composition options ``sublayer`` (a list of layers over the stage, strongest first),
+    ``variant`` (a list of "/Prim{set=name}") and ``mask`` ("/A,/B")."""
     import os
 
     from .cli.render import render_shot
@@ -98,7 +100,8 @@ def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
     ("amplitude" or "compression"), ``sparse``, ``all_meshes``, ``relax_iterations``,
     ``history_start``, ``maps`` ("normal,height,amplitude" or a list), ``map_size``,
     ``map_dir``, ``map_format``, ``map_padding``, ``uv``, ``tangent_space``,
-    ``map_layout``, ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``."""
+    ``map_layout``, ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``,
+    ``sublayer``, ``variant``, ``mask`` (as render's)."""
     if "maps" in options and options["maps"] is not None and \
             not isinstance(options["maps"], str):
         options["maps"] = ",".join(options["maps"])

@@ -42,11 +42,19 @@ class EngineOptions:
     use_baked: bool = True
     #: time every pass (GL timer queries, or the wall clock between glFinish calls)
     profile: bool = False
+    #: how the stage is composed (scene/composition.Composition; None: as it is): a farm
+    #: worker opens the stage with it
+    composition: object | None = None
 
     def create(self, stage=None, preroll_progress=None):
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
         ``preroll_progress`` wraps the list of preroll frames (a progress bar)."""
         from .engine import WrinkleEngine
+
+        if stage is None and self.composition:
+            from .scene.stage import open_stage
+
+            stage = open_stage(self.stage, self.composition)
 
         kwargs = {} if preroll_progress is None else {"preroll_progress": preroll_progress}
         return WrinkleEngine(stage if stage is not None else self.stage,

@@ -141,7 +141,8 @@ def engine_options(args, stage_path: str | None = None, camera: str | None = Non
     return EngineOptions(os.path.abspath(stage_path or args.stage),
                          all_meshes=args.all_meshes, relax_iterations=args.relax_iterations,
                          camera=camera, history_start=args.history_start, use_baked=use_baked,
-                         profile=bool(getattr(args, "stats", None)))
+                         profile=bool(getattr(args, "stats", None)),
+                         composition=composition_of(args) or None)
 
 
 def start_engine(args, reporter: Reporter, stage, camera: str | None = None,

@@ -233,12 +233,7 @@ def _render_shot(args, reporter) -> list[str]:
     from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames, unapplied_note
 
     # everything that can be refused without the GPU is checked first
-    composition = composition_of(args)
-    if composition and args.dask is not None:
-        raise UsdWrinkleError("--sublayer, --variant and --mask apply to a serial render; "
-                              "for --dask, write them into a shot layer (or bake first: a "
-                              "bake records them, and --dask renders its layer)")
-    stage = open_stage(args.stage, composition)
+    stage = open_stage(args.stage, composition_of(args))
     frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
     if not args.frames and (note := inherited_range_note(stage)):
         reporter.warn(note)

@@ -238,8 +238,15 @@ def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
                 print_stderr(f"usdwrinkle: baked wave fields to {layer} in "
                              f"{time.perf_counter() - bake_started:.1f} s")
             render_stage = layer
+        composition = job.engine.composition
+        if layer is not None and composition:
+            # the bake's layer carries the sublayers and variant selections; the workers
+            # still mask the population as the client did
+            from ..scene.composition import Composition
+
+            composition = Composition(mask=composition.mask) or None
         options = dataclasses.replace(job.engine, stage=os.path.abspath(render_stage),
-                                      use_baked=wrinkles)
+                                      use_baked=wrinkles, composition=composition)
         chunk = job.chunk or default_chunk(len(frames), workers)
         before = [file_identity(p) for p in outputs]
         run_id = uuid.uuid4().hex[:8]

@@ -273,9 +273,12 @@ class LayerBaker:
             rel = spec.relationships.get("skel:skeleton") or Sdf.RelationshipSpec(
                 spec, "skel:skeleton", custom=False)
             rel.targetPathList.ClearEditsAndMakeExplicit()
+        shot_range = getattr(facts, "shot_range", None)
         return {"version": __version__, "frames": options.frame_spec, "source": source_path,
                 "withPoints": options.with_points, "displayColor": options.display_color or "",
-                "sparse": options.sparse}
+                "sparse": options.sparse,
+                **({"shotStart": shot_range[0], "shotEnd": shot_range[1]}
+                   if shot_range else {})}
 
 
 

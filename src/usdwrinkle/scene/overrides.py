@@ -119,6 +119,9 @@ class StageFacts:
     #: bake layer records them, so that it renders as the composed stage did
     sublayers: tuple = ()
     variant_selections: tuple = ()
+    #: the stage's own frame range (start, end), or None: automatic framing of a bake's
+    #: layer takes its bounds over it, not over the baked frames only
+    shot_range: tuple | None = None
 
 
 def read_overrides(stage: Usd.Stage, stage_path: str, records: dict, frames,
@@ -148,7 +151,11 @@ def _composition(stage: Usd.Stage) -> dict:
     from .composition import recorded
 
     sublayers, selections = recorded(stage)
-    return {"sublayers": tuple(sublayers), "variant_selections": tuple(selections)}
+    shot_range = None
+    if stage.HasAuthoredTimeCodeRange():
+        shot_range = (float(stage.GetStartTimeCode()), float(stage.GetEndTimeCode()))
+    return {"sublayers": tuple(sublayers), "variant_selections": tuple(selections),
+            "shot_range": shot_range}
 
 
 def _material_names(stage: Usd.Stage, default) -> frozenset:

@@ -161,7 +161,7 @@ class FrameSampler:
         Fixed for the whole shot, so automatic framing does not depend on which
         frames a farm chunk renders.
         """
-        frames = self.scene.frame_range()
+        frames = self.scene.framing_range()
         if len(frames) > 9:
             frames = list(np.linspace(frames[0], frames[-1], 9))
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)

@@ -475,6 +475,20 @@ class StageSceneDelegate:
         except UsdWrinkleError:
             return [float("nan")]
 
+    def framing_range(self) -> list[float]:
+        """The frames automatic framing takes its bounds over: the shot's range that a bake
+        recorded in its layer (customLayerData usdwrinkle.shotStart, shotEnd), so that a
+        bake of part of a shot is framed as the shot is; else frame_range."""
+        data = self.stage.GetRootLayer().customLayerData.get("usdwrinkle", {})
+        try:
+            start, end = float(data["shotStart"]), float(data["shotEnd"])
+        except (TypeError, ValueError, KeyError, AttributeError):
+            return self.frame_range()
+        if not (math.isfinite(start) and math.isfinite(end) and start <= end and
+                end - start <= MAX_FRAMES):
+            return self.frame_range()
+        return [float(f) for f in np.arange(start, end + 0.5)]  # as stage_frames
+
     def prim(self, path: str) -> Usd.Prim:
         """The Usd.Prim of a mesh the scene keeps a record of."""
         return self._prims[path]
