@@ -537,3 +537,34 @@ def test_a_refusal_with_stderr_closed_still_exits_2(tmp_path):
                           shell=True, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2
     assert done.stdout == ""
+
+
+def test_environment_and_options_no_library_takes_are_one_line(tmp_path, capsys):
+    """Findings 12 and 13: USDWRINKLE_EGL_DEVICE=² (str.isdigit accepts superscripts) and
+    --dask ucx://... exited 3 with an internal error; a garbage plugInfo.json on
+    PXR_PLUGINPATH_NAME printed a traceback at import."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    env = {**os.environ, "USDWRINKLE_EGL_DEVICE": "²"}
+    done = subprocess.run([sys.executable, "-m", "usdwrinkle", "info"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1  # the health check says the node cannot render
+    assert "USDWRINKLE_EGL_DEVICE must be a device index (0, 1, ...), not '²'" in done.stdout
+    assert "Traceback" not in done.stderr
+    plugins = tmp_path / "plugins"
+    plugins.mkdir()
+    (plugins / "plugInfo.json").write_text("{ garbage")
+    env = {**os.environ, "PXR_PLUGINPATH_NAME": str(plugins)}
+    done = subprocess.run([sys.executable, "-m", "usdwrinkle", "info", "--no-gl"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.startswith("usdwrinkle: warning: USD skipped a plugin (Plugin info "
+                                  "file"), done.stderr
+    assert done.stderr.count("\n") == 1
+    assert main(["render", str(shirt), str(tmp_path / "f.####.png"), "--frames", "1:2",
+                 "--dask", "ucx://host:1"]) == 2
+    assert "the 'ucx' protocol is not supported" in capsys.readouterr().err
