@@ -148,8 +148,9 @@ def require_schema() -> None:
         f"USD schemas, or set PXR_PLUGINPATH_NAME={schema_dir()}{os.pathsep}$PXR_PLUGINPATH_NAME")
 
 
-#: the artist's controls: a prim authoring one of these is meant to be wrinkled
-CONTROL_ATTRIBUTES = (Q, WIDTH, AMPLITUDE_SCALE, HEIGHT_PROFILE, GRADIENT_PROFILE,
+#: the artist's controls, WrinkleAPI's attributes (a prim authoring one is meant to be
+#: wrinkled), in the order check reports their findings
+CONTROL_ATTRIBUTES = (Q, WIDTH, HEIGHT_PROFILE, GRADIENT_PROFILE, AMPLITUDE_SCALE,
                       RELAX_ITERATIONS, BIAXIAL, TENSION, TENSION_THRESHOLD, CLOTH, SLACK,
                       HELD, CREST_DAMPING)
 

@@ -291,10 +291,7 @@ def attribute_findings(attr: Usd.Attribute, path: str, count: int | None) -> lis
 
 
 #: the WrinkleAPI attributes, in the order their findings are reported
-ATTRIBUTES = (schema.Q, schema.WIDTH, schema.HEIGHT_PROFILE, schema.GRADIENT_PROFILE,
-              schema.AMPLITUDE_SCALE, schema.RELAX_ITERATIONS, schema.BIAXIAL, schema.TENSION,
-              schema.TENSION_THRESHOLD, schema.CLOTH, schema.SLACK, schema.HELD,
-              schema.CREST_DAMPING)
+ATTRIBUTES = schema.CONTROL_ATTRIBUTES
 
 
 def parameter_findings(prim: Usd.Prim, count: int | None) -> list[Finding]:

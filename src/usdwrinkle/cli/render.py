@@ -263,13 +263,13 @@ def _render_shot(args, reporter) -> list[str]:
                 (note := outside_range_note(stage, frames)):
             reporter.warn(note)  # a preroll from the shot's start (not for baked frames)
         _warn_unbaked(engine, reporter, args)
-        if not args.all_meshes and not args.no_wrinkles and \
-                (note := unapplied_note(engine.stage)):
-            reporter.warn(note)
+        unapplied = None if args.all_meshes or args.no_wrinkles else \
+            unapplied_note(engine.stage)
+        if unapplied:
+            reporter.warn(unapplied)
         _warn_geometry(engine, reporter, args, frames)
         if not engine.wrinkled_paths and not args.no_wrinkles and \
-                geometry_bake(engine.stage) is None and \
-                (args.all_meshes or unapplied_note(engine.stage) is None):
+                geometry_bake(engine.stage) is None and unapplied is None:
             reporter.warn("the stage has no Mesh to wrinkle; rendering without wrinkles"
                           if args.all_meshes else NO_WRINKLED_MESH)
         mapped = [path for path in engine.wrinkled_paths
