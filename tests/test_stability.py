@@ -121,3 +121,23 @@ def test_crests_still_ride_with_the_cloth(gl_context, name):
     finally:
         engine.release()
     assert np.mean(swims) <= {"shirt": 0.34, "zeppelin": 0.02, "curtain": 0.13}[name], swims
+
+
+#: the mean misfit over the stage and its 15 joint changes before the stability change
+#: (commit f822306; docs/method.md: "What the change costs", benchmarks/misfit.py)
+MISFIT_BEFORE = {"shirt": 0.365, "zeppelin": 0.388, "curtain": 0.562}
+
+
+@pytest.mark.parametrize("name", ["shirt", "zeppelin", "curtain"])
+def test_neighbouring_waves_align_no_worse_than_before(gl_context, tmp_path, name):
+    """The misfit, a distribution where rounding places the dislocations (the curtain's
+    0.456 before the change was its luckiest of 16 draws), is no worse in the mean: 0.368,
+    0.376, 0.549 now. The shirt's difference (+0.003) is within the draws' spread."""
+    from benchmarks import misfit
+
+    path = stability.ROOT / "sample_stages" / f"{name}.usda"
+    draws = [misfit.run_stage(str(path) if deg == 0 else
+                              stability.perturbed(str(path), deg, str(tmp_path / f"{deg}.usda")),
+                              gl_context)[0] for deg in misfit.DEGREES]
+    assert len(set(draws)) > 1  # the joint changes reach the phases
+    assert np.mean(draws) <= MISFIT_BEFORE[name] + 0.005, draws
