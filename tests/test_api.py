@@ -41,9 +41,9 @@ def test_bake_writes_the_layer_with_its_options(gl_context, tmp_path):
 
 
 def test_mistakes_are_the_commands_errors(tmp_path):
-    with pytest.raises(TypeError, match="unknown option.*widht"):
+    with pytest.raises(TypeError, match="unexpected keyword argument 'widht'"):
         api.render(SHIRT, tmp_path / "s.png", widht=3)
-    with pytest.raises(UsdWrinkleError, match="--width and --height must be positive"):
+    with pytest.raises(UsdWrinkleError, match="`width` and `height` must be positive"):
         api.render(SHIRT, tmp_path / "s.####.png", width=-3)
     with pytest.raises(UsdWrinkleError, match="does not exist"):
         api.bake(tmp_path / "missing.usda", tmp_path / "out.usda")
@@ -51,15 +51,15 @@ def test_mistakes_are_the_commands_errors(tmp_path):
 
 
 @pytest.mark.parametrize("call,options,message", [
-    ("render", {"width": "wide"}, "width='wide' must be an integer"),
-    ("render", {"width": 3.5}, "width=3.5 must be an integer"),
-    ("render", {"exr_compression": "bogus"}, "exr_compression='bogus' is not one of zip"),
-    ("render", {"frames": []}, "frames is empty"),
+    ("render", {"width": "wide"}, "`width`='wide' must be an integer"),
+    ("render", {"width": 3.5}, "`width`=3.5 must be an integer"),
+    ("render", {"exr_compression": "bogus"}, "`exr_compression`='bogus' is not one of zip"),
+    ("render", {"frames": []}, "`frames` is empty"),
     ("bake", {"maps": "normal", "tangent_space": "MikkTSpace"},
-     "tangent_space='MikkTSpace' is not one of triangle, mikktspace"),
-    ("bake", {"display_color": "red"}, "display_color='red' is not one of amplitude"),
-    ("bake", {"maps": "normal", "map_format": "jpg"}, "map_format='jpg' is not one of png"),
-    ("bake", {"maps": "normal", "map_layout": "x"}, "map_layout='x' is not one of islands"),
+     "`tangent_space`='MikkTSpace' is not one of triangle, mikktspace"),
+    ("bake", {"display_color": "red"}, "`display_color`='red' is not one of amplitude"),
+    ("bake", {"maps": "normal", "map_format": "jpg"}, "`map_format`='jpg' is not one of png"),
+    ("bake", {"maps": "normal", "map_layout": "x"}, "`map_layout`='x' is not one of islands"),
 ])
 def test_the_api_refuses_what_the_command_refuses(tmp_path, call, options, message):
     """Issue 42, finding 5: these gave per-triangle maps, the whole shot, a raw TypeError

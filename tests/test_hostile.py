@@ -18,7 +18,7 @@ import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux
 
 from usdwrinkle import schema
-from usdwrinkle.cli.frames import frame_path, parse_frame_spec
+from usdwrinkle.app.frames import frame_path, parse_frame_spec
 from usdwrinkle.cli.main import main
 
 from conftest import grid_sheet

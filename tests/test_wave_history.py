@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom
 
-from usdwrinkle.cli.frames import frame_paths
+from usdwrinkle.app.frames import frame_paths
 from usdwrinkle.cli.main import main
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.history import WaveHistory, cache_capacity, on_grid, reads_index

@@ -1,111 +1,145 @@
-"""usdwrinkle from Python: render and bake a shot in-process, with the command line's
-options as keyword arguments.
+"""usdwrinkle from Python: render and bake a shot in-process.
 
     from usdwrinkle import api
 
     frames = api.render("shot.usda", "out/shot.####.exr", frames="1:24", width=960)
-    layer = api.bake("shot.usda", "shot_wrinkles.usdc", maps="normal", with_points=True)
+    layer = api.bake("shot.usda", "shot_wrinkles.usdc", maps=["normal"], with_points=True)
 
-Each call runs the same code as ``usdwrinkle render`` or ``usdwrinkle bake``, with the
-same checks and defaults (``usdwrinkle render --help`` lists every option). A keyword is
-the option's long name with ``_`` for ``-``: ``no_wrinkles=True``, ``all_meshes=True``,
-``skip_existing=True``, ``dask="local"``. ``frames`` takes the command line's text
-("1:24", "1,5,9", "1:24x2") or a list of numbers. A problem with the input raises
-:class:`usdwrinkle.errors.UsdWrinkleError` with the command line's one-line message.
-Warnings go through the ``usdwrinkle`` logger (usdwrinkle/log.py): on stderr as
-``usdwrinkle: warning: ...`` unless the caller collects them
-(``with usdwrinkle.log.collect() as messages: api.render(...)``) or silences them.
-``quiet`` (True by default here) leaves out the progress bars and the closing line.
-``usdwrinkle.api.UsdWrinkleError`` is the error type.
+Each call runs the job the command line runs (usdwrinkle.app: ``RenderJob``, ``BakeJob``),
+with the same checks and defaults; the keywords are the jobs' option fields
+(app/options.py: ``RenderOptions``, ``BakeOptions``, ``ShotOptions``), which are the
+command line's long options with ``_`` for ``-``. ``frames`` takes usdrecord's FrameSpec
+text ("1:24", "1,5,9", "1:24x2") or a list of numbers; None is the stage's range.
+
+A problem with the input raises :class:`UsdWrinkleError` (also ``usdwrinkle.api.
+UsdWrinkleError``) with a one-line message that names option fields in backquotes
+(`` `width` and `height` must be positive``). Warnings go through the ``usdwrinkle``
+logger (usdwrinkle/log.py): on stderr as ``usdwrinkle: warning: ...`` unless the caller
+collects them (``with usdwrinkle.log.collect() as messages: api.render(...)``) or
+silences them. ``quiet`` (True by default here) leaves out the progress bars.
+
+For more control, build the jobs yourself::
+
+    from usdwrinkle.api import RenderJob, RenderOptions, Shot, ShotOptions
+
+    shot = Shot("shot.usda", ShotOptions(sublayer=("fixes.usda",)))
+    result = RenderJob(shot, "out/f.####.exr", "1:24", RenderOptions(width=640)).run()
 
 Authoring is :class:`usdwrinkle.WrinkleAPI` (and ``usdwrinkle apply`` on the command
 line).
 """
 from __future__ import annotations
 
-import argparse
+import os
+from collections.abc import Sequence
 
+from .app.bake import BakeJob, BakeResult
+from .app.options import BakeOptions, RenderOptions, ShotOptions
+from .app.render import RenderJob, RenderResult
+from .app.shot import Progress, Shot, no_progress
 from .errors import UsdWrinkleError
 
-__all__ = ["UsdWrinkleError", "bake", "render"]
+__all__ = ["BakeJob", "BakeOptions", "BakeResult", "RenderJob", "RenderOptions",
+           "RenderResult", "Shot", "ShotOptions", "UsdWrinkleError", "bake", "render"]
+
+Path = str | os.PathLike[str]
+Frames = str | Sequence[float] | None
 
 
-def _namespace(command: str, stage, output, frames, options: dict) -> argparse.Namespace:
-    """The command's parsed options: its parser's defaults, then ``options``."""
-    from .cli.main import build_parser
+def _progress(quiet: bool) -> Progress:
+    if quiet:
+        return no_progress
+    from .app.shot import progress_bars
 
-    args = build_parser().parse_args([command, str(stage), str(output)])
-    known = set(vars(args)) - {"command", "run", "stage", "output", "frames", "debug"}
-    unknown = sorted(set(options) - known)
-    if unknown:
-        raise TypeError(f"usdwrinkle.api.{command}() got unknown option(s) "
-                        f"{', '.join(unknown)}; it takes {', '.join(sorted(known))}")
-    if frames is not None and not isinstance(frames, str):
-        frames = ",".join(repr(float(f)) for f in frames)
-    if frames is not None and not frames.strip():
-        from .errors import UsdWrinkleError
-
-        raise UsdWrinkleError("frames is empty (None renders the stage's time range)")
-    args.frames = frames
-    actions = {action.dest: action for action in build_parser().commands[command]._actions}
-    for name, value in options.items():
-        setattr(args, name, _checked(name, value, actions.get(name)))
-    args.debug = False
-    args.library = True  # warnings through the library's logger (log.collect sees them)
-    return args
+    return progress_bars
 
 
-def _checked(name: str, value, action):
-    """``value`` as the command line would take it for option ``name``: its choices and
-    its type (an int option refuses "wide" and 3.5), else UsdWrinkleError."""
-    from .errors import UsdWrinkleError
-
-    if action is None or value is None:
-        return value
-    if action.choices is not None and value not in action.choices:
-        raise UsdWrinkleError(f"{name}={value!r} is not one of "
-                              f"{', '.join(map(str, action.choices))}")
-    kind = action.type
-    if kind in (int, float) and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                 or (kind is int and not float(value).is_integer())):
-        raise UsdWrinkleError(f"{name}={value!r} must be "
-                              f"{'an integer' if kind is int else 'a number'}")
-    if kind in (int, float):
-        return kind(value)
-    if action.nargs == 0 and not isinstance(value, bool):
-        raise UsdWrinkleError(f"{name}={value!r} must be True or False")
-    return value
+def _shot(stage: Path, all_meshes: bool, relax_iterations: int | None,
+          history_start: float | None, sublayer: Sequence[str], variant: Sequence[str],
+          mask: str | Sequence[str] | None) -> Shot:
+    masks = (mask,) if isinstance(mask, str) else tuple(mask or ())
+    return Shot(stage, ShotOptions(all_meshes=all_meshes, relax_iterations=relax_iterations,
+                                   history_start=history_start, sublayer=tuple(sublayer),
+                                   variant=tuple(variant), mask=masks))
 
 
-def render(stage, output, frames=None, *, quiet: bool = True, **options) -> list[str]:
-    """Render ``stage`` to ``output`` (a path with a '#' frame placeholder, or one file
-    for one frame); returns the paths of the frames the shot now has on disk (written,
-    or kept by ``skip_existing``). The options are render's: ``width`` (640), ``height``,
-    ``camera``, ``samples`` (4), ``no_wrinkles``, ``all_meshes``, ``recompute``,
-    ``relax_iterations``, ``history_start``, ``write_threads``, ``exr_compression``,
-    ``exr_half``, ``skip_existing``, ``stats``, ``dask``, ``workers``, ``chunk``; and the
-    composition options ``sublayer`` (a list of layers over the stage, strongest first),
-    ``variant`` (a list of "/Prim{set=name}") and ``mask`` ("/A,/B")."""
-    import os
+def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
+           camera: str | None = None, width: int = 960, height: int | None = None,
+           samples: int = 4, shade_samples: bool = True, write_threads: int = 1,
+           exr_half: bool = True, exr_compression: str = "zip", no_wrinkles: bool = False,
+           skip_existing: bool = False, recompute: bool = False, stats: str | None = None,
+           all_meshes: bool = False, relax_iterations: int | None = None,
+           history_start: float | None = None, sublayer: Sequence[str] = (),
+           variant: Sequence[str] = (), mask: str | Sequence[str] | None = None,
+           dask: str | None = None, workers: int | None = None,
+           chunk: int | None = None) -> list[str]:
+    """Render ``stage`` to ``output`` (a path with a '#' frame placeholder, or one file for
+    one frame); returns the paths of the frames the shot now has on disk (written, or
+    kept by ``skip_existing``). The options are RenderOptions' and ShotOptions' fields
+    (``usdwrinkle render --help`` says what each does); ``sublayer`` is a list of layers
+    over the stage, strongest first, ``variant`` a list of "/Prim{set=name}" and ``mask``
+    prim paths ("/A,/B" or a list). ``dask`` ("local" or a scheduler's address),
+    ``workers`` and ``chunk`` render on a Dask cluster, as ``render --dask``."""
+    options = RenderOptions(camera=camera, width=width, height=height, samples=samples,
+                            shade_samples=shade_samples, write_threads=write_threads,
+                            exr_half=exr_half, exr_compression=exr_compression,
+                            no_wrinkles=no_wrinkles, skip_existing=skip_existing,
+                            recompute=recompute, stats=stats)
+    job = RenderJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,
+                          variant, mask), output, frames, options, progress=_progress(quiet))
+    if dask is None:
+        if workers is not None or chunk is not None:
+            from .log import warn
 
-    from .cli.render import render_shot
+            warn("`chunk` and `workers` apply to `dask` only; ignored")
+        outputs = job.run().outputs
+    else:
+        outputs = _render_on_dask(job, frames, dask, workers, chunk, quiet)
+    return [path for path in outputs if os.path.isfile(path)]
 
-    args = _namespace("render", stage, output, frames, {"quiet": quiet, **options})
-    return [path for path in render_shot(args) if os.path.isfile(path)]
+
+def _render_on_dask(job: RenderJob, frames: Frames, scheduler: str, workers: int | None,
+                    chunk: int | None, quiet: bool) -> list[str]:
+    from .farm.client import FarmRender, check_farm_options, render_on_dask
+
+    check_farm_options(scheduler, workers, chunk)
+    plan = job.prepare()
+
+    class _Reporter:
+        def __init__(self) -> None:
+            self.quiet = quiet
+
+        def progress(self, items: list, what: str) -> object:
+            return job.progress(items, what)
+
+    spec = frames if isinstance(frames, str) or frames is None else \
+        ",".join(repr(float(f)) for f in frames)
+    render_on_dask(FarmRender(job, plan, spec, scheduler, workers, chunk), _Reporter())
+    return list(plan.outputs)
 
 
-def bake(stage, output, frames=None, *, quiet: bool = True, **options) -> str:
+def bake(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
+         with_points: bool = False, display_color: str | None = None, sparse: bool = False,
+         maps: str | Sequence[str] | None = None, map_size: int | None = None,
+         map_dir: str | None = None, map_format: str | None = None,
+         map_padding: int | None = None, map_layout: str | None = None,
+         uv: str | None = None, tangent_space: str | None = None,
+         map_displacement: bool | None = None, geometry: bool = False,
+         levels: int | None = None, samples_per_wavelength: float | None = None,
+         all_meshes: bool = False, relax_iterations: int | None = None,
+         history_start: float | None = None, sublayer: Sequence[str] = (),
+         variant: Sequence[str] = (), mask: str | Sequence[str] | None = None) -> str:
     """Bake the wrinkle fields of ``stage`` into the layer ``output`` (.usda, .usdc or
-    .usd); returns its path. The options are bake's: ``with_points``, ``display_color``
-    ("amplitude" or "compression"), ``sparse``, ``all_meshes``, ``relax_iterations``,
-    ``history_start``, ``maps`` ("normal,height,amplitude" or a list), ``map_size``,
-    ``map_dir``, ``map_format``, ``map_padding``, ``uv``, ``tangent_space``,
-    ``map_layout``, ``map_displacement``, ``geometry``, ``levels``, ``samples_per_wavelength``,
-    ``sublayer``, ``variant``, ``mask`` (as render's)."""
-    if "maps" in options and options["maps"] is not None and \
-            not isinstance(options["maps"], str):
-        options["maps"] = ",".join(options["maps"])
-    from .cli import bake as bake_command
-
-    bake_command.run(_namespace("bake", stage, output, frames, {"quiet": quiet, **options}))
-    return str(output)
+    .usd); returns its path. The options are BakeOptions' and ShotOptions' fields
+    (``usdwrinkle bake --help``); ``maps`` is "normal,height,amplitude" or a list."""
+    kinds = tuple(part.strip() for part in maps.split(",")) if isinstance(maps, str) \
+        else (None if maps is None else tuple(maps))
+    options = BakeOptions(with_points=with_points, display_color=display_color,
+                          sparse=sparse, maps=kinds, map_size=map_size, map_dir=map_dir,
+                          map_format=map_format, map_padding=map_padding,
+                          map_layout=map_layout, uv=uv, tangent_space=tangent_space,
+                          map_displacement=map_displacement, geometry=geometry,
+                          levels=levels, samples_per_wavelength=samples_per_wavelength)
+    job = BakeJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,
+                        variant, mask), output, frames, options, progress=_progress(quiet))
+    return job.run().layer

@@ -46,9 +46,10 @@ class EngineOptions:
     #: worker opens the stage with it
     composition: object | None = None
 
-    def create(self, stage=None, preroll_progress=None):
+    def create(self, stage=None, preroll_progress=None, ctx=None):
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
-        ``preroll_progress`` wraps the list of preroll frames (a progress bar)."""
+        ``preroll_progress`` wraps the list of preroll frames (a progress bar); ``ctx``: a
+        moderngl context to share (None: the process's own)."""
         from .engine import WrinkleEngine
 
         if stage is None and self.composition:
@@ -57,6 +58,8 @@ class EngineOptions:
             stage = open_stage(self.stage, self.composition)
 
         kwargs = {} if preroll_progress is None else {"preroll_progress": preroll_progress}
+        if ctx is not None:
+            kwargs["ctx"] = ctx
         return WrinkleEngine(stage if stage is not None else self.stage,
                              all_meshes=self.all_meshes,
                              relax_iterations=self.relax_iterations, camera=self.camera,

@@ -1,23 +1,11 @@
 """usdwrinkle bake STAGE OUTPUT_LAYER: write the wrinkle fields back to USD."""
 from __future__ import annotations
 
-import dataclasses
-import os
-import time
-
-from ..errors import UsdWrinkleError, print_stderr
+from ..errors import print_stderr
 from ..geometry.options import GeometryOptions
 from ..maps.options import LAYOUTS, TANGENT_SPACES, MapOptions
 from ..schema import MAP_ST, baked_names_text
-from .common import (
-    Reporter,
-    add_shot_args,
-    check_stage_args,
-    composition_of,
-    refuse_overwriting_inputs,
-    start_engine,
-)
-from .frames import parse_frame_spec
+from .common import Reporter, add_shot_args
 
 MAP_DEFAULTS = MapOptions()
 GEOMETRY_DEFAULTS = GeometryOptions()
@@ -116,126 +104,36 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
-def _given(args, flags: dict) -> dict:
-    """{field: value} of the options in ``flags`` (flag -> field) that were given."""
-    return {field: getattr(args, flag.lstrip("-").replace("-", "_"))
-            for flag, field in flags.items()
-            if getattr(args, flag.lstrip("-").replace("-", "_")) is not None}
+def bake_job(args, reporter: Reporter | None = None):
+    """The app.BakeJob of the command's options."""
+    from ..app.bake import BakeJob
+    from ..app.options import BakeOptions
+    from .render import shot_of
 
-
-MAP_FLAGS = {"--map-size": "size", "--map-dir": "folder", "--map-format": "fmt",
-             "--map-padding": "padding", "--uv": "uv", "--tangent-space": "tangent_space",
-             "--map-layout": "layout",
-             "--map-displacement": "displacement"}
-GEOMETRY_FLAGS = {"--levels": "levels", "--samples-per-wavelength": "samples_per_wavelength"}
-
-
-def _refuse_without(args, flags: dict, needed: str) -> None:
-    given = [flag for flag in flags if getattr(args, flag.lstrip("-").replace("-", "_"))
-             is not None]
-    if given:
-        raise UsdWrinkleError(f"{', '.join(given)} need {needed}")
-
-
-def map_options(args):
-    """MapOptions from --maps and its options (None without --maps); what is not given
-    keeps MapOptions' default."""
-    if args.maps is None:
-        _refuse_without(args, MAP_FLAGS, "--maps")
-        return None
-    from ..maps.bake import check_map_options
-    from ..maps.files import parse_map_kinds
-
-    if args.map_layout == "islands" and args.uv is not None:
-        raise UsdWrinkleError("--uv names the texture coordinates of --map-layout asset; "
-                              "--map-layout islands lays the maps out in their own")
-    options = dataclasses.replace(MAP_DEFAULTS, kinds=parse_map_kinds(args.maps),
-                                  uv_named=args.uv is not None, **_given(args, MAP_FLAGS))
-    check_map_options(options)
-    return options
-
-
-def geometry_options(args):
-    """GeometryOptions from --geometry and its options (None without --geometry)."""
-    if not args.geometry:
-        _refuse_without(args, GEOMETRY_FLAGS, "--geometry")
-        return None
-    from ..geometry.bake import check_geometry_options
-
-    options = dataclasses.replace(GEOMETRY_DEFAULTS, **_given(args, GEOMETRY_FLAGS))
-    check_geometry_options(options)
-    return options
-
-
-def check_map_folder(folder: str) -> None:
-    """Refuse a map folder that cannot be written, before any work; one that does not
-    exist yet is made only when the maps are committed (a failed bake leaves none)."""
-    from ..outputs.atomic import check_writable
-
-    if os.path.exists(folder) and not os.path.isdir(folder):
-        raise UsdWrinkleError(f"cannot write maps to '{folder}': it is a file, not a folder")
-    probe = folder if os.path.isdir(folder) else os.path.dirname(os.path.abspath(folder))
-    check_writable([os.path.join(probe, ".usdwrinkle-maps-probe")])
+    options = BakeOptions(
+        with_points=args.with_points, display_color=args.display_color, sparse=args.sparse,
+        maps=args.maps, map_size=args.map_size, map_dir=args.map_dir,
+        map_format=args.map_format, map_padding=args.map_padding, map_layout=args.map_layout,
+        uv=args.uv, tangent_space=args.tangent_space, map_displacement=args.map_displacement,
+        geometry=args.geometry, levels=args.levels,
+        samples_per_wavelength=args.samples_per_wavelength)
+    job = BakeJob(shot_of(args), args.output, args.frames, options)
+    if reporter is not None:
+        job.progress = reporter.progress
+        job.on_start = lambda: reporter.header(args.command, args.stage)
+    return job
 
 
 def run(args) -> int:
-    from ..outputs.layers import check_layer_path
-
-    check_stage_args(args)
-    maps = map_options(args)
-    geometry = geometry_options(args)
-    refuse_overwriting_inputs(args.stage, [args.output])
-    check_layer_path(args.output)
+    job = bake_job(args)
+    job.check()  # refusals before any warning
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
-        return _bake(args, reporter, maps, geometry)
-
-
-def _bake(args, reporter, maps, geometry) -> int:
-    from ..outputs.atomic import check_writable
-    from ..scene.stage import (
-        inherited_range_note,
-        open_stage,
-        outside_range_note,
-        stage_frames,
-    )
-    from ..shot import BakeRequest, bake_layer
-
-    # everything that can be refused without the GPU is checked first
-    stage = open_stage(args.stage, composition_of(args))
-    refuse_overwriting_inputs(args.stage, [args.output], stage)
-    check_writable([args.output])
-    if maps is not None:
-        check_map_folder(maps.folder_for(args.output))
-    frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
-    if not args.frames and (note := inherited_range_note(stage)):
-        reporter.warn(note)
-    # a bake always computes: fields already baked into the input are not its input
-    engine = start_engine(args, reporter, stage, use_baked=False)
-    if args.frames and args.history_start is None and engine.wrinkled_paths and \
-            (note := outside_range_note(stage, frames)):
-        reporter.warn(note)
-    try:
-        if maps is not None:
-            from ..maps.bake import check_map_options
-
-            check_map_options(maps, engine.max_texture_size)
-        engine.check_relax_work(frames)  # a refusal: before the header
-        reporter.header(args.command, args.stage)
-        started = time.perf_counter()
-        request = BakeRequest(args.stage, args.output, tuple(frames), args.frames,
-                              with_points=args.with_points, display_color=args.display_color,
-                              sparse=args.sparse, maps=maps, geometry=geometry)
-        count = bake_layer(engine, request,
-                           progress=lambda items: reporter.progress(items, "bake"),
-                           survey_progress=lambda items: reporter.progress(items, "survey"))
-        if not args.quiet:
-            from ..scene.params import width_summary
-
-            print_stderr(f"usdwrinkle: baked {count} mesh(es) x {len(frames)} frame(s) to "
-                  f"{args.output} in {time.perf_counter() - started:.1f} s")
-            for path, record in sorted(engine.meshes.items()):
-                if record.wrinkled:
-                    print_stderr(f"  {path}: {width_summary(record.params)['text']}")
-    finally:
-        engine.release()
+        job.progress = reporter.progress
+        job.on_start = lambda: reporter.header(args.command, args.stage)
+        result = job.run()
+    if not args.quiet:
+        print_stderr(f"usdwrinkle: baked {result.count} mesh(es) x {len(result.frames)} "
+                     f"frame(s) to {args.output} in {result.elapsed:.1f} s")
+        for path, text in result.meshes.items():
+            print_stderr(f"  {path}: {text}")
     return 0

@@ -64,9 +64,9 @@ def collect(stage, keywords=KEYWORDS) -> list[dict]:
 
 def run(args) -> int:
     from ..scene.stage import open_stage
-    from .common import composition_of
+    from .common import shot_options
 
-    stage = open_stage(args.stage, composition_of(args))
+    stage = open_stage(args.stage, shot_options(args).composition())
     findings = collect(stage, ("UsdWrinkleValidators",)) if args.wrinkles_only else \
         collect(stage)
     scene = read_scene(stage)

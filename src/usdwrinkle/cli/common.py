@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import UsdWrinkleError, print_warning
+from ..errors import print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -35,39 +35,33 @@ def add_composition_args(parser) -> None:
                             "as usdview's --mask)")
 
 
-def composition_of(args):
-    """The Composition of the command's options (empty without them)."""
-    from ..scene.composition import Composition
+def shot_options(args):
+    """The app.ShotOptions of the command's stage and composition options."""
+    from ..app.options import ShotOptions
 
-    mask = getattr(args, "mask", None)
-    if isinstance(mask, str):
-        mask = [part.strip() for part in mask.split(",") if part.strip()]
-    return Composition(tuple(getattr(args, "sublayer", None) or ()),
-                       tuple(getattr(args, "variant", None) or ()), tuple(mask or ()))
+    return ShotOptions(all_meshes=getattr(args, "all_meshes", False),
+                       relax_iterations=getattr(args, "relax_iterations", None),
+                       history_start=getattr(args, "history_start", None),
+                       sublayer=tuple(getattr(args, "sublayer", None) or ()),
+                       variant=tuple(getattr(args, "variant", None) or ()),
+                       mask=(args.mask,) if getattr(args, "mask", None) else ())
+
+
+def add_frame_args(parser) -> None:
+    parser.add_argument("--frames", metavar="SPEC",
+                        help="frames to process, as usdrecord's FrameSpec: 1:48, 101:109x2, "
+                             "1,5,10; at most 100,000 frames within +-1e9 (default: the "
+                             "stage's start..end, or the default time)")
 
 
 def add_shot_args(parser, output_help: str) -> None:
     """What render and bake both take: STAGE OUTPUT, --frames, the stage options and the
     composition options."""
-    from .frames import add_frame_args
-
     parser.add_argument("stage", help="the USD stage (.usd, .usda, .usdc, .usdz)")
     parser.add_argument("output", help=output_help)
     add_frame_args(parser)
     add_stage_args(parser)
     add_composition_args(parser)
-
-
-def check_stage_args(args) -> None:
-    """Refuse stage options out of range (add_stage_args), before any stage is read."""
-    from ..limits import MAX_RELAX_ITERATIONS
-    from .frames import check_time_code
-
-    if args.relax_iterations is not None and not \
-            0 <= args.relax_iterations <= MAX_RELAX_ITERATIONS:
-        raise UsdWrinkleError(f"--relax-iterations must be in 0..{MAX_RELAX_ITERATIONS:,}")
-    if args.history_start is not None:
-        check_time_code(args.history_start, "--history-start")
 
 
 from ..scene.stage import refuse_overwriting_inputs  # noqa: E402,F401  (the CLI's name)
@@ -108,7 +102,9 @@ class Reporter:
 
             warn(message)
         else:
-            print_warning(message)
+            from .flags import flagged
+
+            print_warning(flagged(message))  # a job's `field`: its flag
 
     def header(self, command: str, stage_path: str) -> None:
         """The line that starts a run's work (after every check that may refuse it, so a
@@ -131,28 +127,3 @@ class Reporter:
         from ..progress import wrap  # a bar on a terminal, log lines in a farm's log
 
         return wrap(items, desc)
-
-
-def engine_options(args, stage_path: str | None = None, camera: str | None = None,
-                   use_baked: bool = True):
-    """The EngineOptions of a render or bake run (shot.py)."""
-    from ..shot import EngineOptions
-
-    return EngineOptions(os.path.abspath(stage_path or args.stage),
-                         all_meshes=args.all_meshes, relax_iterations=args.relax_iterations,
-                         camera=camera, history_start=args.history_start, use_baked=use_baked,
-                         profile=bool(getattr(args, "stats", None)),
-                         composition=composition_of(args) or None)
-
-
-def start_engine(args, reporter: Reporter, stage, camera: str | None = None,
-                 use_baked: bool = True):
-    """The WrinkleEngine of a render or bake run, with the stage options and a preroll bar."""
-    from ..scene.params import units_notes
-
-    engine = engine_options(args, camera=camera, use_baked=use_baked).create(
-        stage, lambda steps: reporter.progress(steps, "preroll"))
-    for note in units_notes(engine.stage, {path: engine.meshes[path]
-                                           for path in engine.wrinkled_paths}):
-        reporter.warn(note)
-    return engine

@@ -208,6 +208,9 @@ def _main(argv: list[str] | None) -> int:
     except UsdWrinkleError as exc:
         if args.debug:
             traceback.print_exc()
+        from .flags import flagged  # the job named its option fields: say their flags
+
+        exc.what = flagged(exc.what, parser.commands.get(args.command))
         print_stderr(f"usdwrinkle: error: {exc.one_line()}")
         return 2
     except KeyboardInterrupt:

@@ -72,14 +72,14 @@ def check_display() -> None:
 
 
 def run(args) -> int:
+    from ..app.frames import check_time_code
     from ..paint.session import PaintSession, open_paint_stage
     from ..schema import require_schema
-    from .frames import check_time_code
 
     require_schema()
     size = _size(args.size)
     if args.frame is not None:
-        check_time_code(args.frame, "--frame")
+        check_time_code(args.frame, "`frame`")
     stage, layer, save = open_paint_stage(args.stage, args.output)
     check_paintable(stage, args.prim, args.all_meshes)
     check_display()

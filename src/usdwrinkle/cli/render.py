@@ -2,22 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import os
-import time
 
-from ..errors import UsdWrinkleError, print_stderr
-from ..limits import LOCAL_WORKERS_PER_CORE
-from ..outputs.images import EXR_COMPRESSIONS
-from .common import (
-    Reporter,
-    add_shot_args,
-    check_stage_args,
-    composition_of,
-    engine_options,
-    refuse_overwriting_inputs,
-    start_engine,
-)
-from .frames import frame_path, frame_paths, parse_frame_spec
+from ..app.frames import frame_path
+from ..app.options import EXR_COMPRESSIONS
+from ..errors import print_stderr
+from .common import Reporter, add_shot_args, shot_options
 
 
 def add_parser(subparsers) -> None:
@@ -90,28 +79,38 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
-def check_render_args(args) -> None:
-    """Refuse bad options before any stage is read."""
-    from ..outputs.images import check_format
-    from ..render.buffers import check_samples
+def shot_of(args):
+    """The app.Shot of the command's stage and stage options."""
+    from ..app.shot import Shot
 
-    refuse_overwriting_inputs(args.stage, [args.output])
-    check_format(args.output)
-    if args.width <= 0 or (args.height is not None and args.height <= 0):
-        raise UsdWrinkleError("--width and --height must be positive")
-    check_samples(args.samples)
-    if not 0 <= args.write_threads <= 8:
-        raise UsdWrinkleError("--write-threads must be in 0..8")
-    check_stage_args(args)
-    if args.chunk is not None and args.chunk < 1:
-        raise UsdWrinkleError("--chunk must be at least 1")
-    if args.workers is not None:
-        cores = os.cpu_count() or 1
-        most = LOCAL_WORKERS_PER_CORE * cores
-        if not 1 <= args.workers <= most:
-            raise UsdWrinkleError(f"--workers must be in 1..{most} ({LOCAL_WORKERS_PER_CORE} "
-                                  f"worker processes per CPU core, {cores} here: each holds "
-                                  "its own GL context)")
+    return Shot(args.stage, shot_options(args))
+
+
+def render_job(args, reporter: Reporter | None = None):
+    """The app.RenderJob of the command's options."""
+    from ..app.options import RenderOptions
+    from ..app.render import RenderJob
+
+    options = RenderOptions(
+        camera=args.camera, width=args.width, height=args.height, samples=args.samples,
+        shade_samples=args.shade_samples, write_threads=args.write_threads,
+        exr_half=args.exr_half, exr_compression=args.exr_compression,
+        no_wrinkles=args.no_wrinkles, skip_existing=args.skip_existing,
+        recompute=args.recompute, stats=args.stats)
+    job = RenderJob(shot_of(args), args.output, args.frames, options)
+    if reporter is not None:
+        job.progress = reporter.progress
+        job.on_start = lambda: reporter.header(args.command, args.stage)
+    return job
+
+
+def check_farm_args(args) -> None:
+    """Refuse farm options out of range, before any stage is read."""
+    if args.dask is None and args.chunk is None and args.workers is None:
+        return
+    from ..farm.client import check_farm_options
+
+    check_farm_options(args.dask, args.workers, args.chunk)
 
 
 def summary(written: int, width: int, height: int, output: str, frames: list[float],
@@ -129,82 +128,20 @@ def summary(written: int, width: int, height: int, output: str, frames: list[flo
     return text
 
 
-def _render_on_dask(args, reporter, stage, frames: list[float], outputs: list[str]) -> None:
-    """--dask: the farm's typed request from the options, and the summary of its result."""
+def _render_on_dask(args, reporter, job, plan) -> None:
+    """--dask: the farm's typed request from the job, and the summary of its result."""
     from ..farm.client import FarmRender, render_on_dask
-    from ..shot import ImageOptions
 
-    job = FarmRender(
-        stage_path=args.stage, output=args.output, frames=tuple(frames),
-        outputs=tuple(outputs),
-        engine=engine_options(args, camera=args.camera,
-                              use_baked=not (args.recompute or args.no_wrinkles)),
-        image=ImageOptions(args.width, args.height, args.samples, not args.no_wrinkles,
-                           args.write_threads, args.exr_compression, args.exr_half,
-                           args.shade_samples),
-        frame_spec=args.frames, recompute=args.recompute, skip_existing=args.skip_existing,
-        scheduler=args.dask, workers=args.workers, chunk=args.chunk)
-    result = render_on_dask(job, stage, reporter)
+    frames = plan.frames
+    request = FarmRender(job=job, plan=plan, frame_spec=args.frames, scheduler=args.dask,
+                         workers=args.workers, chunk=args.chunk)
+    result = render_on_dask(request, reporter)
     if not reporter.quiet:
         print_stderr(summary(result.written, result.width, result.height, args.output, frames,
                       result.elapsed, result.baked,
                       f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
                       f"{result.workers} Dask worker(s), chunks of {result.chunk})",
                       skipped=result.skipped))
-
-
-def write_stats(path: str, stats: dict) -> None:
-    """--stats: the timings as JSON, written atomically."""
-    import json
-
-    from ..outputs.atomic import atomic_path
-
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as handle:
-        json.dump(stats, handle, indent=1)
-
-
-def _warn_unbaked(engine, reporter, args) -> None:
-    """A farm chunk that renders a bake but finds wrinkled meshes without baked fields
-    (a bake made without --all-meshes, say) computes them itself, with a preroll: say
-    so, since that is what the farm recipe's bake exists to avoid."""
-    from ..scene.baked import holds_bake
-
-    if args.recompute or args.no_wrinkles or not holds_bake(engine.stage):
-        return
-    unbaked = [path for path in engine.wrinkled_paths if path not in engine.baked]
-    if unbaked:
-        start = engine.history_start()
-        preroll = f", with a phase-history preroll from frame {start:g}" \
-            if start is not None else ""
-        reporter.warn(f"the stage holds a usdwrinkle bake, but {len(unbaked)} wrinkled "
-                      f"mesh(es) have no baked wave fields in it; computing them here{preroll} "
-                      "(other machines may compute them slightly differently: bake with the "
-                      f"options the render uses, e.g. --all-meshes) ({unbaked[0]})")
-
-
-def _warn_geometry(engine, reporter, args, frames: list[float]) -> None:
-    """A ``bake --geometry`` layer carries the wrinkles in its displaced meshes: say so
-    instead of advising --all-meshes (which would wrinkle them again), and say when frames
-    fall outside the ones it baked (they show its nearest baked frame)."""
-    import math
-
-    from ..scene.baked import geometry_bake
-
-    found = geometry_bake(engine.stage)
-    if found is None:
-        return
-    layer, first, last = found
-    if not args.no_wrinkles and not engine.wrinkled_paths:
-        reporter.warn(f"the stage holds usdwrinkle's displaced geometry, whose wrinkles are in "
-                      f"its meshes: render with --no-wrinkles (--all-meshes would wrinkle them "
-                      f"a second time) ({layer})")
-    if math.isnan(first) or math.isnan(last):
-        return
-    outside = [f for f in frames if not math.isnan(f) and not first <= f <= last]
-    if outside:
-        reporter.warn(f"{len(outside)} frame(s) lie outside the frames the displaced geometry "
-                      f"was baked for ({first:g}..{last:g}), from {outside[0]:g}: they show its "
-                      f"nearest baked frame ({layer})")
 
 
 def run(args) -> int:
@@ -214,89 +151,22 @@ def run(args) -> int:
 
 def render_shot(args) -> list[str]:
     """The render command's work; returns the file of each frame of the shot (written, or
-    kept by --skip-existing). usdwrinkle.api.render calls it too."""
-    check_render_args(args)
+    kept by --skip-existing)."""
+    check_farm_args(args)
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
-        return _render_shot(args, reporter)
-
-
-def _render_shot(args, reporter) -> list[str]:
-    from ..imagefiles import is_complete_image
-    from ..outputs.atomic import check_writable, sweep_dead_temporaries
-    from ..scene.baked import geometry_bake
-    from ..scene.stage import (
-        inherited_range_note,
-        open_stage,
-        outside_range_note,
-        stage_frames,
-    )
-    from ..shot import NO_WRINKLED_MESH, ImageOptions, render_frames, unapplied_note
-
-    # everything that can be refused without the GPU is checked first
-    stage = open_stage(args.stage, composition_of(args))
-    frames = parse_frame_spec(args.frames) if args.frames else stage_frames(stage)
-    if not args.frames and (note := inherited_range_note(stage)):
-        reporter.warn(note)
-    outputs = frame_paths(args.output, frames)
-    extra = [args.stats] if args.stats else []
-    if args.stats and os.path.realpath(args.stats) in {os.path.realpath(o) for o in outputs}:
-        raise UsdWrinkleError(f"--stats '{args.stats}' is the path of a frame this run "
-                              "writes; choose another file for the timings")
-    refuse_overwriting_inputs(args.stage, outputs + extra, stage)
-    check_writable(outputs + extra)
-    sweep_dead_temporaries(outputs)  # what a killed run of these frames left behind
-    if args.dask is not None:
-        if args.stats:
-            reporter.warn("--stats applies to a serial render; ignored with --dask")
-        _render_on_dask(args, reporter, stage, frames, outputs)
-        return outputs
-    if args.chunk is not None or args.workers is not None:
-        reporter.warn("--chunk and --workers apply to --dask only; ignored")
-    # --no-wrinkles draws no waves, so it needs no baked frames either
-    engine = start_engine(args, reporter, stage, args.camera,
-                          use_baked=not (args.recompute or args.no_wrinkles))
-    try:
-        engine.check_baked(frames)
-        computed = not args.no_wrinkles and any(path not in engine.baked
-                                                for path in engine.wrinkled_paths)
-        if computed and args.frames and args.history_start is None and \
-                (note := outside_range_note(stage, frames)):
-            reporter.warn(note)  # a preroll from the shot's start (not for baked frames)
-        _warn_unbaked(engine, reporter, args)
-        unapplied = None if args.all_meshes or args.no_wrinkles else \
-            unapplied_note(engine.stage)
-        if unapplied:
-            reporter.warn(unapplied)
-        _warn_geometry(engine, reporter, args, frames)
-        if not engine.wrinkled_paths and not args.no_wrinkles and \
-                geometry_bake(engine.stage) is None and unapplied is None:
-            reporter.warn("the stage has no Mesh to wrinkle; rendering without wrinkles"
-                          if args.all_meshes else NO_WRINKLED_MESH)
-        mapped = [path for path in engine.wrinkled_paths
-                  if engine.meshes[path].material.wrinkle_maps]
-        if mapped and not args.no_wrinkles:
-            reporter.warn(f"{len(mapped)} mesh(es) have baked wrinkle maps in their material "
-                          f"and are drawn with wrinkles too, so their wrinkles show twice; "
-                          f"pass --no-wrinkles to draw the maps alone ({mapped[0]})")
-        width, height = engine.resolution(args.width, args.height, frames[0])
-        image = ImageOptions(width, height, args.samples, not args.no_wrinkles,
-                             args.write_threads, args.exr_compression, args.exr_half,
-                             args.shade_samples)
-        engine.check_relax_work(frames, not args.no_wrinkles)  # a refusal: before the header
-        reporter.header(args.command, args.stage)
-        started = time.perf_counter()
-        stats = {} if args.stats else None
-        written = render_frames(
-            engine, image, frames, outputs,
-            skip=(lambda path: is_complete_image(path, width, height)) if args.skip_existing
-            else (lambda path: False),
-            progress=lambda items: reporter.progress(items, "render"), stats=stats)
-        if stats is not None:
-            write_stats(args.stats, stats)
+        job = render_job(args, reporter)
+        if args.dask is not None:
+            job.check()
+            if args.stats:
+                reporter.warn("--stats applies to a serial render; ignored with --dask")
+            plan = job.prepare()
+            _render_on_dask(args, reporter, job, plan)
+            return plan.outputs
+        if args.chunk is not None or args.workers is not None:
+            reporter.warn("--chunk and --workers apply to --dask only; ignored")
+        result = job.run()
         if not args.quiet:
-            print_stderr(summary(len(written), width, height, args.output, frames,
-                          time.perf_counter() - started, engine.baked_paths,
-                          skipped=len(frames) - len(written) if args.skip_existing else 0))
-    finally:
-        engine.release()
-    return outputs
+            print_stderr(summary(len(result.written), result.width, result.height,
+                                 args.output, result.frames, result.elapsed, result.baked,
+                                 skipped=result.skipped))
+        return result.outputs

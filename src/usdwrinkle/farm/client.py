@@ -31,14 +31,6 @@ from dataclasses import dataclass
 
 from ..errors import UsdWrinkleError, print_stderr
 from ..outputs.atomic import remove_temporaries
-from ..shot import (
-    NO_WRINKLED_MESH,
-    BakeRequest,
-    EngineOptions,
-    ImageOptions,
-    bake_layer,
-    unapplied_note,
-)
 from .worker import file_identity, render_chunk
 
 _log = logging.getLogger(__name__)
@@ -53,9 +45,25 @@ def _import_dask():
     try:
         import distributed
     except ImportError:
-        raise UsdWrinkleError("--dask needs Dask's distributed scheduler: "
+        raise UsdWrinkleError("`dask` needs Dask's distributed scheduler: "
                               "pip install 'usdwrinkle[farm]'") from None
     return distributed
+
+
+def check_farm_options(scheduler: str | None, workers: int | None,
+                       chunk: int | None) -> None:
+    """Refuse farm options out of range, before any stage is read."""
+    from ..limits import LOCAL_WORKERS_PER_CORE
+
+    if chunk is not None and chunk < 1:
+        raise UsdWrinkleError("`chunk` must be at least 1")
+    if workers is not None:
+        cores = os.cpu_count() or 1
+        most = LOCAL_WORKERS_PER_CORE * cores
+        if not 1 <= workers <= most:
+            raise UsdWrinkleError(f"`workers` must be in 1..{most} ({LOCAL_WORKERS_PER_CORE} "
+                                  f"worker processes per CPU core, {cores} here: each holds "
+                                  "its own GL context)")
 
 
 def default_chunk(frames: int, workers: int) -> int:
@@ -111,7 +119,7 @@ def _connect(distributed, address: str, workers: int | None):
         return distributed.Client(cluster), cluster, count
     scheme = address.split("://", 1)[0].lower() if "://" in address else "tcp"
     if scheme not in DASK_SCHEMES:
-        raise UsdWrinkleError(f"--dask {address}: the '{scheme}' protocol is not supported "
+        raise UsdWrinkleError(f"`dask` {address}: the '{scheme}' protocol is not supported "
                               f"(use {', '.join(s + '://' for s in DASK_SCHEMES)} HOST:PORT "
                               "or 'local')")
     try:
@@ -144,23 +152,13 @@ def _needs_bake(scene, frames: list[float], wrinkles: bool, recompute: bool) -> 
 
 @dataclass(frozen=True)
 class FarmRender:
-    """What ``usdwrinkle render --dask`` asks for; cli/render.py builds it from its
-    options (Python callers build it themselves)."""
+    """What ``usdwrinkle render --dask`` asks for: the render job (app/render.RenderJob),
+    checked and planned by its ``prepare``, and how to spread it."""
 
-    #: the stage as given, and the output pattern (the bake goes beside the outputs)
-    stage_path: str
-    output: str
-    frames: tuple
-    #: the file of each frame
-    outputs: tuple
-    #: the stage's engine options (use_baked: whether its own baked fields may be used)
-    engine: EngineOptions
-    #: width and height as asked (None: from the camera's aspect, as a serial render)
-    image: ImageOptions
+    job: object
+    plan: object
     #: the frames as the user wrote them (recorded in the bake's layer), or None
     frame_spec: str | None = None
-    recompute: bool = False
-    skip_existing: bool = False
     #: "local" (a LocalCluster) or a scheduler's address
     scheduler: str = "local"
     workers: int | None = None
@@ -183,78 +181,74 @@ class FarmResult:
     skipped: int = 0
 
 
-def render_on_dask(job: FarmRender, stage, reporter) -> FarmResult:
-    """Run a farm render. ``stage``: the opened Usd.Stage of ``job.stage_path``;
-    ``reporter``: progress(items, desc) and quiet (cli/common.Reporter); warnings are
-    logged (usdwrinkle/log.py), the workers' too."""
+def render_on_dask(request: FarmRender, reporter) -> FarmResult:
+    """Run a farm render. ``reporter``: progress(items, desc) and quiet
+    (cli/common.Reporter); warnings are logged (usdwrinkle/log.py), the workers' too."""
+    from ..app.bake import BakeJob
     from ..engine import image_size
     from ..scene.stage import StageSceneDelegate, refuse_overwriting_inputs
 
     distributed = _import_dask()
-    frames, outputs = list(job.frames), list(job.outputs)
-    wrinkles = job.image.wrinkles
+    job, plan = request.job, request.plan
+    shot, options = job.shot, job.options
+    frames, outputs = list(plan.frames), list(plan.outputs)
+    wrinkles = job.wrinkles
+    stage = shot.open()
     # the checks of a serial render, once, here (no GL context)
-    scene = StageSceneDelegate(stage, all_meshes=job.engine.all_meshes,
-                               relax_iterations=job.engine.relax_iterations,
-                               use_baked=wrinkles and not job.recompute)
-    scene.camera(job.engine.camera)  # a missing camera fails before any worker starts
-    needs_bake = _needs_bake(scene, frames, wrinkles, job.recompute)
-    layer = bake_path(job.output, job.stage_path) if needs_bake else None
+    scene = StageSceneDelegate(stage, all_meshes=shot.options.all_meshes,
+                               relax_iterations=shot.options.relax_iterations,
+                               use_baked=job.uses_baked)
+    scene.camera(options.camera)  # a missing camera fails before any worker starts
+    needs_bake = _needs_bake(scene, frames, wrinkles, options.recompute)
+    layer = bake_path(job.output, shot.path) if needs_bake else None
     if layer is not None:
-        refuse_overwriting_inputs(job.stage_path, [layer], stage)
-    note = None if job.engine.all_meshes or not wrinkles else unapplied_note(stage)
-    if note:
+        refuse_overwriting_inputs(shot.path, [layer], stage)
+    for note in job.mesh_notes(stage, [p for p, r in scene.meshes.items() if r.wrinkled]):
         _log.warning(note)
-    elif wrinkles and not any(r.wrinkled for r in scene.meshes.values()):
-        _log.warning(NO_WRINKLED_MESH)
-    width, height = image_size(scene, job.engine.camera, job.image.width, job.image.height,
+    for note in job.frame_notes(stage, frames):
+        _log.warning(note)
+    width, height = image_size(scene, options.camera, options.width, options.height,
                                frames[0])
-    image = dataclasses.replace(job.image, width=width, height=height)
+    image = job.image_options(width, height)
 
     started = time.perf_counter()
     client = cluster = None
     futures = []
     try:
-        client, cluster, workers = _connect(distributed, job.scheduler, job.workers)
+        client, cluster, workers = _connect(distributed, request.scheduler, request.workers)
         if not reporter.quiet:
-            where = "a local cluster" if cluster is not None else job.scheduler
+            where = "a local cluster" if cluster is not None else request.scheduler
             dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
                 else "none (pip install bokeh for Dask's dashboard)"
             print_stderr(f"usdwrinkle: rendering on {where}, {workers} worker(s); "
                          f"dashboard: {dashboard}")
-        render_stage = job.stage_path
+        render_stage = shot.path
         if layer is not None:
             bake_started = time.perf_counter()
             os.makedirs(os.path.dirname(layer), exist_ok=True)
-            engine = dataclasses.replace(job.engine, camera=None, use_baked=False).create(
-                stage, lambda steps: reporter.progress(steps, "preroll"))
-            try:
-                bake_layer(engine, BakeRequest(job.stage_path, layer, tuple(frames),
-                                               job.frame_spec),
-                           progress=lambda items: reporter.progress(items, "bake"))
-            finally:
-                engine.release()
+            BakeJob(shot, layer, request.frame_spec, progress=reporter.progress).run()
             if not reporter.quiet:
                 print_stderr(f"usdwrinkle: baked wave fields to {layer} in "
                              f"{time.perf_counter() - bake_started:.1f} s")
             render_stage = layer
-        composition = job.engine.composition
+        composition = shot.options.composition()
         if layer is not None and composition:
             # the bake's layer carries the sublayers and variant selections; the workers
             # still mask the population as the client did
             from ..scene.composition import Composition
 
-            composition = Composition(mask=composition.mask) or None
-        options = dataclasses.replace(job.engine, stage=os.path.abspath(render_stage),
-                                      use_baked=wrinkles, composition=composition)
-        chunk = job.chunk or default_chunk(len(frames), workers)
+            composition = Composition(mask=composition.mask)
+        engine_options = dataclasses.replace(
+            shot.engine_options(options.camera, use_baked=wrinkles),
+            stage=os.path.abspath(render_stage), composition=composition or None)
+        chunk = request.chunk or default_chunk(len(frames), workers)
         before = [file_identity(p) for p in outputs]
         run_id = uuid.uuid4().hex[:8]
         for index, start in enumerate(range(0, len(frames), chunk)):
             part = slice(start, start + chunk)
             futures.append(client.submit(
-                render_chunk, options, image, frames[part], outputs[part], before[part],
-                job.skip_existing, retries=RETRIES, pure=False,
+                render_chunk, engine_options, image, frames[part], outputs[part],
+                before[part], options.skip_existing, retries=RETRIES, pure=False,
                 key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
         written, baked, skipped = _gather(distributed, futures, len(frames), chunk, reporter)
         return FarmResult(written, baked, width, height, time.perf_counter() - started,

@@ -1,4 +1,5 @@
-"""FrameSpecs (usdrecord's syntax) and '#' frame placeholders in output paths."""
+"""FrameSpecs (usdrecord's syntax) and '#' frame placeholders in output paths: what a
+job's ``frames`` and ``output`` mean."""
 from __future__ import annotations
 
 import math
@@ -14,7 +15,8 @@ _HASHES = re.compile(r"#+")
 
 
 def check_time_code(value: float, what: str) -> float:
-    """Refuse a time code that is not finite or beyond ``MAX_TIME_CODE``."""
+    """Refuse a time code that is not finite or beyond ``MAX_TIME_CODE``; ``what`` names
+    the option field that holds it, in backquotes."""
     if not math.isfinite(value) or abs(value) > MAX_TIME_CODE:
         raise UsdWrinkleError(f"{what} {value:g} is not a finite time code within "
                               f"+-{MAX_TIME_CODE:g}")
@@ -70,7 +72,7 @@ def parse_frame_spec(spec: str) -> list[float]:
         steps = (end - start) / tcr.stride  # a tiny stride: inf, never listed
         total += range_count(start, end, tcr.stride) if steps <= MAX_FRAMES else MAX_FRAMES + 1
         if total > MAX_FRAMES:
-            raise UsdWrinkleError(f"--frames '{spec}' names more than {MAX_FRAMES:,} frames "
+            raise UsdWrinkleError(f"`frames` '{spec}' names more than {MAX_FRAMES:,} frames "
                                   "(the most one run renders; split the shot into chunks)")
         ranges.append(tcr)
     frames = {}  # insertion-ordered and linear: a dict, not 'in' on a list
@@ -78,13 +80,6 @@ def parse_frame_spec(spec: str) -> list[float]:
         for tc in tcr:
             frames.setdefault(float(tc.GetValue()), None)
     return list(frames)
-
-
-def add_frame_args(parser) -> None:
-    parser.add_argument("--frames", metavar="SPEC",
-                        help="frames to process, as usdrecord's FrameSpec: 1:48, 101:109x2, "
-                             "1,5,10; at most 100,000 frames within +-1e9 (default: the "
-                             "stage's start..end, or the default time)")
 
 
 #: decimals of a sub-frame in a file name (frame 1.25 -> 0001.250)

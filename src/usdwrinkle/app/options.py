@@ -1,0 +1,205 @@
+"""The options of each job, typed and documented: what every door fills in.
+
+A field is named as the command line's option is, with ``_`` for ``-`` (``width`` is
+``--width``, ``map_size`` is ``--map-size``). Messages name a field in backquotes
+(`` `width` ``): a Python caller reads the field, the command line prints its flag
+instead (cli/flags.py). Each dataclass checks its
+values when it is made: a value of the wrong type, or outside its choices, raises
+:class:`usdwrinkle.errors.UsdWrinkleError` naming the field. Ranges that need no stage
+are checked by ``check()``; what needs the stage or the GL context, by the job.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+import typing
+from dataclasses import dataclass
+
+from ..errors import UsdWrinkleError
+from ..maps.options import LAYOUTS as MAP_LAYOUTS
+from ..maps.options import TANGENT_SPACES
+from ..outputs.images import EXR_COMPRESSIONS
+
+DISPLAY_COLORS = ("amplitude", "compression")
+MAP_FORMATS = ("png", "exr")
+MAX_WRITE_THREADS = 8
+
+
+def _kind(hint) -> tuple[type, bool, bool]:
+    """(the base type, None allowed, a tuple of it) of a field's annotation."""
+    import types
+
+    union = typing.get_origin(hint) in (typing.Union, types.UnionType)
+    members = typing.get_args(hint) if union else (hint,)
+    optional = type(None) in members
+    inner = [a for a in members if a is not type(None)][0]
+    if typing.get_origin(inner) is tuple:
+        return typing.get_args(inner)[0], optional, True
+    return inner, optional, False
+
+
+def _checked_value(name: str, value, base: type):
+    """``value`` as a field of type ``base`` takes it, or UsdWrinkleError naming ``name``."""
+    if base is bool:
+        if not isinstance(value, bool):
+            raise UsdWrinkleError(f"`{name}`={value!r} must be True or False")
+        return value
+    if base in (int, float):
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not number or (base is int and not float(value).is_integer()):
+            raise UsdWrinkleError(f"`{name}`={value!r} must be "
+                                  f"{'an integer' if base is int else 'a number'}")
+        return base(value)
+    if base is str:
+        if isinstance(value, os.PathLike):
+            return os.fspath(value)
+        if not isinstance(value, str):
+            raise UsdWrinkleError(f"`{name}`={value!r} must be a string")
+        return value
+    return value
+
+
+class _Checked:
+    """Type and choice checks of a frozen dataclass's fields, when it is made."""
+
+    #: field -> the values it may take
+    CHOICES: typing.ClassVar[dict[str, tuple]] = {}
+
+    def __post_init__(self) -> None:
+        hints = typing.get_type_hints(type(self))
+        for field in dataclasses.fields(self):  # type: ignore[arg-type]
+            value = getattr(self, field.name)
+            base, optional, many = _kind(hints[field.name])
+            if value is None:
+                if not optional:
+                    raise UsdWrinkleError(f"`{field.name}` must be given")
+                continue
+            if many:
+                if isinstance(value, (str, os.PathLike)):
+                    value = (value,)
+                try:
+                    items = tuple(value)
+                except TypeError:
+                    raise UsdWrinkleError(f"`{field.name}`={value!r} must be a list") from None
+                value = tuple(_checked_value(field.name, item, base) for item in items)
+            else:
+                value = _checked_value(field.name, value, base)
+            choices = self.CHOICES.get(field.name)
+            if choices is not None and value not in choices:
+                raise UsdWrinkleError(f"`{field.name}`={value!r} is not one of "
+                                      f"{', '.join(map(str, choices))}")
+            object.__setattr__(self, field.name, value)
+
+
+@dataclass(frozen=True)
+class ShotOptions(_Checked):
+    """How a shot is opened and its wrinkles computed (render and bake alike)."""
+
+    #: wrinkle every Mesh, as if WrinkleAPI were applied (with its fallbacks)
+    all_meshes: bool = False
+    #: phase relaxation iterations per frame, 0..10,000 (None: wrinkle:relaxIterations)
+    relax_iterations: int | None = None
+    #: the first frame of the shot's phase history (None: the stage's start time code)
+    history_start: float | None = None
+    #: layers over the stage, strongest first (scene/composition.py)
+    sublayer: tuple[str, ...] = ()
+    #: variant selections, each "/Prim{set=name}"
+    variant: tuple[str, ...] = ()
+    #: prim paths: the stage is opened with a population mask of them
+    mask: tuple[str, ...] = ()
+
+    def check(self) -> None:
+        from ..limits import MAX_RELAX_ITERATIONS
+        from .frames import check_time_code
+
+        if self.relax_iterations is not None and \
+                not 0 <= self.relax_iterations <= MAX_RELAX_ITERATIONS:
+            raise UsdWrinkleError(f"`relax_iterations` must be in 0..{MAX_RELAX_ITERATIONS:,}")
+        if self.history_start is not None:
+            check_time_code(self.history_start, "`history_start`")
+
+    def composition(self):
+        """The scene/composition.Composition of these options (empty without them)."""
+        from ..scene.composition import Composition
+
+        mask = [part.strip() for text in self.mask for part in text.split(",")
+                if part.strip()]
+        return Composition(tuple(self.sublayer), tuple(self.variant), tuple(mask))
+
+
+@dataclass(frozen=True)
+class RenderOptions(_Checked):
+    """How a render draws and writes its frames (``usdwrinkle render --help``)."""
+
+    CHOICES: typing.ClassVar[dict[str, tuple]] = {"exr_compression": EXR_COMPRESSIONS}
+
+    #: camera prim path or name (None: the primary camera, the first camera, or an
+    #: automatic framing of the bounds)
+    camera: str | None = None
+    width: int = 960
+    #: None: from the camera's aspect ratio
+    height: int | None = None
+    #: multisamples per pixel, a power of two
+    samples: int = 4
+    #: shade every multisample where it lies (False: once per pixel, at its centroid)
+    shade_samples: bool = True
+    #: threads that encode and write frames while the next ones render (0..8)
+    write_threads: int = 1
+    #: EXR: colour and normals as half float (depth and the wrinkle fields stay float)
+    exr_half: bool = True
+    exr_compression: str = "zip"
+    #: the same shading without wrinkles
+    no_wrinkles: bool = False
+    #: leave frames whose file is already a whole image of this size
+    skip_existing: bool = False
+    #: ignore baked wave fields in the stage and compute every mesh's wrinkles
+    recompute: bool = False
+    #: a JSON file for per-frame timings (each pass timed, with glFinish between passes)
+    stats: str | None = None
+
+    def check(self) -> None:
+        from ..render.buffers import check_samples
+
+        if self.width <= 0 or (self.height is not None and self.height <= 0):
+            raise UsdWrinkleError("`width` and `height` must be positive")
+        check_samples(self.samples)
+        if not 0 <= self.write_threads <= MAX_WRITE_THREADS:
+            raise UsdWrinkleError(f"`write_threads` must be in 0..{MAX_WRITE_THREADS}")
+
+
+@dataclass(frozen=True)
+class BakeOptions(_Checked):
+    """What a bake writes besides the wrinkle primvars (``usdwrinkle bake --help``)."""
+
+    CHOICES: typing.ClassVar[dict[str, tuple]] = {
+        "display_color": DISPLAY_COLORS, "map_format": MAP_FORMATS,
+        "tangent_space": TANGENT_SPACES, "map_layout": MAP_LAYOUTS}
+
+    #: also the posed points and extent (and normals where the mesh authors them)
+    with_points: bool = False
+    #: also primvars:displayColor as a viridis ramp of this field
+    display_color: str | None = None
+    #: the overs alone, without sublayering the input
+    sparse: bool = False
+    #: wrinkle maps: "normal", "height", "amplitude" (a comma-separated text or a list)
+    maps: tuple[str, ...] | None = None
+    map_size: int | None = None
+    map_dir: str | None = None
+    map_format: str | None = None
+    map_padding: int | None = None
+    map_layout: str | None = None
+    uv: str | None = None
+    tangent_space: str | None = None
+    map_displacement: bool | None = None
+    #: a displaced render mesh per wrinkled mesh, the coarse mesh its proxy
+    geometry: bool = False
+    levels: int | None = None
+    samples_per_wavelength: float | None = None
+
+
+#: BakeOptions field -> maps/options.MapOptions field
+MAP_FIELDS = {"map_size": "size", "map_dir": "folder", "map_format": "fmt",
+              "map_padding": "padding", "uv": "uv", "tangent_space": "tangent_space",
+              "map_layout": "layout", "map_displacement": "displacement"}
+#: BakeOptions field -> geometry/options.GeometryOptions field
+GEOMETRY_FIELDS = {"levels": "levels", "samples_per_wavelength": "samples_per_wavelength"}

@@ -1,0 +1,251 @@
+"""RenderJob: a shot's frames to image files, with every check and warning of a render.
+
+The command line (``usdwrinkle render``), the Python API (``usdwrinkle.api.render``), the
+farm (its client checks with ``prepare`` and ``mesh_notes``; its workers render chunks
+with ``render_chunk``) and usdview's "Render current frame" all run this job, so a render
+policy (a check, a warning) is written once. Warnings go to the ``usdwrinkle`` logger
+(usdwrinkle/log.py); errors are UsdWrinkleError, naming option fields in backquotes.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from ..errors import UsdWrinkleError
+from .options import RenderOptions
+from .shot import Progress, Shot, no_progress
+
+_log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RenderPlan:
+    """What a render will do, known before any GL work: the frames and their files."""
+
+    frames: list[float]
+    outputs: list[str]
+
+
+@dataclass
+class RenderResult:
+    """What a render did."""
+
+    #: the frames of the shot, and the file of each (written, or kept by ``skip_existing``)
+    frames: list[float]
+    outputs: list[str]
+    #: the frames written this run
+    written: list[float]
+    width: int
+    height: int
+    #: seconds of the frame loop (after the checks and the engine's start)
+    elapsed: float
+    #: the meshes drawn from baked wave fields
+    baked: list[str] = field(default_factory=list)
+    #: frames ``skip_existing`` found complete
+    skipped: int = 0
+    #: per-frame timings (``stats``), else None
+    stats: dict | None = None
+
+
+class RenderJob:
+    """Render ``frames`` of ``shot`` to ``output`` (a path with a '#' frame placeholder, or
+    one file for one frame; the format follows the extension).
+
+    ``frames``: usdrecord's FrameSpec text, a list of numbers, or None for the stage's
+    range. ``progress(items, what)`` wraps each loop (a progress bar); ``on_start()`` is
+    called after every check that can refuse the job, before the frame work (the command
+    line prints its header line there)."""
+
+    def __init__(self, shot: Shot, output: str | os.PathLike,
+                 frames: str | Sequence[float] | None = None,
+                 options: RenderOptions | None = None, progress: Progress = no_progress,
+                 on_start: Callable[[], None] | None = None):
+        if not isinstance(shot, Shot):
+            raise UsdWrinkleError(f"`shot`={shot!r} must be a usdwrinkle Shot")
+        if not isinstance(output, (str, os.PathLike)):
+            raise UsdWrinkleError(f"`output`={output!r} must be a path")
+        self.shot = shot
+        self.output = os.fspath(output)
+        self.frames = frames
+        self.options = options if options is not None else RenderOptions()
+        self.progress = progress
+        self.on_start = on_start
+
+    # --- checks -------------------------------------------------------------------------
+
+    def check(self) -> None:
+        """What can be refused before the stage is read."""
+        from ..outputs.images import check_format
+        from ..scene.stage import refuse_overwriting_inputs
+
+        if not self.shot.held:
+            refuse_overwriting_inputs(self.shot.path, [self.output])
+        check_format(self.output)
+        self.options.check()
+        self.shot.check()
+
+    def prepare(self) -> RenderPlan:
+        """Open the stage and check what a render writes, before any GL work: the frames,
+        their files (writable, not the stage's inputs), and the stats file. Removes what
+        a killed render of these frames left behind."""
+        from ..outputs.atomic import check_writable, sweep_dead_temporaries
+        from ..scene.stage import refuse_overwriting_inputs
+        from .frames import frame_paths
+
+        self.check()
+        stage = self.shot.open()
+        frames = self.shot.frames(self.frames)
+        outputs = frame_paths(self.output, frames)
+        stats = self.options.stats
+        extra = [stats] if stats else []
+        if stats and os.path.realpath(stats) in {os.path.realpath(o) for o in outputs}:
+            raise UsdWrinkleError(f"`stats` '{stats}' is the path of a frame this run "
+                                  "writes; choose another file for the timings")
+        if not self.shot.held:
+            refuse_overwriting_inputs(self.shot.path, outputs + extra, stage)
+        check_writable(outputs + extra)
+        sweep_dead_temporaries(outputs)  # what a killed run of these frames left behind
+        return RenderPlan(frames, outputs)
+
+    @property
+    def wrinkles(self) -> bool:
+        return not self.options.no_wrinkles
+
+    @property
+    def uses_baked(self) -> bool:
+        """Whether wave fields baked into the stage may be drawn (not recomputed); a render
+        without wrinkles needs none."""
+        return not (self.options.recompute or self.options.no_wrinkles)
+
+    def mesh_notes(self, stage, wrinkled: Sequence[str]) -> list[str]:
+        """The warnings about which meshes get wrinkles (``wrinkled``: the wrinkled mesh
+        paths): controls authored without WrinkleAPI, a displaced-geometry bake, no mesh to
+        wrinkle. The serial render and the farm's client both say them."""
+        from ..scene.baked import geometry_bake
+        from ..shot import NO_WRINKLED_MESH, unapplied_note
+
+        notes = []
+        all_meshes = self.shot.options.all_meshes
+        unapplied = None if all_meshes or not self.wrinkles else unapplied_note(stage)
+        if unapplied:
+            notes.append(unapplied)
+        found = geometry_bake(stage)
+        if found is not None and self.wrinkles and not wrinkled:
+            notes.append("the stage holds usdwrinkle's displaced geometry, whose wrinkles are "
+                         "in its meshes: render with `no_wrinkles` (`all_meshes` would "
+                         f"wrinkle them a second time) ({found[0]})")
+        if not wrinkled and self.wrinkles and found is None and unapplied is None:
+            notes.append("the stage has no Mesh to wrinkle; rendering without wrinkles"
+                         if all_meshes else NO_WRINKLED_MESH)
+        return notes
+
+    def frame_notes(self, stage, frames: list[float]) -> list[str]:
+        """Warnings about the frames: those outside what a displaced-geometry bake holds."""
+        import math
+
+        from ..scene.baked import geometry_bake
+
+        found = geometry_bake(stage)
+        if found is None:
+            return []
+        layer, first, last = found
+        if math.isnan(first) or math.isnan(last):
+            return []
+        outside = [f for f in frames if not math.isnan(f) and not first <= f <= last]
+        if not outside:
+            return []
+        return [f"{len(outside)} frame(s) lie outside the frames the displaced geometry was "
+                f"baked for ({first:g}..{last:g}), from {outside[0]:g}: they show its nearest "
+                f"baked frame ({layer})"]
+
+    def _engine_notes(self, engine, frames: list[float]) -> None:
+        from ..scene.baked import holds_bake
+        from ..scene.stage import outside_range_note
+
+        computed = self.wrinkles and any(path not in engine.baked
+                                         for path in engine.wrinkled_paths)
+        options = self.shot.options
+        if computed and self.frames is not None and options.history_start is None and \
+                (note := outside_range_note(engine.stage, frames)):
+            _log.warning(note)  # a preroll from the shot's start (not for baked frames)
+        if self.uses_baked and holds_bake(engine.stage):
+            # a farm chunk that renders a bake but finds wrinkled meshes without baked
+            # fields computes them itself, with a preroll: what the farm's bake avoids
+            unbaked = [path for path in engine.wrinkled_paths if path not in engine.baked]
+            if unbaked:
+                start = engine.history_start()
+                preroll = f", with a phase-history preroll from frame {start:g}" \
+                    if start is not None else ""
+                _log.warning(f"the stage holds a usdwrinkle bake, but {len(unbaked)} wrinkled "
+                             f"mesh(es) have no baked wave fields in it; computing them "
+                             f"here{preroll} (other machines may compute them slightly "
+                             "differently: bake with the options the render uses, e.g. "
+                             f"`all_meshes`) ({unbaked[0]})")
+        for note in self.mesh_notes(engine.stage, engine.wrinkled_paths):
+            _log.warning(note)
+        for note in self.frame_notes(engine.stage, frames):
+            _log.warning(note)
+        mapped = [path for path in engine.wrinkled_paths
+                  if engine.meshes[path].material.wrinkle_maps]
+        if mapped and self.wrinkles:
+            _log.warning(f"{len(mapped)} mesh(es) have baked wrinkle maps in their material "
+                         "and are drawn with wrinkles too, so their wrinkles show twice; "
+                         f"pass `no_wrinkles` to draw the maps alone ({mapped[0]})")
+
+    # --- the work -----------------------------------------------------------------------
+
+    def image_options(self, width: int, height: int):
+        """The frame loop's shot.ImageOptions at the resolved size."""
+        from ..shot import ImageOptions
+
+        o = self.options
+        return ImageOptions(width, height, o.samples, self.wrinkles, o.write_threads,
+                            o.exr_compression, o.exr_half, o.shade_samples)
+
+    def run(self, ctx=None) -> RenderResult:
+        """Check, start the engine, render every frame; ``ctx``: a moderngl context to
+        share (None: the process's own)."""
+        from ..imagefiles import is_complete_image
+        from ..shot import render_frames
+
+        plan = self.prepare()
+        engine = self.shot.start_engine(self.options.camera, use_baked=self.uses_baked,
+                                        profile=bool(self.options.stats),
+                                        progress=self.progress, ctx=ctx)
+        try:
+            engine.check_baked(plan.frames)
+            self._engine_notes(engine, plan.frames)
+            width, height = engine.resolution(self.options.width, self.options.height,
+                                              plan.frames[0])
+            image = self.image_options(width, height)
+            engine.check_relax_work(plan.frames, self.wrinkles)  # a refusal: before start
+            if self.on_start is not None:
+                self.on_start()
+            started = time.perf_counter()
+            stats: dict | None = {} if self.options.stats else None
+            skip = (lambda path: is_complete_image(path, width, height)) \
+                if self.options.skip_existing else (lambda path: False)
+            written = render_frames(engine, image, plan.frames, plan.outputs, skip=skip,
+                                    progress=lambda items: self.progress(items, "render"),
+                                    stats=stats)
+            if stats is not None and self.options.stats:
+                write_stats(self.options.stats, stats)
+            skipped = len(plan.frames) - len(written) if self.options.skip_existing else 0
+            return RenderResult(plan.frames, plan.outputs, written, width, height,
+                                time.perf_counter() - started, list(engine.baked_paths),
+                                skipped, stats)
+        finally:
+            engine.release()
+
+
+def write_stats(path: str, stats: dict) -> None:
+    """The timings as JSON, written atomically."""
+    import json
+
+    from ..outputs.atomic import atomic_path
+
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as handle:
+        json.dump(stats, handle, indent=1)

@@ -1,0 +1,122 @@
+"""A shot as every job opens it: the stage (a file, or a stage a host already holds), its
+composition, the options that decide how its wrinkles are computed, and its frames."""
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Sequence
+
+from ..errors import UsdWrinkleError
+from .options import ShotOptions
+
+_log = logging.getLogger(__name__)
+
+#: what a progress callback gets: the items of a loop and what it does ("render",
+#: "preroll", "bake"); it returns the items to iterate (a progress bar's wrapper)
+Progress = Callable[[list, str], object]
+
+
+def no_progress(items: list, _what: str) -> list:
+    return items
+
+
+def progress_bars(items: list, what: str) -> object:
+    """A progress bar over ``items`` (a loop of two or more), as the command line shows:
+    on a terminal a bar, in a farm's log one line per step."""
+    if len(items) < 2:
+        return items
+    from ..progress import wrap
+
+    return wrap(items, what)
+
+
+class Shot:
+    """A USD stage as a job opens it.
+
+    ``stage``: a file path, or a ``Usd.Stage`` a host already holds (usdview's, with its
+    session layer; composition options do not apply to it). ``options``: how the stage is
+    composed and its wrinkles computed (app/options.ShotOptions)."""
+
+    def __init__(self, stage, options: ShotOptions | None = None):
+        self.options = options if options is not None else ShotOptions()
+        if isinstance(stage, (str, os.PathLike)):
+            self.path = os.fspath(stage)
+            self._stage = None
+        else:
+            if self.options.composition():
+                raise UsdWrinkleError("`sublayer`, `variant` and `mask` compose a stage that is "
+                                      "opened from a file; this one is already open")
+            self._stage = stage
+            self.held = True
+            layer = stage.GetRootLayer()
+            self.path = layer.realPath or layer.identifier
+
+    #: whether the stage came open (a host's), rather than from a file
+    held = False
+
+    def check(self) -> None:
+        """What can be refused before the stage is read."""
+        self.options.check()
+
+    def open(self):
+        """The composed Usd.Stage (opened once)."""
+        if self._stage is None:
+            from ..scene.stage import open_stage
+
+            composition = self.options.composition()
+            self._stage = open_stage(self.path, composition or None)
+        return self._stage
+
+    def frames(self, frames: str | Sequence[float] | None) -> list[float]:
+        """The frames a job runs: ``frames`` as usdrecord's FrameSpec ("1:24", "1,5",
+        "1:24x2"), a list of numbers, or None for the stage's start..end (the default
+        time without a range)."""
+        from ..scene.stage import inherited_range_note, stage_frames
+        from .frames import parse_frame_spec
+
+        if frames is None:
+            stage = self.open()
+            if note := inherited_range_note(stage):
+                _log.warning(note)
+            return stage_frames(stage)
+        return parse_frame_spec(frame_spec_of(frames))
+
+    def engine_options(self, camera: str | None = None, use_baked: bool = True,
+                       profile: bool = False):
+        """The shot.EngineOptions of this shot (picklable: a farm task carries them)."""
+        from ..shot import EngineOptions
+
+        composition = self.options.composition()
+        return EngineOptions(os.path.abspath(self.path), all_meshes=self.options.all_meshes,
+                             relax_iterations=self.options.relax_iterations, camera=camera,
+                             history_start=self.options.history_start, use_baked=use_baked,
+                             profile=profile, composition=composition or None)
+
+    def start_engine(self, camera: str | None = None, use_baked: bool = True,
+                     profile: bool = False, progress: Progress = no_progress, ctx=None):
+        """The WrinkleEngine of this shot, warning about the units its cloth widths go
+        through; ``progress`` wraps the preroll frames."""
+        from ..scene.params import units_notes
+
+        engine = self.engine_options(camera, use_baked, profile).create(
+            self.open(), lambda steps: progress(steps, "preroll"), ctx)
+        for note in units_notes(engine.stage, {path: engine.meshes[path]
+                                               for path in engine.wrinkled_paths}):
+            _log.warning(note)
+        return engine
+
+
+def frame_spec_of(frames: str | Sequence[float]) -> str:
+    """A FrameSpec text of ``frames`` (a text, or a list of numbers)."""
+    if isinstance(frames, str):
+        if not frames.strip():
+            raise UsdWrinkleError("`frames` is empty (None runs the stage's time range)")
+        return frames
+    try:
+        values = [float(f) for f in frames]
+    except (TypeError, ValueError):
+        raise UsdWrinkleError(f"`frames`={frames!r} must be a FrameSpec text or a list of "
+                              "numbers") from None
+    if not values:
+        raise UsdWrinkleError("`frames` is empty (None runs the stage's time range)")
+    return ",".join(repr(f) for f in values)
