@@ -163,3 +163,45 @@ def test_a_baked_frame_value_is_set_in_one_place():
                 if isinstance(node, ast.Attribute) and node.attr == "SetTimeSample":
                     callers.append(f"{path.relative_to(package).as_posix()}:{function.name}")
     assert sorted(callers) == ["maps/material.py:author_material", "outputs/layers.py:set_value"]
+
+
+# --- issue 44: the doors stand on the application layer --------------------------------
+
+#: the rooms every layer may use: errors, logging, time codes, the package's data
+FOUNDATION = {"errors", "log", "timecode", "layerinfo", "limits", "progress", "_resources",
+              "usdwrinkle", "__main__"}
+#: the doors: each maps what its user gives onto the application layer's jobs
+DOORS = {"api", "cli", "farm", "usdview", "paint"}
+#: what a door still imports below the application layer. Issue 44 asks for none; this
+#: list may only shrink (a door that reaches one room more, or one less, fails here, so
+#: that the list is kept true)
+NOT_YET = {
+    "cli": {"geometry", "maps", "outputs", "profiles", "render", "scene", "schema",
+            "validation", "values"},
+    "farm": {"engine", "imagefiles", "outputs", "render", "scene", "shot"},
+    "paint": {"engine", "outputs", "scene", "schema"},
+}
+
+
+def test_the_doors_stand_on_the_application_layer():
+    """The Python API and usdview's plugin import the jobs (app/), authoring and the
+    foundation, nothing below; the command line, the farm and the paint window still reach
+    the rooms NOT_YET names."""
+    _, edges, _ = graph()
+    rooms = layering.room_graph(edges)
+    for door in sorted(DOORS):
+        below = rooms.get(door, set()) - DOORS - FOUNDATION - {"app", "authoring"}
+        assert below == NOT_YET.get(door, set()), (door, sorted(below))
+    assert "app" in rooms["api"] and "app" in rooms["usdview"] and "app" in rooms["cli"]
+    assert not {"api", "cli", "farm", "usdview"} & rooms.get("app", set())  # app looks down
+
+
+def test_the_api_and_the_application_layer_are_typed():
+    """mypy --strict over usdwrinkle/api.py and app/ (pyproject.toml's [tool.mypy])."""
+    import os
+
+    result = subprocess.run([sys.executable, "-m", "mypy", "--cache-dir", os.devnull],
+                            capture_output=True, text=True, timeout=600,
+                            cwd=layering.PACKAGE.parents[1])
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "Success: no issues found" in result.stdout

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import Any
 
 from .app.bake import BakeJob, BakeResult
 from .app.options import BakeOptions, RenderOptions, ShotOptions
@@ -109,7 +110,7 @@ def _render_on_dask(job: RenderJob, frames: Frames, scheduler: str, workers: int
         def __init__(self) -> None:
             self.quiet = quiet
 
-        def progress(self, items: list, what: str) -> object:
+        def progress(self, items: list[Any], what: str) -> Any:
             return job.progress(items, what)
 
     spec = frames if isinstance(frames, str) or frames is None else \

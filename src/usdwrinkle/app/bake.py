@@ -14,6 +14,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from ..errors import UsdWrinkleError
 from .options import GEOMETRY_FIELDS, MAP_FIELDS, BakeOptions
@@ -37,19 +38,19 @@ class BakeResult:
     elapsed: float
 
 
-def _given(options: BakeOptions, fields: dict) -> dict:
+def _given(options: BakeOptions, fields: dict[str, str]) -> dict[str, Any]:
     """{target field: value} of the options in ``fields`` (option -> target) given."""
     return {target: getattr(options, name) for name, target in fields.items()
             if getattr(options, name) is not None}
 
 
-def _refuse_without(options: BakeOptions, fields: dict, needed: str) -> None:
+def _refuse_without(options: BakeOptions, fields: dict[str, str], needed: str) -> None:
     given = [f"`{name}`" for name in fields if getattr(options, name) is not None]
     if given:
         raise UsdWrinkleError(f"{', '.join(given)} need `{needed}`")
 
 
-def map_options(options: BakeOptions):
+def map_options(options: BakeOptions) -> Any:
     """maps/options.MapOptions of ``options`` (None without maps); what is not given keeps
     MapOptions' default."""
     from ..maps.options import MapOptions
@@ -70,7 +71,7 @@ def map_options(options: BakeOptions):
     return maps
 
 
-def geometry_options(options: BakeOptions):
+def geometry_options(options: BakeOptions) -> Any:
     """geometry/options.GeometryOptions of ``options`` (None without geometry)."""
     from ..geometry.options import GeometryOptions
 
@@ -102,7 +103,7 @@ class BakeJob:
     range. ``progress(items, what)`` wraps each loop; ``on_start()`` is called after every
     check that can refuse the job, before the frame work."""
 
-    def __init__(self, shot: Shot, output: str | os.PathLike,
+    def __init__(self, shot: Shot, output: str | os.PathLike[str],
                  frames: str | Sequence[float] | None = None,
                  options: BakeOptions | None = None, progress: Progress = no_progress,
                  on_start: Callable[[], None] | None = None):
@@ -117,7 +118,7 @@ class BakeJob:
         self.progress = progress
         self.on_start = on_start
 
-    def check(self):
+    def check(self) -> tuple[Any, Any]:
         """What can be refused before the stage is read; returns (maps, geometry)."""
         from ..outputs.layers import check_layer_path
         from ..scene.stage import refuse_overwriting_inputs
@@ -130,7 +131,7 @@ class BakeJob:
         check_layer_path(self.output)
         return maps, geometry
 
-    def run(self, ctx=None) -> BakeResult:
+    def run(self, ctx: Any = None) -> BakeResult:
         from ..outputs.atomic import check_writable
         from ..scene.params import width_summary
         from ..scene.stage import outside_range_note, refuse_overwriting_inputs
@@ -172,3 +173,38 @@ class BakeJob:
                               time.perf_counter() - started)
         finally:
             engine.release()
+
+
+def bake_frame_into(shot: Shot, layer: Any, frame: float,
+                    pick: Callable[[list[str]], list[str]] | None = None,
+                    display_color: str | None = "amplitude", ctx: Any = None) -> list[str]:
+    """Bake one frame of ``shot``'s wrinkle primvars (and a displayColor ramp of
+    ``display_color``) into ``layer``, an open Sdf.Layer (usdview's session layer: the
+    edit shows at once). ``pick(wrinkled paths)`` chooses the meshes (None: all). Returns
+    the baked mesh paths, [] when no mesh has WrinkleAPI (a warning says so)."""
+    from ..outputs.layers import LayerBaker, LayerOptions
+    from ..outputs.sink import BakeScene
+    from ..scene.overrides import read_overrides
+    from .shot import at_frame
+
+    engine = shot.start_engine(ctx=ctx)
+    try:
+        targets = list(engine.wrinkled_paths)
+        if pick is not None:
+            targets = pick(targets)
+        if not targets:
+            _log.warning("no mesh on this stage has WrinkleAPI applied")
+            return []
+        with at_frame(frame):
+            engine.compute_frame(frame)
+            stage = engine.stage
+            records = {path: engine.meshes[path] for path in targets}
+            facts = read_overrides(stage, stage.GetRootLayer().realPath or "", records,
+                                   (frame,))
+            scene = BakeScene(facts, "", (frame,), records, engine.meshes)
+            baker = LayerBaker(scene, LayerOptions(display_color=display_color))
+            baker.begin(layer)
+            baker.add_frame(frame, {path: engine.read_fields(path) for path in targets}, {})
+        return targets
+    finally:
+        engine.release()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+import typing
 
 from pxr import Usd, UsdUtils
 
@@ -31,7 +32,7 @@ def range_count(start: float, end: float, stride: float) -> int:
 _SPEC_ITEM = re.compile(r"^([^:x]+)(?::([^:x]+)(?:x([^:x]+))?)?$")
 
 
-def _time_code_range(part: str, spec: str):
+def _time_code_range(part: str, spec: str) -> typing.Any:
     """One FrameSpec item (``start``, ``start:end`` or ``start:endxstride``) as a
     UsdUtils.TimeCodeRange. Parsed here, not by TimeCodeRange.CreateFromFrameSpec, which
     crashes the process on some malformed items (``1:``)."""
@@ -40,17 +41,17 @@ def _time_code_range(part: str, spec: str):
     if match is None:
         raise bad
     try:
-        values = [None if text is None else float(text) for text in match.groups()]
+        start = float(match.group(1))
+        end = start if match.group(2) is None else float(match.group(2))
+        stride = None if match.group(3) is None else float(match.group(3))
     except ValueError:
         raise bad from None
-    start, end, stride = values
-    end = start if end is None else end
     for value in (start, end):
-        check_time_code(value, f"--frames '{part}': frame")
+        check_time_code(value, f"`frames` '{part}': frame")
     if stride is None:
         stride = 1.0 if end >= start else -1.0
     if not math.isfinite(stride) or stride == 0 or (end - start) * stride < 0:
-        raise UsdWrinkleError(f"--frames '{part}': stride {stride:g} does not lead from "
+        raise UsdWrinkleError(f"`frames` '{part}': stride {stride:g} does not lead from "
                               f"{start:g} to {end:g}")
     return UsdUtils.TimeCodeRange(Usd.TimeCode(start), Usd.TimeCode(end), stride)
 
@@ -75,7 +76,7 @@ def parse_frame_spec(spec: str) -> list[float]:
             raise UsdWrinkleError(f"`frames` '{spec}' names more than {MAX_FRAMES:,} frames "
                                   "(the most one run renders; split the shot into chunks)")
         ranges.append(tcr)
-    frames = {}  # insertion-ordered and linear: a dict, not 'in' on a list
+    frames: dict[float, None] = {}  # insertion-ordered and linear: a dict, not 'in' on a list
     for tcr in ranges:
         for tc in tcr:
             frames.setdefault(float(tc.GetValue()), None)

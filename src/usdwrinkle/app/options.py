@@ -25,7 +25,7 @@ MAP_FORMATS = ("png", "exr")
 MAX_WRITE_THREADS = 8
 
 
-def _kind(hint) -> tuple[type, bool, bool]:
+def _kind(hint: typing.Any) -> tuple[typing.Any, bool, bool]:
     """(the base type, None allowed, a tuple of it) of a field's annotation."""
     import types
 
@@ -38,7 +38,7 @@ def _kind(hint) -> tuple[type, bool, bool]:
     return inner, optional, False
 
 
-def _checked_value(name: str, value, base: type):
+def _checked_value(name: str, value: typing.Any, base: typing.Any) -> typing.Any:
     """``value`` as a field of type ``base`` takes it, or UsdWrinkleError naming ``name``."""
     if base is bool:
         if not isinstance(value, bool):
@@ -63,7 +63,7 @@ class _Checked:
     """Type and choice checks of a frozen dataclass's fields, when it is made."""
 
     #: field -> the values it may take
-    CHOICES: typing.ClassVar[dict[str, tuple]] = {}
+    CHOICES: typing.ClassVar[dict[str, tuple[str, ...]]] = {}
 
     def __post_init__(self) -> None:
         hints = typing.get_type_hints(type(self))
@@ -118,7 +118,7 @@ class ShotOptions(_Checked):
         if self.history_start is not None:
             check_time_code(self.history_start, "`history_start`")
 
-    def composition(self):
+    def composition(self) -> typing.Any:
         """The scene/composition.Composition of these options (empty without them)."""
         from ..scene.composition import Composition
 
@@ -131,7 +131,7 @@ class ShotOptions(_Checked):
 class RenderOptions(_Checked):
     """How a render draws and writes its frames (``usdwrinkle render --help``)."""
 
-    CHOICES: typing.ClassVar[dict[str, tuple]] = {"exr_compression": EXR_COMPRESSIONS}
+    CHOICES: typing.ClassVar[dict[str, tuple[str, ...]]] = {"exr_compression": EXR_COMPRESSIONS}
 
     #: camera prim path or name (None: the primary camera, the first camera, or an
     #: automatic framing of the bounds)
@@ -171,7 +171,7 @@ class RenderOptions(_Checked):
 class BakeOptions(_Checked):
     """What a bake writes besides the wrinkle primvars (``usdwrinkle bake --help``)."""
 
-    CHOICES: typing.ClassVar[dict[str, tuple]] = {
+    CHOICES: typing.ClassVar[dict[str, tuple[str, ...]]] = {
         "display_color": DISPLAY_COLORS, "map_format": MAP_FORMATS,
         "tangent_space": TANGENT_SPACES, "map_layout": MAP_LAYOUTS}
 

@@ -13,6 +13,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import UsdWrinkleError
 from .options import RenderOptions
@@ -47,7 +48,7 @@ class RenderResult:
     #: frames ``skip_existing`` found complete
     skipped: int = 0
     #: per-frame timings (``stats``), else None
-    stats: dict | None = None
+    stats: dict[str, Any] | None = None
 
 
 class RenderJob:
@@ -59,7 +60,7 @@ class RenderJob:
     called after every check that can refuse the job, before the frame work (the command
     line prints its header line there)."""
 
-    def __init__(self, shot: Shot, output: str | os.PathLike,
+    def __init__(self, shot: Shot, output: str | os.PathLike[str],
                  frames: str | Sequence[float] | None = None,
                  options: RenderOptions | None = None, progress: Progress = no_progress,
                  on_start: Callable[[], None] | None = None):
@@ -120,7 +121,7 @@ class RenderJob:
         without wrinkles needs none."""
         return not (self.options.recompute or self.options.no_wrinkles)
 
-    def mesh_notes(self, stage, wrinkled: Sequence[str]) -> list[str]:
+    def mesh_notes(self, stage: Any, wrinkled: Sequence[str]) -> list[str]:
         """The warnings about which meshes get wrinkles (``wrinkled``: the wrinkled mesh
         paths): controls authored without WrinkleAPI, a displaced-geometry bake, no mesh to
         wrinkle. The serial render and the farm's client both say them."""
@@ -142,7 +143,7 @@ class RenderJob:
                          if all_meshes else NO_WRINKLED_MESH)
         return notes
 
-    def frame_notes(self, stage, frames: list[float]) -> list[str]:
+    def frame_notes(self, stage: Any, frames: list[float]) -> list[str]:
         """Warnings about the frames: those outside what a displaced-geometry bake holds."""
         import math
 
@@ -161,7 +162,7 @@ class RenderJob:
                 f"baked for ({first:g}..{last:g}), from {outside[0]:g}: they show its nearest "
                 f"baked frame ({layer})"]
 
-    def _engine_notes(self, engine, frames: list[float]) -> None:
+    def _engine_notes(self, engine: Any, frames: list[float]) -> None:
         from ..scene.baked import holds_bake
         from ..scene.stage import outside_range_note
 
@@ -197,7 +198,7 @@ class RenderJob:
 
     # --- the work -----------------------------------------------------------------------
 
-    def image_options(self, width: int, height: int):
+    def image_options(self, width: int, height: int) -> Any:
         """The frame loop's shot.ImageOptions at the resolved size."""
         from ..shot import ImageOptions
 
@@ -205,7 +206,7 @@ class RenderJob:
         return ImageOptions(width, height, o.samples, self.wrinkles, o.write_threads,
                             o.exr_compression, o.exr_half, o.shade_samples)
 
-    def run(self, ctx=None) -> RenderResult:
+    def run(self, ctx: Any = None) -> RenderResult:
         """Check, start the engine, render every frame; ``ctx``: a moderngl context to
         share (None: the process's own)."""
         from ..imagefiles import is_complete_image
@@ -225,7 +226,7 @@ class RenderJob:
             if self.on_start is not None:
                 self.on_start()
             started = time.perf_counter()
-            stats: dict | None = {} if self.options.stats else None
+            stats: dict[str, Any] | None = {} if self.options.stats else None
             skip = (lambda path: is_complete_image(path, width, height)) \
                 if self.options.skip_existing else (lambda path: False)
             written = render_frames(engine, image, plan.frames, plan.outputs, skip=skip,
@@ -241,7 +242,7 @@ class RenderJob:
             engine.release()
 
 
-def write_stats(path: str, stats: dict) -> None:
+def write_stats(path: str, stats: dict[str, Any]) -> None:
     """The timings as JSON, written atomically."""
     import json
 

@@ -3,8 +3,10 @@ composition, the options that decide how its wrinkles are computed, and its fram
 from __future__ import annotations
 
 import logging
+import math
 import os
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from ..errors import UsdWrinkleError
 from .options import ShotOptions
@@ -13,14 +15,14 @@ _log = logging.getLogger(__name__)
 
 #: what a progress callback gets: the items of a loop and what it does ("render",
 #: "preroll", "bake"); it returns the items to iterate (a progress bar's wrapper)
-Progress = Callable[[list, str], object]
+Progress = Callable[[list[Any], str], Any]
 
 
-def no_progress(items: list, _what: str) -> list:
+def no_progress(items: list[Any], _what: str) -> list[Any]:
     return items
 
 
-def progress_bars(items: list, what: str) -> object:
+def progress_bars(items: list[Any], what: str) -> Any:
     """A progress bar over ``items`` (a loop of two or more), as the command line shows:
     on a terminal a bar, in a farm's log one line per step."""
     if len(items) < 2:
@@ -37,7 +39,8 @@ class Shot:
     session layer; composition options do not apply to it). ``options``: how the stage is
     composed and its wrinkles computed (app/options.ShotOptions)."""
 
-    def __init__(self, stage, options: ShotOptions | None = None):
+    def __init__(self, stage: str | os.PathLike[str] | Any,
+                 options: ShotOptions | None = None):
         self.options = options if options is not None else ShotOptions()
         if isinstance(stage, (str, os.PathLike)):
             self.path = os.fspath(stage)
@@ -58,7 +61,7 @@ class Shot:
         """What can be refused before the stage is read."""
         self.options.check()
 
-    def open(self):
+    def open(self) -> Any:
         """The composed Usd.Stage (opened once)."""
         if self._stage is None:
             from ..scene.stage import open_stage
@@ -79,10 +82,15 @@ class Shot:
             if note := inherited_range_note(stage):
                 _log.warning(note)
             return stage_frames(stage)
-        return parse_frame_spec(frame_spec_of(frames))
+        if not isinstance(frames, str):
+            values = list(frames) if isinstance(frames, Sequence) else None
+            if values is not None and len(values) == 1 and isinstance(values[0], float) and \
+                    math.isnan(values[0]):
+                return [float(values[0])]  # [NaN]: the default time (usdview's current time)
+        return list(parse_frame_spec(frame_spec_of(frames)))
 
     def engine_options(self, camera: str | None = None, use_baked: bool = True,
-                       profile: bool = False):
+                       profile: bool = False) -> Any:
         """The shot.EngineOptions of this shot (picklable: a farm task carries them)."""
         from ..shot import EngineOptions
 
@@ -93,7 +101,8 @@ class Shot:
                              profile=profile, composition=composition or None)
 
     def start_engine(self, camera: str | None = None, use_baked: bool = True,
-                     profile: bool = False, progress: Progress = no_progress, ctx=None):
+                     profile: bool = False, progress: Progress = no_progress,
+                     ctx: Any = None) -> Any:
         """The WrinkleEngine of this shot, warning about the units its cloth widths go
         through; ``progress`` wraps the preroll frames."""
         from ..scene.params import units_notes
@@ -104,6 +113,13 @@ class Shot:
                                                for path in engine.wrinkled_paths}):
             _log.warning(note)
         return engine
+
+
+def at_frame(frame: float) -> Any:
+    """A block whose errors name ``frame`` where they named none (shot.at_frame)."""
+    from ..shot import at_frame as frame_block
+
+    return frame_block(frame)
 
 
 def frame_spec_of(frames: str | Sequence[float]) -> str:

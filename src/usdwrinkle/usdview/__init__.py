@@ -156,36 +156,22 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
 
 
 def _bake_in_process(usdview_api, ctx) -> list[str]:
-    from ..engine import WrinkleEngine
+    from ..app.bake import bake_frame_into
+    from ..app.shot import Shot
     from ..errors import UsdWrinkleError
-    from ..outputs.layers import LayerBaker, LayerOptions
-    from ..outputs.sink import BakeScene
-    from ..scene.overrides import read_overrides
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
     try:
-        engine = WrinkleEngine(stage, ctx=ctx)
+        targets = bake_frame_into(Shot(stage), stage.GetSessionLayer(), frame,
+                                  pick=lambda wrinkled: _targets(usdview_api, wrinkled),
+                                  ctx=ctx)
     except UsdWrinkleError as exc:
         usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
         return []
-    try:
-        targets = _targets(usdview_api, engine.wrinkled_paths)
-        if not targets:
-            usdview_api.PrintStatus("Wrinkles: no mesh on this stage has WrinkleAPI applied")
-            return []
-        engine.compute_frame(frame)
-        records = {path: engine.meshes[path] for path in targets}
-        facts = read_overrides(stage, stage.GetRootLayer().realPath or "", records, (frame,))
-        scene = BakeScene(facts, "", (frame,), records, engine.meshes)
-        baker = LayerBaker(scene, LayerOptions(display_color="amplitude"))
-        baker.begin(stage.GetSessionLayer())
-        baker.add_frame(frame, {path: engine.read_fields(path) for path in targets}, {})
-    except UsdWrinkleError as exc:
-        usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
+    if not targets:
+        usdview_api.PrintStatus("Wrinkles: no mesh on this stage has WrinkleAPI applied")
         return []
-    finally:
-        engine.release()
     when = "the default time" if math.isnan(frame) else f"frame {frame:g}"
     usdview_api.PrintStatus(f"Wrinkles: baked {len(targets)} mesh(es) at {when} into the "
                             "session layer (displayColor shows the amplitude)")
@@ -237,21 +223,18 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
         opener(paths[1])
         usdview_api.PrintStatus(f"Wrinkles: rendered {paths[0]} and {paths[1]}")
         return paths
-    from ..engine import WrinkleEngine
+    from ..app.options import RenderOptions
+    from ..app.render import RenderJob
+    from ..app.shot import Shot
     from ..errors import UsdWrinkleError
     from ..log import silenced
-    from ..outputs.images import write_image
 
+    shot = Shot(stage)
     try:
-        with silenced():
-            engine = WrinkleEngine(stage, camera=camera, ctx=ctx)
-            try:
-                w, h = engine.resolution(width, None, frame)
-                buffers = engine.render_frame(frame, w, h)
-            finally:
-                engine.release()
-        for path in paths:
-            write_image(path, buffers)
+        with silenced():  # the status line reports the outcome
+            for path in paths:
+                RenderJob(shot, path, [frame], RenderOptions(width=width, camera=camera)) \
+                    .run(ctx)
     except UsdWrinkleError as exc:
         usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
         return []
