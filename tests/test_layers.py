@@ -205,3 +205,45 @@ def test_the_api_and_the_application_layer_are_typed():
                             cwd=layering.PACKAGE.parents[1])
     assert result.returncode == 0, result.stdout + result.stderr
     assert "Success: no issues found" in result.stdout
+
+
+def _strings(path):
+    """(line, text) of the string constants of a module that are not docstrings (an
+    f-string's literal parts included)."""
+    import ast
+
+    tree = ast.parse(path.read_text(), str(path))
+    docstrings = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef,
+                             ast.AsyncFunctionDef)) and node.body and \
+                isinstance(node.body[0], ast.Expr) and \
+                isinstance(node.body[0].value, ast.Constant):
+            docstrings.add(id(node.body[0].value))
+    return [(node.lineno, node.value) for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and id(node) not in docstrings]
+
+
+#: modules outside cli/ that run the command line itself (usdview's plugin, where
+#: usdwrinkle's dependencies do not import in usdview's Python: a command line it runs)
+RUNS_THE_COMMAND_LINE = {"usdwrinkle.usdview"}
+
+
+def test_the_library_names_fields_not_flags():
+    """Issue 44: a Python caller got advice about flags it never passed. Outside cli/, a
+    message names an option field in backquotes (`map_size`), and the command line prints
+    it as its flag (cli/flags.py). Docstrings may still say which command uses a
+    function."""
+    import re
+
+    flag = re.compile(r"(?<![\w-])--[a-z]")
+    found = []
+    for module, path in layering.modules().items():
+        if layering.room(module) == "cli" or module in RUNS_THE_COMMAND_LINE:
+            continue
+        found += [f"{module}:{line}: {text!r}" for line, text in _strings(path)
+                  if flag.search(text)]
+    assert found == []
+    # the reader sees what it looks for
+    assert any("--" in text for _, text in _strings(layering.PACKAGE / "cli" / "render.py"))

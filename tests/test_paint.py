@@ -281,7 +281,7 @@ def test_a_session_refuses_what_it_cannot_paint(gl_context, tmp_path):
     stage_path = sheet_stage(tmp_path / "sheet.usda", nx=5)
     stage, layer, save = open_paint_stage(stage_path, None)
     assert save == os.path.realpath(stage_path)  # no -o: the root layer, in place
-    with pytest.raises(UsdWrinkleError, match="--prim /Nope is not a wrinkled mesh"):
+    with pytest.raises(UsdWrinkleError, match="`prim` /Nope is not a wrinkled mesh"):
         PaintSession(stage, layer, save, prim="/Nope", ctx=gl_context)
     with pytest.raises(UsdWrinkleError, match="cannot open paint layer"):
         bad = tmp_path / "bad.usda"

@@ -199,8 +199,8 @@ class WrinkleEngine:
                 f"this run would relax {iterations:,} iterations x {computed:,.0f} frames "
                 f"({preroll:,.0f} of them phase-history preroll) = "
                 f"{iterations * computed:,.0f} iterations; at most {MAX_RELAX_WORK:,} are "
-                "accepted (lower wrinkle:relaxIterations or --relax-iterations, render fewer "
-                "frames, or pass --history-start nearer the first frame)")
+                "accepted (lower wrinkle:relaxIterations or `relax_iterations`, render fewer "
+                "frames, or pass `history_start` nearer the first frame)")
 
     # -- phase history (history.py: the wave states of grid frames, as values) ----------
     def history_start(self) -> float | None:
@@ -235,7 +235,7 @@ class WrinkleEngine:
             raise UsdWrinkleError(
                 f"frame {frame:g} is {frame - (start + first):,.0f} frames after the phase "
                 f"history's start {start + first:g}; more than {MAX_HISTORY_FRAMES:,} frames "
-                "of history are refused (pass --history-start nearer, or bake the shot)")
+                "of history are refused (pass `history_start` nearer, or bake the shot)")
         return list(range(first, needed + 1)), base
 
     def _compute_only(self, frame: float, write: int, read: int | None,

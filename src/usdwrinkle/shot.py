@@ -20,7 +20,7 @@ _log = logging.getLogger(__name__)
 
 #: the warning of a render that finds no wrinkled mesh (serial and farm)
 NO_WRINKLED_MESH = ("no mesh has WrinkleAPI applied; rendering without wrinkles "
-                    "(use --all-meshes to wrinkle every mesh)")
+                    "(use `all_meshes` to wrinkle every mesh)")
 
 
 def unapplied_note(stage) -> str | None:
@@ -210,7 +210,7 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
         if note := unapplied_note(engine.stage):
             raise UsdWrinkleError(f"{note}; the layer would hold no wrinkle data")
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so the layer would hold no "
-                              "wrinkle data: pass --all-meshes to wrinkle every mesh, or apply "
+                              "wrinkle data: pass `all_meshes` to wrinkle every mesh, or apply "
                               "WrinkleAPI to the cloth (usdwrinkle apply)")
     # the maps are relative to the posed shading normals, which renderers must shade with:
     # Storm drops the authored normals of a skinned mesh, so the posed points and normals

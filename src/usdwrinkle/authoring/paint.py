@@ -45,7 +45,7 @@ class MeshSurface:
     def corner_uv(self, name: str) -> np.ndarray:
         primvar = UsdGeom.PrimvarsAPI(self.prim).GetPrimvar(name)
         if not primvar or not primvar.HasValue():
-            raise UsdWrinkleError(f"texture coordinates '{name}' not found (use --uv)",
+            raise UsdWrinkleError(f"texture coordinates '{name}' not found (use `uv`)",
                                   self.path, f"primvars:{name}")
         corners = corner_values(primvar, self.topology, Usd.TimeCode.Default())
         if corners is None or corners.shape[-1] < 2:
@@ -116,7 +116,7 @@ def q_uniform(surface: MeshSurface, direction, amount: float) -> np.ndarray:
     """A rest-space direction projected onto each tangent plane, with |q| = amount."""
     d = np.asarray(direction, np.float64).reshape(1, 3)
     if not np.all(np.isfinite(d)) or not np.any(d):
-        raise UsdWrinkleError("--q needs a finite, non-zero direction")
+        raise UsdWrinkleError("`q` needs a finite, non-zero direction")
     d = d / np.abs(d).max()  # only the direction counts: 1e308 must not overflow
     tangent = surface.project(np.repeat(d, len(surface.rest), axis=0))
     length = np.linalg.norm(tangent, axis=1, keepdims=True)

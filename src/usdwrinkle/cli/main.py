@@ -13,7 +13,7 @@ import threading
 import traceback
 
 from .. import __version__
-from ..errors import STDERR, print_stderr
+from ..errors import STDERR, print_stderr, print_warning
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -194,9 +194,13 @@ def _main(argv: list[str] | None) -> int:
         parser.print_help(STDERR)
         return 2
     from ..errors import UsdWrinkleError
+    from ..log import warnings_to
+    from .flags import flagged
 
     try:
-        return int(args.run(args) or 0)
+        # a warning names the option fields of the jobs below in backquotes: here, flags
+        with warnings_to(lambda message: print_warning(flagged(message))):
+            return int(args.run(args) or 0)
     except BrokenPipeError:
         # stdout closed by its reader (usdwrinkle info | head): what it read is what it
         # wanted; no traceback, and no failing flush at exit

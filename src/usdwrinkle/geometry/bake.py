@@ -44,9 +44,9 @@ SURVEY_PERCENTILE = 99.0
 
 def check_geometry_options(options: GeometryOptions) -> None:
     if options.levels is not None and not 0 <= options.levels <= MAX_LEVELS:
-        raise UsdWrinkleError(f"--levels must be in 0..{MAX_LEVELS} (got {options.levels})")
+        raise UsdWrinkleError(f"`levels` must be in 0..{MAX_LEVELS} (got {options.levels})")
     if not 1.0 <= options.samples_per_wavelength <= 64.0:
-        raise UsdWrinkleError("--samples-per-wavelength must be in 1..64 "
+        raise UsdWrinkleError("`samples_per_wavelength` must be in 1..64 "
                               f"(got {options.samples_per_wavelength:g})")
 
 
@@ -129,7 +129,7 @@ class GeometryBake:
             self.levels[path] = levels
         require_memory(sum(counts.values()) * max(len(self.frames), 1) * BYTES_PER_POINT_FRAME,
                        f"building the layer, the wrinkled meshes of {len(self.frames)} "
-                       "frame(s) need", "pass fewer --levels or bake fewer --frames per layer")
+                       "frame(s) need", "pass fewer `levels` or bake fewer `frames` per layer")
         for path, record in self.meshes.items():
             fine = subdivide(record.rest_points, record.topology.triangles, self.levels[path])
             self.fine_points[path] = len(fine.points)
@@ -151,7 +151,7 @@ class GeometryBake:
                          f"{fine_point_count(len(record.rest_points), triangles, wanted):,} "
                          f"fine points (more than {AUTO_FINE_POINTS:,}); baking {levels} levels, "
                          "where waves shorter than 2 fine edges fade to the smooth surface "
-                         "(band limit); a smaller wrinkle:width asks for this, --levels sets "
+                         "(band limit); a smaller wrinkle:width asks for this, `levels` sets "
                          "the count")
         return levels
 

@@ -88,7 +88,7 @@ def check_size(path: str, num_points: int, triangles: np.ndarray, levels: int) -
     if count > MAX_FINE_POINTS:
         raise UsdWrinkleError(
             f"{levels} subdivision level(s) would make {count:,} fine points, more than "
-            f"{MAX_FINE_POINTS:,}; pass fewer --levels (or a lower --samples-per-wavelength)",
+            f"{MAX_FINE_POINTS:,}; pass fewer `levels` (or a lower `samples_per_wavelength`)",
             path)
     return count
 

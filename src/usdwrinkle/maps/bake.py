@@ -59,19 +59,19 @@ def check_map_options(options: MapOptions, max_texture_size: int | None = None) 
     """Refuse sizes and paddings out of range, and maps the memory cannot hold."""
     limit = max_texture_size or 16384
     if not MIN_MAP_SIZE <= options.size <= limit:
-        raise UsdWrinkleError(f"--map-size must be in {MIN_MAP_SIZE}..{limit} "
+        raise UsdWrinkleError(f"`map_size` must be in {MIN_MAP_SIZE}..{limit} "
                               f"(got {options.size})")
     if not 0 <= options.padding <= MAX_PADDING:
-        raise UsdWrinkleError(f"--map-padding must be in 0..{MAX_PADDING} "
+        raise UsdWrinkleError(f"`map_padding` must be in 0..{MAX_PADDING} "
                               f"(got {options.padding})")
     target = options.size * options.size * TARGET_BYTES_PER_TEXEL
     if target >= MAX_TARGET_BYTES:
         largest = int((MAX_TARGET_BYTES // TARGET_BYTES_PER_TEXEL) ** 0.5)
-        raise UsdWrinkleError(f"--map-size {options.size} needs render targets of "
+        raise UsdWrinkleError(f"`map_size` {options.size} needs render targets of "
                               f"{target / 2**30:.2f} GiB each; at most {largest} fits "
                               "the 2 GiB a GL target may hold (llvmpipe refuses larger)")
     require_memory(options.size * options.size * BYTES_PER_TEXEL,
-                   f"{options.size}x{options.size} maps need", "lower --map-size")
+                   f"{options.size}x{options.size} maps need", "lower `map_size`")
 
 
 @dataclass
@@ -115,9 +115,9 @@ class MapBake:
         if options.uv_named and meshes and options.layout != "islands" and \
                 not any(self._own_uv(path) is not None for path in meshes):
             raise UsdWrinkleError(
-                f"--uv {options.uv}: no wrinkled mesh has texture coordinates of that name "
+                f"`uv` {options.uv}: no wrinkled mesh has texture coordinates of that name "
                 f"({', '.join(sorted(meshes))}); name the meshes' own (st by default), or "
-                "use --map-layout islands")
+                "use `map_layout` islands")
         islands: dict[str, MeshMaps | None] = {}   # one layout per mesh, for every set
         for map_set in options.sets:
             for path in meshes:
@@ -126,9 +126,9 @@ class MapBake:
                     self.plans.append(plan)
         if meshes and not self.plans:
             raise UsdWrinkleError(
-                f"no wrinkled mesh has the texture coordinates '{options.uv}' that --maps "
+                f"no wrinkled mesh has the texture coordinates '{options.uv}' that `maps` "
                 f"lays the maps out in ({', '.join(sorted(meshes))}): author them, pass "
-                "--uv with the name of the mesh's texture coordinates, or use --map-layout "
+                "`uv` with the name of the mesh's texture coordinates, or use `map_layout` "
                 "islands")
         for path in dict.fromkeys(plan.path for plan in self.plans):
             facts = scene.facts.meshes.get(path)
@@ -145,7 +145,7 @@ class MapBake:
         for name in self.file_names(list(scene.frames)):
             if scene.facts.inputs.protects(name):
                 raise UsdWrinkleError(f"wrinkle map '{name}' would overwrite a file the stage "
-                                      "reads (choose another --map-dir)")
+                                      "reads (choose another `map_dir`)")
 
     def uv_name(self, plan: MeshMaps) -> str:
         """The texture coordinates ``plan``'s maps are laid out in."""
@@ -162,12 +162,12 @@ class MapBake:
         if corner_uv is not None:
             plan = self._asset_plan(path, stem, corner_uv)
         elif map_set.layout == "asset":
-            _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv); no "
-                         f"wrinkle maps for it (--map-layout islands needs none) ({path})")
+            _log.warning(f"mesh has no texture coordinates '{options.uv}' (`uv`); no "
+                         f"wrinkle maps for it (`map_layout` islands needs none) ({path})")
             return None
         else:
             if map_set.layout is None:
-                _log.warning(f"mesh has no texture coordinates '{options.uv}' (--uv): its "
+                _log.warning(f"mesh has no texture coordinates '{options.uv}' (`uv`): its "
                              f"wrinkle maps are laid out in islands, primvars:{MAP_ST} "
                              f"({path})")
             try:
@@ -180,7 +180,7 @@ class MapBake:
                     raise
                 _log.warning(f"{len(self.scene.facts.meshes[path].face_counts)} faces leave "
                              f"islands too small on a {options.size}-texel map: the preview "
-                             f"maps are laid out in '{options.uv}' instead (raise --map-size "
+                             f"maps are laid out in '{options.uv}' instead (raise `map_size` "
                              f"for islands, which usdview's Storm decodes best) ({path})")
                 plan = self._asset_plan(path, stem, own)
         if plan is None:
@@ -214,12 +214,12 @@ class MapBake:
                 record.rest_points, topology.triangles, topology.triangle_face,
                 topology.corner_face_vertex, counts, self.options.size, self.options.padding)
         except ValueError as exc:
-            raise UsdWrinkleError(f"{exc}: raise --map-size, or use --map-layout asset",
+            raise UsdWrinkleError(f"{exc}: raise `map_size`, or use `map_layout` asset",
                                   path) from None
         if typical < MIN_ISLAND:
             _log.warning(f"{len(counts)} faces on a {self.options.size}-texel map: the wrinkle "
                          f"maps' islands are {typical:.0f} texels across and {padding} apart "
-                         f"(raise --map-size) ({path})")
+                         f"(raise `map_size`) ({path})")
         corner_uv = np.ascontiguousarray(face_uv[topology.corner_face_vertex], np.float32)
         return MeshMaps(path, stem, corner_uv, [(0, 0)], face_uv=face_uv)
 

@@ -36,7 +36,7 @@ def parse_map_kinds(text: str) -> tuple[str, ...]:
     kinds = [part.strip() for part in text.split(",") if part.strip()]
     unknown = [kind for kind in kinds if kind not in MAP_KINDS]
     if unknown or not kinds:
-        raise UsdWrinkleError(f"--maps takes a comma-separated list of {', '.join(MAP_KINDS)}"
+        raise UsdWrinkleError(f"`maps` takes a comma-separated list of {', '.join(MAP_KINDS)}"
                               f" (got '{text}')")
     return tuple(kind for kind in MAP_KINDS if kind in kinds)
 

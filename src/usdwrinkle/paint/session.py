@@ -147,10 +147,10 @@ class PaintSession:
         if not paths:
             self.engine.release()
             raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to "
-                                  "paint (pass --all-meshes to paint every mesh)")
+                                  "paint (pass `all_meshes` to paint every mesh)")
         if prim is not None and prim not in paths:
             self.engine.release()
-            raise UsdWrinkleError(f"--prim {prim} is not a wrinkled mesh of the stage "
+            raise UsdWrinkleError(f"`prim` {prim} is not a wrinkled mesh of the stage "
                                   f"(wrinkled: {', '.join(paths)})")
         self.paths = [prim] if prim is not None else paths
         self.meshes = {path: self._paint_mesh(path) for path in self.paths}

@@ -32,7 +32,7 @@ def check_samples(samples: int) -> None:
     from ..errors import UsdWrinkleError
 
     if samples < 1 or samples & (samples - 1):
-        raise UsdWrinkleError(f"--samples {samples} is not a power of two (1, 2, 4, 8, ...)")
+        raise UsdWrinkleError(f"`samples` {samples} is not a power of two (1, 2, 4, 8, ...)")
 
 
 def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
@@ -53,13 +53,13 @@ def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
     check_samples(samples)
     max_samples = int(ctx.info.get("GL_MAX_SAMPLES", 1) or 1)
     if samples > max_samples:
-        raise UsdWrinkleError(f"--samples {samples} exceeds this GL implementation's "
+        raise UsdWrinkleError(f"`samples` {samples} exceeds this GL implementation's "
                               f"GL_MAX_SAMPLES of {max_samples}")
     # the targets, the resolve pass's output and the read-back copies (the writer may
     # hold a few)
     require_memory(width * height * (_ATTACHMENT_BYTES * samples + OFFSET_SLOTS * 4 * 4),
                    f"a {width}x{height} frame with {samples} samples needs",
-                   "lower --width/--height or --samples")
+                   "lower `width`/`height` or `samples`")
 
 
 class Framebuffer:

@@ -93,7 +93,7 @@ class BakedSource:
         if second and len(second) < len(SECOND_SYSTEM):
             missing = next(name for name in SECOND_SYSTEM if name not in self.attrs)
             raise UsdWrinkleError("incomplete second wave system: this primvar is missing "
-                                  "(re-bake, or pass --recompute)", self.path, missing)
+                                  "(re-bake, or pass `recompute`)", self.path, missing)
 
     @property
     def static(self) -> bool:
@@ -116,13 +116,13 @@ class BakedSource:
         if math.isnan(frame):
             raise UsdWrinkleError(
                 f"the baked fields have time samples ({self.range_text()}) but the default "
-                "time is rendered; give --frames, or pass --recompute", self.path, attribute)
+                "time is rendered; give `frames`, or pass `recompute`", self.path, attribute)
         first, last = self.times[0], self.times[-1]
         if first <= frame <= last:
             what = f"frame missing from the baked range {self.range_text()}"
         else:
             what = f"frame outside the baked range {self.range_text()}"
-        raise UsdWrinkleError(f"{what}; bake this frame, or pass --recompute", self.path,
+        raise UsdWrinkleError(f"{what}; bake this frame, or pass `recompute`", self.path,
                               attribute, frame)
 
     def at(self, frame: float) -> BakedFields:
@@ -172,7 +172,7 @@ def find_baked(prim: Usd.Prim, num_points: int) -> BakedSource | None:
     if len(authored) < len(REQUIRED):
         missing = next(name for name in REQUIRED if name not in authored)
         raise UsdWrinkleError("incomplete baked wave fields: this primvar is missing "
-                              "(re-bake, or pass --recompute)", str(prim.GetPath()), missing)
+                              "(re-bake, or pass `recompute`)", str(prim.GetPath()), missing)
     return BakedSource(prim, num_points)
 
 

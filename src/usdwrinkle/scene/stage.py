@@ -159,7 +159,7 @@ def outside_range_note(stage: Usd.Stage, frames: list[float]) -> str | None:
     return (f"{len(outside)} of the {len(finite)} frame(s) lie outside the stage's time range "
             f"{format_frame(start)}..{format_frame(end)} (first: {format_frame(outside[0])}): "
             "they show the animation held at its ends, and the phase history is computed "
-            f"from frame {format_frame(start)} up to them (pass --history-start to begin it "
+            f"from frame {format_frame(start)} up to them (pass `history_start` to begin it "
             "elsewhere)")
 
 
@@ -179,10 +179,10 @@ def stage_frames(stage: Usd.Stage) -> list[float]:
                               f"+-{MAX_TIME_CODE:g} ({where})")
     if end < start:
         raise UsdWrinkleError(f"the stage's endTimeCode is before its startTimeCode ({where}); "
-                              "fix the metadata or pass --frames")
+                              "fix the metadata or pass `frames`")
     if end - start + 1 > MAX_FRAMES:
         raise UsdWrinkleError(f"the stage's frame range holds more than {MAX_FRAMES:,} frames "
-                              f"({where}); pass --frames")
+                              f"({where}); pass `frames`")
     return [float(f) for f in np.arange(start, end + 0.5)]
 
 
@@ -199,7 +199,7 @@ def inherited_range_note(stage: Usd.Stage) -> str | None:
                 return (f"the stage's root layer authors no startTimeCode/endTimeCode, so only "
                         f"the default time is processed; its sublayer "
                         f"'{os.path.basename(layer.identifier)}' spans {start:g}..{end:g} "
-                        f"(pass --frames {start:g}:{end:g}, or author the range on the root "
+                        f"(pass `frames` {start:g}:{end:g}, or author the range on the root "
                         "layer)")
     return None
 
