@@ -39,3 +39,21 @@ def test_the_readme_python_example_runs(tmp_path):
     assert len(layer.ListTimeSamplesForPath(phase.path)) == 24
     frames = sorted((tmp_path / "out").glob("shirt.*.png"))
     assert [f.name for f in frames] == [f"shirt.{i:04d}.png" for i in range(1, 25)]
+
+
+def test_the_readme_job_example_runs(tmp_path):
+    """The second example (the jobs themselves) runs as it stands and renders two frames
+    of the size it asks for."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("### Python"):]
+    code = re.findall(r"```python\n(.*?)```", section, re.S)[1]
+    assert "RenderJob" in code
+    shutil.copy(ROOT / "sample_stages" / "shirt.usda", tmp_path)
+    shutil.copytree(ROOT / "sample_stages" / "textures", tmp_path / "textures")
+    result = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=600)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.split()[:2] == ["[23.0,", "24.0]"]
+    assert result.stdout.split()[2:4] == ["96", "64"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["job.0023.png",
+                                                                   "job.0024.png"]
