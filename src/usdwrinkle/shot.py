@@ -11,6 +11,7 @@ import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
 from . import schema
 from .errors import UsdWrinkleError
@@ -46,7 +47,7 @@ class EngineOptions:
     #: worker opens the stage with it
     composition: object | None = None
 
-    def create(self, stage=None, preroll_progress=None, ctx=None):
+    def create(self, stage: Any = None, preroll_progress: Any = None, ctx: Any = None) -> Any:
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
         ``preroll_progress`` wraps the list of preroll frames (a progress bar); ``ctx``: a
         moderngl context to share (None: the process's own)."""

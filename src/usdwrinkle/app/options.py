@@ -16,10 +16,17 @@ import typing
 from dataclasses import dataclass
 
 from ..errors import UsdWrinkleError
+from ..geometry.options import GeometryOptions
 from ..maps.options import LAYOUTS as MAP_LAYOUTS
-from ..maps.options import TANGENT_SPACES
+from ..maps.options import TANGENT_SPACES, MapOptions
 from ..outputs.images import EXR_COMPRESSIONS
+from ..schema import MAP_ST, baked_names_text
 
+#: what --help shows of the defaults and names below
+MAP_DEFAULTS = MapOptions()
+GEOMETRY_DEFAULTS = GeometryOptions()
+BAKED_NAMES_TEXT = baked_names_text()
+MAP_ST_NAME = MAP_ST
 DISPLAY_COLORS = ("amplitude", "compression")
 MAP_FORMATS = ("png", "exr")
 MAX_WRITE_THREADS = 8

@@ -30,6 +30,15 @@ class RenderPlan:
     outputs: list[str]
 
 
+@dataclass(frozen=True)
+class ChunkPlan:
+    """What a farm spreads: each chunk's image options, and whether wave fields must be
+    baked first."""
+
+    image: Any
+    needs_bake: bool
+
+
 @dataclass
 class RenderResult:
     """What a render did."""
@@ -195,6 +204,54 @@ class RenderJob:
             _log.warning(f"{len(mapped)} mesh(es) have baked wrinkle maps in their material "
                          "and are drawn with wrinkles too, so their wrinkles show twice; "
                          f"pass `no_wrinkles` to draw the maps alone ({mapped[0]})")
+
+    def plan_chunks(self, plan: RenderPlan) -> ChunkPlan:
+        """What a farm needs before it spreads ``plan`` in chunks, checked without a GL
+        context: the camera (a missing one fails before any worker starts), the warnings
+        of a serial render, the image size, and whether the stage's own baked wave fields
+        cover every frame (else the farm bakes them once)."""
+        from ..engine import image_size
+        from ..scene.stage import StageSceneDelegate
+
+        stage = self.shot.open()
+        options = self.shot.options
+        scene = StageSceneDelegate(stage, all_meshes=options.all_meshes,
+                                   relax_iterations=options.relax_iterations,
+                                   use_baked=self.uses_baked)
+        scene.camera(self.options.camera)
+        wrinkled = [path for path, record in scene.meshes.items() if record.wrinkled]
+        for note in self.mesh_notes(stage, wrinkled) + self.frame_notes(stage, plan.frames):
+            _log.warning(note)
+        needs_bake = False
+        if self.wrinkles:
+            for path in wrinkled:
+                source = None if self.options.recompute else scene.baked.get(path)
+                if source is None or not all(source.covers(f) for f in plan.frames):
+                    needs_bake = True
+        width, height = image_size(scene, self.options.camera, self.options.width,
+                                   self.options.height, plan.frames[0])
+        return ChunkPlan(self.image_options(width, height), needs_bake)
+
+    def check_output(self, path: str) -> None:
+        """Refuse a further file the job writes (a farm's bake) that is one of the stage's
+        inputs."""
+        from ..scene.stage import refuse_overwriting_inputs
+
+        if not self.shot.held:
+            refuse_overwriting_inputs(self.shot.path, [path], self.shot.open())
+
+    def chunk_engine(self, stage_path: str, baked: bool) -> Any:
+        """The shot.EngineOptions a chunk renders with: ``stage_path`` is the stage, or the
+        farm's bake of it (``baked``: then the bake's layer carries the sublayers and
+        variant selections, and only the population mask is applied again)."""
+        import dataclasses
+
+        shot_options = self.shot.options
+        composition = (dataclasses.replace(shot_options, sublayer=(), variant=()) if baked
+                       else shot_options).composition()
+        return dataclasses.replace(
+            self.shot.engine_options(self.options.camera, use_baked=self.wrinkles),
+            stage=os.path.abspath(stage_path), composition=composition or None)
 
     # --- the work -----------------------------------------------------------------------
 

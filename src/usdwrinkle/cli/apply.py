@@ -192,7 +192,7 @@ def edit_target(args, stage):
 
     from ..errors import UsdWrinkleError
     from ..outputs.layers import check_layer_path
-    from .common import refuse_overwriting_inputs
+    from ..scene.stage import refuse_overwriting_inputs
 
     if not args.output:
         target = stage.GetRootLayer()

@@ -1,21 +1,23 @@
 """usdwrinkle bake STAGE OUTPUT_LAYER: write the wrinkle fields back to USD."""
 from __future__ import annotations
 
+from ..app.options import (
+    BAKED_NAMES_TEXT,
+    GEOMETRY_DEFAULTS,
+    MAP_DEFAULTS,
+    MAP_LAYOUTS,
+    TANGENT_SPACES,
+)
+from ..app.options import MAP_ST_NAME as MAP_ST
 from ..errors import print_stderr
-from ..geometry.options import GeometryOptions
-from ..maps.options import LAYOUTS, TANGENT_SPACES, MapOptions
-from ..schema import MAP_ST, baked_names_text
 from .common import Reporter, add_shot_args
-
-MAP_DEFAULTS = MapOptions()
-GEOMETRY_DEFAULTS = GeometryOptions()
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "bake", help="bake the wrinkle fields of every frame into a USD layer",
         description="Compute the wrinkles of a stage and write them as per-vertex primvars "
-                    f"({baked_names_text()}; "
+                    f"({BAKED_NAMES_TEXT}; "
                     "interpolation vertex) with a time sample per frame. By default the "
                     "output layer sublayers the input, so 'usdview OUTPUT_LAYER' shows the "
                     "shot with the baked data. --maps adds per-frame wrinkle maps bound in a "
@@ -53,7 +55,7 @@ def add_parser(subparsers) -> None:
                       help="texels by which UV islands are grown, so that filtering at their "
                            f"borders does not reach the background; default "
                            f"{MAP_DEFAULTS.padding}")
-    maps.add_argument("--map-layout", choices=LAYOUTS,
+    maps.add_argument("--map-layout", choices=MAP_LAYOUTS,
                       help="islands: every face its own island in texture coordinates of "
                            f"the bake's own (primvars:{MAP_ST}), so that usdview's Storm "
                            "decodes each face in one continuous frame and never reads a "

@@ -64,8 +64,6 @@ def add_shot_args(parser, output_help: str) -> None:
     add_composition_args(parser)
 
 
-from ..scene.stage import refuse_overwriting_inputs  # noqa: E402,F401  (the CLI's name)
-
 
 class Reporter:
     """A command's warnings on stderr, each once, and a progress bar for multi-frame runs
@@ -113,8 +111,8 @@ class Reporter:
         if self.quiet:
             return
         from .. import __version__
+        from ..app.environment import renderer_info
         from ..errors import print_stderr
-        from ..render.context import renderer_info
 
         info = renderer_info()
         print_stderr(f"usdwrinkle: version {__version__}, {command} "

@@ -26,7 +26,8 @@ def run(args) -> int:
     import OpenImageIO
     from pxr import Usd
 
-    from .. import __version__, schema
+    from .. import __version__
+    from ..app.environment import register_schema, schema_dir
     from ..errors import GLContextError
 
     print(f"usdwrinkle {__version__}")
@@ -35,11 +36,11 @@ def run(args) -> int:
           f"{'.'.join(str(v) for v in Usd.GetVersion())})")
     print(f"moderngl {moderngl.__version__}, numpy {numpy.__version__}, "
           f"OpenImageIO {OpenImageIO.__version__}")
-    healthy = schema.register()
+    healthy = register_schema()
     print(f"WrinkleAPI schema: {'registered' if healthy else 'NOT usable'} "
-          f"({schema.schema_dir()})")
+          f"({schema_dir()})")
     if not args.no_gl:
-        from ..render.context import renderer_info
+        from ..app.environment import renderer_info
         try:
             info = renderer_info()
             print(f"GL renderer: {info['renderer']}; {info['version']}")
@@ -65,7 +66,7 @@ def environment_lines() -> list[str]:
     """The exact environment usdview needs for the schema and the Wrinkles menu."""
     import usdwrinkle
 
-    from .. import schema
+    from ..app.environment import schema_dir
     from ..usdview import plugin_dir
 
     def joined(name, *dirs, last=False):
@@ -76,7 +77,7 @@ def environment_lines() -> list[str]:
         return os.pathsep.join(ordered)
 
     package_parent = os.path.dirname(os.path.dirname(os.path.abspath(usdwrinkle.__file__)))
-    plugin_path = joined("PXR_PLUGINPATH_NAME", schema.schema_dir(), plugin_dir())
+    plugin_path = joined("PXR_PLUGINPATH_NAME", schema_dir(), plugin_dir())
     # a non-editable install's folder is a site-packages that also holds usd-core's pxr:
     # first on PYTHONPATH it would shadow the studio's USD, whose pxr has Usdviewq
     shadows = os.path.isdir(os.path.join(package_parent, "pxr"))

@@ -255,10 +255,9 @@ def _stop_in_chain(exc: BaseException) -> BaseException | None:
 
 def entry_point() -> None:
     code = main()
-    if "usdwrinkle.render.context" in sys.modules:
-        from ..render.context import release_context
+    from ..app.environment import release_context
 
-        release_context()  # the one GL context of the process, released cleanly
+    release_context()  # the one GL context of the process, released cleanly
     sys.exit(code)
 
 

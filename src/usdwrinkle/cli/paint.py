@@ -72,9 +72,9 @@ def check_display() -> None:
 
 
 def run(args) -> int:
+    from ..app.environment import require_schema
     from ..app.frames import check_time_code
     from ..paint.session import PaintSession, open_paint_stage
-    from ..schema import require_schema
 
     require_schema()
     size = _size(args.size)

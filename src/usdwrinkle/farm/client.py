@@ -19,7 +19,6 @@ Flow:
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import logging
 import math
 import os
@@ -29,9 +28,8 @@ import time
 import uuid
 from dataclasses import dataclass
 
+from ..app.chunks import file_identity, remove_temporaries, render_chunk
 from ..errors import UsdWrinkleError, print_stderr
-from ..outputs.atomic import remove_temporaries
-from .worker import file_identity, render_chunk
 
 _log = logging.getLogger(__name__)
 
@@ -136,20 +134,6 @@ def _connect(distributed, address: str, workers: int | None):
     return client, None, len(client.scheduler_info()["workers"])
 
 
-def _needs_bake(scene, frames: list[float], wrinkles: bool, recompute: bool) -> bool:
-    if not wrinkles:
-        return False
-    if recompute:
-        return True
-    for path in scene.meshes:
-        if not scene.meshes[path].wrinkled:
-            continue
-        source = scene.baked.get(path)
-        if source is None or not all(source.covers(f) for f in frames):
-            return True
-    return False
-
-
 @dataclass(frozen=True)
 class FarmRender:
     """What ``usdwrinkle render --dask`` asks for: the render job (app/render.RenderJob),
@@ -185,31 +169,18 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
     """Run a farm render. ``reporter``: progress(items, desc) and quiet
     (cli/common.Reporter); warnings are logged (usdwrinkle/log.py), the workers' too."""
     from ..app.bake import BakeJob
-    from ..engine import image_size
-    from ..scene.stage import StageSceneDelegate, refuse_overwriting_inputs
 
     distributed = _import_dask()
     job, plan = request.job, request.plan
     shot, options = job.shot, job.options
     frames, outputs = list(plan.frames), list(plan.outputs)
-    wrinkles = job.wrinkles
-    stage = shot.open()
     # the checks of a serial render, once, here (no GL context)
-    scene = StageSceneDelegate(stage, all_meshes=shot.options.all_meshes,
-                               relax_iterations=shot.options.relax_iterations,
-                               use_baked=job.uses_baked)
-    scene.camera(options.camera)  # a missing camera fails before any worker starts
-    needs_bake = _needs_bake(scene, frames, wrinkles, options.recompute)
-    layer = bake_path(job.output, shot.path) if needs_bake else None
+    chunks = job.plan_chunks(plan)
+    layer = bake_path(job.output, shot.path) if chunks.needs_bake else None
     if layer is not None:
-        refuse_overwriting_inputs(shot.path, [layer], stage)
-    for note in job.mesh_notes(stage, [p for p, r in scene.meshes.items() if r.wrinkled]):
-        _log.warning(note)
-    for note in job.frame_notes(stage, frames):
-        _log.warning(note)
-    width, height = image_size(scene, options.camera, options.width, options.height,
-                               frames[0])
-    image = job.image_options(width, height)
+        job.check_output(layer)
+    image = chunks.image
+    width, height = image.width, image.height
 
     started = time.perf_counter()
     client = cluster = None
@@ -231,16 +202,7 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
                 print_stderr(f"usdwrinkle: baked wave fields to {layer} in "
                              f"{time.perf_counter() - bake_started:.1f} s")
             render_stage = layer
-        composition = shot.options.composition()
-        if layer is not None and composition:
-            # the bake's layer carries the sublayers and variant selections; the workers
-            # still mask the population as the client did
-            from ..scene.composition import Composition
-
-            composition = Composition(mask=composition.mask)
-        engine_options = dataclasses.replace(
-            shot.engine_options(options.camera, use_baked=wrinkles),
-            stage=os.path.abspath(render_stage), composition=composition or None)
+        engine_options = job.chunk_engine(render_stage, baked=layer is not None)
         chunk = request.chunk or default_chunk(len(frames), workers)
         before = [file_identity(p) for p in outputs]
         run_id = uuid.uuid4().hex[:8]
@@ -263,8 +225,7 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
             with contextlib.suppress(Exception):
                 cluster.close()
             shutil.rmtree(cluster.usdwrinkle_scratch, ignore_errors=True)
-        for path in outputs:  # killed workers never reach atomic_path's cleanup
-            remove_temporaries(path)
+        remove_temporaries(outputs)  # killed workers never reach atomic_path's cleanup
 
 
 def _gather(distributed, futures, total: int, chunk: int,

@@ -1,4 +1,4 @@
-"""The task that a Dask worker runs: render one chunk of frames.
+"""A chunk of a render's frames, as a farm's worker runs it (farm/: Dask's tasks).
 
 One engine per worker process, kept across tasks: the GL context and the compiled
 passes cost most of a short chunk. It is created lazily inside the first task, on the
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import threading
+from typing import Any
 
 from ..errors import UsdWrinkleError
 from ..imagefiles import is_complete_image
@@ -21,10 +22,10 @@ from ..log import warnings_to
 from ..shot import EngineOptions, ImageOptions, render_frames
 
 _lock = threading.Lock()
-_cached: dict = {"key": None, "engine": None}
+_cached: dict[str, Any] = {"key": None, "engine": None}
 
 
-def _engine(options: EngineOptions):
+def _engine(options: EngineOptions) -> Any:
     """This process's engine for ``options`` (a new stage or options replaces it)."""
     key = (options, threading.get_ident())
     if _cached["key"] != key:
@@ -36,7 +37,7 @@ def _engine(options: EngineOptions):
     return _cached["engine"]
 
 
-def file_identity(path: str):
+def file_identity(path: str) -> tuple[int, int] | None:
     """(device, inode) of an existing file, else None: an atomic write makes a new inode."""
     try:
         st = os.stat(path)
@@ -45,7 +46,7 @@ def file_identity(path: str):
     return (st.st_dev, st.st_ino)
 
 
-def written_this_run(path: str, before) -> bool:
+def written_this_run(path: str, before: tuple[int, int] | None) -> bool:
     """True when ``path`` was written after the run took its snapshot ``before``
     (None: the file did not exist then). A retried chunk skips these frames, so that
     no frame is written twice."""
@@ -57,15 +58,16 @@ def written_this_run(path: str, before) -> bool:
 
 
 def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float],
-                 paths: list[str], before: list, skip_existing: bool) -> dict:
+                 paths: list[str], before: list[tuple[int, int] | None],
+                 skip_existing: bool) -> dict[str, Any]:
     """Render ``frames`` to ``paths``; returns {"written", "earlier", "skipped", "warnings",
     "error", "baked", "worker"}: "earlier" are frames this run wrote in an attempt at the
-    chunk whose worker died, "skipped" the complete frames --skip-existing kept.
+    chunk whose worker died, "skipped" the complete frames `skip_existing` kept.
 
     ``before``: each path's file identity when the run started (file_identity).
     """
-    result = {"written": [], "earlier": [], "skipped": [], "warnings": [], "error": None,
-              "baked": [], "worker": os.getpid()}
+    result: dict[str, Any] = {"written": [], "earlier": [], "skipped": [], "warnings": [],
+                              "error": None, "baked": [], "worker": os.getpid()}
     previous = dict(zip(paths, before, strict=True))
 
     def skip(path: str) -> bool:
@@ -95,3 +97,12 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
                                "attribute": exc.attribute, "frame": exc.frame,
                                "type": type(exc).__name__}
     return result
+
+
+def remove_temporaries(paths: list[str]) -> None:
+    """Remove what killed workers left beside ``paths`` (their writers never reach
+    atomic_path's cleanup)."""
+    from ..outputs.atomic import remove_temporaries as remove
+
+    for path in paths:
+        remove(path)
