@@ -101,6 +101,9 @@ def cpu_nodes(quick: bool, corpus: Path | None, ctx=None, before: str | None = N
                             "speedup": rows["before_exr"]["seconds"] / exr["seconds"]}
     if ctx is not None:
         result["encoders"] = encoders(ctx, path, width, height, 3 if quick else 15)
+        from .encoding import measure as encoding
+
+        result["encoding"] = encoding(quick, ctx)
     return result
 
 
@@ -226,4 +229,8 @@ def markdown(result: dict) -> list[str]:
             lines.append(f"| {e['library']} | {'half + float' if e['half'] else 'float'} | "
                          f"{e['compression']} | {e['ms']:.1f} | {e['bytes'] / 1024:.0f} |")
         lines.append("")
+    if row.get("encoding"):
+        from .encoding import markdown as encoding
+
+        lines += encoding(row["encoding"])
     return lines

@@ -111,3 +111,36 @@ def test_flags_replace_backquoted_fields_only():
     assert flagged("`exr_half` and `map_size` (/World/width)") == \
         "--exr-half and --map-size (/World/width)"
     assert flagged("width `width`") == "width --width"
+
+
+def test_writer_threads_follow_the_cores_and_the_memory(monkeypatch):
+    """Issue 45: the writer used 1 thread and 2 frames in flight on any node."""
+    from usdwrinkle import memory
+    from usdwrinkle.outputs import writer
+
+    monkeypatch.setattr(writer, "cores", lambda: 16)
+    assert writer.default_threads() == 15
+    monkeypatch.setattr(writer, "cores", lambda: 2)
+    assert writer.default_threads() == 1
+    monkeypatch.setattr(writer, "cores", lambda: 1)
+    assert writer.default_threads() == 1
+    monkeypatch.setattr(memory, "available_memory", lambda: 64 * 2**30)
+    assert writer.frames_in_flight(15, 66 * 2**20) == 16  # 1080p EXR: 16 x 66 MB fit
+    monkeypatch.setattr(memory, "available_memory", lambda: 1 * 2**30)
+    assert writer.frames_in_flight(15, 66 * 2**20) == 3   # a quarter of 1 GiB holds 3
+    assert writer.frames_in_flight(15, 2**30) == 2        # never fewer than 2
+    monkeypatch.setattr(memory, "available_memory", lambda: None)
+    assert writer.frames_in_flight(7, 2**30) == 8
+
+
+def test_a_job_resolves_its_writer_threads(monkeypatch):
+    from usdwrinkle.outputs import writer
+
+    monkeypatch.setattr(writer, "cores", lambda: 16)
+    job = RenderJob(Shot(SHIRT), "x.####.png")
+    assert job.image_options(1920, 1080).write_threads == 15
+    assert job.image_options(1920, 1080, chunked=True).write_threads == 1
+    assert RenderJob(Shot(SHIRT), "x.####.png", options=RenderOptions(write_threads=3)) \
+        .image_options(64, 64, chunked=True).write_threads == 3
+    with pytest.raises(UsdWrinkleError, match="`write_threads` must be in 0..64"):
+        RenderOptions(write_threads=65).check()

@@ -93,13 +93,16 @@ def assert_every_file_is_its_frame(folder: Path, fmt: str, alone: dict) -> None:
     assert not hidden(folder)
 
 
-@pytest.mark.parametrize("threads", [0, 1, 2])
+@pytest.mark.parametrize("threads", [0, 1, 2, None, 64])
 @pytest.mark.parametrize("fmt", FORMATS)
 def test_every_file_is_the_frame_it_names(gl_context, tmp_path, alone, fmt, threads):
     """Issue 22, finding 1: the overlapped writer put another frame's pixels in 8-bit
-    files (a readback array reused while the writer still encoded from it)."""
+    files (a readback array reused while the writer still encoded from it). Issue 45: with
+    the default (every core but one) and the most writer threads (64, 65 frames in
+    flight) too."""
+    given = [] if threads is None else ["--write-threads", str(threads)]
     assert main(["render", SHIRT, str(tmp_path / f"m.####.{fmt}"), "--frames", FRAMES,
-                 "--width", str(WIDTH), "--write-threads", str(threads), "--quiet"]) == 0
+                 "--width", str(WIDTH), *given, "--quiet"]) == 0
     assert_every_file_is_its_frame(tmp_path, fmt, alone)
 
 

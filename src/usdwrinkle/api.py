@@ -66,7 +66,7 @@ def _shot(stage: Path, all_meshes: bool, relax_iterations: int | None,
 
 def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
            camera: str | None = None, width: int = 960, height: int | None = None,
-           samples: int = 4, shade_samples: bool = True, write_threads: int = 1,
+           samples: int = 4, shade_samples: bool = True, write_threads: int | None = None,
            exr_half: bool = True, exr_compression: str = "zip", no_wrinkles: bool = False,
            skip_existing: bool = False, recompute: bool = False, stats: str | None = None,
            all_meshes: bool = False, relax_iterations: int | None = None,

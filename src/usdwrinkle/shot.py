@@ -85,6 +85,8 @@ class ImageOptions:
     #: shade every multisample where it lies, not once per pixel (render
     #: --no-shade-samples turns it off)
     shade_samples: bool = True
+    #: frames that may wait or encode at once (outputs/writer.frames_in_flight)
+    in_flight: int = 2
 
 
 @contextlib.contextmanager
@@ -129,7 +131,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[
             rows[path]["encode"] = (time.perf_counter() - started) * 1e3
 
     loop_started = time.perf_counter()
-    with FrameWriter(write, image.write_threads) as writer:
+    with FrameWriter(write, image.write_threads, image.in_flight) as writer:
         for frame, path in progress(list(zip(frames, paths, strict=True))):
             if skip(path):
                 continue

@@ -20,6 +20,7 @@ from ..geometry.options import GeometryOptions
 from ..maps.options import LAYOUTS as MAP_LAYOUTS
 from ..maps.options import TANGENT_SPACES, MapOptions
 from ..outputs.images import EXR_COMPRESSIONS
+from ..outputs.writer import MAX_THREADS as MAX_WRITE_THREADS
 from ..schema import MAP_ST, baked_names_text
 
 #: what --help shows of the defaults and names below
@@ -29,7 +30,6 @@ BAKED_NAMES_TEXT = baked_names_text()
 MAP_ST_NAME = MAP_ST
 DISPLAY_COLORS = ("amplitude", "compression")
 MAP_FORMATS = ("png", "exr")
-MAX_WRITE_THREADS = 8
 
 
 def _kind(hint: typing.Any) -> tuple[typing.Any, bool, bool]:
@@ -150,8 +150,9 @@ class RenderOptions(_Checked):
     samples: int = 4
     #: shade every multisample where it lies (False: once per pixel, at its centroid)
     shade_samples: bool = True
-    #: threads that encode and write frames while the next ones render (0..8)
-    write_threads: int = 1
+    #: threads that encode and write frames while the next ones render, 0..64 (None: every
+    #: core but one; 0: each frame is written before the next renders)
+    write_threads: int | None = None
     #: EXR: colour and normals as half float (depth and the wrinkle fields stay float)
     exr_half: bool = True
     exr_compression: str = "zip"
@@ -170,7 +171,8 @@ class RenderOptions(_Checked):
         if self.width <= 0 or (self.height is not None and self.height <= 0):
             raise UsdWrinkleError("`width` and `height` must be positive")
         check_samples(self.samples)
-        if not 0 <= self.write_threads <= MAX_WRITE_THREADS:
+        if self.write_threads is not None and \
+                not 0 <= self.write_threads <= MAX_WRITE_THREADS:
             raise UsdWrinkleError(f"`write_threads` must be in 0..{MAX_WRITE_THREADS}")
 
 

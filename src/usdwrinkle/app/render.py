@@ -230,7 +230,7 @@ class RenderJob:
                     needs_bake = True
         width, height = image_size(scene, self.options.camera, self.options.width,
                                    self.options.height, plan.frames[0])
-        return ChunkPlan(self.image_options(width, height), needs_bake)
+        return ChunkPlan(self.image_options(width, height, chunked=True), needs_bake)
 
     def check_output(self, path: str) -> None:
         """Refuse a further file the job writes (a farm's bake) that is one of the stage's
@@ -255,13 +255,20 @@ class RenderJob:
 
     # --- the work -----------------------------------------------------------------------
 
-    def image_options(self, width: int, height: int) -> Any:
-        """The frame loop's shot.ImageOptions at the resolved size."""
+    def image_options(self, width: int, height: int, chunked: bool = False) -> Any:
+        """The frame loop's shot.ImageOptions at the resolved size (``chunked``: for a farm's
+        worker process, one of several on its node: one writer thread unless asked)."""
+        from ..outputs.writer import default_threads, frames_in_flight
         from ..shot import ImageOptions
 
         o = self.options
-        return ImageOptions(width, height, o.samples, self.wrinkles, o.write_threads,
-                            o.exr_compression, o.exr_half, o.shade_samples)
+        threads = o.write_threads if o.write_threads is not None else \
+            (1 if chunked else default_threads())
+        # what a frame holds until it is written: at most 32 bytes a pixel (an EXR's
+        # colour, normals, depth and wrinkle fields)
+        in_flight = frames_in_flight(threads, 32 * width * height)
+        return ImageOptions(width, height, o.samples, self.wrinkles, threads,
+                            o.exr_compression, o.exr_half, o.shade_samples, in_flight)
 
     def run(self, ctx: Any = None) -> RenderResult:
         """Check, start the engine, render every frame; ``ctx``: a moderngl context to

@@ -35,10 +35,12 @@ def add_parser(subparsers) -> None:
                         "filtering averages a baked map; --no-shade-samples shades each "
                         "pixel once, at its centroid (about 1.4x faster on llvmpipe, jagged "
                         "fold crests; README: render options)")
-    p.add_argument("--write-threads", type=int, default=1, metavar="N",
-                   help="threads that encode and write frames while the next ones render "
-                        "(1; at most 2 frames in flight; 0 writes each frame before the next "
-                        "is rendered)")
+    p.add_argument("--write-threads", type=int, metavar="N",
+                   help="threads that encode and write frames while the next ones render, "
+                        "0..64 (default: every CPU core but one, at least 1; with --dask, 1 "
+                        "per worker; 0 writes each frame before the next is rendered). "
+                        "Frames in flight: one per thread and one more, within a quarter of "
+                        "the available memory")
     exr = p.add_mutually_exclusive_group()
     exr.add_argument("--exr-half", dest="exr_half", action="store_true",
                      help="EXR: colour and normals as half float, as compositing keeps them; "
@@ -47,8 +49,11 @@ def add_parser(subparsers) -> None:
                      help="EXR: every channel as 32-bit float (files about 60%% larger)")
     p.set_defaults(exr_half=True)
     p.add_argument("--exr-compression", choices=EXR_COMPRESSIONS,
-                   default="zip", help="EXR compression; default zip (the fastest "
-                                       "compressed encode measured, docs/benchmarks.md)")
+                   default="zip", help="EXR compression; default zip, the fastest lossless "
+                                       "compression that keeps files small; none encodes "
+                                       "about 5x faster into 8x larger files (a fast local "
+                                       "disk may prefer it); dwaa is lossy "
+                                       "(docs/benchmarks.md: encoding)")
     p.add_argument("--no-wrinkles", action="store_true",
                    help="render the same shading without wrinkles (comparison, timing)")
     p.add_argument("--skip-existing", action="store_true",

@@ -10,8 +10,42 @@ are finished (or their temporary files removed) before the exception goes on.
 """
 from __future__ import annotations
 
+import os
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
+
+#: the most writer threads (--write-threads); the automatic count stays below it too
+MAX_THREADS = 64
+#: the share of the available memory that frames waiting for or in encoding may hold
+MEMORY_SHARE = 0.25
+
+
+def cores() -> int:
+    """The CPU cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def default_threads() -> int:
+    """Writer threads when none are asked for: every core but one, which renders (on a
+    2-core machine 1; on a 16-core GPU node 15). Both encoders release the GIL, so the
+    threads encode in parallel (docs/benchmarks.md: encoding)."""
+    return max(1, min(cores() - 1, MAX_THREADS))
+
+
+def frames_in_flight(threads: int, frame_bytes: int) -> int:
+    """Frames that may wait or encode at once: one per thread and one more, so that no
+    thread idles while the next frame renders, and no more than MEMORY_SHARE of the
+    available memory holds (at least 2: frame f encodes while f + 1 renders)."""
+    from ..memory import available_memory
+
+    wanted = threads + 1
+    available = available_memory()
+    if available is not None and frame_bytes > 0:
+        wanted = min(wanted, int(available * MEMORY_SHARE) // frame_bytes)
+    return max(2, wanted)
 
 
 class FrameWriter:
