@@ -573,7 +573,8 @@ def test_an_interrupted_check_says_nothing_of_frames(tmp_path):
     stage = sheet_stage(tmp_path / "s.usda")
     code = """
 import sys
-from usdwrinkle.cli import check, main
+from usdwrinkle.app import check
+from usdwrinkle.cli import main
 def interrupted(stage):
     raise KeyboardInterrupt
 check.collect = interrupted

@@ -84,7 +84,7 @@ def collect() -> Iterator[list[str]]:
         yield messages
 
 
-def silenced():
+def silenced() -> contextlib.AbstractContextManager[None]:
     """A block whose warnings are dropped (the host's logging still gets them)."""
     return warnings_to(_drop)
 
