@@ -41,24 +41,6 @@ def _size(text: str) -> tuple[int, int]:
     return width, height
 
 
-def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
-    """Refuse, before a window opens, a stage with nothing to paint, or a --prim that is
-    not a mesh of it (the session would say so inside an empty window)."""
-    from pxr import Usd, UsdGeom
-
-    from .. import schema
-
-    meshes = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Mesh)]
-    if prim is not None and str(prim) not in {str(p.GetPath()) for p in meshes}:
-        raise UsdWrinkleError(f"--prim {prim} is not a Mesh of the stage")
-    if not all_meshes and not any(schema.has_wrinkle_api(p) for p in meshes):
-        if paths := schema.unapplied_controls(stage):
-            raise UsdWrinkleError(schema.unapplied_message(paths))
-        raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to paint "
-                              "(pass --all-meshes to paint every mesh, or apply WrinkleAPI "
-                              "with usdwrinkle apply)")
-
-
 def check_display() -> None:
     """Refuse, in one line, a Linux session with no display: Qt's xcb platform would
     abort the process instead."""
@@ -74,14 +56,14 @@ def check_display() -> None:
 def run(args) -> int:
     from ..app.environment import require_schema
     from ..app.frames import check_time_code
-    from ..paint.session import PaintSession, open_paint_stage
+    from ..paint.session import PaintSession, check_paintable, open_paint_stage
 
     require_schema()
     size = _size(args.size)
     if args.frame is not None:
         check_time_code(args.frame, "`frame`")
     stage, layer, save = open_paint_stage(args.stage, args.output)
-    check_paintable(stage, args.prim, args.all_meshes)
+    check_paintable(stage, args.prim, args.all_meshes)  # before a window opens
     check_display()
     from ..paint.window import run_window  # a one-line error without PySide6
 

@@ -528,3 +528,19 @@ def with_brush(session: PaintSession, **changes) -> BrushSettings:
     """Change the session's brush (checked); returns it."""
     session.brush = replace(session.brush, **changes)
     return session.brush
+
+
+def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
+    """Refuse, before a window opens, a stage with nothing to paint, or a ``prim`` that
+    is not a mesh of it (the session would say so inside an empty window)."""
+    from pxr import Usd, UsdGeom
+
+    meshes = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Mesh)]
+    if prim is not None and str(prim) not in {str(p.GetPath()) for p in meshes}:
+        raise UsdWrinkleError(f"`prim` {prim} is not a Mesh of the stage")
+    if not all_meshes and not any(schema.has_wrinkle_api(p) for p in meshes):
+        if paths := schema.unapplied_controls(stage):
+            raise UsdWrinkleError(schema.unapplied_message(paths))
+        raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to paint "
+                              "(pass `all_meshes` to paint every mesh, or apply WrinkleAPI "
+                              "with usdwrinkle apply)")
