@@ -326,6 +326,16 @@ def scenario_faults(out: Path, stage: str) -> dict:
             QTest.keyClick(window.view, Qt.Key_S, Qt.ControlModifier)
             QtWidgets.QApplication.instance().processEvents()
         result["seen"].append(window.errors[before:])
+        # the window shows its banner from the event loop (a zero-time timer, so that no
+        # layout change happens inside paintGL): wait for it, as an artist would see it
+        # a moment later, instead of reading the banner in the same instant
+        shown = window.errors[before:][-1:] if len(window.errors) > before else []
+        try:
+            wait_for(lambda t=shown: bool(t) and window.error_banner.isVisible() and
+                     window.error_banner.text() == f"error: {t[0]}", f"the {fault} banner",
+                     timeout=30.0)
+        except TimeoutError:
+            pass  # the test reports the banner as not shown
         result[f"banner_{fault}"] = window.error_banner.isVisible() and \
             "injected" in window.error_banner.text()
     # and it still draws and paints

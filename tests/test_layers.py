@@ -244,3 +244,20 @@ def test_the_library_names_fields_not_flags():
     assert found == []
     # the reader sees what it looks for
     assert any("--" in text for _, text in _strings(layering.PACKAGE / "cli" / "render.py"))
+
+
+def test_no_time_is_nan():
+    """Issue 44: the default time was NaN in 27 places (a comparison with NaN is silently
+    false). A frame is now a float or None (timecode.Frame): nothing tests a time for
+    NaN, and nothing makes a NaN frame."""
+    import re
+
+    time_names = r"(frame|frames\[\d\]|time|first|last|start|end|offset|other)"
+    tested = re.compile(rf"isnan\(\s*{time_names}\b")
+    made = re.compile(r"\[float\(\"nan\"\)\]|frame\w* = (math\.nan|float\(\"nan\"\))")
+    found = [f"{module}:{number}: {line.strip()}"
+             for module, path in layering.modules().items()
+             for number, line in enumerate(path.read_text().splitlines(), 1)
+             if tested.search(line) or made.search(line)]
+    assert found == []
+    assert tested.search("if math.isnan(frame):") and made.search('return [float("nan")]')

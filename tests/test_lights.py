@@ -90,7 +90,7 @@ def test_invisible_lights_are_off_and_a_stage_without_lights_gets_the_camera_lig
     mesh.CreatePointsAttr([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)])
     mesh.CreateFaceVertexCountsAttr([4])
     mesh.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
-    frame = StageSceneDelegate(stage).sample(float("nan"), 1.0)
+    frame = StageSceneDelegate(stage).sample(None, 1.0)
     (camera,) = frame.lights
     assert camera.kind == "positional" and not camera.attenuate
     np.testing.assert_allclose(camera.color, math.pi)
@@ -192,7 +192,7 @@ def test_preview_surface_is_storms(gl_context, material):
     stage = quad_stage(material, light_rotation=(35.0, 0.0, 0.0))
     engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam")
     try:
-        color = engine.render_frame(float("nan"), 65, 65, wrinkles=False, samples=1)["color"]
+        color = engine.render_frame(None, 65, 65, wrinkles=False, samples=1)["color"]
     finally:
         engine.release()
     to_light = np.array([0.0, -math.sin(math.radians(35)), math.cos(math.radians(35))])
@@ -214,7 +214,7 @@ def test_the_fallback_surface_is_storms_simple_lighting(gl_context):
         engine = WrinkleEngine(quad_stage(None, rotation, display), ctx=gl_context,
                                camera="/Cam")
         try:
-            pixel = engine.render_frame(float("nan"), 65, 65, wrinkles=False,
+            pixel = engine.render_frame(None, 65, 65, wrinkles=False,
                                         samples=1)["color"].pixels[32, 32, :3]
         finally:
             engine.release()
@@ -242,7 +242,7 @@ def test_a_per_vertex_display_color_is_shaded_per_corner(gl_context):
     primvar.Set([Gf.Vec3f(*red), Gf.Vec3f(*blue), Gf.Vec3f(*blue), Gf.Vec3f(*red)])
     engine = WrinkleEngine(stage, ctx=gl_context, camera="/Cam")
     try:
-        color = engine.render_frame(float("nan"), 65, 65, wrinkles=False,
+        color = engine.render_frame(None, 65, 65, wrinkles=False,
                                     samples=1)["color"].pixels
     finally:
         engine.release()

@@ -192,7 +192,7 @@ def test_which_state_a_frame_reads():
     assert reads_index(2.0, 1.0) == 0
     assert reads_index(1.25, 1.0) == 0  # a sub-frame reads the grid frame below it
     assert reads_index(5.75, 1.0) == 4
-    assert reads_index(float("nan"), 1.0) is None
+    assert reads_index(None, 1.0) is None  # the default time
     assert on_grid(3.0, 1.0) and not on_grid(3.5, 1.0) and not on_grid(0.0, 1.0)
     assert cache_capacity(1 << 20) == 8 and cache_capacity(1 << 30) == 1
     assert cache_capacity(100 << 20, frames=8, budget=256 << 20) == 2

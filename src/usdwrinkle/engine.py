@@ -162,12 +162,12 @@ class WrinkleEngine:
             return None
         return start + self.history.last
 
-    def sample(self, frame: float, aspect: float):
+    def sample(self, frame: float | None, aspect: float):
         """The scene's FrameRecord at ``frame`` through this engine's camera (what
         compute_frame syncs to), without computing anything."""
         return self.scene.sample(frame, aspect, self.camera)
 
-    def camera_aspect(self, frame: float) -> float | None:
+    def camera_aspect(self, frame: float | None) -> float | None:
         """This engine's camera's aspect ratio at ``frame`` (None: no camera)."""
         return self.scene.camera_aspect(self.camera, frame)
 
@@ -176,7 +176,8 @@ class WrinkleEngine:
         bits}, added, removed): what pull_changes turns into dirty bits. Consumes them."""
         return self.scene.process_changes()
 
-    def resolution(self, width: int, height: int | None, frame: float) -> tuple[int, int]:
+    def resolution(self, width: int, height: int | None,
+                   frame: float | None) -> tuple[int, int]:
         """Fill in ``--height`` from the camera's aspect ratio (image_size)."""
         return image_size(self.scene, self.camera, width, height, frame)
 
@@ -186,7 +187,7 @@ class WrinkleEngine:
         iterations = max((self.scene.meshes[path].params.relax_iterations
                           for path in self.wrinkled_paths if path not in self.scene.baked),
                          default=0)
-        finite = [f for f in frames if not math.isnan(f)]
+        finite = [f for f in frames if f is not None]
         if not wrinkles or not iterations or not finite:
             return
         start = self.history_start()
@@ -208,9 +209,9 @@ class WrinkleEngine:
         if self._history_start is not None:
             return self._history_start
         frames = self.scene.frame_range()
-        return None if math.isnan(frames[0]) else frames[0]
+        return frames[0]
 
-    def _history_plan(self, frame: float) -> tuple[list[int], int | None]:
+    def _history_plan(self, frame: float | None) -> tuple[list[int], int | None]:
         """The grid frames (as indices: frame - start) to compute before ``frame``, and
         the index of the kept state the first of them (or ``frame`` itself) reads (None:
         a cold start). Plans only: the caller applies it.
@@ -222,7 +223,7 @@ class WrinkleEngine:
         draw), and a frame whose state is kept replays nothing.
         """
         start = self.history_start()
-        if start is None or math.isnan(frame):
+        if start is None or frame is None:
             return [], None
         needed = reads_index(frame, start)
         if needed is None:
@@ -275,7 +276,8 @@ class WrinkleEngine:
             self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME,
                                           meshes.get(path))
 
-    def compute_frame(self, frame: float, aspect: float | None = None, wrinkles: bool = True):
+    def compute_frame(self, frame: float | None, aspect: float | None = None,
+                      wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
 
         With wrinkles, the frame starts from the kept wave state of the grid frame before
@@ -330,7 +332,7 @@ class WrinkleEngine:
             if mesh.resources is not None and mesh.resources.waves.slots > keep:
                 mesh.resources.waves.release_slots(keep)
 
-    def render_frame(self, frame: float, width: int, height: int, wrinkles: bool = True,
+    def render_frame(self, frame: float | None, width: int, height: int, wrinkles: bool = True,
                      samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):
         """Compute and draw ``frame``; returns {aov name: RenderBuffer}.
 
@@ -342,7 +344,7 @@ class WrinkleEngine:
         return self._render(frame, width, height, wrinkles, samples, tuple(aovs), None,
                             shade_samples)
 
-    def render_image(self, frame: float, width: int, height: int, layout,
+    def render_image(self, frame: float | None, width: int, height: int, layout,
                      wrinkles: bool = True, samples: int = 4, shade_samples: bool = True,
                      camera=None):
         """Compute and draw ``frame``; returns it as an image file stores it
@@ -410,7 +412,7 @@ class WrinkleEngine:
 
 
 def image_size(scene, camera: str | None, width: int, height: int | None,
-               frame: float) -> tuple[int, int]:
+               frame: float | None) -> tuple[int, int]:
     """``--width`` and ``--height``, the height from the camera's aspect ratio when not
     given (16:9 without a camera), rounded down as usdrecord does. Needs only the scene
     delegate, no GL."""

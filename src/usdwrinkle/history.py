@@ -99,17 +99,19 @@ class WaveHistory:
             self._states.popitem(last=False)
 
 
-def on_grid(frame: float, start: float | None) -> bool:
+def on_grid(frame: float | None, start: float | None) -> bool:
     """Whether ``frame`` is a frame of the history's grid start, start + 1, ..."""
-    return start is not None and not math.isnan(frame) and frame >= start and \
+    return start is not None and frame is not None and frame >= start and \
         float(frame - start).is_integer()
 
 
-def reads_index(frame: float, start: float) -> int | None:
+def reads_index(frame: float | None, start: float) -> int | None:
     """The grid index whose state ``frame`` starts from: the grid frame before it (f - 1
     on the grid, the grid frame below a sub-frame), or None for the shot's first frame
     and frames before it (a cold start)."""
+    if frame is None:
+        return None
     offset = frame - start
-    if math.isnan(offset) or offset <= 0:
+    if offset <= 0:
         return None
     return math.ceil(offset) - 1

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -90,21 +89,21 @@ class ImageOptions:
 
 
 @contextlib.contextmanager
-def at_frame(frame: float):
+def at_frame(frame: float | None):
     """Name the frame in a per-frame error that did not name one."""
     try:
         yield
     except UsdWrinkleError as exc:
-        if exc.frame is None and not math.isnan(frame):
+        if exc.frame is None and frame is not None:
             exc.frame = frame
             exc.args = (exc.one_line(),)
         raise
 
 
-def render_frames(engine, image: ImageOptions, frames: list[float], paths: list[str],
+def render_frames(engine, image: ImageOptions, frames: list[float | None], paths: list[str],
                   skip: Callable[[str], bool] = lambda path: False,
                   progress: Callable = lambda items: items,
-                  stats: dict | None = None) -> list[float]:
+                  stats: dict | None = None) -> list[float | None]:
     """Render each frame to its path (atomically); returns the frames written.
 
     ``skip(path)``: leave that frame alone (``--skip-existing``, a farm retry).
@@ -273,6 +272,6 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
 def frame_spec_text(frames: list[float]) -> str:
     """The frames of a bake for its layer's metadata, when no --frames named them:
     ``first:last``, or ``default``."""
-    if not frames or math.isnan(frames[0]):
-        return format_frame(float("nan"))
+    if not frames or frames[0] is None:
+        return format_frame(None)
     return f"{format_frame(frames[0])}:{format_frame(frames[-1])}"

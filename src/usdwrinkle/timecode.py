@@ -1,25 +1,34 @@
-"""Frames as people read them: one formatting for messages, summaries and metadata."""
+"""Frames: what a frame is, and how people read one (messages, summaries, file names).
+
+A frame is a time code (a float), or None for USD's default time
+(``Usd.TimeCode.Default()``): the stage's unanimated values, what a stage without a time
+range renders. None, not NaN: a comparison or sum with None fails loudly, where NaN
+silently compares false.
+"""
 from __future__ import annotations
 
-import math
+from typing import TypeAlias
+
+#: a time code, or None for the default time
+Frame: TypeAlias = "float | None"
 
 
-def format_frame(frame: float) -> str:
-    """``24`` for an integer frame, ``1.25`` for a sub-frame, ``default`` for NaN (USD's
+def format_frame(frame: float | None) -> str:
+    """``24`` for an integer frame, ``1.25`` for a sub-frame, ``default`` for None (USD's
     default time)."""
-    frame = float(frame)
-    if math.isnan(frame):
+    if frame is None:
         return "default"
+    frame = float(frame)
     return str(int(frame)) if frame.is_integer() else f"{frame:g}"
 
 
 SUBFRAME_DECIMALS = 3
 
 
-def frame_text(frame: float, width: int = 4) -> str:
+def frame_text(frame: float | None, width: int = 4) -> str:
     """A frame number as it appears in a file name: zero-padded, sub-frames to
-    SUBFRAME_DECIMALS decimals (rounded, so 1.9996 names 0002.000), NaN as 'default'."""
-    if math.isnan(frame):
+    SUBFRAME_DECIMALS decimals (rounded, so 1.9996 names 0002.000), None as 'default'."""
+    if frame is None:
         return format_frame(frame)
     rounded = round(frame, SUBFRAME_DECIMALS)
     sign = "-" if rounded < 0 else ""

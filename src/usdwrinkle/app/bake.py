@@ -29,7 +29,7 @@ class BakeResult:
 
     #: the layer written
     layer: str
-    frames: list[float]
+    frames: list[float | None]
     #: how many meshes the layer holds
     count: int
     #: the wrinkled meshes, each with its width's summary (scene/params.width_summary)

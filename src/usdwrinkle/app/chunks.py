@@ -57,7 +57,7 @@ def written_this_run(path: str, before: tuple[int, int] | None) -> bool:
     return (st.st_dev, st.st_ino) != before and st.st_size > 0
 
 
-def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float],
+def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float | None],
                  paths: list[str], before: list[tuple[int, int] | None],
                  skip_existing: bool) -> dict[str, Any]:
     """Render ``frames`` to ``paths``; returns {"written", "earlier", "skipped", "warnings",

@@ -84,7 +84,7 @@ def parse_frame_spec(spec: str) -> list[float]:
 
 
 #: decimals of a sub-frame in a file name (frame 1.25 -> 0001.250)
-def frame_path(pattern: str, frame: float) -> str:
+def frame_path(pattern: str, frame: float | None) -> str:
     """Replace the first run of '#' by the zero-padded frame number."""
     match = _HASHES.search(pattern)
     if match is None:
@@ -93,17 +93,17 @@ def frame_path(pattern: str, frame: float) -> str:
         pattern[match.end():]
 
 
-def frame_paths(pattern: str, frames: list[float]) -> list[str]:
+def frame_paths(pattern: str, frames: list[float | None]) -> list[str]:
     """One output path per frame; refuses frames that would share a file name (sub-frames
     closer than the file name's SUBFRAME_DECIMALS decimals)."""
     check_output_pattern(pattern, frames)
     paths = [frame_path(pattern, f) for f in frames]
-    first: dict[object, tuple[float, str]] = {}
+    first: dict[object, tuple[float | None, str]] = {}
     for frame, path in zip(frames, paths, strict=True):
         # the same file, or files that name the same frame (1 and 1.0001: 0001, 0001.000)
-        for key in (path, "nan" if math.isnan(frame) else round(frame, SUBFRAME_DECIMALS)):
+        for key in (path, None if frame is None else round(frame, SUBFRAME_DECIMALS)):
             other, other_path = first.setdefault(key, (frame, path))
-            if other != frame and not (math.isnan(other) and math.isnan(frame)):
+            if other != frame:
                 where = f"written to '{path}'" if other_path == path else \
                     f"named frame {frame_text(frame, 1)} ('{other_path}', '{path}')"
                 raise UsdWrinkleError(
@@ -112,7 +112,7 @@ def frame_paths(pattern: str, frames: list[float]) -> list[str]:
     return paths
 
 
-def check_output_pattern(pattern: str, frames: list[float]) -> None:
+def check_output_pattern(pattern: str, frames: list[float | None]) -> None:
     if len(frames) > 1 and "#" not in pattern:
         raise UsdWrinkleError(
             f"output '{pattern}' has no '#' frame placeholder, but {len(frames)} frames are "

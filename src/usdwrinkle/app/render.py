@@ -26,7 +26,7 @@ _log = logging.getLogger(__name__)
 class RenderPlan:
     """What a render will do, known before any GL work: the frames and their files."""
 
-    frames: list[float]
+    frames: list[float | None]
     outputs: list[str]
 
 
@@ -44,10 +44,10 @@ class RenderResult:
     """What a render did."""
 
     #: the frames of the shot, and the file of each (written, or kept by ``skip_existing``)
-    frames: list[float]
+    frames: list[float | None]
     outputs: list[str]
     #: the frames written this run
-    written: list[float]
+    written: list[float | None]
     width: int
     height: int
     #: seconds of the frame loop (after the checks and the engine's start)
@@ -152,9 +152,8 @@ class RenderJob:
                          if all_meshes else NO_WRINKLED_MESH)
         return notes
 
-    def frame_notes(self, stage: Any, frames: list[float]) -> list[str]:
+    def frame_notes(self, stage: Any, frames: list[float | None]) -> list[str]:
         """Warnings about the frames: those outside what a displaced-geometry bake holds."""
-        import math
 
         from ..scene.baked import geometry_bake
 
@@ -162,16 +161,16 @@ class RenderJob:
         if found is None:
             return []
         layer, first, last = found
-        if math.isnan(first) or math.isnan(last):
+        if first is None or last is None:
             return []
-        outside = [f for f in frames if not math.isnan(f) and not first <= f <= last]
+        outside = [f for f in frames if f is not None and not first <= f <= last]
         if not outside:
             return []
         return [f"{len(outside)} frame(s) lie outside the frames the displaced geometry was "
                 f"baked for ({first:g}..{last:g}), from {outside[0]:g}: they show its nearest "
                 f"baked frame ({layer})"]
 
-    def _engine_notes(self, engine: Any, frames: list[float]) -> None:
+    def _engine_notes(self, engine: Any, frames: list[float | None]) -> None:
         from ..scene.baked import holds_bake
         from ..scene.stage import outside_range_note
 

@@ -3,7 +3,6 @@ composition, the options that decide how its wrinkles are computed, and its fram
 from __future__ import annotations
 
 import logging
-import math
 import os
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -70,7 +69,7 @@ class Shot:
             self._stage = open_stage(self.path, composition or None)
         return self._stage
 
-    def frames(self, frames: str | Sequence[float] | None) -> list[float]:
+    def frames(self, frames: str | Sequence[float | None] | None) -> list[float | None]:
         """The frames a job runs: ``frames`` as usdrecord's FrameSpec ("1:24", "1,5",
         "1:24x2"), a list of numbers, or None for the stage's start..end (the default
         time without a range)."""
@@ -81,13 +80,11 @@ class Shot:
             stage = self.open()
             if note := inherited_range_note(stage):
                 _log.warning(note)
-            return stage_frames(stage)
-        if not isinstance(frames, str):
-            values = list(frames) if isinstance(frames, Sequence) else None
-            if values is not None and len(values) == 1 and isinstance(values[0], float) and \
-                    math.isnan(values[0]):
-                return [float(values[0])]  # [NaN]: the default time (usdview's current time)
-        return list(parse_frame_spec(frame_spec_of(frames)))
+            return list(stage_frames(stage))
+        if not isinstance(frames, str) and list(frames) == [None]:
+            return [None]  # the default time (usdview's, when it shows no time)
+        parsed: list[float | None] = list(parse_frame_spec(frame_spec_of(frames)))
+        return parsed
 
     def engine_options(self, camera: str | None = None, use_baked: bool = True,
                        profile: bool = False) -> Any:
@@ -122,14 +119,14 @@ def at_frame(frame: float) -> Any:
     return frame_block(frame)
 
 
-def frame_spec_of(frames: str | Sequence[float]) -> str:
+def frame_spec_of(frames: str | Sequence[float | None]) -> str:
     """A FrameSpec text of ``frames`` (a text, or a list of numbers)."""
     if isinstance(frames, str):
         if not frames.strip():
             raise UsdWrinkleError("`frames` is empty (None runs the stage's time range)")
         return frames
     try:
-        values = [float(f) for f in frames]
+        values = [float(f) for f in frames]  # type: ignore[arg-type]
     except (TypeError, ValueError):
         raise UsdWrinkleError(f"`frames`={frames!r} must be a FrameSpec text or a list of "
                               "numbers") from None

@@ -8,7 +8,6 @@ interrupt leaves no partial map set, and the layer that names them is written af
 """
 from __future__ import annotations
 
-import math
 import os
 import re
 import shutil
@@ -215,6 +214,6 @@ def relative_asset(path: str, layer_path: str) -> str:
     return relative if relative.startswith("../") else "./" + relative
 
 
-def frame_token(frame: float) -> str | None:
+def frame_token(frame: float | None) -> str | None:
     """A frame as it appears in a map's file name, or None for the default time."""
-    return None if math.isnan(frame) else frame_text(frame)
+    return None if frame is None else frame_text(frame)

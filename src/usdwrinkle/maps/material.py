@@ -26,7 +26,6 @@ neither read here nor edited.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass
 
 from pxr import Sdf
@@ -139,7 +138,7 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         file_input = attribute_spec(material, f"inputs:{input_name}", VALUE_TYPES.Asset)
         file_input.default = Sdf.AssetPath(frames[0][1])  # readers that ignore time samples
         for frame, asset in frames:
-            if not math.isnan(frame):
+            if frame is not None:
                 layer.SetTimeSample(file_input.path, frame, Sdf.AssetPath(asset))
         if shader_name is None or (kind == "height" and not displacement):
             continue

@@ -6,7 +6,6 @@ beside the target, then a rename), and never over a layer the input stage uses.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 
@@ -158,7 +157,7 @@ class LayerBaker:
                     raise UsdWrinkleError(
                         f"the computed {name} is not finite (NaN or Inf): the mesh's scale or "
                         "transform is out of the GPU's float range", path, None,
-                        None if np.isnan(frame) else frame)
+                        frame)
         self.frames.append(frame)
         for path, fields in fields_by_path.items():
             if path in self.wrinkled:
@@ -240,7 +239,7 @@ class LayerBaker:
         layer = self.layer
         layer.timeCodesPerSecond = facts.time_codes_per_second
         layer.framesPerSecond = facts.frames_per_second
-        timed = [f for f in self.frames if not math.isnan(f)]
+        timed = [f for f in self.frames if f is not None]
         if timed:
             layer.startTimeCode = min(timed)
             layer.endTimeCode = max(timed)
@@ -358,10 +357,10 @@ def attribute_spec(prim_spec: Sdf.PrimSpec, name: str, type_name, value=None, *,
     return spec
 
 
-def set_value(layer: Sdf.Layer, attr_path, frame: float, value) -> None:
+def set_value(layer: Sdf.Layer, attr_path, frame: float | None, value) -> None:
     """A baked frame's value of the attribute at ``attr_path``: its time sample at
-    ``frame``, or its default when the frame is the default time (NaN)."""
-    if math.isnan(frame):
+    ``frame``, or its default when the frame is the default time (None)."""
+    if frame is None:
         layer.GetAttributeAtPath(attr_path).default = value
     else:
         layer.SetTimeSample(attr_path, frame, value)

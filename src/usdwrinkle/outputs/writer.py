@@ -62,11 +62,11 @@ class FrameWriter:
         self.pool = ThreadPoolExecutor(threads, thread_name_prefix="usdwrinkle-writer") \
             if threads > 0 else None
         self.pending: deque[tuple[float, Future]] = deque()
-        self.written: list[float] = []
+        self.written: list[float | None] = []
         #: seconds the caller waited for the writer (the part of encoding not hidden)
         self.waited = 0.0
 
-    def submit(self, frame: float, path: str, image) -> None:
+    def submit(self, frame: float | None, path: str, image) -> None:
         if self.pool is None:
             self.write(path, image)
             self.written.append(frame)

@@ -157,10 +157,10 @@ class PaintSession:
         self.active = self.paths[0]
         frames = self.engine.scene.frame_range()
         #: the frames the timeline offers ([default] for a stage without a time range)
-        self.frames = [float(f) for f in frames]
+        self.frames = [None if f is None else float(f) for f in frames]
         self.frame_range = (self.frames[0], self.frames[-1])
         end = self.frames[-1]
-        self.frame = float(frame if frame is not None else end)
+        self.frame = frame if frame is not None else end
         self.brush = BrushSettings(radius=0.1 * self._size(), width=float(
             np.median(self.meshes[self.active].width)))
         self.orbit: OrbitCamera | None = OrbitCamera(np.zeros(3), 1.0,

@@ -25,6 +25,7 @@ except ImportError as exc:  # the optional extra
     raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
                           f"({exc})") from None
 
+from ..timecode import format_frame
 from .brush import FALLOFFS, MIRROR_AXES, MODES
 from .session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
 from .view import project
@@ -565,7 +566,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.width_slider.low, self.width_slider.high = width / 20, width * 20
         self._fill_controls()
         frames = session.frames
-        if len(frames) > 1 and not np.isnan(frames[0]):
+        if len(frames) > 1 and frames[0] is not None:
             blocked = self.timeline.blockSignals(True)
             self.timeline.setRange(int(frames[0]), int(frames[-1]))
             self.timeline.setValue(int(round(session.frame)))
@@ -677,7 +678,7 @@ class PaintWindow(QtWidgets.QMainWindow):
 
     def _update_frame_label(self) -> None:
         if self.session is not None:
-            self.frame_label.setText(f"frame {self.session.frame:g}")
+            self.frame_label.setText(f"frame {format_frame(self.session.frame)}")
 
     @guarded
     def _toggle_play(self, on: bool):
@@ -746,7 +747,7 @@ class PaintWindow(QtWidgets.QMainWindow):
     def frame_drawn(self, frame) -> None:
         kind = "preview" if frame.quality.preview else "full"
         self.statusBar().showMessage(
-            f"frame {frame.frame:g}, {frame.width}x{frame.height} {kind} in "
+            f"frame {format_frame(frame.frame)}, {frame.width}x{frame.height} {kind} in "
             f"{1e3 * frame.seconds:.0f} ms; radius {self.session.brush.radius:.3g}; "
             f"mesh {self.session.active}")
 

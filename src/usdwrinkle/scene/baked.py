@@ -16,7 +16,6 @@ Which frames a bake covers
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,15 +104,15 @@ class BakedSource:
             return "default time"
         return f"{format_frame(self.times[0])}..{format_frame(self.times[-1])}"
 
-    def covers(self, frame: float) -> bool:
-        return self.static or (not math.isnan(frame) and float(frame) in self._sampled)
+    def covers(self, frame: float | None) -> bool:
+        return self.static or (frame is not None and float(frame) in self._sampled)
 
-    def check_covers(self, frame: float) -> None:
+    def check_covers(self, frame: float | None) -> None:
         """Raise the one-line error for a frame the bake does not hold."""
         if self.covers(frame):
             return
         attribute = REQUIRED[0]
-        if math.isnan(frame):
+        if frame is None:
             raise UsdWrinkleError(
                 f"the baked fields have time samples ({self.range_text()}) but the default "
                 "time is rendered; give `frames`, or pass `recompute`", self.path, attribute)
@@ -125,12 +124,13 @@ class BakedSource:
         raise UsdWrinkleError(f"{what}; bake this frame, or pass `recompute`", self.path,
                               attribute, frame)
 
-    def at(self, frame: float) -> BakedFields:
-        """The fields at ``frame`` (NaN: the default time), checked: length and finiteness."""
+    def at(self, frame: float | None) -> BakedFields:
+        """The fields at ``frame`` (None: the default time), checked: length and
+        finiteness."""
         self.check_covers(frame)
-        time = Usd.TimeCode.Default() if math.isnan(frame) or self.static \
+        time = Usd.TimeCode.Default() if frame is None or self.static \
             else Usd.TimeCode(frame)
-        where = None if math.isnan(frame) else frame
+        where = frame
         n = self.num_points
         values = {}
         for name, (field, components) in BAKED_PRIMVARS.items():
@@ -191,8 +191,8 @@ def geometry_bake(stage: Usd.Stage):
     for layer in stage.GetLayerStack(includeSessionLayers=False):
         data = layer.customLayerData.get("usdwrinkle")
         if data and "geometry" in data:
-            first = layer.startTimeCode if layer.HasStartTimeCode() else float("nan")
-            last = layer.endTimeCode if layer.HasEndTimeCode() else float("nan")
+            first = layer.startTimeCode if layer.HasStartTimeCode() else None
+            last = layer.endTimeCode if layer.HasEndTimeCode() else None
             return layer.realPath or layer.identifier, first, last
     return None
 

@@ -7,7 +7,6 @@ flows down (scene -> GPU -> writers), as it does for a render.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,9 +18,9 @@ from .sampling import time_code
 from .stage import stage_inputs
 
 
-def frame_key(frame: float):
-    """A frame as a dict key: None for the default time (NaN equals nothing)."""
-    return None if math.isnan(frame) else float(frame)
+def frame_key(frame: float | None) -> float | None:
+    """A frame as a dict key (None: the default time)."""
+    return None if frame is None else float(frame)
 
 
 @dataclass(frozen=True)

@@ -23,8 +23,9 @@ from .skel import check_blend_weights, dual_quaternions, sample_skin
 RENDERED_PURPOSES = (UsdGeom.Tokens.default_, UsdGeom.Tokens.render)
 
 
-def time_code(frame: float) -> Usd.TimeCode:
-    return Usd.TimeCode.Default() if np.isnan(frame) else Usd.TimeCode(frame)
+def time_code(frame: float | None) -> Usd.TimeCode:
+    """USD's time code of a frame (None: the default time)."""
+    return Usd.TimeCode.Default() if frame is None else Usd.TimeCode(frame)
 
 
 def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -> None:
@@ -96,7 +97,7 @@ class FrameSampler:
         frame = frame_of(time)
         baked = None
         if with_baked and path in self.scene.baked:
-            baked = self.scene.baked[path].at(float("nan") if frame is None else frame)
+            baked = self.scene.baked[path].at(frame)
         local_to_world = np.asarray(xform_cache.GetLocalToWorldTransform(prim), np.float64)
         check_transform(local_to_world, path, frame, record.extent)
         visible = UsdGeom.Imageable(prim).ComputeVisibility(time) != UsdGeom.Tokens.invisible

@@ -142,12 +142,12 @@ def rest_pose(prim: Usd.Prim, skinned: bool = False):
     return point_cached, static_value(points_attr), "points"
 
 
-def outside_range_note(stage: Usd.Stage, frames: list[float]) -> str | None:
+def outside_range_note(stage: Usd.Stage, frames: list[float | None]) -> str | None:
     """A warning when --frames asks for frames outside the stage's authored time range:
     they hold the animation's last (or first) pose, and the phase history runs from the
     start up to them (a long preroll). None when every frame lies inside, or the stage
     has no range."""
-    finite = [f for f in frames if not math.isnan(f)]
+    finite = [f for f in frames if f is not None]
     if not finite or not stage.HasAuthoredTimeCodeRange():
         return None
     start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
@@ -163,14 +163,14 @@ def outside_range_note(stage: Usd.Stage, frames: list[float]) -> str | None:
             "elsewhere)")
 
 
-def stage_frames(stage: Usd.Stage) -> list[float]:
+def stage_frames(stage: Usd.Stage) -> list[float | None]:
     """The stage's authored start..end frames (step 1), or [NaN] for the default time.
 
     A range that is not finite, runs backwards, lies beyond +-MAX_TIME_CODE or holds more
     than MAX_FRAMES frames is refused, naming the layer's metadata.
     """
     if not stage.HasAuthoredTimeCodeRange():
-        return [float("nan")]
+        return [None]
     start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
     where = f"startTimeCode {start:g}, endTimeCode {end:g} of '{stage.GetRootLayer().identifier}'"
     if not (math.isfinite(start) and math.isfinite(end)) or max(abs(start), abs(end)) > \
@@ -467,13 +467,13 @@ class StageSceneDelegate:
                           bool(static_value(mesh.GetDoubleSidedAttr())))
 
     # -- time ---------------------------------------------------------------------------
-    def frame_range(self) -> list[float]:
+    def frame_range(self) -> list[float | None]:
         """The stage's authored start..end frames, or [default] when none (or when the
         stage's range is unusable: the commands refuse that unless --frames is given)."""
         try:
             return stage_frames(self.stage)
         except UsdWrinkleError:
-            return [float("nan")]
+            return [None]
 
     def framing_range(self) -> list[float]:
         """The frames automatic framing takes its bounds over: the shot's range that a bake

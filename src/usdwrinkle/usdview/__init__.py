@@ -16,7 +16,6 @@ session layer, the render as files.
 """
 from __future__ import annotations
 
-import math
 import os
 import subprocess
 import sys
@@ -33,9 +32,9 @@ def plugin_dir() -> str:
     return os.path.dirname(os.path.abspath(__file__))
 
 
-def _frame(usdview_api) -> float:
+def _frame(usdview_api) -> float | None:
     frame = usdview_api.frame
-    return math.nan if frame is None or frame.IsDefault() else float(frame.GetValue())
+    return None if frame is None or frame.IsDefault() else float(frame.GetValue())
 
 
 def _targets(usdview_api, wrinkled: list[str]) -> list[str]:
@@ -108,8 +107,8 @@ def _run_usdwrinkle(usdview_api, args: list[str]) -> bool:
     return True
 
 
-def _frame_args(frame: float) -> list[str]:
-    return [] if math.isnan(frame) else [f"--frames={frame!r}"]
+def _frame_args(frame: float | None) -> list[str]:
+    return [] if frame is None else [f"--frames={frame!r}"]
 
 
 def _bake_out_of_process(usdview_api) -> list[str]:
@@ -138,7 +137,7 @@ def _bake_out_of_process(usdview_api) -> list[str]:
                    if path.IsPropertyPath() and path.name == "primvars:wrinkle:amplitude"
                    else None)
     stage.GetSessionLayer().subLayerPaths.insert(0, layer)
-    when = "the default time" if math.isnan(frame) else f"frame {frame:g}"
+    when = "the default time" if frame is None else f"frame {frame:g}"
     usdview_api.PrintStatus(f"Wrinkles: baked {len(targets)} mesh(es) at {when} into the "
                             "session layer (displayColor shows the amplitude)")
     return sorted(targets)
@@ -172,7 +171,7 @@ def _bake_in_process(usdview_api, ctx) -> list[str]:
     if not targets:
         usdview_api.PrintStatus("Wrinkles: no mesh on this stage has WrinkleAPI applied")
         return []
-    when = "the default time" if math.isnan(frame) else f"frame {frame:g}"
+    when = "the default time" if frame is None else f"frame {frame:g}"
     usdview_api.PrintStatus(f"Wrinkles: baked {len(targets)} mesh(es) at {when} into the "
                             "session layer (displayColor shows the amplitude)")
     return targets
@@ -281,7 +280,7 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
 
         def make_session(ctx):
             return PaintSession(stage, stage.GetSessionLayer(), None, prim=prim,
-                                frame=None if math.isnan(frame) else frame, ctx=ctx,
+                                frame=frame, ctx=ctx,
                                 in_memory=True)
 
         try:
@@ -312,7 +311,7 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
     strokes = os.path.join(folder, "strokes.usda")
     Sdf.Layer.CreateNew(strokes).Save()
     args = [python, "-m", "usdwrinkle", "paint", held, "-o", strokes]
-    if not math.isnan(frame):
+    if frame is not None:
         args.append(f"--frame={frame!r}")
     if prim is not None:
         args += ["--prim", prim]
