@@ -37,7 +37,7 @@ def application() -> QtWidgets.QApplication:
 
 
 def open_window(stage: str, output: str, size=(1200, 700), **kwargs):
-    from usdwrinkle.paint.session import PaintSession, open_paint_stage
+    from usdwrinkle.app.paint import PaintSession, open_paint_stage
     from usdwrinkle.paint.window import PaintWindow
 
     stage_, layer, save = open_paint_stage(stage, output)
@@ -109,7 +109,7 @@ def line(a, b, steps: int = 30) -> list[tuple[float, float]]:
 
 def view_pixels(window, path: str, mask: np.ndarray) -> np.ndarray:
     """The mean widget position of the posed vertices in ``mask`` (logical pixels)."""
-    from usdwrinkle.paint.view import project
+    from usdwrinkle.app.view import project
 
     session, frame = window.session, window.view.last_frame
     xy, _ = project(frame.camera, session._posed_points(path)[mask], frame.width, frame.height)
@@ -203,7 +203,7 @@ def scenario_stroke(out: Path, stage: str) -> dict:
     result["erased_max"] = float(np.abs(q2[erased]).max()) if len(erased) else 1.0
     # smooth: over a region of scattered directions
     key(window, Qt.Key_Z, Qt.ControlModifier)
-    from usdwrinkle.paint.brush import spread
+    from usdwrinkle.app.brush import spread
 
     rng = np.random.default_rng(7)
     noisy = session.mesh.q.copy()
@@ -212,7 +212,7 @@ def scenario_stroke(out: Path, stage: str) -> dict:
     # along x, scattered: each vertex's direction off by a random tangent part
     scattered = np.array([1.0, 0.0, 0.0]) + 0.7 * rng.normal(size=(len(region), 3))
     noisy[region] = 0.8 * scattered / np.linalg.norm(scattered, axis=1)[:, None]
-    from usdwrinkle.paint.session import Edit
+    from usdwrinkle.app.paint import Edit
 
     session._record(Edit(path, "paint", (session.mesh.q.copy(), session.mesh.width.copy()),
                          (noisy.astype(np.float32), session.mesh.width.copy())))

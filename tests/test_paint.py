@@ -1,4 +1,4 @@
-"""The paint mode's core without Qt (paint/brush.py, paint/session.py): what a stamp does
+"""The paint mode's core without Qt (app/brush.py, app/paint.py): what a stamp does
 to q, against numbers worked out by hand, and a session's strokes, undo, controls and save
 on the engine (tests/test_paint_window.py drives the window itself)."""
 from __future__ import annotations
@@ -10,10 +10,7 @@ import numpy as np
 import pytest
 from pxr import Usd
 
-from usdwrinkle.authoring import WrinkleAPI
-from usdwrinkle.authoring.builders import grid_sheet
-from usdwrinkle.errors import UsdWrinkleError
-from usdwrinkle.paint.brush import (
+from usdwrinkle.app.brush import (
     BrushSettings,
     Hit,
     PaintMesh,
@@ -23,8 +20,11 @@ from usdwrinkle.paint.brush import (
     spread,
     stamp,
 )
-from usdwrinkle.paint.session import FULL, PaintSession, open_paint_stage
-from usdwrinkle.paint.view import OrbitCamera, pixel_ray, project, ray_triangles
+from usdwrinkle.app.paint import FULL, PaintSession, open_paint_stage
+from usdwrinkle.app.view import OrbitCamera, pixel_ray, project, ray_triangles
+from usdwrinkle.authoring import WrinkleAPI
+from usdwrinkle.authoring.builders import grid_sheet
+from usdwrinkle.errors import UsdWrinkleError
 
 from helpers import sheet_stage
 

@@ -46,7 +46,8 @@ class EngineOptions:
     #: worker opens the stage with it
     composition: object | None = None
 
-    def create(self, stage: Any = None, preroll_progress: Any = None, ctx: Any = None) -> Any:
+    def create(self, stage: Any = None, preroll_progress: Any = None, ctx: Any = None,
+               history_cache: int | None = None) -> Any:
         """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
         ``preroll_progress`` wraps the list of preroll frames (a progress bar); ``ctx``: a
         moderngl context to share (None: the process's own)."""
@@ -60,6 +61,8 @@ class EngineOptions:
         kwargs = {} if preroll_progress is None else {"preroll_progress": preroll_progress}
         if ctx is not None:
             kwargs["ctx"] = ctx
+        if history_cache is not None:
+            kwargs["history_cache"] = history_cache
         return WrinkleEngine(stage if stage is not None else self.stage,
                              all_meshes=self.all_meshes,
                              relax_iterations=self.relax_iterations, camera=self.camera,

@@ -99,13 +99,13 @@ class Shot:
 
     def start_engine(self, camera: str | None = None, use_baked: bool = True,
                      profile: bool = False, progress: Progress = no_progress,
-                     ctx: Any = None) -> Any:
+                     ctx: Any = None, history_cache: int | None = None) -> Any:
         """The WrinkleEngine of this shot, warning about the units its cloth widths go
         through; ``progress`` wraps the preroll frames."""
         from ..scene.params import units_notes
 
         engine = self.engine_options(camera, use_baked, profile).create(
-            self.open(), lambda steps: progress(steps, "preroll"), ctx)
+            self.open(), lambda steps: progress(steps, "preroll"), ctx, history_cache)
         for note in units_notes(engine.stage, {path: engine.meshes[path]
                                                for path in engine.wrinkled_paths}):
             _log.warning(note)

@@ -56,7 +56,7 @@ def check_display() -> None:
 def run(args) -> int:
     from ..app.environment import require_schema
     from ..app.frames import check_time_code
-    from ..paint.session import PaintSession, check_paintable, open_paint_stage
+    from ..app.paint import PaintSession, check_paintable, open_paint_stage
 
     require_schema()
     size = _size(args.size)

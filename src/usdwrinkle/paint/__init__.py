@@ -1,8 +1,8 @@
 """The paint mode (issue 43): artists paint q and W on the posed mesh and see the folds
 change at once, on the engine that renders the shot.
 
-- ``brush.py``: what a stamp does to q and W (numpy; no Qt, no GL, no USD);
-- ``view.py``: the orbit camera and picking rays (numpy);
-- ``session.py``: a stage, its edit layer, the engine, the brush, undo and save (no Qt);
-- ``window.py``: the Qt front end (PySide6, ``pip install 'usdwrinkle[paint]'``).
+- ``window.py``: the Qt front end (PySide6, ``pip install 'usdwrinkle[paint]'``), a door
+  onto the application layer's paint session: ``app/paint.py`` (a stage, its edit layer,
+  the engine, the brush, undo and save; no Qt), ``app/brush.py`` (what a stamp does to q
+  and W, numpy) and ``app/view.py`` (the orbit camera and picking rays, numpy).
 """

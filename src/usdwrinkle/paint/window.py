@@ -25,10 +25,10 @@ except ImportError as exc:  # the optional extra
     raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
                           f"({exc})") from None
 
+from ..app.brush import FALLOFFS, MIRROR_AXES, MODES
+from ..app.paint import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
+from ..app.view import project
 from ..timecode import format_frame
-from .brush import FALLOFFS, MIRROR_AXES, MODES
-from .session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
-from .view import project
 
 Qt = QtCore.Qt
 
@@ -586,7 +586,7 @@ class PaintWindow(QtWidgets.QMainWindow):
     def _brush_changed(self, *_):
         if self.session is None:
             return
-        from .session import with_brush
+        from ..app.paint import with_brush
 
         with_brush(self.session, mode=self.mode.currentText(),
                    falloff=self.falloff.currentText(),

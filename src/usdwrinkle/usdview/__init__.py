@@ -274,8 +274,8 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
     frame = _frame(usdview_api)
     prim = _paint_prim(usdview_api)
     if _in_process() and _has_pyside6():
+        from ..app.paint import PaintSession
         from ..errors import UsdWrinkleError
-        from ..paint.session import PaintSession
         from ..paint.window import PaintWindow
 
         def make_session(ctx):

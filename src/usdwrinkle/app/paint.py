@@ -128,9 +128,10 @@ class PaintSession:
                  prim: str | None = None, frame: float | None = None,
                  camera: str | None = None, all_meshes: bool = False, ctx=None,
                  history_cache: int = 32, in_memory: bool = False):
-        from ..engine import WrinkleEngine
         from ..outputs.images import layout_for
         from ..schema import require_schema
+        from .options import ShotOptions
+        from .shot import Shot
 
         require_schema()
         self.stage = stage
@@ -140,8 +141,10 @@ class PaintSession:
         #: session clean and writes nothing, unless a path is given
         self.in_memory = in_memory
         self.stage.SetEditTarget(Usd.EditTarget(layer))
-        self.engine = WrinkleEngine(stage, all_meshes=all_meshes, camera=camera, ctx=ctx,
-                                    history_cache=history_cache)
+        # the same shot as render and bake open (its units warnings too); the session
+        # keeps more wave states, so that scrubbing back replays nothing
+        self.engine = Shot(stage, ShotOptions(all_meshes=all_meshes)).start_engine(
+            camera, ctx=ctx, history_cache=history_cache)
         self._layout = layout_for("view.png")
         paths = self.engine.wrinkled_paths
         if not paths:
