@@ -10,7 +10,8 @@ from that slower session: the plain frames (8 shots x 2 frames) 28 s, the probes
 bake outputs in Storm 76 s (3 shots: 3-4 bakes and 3 renders each), the decoded-normal
 cases in Storm 20-30 s each (six renders each side; the three 1280-pixel ones the most)
 and Cycles 40 s (one shot, two bakes, 16 samples); Blender's import of a look per purpose
-about 20 s."""
+about 20 s. The decoded-normal cases live in test_realclients_normals.py, so that a run
+on two or more cores (pytest-xdist, --dist loadfile) gives them a worker of their own."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -250,77 +251,6 @@ def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, 
     match = compare(views.images["ours_display"], views.images["storm_display"])
     print(name, match)
     assert match.correlation >= least and match.iou >= 0.99, match
-
-
-@pytest.mark.parametrize("frame,slack,layout,width,options,bounds", [
-    # measured against render's default (every multisample shaded): median, p90, p99;
-    # the elbow's p99
-    ("triangle", 0.0, "asset", 640, {}, (0.6, 1.8, 10.0, 15.0)),     # 0.43, 1.38, 8.50; 12.5
-    ("mikktspace", 0.0, "asset", 640, {}, (0.7, 4.0, 23.0, 30.0)),   # 0.46, 3.10, 19.9; 26.6
-    ("triangle", None, "asset", 640, {}, (0.6, 1.8, 10.0, 14.0)),    # 0.48, 1.35, 8.08; 11.6
-    ("triangle", 0.0, "islands", 640, {}, (0.5, 1.6, 7.0, 11.5)),    # 0.34, 1.17, 5.33; 9.20
-    # issue 23's 3 degrees at the elbow, at 1280 pixels: the default bake, whose preview
-    # set (per triangle, islands; byte-identical to "triangle", "islands": test_maps.py)
-    # Storm shows
-    (None, 0.0, None, 1280, {}, (0.25, 0.6, 2.0, 3.0)),             # 0.16, 0.42, 1.44; 2.68
-    # against render --no-shade-samples (each pixel shaded once)
-    (None, 0.0, None, 1280, {"shade_samples": False},
-     (0.3, 0.7, 2.5, 4.3)),                                       # 0.17, 0.45, 1.96; 3.68
-    # EXR maps (Storm reads a 16-bit PNG at 8 bits)
-    (None, 0.0, None, 1280, {"map_format": "exr"},
-     (0.15, 0.5, 2.0, 3.0)),                                      # 0.09, 0.31, 1.39; 2.64
-])
-def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layout, width,
-                                       options, bounds):
-    """The shading normals Storm decodes from the maps against usdwrinkle's, both by
-    photometric stereo (six renders, one distant light each along +-X, +-Y, +-Z), for
-    each tangent frame of --tangent-space: median, p90 and p99 over the shirt at 640
-    pixels, and p99 in the lower third (the elbow's crease). Issue 23 asks for p99 <= 3
-    degrees at the elbow.
-
-    Storm builds the per-triangle frame, so "triangle" is its own: what is left lies in
-    one-pixel lines along the coarse triangles' edges (the p99 halves at 1280 pixels, to
-    4.5): Storm shades its four multisamples at the pixel's centre, so an edge pixel
-    samples the neighbouring triangle's texels and decodes them in its own triangle's
-    frame, which turns by 29 degrees (median) across the elbow's quads. A MikkTSpace map
-    decoded in Storm's frame is off by the frames' difference (10 degrees median at the
-    elbow) times the tilt. This test holds the measured values, so that a change for
-    the worse fails.
-    ``slack`` None keeps the fallback wrinkle:slack (the other comparisons author 0):
-    Storm agrees as well with it.
-
-    --map-layout islands (maps/islands.py) removes both causes: no face reads another's
-    texels, and a quad's frame is one across its diagonal. What is left at 640 pixels is
-    texture filtering of the elbow's pinch, whose folds are a few pixels across: usdwrinkle
-    drawing the very same islands map differs from Storm by 9.8 degrees at the elbow's
-    p99 (llvmpipe's filtering against usdwrinkle's GPU-style one), and its analytic
-    band limit from its own drawing of the map by 5.4. At 1280 pixels, shaded once per
-    pixel, the islands miss the 3 degrees only at the grazing fold contours (2.8 without
-    the pixels within one of |n.v| < 0.1); the asset's UVs give 0.27 / 0.55 / 4.43 and
-    7.5 there.
-
-    What is left at 1280 pixels lies at the elbow's pinch, where the folds' normals turn
-    within a pixel: Storm's texture filtering averages the map over the pixel. usdwrinkle
-    shades every multisample where it lies (render's default), so it averages over the
-    pixel too, and issue 23's 3 degrees holds there (2.68; shaded once per pixel, render
-    --no-shade-samples, 3.68). Storm reads a 16-bit PNG at 8 bits (its frames of the
-    16-bit map and of the same map rounded to 8 bits differ by 0.02 degrees median, of an
-    EXR by 0.09), so EXR maps halve the median (0.16 -> 0.09). At 640 pixels the elbow
-    is 9.2 (11.8 shaded once per pixel)."""
-    import dataclasses
-
-    from realclients.bakes import MAP_SHOTS, angles, normal_views
-
-    shot = dataclasses.replace(MAP_SHOTS[0], width=width)
-    views = normal_views(shot, tmp_path, tangent_space=frame, slack=slack, layout=layout,
-                         **options)
-    degrees, mask = angles(views["usdwrinkle"], views["storm"])
-    assert mask.sum() > 40000 * (width / 640) ** 2
-    lower = mask & (np.arange(mask.shape[0])[:, None] > 2 * mask.shape[0] // 3)
-    median, p90, p99 = np.percentile(degrees[mask], [50, 90, 99])
-    elbow = np.percentile(degrees[lower], 99)
-    assert median <= bounds[0] and p90 <= bounds[1] and p99 <= bounds[2] and \
-        elbow <= bounds[3], (median, p90, p99, elbow)
 
 
 # --- issue 23: the bake outputs as Cycles shows them -----------------------------------

@@ -18,7 +18,7 @@ from typing import Any
 
 from ..errors import UsdWrinkleError
 from .options import GEOMETRY_FIELDS, MAP_FIELDS, BakeOptions
-from .shot import Progress, Shot, frame_spec_of, no_progress
+from .shot import Progress, Shot, ShotJob, frame_spec_of, no_progress
 
 _log = logging.getLogger(__name__)
 
@@ -96,27 +96,16 @@ def check_map_folder(folder: str) -> None:
     check_writable([os.path.join(probe, ".usdwrinkle-maps-probe")])
 
 
-class BakeJob:
-    """Bake ``frames`` of ``shot`` into the layer ``output`` (.usda, .usdc or .usd).
-
-    ``frames``: usdrecord's FrameSpec text, a list of numbers, or None for the stage's
-    range. ``progress(items, what)`` wraps each loop; ``on_start()`` is called after every
-    check that can refuse the job, before the frame work."""
+class BakeJob(ShotJob):
+    """Bake ``frames`` of ``shot`` into the layer ``output`` (.usda, .usdc or .usd). The
+    rest as ShotJob's."""
 
     def __init__(self, shot: Shot, output: str | os.PathLike[str],
                  frames: str | Sequence[float] | None = None,
                  options: BakeOptions | None = None, progress: Progress = no_progress,
                  on_start: Callable[[], None] | None = None):
-        if not isinstance(shot, Shot):
-            raise UsdWrinkleError(f"`shot`={shot!r} must be a usdwrinkle Shot")
-        if not isinstance(output, (str, os.PathLike)):
-            raise UsdWrinkleError(f"`output`={output!r} must be a path")
-        self.shot = shot
-        self.output = os.fspath(output)
-        self.frames = frames
+        super().__init__(shot, output, frames, progress, on_start)
         self.options = options if options is not None else BakeOptions()
-        self.progress = progress
-        self.on_start = on_start
 
     def check(self) -> tuple[Any, Any]:
         """What can be refused before the stage is read; returns (maps, geometry)."""

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import UsdWrinkleError
 from .options import RenderOptions
-from .shot import Progress, Shot, no_progress
+from .shot import Progress, Shot, ShotJob, no_progress
 
 _log = logging.getLogger(__name__)
 
@@ -60,29 +60,17 @@ class RenderResult:
     stats: dict[str, Any] | None = None
 
 
-class RenderJob:
+class RenderJob(ShotJob):
     """Render ``frames`` of ``shot`` to ``output`` (a path with a '#' frame placeholder, or
-    one file for one frame; the format follows the extension).
-
-    ``frames``: usdrecord's FrameSpec text, a list of numbers, or None for the stage's
-    range. ``progress(items, what)`` wraps each loop (a progress bar); ``on_start()`` is
-    called after every check that can refuse the job, before the frame work (the command
-    line prints its header line there)."""
+    one file for one frame; the format follows the extension). The rest as ShotJob's (the
+    command line prints its header line at ``on_start``)."""
 
     def __init__(self, shot: Shot, output: str | os.PathLike[str],
                  frames: str | Sequence[float] | None = None,
                  options: RenderOptions | None = None, progress: Progress = no_progress,
                  on_start: Callable[[], None] | None = None):
-        if not isinstance(shot, Shot):
-            raise UsdWrinkleError(f"`shot`={shot!r} must be a usdwrinkle Shot")
-        if not isinstance(output, (str, os.PathLike)):
-            raise UsdWrinkleError(f"`output`={output!r} must be a path")
-        self.shot = shot
-        self.output = os.fspath(output)
-        self.frames = frames
+        super().__init__(shot, output, frames, progress, on_start)
         self.options = options if options is not None else RenderOptions()
-        self.progress = progress
-        self.on_start = on_start
 
     # --- checks -------------------------------------------------------------------------
 

@@ -112,7 +112,28 @@ class Shot:
         return engine
 
 
-def at_frame(frame: float) -> Any:
+class ShotJob:
+    """What a job of a shot holds: the shot, what it writes (a path or pattern), the
+    frames (usdrecord's FrameSpec text, a list of numbers, or None for the stage's
+    range), a ``progress(items, what)`` callback that wraps each loop, and ``on_start()``,
+    called after every check that can refuse the job, before the frame work."""
+
+    def __init__(self, shot: Shot, output: str | os.PathLike[str],
+                 frames: str | Sequence[float] | None = None,
+                 progress: Progress = no_progress,
+                 on_start: Callable[[], None] | None = None):
+        if not isinstance(shot, Shot):
+            raise UsdWrinkleError(f"`shot`={shot!r} must be a usdwrinkle Shot")
+        if not isinstance(output, (str, os.PathLike)):
+            raise UsdWrinkleError(f"`output`={output!r} must be a path")
+        self.shot = shot
+        self.output = os.fspath(output)
+        self.frames = frames
+        self.progress = progress
+        self.on_start = on_start
+
+
+def at_frame(frame: float | None) -> Any:
     """A block whose errors name ``frame`` where they named none (shot.at_frame)."""
     from ..shot import at_frame as frame_block
 

@@ -10,7 +10,7 @@ from ..app.options import (
 )
 from ..app.options import MAP_ST_NAME as MAP_ST
 from ..errors import print_stderr
-from .common import Reporter, add_shot_args
+from .common import Reporter, add_shot_args, report_to
 
 
 def add_parser(subparsers) -> None:
@@ -106,7 +106,7 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
-def bake_job(args, reporter: Reporter | None = None):
+def bake_job(args):
     """The app.BakeJob of the command's options."""
     from ..app.bake import BakeJob
     from ..app.options import BakeOptions
@@ -119,19 +119,14 @@ def bake_job(args, reporter: Reporter | None = None):
         uv=args.uv, tangent_space=args.tangent_space, map_displacement=args.map_displacement,
         geometry=args.geometry, levels=args.levels,
         samples_per_wavelength=args.samples_per_wavelength)
-    job = BakeJob(shot_of(args), args.output, args.frames, options)
-    if reporter is not None:
-        job.progress = reporter.progress
-        job.on_start = lambda: reporter.header(args.command, args.stage)
-    return job
+    return BakeJob(shot_of(args), args.output, args.frames, options)
 
 
 def run(args) -> int:
     job = bake_job(args)
     job.check()  # refusals before any warning
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
-        job.progress = reporter.progress
-        job.on_start = lambda: reporter.header(args.command, args.stage)
+        report_to(job, reporter, args)
         result = job.run()
     if not args.quiet:
         print_stderr(f"usdwrinkle: baked {result.count} mesh(es) x {len(result.frames)} "

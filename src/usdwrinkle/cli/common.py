@@ -65,6 +65,12 @@ def add_shot_args(parser, output_help: str) -> None:
 
 
 
+def report_to(job, reporter, args) -> None:
+    """Give a job the command's progress bars and header line."""
+    job.progress = reporter.progress
+    job.on_start = lambda: reporter.header(args.command, args.stage)
+
+
 class Reporter:
     """A command's warnings on stderr, each once, and a progress bar for multi-frame runs
     (unless quiet). As a context manager it is where usdwrinkle's logged warnings go

@@ -6,7 +6,7 @@ import argparse
 from ..app.frames import frame_path
 from ..app.options import EXR_COMPRESSIONS
 from ..errors import print_stderr
-from .common import Reporter, add_shot_args, shot_options
+from .common import Reporter, add_shot_args, report_to, shot_options
 
 
 def add_parser(subparsers) -> None:
@@ -104,8 +104,7 @@ def render_job(args, reporter: Reporter | None = None):
         recompute=args.recompute, stats=args.stats)
     job = RenderJob(shot_of(args), args.output, args.frames, options)
     if reporter is not None:
-        job.progress = reporter.progress
-        job.on_start = lambda: reporter.header(args.command, args.stage)
+        report_to(job, reporter, args)
     return job
 
 
