@@ -102,8 +102,10 @@ def cpu_nodes(quick: bool, corpus: Path | None, ctx=None, before: str | None = N
     if ctx is not None:
         result["encoders"] = encoders(ctx, path, width, height, 3 if quick else 15)
         from .encoding import measure as encoding
+        from .files_written import measure as files_written
 
         result["encoding"] = encoding(quick, ctx)
+        result["files_written"] = files_written(corpus, quick)
     return result
 
 
@@ -233,4 +235,8 @@ def markdown(result: dict) -> list[str]:
         from .encoding import markdown as encoding
 
         lines += encoding(row["encoding"])
+    if row.get("files_written"):
+        from .files_written import markdown as files_written
+
+        lines += files_written(row["files_written"])
     return lines

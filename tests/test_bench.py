@@ -67,12 +67,20 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
                                   "png_overlapped"}
     for row in nodes["rows"].values():
         assert row["fps"] > 0 and row["split_ms"]["encode"] > 0 and row["startup_s"] >= 0
+    # issue 45: what a farm gets as files, and how the writer's threads scale
+    written = nodes["files_written"]["rows"]
+    assert [row["case"].split()[0] for row in written] == ["shirt", "shirt", "CesiumMan"]
+    for row in written:
+        assert row["fps"] > 0 and 0 <= row["wait_share"] < 1 and row["cpu_utilisation"] > 0
+    assert set(nodes["encoding"]["threads"][".exr"]) >= {"1"}
+    assert set(nodes["encoding"]["compressions"]) == {"zip", "zips", "piz", "dwaa", "none"}
     tri = result["triangulation"]
     assert tri["polygon"]["triangles"] == 10_000 - 2 and tri["polygon"]["ms"] > 0
     assert tri["quads"]["triangles"] == 2 * tri["quads"]["faces"] and tri["quads"]["ms"] > 0
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
                     "## End to end", "## What the rasteriser costs by itself", "## Farms",
-                    "## Triangulation of hostile meshes", "## CPU render nodes"):
+                    "## Triangulation of hostile meshes", "## CPU render nodes",
+                    "### Encoding on every core", "### Files written"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text
 

@@ -1,0 +1,96 @@
+"""What a farm gets: frames as files (issue 45).
+
+Each row is one ``usdwrinkle render`` process with the default options (writer threads:
+every core but one):
+
+- the paper's shirt at 664x497 to PNG, frames 1-24 in steps of 0.1 (231 frames);
+- the shirt and CesiumMan (``--all-meshes``) at 1920x1080 to EXR, 24 frames.
+
+Frames per second without start-up: the frames over the frame loop's time (``--stats``'s
+``loop_s``; the profile it turns on ends each pass with glFinish, so the loop is a little
+slower than without it). CPU utilisation: the process's CPU time over its wall time and
+the cores. Wait: the share of the loop the renderer spent waiting for the writer (frames
+in flight all taken), the bound when encoding is the slower half. ``python -m
+benchmarks.files_written`` prints the table; ``python -m benchmarks`` runs it in its CPU
+render nodes section.
+"""
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from .farm import _cli
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIRT = ROOT / "sample_stages" / "shirt.usda"
+
+
+def cases(corpus: Path | None, quick: bool) -> list[tuple[str, Path, list, str]]:
+    """(label, stage, options, extension) of each row."""
+    scale = 4 if quick else 1
+    paper = (664 // scale, 497 // scale, "1:6x0.1" if quick else "1:24x0.1")
+    full = (1920 // scale, 1080 // scale, "1:4" if quick else "1:24")
+    rows = [(f"shirt {paper[0]}x{paper[1]} PNG, {paper[2]}", SHIRT,
+             ["--frames", paper[2], "--width", paper[0], "--height", paper[1]], "png"),
+            (f"shirt {full[0]}x{full[1]} EXR, {full[2]}", SHIRT,
+             ["--frames", full[2], "--width", full[0], "--height", full[1]], "exr")]
+    cesium = corpus / "usd-wg" / "CesiumMan.usdz" if corpus else None
+    if cesium is not None and cesium.is_file():
+        rows.append((f"CesiumMan {full[0]}x{full[1]} EXR, {full[2]}", cesium,
+                     ["--all-meshes", "--frames", full[2], "--width", full[0], "--height",
+                      full[1]], "exr"))
+    return rows
+
+
+def measure(corpus: Path | None = None, quick: bool = False) -> dict:
+    from usdwrinkle.outputs.writer import cores
+
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for index, (label, stage, options, ext) in enumerate(cases(corpus, quick)):
+            stats = os.path.join(folder, f"stats{index}.json")
+            out = os.path.join(folder, f"r{index}", f"f.####.{ext}")
+            wall, cpu = _cli("render", stage, out, *options, "--stats", stats, "--quiet")
+            data = json.loads(Path(stats).read_text())
+            frames = len(data["frames"])
+            rows.append({"case": label, "frames": frames, "wall_s": wall,
+                         "fps": frames / data["loop_s"],
+                         "cpu_utilisation": cpu / (wall * cores()),
+                         "wait_share": data["waited_s"] / data["loop_s"],
+                         "write_threads": data["write_threads"]})
+    return {"cores": cores(), "rows": rows, "date": datetime.datetime.now(
+        datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
+
+
+def markdown(result: dict) -> list[str]:
+    lines = ["### Files written", "",
+             f"What a farm gets: each row one `usdwrinkle render` process with the defaults "
+             f"({result['rows'][0]['write_threads'] if result['rows'] else '?'} writer "
+             f"thread(s) on {result['cores']} core(s)), {result['date']} "
+             "(`python -m benchmarks.files_written`). Frames per second over the frame loop "
+             "(without start-up; `--stats` ends each pass with glFinish); CPU utilisation of "
+             "all cores over the whole process; wait: the share of the loop the renderer "
+             "waited for the writer. The paper's 328 fps and the GPU rows wait for a GPU "
+             "node (issue 45).", "",
+             "| case | frames | fps | CPU utilisation | wait | whole process s |",
+             "|---|---|---|---|---|---|"]
+    for row in result["rows"]:
+        lines.append(f"| {row['case']} | {row['frames']} | {row['fps']:.1f} | "
+                     f"{100 * row['cpu_utilisation']:.0f}% | {100 * row['wait_share']:.0f}% | "
+                     f"{row['wall_s']:.1f} |")
+    return lines + [""]
+
+
+def main(argv=None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    corpus = Path(os.environ.get("USDWRINKLE_CORPUS", ROOT.parent / "shared" / "corpus"))
+    print("\n".join(markdown(measure(corpus, quick="--quick" in args))))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
