@@ -37,7 +37,7 @@ from typing import Any
 from .app.bake import BakeJob, BakeResult
 from .app.options import BakeOptions, RenderOptions, ShotOptions
 from .app.render import RenderJob, RenderResult
-from .app.shot import Progress, Shot, no_progress
+from .app.shot import Progress, Shot, frame_spec_of, no_progress
 from .errors import UsdWrinkleError
 
 __all__ = ["BakeJob", "BakeOptions", "BakeResult", "RenderJob", "RenderOptions",
@@ -113,8 +113,7 @@ def _render_on_dask(job: RenderJob, frames: Frames, scheduler: str, workers: int
         def progress(self, items: list[Any], what: str) -> Any:
             return job.progress(items, what)
 
-    spec = frames if isinstance(frames, str) or frames is None else \
-        ",".join(repr(float(f)) for f in frames)
+    spec = None if frames is None else frame_spec_of(frames)
     render_on_dask(FarmRender(job, plan, spec, scheduler, workers, chunk), _Reporter())
     return list(plan.outputs)
 

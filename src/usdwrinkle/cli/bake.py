@@ -124,7 +124,6 @@ def bake_job(args):
 
 def run(args) -> int:
     job = bake_job(args)
-    job.check()  # refusals before any warning
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
         report_to(job, reporter, args)
         result = job.run()

@@ -160,10 +160,9 @@ def render_shot(args) -> list[str]:
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
         job = render_job(args, reporter)
         if args.dask is not None:
-            job.check()
+            plan = job.prepare()  # the job's checks: every refusal comes first
             if args.stats:
                 reporter.warn("--stats applies to a serial render; ignored with --dask")
-            plan = job.prepare()
             _render_on_dask(args, reporter, job, plan)
             return plan.outputs
         if args.chunk is not None or args.workers is not None:
