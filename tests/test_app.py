@@ -144,3 +144,26 @@ def test_a_job_resolves_its_writer_threads(monkeypatch):
         .image_options(64, 64, chunked=True).write_threads == 3
     with pytest.raises(UsdWrinkleError, match="`write_threads` must be in 0..64"):
         RenderOptions(write_threads=65).check()
+
+
+def test_exr_files_share_the_cores_with_openexrs_threads(monkeypatch):
+    """Issue 45: on a 16-core H200 node, 24 shirt frames at 1080p EXR ran at 19.0 fps with
+    15 writer threads compressing each file alone, 26.0 with 4 writer threads of 4
+    OpenEXR threads each (benchmarks/exr_threads.py, docs/benchmarks-gpu.md)."""
+    from usdwrinkle.outputs import writer
+
+    monkeypatch.delenv("USDWRINKLE_EXR_THREADS", raising=False)
+    expected = {16: (4, 4), 8: (4, 2), 4: (3, 1), 2: (1, 0), 1: (1, 0)}
+    for cores, (threads, per_file) in expected.items():
+        monkeypatch.setattr(writer, "cores", lambda cores=cores: cores)
+        image = RenderJob(Shot(SHIRT), "x.####.exr").image_options(1920, 1080)
+        assert (image.write_threads, image.exr_threads) == (threads, per_file), cores
+        png = RenderJob(Shot(SHIRT), "x.####.png").image_options(1920, 1080)
+        assert png.write_threads == max(1, cores - 1)
+        chunk = RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64, chunked=True)
+        assert (chunk.write_threads, chunk.exr_threads) == (1, 0)  # one worker per core
+    monkeypatch.setenv("USDWRINKLE_EXR_THREADS", "8")
+    assert RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64).exr_threads == 8
+    monkeypatch.setenv("USDWRINKLE_EXR_THREADS", "many")
+    with pytest.raises(UsdWrinkleError, match="USDWRINKLE_EXR_THREADS must be in 0..64"):
+        RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64)

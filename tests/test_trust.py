@@ -70,7 +70,8 @@ def hidden(folder: Path) -> list[str]:
 
 @pytest.fixture(scope="module")
 def alone(tmp_path_factory, gl_context) -> dict:
-    """Each frame of the shot rendered alone (its own run, with its preroll), per format."""
+    """Each frame of the shot rendered alone (its own run, with its preroll), per format,
+    read back as soon as it is drawn (one readback buffer)."""
     out = tmp_path_factory.mktemp("alone")
     frames = {}
     first, last = (int(f) for f in FRAMES.split(":"))
@@ -78,7 +79,7 @@ def alone(tmp_path_factory, gl_context) -> dict:
         for frame in range(first, last + 1):
             path = out / f"a.{frame:04d}.{fmt}"
             assert main(["render", SHIRT, str(path), "--frames", str(frame), "--width",
-                         str(WIDTH), "--quiet"]) == 0
+                         str(WIDTH), "--readback-buffers", "1", "--quiet"]) == 0
             frames[(fmt, frame)] = path
     return frames
 
@@ -93,17 +94,32 @@ def assert_every_file_is_its_frame(folder: Path, fmt: str, alone: dict) -> None:
     assert not hidden(folder)
 
 
-@pytest.mark.parametrize("threads", [0, 1, 2, None, 64])
+@pytest.mark.parametrize(("threads", "buffers"),
+                         [(0, 1), (0, 2), (1, 2), (2, 3), (None, None), (None, 8), (64, 2),
+                          (64, 8)])
 @pytest.mark.parametrize("fmt", FORMATS)
-def test_every_file_is_the_frame_it_names(gl_context, tmp_path, alone, fmt, threads):
+def test_every_file_is_the_frame_it_names(gl_context, tmp_path, alone, fmt, threads, buffers):
     """Issue 22, finding 1: the overlapped writer put another frame's pixels in 8-bit
     files (a readback array reused while the writer still encoded from it). Issue 45: with
     the default (every core but one) and the most writer threads (64, 65 frames in
-    flight) too."""
+    flight) too, and with K readback buffers in flight (the default 2, and up to the
+    most, 8, more than the shot's frames)."""
     given = [] if threads is None else ["--write-threads", str(threads)]
+    given += [] if buffers is None else ["--readback-buffers", str(buffers)]
     assert main(["render", SHIRT, str(tmp_path / f"m.####.{fmt}"), "--frames", FRAMES,
                  "--width", str(WIDTH), *given, "--quiet"]) == 0
     assert_every_file_is_its_frame(tmp_path, fmt, alone)
+
+
+@pytest.mark.parametrize("per_file", ["1", "4"])
+def test_every_exr_is_its_frame_with_openexrs_own_threads(gl_context, tmp_path, alone,
+                                                          monkeypatch, per_file):
+    """Issue 45: a GPU node's default compresses each EXR on 4 threads of OpenEXR's own
+    (outputs/writer.exr_file_threads); here forced, with 4 writer threads."""
+    monkeypatch.setenv("USDWRINKLE_EXR_THREADS", per_file)
+    assert main(["render", SHIRT, str(tmp_path / "m.####.exr"), "--frames", FRAMES,
+                 "--width", str(WIDTH), "--write-threads", "4", "--quiet"]) == 0
+    assert_every_file_is_its_frame(tmp_path, "exr", alone)
 
 
 @pytest.mark.slow

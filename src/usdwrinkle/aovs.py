@@ -65,11 +65,25 @@ class ResolvedImage:
     bad: int
     #: hands the planes' memory back to the pass that made them (see :meth:`release`)
     _recycle: object = field(default=None, repr=False, compare=False)
+    #: the copy of the planes out of the GPU's readback buffer, when it runs on another
+    #: thread (render/resolve.py): a concurrent.futures.Future, or None when done
+    _ready: object = field(default=None, repr=False, compare=False)
+    #: ms the copy took
+    read_ms: float = field(default=0.0, repr=False, compare=False)
+
+    def wait(self) -> None:
+        """Wait until the planes hold the frame (raises the copy's error)."""
+        if self._ready is not None:
+            self._ready.result()
+            self._ready = None
 
     def release(self) -> None:
         """Say that nobody reads these planes any more: their memory may then hold a
         later frame. Only the writer calls it, after the file is written; an image that
         is never released keeps its own memory (nothing else ever writes into it)."""
+        ready, self._ready = self._ready, None
+        if ready is not None:  # a copy into these planes still running must end first
+            ready.exception()
         recycle, self._recycle = self._recycle, None
         self.planes = {}
         if recycle is not None:

@@ -67,8 +67,9 @@ def _shot(stage: Path, all_meshes: bool, relax_iterations: int | None,
 def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
            camera: str | None = None, width: int = 960, height: int | None = None,
            samples: int = 4, shade_samples: bool = True, write_threads: int | None = None,
-           exr_half: bool = True, exr_compression: str = "zip", no_wrinkles: bool = False,
-           skip_existing: bool = False, recompute: bool = False, stats: str | None = None,
+           readback_buffers: int = 3, exr_half: bool = True, exr_compression: str = "zip",
+           no_wrinkles: bool = False, skip_existing: bool = False, recompute: bool = False,
+           stats: str | None = None, stats_passes: bool = True,
            all_meshes: bool = False, relax_iterations: int | None = None,
            history_start: float | None = None, sublayer: Sequence[str] = (),
            variant: Sequence[str] = (), mask: str | Sequence[str] | None = None,
@@ -83,9 +84,10 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
     ``workers`` and ``chunk`` render on a Dask cluster, as ``render --dask``."""
     options = RenderOptions(camera=camera, width=width, height=height, samples=samples,
                             shade_samples=shade_samples, write_threads=write_threads,
-                            exr_half=exr_half, exr_compression=exr_compression,
+                            readback_buffers=readback_buffers, exr_half=exr_half,
+                            exr_compression=exr_compression,
                             no_wrinkles=no_wrinkles, skip_existing=skip_existing,
-                            recompute=recompute, stats=stats)
+                            recompute=recompute, stats=stats, stats_passes=stats_passes)
     job = RenderJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,
                           variant, mask), output, frames, options, progress=_progress(quiet))
     if dask is None:

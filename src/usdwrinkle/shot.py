@@ -89,6 +89,11 @@ class ImageOptions:
     shade_samples: bool = True
     #: frames that may wait or encode at once (outputs/writer.frames_in_flight)
     in_flight: int = 2
+    #: readback buffers: frame f is copied out of the GPU while f + 1 .. f + K - 1 compute
+    #: (render/resolve.py); 1 reads each frame as soon as it is drawn
+    readback_buffers: int = 3
+    #: OpenEXR's own threads per EXR file (outputs/writer.exr_threads)
+    exr_threads: int = 0
 
 
 @contextlib.contextmanager
@@ -112,10 +117,18 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
     ``skip(path)``: leave that frame alone (``--skip-existing``, a farm retry).
     ``progress``: wraps the list of (frame, path) pairs (a progress bar).
     ``stats``: filled with per-frame timings in ms (the engine's ``last_timings``, with
-    ``profile`` on for the per-pass split, and ``encode`` on the writer), the seconds the
-    loop waited for the writer, and the loop's wall time (``render --stats``).
+    ``profile`` on for the per-pass split, ``fence_wait`` and ``readback`` when the frame
+    was copied out, and ``encode`` on the writer), the seconds the loop waited for the
+    writer and for the GPU, and the loop's wall time (``render --stats``).
+
+    With ``image.readback_buffers`` K > 1, frame f is queued (computed, drawn and resolved
+    into one of K readback buffers, behind a fence) and copied out only once frame
+    f + K - 1 is queued too, on the resolve's copy thread, so the GPU works on the next
+    frames while the CPU copies and encodes; the files are the same
+    (tests/test_trust.py).
     """
     import time
+    from collections import deque
 
     from .outputs.images import layout_for, write_image
     from .outputs.writer import FrameWriter
@@ -124,33 +137,62 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
     rows: dict[str, dict] = {}
 
     def write(path: str, frame_image) -> None:
-        started = time.perf_counter()
         try:
-            write_image(path, frame_image, image.exr_compression)
+            frame_image.wait()  # copied out of the GPU's readback buffer
+            started = time.perf_counter()
+            write_image(path, frame_image, image.exr_compression,
+                        exr_threads=image.exr_threads)
         finally:
             frame_image.release()  # its memory may now hold a later frame, not before
         if stats is not None:
             rows[path]["encode"] = (time.perf_counter() - started) * 1e3
+            if ring > 1:
+                rows[path]["readback"] = frame_image.read_ms
+
+    ring = max(1, image.readback_buffers)
+    queued: deque = deque()  # (frame, path, PendingImage) not copied out yet
+    gpu_waited = 0.0
+
+    def copy_out(writer: FrameWriter) -> None:
+        nonlocal gpu_waited
+        frame, path, pending = queued.popleft()
+        with at_frame(frame):  # the copy out runs on the resolve's copy thread
+            frame_image = pending.start(background=True) if ring > 1 else pending
+        if ring > 1:
+            gpu_waited += pending.wait_ms / 1e3
+            if stats is not None:
+                rows[path]["fence_wait"] = pending.wait_ms
+        writer.submit(frame, path, frame_image)
 
     loop_started = time.perf_counter()
     with FrameWriter(write, image.write_threads, image.in_flight) as writer:
-        for frame, path in progress(list(zip(frames, paths, strict=True))):
-            if skip(path):
-                continue
-            started = time.perf_counter()
-            with at_frame(frame):
-                frame_image = engine.render_image(frame, image.width, image.height,
+        try:
+            for frame, path in progress(list(zip(frames, paths, strict=True))):
+                if skip(path):
+                    continue
+                started = time.perf_counter()
+                with at_frame(frame):
+                    pending = engine.render_image(frame, image.width, image.height,
                                                   layout_for(path, image.exr_half),
                                                   image.wrinkles, image.samples,
-                                                  image.shade_samples)
-            if stats is not None:
-                rows[path] = {"frame": frame, **engine.last_timings,
-                              "render": (time.perf_counter() - started) * 1e3}
-            writer.submit(frame, path, frame_image)
+                                                  image.shade_samples, readback_ring=ring)
+                if stats is not None:
+                    rows[path] = {"frame": frame, **engine.last_timings,
+                                  "render": (time.perf_counter() - started) * 1e3}
+                queued.append((frame, path, pending))
+                while len(queued) >= ring:
+                    copy_out(writer)
+            while queued:
+                copy_out(writer)
+        finally:
+            for _frame, _path, pending in queued:  # an error or a stop: never read
+                if ring > 1:
+                    pending.discard()
     if stats is not None:
         stats.update({"frames": list(rows.values()), "waited_s": writer.waited,
+                      "gpu_waited_s": gpu_waited,
                       "loop_s": time.perf_counter() - loop_started,
-                      "write_threads": image.write_threads})
+                      "write_threads": image.write_threads, "readback_buffers": ring})
     return writer.written
 
 

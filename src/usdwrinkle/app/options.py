@@ -21,6 +21,7 @@ from ..maps.options import LAYOUTS as MAP_LAYOUTS
 from ..maps.options import TANGENT_SPACES, MapOptions
 from ..outputs.images import EXR_COMPRESSIONS
 from ..outputs.writer import MAX_THREADS as MAX_WRITE_THREADS
+from ..render.resolve import MAX_RING
 from ..schema import MAP_ST, baked_names_text
 
 #: what --help shows of the defaults and names below
@@ -153,6 +154,9 @@ class RenderOptions(_Checked):
     #: threads that encode and write frames while the next ones render, 0..64 (None: every
     #: core but one; 0: each frame is written before the next renders)
     write_threads: int | None = None
+    #: GPU readback buffers, 1..8: frame f is copied out while the next frames compute
+    #: (1: each frame is read back as soon as it is drawn)
+    readback_buffers: int = 3
     #: EXR: colour and normals as half float (depth and the wrinkle fields stay float)
     exr_half: bool = True
     exr_compression: str = "zip"
@@ -164,6 +168,9 @@ class RenderOptions(_Checked):
     recompute: bool = False
     #: a JSON file for per-frame timings (each pass timed, with glFinish between passes)
     stats: str | None = None
+    #: with ``stats``: time each pass (False: the frame loop's times alone, the GPU
+    #: working ahead as without ``stats``)
+    stats_passes: bool = True
 
     def check(self) -> None:
         from ..render.buffers import check_samples
@@ -174,6 +181,8 @@ class RenderOptions(_Checked):
         if self.write_threads is not None and \
                 not 0 <= self.write_threads <= MAX_WRITE_THREADS:
             raise UsdWrinkleError(f"`write_threads` must be in 0..{MAX_WRITE_THREADS}")
+        if not 1 <= self.readback_buffers <= MAX_RING:
+            raise UsdWrinkleError(f"`readback_buffers` must be in 1..{MAX_RING}")
 
 
 @dataclass(frozen=True)

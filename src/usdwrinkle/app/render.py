@@ -245,17 +245,19 @@ class RenderJob(ShotJob):
     def image_options(self, width: int, height: int, chunked: bool = False) -> Any:
         """The frame loop's shot.ImageOptions at the resolved size (``chunked``: for a farm's
         worker process, one of several on its node: one writer thread unless asked)."""
-        from ..outputs.writer import default_threads, frames_in_flight
+        from ..outputs.writer import default_threads, exr_threads, frames_in_flight
         from ..shot import ImageOptions
 
         o = self.options
+        exr = str(self.output).lower().endswith(".exr")
         threads = o.write_threads if o.write_threads is not None else \
-            (1 if chunked else default_threads())
+            (1 if chunked else default_threads(exr))
         # what a frame holds until it is written: at most 32 bytes a pixel (an EXR's
         # colour, normals, depth and wrinkle fields)
         in_flight = frames_in_flight(threads, 32 * width * height)
         return ImageOptions(width, height, o.samples, self.wrinkles, threads,
-                            o.exr_compression, o.exr_half, o.shade_samples, in_flight)
+                            o.exr_compression, o.exr_half, o.shade_samples, in_flight,
+                            o.readback_buffers, exr_threads(chunked))
 
     def run(self, ctx: Any = None) -> RenderResult:
         """Check, start the engine, render every frame; ``ctx``: a moderngl context to
@@ -265,7 +267,8 @@ class RenderJob(ShotJob):
 
         plan = self.prepare()
         engine = self.shot.start_engine(self.options.camera, use_baked=self.uses_baked,
-                                        profile=bool(self.options.stats),
+                                        profile=bool(self.options.stats and
+                                                     self.options.stats_passes),
                                         progress=self.progress, ctx=ctx)
         try:
             engine.check_baked(plan.frames)

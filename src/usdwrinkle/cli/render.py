@@ -41,6 +41,11 @@ def add_parser(subparsers) -> None:
                         "per worker; 0 writes each frame before the next is rendered). "
                         "Frames in flight: one per thread and one more, within a quarter of "
                         "the available memory")
+    p.add_argument("--readback-buffers", type=int, default=3, metavar="K",
+                   help="GPU buffers that frames are resolved into, 1..8 (3): frame f is "
+                        "copied out of the GPU after a fence, on a thread of its own, while "
+                        "frames f + 1 .. f + K - 1 compute; 1 reads each frame back as soon "
+                        "as it is drawn. The files are the same")
     exr = p.add_mutually_exclusive_group()
     exr.add_argument("--exr-half", dest="exr_half", action="store_true",
                      help="EXR: colour and normals as half float, as compositing keeps them; "
@@ -78,8 +83,13 @@ def add_parser(subparsers) -> None:
                       help="worker processes of the local cluster (default: the CPU cores)")
     p.add_argument("--stats", metavar="FILE.json",
                    help="write per-frame timings (USD read, skin, crush, relax, draw, readback, "
-                        "encode; ms) and the time waited for the writer to this JSON file; "
-                        "each pass is then timed with glFinish between passes")
+                        "encode; ms) and the time waited for the writer and the GPU to this "
+                        "JSON file; each pass is then timed with glFinish between passes, "
+                        "unless --no-stats-passes")
+    p.add_argument("--stats-passes", action=argparse.BooleanOptionalAction, default=True,
+                   help="with --stats, time each pass (the default; glFinish between passes "
+                        "keeps the GPU from working ahead); --no-stats-passes writes the "
+                        "frame loop's times alone, as a render without --stats runs")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(run=run)
 
@@ -99,9 +109,10 @@ def render_job(args, reporter: Reporter | None = None):
     options = RenderOptions(
         camera=args.camera, width=args.width, height=args.height, samples=args.samples,
         shade_samples=args.shade_samples, write_threads=args.write_threads,
+        readback_buffers=args.readback_buffers,
         exr_half=args.exr_half, exr_compression=args.exr_compression,
         no_wrinkles=args.no_wrinkles, skip_existing=args.skip_existing,
-        recompute=args.recompute, stats=args.stats)
+        recompute=args.recompute, stats=args.stats, stats_passes=args.stats_passes)
     job = RenderJob(shot_of(args), args.output, args.frames, options)
     if reporter is not None:
         report_to(job, reporter, args)

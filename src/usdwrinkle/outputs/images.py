@@ -17,6 +17,7 @@ import functools
 import os
 import shutil
 import tempfile
+import threading
 
 import numpy as np
 
@@ -33,9 +34,10 @@ EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
 #: libpng's row filter for frames (PNG_FILTER_UP) and their zlib level
 PNG_FILTER_UP = 0x20
 PNG_FRAME_COMPRESSION = 1
-#: OpenEXR's own encode threads per file: 0 encodes in the writer thread alone and leaves
-#: the other core to llvmpipe; 2 was no faster (24 CesiumMan EXR frames, alternating
-#: processes: median 1.64 s with 0, 1.72 s with 2)
+#: OpenEXR's own encode threads per file by default: 0 encodes in the writer thread alone
+#: and leaves the other core to llvmpipe; 2 was no faster (24 CesiumMan EXR frames,
+#: alternating processes: median 1.64 s with 0, 1.72 s with 2). outputs/writer.exr_threads
+#: chooses per node
 EXR_THREADS = 0
 
 
@@ -178,11 +180,12 @@ def encode_file(scratch: str, spec, pixels: np.ndarray, path: str) -> None:
 
 
 def encode_frame(scratch: str, image: ResolvedImage, path: str,
-                 compression: str = "zip") -> None:
-    """Encode one frame to the file ``scratch``: EXR with OpenEXR, 8-bit formats with
+                 compression: str = "zip", exr_threads: int = EXR_THREADS) -> None:
+    """Encode one frame to the file ``scratch``: EXR with OpenEXR (its chunks compressed
+    on ``exr_threads`` of its own threads; 0: in this thread), 8-bit formats with
     OpenImageIO."""
     if image.layout.kind == "exr":
-        _encode_exr(scratch, image, path, compression)
+        _encode_exr(scratch, image, path, compression, exr_threads)
         return
     import OpenImageIO as oiio
 
@@ -202,18 +205,37 @@ def encode_frame(scratch: str, image: ResolvedImage, path: str,
     encode_file(scratch, spec, pixels, path)
 
 
-def _encode_exr(scratch: str, image: ResolvedImage, path: str, compression: str) -> None:
+def _encode_exr(scratch: str, image: ResolvedImage, path: str, compression: str,
+                threads: int) -> None:
     import OpenEXR
 
     from .. import __version__
 
     header = {"compression": getattr(OpenEXR, _EXR_COMPRESSION[compression]),
               "type": OpenEXR.scanlineimage, "software": f"usdwrinkle {__version__}"}
+    if threads > 0:
+        _exr_pool(threads)
     try:
-        with OpenEXR.File(header, dict(image.planes), EXR_THREADS) as exr:
+        with OpenEXR.File(header, dict(image.planes), threads) as exr:
             exr.write(scratch)
     except (RuntimeError, ValueError, TypeError) as exc:  # the binding's, with the reason
         raise UsdWrinkleError(f"cannot write image '{path}': {one_line(str(exc))}") from None
+
+
+_pool_lock = threading.Lock()
+
+
+def _exr_pool(threads: int) -> None:
+    """Grow OpenEXR's global thread pool (which every file's own threads come from, and
+    which starts empty) to at least the cores, once; a file asks it for ``threads``."""
+    import OpenEXR
+
+    from .writer import cores
+
+    with _pool_lock:
+        wanted = max(threads, cores())
+        if OpenEXR.global_thread_count() < wanted:
+            OpenEXR.set_global_thread_count(wanted)
 
 
 #: --exr-compression -> the OpenEXR binding's constant
@@ -222,7 +244,8 @@ _EXR_COMPRESSION = {"zip": "ZIP_COMPRESSION", "zips": "ZIPS_COMPRESSION",
                     "none": "NO_COMPRESSION"}
 
 
-def write_image(path: str, image, compression: str = "zip", half: bool = True) -> None:
+def write_image(path: str, image, compression: str = "zip", half: bool = True,
+                exr_threads: int = EXR_THREADS) -> None:
     """Write one frame to ``path``, atomically and completely.
 
     ``image``: a ResolvedImage in ``layout_for(path)``'s kind, or a dict of float
@@ -238,5 +261,5 @@ def write_image(path: str, image, compression: str = "zip", half: bool = True) -
         image = image_from_buffers(image, layout_for(path, half))
     _check_finite(image)
     with memory_file(ext) as scratch:
-        encode_frame(scratch, image, path, compression)
+        encode_frame(scratch, image, path, compression, exr_threads)
         copy_complete(scratch, path)

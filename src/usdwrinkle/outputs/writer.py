@@ -28,11 +28,41 @@ def cores() -> int:
         return os.cpu_count() or 1
 
 
-def default_threads() -> int:
+def default_threads(exr: bool = False) -> int:
     """Writer threads when none are asked for: every core but one, which renders (on a
     2-core machine 1; on a 16-core GPU node 15). Both encoders release the GIL, so the
-    threads encode in parallel (docs/benchmarks.md: encoding)."""
+    threads encode in parallel (docs/benchmarks.md: encoding). EXR files, whose chunks
+    OpenEXR compresses on threads of its own (exr_file_threads), get the cores but one
+    shared out: on a 16-core node 4 writer threads of 4 (a 24-frame chunk of 1080p frames
+    then ends waiting for one file, not for 15 compressed on one core each:
+    docs/benchmarks-gpu.md)."""
+    per_file = exr_file_threads() if exr else 0
+    if per_file > 1:
+        return max(1, min(int((cores() - 1) / per_file + 0.5), MAX_THREADS))
     return max(1, min(cores() - 1, MAX_THREADS))
+
+
+def exr_file_threads() -> int:
+    """OpenEXR's own threads per EXR file by default: none below 4 cores (the writer
+    thread compresses; llvmpipe needs the other core), then a quarter of the cores, at
+    most 4 (the fastest on a 16-core node: docs/benchmarks-gpu.md)."""
+    count = cores()
+    return 0 if count < 4 else min(4, count // 4)
+
+
+def exr_threads(chunked: bool = False) -> int:
+    """OpenEXR's threads per EXR file of a render (outputs/images.py): exr_file_threads,
+    0 for a farm's worker process (one of one per core), or $USDWRINKLE_EXR_THREADS
+    where it is set."""
+    from ..errors import UsdWrinkleError
+
+    given = os.environ.get("USDWRINKLE_EXR_THREADS", "").strip()
+    if not given:
+        return 0 if chunked else exr_file_threads()
+    if not (given.isascii() and given.isdigit()) or int(given) > MAX_THREADS:
+        raise UsdWrinkleError(f"USDWRINKLE_EXR_THREADS must be in 0..{MAX_THREADS}, not "
+                              f"'{given}'")
+    return int(given)
 
 
 def frames_in_flight(threads: int, frame_bytes: int) -> int:

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..aovs import OFFSET_SLOTS
 from ..memory import require_memory
-from .resolve import AOVS, ImageLayout, ResolvedImage, ResolvePass, read_rect
+from .resolve import AOVS, ImageLayout, PendingImage, ResolvedImage, ResolvePass, read_rect
 
 
 @dataclass
@@ -122,12 +122,15 @@ class Framebuffer:
         self.fbo.color_mask = masks[0] if len(masks) == 1 else masks
         return previous
 
-    def read_image(self, layout: ImageLayout) -> ResolvedImage:
+    def read_image(self, layout: ImageLayout, ring: int = 1) -> ResolvedImage | PendingImage:
         """The frame as ``layout`` says (an image file's planes or codes): only the
-        attachments it needs are read, at the precision it is stored at."""
+        attachments it needs are read, at the precision it is stored at. ``ring`` > 1:
+        a PendingImage, resolved into the next of that many readback buffers and read
+        when asked for (render/resolve.py)."""
         if read_rect(layout, *self.size, self.rect) != self.rect:
             raise RuntimeError(f"the frame was cleared for another layout than {layout.kind}")
-        return self.resolve.run(self.targets, self.size, self.samples, layout, self.rect)
+        return self.resolve.run(self.targets, self.size, self.samples, layout, self.rect,
+                                ring)
 
     def read(self, aovs=tuple(AOVS)) -> dict[str, RenderBuffer]:
         """The requested AOVs as float RenderBuffers, views of one array of their own

@@ -21,7 +21,7 @@ from .passes.draw import FLIP_Y, DrawPass
 from .passes.normals import NormalsPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
-from .resolve import ImageLayout, ResolvedImage, ResolvePass
+from .resolve import ImageLayout, PendingImage, ResolvedImage, ResolvePass
 from .resources import MeshResources
 
 
@@ -155,6 +155,9 @@ class RenderPassState:
     timings: dict = field(default_factory=dict)
     #: read the frame back as an image file stores it instead of as float AOVs
     image: ImageLayout | None = None
+    #: with ``image``: readback buffers in a ring; > 1 returns a PendingImage, read
+    #: while the next frames compute (render/resolve.py)
+    readback_ring: int = 1
 
 
 class RenderDelegate:
@@ -265,7 +268,8 @@ class RenderPass:
             fb.write_only(previous)
             fb.fbo.depth_mask = True
 
-    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage:
+    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage | \
+            PendingImage:
         """Draw every rprim; returns the AOVs, or with ``state.image`` the frame as an
         image file stores it."""
         d = self.delegate
@@ -304,7 +308,8 @@ class RenderPass:
             if translucent:
                 self._draw_translucent(translucent, fb, state.camera, bounds)
         started = time.perf_counter()
-        buffers = fb.read_image(state.image) if state.image is not None else fb.read(state.aovs)
-        if d.profile:
+        buffers = fb.read_image(state.image, state.readback_ring) if state.image is not None \
+            else fb.read(state.aovs)
+        if d.profile:  # a pending image's copy is timed when it is read (its read_ms)
             state.timings["readback"] = (time.perf_counter() - started) * 1e3
         return buffers
