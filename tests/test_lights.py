@@ -51,6 +51,66 @@ def test_a_distant_light_gives_its_radiance_times_its_solid_angle():
     np.testing.assert_allclose(lights_of(stage)[0].color, 2.0)  # normalize: no solid angle
 
 
+def test_lights_are_read_once_unless_they_vary_or_the_stage_is_edited():
+    """Issue 45: the lights were read at every frame (a third of the paper's shirt frame on
+    a GPU node). Lights that do not vary are kept; an animated intensity, an animated
+    parent transform and an edit of the stage are each seen at the next frame."""
+    stage, light = one_light("SphereLight", intensity=2.0, normalize=True)
+    parent = UsdGeom.Xform.Define(stage, "/Rig")
+    animated = UsdLux.DistantLight.Define(stage, "/Rig/Key")
+    animated.CreateIntensityAttr(1.0).Set(3.0)
+    scene = StageSceneDelegate(stage)
+
+    def colours(frame):
+        return sorted(float(record.color[0]) for record in scene.sample(frame, 1.0).lights)
+
+    sun = SUN_SOLID_ANGLE
+    assert colours(1.0) == pytest.approx(sorted([2.0, 3.0 * sun]))
+    first = scene.sample(1.0, 1.0).lights
+    assert scene.sample(2.0, 1.0).lights[0] is first[0]  # kept: nothing varies
+    light.GetIntensityAttr().Set(4.0)  # an edit (the paint window's, usdview's)
+    assert colours(2.0) == pytest.approx(sorted([4.0, 3.0 * sun]))
+    animated.GetIntensityAttr().Set(3.0, 1.0)
+    animated.GetIntensityAttr().Set(5.0, 2.0)  # now animated: read at every frame
+    assert colours(1.0) == pytest.approx(sorted([4.0, 3.0 * sun]))
+    assert colours(2.0) == pytest.approx(sorted([4.0, 5.0 * sun]))
+    animated.GetIntensityAttr().Clear()
+    animated.GetIntensityAttr().Set(3.0)
+    rotate = parent.AddRotateXOp()  # the rig turns: the light's direction varies
+    rotate.Set(0.0, 1.0)
+    rotate.Set(90.0, 2.0)
+    directions = {frame: next(r for r in scene.sample(frame, 1.0).lights
+                              if r.kind == "directional").vector for frame in (1.0, 2.0)}
+    np.testing.assert_allclose(directions[1.0], [0, 0, 1], atol=1e-9)
+    np.testing.assert_allclose(directions[2.0], [0, -1, 0], atol=1e-9)
+    assert colours(None) == pytest.approx(sorted([4.0, 3.0 * sun]))  # the default time
+
+
+def test_a_camera_is_read_once_unless_it_varies_or_the_stage_is_edited():
+    """Issue 45, as the lights: a still camera is kept; an edit of its lens, and an
+    animated transform of a prim above it, are seen at the next frame."""
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.Mesh.Define(stage, "/M").CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    rig = UsdGeom.Xform.Define(stage, "/Rig")
+    camera = UsdGeom.Camera.Define(stage, "/Rig/Cam")
+    camera.AddTranslateOp().Set(Gf.Vec3d(0, 0, 10))
+    scene = StageSceneDelegate(stage)
+
+    def sample(frame):
+        return scene.sample(frame, 1.0, "/Rig/Cam").camera
+
+    first = sample(1.0)
+    assert sample(2.0) is first  # kept: nothing varies
+    camera.GetFocalLengthAttr().Set(100.0)  # an edit: a longer lens
+    zoomed = sample(2.0)
+    assert zoomed.projection[0, 0] == pytest.approx(first.projection[0, 0] * 100 / 50)
+    translate = rig.AddTranslateOp()  # the rig moves: the camera varies
+    translate.Set(Gf.Vec3d(0, 0, 0), 1.0)
+    translate.Set(Gf.Vec3d(0, 5, 0), 2.0)
+    np.testing.assert_allclose(sample(1.0).position, [0, 0, 10], atol=1e-9)
+    np.testing.assert_allclose(sample(2.0).position, [0, 5, 10], atol=1e-9)
+
+
 @pytest.mark.parametrize("kind, inputs, area", [
     ("SphereLight", {"radius": 0.25}, math.pi * 0.0625),
     ("DiskLight", {"radius": 2.0}, math.pi * 4.0),

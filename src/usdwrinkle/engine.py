@@ -208,8 +208,7 @@ class WrinkleEngine:
         """The frame where the shot's phase history starts (None: every frame cold)."""
         if self._history_start is not None:
             return self._history_start
-        frames = self.scene.frame_range()
-        return frames[0]
+        return self.scene.first_frame()
 
     def _history_plan(self, frame: float | None) -> tuple[list[int], int | None]:
         """The grid frames (as indices: frame - start) to compute before ``frame``, and
@@ -310,10 +309,10 @@ class WrinkleEngine:
         read_at = time.perf_counter()
         self._sync(record.meshes)
         synced = time.perf_counter()
-        self.last_timings = {}
+        # the USD read and the sync are CPU work: timed always (render --stats)
+        self.last_timings = {"usd_read": (read_at - started) * 1e3,
+                             "sync": (synced - read_at) * 1e3}
         if profile:
-            self.last_timings["usd_read"] = (read_at - started) * 1e3
-            self.last_timings["sync"] = (synced - read_at) * 1e3
             self.last_timings["preroll_frames"] = float(len(steps))
         self.preroll_count += len(steps)
         write = self.history.work_slot(keep=read)
@@ -346,20 +345,24 @@ class WrinkleEngine:
 
     def render_image(self, frame: float | None, width: int, height: int, layout,
                      wrinkles: bool = True, samples: int = 4, shade_samples: bool = True,
-                     camera=None):
+                     camera=None, readback_ring: int = 1):
         """Compute and draw ``frame``; returns it as an image file stores it
         (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for).
         ``camera``: a CameraRecord to look through instead of the engine's (a viewer's
-        orbit camera)."""
+        orbit camera). ``readback_ring`` > 1: the frame is resolved into the next of that
+        many readback buffers and returned as a render.resolve.PendingImage, whose
+        ``result()`` copies it out; ask for it after the next frame is queued, and the GPU
+        computes that frame meanwhile (shot.render_frames)."""
         return self._render(frame, width, height, wrinkles, samples, (), layout, shade_samples,
-                            camera)
+                            camera, readback_ring)
 
     def _render(self, frame, width, height, wrinkles, samples, aovs, layout,
-                shade_samples=True, camera=None):
+                shade_samples=True, camera=None, readback_ring=1):
         record = self.compute_frame(frame, width / height, wrinkles)
         state = RenderPassState(camera if camera is not None else record.camera,
                                 record.lights, width, height, wrinkles, samples,
-                                aovs, image=layout, shade_samples=shade_samples)
+                                aovs, image=layout, shade_samples=shade_samples,
+                                readback_ring=readback_ring)
         result = self.render_pass.execute(state)
         self.last_timings.update(state.timings)
         return result

@@ -25,10 +25,15 @@ class ChangeTracker:
         #: how many notices resynced a prim (never reset): what is cached from a walk of
         #: the stage (the camera, the lights) is valid while this stays the same
         self.prim_resyncs = 0
+        #: how many notices arrived (never reset): what is cached from the stage's values
+        #: (the lights of a stage whose lights do not vary in time) is valid while this
+        #: stays the same
+        self.notices = 0
         self._listener = Tf.Notice.Register(Usd.Notice.ObjectsChanged, self._on_changed,
                                             stage)
 
     def _on_changed(self, notice, sender) -> None:
+        self.notices += 1
         resynced = notice.GetResyncedPaths()
         if any(not path.IsPropertyPath() for path in resynced):
             self.prim_resyncs += 1

@@ -51,6 +51,26 @@ def finite_points(points, path, attribute, time=None):
     return arr
 
 
+def might_vary_in_time(prims: list[Usd.Prim]) -> bool:
+    """Whether any of ``prims`` (lights, a camera) may read differently at another time:
+    one of its attributes (a light's colour, intensity, shaping, a dome's texture; a
+    camera's lens; its transform and visibility), or the transform or visibility of a
+    prim above it, may vary in time."""
+    for prim in prims:
+        if any(attr.ValueMightBeTimeVarying() for attr in prim.GetAttributes()):
+            return True
+        parent = prim.GetParent()
+        while parent and not parent.IsPseudoRoot():
+            if parent.IsA(UsdGeom.Xformable) and \
+                    UsdGeom.Xformable(parent).TransformMightBeTimeVarying():
+                return True
+            if parent.IsA(UsdGeom.Imageable) and \
+                    UsdGeom.Imageable(parent).GetVisibilityAttr().ValueMightBeTimeVarying():
+                return True
+            parent = parent.GetParent()
+    return False
+
+
 class FrameSampler:
     """Samples the scene delegate ``scene``'s meshes, camera and lights at a frame. The
     meshes' bounds for the automatic framing are made on first use and kept until
@@ -67,6 +87,11 @@ class FrameSampler:
         self._walked = -1  # the tracker's prim_resyncs when the prims below were found
         self._cameras: dict = {}  # --camera spec -> its prim (or None: the framing)
         self._lights: list | None = None
+        #: the lights and cameras read, while they do not vary in time (_kept), until the
+        #: tracker's next notice
+        self._kept_values: dict = {}
+        self._varies: dict = {}
+        self._kept_at = -1  # the tracker's notices when the two above were set
 
     def _walk_is_current(self) -> None:
         resyncs = self.scene.tracker.prim_resyncs
@@ -85,6 +110,35 @@ class FrameSampler:
         if self._lights is None:
             self._lights = light_prims(self.scene.stage)
         return self._lights
+
+    def _kept(self, key, prims: list, read):
+        """``read()``, kept under ``key`` while none of ``prims`` varies in time
+        (might_vary_in_time) and the stage is not edited (the tracker's notices), else
+        read again each time. Reading the lights and the camera each frame was a fifth of
+        the paper's shirt frame on a GPU node."""
+        notices = self.scene.tracker.notices
+        if notices != self._kept_at:
+            self._kept_at, self._kept_values, self._varies = notices, {}, {}
+        group = key[0]
+        if group not in self._varies:
+            self._varies[group] = might_vary_in_time(prims)
+        if self._varies[group]:
+            return read()
+        if key not in self._kept_values:
+            self._kept_values[key] = read()
+        return self._kept_values[key]
+
+    def lights(self, time: Usd.TimeCode, xform_cache) -> list:
+        """The stage's lights at ``time`` (read_lights), kept while they do not vary."""
+        prims = self.light_prims()
+        # a default value may differ from a single time sample: the default time apart
+        return self._kept(("lights", time.IsDefault()), prims,
+                          lambda: read_lights(self.scene.stage, time, xform_cache, prims))
+
+    def camera(self, prim, time: Usd.TimeCode, aspect: float):
+        """``prim``'s CameraRecord at ``time`` for ``aspect``, kept while it does not vary."""
+        return self._kept((f"camera {prim.GetPath()}", time.IsDefault(), aspect), [prim],
+                          lambda: camera_mod.usd_camera(prim, time, aspect))
 
     def forget_bounds(self) -> None:
         self._bounds = None
@@ -204,13 +258,12 @@ class FrameSampler:
         meshes = self.sample_meshes(frame, xform_cache)
         prim = self.camera_prim(camera_spec)
         if prim is not None:
-            cam = camera_mod.usd_camera(prim, time, aspect)
+            cam = self.camera(prim, time, aspect)
         else:
             if self._bounds is None:
                 self._bounds = self.bounds()
             cam = camera_mod.framing_camera(*self._bounds, self.scene.up_axis, aspect)
-        lights = read_lights(self.scene.stage, time, xform_cache, self.light_prims()) or \
-            default_lights(cam.view)
+        lights = self.lights(time, xform_cache) or default_lights(cam.view)
         return FrameRecord(frame, cam, tuple(lights), meshes)
 
 

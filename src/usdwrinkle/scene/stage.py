@@ -164,14 +164,28 @@ def outside_range_note(stage: Usd.Stage, frames: list[float | None]) -> str | No
 
 
 def stage_frames(stage: Usd.Stage) -> list[float | None]:
-    """The stage's authored start..end frames (step 1), or [NaN] for the default time.
+    """The stage's authored start..end frames (step 1), or [None] for the default time.
 
     A range that is not finite, runs backwards, lies beyond +-MAX_TIME_CODE or holds more
     than MAX_FRAMES frames is refused, naming the layer's metadata.
     """
-    if not stage.HasAuthoredTimeCodeRange():
+    span = stage_span(stage)
+    if span is None:
         return [None]
+    return [float(f) for f in np.arange(span[0], span[1] + 0.5)]
+
+
+def stage_span(stage: Usd.Stage) -> tuple[float, float] | None:
+    """The stage's authored (start, end) frames, checked as stage_frames says, or None
+    for the default time (without building the list of frames: the phase history asks
+    for its start at every frame)."""
+    if not stage.HasAuthoredTimeCodeRange():
+        return None
     start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
+    if math.isfinite(start) and math.isfinite(end) and \
+            max(abs(start), abs(end)) <= MAX_TIME_CODE and start <= end and \
+            end - start + 1 <= MAX_FRAMES:
+        return start, end
     where = f"startTimeCode {start:g}, endTimeCode {end:g} of '{stage.GetRootLayer().identifier}'"
     if not (math.isfinite(start) and math.isfinite(end)) or max(abs(start), abs(end)) > \
             MAX_TIME_CODE:
@@ -183,7 +197,7 @@ def stage_frames(stage: Usd.Stage) -> list[float | None]:
     if end - start + 1 > MAX_FRAMES:
         raise UsdWrinkleError(f"the stage's frame range holds more than {MAX_FRAMES:,} frames "
                               f"({where}); pass `frames`")
-    return [float(f) for f in np.arange(start, end + 0.5)]
+    raise AssertionError("unreachable")  # every failed condition above raised
 
 
 def inherited_range_note(stage: Usd.Stage) -> str | None:
@@ -474,6 +488,14 @@ class StageSceneDelegate:
             return stage_frames(self.stage)
         except UsdWrinkleError:
             return [None]
+
+    def first_frame(self) -> float | None:
+        """frame_range()[0], without building the range."""
+        try:
+            span = stage_span(self.stage)
+        except UsdWrinkleError:
+            return None
+        return None if span is None else float(span[0])
 
     def framing_range(self) -> list[float]:
         """The frames automatic framing takes its bounds over: the shot's range that a bake

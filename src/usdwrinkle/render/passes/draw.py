@@ -150,7 +150,11 @@ class DrawPass:
             return
         record = res.record
         local_to_world = frame.local_to_world
-        eye_local = np.append(camera.position, 1.0) @ np.linalg.pinv(local_to_world)
+        try:  # inv, not pinv: pinv's SVD was a tenth of a small frame on a GPU node
+            to_local = np.linalg.inv(local_to_world)
+        except np.linalg.LinAlgError:  # a scale of 0 flattens the mesh
+            to_local = np.linalg.pinv(local_to_world)
+        eye_local = np.append(camera.position, 1.0) @ to_local
         material = record.material
         variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
                                 NORMAL_MAP=res.normal_map is not None,
