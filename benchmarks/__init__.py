@@ -32,44 +32,64 @@ from .stages import default_corpus
 
 
 def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
-              before: str | None = None) -> dict:
+              before: str | None = None, checkpoint=None) -> dict:
+    """Every section in turn; ``checkpoint(result)`` after each (the sections so far: a
+    run stopped by a time limit keeps what it measured)."""
     from usdwrinkle.render.context import create_context
 
     ctx = create_context()
     result = {"quick": quick, "machine": machine(ctx),
               "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
-    for key, step in (("paper_table", lambda: paper_table(quick, ctx)),
-                      ("scaling", lambda: scaling(quick, ctx)),
-                      ("skin_baseline", lambda: skin_baseline(quick, ctx)),
-                      ("numpy_baseline", lambda: numpy_baseline(quick, ctx)),
-                      ("end_to_end", lambda: end_to_end(quick, ctx, corpus))):
-        progress(f"bench: {key.replace('_', ' ')}")
+
+    def floors_row():
+        return floors(ctx, result["skin_baseline"][-1]["vertices"])
+
+    def farm_row():
+        from . import farm as farm_bench
+        return farm_bench.farm(quick, corpus)
+
+    def preroll_row():
+        from . import farm as farm_bench
+        return farm_bench.preroll(quick, ctx)
+
+    def renderers(name):
+        from . import renderers as module
+        return (module.wrinkle_maps(quick, ctx) if name == "maps" else
+                module.displaced_geometry(quick, ctx, corpus))
+
+    def beyond_row():
+        from .beyond import overhead
+        return overhead(quick, ctx)
+
+    def peers_row():
+        from .peers import storm_peer
+        return storm_peer(quick, corpus)
+
+    def paint_row():
+        from .paint import paint
+        return paint(quick, ctx, corpus)
+
+    sections = (("paper_table", "paper table", lambda: paper_table(quick, ctx)),
+                ("scaling", "scaling", lambda: scaling(quick, ctx)),
+                ("skin_baseline", "skin baseline", lambda: skin_baseline(quick, ctx)),
+                ("numpy_baseline", "numpy baseline", lambda: numpy_baseline(quick, ctx)),
+                ("end_to_end", "end to end", lambda: end_to_end(quick, ctx, corpus)),
+                ("preroll", "preroll", preroll_row),
+                ("farm", "farm", farm_row),
+                ("cpu_nodes", "cpu render nodes", lambda: cpu_nodes(quick, corpus, ctx,
+                                                                     before)),
+                ("wrinkle_maps", "wrinkle maps", lambda: renderers("maps")),
+                ("displaced_geometry", "displaced geometry", lambda: renderers("geometry")),
+                ("beyond", "beyond the paper", beyond_row),
+                ("peers", "against Storm", peers_row),
+                ("paint", "the paint window", paint_row),
+                ("triangulation", "triangulation", lambda: triangulation(quick)),
+                ("floors", "floors", floors_row))
+    for key, label, step in sections:
+        progress(f"bench: {label}")
         result[key] = step()
-    from . import farm as farm_bench
-    progress("bench: preroll")
-    result["preroll"] = farm_bench.preroll(quick, ctx)
-    progress("bench: farm")
-    result["farm"] = farm_bench.farm(quick, corpus)
-    progress("bench: cpu render nodes")
-    result["cpu_nodes"] = cpu_nodes(quick, corpus, ctx, before)
-    progress("bench: wrinkle maps")
-    from .renderers import displaced_geometry, wrinkle_maps
-    result["wrinkle_maps"] = wrinkle_maps(quick, ctx)
-    progress("bench: displaced geometry")
-    result["displaced_geometry"] = displaced_geometry(quick, ctx, corpus)
-    progress("bench: beyond the paper")
-    from .beyond import overhead
-    result["beyond"] = overhead(quick, ctx)
-    progress("bench: against Storm")
-    from .peers import storm_peer
-    result["peers"] = storm_peer(quick, corpus)
-    progress("bench: the paint window")
-    from .paint import paint
-    result["paint"] = paint(quick, ctx, corpus)
-    progress("bench: triangulation")
-    result["triangulation"] = triangulation(quick)
-    progress("bench: floors")
-    result["floors"] = floors(ctx, result["skin_baseline"][-1]["vertices"])
+        if checkpoint is not None:
+            checkpoint(result)
     result["targets"] = targets(result)
     return result
 
@@ -84,10 +104,16 @@ def run(args) -> int:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
         from usdwrinkle.log import silenced
 
+        def checkpoint(partial: dict) -> None:
+            if args.json:  # the sections so far, should the run be stopped
+                with atomic_path(args.json) as tmp:
+                    Path(tmp).write_text(json.dumps({**partial, "partial": True}, indent=2,
+                                                    default=float) + "\n")
+
         with silenced():  # the shots' degraded-input warnings are not the bench's output
             result = run_bench(args.quick, corpus,
                                progress=lambda m: print(m, file=sys.stderr, flush=True),
-                               before=args.before)
+                               before=args.before, checkpoint=checkpoint)
         result["command"] = "python -m benchmarks" + (" --quick" if args.quick else "") + (
             f" --json {args.json}" if args.json else "") + (
             f" --markdown {args.markdown}" if args.markdown != "docs/benchmarks.md" else "") + (

@@ -7,10 +7,11 @@ every core but one):
 - the shirt and CesiumMan (``--all-meshes``) at 1920x1080 to EXR, 24 frames.
 
 Frames per second without start-up: the frames over the frame loop's time (``--stats``'s
-``loop_s``; the profile it turns on ends each pass with glFinish, so the loop is a little
-slower than without it). CPU utilisation: the process's CPU time over its wall time and
-the cores. Wait: the share of the loop the renderer spent waiting for the writer (frames
-in flight all taken), the bound when encoding is the slower half. ``python -m
+``loop_s``, with ``--no-stats-passes``, so that the loop runs as without ``--stats``).
+CPU utilisation: the process's CPU time over its wall time and the cores. Waits: the
+share of the loop the renderer spent waiting for the writer (frames in flight all taken),
+the bound when encoding is the slower half, and waiting on the fence of a frame's
+resolve before copying it out (the GPU still busy: the bound when rendering is). ``python -m
 benchmarks.files_written`` prints the table; ``python -m benchmarks`` runs it in its CPU
 render nodes section.
 """
@@ -46,7 +47,8 @@ def cases(corpus: Path | None, quick: bool) -> list[tuple[str, Path, list, str]]
     return rows
 
 
-def measure(corpus: Path | None = None, quick: bool = False) -> dict:
+def measure(corpus: Path | None = None, quick: bool = False, extra: tuple = ()) -> dict:
+    """The rows; ``extra``: more render options for every row (a comparison's)."""
     from usdwrinkle.outputs.writer import cores
 
     rows = []
@@ -54,13 +56,16 @@ def measure(corpus: Path | None = None, quick: bool = False) -> dict:
         for index, (label, stage, options, ext) in enumerate(cases(corpus, quick)):
             stats = os.path.join(folder, f"stats{index}.json")
             out = os.path.join(folder, f"r{index}", f"f.####.{ext}")
-            wall, cpu = _cli("render", stage, out, *options, "--stats", stats, "--quiet")
+            wall, cpu = _cli("render", stage, out, *options, *extra, "--stats", stats,
+                             "--no-stats-passes", "--quiet")
             data = json.loads(Path(stats).read_text())
             frames = len(data["frames"])
             rows.append({"case": label, "frames": frames, "wall_s": wall,
                          "fps": frames / data["loop_s"],
                          "cpu_utilisation": cpu / (wall * cores()),
                          "wait_share": data["waited_s"] / data["loop_s"],
+                         "gpu_wait_share": data.get("gpu_waited_s", 0.0) / data["loop_s"],
+                         "readback_buffers": data.get("readback_buffers", 1),
                          "write_threads": data["write_threads"]})
     return {"cores": cores(), "rows": rows, "date": datetime.datetime.now(
         datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
@@ -70,25 +75,29 @@ def markdown(result: dict) -> list[str]:
     lines = ["### Files written", "",
              f"What a farm gets: each row one `usdwrinkle render` process with the defaults "
              f"({result['rows'][0]['write_threads'] if result['rows'] else '?'} writer "
-             f"thread(s) on {result['cores']} core(s)), {result['date']} "
+             f"thread(s) on {result['cores']} core(s), "
+             f"{result['rows'][0].get('readback_buffers', 1) if result['rows'] else '?'} "
+             f"readback buffers), {result['date']} "
              "(`python -m benchmarks.files_written`). Frames per second over the frame loop "
-             "(without start-up; `--stats` ends each pass with glFinish); CPU utilisation of "
-             "all cores over the whole process; wait: the share of the loop the renderer "
-             "waited for the writer. The paper's 328 fps and the GPU rows wait for a GPU "
-             "node (issue 45).", "",
-             "| case | frames | fps | CPU utilisation | wait | whole process s |",
-             "|---|---|---|---|---|---|"]
+             "(without start-up); CPU utilisation of all cores over the whole process; "
+             "waits: the share of the loop the renderer waited for the writer (encode the "
+             "bound), and for the fence of a frame's resolve before copying it out (the "
+             "GPU, or llvmpipe, the bound).", "",
+             "| case | frames | fps | CPU utilisation | waits for the writer | "
+             "waits for the GPU | whole process s |",
+             "|---|---|---|---|---|---|---|"]
     for row in result["rows"]:
         lines.append(f"| {row['case']} | {row['frames']} | {row['fps']:.1f} | "
                      f"{100 * row['cpu_utilisation']:.0f}% | {100 * row['wait_share']:.0f}% | "
-                     f"{row['wall_s']:.1f} |")
+                     f"{100 * row.get('gpu_wait_share', 0.0):.0f}% | {row['wall_s']:.1f} |")
     return lines + [""]
 
 
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     corpus = Path(os.environ.get("USDWRINKLE_CORPUS", ROOT.parent / "shared" / "corpus"))
-    print("\n".join(markdown(measure(corpus, quick="--quick" in args))))
+    extra = tuple(a for a in args if a != "--quick")  # render options: --readback-buffers 1
+    print("\n".join(markdown(measure(corpus, quick="--quick" in args, extra=extra))))
     return 0
 
 

@@ -1,0 +1,87 @@
+"""Crests across GL implementations (issue 46): the same frames on a GPU and on llvmpipe.
+
+    python -m benchmarks.crests_across_gl --save gpu.npz       # on the GPU node
+    python -m benchmarks.crests_across_gl --compare gpu.npz    # here, on llvmpipe
+
+Each run renders the shirt and CesiumMan (``--all-meshes``, with its units) at the
+frames and size of benchmarks/stability.py from a cold engine, and keeps each frame's
+``wrinkle.height``, ``wrinkle.amplitude`` and coverage. ``--compare`` measures, per
+frame, the share of wrinkled pixels whose height differs by more than 15% of the largest
+amplitude between the saved run and this machine's: stability's "crest moved", where the
+change is the GL implementation rather than the input (issue 46's bar: 2%).
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+
+import numpy as np
+
+from .stability import FRAMES, SHIRT, corpus_dir, heights, moved_share, with_units
+
+
+def runs(ctx=None) -> dict:
+    """stage -> frame -> (height, amplitude, alpha)."""
+    out = {"shirt": heights(str(SHIRT), ctx=ctx)}
+    cesium = corpus_dir() / "usd-wg" / "CesiumMan.usdz"
+    if cesium.exists():
+        with tempfile.TemporaryDirectory() as folder:
+            out["cesium_man"] = heights(with_units(str(cesium), f"{folder}/cesium.usda"),
+                                        all_meshes=True, ctx=ctx)
+    return out
+
+
+def save(path: str, result: dict) -> None:
+    from usdwrinkle.render.context import renderer_info
+
+    arrays = {f"{stage}/{frame}/{index}": plane for stage, frames in result.items()
+              for frame, planes in frames.items() for index, plane in enumerate(planes)}
+    arrays["renderer"] = np.array(renderer_info()["renderer"])
+    np.savez_compressed(path, **arrays)
+
+
+def load(path: str) -> tuple[str, dict]:
+    data = np.load(path)
+    result: dict = {}
+    for key in data.files:
+        if key == "renderer":
+            continue
+        stage, frame, index = key.split("/")
+        planes = result.setdefault(stage, {}).setdefault(int(frame), [None, None, None])
+        planes[int(index)] = data[key]
+    return str(data["renderer"]), {stage: {f: tuple(p) for f, p in frames.items()}
+                                   for stage, frames in result.items()}
+
+
+def compare(path: str) -> str:
+    from usdwrinkle.render.context import renderer_info
+
+    theirs_name, theirs = load(path)
+    ours = runs()
+    lines = [f"crests of {theirs_name} against {renderer_info()['renderer']}: wrinkled pixels "
+             "whose height differs by more than 15% of the largest amplitude", "",
+             "| stage | " + " | ".join(f"frame {f}" for f in FRAMES) + " |",
+             "|---|" + "---|" * len(FRAMES)]
+    for stage in ours:
+        if stage not in theirs:
+            continue
+        shares = moved_share(ours[stage], theirs[stage])
+        lines.append(f"| {stage} | " + " | ".join(f"{100 * shares[f]:.2f}%" for f in FRAMES)
+                     + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) == 2 and args[0] == "--save":
+        save(args[1], runs())
+        return 0
+    if len(args) == 2 and args[0] == "--compare":
+        print(compare(args[1]))
+        return 0
+    print(__doc__.strip().splitlines()[2:4], file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
