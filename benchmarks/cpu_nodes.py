@@ -102,10 +102,12 @@ def cpu_nodes(quick: bool, corpus: Path | None, ctx=None, before: str | None = N
     if ctx is not None:
         result["encoders"] = encoders(ctx, path, width, height, 3 if quick else 15)
         from .encoding import measure as encoding
+        from .exr_threads import measure as exr_threads
         from .files_written import measure as files_written
 
         result["encoding"] = encoding(quick, ctx)
         result["files_written"] = files_written(corpus, quick)
+        result["exr_threads"] = exr_threads(corpus, quick)
     return result
 
 
@@ -235,6 +237,10 @@ def markdown(result: dict) -> list[str]:
         from .encoding import markdown as encoding
 
         lines += encoding(row["encoding"])
+    if row.get("exr_threads"):
+        from .exr_threads import markdown as exr_threads
+
+        lines += exr_threads(row["exr_threads"])
     if row.get("files_written"):
         from .files_written import markdown as files_written
 

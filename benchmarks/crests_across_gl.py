@@ -17,7 +17,7 @@ import tempfile
 
 import numpy as np
 
-from .stability import FRAMES, SHIRT, corpus_dir, heights, moved_share, with_units
+from .stability import FRAMES, SHIRT, SLEEVE, corpus_dir, heights, moved_share, with_units
 
 
 def runs(ctx=None) -> dict:
@@ -71,8 +71,64 @@ def compare(path: str) -> str:
     return "\n".join(lines)
 
 
+def tables(cold: bool, ctx=None) -> dict:
+    """The shirt's per-vertex tables after each frame 1..24 (posed points, the wave fields,
+    the relaxed phases), with the phase history (``cold``: each frame a cold start)."""
+    from usdwrinkle.engine import WrinkleEngine
+
+    out = {}
+    engine = None
+    try:
+        for frame in range(1, 25):
+            if engine is None or cold:
+                if engine is not None:
+                    engine.release()
+                engine = WrinkleEngine(str(SHIRT), ctx=ctx,
+                                       history_start=float(frame) if cold else None)
+            engine.compute_frame(float(frame), 1.0)
+            res = engine.mesh_resources(SLEEVE)
+            out[frame] = (np.asarray(res.posed_points.read()),
+                          np.asarray(res.waves.current.read()),
+                          np.asarray(res.waves.phase.read()))
+    finally:
+        if engine is not None:
+            engine.release()
+    return out
+
+
+def save_tables(path: str) -> None:
+    np.savez_compressed(path, **{f"{mode}/{frame}/{index}": table
+                                 for mode in ("history", "cold")
+                                 for frame, planes in tables(mode == "cold").items()
+                                 for index, table in enumerate(planes)})
+
+
+def compare_tables(path: str) -> str:
+    data = np.load(path)
+    lines = ["per frame, the largest difference of the shirt's tables (theirs - ours): posed "
+             "points, wave fields, phases (radians, wrapped)", "",
+             "| mode | frame | points | fields | phase | vertices with phase off > 0.1 |",
+             "|---|---|---|---|---|---|"]
+    for mode in ("history", "cold"):
+        ours = tables(mode == "cold")
+        for frame, (points, fields, phase) in ours.items():
+            theirs = [data[f"{mode}/{frame}/{i}"] for i in range(3)]
+            dphase = np.angle(np.exp(1j * (theirs[2].astype(np.float64) - phase)))
+            lines.append(f"| {mode} | {frame} | {np.abs(theirs[0] - points).max():.2e} | "
+                         f"{np.abs(theirs[1] - fields).max():.2e} | "
+                         f"{np.abs(dphase).max():.2e} | "
+                         f"{int((np.abs(dphase) > 0.1).any(axis=-1).sum())} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
+    if len(args) == 2 and args[0] == "--save-tables":
+        save_tables(args[1])
+        return 0
+    if len(args) == 2 and args[0] == "--compare-tables":
+        print(compare_tables(args[1]))
+        return 0
     if len(args) == 2 and args[0] == "--save":
         save(args[1], runs())
         return 0

@@ -66,6 +66,7 @@ def measure(corpus: Path | None = None, quick: bool = False, extra: tuple = ()) 
                          "wait_share": data["waited_s"] / data["loop_s"],
                          "gpu_wait_share": data.get("gpu_waited_s", 0.0) / data["loop_s"],
                          "readback_buffers": data.get("readback_buffers", 1),
+                         "exr_threads": data.get("exr_threads", 0),
                          "write_threads": data["write_threads"]})
     return {"cores": cores(), "rows": rows, "date": datetime.datetime.now(
         datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
@@ -74,20 +75,23 @@ def measure(corpus: Path | None = None, quick: bool = False, extra: tuple = ()) 
 def markdown(result: dict) -> list[str]:
     lines = ["### Files written", "",
              f"What a farm gets: each row one `usdwrinkle render` process with the defaults "
-             f"({result['rows'][0]['write_threads'] if result['rows'] else '?'} writer "
-             f"thread(s) on {result['cores']} core(s), "
-             f"{result['rows'][0].get('readback_buffers', 1) if result['rows'] else '?'} "
-             f"readback buffers), {result['date']} "
+             f"on {result['cores']} core(s) "
+             f"({result['rows'][0].get('readback_buffers', 1) if result['rows'] else '?'} "
+             f"readback buffers; writer threads: T, or T x t with t OpenEXR threads per "
+             f"file), {result['date']} "
              "(`python -m benchmarks.files_written`). Frames per second over the frame loop "
              "(without start-up); CPU utilisation of all cores over the whole process; "
              "waits: the share of the loop the renderer waited for the writer (encode the "
              "bound), and for the fence of a frame's resolve before copying it out (the "
              "GPU, or llvmpipe, the bound).", "",
-             "| case | frames | fps | CPU utilisation | waits for the writer | "
+             "| case | frames | writer threads | fps | CPU utilisation | waits for the writer | "
              "waits for the GPU | whole process s |",
-             "|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|"]
     for row in result["rows"]:
-        lines.append(f"| {row['case']} | {row['frames']} | {row['fps']:.1f} | "
+        threads = str(row.get("write_threads", "?")) + (
+            f" x {row['exr_threads']}" if row.get("exr_threads") and "EXR" in row["case"]
+            else "")
+        lines.append(f"| {row['case']} | {row['frames']} | {threads} | {row['fps']:.1f} | "
                      f"{100 * row['cpu_utilisation']:.0f}% | {100 * row['wait_share']:.0f}% | "
                      f"{100 * row.get('gpu_wait_share', 0.0):.0f}% | {row['wall_s']:.1f} |")
     return lines + [""]

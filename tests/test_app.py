@@ -153,7 +153,7 @@ def test_exr_files_share_the_cores_with_openexrs_threads(monkeypatch):
     from usdwrinkle.outputs import writer
 
     monkeypatch.delenv("USDWRINKLE_EXR_THREADS", raising=False)
-    expected = {16: (4, 4), 8: (4, 2), 4: (3, 1), 2: (1, 0), 1: (1, 0)}
+    expected = {16: (4, 4), 8: (4, 2), 4: (3, 1), 2: (1, 1), 1: (1, 0)}
     for cores, (threads, per_file) in expected.items():
         monkeypatch.setattr(writer, "cores", lambda cores=cores: cores)
         image = RenderJob(Shot(SHIRT), "x.####.exr").image_options(1920, 1080)

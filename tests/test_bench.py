@@ -72,6 +72,12 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     assert [row["case"].split()[0] for row in written] == ["shirt", "shirt", "CesiumMan"]
     for row in written:
         assert row["fps"] > 0 and 0 <= row["wait_share"] < 1 and row["cpu_utilisation"] > 0
+        assert 0 <= row["gpu_wait_share"] < 1 and row["readback_buffers"] in (1, 3)
+    # writer threads against OpenEXR's own threads per file, for both stages
+    combos = {(row["stage"], row["write_threads"], row["exr_threads"])
+              for row in nodes["exr_threads"]["rows"]}
+    assert {("shirt", 1, 0), ("CesiumMan", 1, 0)} <= combos
+    assert all(row["fps"] > 0 for row in nodes["exr_threads"]["rows"])
     assert set(nodes["encoding"]["threads"][".exr"]) >= {"1"}
     assert set(nodes["encoding"]["compressions"]) == {"zip", "zips", "piz", "dwaa", "none"}
     tri = result["triangulation"]
@@ -80,7 +86,8 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     for heading in ("## Targets", "## The paper's table", "## Scaling", "## Baselines",
                     "## End to end", "## What the rasteriser costs by itself", "## Farms",
                     "## Triangulation of hostile meshes", "## CPU render nodes",
-                    "### Encoding on every core", "### Files written"):
+                    "### Encoding on every core", "### Files written",
+                    "### Writer threads and OpenEXR's threads"):
         assert heading in text
     assert result["machine"]["gl_renderer"] in text
 

@@ -155,8 +155,8 @@ class RenderOptions(_Checked):
     #: core but one; 0: each frame is written before the next renders)
     write_threads: int | None = None
     #: GPU readback buffers, 1..8: frame f is copied out while the next frames compute
-    #: (1: each frame is read back as soon as it is drawn)
-    readback_buffers: int = 3
+    #: (1: each frame is read back as soon as it is drawn; None: 3 on a GPU, 1 on llvmpipe)
+    readback_buffers: int | None = None
     #: EXR: colour and normals as half float (depth and the wrinkle fields stay float)
     exr_half: bool = True
     exr_compression: str = "zip"
@@ -181,7 +181,7 @@ class RenderOptions(_Checked):
         if self.write_threads is not None and \
                 not 0 <= self.write_threads <= MAX_WRITE_THREADS:
             raise UsdWrinkleError(f"`write_threads` must be in 0..{MAX_WRITE_THREADS}")
-        if not 1 <= self.readback_buffers <= MAX_RING:
+        if self.readback_buffers is not None and not 1 <= self.readback_buffers <= MAX_RING:
             raise UsdWrinkleError(f"`readback_buffers` must be in 1..{MAX_RING}")
 
 

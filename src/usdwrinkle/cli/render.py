@@ -41,11 +41,12 @@ def add_parser(subparsers) -> None:
                         "per worker; 0 writes each frame before the next is rendered). "
                         "Frames in flight: one per thread and one more, within a quarter of "
                         "the available memory")
-    p.add_argument("--readback-buffers", type=int, default=3, metavar="K",
-                   help="GPU buffers that frames are resolved into, 1..8 (3): frame f is "
-                        "copied out of the GPU after a fence, on a thread of its own, while "
-                        "frames f + 1 .. f + K - 1 compute; 1 reads each frame back as soon "
-                        "as it is drawn. The files are the same")
+    p.add_argument("--readback-buffers", type=int, metavar="K",
+                   help="GPU buffers that frames are resolved into, 1..8 (default: 3 on a "
+                        "GPU, 1 on llvmpipe, where the CPU computes the frame anyway): frame "
+                        "f is copied out of the GPU after a fence, on a thread of its own, "
+                        "while frames f + 1 .. f + K - 1 compute; 1 reads each frame back as "
+                        "soon as it is drawn. The files are the same")
     exr = p.add_mutually_exclusive_group()
     exr.add_argument("--exr-half", dest="exr_half", action="store_true",
                      help="EXR: colour and normals as half float, as compositing keeps them; "

@@ -34,10 +34,8 @@ EXR_COMPRESSIONS = ("zip", "zips", "piz", "dwaa", "none")
 #: libpng's row filter for frames (PNG_FILTER_UP) and their zlib level
 PNG_FILTER_UP = 0x20
 PNG_FRAME_COMPRESSION = 1
-#: OpenEXR's own encode threads per file by default: 0 encodes in the writer thread alone
-#: and leaves the other core to llvmpipe; 2 was no faster (24 CesiumMan EXR frames,
-#: alternating processes: median 1.64 s with 0, 1.72 s with 2). outputs/writer.exr_threads
-#: chooses per node
+#: OpenEXR's own encode threads per file where no caller says: 0, the file compressed in
+#: the calling thread. A render's frames take outputs/writer.exr_threads, chosen per node
 EXR_THREADS = 0
 
 

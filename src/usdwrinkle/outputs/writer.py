@@ -43,11 +43,13 @@ def default_threads(exr: bool = False) -> int:
 
 
 def exr_file_threads() -> int:
-    """OpenEXR's own threads per EXR file by default: none below 4 cores (the writer
-    thread compresses; llvmpipe needs the other core), then a quarter of the cores, at
-    most 4 (the fastest on a 16-core node: docs/benchmarks-gpu.md)."""
+    """OpenEXR's own threads per EXR file by default: a quarter of the cores, at least 1
+    and at most 4; none on 1 core. On 2 cores, 1 (24 CesiumMan frames at 1080p: 2.13 fps
+    and 8% of the loop waiting for the writer, against 1.81 fps and 35% compressing in the
+    writer thread; docs/benchmarks.md); on a 16-core H200 node 4 (26.0 fps against 19.0
+    for the shirt)."""
     count = cores()
-    return 0 if count < 4 else min(4, count // 4)
+    return 0 if count < 2 else max(1, min(4, count // 4))
 
 
 def exr_threads(chunked: bool = False) -> int:
