@@ -21,7 +21,8 @@ import tempfile
 from pathlib import Path
 
 from .farm import _cli
-from .files_written import ROOT, SHIRT
+from .files_written import SHIRT
+from .stages import default_corpus
 
 
 def combinations(cores: int) -> list[tuple[int, int]]:
@@ -91,8 +92,7 @@ def markdown(result: dict) -> list[str]:
 
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
-    corpus = Path(os.environ.get("USDWRINKLE_CORPUS", ROOT.parent / "shared" / "corpus"))
-    result = measure(corpus, quick="--quick" in args)
+    result = measure(default_corpus(), quick="--quick" in args)
     print("\n".join(markdown(result)))
     if "--json" in args:
         print(json.dumps(result))

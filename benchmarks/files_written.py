@@ -25,6 +25,7 @@ import tempfile
 from pathlib import Path
 
 from .farm import _cli
+from .stages import default_corpus
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
@@ -99,9 +100,9 @@ def markdown(result: dict) -> list[str]:
 
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
-    corpus = Path(os.environ.get("USDWRINKLE_CORPUS", ROOT.parent / "shared" / "corpus"))
     extra = tuple(a for a in args if a != "--quick")  # render options: --readback-buffers 1
-    print("\n".join(markdown(measure(corpus, quick="--quick" in args, extra=extra))))
+    print("\n".join(markdown(measure(default_corpus(), quick="--quick" in args,
+                                      extra=extra))))
     return 0
 
 
