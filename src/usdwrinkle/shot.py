@@ -157,7 +157,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
             frame_image.release()  # its memory may now hold a later frame, not before
         if stats is not None:
             rows[path]["encode"] = (time.perf_counter() - started) * 1e3
-            if ring > 1:
+            if ring > 1 or "readback" not in rows[path]:  # the copy out (ms)
                 rows[path]["readback"] = frame_image.read_ms
 
     ring = image.readback_buffers if image.readback_buffers is not None else \
