@@ -37,10 +37,13 @@ def add_parser(subparsers) -> None:
                         "fold crests; README: render options)")
     p.add_argument("--write-threads", type=int, metavar="N",
                    help="threads that encode and write frames while the next ones render, "
-                        "0..64 (default: every CPU core but one, at least 1; with --dask, 1 "
-                        "per worker; 0 writes each frame before the next is rendered). "
-                        "Frames in flight: one per thread and one more, within a quarter of "
-                        "the available memory")
+                        "0..64 (default: every CPU core but one, at least 1; for EXR those "
+                        "cores are shared with OpenEXR's own threads per file, a quarter of "
+                        "the cores, at most 4: 4 writer threads of 4 on 16 cores, "
+                        "USDWRINKLE_EXR_THREADS overrides them; with --dask, 1 per worker; 0 "
+                        "writes each frame before the next is rendered). Frames in flight: "
+                        "one per thread and one more, within a quarter of the available "
+                        "memory")
     p.add_argument("--readback-buffers", type=int, metavar="K",
                    help="GPU buffers that frames are resolved into, 1..8 (default: 3 on a "
                         "GPU, 1 on llvmpipe, where the CPU computes the frame anyway): frame "
