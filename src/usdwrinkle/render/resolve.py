@@ -23,7 +23,7 @@ from ..aovs import (  # noqa: F401  (re-exported: the pass's own names for its t
     ResolvedImage,
 )
 from . import bindings
-from .glcalls import GLCalls
+from .glcalls import GLCalls, MappedBuffer
 from .shaders import Variants, compute_shader
 
 
@@ -126,8 +126,6 @@ class _Slot:
                 self.out = None
             size = max(words, 1) * 4
             if calls.mapped:
-                from .glcalls import MappedBuffer
-
                 try:
                     self.out = MappedBuffer(calls, size)
                 except OSError:
@@ -166,8 +164,6 @@ class PendingImage:
         if self._image is None:
             import time
 
-            from .glcalls import GLCalls
-
             started = time.perf_counter()
             if self._fence is not None:
                 calls = GLCalls.get()
@@ -196,8 +192,6 @@ class PendingImage:
         """Drop the frame unread (an interrupted loop): its fence is deleted, a copy under
         way is waited for (the buffer it reads may be released next)."""
         if self._fence is not None:
-            from .glcalls import GLCalls
-
             GLCalls.get().delete(self._fence)
             self._fence = None
         if self._image is not None:
@@ -305,8 +299,6 @@ class ResolvePass:
         copies, so the render loop goes on meanwhile (a 1080p EXR frame's 54 MB took
         about 20 ms to copy on an H200 node)."""
         import time
-
-        from .glcalls import MappedBuffer
 
         width, height = size
         n = width * height
