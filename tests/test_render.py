@@ -144,3 +144,53 @@ def test_shade_samples_average_the_pixel(tmp_path):
     single = draw("single", 320, 200, "--samples", "1")
     single_once = draw("single_once", 320, 200, "--samples", "1", "--no-shade-samples")
     assert np.array_equal(single, single_once)
+
+
+def test_shade_samples_shades_only_where_folds_turn(tmp_path):
+    """render's default shades a pixel's multisamples one by one only where the folds turn
+    its normal within it (draw.glsl: turn_across_pixel); a pixel without a wave is shaded
+    once, exactly as --no-shade-samples shades it. The pulled sheet at frame 24 has both:
+    the wrinkled pixels differ, the others are the same to the bit."""
+    from usdwrinkle.cli.main import main
+
+    from helpers import read_pixels
+
+    def draw(name, *extra):
+        out = tmp_path / f"{name}.####.exr"
+        assert main(["render", str(REPO / "sample_stages" / "pull.usda"), str(out),
+                     "--frames", "24", "--width", "320", "--height", "200", "--quiet",
+                     "--exr-float", *extra]) == 0
+        return read_pixels(tmp_path / f"{name}.0024.exr")
+
+    default, once = draw("default"), draw("once", "--no-shade-samples")
+    channels = list(oiio.ImageBuf(str(tmp_path / "default.0024.exr")).spec().channelnames)
+    amplitude = default[..., channels.index("wrinkle.amplitude")]
+    # no wave in the pixel nor in its neighbours (an edge pixel blends two triangles)
+    plain = np.ones_like(amplitude, bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            plain &= np.roll(amplitude, (dy, dx), axis=(0, 1)) == 0
+    covered = default[..., channels.index("A")] > 0
+    rgb = [channels.index(c) for c in "RGB"]
+    assert (plain & covered).sum() > 2000 and (~plain & covered).sum() > 20000
+    np.testing.assert_array_equal(default[plain][:, rgb], once[plain][:, rgb])
+    differs = np.abs(default[..., rgb] - once[..., rgb]).max(axis=-1) > 1e-4
+    assert differs[~plain & covered].mean() > 0.5
+
+
+@pytest.mark.parametrize("name", ["cosine", "sharp", "rounded"])
+def test_profile_curvature_is_the_largest_second_derivative(name):
+    """The sample-shading test's max |H''| (render/resources.py) against numpy's second
+    derivative of the preset, sampled 64 times finer: cos has 1."""
+    from usdwrinkle.profiles import derive_gradient, preset_at, profile_preset
+    from usdwrinkle.render.resources import profile_curvature
+
+    fine = np.linspace(0.0, 2 * np.pi, 256 * 64, endpoint=False)
+    values = preset_at(name, fine)
+    span = 0.5 * (values.max() - values.min())   # the preset's normalisation to [-1, 1]
+    second = np.gradient(np.gradient(values / span, fine), fine)
+    expected = np.abs(second[64:-64]).max()
+    got = profile_curvature(derive_gradient(profile_preset(name)))
+    assert got == pytest.approx(expected, rel=0.05), (got, expected)
+    if name == "cosine":
+        assert got == pytest.approx(1.0, rel=1e-3)

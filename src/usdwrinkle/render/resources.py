@@ -211,6 +211,7 @@ class MeshResources:
         self.set_normal_map(record.material.normal_map)
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
+        self.profile_curvature = profile_curvature(record.params.gradient_profile)
 
     def _create_shading_normals(self, record: MeshRecord) -> None:
         """The shading normals (scene/normals.py): a table of ``entries`` normals made per
@@ -257,6 +258,7 @@ class MeshResources:
             self.profiles[index] = self._profile_texture(table)
             self.textures.remove(old)
             old.release()
+        self.profile_curvature = profile_curvature(record.params.gradient_profile)
 
     def _set_corner_colors(self, colors) -> None:
         """Upload colours per triangle corner ((m, 3, 3)), or drop them (None)."""
@@ -390,3 +392,14 @@ class MeshResources:
         for tex in self.textures:
             tex.release()
         self.buffers, self.tables, self.textures = [], [], []
+
+
+def profile_curvature(gradient_profile: np.ndarray) -> float:
+    """max |H''| of a height profile H from its gradient profile H' (N samples over one
+    period, read with linear filtering, so H'' is the slope between neighbours): how fast
+    a wave's slope turns per radian of phase (draw.glsl: turn_across_pixel)."""
+    table = np.asarray(gradient_profile, np.float64)
+    if table.size < 2:
+        return 0.0
+    steps = np.diff(np.append(table, table[0]))
+    return float(np.max(np.abs(steps)) * table.size / (2.0 * np.pi))
