@@ -258,7 +258,30 @@ def entry_point() -> None:
     from ..app.environment import release_context
 
     release_context()  # the one GL context of the process, released cleanly
-    sys.exit(code)
+    quick_exit(code)
+
+
+def quick_exit(code: int) -> None:
+    """End the process with ``code`` once the command is done, without the interpreter's
+    finalization: tearing down USD's, numpy's and our modules was 0.18 s of garbage
+    collection at the end of every run (perf, a 24-frame CesiumMan render), 6% of the
+    whole process. The atexit handlers still run (logging's flush, weakref finalizers,
+    coverage) and both streams are flushed. Where a thread that is not a daemon still
+    runs, the ordinary exit joins it as Python does."""
+    import atexit
+
+    others = [thread for thread in threading.enumerate()
+              if thread is not threading.main_thread() and not thread.daemon and
+              thread.is_alive()]
+    if others:
+        sys.exit(code)
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError, AttributeError):  # a closed or missing stream
+            pass
+    os._exit(code)
 
 
 if __name__ == "__main__":
