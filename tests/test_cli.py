@@ -309,3 +309,29 @@ def _wait_until_caught(pid: int, sig) -> None:
             return
         time.sleep(0.001)
     raise AssertionError(f"process {pid} never caught {sig!r}")
+
+
+@pytest.mark.parametrize("late_thread", [False, True])
+def test_the_quick_exit_keeps_atexit_output_and_threads(tmp_path, late_thread):
+    """The console script ends without Python's finalization (cli/main.py, quick_exit),
+    but what a normal exit would still do happens: atexit handlers run, buffered output
+    on a pipe is flushed, the exit code is the command's, and a non-daemon thread still
+    running is joined before the process ends."""
+    import subprocess
+    import sys
+
+    script = (
+        "import atexit, sys, threading, time\n"
+        "atexit.register(lambda: print('atexit ran'))\n"
+        "sys.argv = ['usdwrinkle', 'render', 'no-such-stage.usda', 'f.####.png']\n"
+        "from usdwrinkle.cli.main import entry_point\n"
+        "print('started')\n"
+        f"if {late_thread}:\n"
+        "    threading.Thread(target=lambda: (time.sleep(1.0), print('thread done'))).start()\n"
+        "entry_point()\n")
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            cwd=tmp_path, timeout=120)
+    assert result.returncode == 2, result.stderr   # the missing stage: a user error
+    lines = result.stdout.splitlines()
+    assert lines[0] == "started" and lines[-1] == "atexit ran", result.stdout
+    assert ("thread done" in lines) == late_thread
