@@ -109,7 +109,7 @@ def storm_peer(quick: bool, corpus: Path) -> dict:
             round_folder = folder / str(index)
             (round_folder / "once").mkdir(parents=True)
             ours.append(_ours(stage, round_folder))
-            # render's shading before it shaded every multisample: the cost of that
+            # every pixel shaded once: what shading the samples of wrinkled pixels costs
             once.append(_ours(stage, round_folder / "once", "--no-shade-samples"))
             theirs.append(_storm(stage, round_folder))
     ours_s, once_s = statistics.median(ours), statistics.median(once)
@@ -147,7 +147,7 @@ def markdown(result: dict) -> list[str]:
         f"| Storm, plain, frame loop | {min(peers['storm_s']):.2f}-"
         f"{max(peers['storm_s']):.2f} | {peers['storm_fps']:.1f} |", "",
         f"usdwrinkle's lead: {peers['lead']:.2f}x (rounds, ours / Storm's: {rounds})" +
-        (f"; {peers['lead_once']:.2f}x with `--no-shade-samples`, which shades each pixel "
-         "once instead of every multisample (render's default since issue 23: folds that "
-         "turn within a pixel are averaged over it, as Storm's texture filtering averages "
-         "a map)." if once else ".")]
+        (f"; {peers['lead_once']:.2f}x with `--no-shade-samples`, which shades every pixel "
+         "once (render's default shades each multisample where folds turn the normal "
+         "within the pixel, so that they are averaged over it, as Storm's texture "
+         "filtering averages a map)." if once else ".")]

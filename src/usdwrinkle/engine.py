@@ -337,8 +337,9 @@ class WrinkleEngine:
 
         ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
         ``aovs``: the render buffers to read back (an 8-bit image needs only colour).
-        ``shade_samples``: shade every multisample where it lies (the default), or once
-        per pixel at its centroid (render --no-shade-samples).
+        ``shade_samples``: where folds turn within a pixel, shade each multisample where
+        it lies (the default), or shade every pixel once, at its centroid (render
+        --no-shade-samples).
         """
         return self._render(frame, width, height, wrinkles, samples, tuple(aovs), None,
                             shade_samples)

@@ -149,7 +149,8 @@ class RenderOptions(_Checked):
     height: int | None = None
     #: multisamples per pixel, a power of two
     samples: int = 4
-    #: shade every multisample where it lies (False: once per pixel, at its centroid)
+    #: where folds turn within a pixel, shade each multisample where it lies (False:
+    #: every pixel once, at its centroid)
     shade_samples: bool = True
     #: threads that encode and write frames while the next ones render, 0..64 (None: every
     #: core but one; 0: each frame is written before the next renders)

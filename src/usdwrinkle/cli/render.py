@@ -30,11 +30,12 @@ def add_parser(subparsers) -> None:
                    help="multisamples per pixel for anti-aliased edges, a power of two (4; 1 "
                         "turns it off)")
     p.add_argument("--shade-samples", action=argparse.BooleanOptionalAction, default=True,
-                   help="shade every multisample where it lies (the default): wrinkles a few "
-                        "pixels across are averaged over the pixel, as a renderer's texture "
-                        "filtering averages a baked map; --no-shade-samples shades each "
-                        "pixel once, at its centroid (about 1.4x faster on llvmpipe, jagged "
-                        "fold crests; README: render options)")
+                   help="where folds turn the normal within a pixel, shade each multisample "
+                        "where it lies (the default): wrinkles a few pixels across are "
+                        "averaged over the pixel, as a renderer's texture filtering averages "
+                        "a baked map; other pixels are shaded once. --no-shade-samples "
+                        "shades every pixel once, at its centroid (1.06x faster on "
+                        "llvmpipe, jagged fold crests; README: render options)")
     p.add_argument("--write-threads", type=int, metavar="N",
                    help="threads that encode and write frames while the next ones render, "
                         "0..64 (default: every CPU core but one, at least 1; for EXR those "

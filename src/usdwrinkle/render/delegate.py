@@ -149,8 +149,8 @@ class RenderPassState:
     wrinkles: bool = True
     samples: int = 4
     aovs: tuple = AOV_BLOCKS
-    #: shade every multisample where it lies, not once per pixel (render
-    #: --no-shade-samples turns it off)
+    #: where folds turn within a pixel, shade each multisample where it lies, not the
+    #: pixel once (render --no-shade-samples turns it off)
     shade_samples: bool = True
     timings: dict = field(default_factory=dict)
     #: read the frame back as an image file stores it instead of as float AOVs

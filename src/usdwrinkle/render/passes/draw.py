@@ -92,8 +92,8 @@ class DrawPass:
         self.variants = Variants(lambda extra: DrawableProgram(
             ctx, program(ctx, "draw.glsl", {**defines, **extra})))
         self.variants()  # the paper's variant always; the other on first use
-        #: shade every multisample where it lies (the default; render --no-shade-samples
-        #: turns it off; draw.glsl: SHADE_SAMPLES)
+        #: where folds turn within a pixel, shade each multisample where it lies (the
+        #: default; render --no-shade-samples turns it off; draw.glsl: SHADE_SAMPLES)
         self.shade_samples = False
         self.frame_uniforms: dict = {}
         self.dome_lit = False
