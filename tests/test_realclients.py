@@ -354,8 +354,9 @@ def test_maps_decoded_normals_in_cycles(cycles_shirt, frame, view, bounds):
     9.57, elbow 9.99.
 
     Against render's default, which shades every multisample where the folds turn
-    within the pixel and so averages its normals over the pixel as Cycles' 16 samples do, the elbow's p99 is 1.8;
-    "decoded_per_pixel", against render --no-shade-samples, 4.8."""
+    within the pixel and so averages its normals over the pixel as Cycles' 16 samples
+    do, the elbow's p99 is 1.8; "decoded_per_pixel", against render --no-shade-samples,
+    4.8."""
     from realclients.bakes import front_angles
 
     degrees, mask = front_angles(*cycles_shirt[frame][view])
