@@ -304,14 +304,12 @@ uniform float u_sample_turn;
 // across the pixel (max |k . step|), blended by the barycentric weights
 float turn_across_pixel(vec3 bary, Footprint pixel) {
     float turn = 0.0;
-    bary = clamp(bary, 0.0, 1.0);
-    bary /= max(bary.x + bary.y + bary.z, 1e-20);
+    bary = blend_weights(bary);
     for (int s = 0; s < SYSTEMS; ++s) {
         for (int c = 0; c < 3; ++c) {
             vec4 wave = v_wave[3 * s + c];
             float a = wave.w * band_limit(wave.xyz, 1.0, pixel);
-            float step = max(abs(dot(wave.xyz, pixel.dx)), abs(dot(wave.xyz, pixel.dy)));
-            turn += bary[c] * a * length(wave.xyz) * step;
+            turn += bary[c] * a * length(wave.xyz) * phase_step(wave.xyz, pixel);
         }
     }
     return turn * u_profile_curvature;

@@ -151,23 +151,34 @@ struct Footprint {
     float min_wavelength;
 };
 
+// the radians of phase wave vector k advances over one step of the footprint, the
+// larger of its two steps
+float phase_step(vec3 k, Footprint footprint) {
+    return max(abs(dot(k, footprint.dx)), abs(dot(k, footprint.dy)));
+}
+
 float band_limit(vec3 k, float ratio, Footprint footprint) {
     float factor = 1.0;
     if (footprint.min_wavelength > 0.0) {
         float lambda = TWO_PI / max(length(k) * ratio, 1e-30);
         factor = smoothstep(footprint.min_wavelength, 1.5 * footprint.min_wavelength, lambda);
     }
-    float step = max(abs(dot(k, footprint.dx)), abs(dot(k, footprint.dy)));
+    float step = phase_step(k, footprint);
     if (step > 0.0) factor *= smoothstep(2.0, 3.0, TWO_PI / step);
     return factor;
+}
+
+// barycentric weights as the blend uses them: interpolation on slivers can leave [0, 1];
+// renormalised weights keep |h| <= max a
+vec3 blend_weights(vec3 bary) {
+    bary = clamp(bary, 0.0, 1.0);
+    return bary / max(bary.x + bary.y + bary.z, 1e-20);
 }
 
 Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gradient,
                         Footprint footprint) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
-    // interpolation on slivers can leave [0, 1]; renormalised weights keep |h| <= max a
-    bary = clamp(bary, 0.0, 1.0);
-    bary /= max(bary.x + bary.y + bary.z, 1e-20);
+    bary = blend_weights(bary);
     for (int s = 0; s < SYSTEMS; ++s) {
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
