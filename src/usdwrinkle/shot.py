@@ -84,9 +84,8 @@ class ImageOptions:
     #: EXR compression and half-float colour and normals (outputs/images.py)
     exr_compression: str = "zip"
     exr_half: bool = True
-    #: shade each multisample where it lies where folds turn within the pixel, not
-    #: once per pixel (render
-    #: --no-shade-samples turns it off)
+    #: where folds turn within a pixel, shade each multisample where it lies, not the
+    #: pixel once (render --no-shade-samples turns it off)
     shade_samples: bool = True
     #: frames that may wait or encode at once (outputs/writer.frames_in_flight)
     in_flight: int = 2
