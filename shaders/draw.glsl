@@ -276,6 +276,11 @@ Bent bend(int t, vec3 n, vec3 bary, vec3 local, Footprint pixel, bool mapped,
     return Bent(wave.height, wave.amplitude, shading_local);
 }
 
+// the depth along the view of world point ``world`` (the Z AOV: eye space's -z)
+float eye_depth(vec3 world) {
+    return -(u_world_to_eye * vec4(world, 1.0)).z;
+}
+
 // The radiance leaving world point ``world`` whose shading normal is ``shading_local``,
 // and that normal in world space (N)
 vec3 shade(vec3 base, float opacity, vec3 world, vec3 shading_local, out vec3 N) {
@@ -359,7 +364,7 @@ void main() {
     vec3 N;
     vec3 radiance = shade(base, opacity, v_world, centre.shading_local, N);
     float amplitude = centre.amplitude;
-    float depth = -(u_world_to_eye * vec4(v_world, 1.0)).z;
+    float depth = eye_depth(v_world);
 
 #if defined SHADE_SAMPLES
     // Where the folds turn the normal within the pixel, every covered multisample is
@@ -387,7 +392,7 @@ void main() {
             sum_normal += Ns;
             sum_h += b.height;
             sum_amplitude += b.amplitude;
-            sum_depth += -(u_world_to_eye * vec4(world, 1.0)).z;
+            sum_depth += eye_depth(world);
             count += 1.0;
         }
         if (count > 0.0) {
