@@ -7,7 +7,8 @@
 // storage buffer of 32-bit words, laid out as render/resolve.py's ImageLayout says:
 //   OUTPUT_AOVS  every AOV as float, (height, width, channels) blocks (Framebuffer.read);
 //   OUTPUT_EXR   one plane per EXR channel (R G B A wrinkle.height wrinkle.amplitude N.X N.Y
-//                N.Z Z), colour and normals as half float with HALF_COLOR_NORMAL;
+//                N.Z Z; those of the layout's AOVs), colour and normals as half float with
+//                HALF_COLOR_NORMAL;
 //   OUTPUT_8BIT  RGBA8 sRGB codes per pixel: straight alpha, or with OVER_BLACK the
 //                premultiplied colour over black and alpha 255 (JPEG).
 // An EXR invocation resolves two neighbouring pixels, so that a half plane's words hold
@@ -40,7 +41,8 @@ uniform ivec2 u_size;
 uniform ivec4 u_rect;
 uniform int u_grid_width;
 // OUTPUT_AOVS: first word of color, wrinkle.height, wrinkle.amplitude, normal, depth;
-// OUTPUT_EXR: first word of each channel's plane, in the order above
+// OUTPUT_EXR: first word of each channel's plane, in the order above; -1: a channel the
+// file leaves out (render --aovs)
 uniform int u_offset[OFFSET_SLOTS];
 
 const float INF = uintBitsToFloat(0x7f800000u);
@@ -163,6 +165,7 @@ void main() {
     Pixel b = resolve(pixel_of(second ? first + 1 : first));
     uint bad = 0u;
     for (int c = 0; c < OFFSET_SLOTS; ++c) {
+        if (u_offset[c] < 0) continue;
         vec2 v = vec2(channel(a, c), channel(b, c));
         if (is_half(c)) {
             // what the file will hold: NaN, or infinite where the value rounds beyond

@@ -29,6 +29,17 @@ def test_render_equals_the_command_and_returns_its_frames(gl_context, tmp_path):
                                       pixels(tmp_path / "cli" / name))
 
 
+def test_render_aovs_as_a_list_or_a_text(gl_context, tmp_path):
+    a = api.render(SHIRT, tmp_path / "a.####.exr", frames=[24], width=64,
+                   aovs=["normal", "color"])
+    b = api.render(SHIRT, tmp_path / "b.####.exr", frames=[24], width=64, aovs="color,normal")
+    for path in a + b:
+        assert oiio.ImageInput.open(path).spec().channelnames == \
+            ("R", "G", "B", "A", "N.X", "N.Y", "N.Z")
+    np.testing.assert_array_equal(oiio.ImageBuf(a[0]).get_pixels(),
+                                  oiio.ImageBuf(b[0]).get_pixels())
+
+
 def test_bake_writes_the_layer_with_its_options(gl_context, tmp_path):
     from pxr import Sdf
 
@@ -55,6 +66,8 @@ def test_mistakes_are_the_commands_errors(tmp_path):
     ("render", {"width": 3.5}, "`width`=3.5 must be an integer"),
     ("render", {"exr_compression": "bogus"}, "`exr_compression`='bogus' is not one of zip"),
     ("render", {"frames": []}, "`frames` is empty"),
+    ("render", {"aovs": ["color", "N"]}, "`aovs` takes a comma-separated list of color"),
+    ("render", {"aovs": "normal"}, "`aovs` normal: a .png frame stores the colour alone"),
     ("bake", {"maps": "normal", "tangent_space": "MikkTSpace"},
      "`tangent_space`='MikkTSpace' is not one of triangle, mikktspace"),
     ("bake", {"display_color": "red"}, "`display_color`='red' is not one of amplitude"),

@@ -34,6 +34,33 @@ def test_render_writes_every_aov(gl_context, tmp_path):
     assert image["wrinkle.height"].shape == (128, 192)  # height from the 3:2 camera
 
 
+def test_render_aovs_writes_the_chosen_channels(gl_context, tmp_path):
+    """--aovs: the file holds the channels of the AOVs asked for, no other, each as the
+    render of every AOV has it; --skip-existing keeps a frame that holds them and renders
+    again one that lacks some."""
+    stage, common = str(SAMPLES / "shirt.usda"), ["--frames", "23:24", "--width", "96",
+                                                   "--quiet"]
+    assert main(["render", stage, str(tmp_path / "all.####.exr"), *common]) == 0
+    assert main(["render", stage, str(tmp_path / "some.####.exr"), *common,
+                 "--aovs", "depth,color"]) == 0
+    full, some = read_exr(tmp_path / "all.0024.exr"), read_exr(tmp_path / "some.0024.exr")
+    assert list(some) == ["R", "G", "B", "A", "Z"]
+    assert (some["A"] > 0).mean() > 0.05
+    for name, plane in some.items():
+        np.testing.assert_array_equal(plane, full[name], err_msg=name)
+
+    def identity(path):
+        return os.stat(path).st_ino
+
+    kept = [identity(tmp_path / f"some.{f:04d}.exr") for f in (23, 24)]
+    assert main(["render", stage, str(tmp_path / "some.####.exr"), *common,
+                 "--aovs", "color,depth", "--skip-existing"]) == 0
+    assert [identity(tmp_path / f"some.{f:04d}.exr") for f in (23, 24)] == kept
+    assert main(["render", stage, str(tmp_path / "some.####.exr"), *common,
+                 "--skip-existing"]) == 0  # every AOV: the frames lack some, rendered again
+    assert sorted(read_exr(tmp_path / "some.0023.exr")) == sorted(EXR_CHANNELS)
+
+
 def test_no_wrinkles_renders_plain(gl_context, tmp_path):
     assert main(["render", str(SAMPLES / "curtain.usda"), str(tmp_path / "c.#.exr"),
                  "--frames", "24", "--width", "96", "--no-wrinkles", "--quiet"]) == 0
@@ -76,6 +103,10 @@ def test_frame_independence(gl_context, tmp_path):
     (["render", "{samples}/shirt.usda", "{tmp}/x.#.png", "--camera", "nope"], "camera 'nope'"),
     (["render", "{tmp}/missing.usda", "{tmp}/x.#.png"], "does not exist"),
     (["render", "{samples}/shirt.usda", "{tmp}/x.#.bmpx"], "unsupported image format"),
+    (["render", "{samples}/shirt.usda", "{tmp}/x.#.exr", "--aovs", "color,Z"],
+     "--aovs takes a comma-separated list of color (R,G,B,A), "),
+    (["render", "{samples}/shirt.usda", "{tmp}/x.#.png", "--aovs", "color,depth"],
+     "--aovs color,depth: a .png frame stores the colour alone (--aovs color)"),
     (["render", "{tmp}/copy.usda", "{tmp}/copy.usda", "--frames", "1"], "is an input of the stage"),
 ])
 def test_user_errors_are_one_line(gl_context, tmp_path, capsys, argv, fragment):

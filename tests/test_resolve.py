@@ -88,6 +88,27 @@ def test_exr_planes_are_the_float_aovs_at_file_precision(drawn, half):
         np.testing.assert_array_equal(got, want, err_msg=name)
 
 
+@pytest.mark.parametrize("aovs", [("color",), ("depth",), ("wrinkle.amplitude", "normal")],
+                         ids=["color", "depth", "amplitude+normal"])
+def test_exr_planes_of_chosen_aovs_are_those_of_every_aov(drawn, aovs):
+    """render --aovs: the planes of the AOVs asked for, and no other, each the same
+    bytes as in the frame of every AOV and as numpy makes them from the float AOVs."""
+    from usdwrinkle.aovs import exr_channels
+
+    _, fb, _ = drawn
+    everything = fb.read_image(ImageLayout("exr", half=True))
+    full = {name: plane.copy() for name, plane in everything.planes.items()}
+    layout = ImageLayout("exr", aovs=aovs, half=True)
+    chosen = fb.read_image(layout)
+    reference = image_from_buffers(fb.read(), layout)
+    assert list(chosen.planes) == list(reference.planes) == list(exr_channels(aovs))
+    assert chosen.bad == reference.bad == 0
+    for name, plane in chosen.planes.items():
+        assert plane.shape == (fb.size[1], fb.size[0]) and plane.flags.c_contiguous
+        np.testing.assert_array_equal(plane, full[name], err_msg=name)
+        np.testing.assert_array_equal(plane, reference.planes[name], err_msg=name)
+
+
 @pytest.mark.parametrize("path", ["f.png", "f.jpg"])
 def test_8bit_codes_match_numpys_srgb_encode(drawn, path):
     _, fb, _ = drawn

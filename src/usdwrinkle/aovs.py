@@ -5,6 +5,7 @@ injected) and outputs/ (which writes them): neither imports the other for them.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 #: AOV name -> (attachment, first channel, channel names in image files)
@@ -22,6 +23,33 @@ AOV_BLOCKS = tuple(AOVS)
 EXR_CHANNELS = tuple(channel for aov in AOV_BLOCKS for channel in AOVS[aov][2])
 #: the channels that ``half`` stores as half float: colour and normals
 HALF_CHANNELS = ("R", "G", "B", "A", "N.X", "N.Y", "N.Z")
+#: what render's ``--aovs`` lists: each AOV with the channels it stores
+AOVS_TEXT = ", ".join(
+    name if AOVS[name][2] == (name,) else f"{name} ({','.join(AOVS[name][2])})"
+    for name in AOV_BLOCKS)
+
+
+def parse_aovs(value: str | Iterable[str]) -> tuple[str, ...]:
+    """``"color,depth"`` (or a list of names, each may hold commas) -> the AOV names in
+    AOV_BLOCKS order; refuses an unknown name or none."""
+    from .errors import UsdWrinkleError
+
+    texts = [value] if isinstance(value, str) else list(value)
+    names = [part.strip() for text in texts for part in str(text).split(",") if part.strip()]
+    unknown = [name for name in names if name not in AOVS]
+    if unknown or not names:
+        got = ", ".join(unknown) if unknown else "nothing"
+        raise UsdWrinkleError(f"`aovs` takes a comma-separated list of {AOVS_TEXT} "
+                              f"(got {got})")
+    return tuple(name for name in AOV_BLOCKS if name in names)
+
+
+def exr_channels(aovs: Iterable[str]) -> tuple[str, ...]:
+    """The EXR channels that hold ``aovs``, in EXR_CHANNELS order."""
+    chosen = set(aovs)
+    return tuple(channel for aov in AOV_BLOCKS if aov in chosen for channel in AOVS[aov][2])
+
+
 #: u_offset's length in resolve.glsl: one first word per EXR plane (the most blocks any
 #: layout has)
 OFFSET_SLOTS = max(len(EXR_CHANNELS), len(AOV_BLOCKS))
@@ -34,7 +62,8 @@ class ImageLayout:
     ``kind``: "aovs" (float AOVs, for Framebuffer.read), "exr" (one plane per EXR
     channel, colour and normals as half float with ``half``) or "8bit" (RGBA sRGB codes,
     straight alpha; with ``over_black`` the colour over black, for JPEG).
-    ``aovs``: the AOVs an "aovs" layout holds.
+    ``aovs``: the AOVs an "aovs" layout holds, or whose channels an "exr" layout holds
+    (render ``--aovs``; every AOV by default).
     """
 
     kind: str
@@ -44,11 +73,16 @@ class ImageLayout:
 
     @property
     def attachments(self) -> frozenset:
-        if self.kind == "exr":
-            return frozenset((0, 1, 2))
+        """The draw's attachments the resolve reads: colour always (its alpha is the
+        coverage that the other AOVs are divided by)."""
         if self.kind == "8bit":
             return frozenset((0,))
         return frozenset(AOVS[name][0] for name in self.aovs) | {0}
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """The planes of an "exr" layout, in EXR_CHANNELS order."""
+        return exr_channels(self.aovs) if self.kind == "exr" else ()
 
 
 @dataclass

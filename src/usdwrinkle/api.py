@@ -68,6 +68,7 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
            camera: str | None = None, width: int = 960, height: int | None = None,
            samples: int = 4, shade_samples: bool = True, write_threads: int | None = None,
            readback_buffers: int | None = None, exr_half: bool = True, exr_compression: str = "zip",
+           aovs: str | Sequence[str] | None = None,
            no_wrinkles: bool = False, skip_existing: bool = False, recompute: bool = False,
            stats: str | None = None, stats_passes: bool = True,
            all_meshes: bool = False, relax_iterations: int | None = None,
@@ -80,12 +81,15 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
     kept by ``skip_existing``). The options are RenderOptions' and ShotOptions' fields
     (``usdwrinkle render --help`` says what each does); ``sublayer`` is a list of layers
     over the stage, strongest first, ``variant`` a list of "/Prim{set=name}" and ``mask``
-    prim paths ("/A,/B" or a list). ``dask`` ("local" or a scheduler's address),
+    prim paths ("/A,/B" or a list), ``aovs`` the AOVs of an EXR ("color,depth" or a list).
+    ``dask`` ("local" or a scheduler's address),
     ``workers`` and ``chunk`` render on a Dask cluster, as ``render --dask``."""
     options = RenderOptions(camera=camera, width=width, height=height, samples=samples,
                             shade_samples=shade_samples, write_threads=write_threads,
                             readback_buffers=readback_buffers, exr_half=exr_half,
                             exr_compression=exr_compression,
+                            aovs=None if aovs is None else
+                            tuple([aovs] if isinstance(aovs, str) else aovs),
                             no_wrinkles=no_wrinkles, skip_existing=skip_existing,
                             recompute=recompute, stats=stats, stats_passes=stats_passes)
     job = RenderJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,

@@ -69,12 +69,16 @@ _MAGIC = {".exr": (b"\x76\x2f\x31\x01",), ".png": (b"\x89PNG\r\n\x1a\n",),
           ".tif": (b"II*\x00", b"MM\x00*"), ".tiff": (b"II*\x00", b"MM\x00*")}
 
 
-def is_complete_image(path: str, width: int, height: int) -> bool:
+def is_complete_image(path: str, width: int, height: int,
+                      channels: tuple[str, ...] | None = None) -> bool:
     """True when ``path`` is a frame as render writes it: the format its extension names
     (PNG data named .exr is not), decoding whole at width x height, and for an EXR every
-    channel a frame holds (one missing its AOVs is not). ``--skip-existing`` trusts only
-    such a file; any other is rendered again."""
+    channel of ``channels`` (None: every channel a frame can hold; one missing an AOV
+    asked for is not complete). ``--skip-existing`` trusts only such a file; any other is
+    rendered again."""
     from .aovs import EXR_CHANNELS
+
+    channels = EXR_CHANNELS if channels is None else channels
 
     ext = os.path.splitext(path)[1].lower()
     try:
@@ -94,8 +98,8 @@ def is_complete_image(path: str, width: int, height: int) -> bool:
         if image is None:
             return False
         try:
-            channels = set(image.spec().channelnames)
+            found = set(image.spec().channelnames)
         finally:
             image.close()
-        return set(EXR_CHANNELS) <= channels
+        return set(channels) <= found
     return True

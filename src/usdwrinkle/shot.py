@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from . import schema
+from .aovs import AOV_BLOCKS
 from .errors import UsdWrinkleError
 from .timecode import format_frame
 
@@ -95,6 +96,8 @@ class ImageOptions:
     readback_buffers: int | None = None
     #: OpenEXR's own threads per EXR file (outputs/writer.exr_threads)
     exr_threads: int = 0
+    #: the AOVs an EXR frame stores (aovs.AOV_BLOCKS' names; render --aovs)
+    aovs: tuple[str, ...] = AOV_BLOCKS
 
 
 def default_readback_buffers(ctx) -> int:
@@ -185,7 +188,8 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
                 started = time.perf_counter()
                 with at_frame(frame):
                     pending = engine.render_image(frame, image.width, image.height,
-                                                  layout_for(path, image.exr_half),
+                                                  layout_for(path, image.exr_half,
+                                                             image.aovs),
                                                   image.wrinkles, image.samples,
                                                   image.shade_samples, readback_ring=ring)
                 if stats is not None:

@@ -16,6 +16,7 @@ import os
 import threading
 from typing import Any
 
+from ..aovs import exr_channels
 from ..errors import UsdWrinkleError
 from ..imagefiles import is_complete_image
 from ..log import warnings_to
@@ -74,7 +75,8 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
         if written_this_run(path, previous[path]):  # by an attempt whose worker died
             result["earlier"].append(path)
             return True
-        if skip_existing and is_complete_image(path, image.width, image.height):
+        if skip_existing and is_complete_image(path, image.width, image.height,
+                                               exr_channels(image.aovs)):
             result["skipped"].append(path)
             return True
         return False

@@ -161,6 +161,9 @@ class RenderOptions(_Checked):
     #: EXR: colour and normals as half float (depth and the wrinkle fields stay float)
     exr_half: bool = True
     exr_compression: str = "zip"
+    #: EXR: the AOVs each frame stores, aovs.AOV_BLOCKS' names (a comma-separated text or a
+    #: list; None: every one). An 8-bit frame stores the colour alone
+    aovs: tuple[str, ...] | None = None
     #: the same shading without wrinkles
     no_wrinkles: bool = False
     #: leave frames whose file is already a whole image of this size
@@ -184,6 +187,22 @@ class RenderOptions(_Checked):
             raise UsdWrinkleError(f"`write_threads` must be in 0..{MAX_WRITE_THREADS}")
         if self.readback_buffers is not None and not 1 <= self.readback_buffers <= MAX_RING:
             raise UsdWrinkleError(f"`readback_buffers` must be in 1..{MAX_RING}")
+        self.chosen_aovs()
+
+    def chosen_aovs(self, path: str | None = None) -> tuple[str, ...]:
+        """The AOVs each frame stores, in aovs.AOV_BLOCKS order (refuses unknown names);
+        with the output ``path``: for an 8-bit file the colour, and only the colour."""
+        from ..aovs import AOV_BLOCKS, parse_aovs
+        from ..outputs.images import FLOAT_FORMATS, check_aovs
+
+        aovs = AOV_BLOCKS if self.aovs is None else parse_aovs(self.aovs)
+        if path is None:
+            return aovs
+        if os.path.splitext(path)[1].lower() not in FLOAT_FORMATS:
+            if self.aovs is None:
+                return ("color",)
+            check_aovs(path, aovs)
+        return aovs
 
 
 @dataclass(frozen=True)

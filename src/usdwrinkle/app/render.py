@@ -83,6 +83,7 @@ class RenderJob(ShotJob):
             refuse_overwriting_inputs(self.shot.path, [self.output])
         check_format(self.output)
         self.options.check()
+        self.options.chosen_aovs(str(self.output))
         self.shot.check()
 
     def prepare(self) -> RenderPlan:
@@ -257,11 +258,13 @@ class RenderJob(ShotJob):
         in_flight = frames_in_flight(threads, 32 * width * height)
         return ImageOptions(width, height, o.samples, self.wrinkles, threads,
                             o.exr_compression, o.exr_half, o.shade_samples, in_flight,
-                            o.readback_buffers, exr_threads(chunked))
+                            o.readback_buffers, exr_threads(chunked),
+                            o.chosen_aovs(str(self.output)))
 
     def run(self, ctx: Any = None) -> RenderResult:
         """Check, start the engine, render every frame; ``ctx``: a moderngl context to
         share (None: the process's own)."""
+        from ..aovs import exr_channels
         from ..imagefiles import is_complete_image
         from ..shot import render_frames
 
@@ -281,7 +284,8 @@ class RenderJob(ShotJob):
                 self.on_start()
             started = time.perf_counter()
             stats: dict[str, Any] | None = {} if self.options.stats else None
-            skip = (lambda path: is_complete_image(path, width, height)) \
+            channels = exr_channels(image.aovs)
+            skip = (lambda path: is_complete_image(path, width, height, channels)) \
                 if self.options.skip_existing else (lambda path: False)
             written = render_frames(engine, image, plan.frames, plan.outputs, skip=skip,
                                     progress=lambda items: self.progress(items, "render"),

@@ -1,7 +1,8 @@
 """Write rendered frames: EXR with OpenEXR's own binding, 8-bit formats with OpenImageIO.
 
-EXR: channels R,G,B,A, wrinkle.height, wrinkle.amplitude, N.X,N.Y,N.Z, Z; colour and
-normals half float by default, the rest float.
+EXR: channels R,G,B,A, wrinkle.height, wrinkle.amplitude, N.X,N.Y,N.Z, Z (render
+``--aovs``: those of the AOVs asked for); colour and normals half float by default, the
+rest float.
 PNG/JPEG/TIFF: the 8-bit sRGB beauty (RGBA; RGB over black for JPEG).
 
 A frame arrives as an aovs.ResolvedImage, already in the file's layout (the
@@ -39,13 +40,22 @@ PNG_FRAME_COMPRESSION = 1
 EXR_THREADS = 0
 
 
-def layout_for(path: str, half: bool = True) -> ImageLayout:
-    """The layout a frame written to ``path`` is read back in: an EXR's planes (colour
-    and normals half float with ``half``), else 8-bit codes."""
+def layout_for(path: str, half: bool = True, aovs: tuple[str, ...] = AOV_BLOCKS) -> ImageLayout:
+    """The layout a frame written to ``path`` is read back in: an EXR's planes of
+    ``aovs`` (colour and normals half float with ``half``), else 8-bit codes (the
+    beauty: check_aovs refuses other AOVs for them)."""
     ext = check_format(path)
     if ext in FLOAT_FORMATS:
-        return ImageLayout("exr", half=half)
+        return ImageLayout("exr", aovs=tuple(aovs), half=half)
     return ImageLayout("8bit", over_black=ext in (".jpg", ".jpeg"))
+
+
+def check_aovs(path: str, aovs: tuple[str, ...]) -> None:
+    """Refuse AOVs other than the beauty for an 8-bit file, which stores the beauty alone."""
+    if check_format(path) not in FLOAT_FORMATS and tuple(aovs) != ("color",):
+        ext = os.path.splitext(path)[1].lower()
+        raise UsdWrinkleError(f"`aovs` {','.join(aovs)}: a {ext} frame stores the colour "
+                              "alone (`aovs` color); write .exr for the other AOVs")
 
 
 def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:
@@ -55,7 +65,7 @@ def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:
     height, width = color.shape[:2]
     if layout.kind == "exr":
         planes = {}
-        for aov in AOV_BLOCKS:
+        for aov in (aov for aov in AOV_BLOCKS if aov in layout.aovs):
             buf = buffers[aov]
             for index, name in enumerate(buf.channel_names):
                 plane = np.ascontiguousarray(buf.pixels[..., index], np.float32)

@@ -28,7 +28,8 @@ from .shaders import Variants, compute_shader
 
 
 def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
-    """(the shader's u_offset, total words, [(name, first word, dtype, shape)])."""
+    """(the shader's u_offset, total words, [(name, first word, dtype, shape)]). An EXR
+    channel the layout leaves out has the offset -1: the shader skips it."""
     offsets, views, word = [], [], 0
     if layout.kind == "aovs":
         for name in AOV_BLOCKS:
@@ -38,7 +39,11 @@ def _plan(layout: ImageLayout, n: int) -> tuple[list[int], int, list]:
                 views.append((name, word, np.float32, count))
             word += n * count if AOVS[name][0] in layout.attachments else 0
     elif layout.kind == "exr":
+        chosen = layout.channels
         for name in EXR_CHANNELS:
+            if name not in chosen:
+                offsets.append(-1)
+                continue
             half = layout.half and name in HALF_CHANNELS
             offsets.append(word)
             views.append((name, word, np.float16 if half else np.float32, 1))
