@@ -40,6 +40,11 @@ timeout 150 python3 -m pytest -q -p no:cacheprovider -n 8 --dist loadfile \
 step "files written, --readback-buffers 1"
 timeout 60 python3 -m benchmarks.files_written --readback-buffers 1
 
+# the EXR rows with the beauty alone (render --aovs color): what a compositor that takes
+# only the colour gets (the PNG row stores colour alone anyway)
+step "files written, --aovs color"
+timeout 60 python3 -m benchmarks.files_written --aovs color
+
 step "crests on this GL"
 timeout 60 python3 -m benchmarks.crests_across_gl --save "$OUT/crests.npz"
 
