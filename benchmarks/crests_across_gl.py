@@ -73,7 +73,8 @@ def compare(path: str) -> str:
 
 def tables(cold: bool, ctx=None) -> dict:
     """The shirt's per-vertex tables after each frame 1..24 (posed points, the wave fields,
-    the relaxed phases), with the phase history (``cold``: each frame a cold start)."""
+    the relaxed phases, crest damping's damped directions, crush's anchored phases), with
+    the phase history (``cold``: each frame a cold start)."""
     from usdwrinkle.engine import WrinkleEngine
 
     out = {}
@@ -89,7 +90,9 @@ def tables(cold: bool, ctx=None) -> dict:
             res = engine.mesh_resources(SLEEVE)
             out[frame] = (np.asarray(res.posed_points.read()),
                           np.asarray(res.waves.current.read()),
-                          np.asarray(res.waves.phase.read()))
+                          np.asarray(res.waves.phase.read()),
+                          np.asarray(res.waves.written.damped.read()),
+                          np.asarray(res.waves.anchor_phase.read()))
     finally:
         if engine is not None:
             engine.release()
@@ -106,18 +109,33 @@ def save_tables(path: str) -> None:
 def compare_tables(path: str) -> str:
     data = np.load(path)
     lines = ["per frame, the largest difference of the shirt's tables (theirs - ours): posed "
-             "points, wave fields, phases (radians, wrapped)", "",
-             "| mode | frame | points | fields | phase | vertices with phase off > 0.1 |",
-             "|---|---|---|---|---|---|"]
+             "points, wave fields, phases and anchored phases (radians, wrapped), damped "
+             "directions (where both hold one: sin of the undirected angle between them)", "",
+             "| mode | frame | points | fields | phase | vertices with phase off > 0.1 | "
+             "damped | anchor |",
+             "|---|---|---|---|---|---|---|---|"]
+
+    def wrapped(a, b):
+        return np.abs(np.angle(np.exp(1j * (a.astype(np.float64) - b))))
+
     for mode in ("history", "cold"):
         ours = tables(mode == "cold")
-        for frame, (points, fields, phase) in ours.items():
-            theirs = [data[f"{mode}/{frame}/{i}"] for i in range(3)]
-            dphase = np.angle(np.exp(1j * (theirs[2].astype(np.float64) - phase)))
+        for frame, (points, fields, phase, damped, anchor) in ours.items():
+            theirs = [data[f"{mode}/{frame}/{i}"] if f"{mode}/{frame}/{i}" in data.files
+                      else None for i in range(5)]
+            dphase = wrapped(theirs[2], phase)
+            extra = ["", ""]
+            if theirs[3] is not None:  # a file saved before the damped tables were kept
+                a, b = theirs[3].reshape(-1, 4)[:, :2], damped.reshape(-1, 4)[:, :2]
+                both = (theirs[3].reshape(-1, 4)[:, 2] > 0.5) & (damped.reshape(-1, 4)[:, 2] > 0.5)
+                cross = np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+                extra = [f"{cross[both].max(initial=0.0):.2e}",
+                         f"{wrapped(theirs[4], anchor).max():.2e}"]
             lines.append(f"| {mode} | {frame} | {np.abs(theirs[0] - points).max():.2e} | "
                          f"{np.abs(theirs[1] - fields).max():.2e} | "
-                         f"{np.abs(dphase).max():.2e} | "
-                         f"{int((np.abs(dphase) > 0.1).any(axis=-1).sum())} |")
+                         f"{dphase.max():.2e} | "
+                         f"{int((dphase > 0.1).any(axis=-1).sum())} | {extra[0]} | "
+                         f"{extra[1]} |")
     return "\n".join(lines)
 
 

@@ -10,7 +10,8 @@
 # Each step has its own time limit, so a slow one leaves the others' results in $OUT:
 #   log.txt                  everything printed
 #   benchmarks-gpu.md/.json  `python -m benchmarks` (docs/benchmarks-gpu.md)
-#   crests.npz               benchmarks.crests_across_gl --save (compare it here)
+#   crests.npz, tables.npz   benchmarks.crests_across_gl --save, --save-tables (compare
+#                            them here: --compare, --compare-tables)
 set -u
 # the bench gets what is left of TOTAL seconds (the call's limit, less a margin)
 deadline=$((SECONDS + ${TOTAL:-570}))
@@ -47,6 +48,9 @@ timeout 60 python3 -m benchmarks.files_written --aovs color
 
 step "crests on this GL"
 timeout 60 python3 -m benchmarks.crests_across_gl --save "$OUT/crests.npz"
+# the shirt's per-vertex tables, frame by frame (here: --compare-tables tables.npz says
+# which table parts first, with history and cold)
+timeout 60 python3 -m benchmarks.crests_across_gl --save-tables "$OUT/tables.npz"
 
 step "the bench"
 timeout $((deadline - SECONDS)) python3 -m benchmarks --json "$OUT/benchmarks-gpu.json" \
