@@ -15,6 +15,7 @@ import os
 import typing
 from dataclasses import dataclass
 
+from ..aovs import AOVS_TEXT  # noqa: F401  (re-exported: what render --help lists)
 from ..errors import UsdWrinkleError
 from ..geometry.options import GeometryOptions
 from ..maps.options import LAYOUTS as MAP_LAYOUTS

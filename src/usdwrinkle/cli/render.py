@@ -3,9 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..aovs import AOVS_TEXT
 from ..app.frames import frame_path
-from ..app.options import EXR_COMPRESSIONS
+from ..app.options import AOVS_TEXT, EXR_COMPRESSIONS
 from ..errors import print_stderr
 from .common import Reporter, add_shot_args, report_to, shot_options
 
