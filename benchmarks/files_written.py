@@ -8,7 +8,9 @@ every core but one):
 
 Frames per second without start-up: the frames over the frame loop's time (``--stats``'s
 ``loop_s``, with ``--no-stats-passes``, so that the loop runs as without ``--stats``).
-CPU utilisation: the process's CPU time over its wall time and the cores. Waits: the
+CPU utilisation: the process's CPU time over its wall time and the cores, over the whole
+process and over the frame loop alone (``loop_cpu_s``: start-up runs on one core, so on a
+16-core node the whole process's figure stays low however busy the loop keeps them). Waits: the
 share of the loop the renderer spent waiting for the writer (frames in flight all taken),
 the bound when encoding is the slower half, and waiting on the fence of a frame's
 resolve before copying it out (the GPU still busy: the bound when rendering is). ``python -m
@@ -64,6 +66,8 @@ def measure(corpus: Path | None = None, quick: bool = False, extra: tuple = ()) 
             rows.append({"case": label, "frames": frames, "wall_s": wall,
                          "fps": frames / data["loop_s"],
                          "cpu_utilisation": cpu / (wall * cores()),
+                         "loop_cpu_utilisation": data["loop_cpu_s"] /
+                         (data["loop_s"] * cores()),
                          "wait_share": data["waited_s"] / data["loop_s"],
                          "gpu_wait_share": data.get("gpu_waited_s", 0.0) / data["loop_s"],
                          "readback_buffers": data.get("readback_buffers", 1),
@@ -81,19 +85,23 @@ def markdown(result: dict) -> list[str]:
              f"readback buffers; writer threads: T, or T x t with t OpenEXR threads per "
              f"file), {result['date']} "
              "(`python -m benchmarks.files_written`). Frames per second over the frame loop "
-             "(without start-up); CPU utilisation of all cores over the whole process; "
+             "(without start-up); CPU utilisation of all cores over the whole process and "
+             "over the frame loop; "
              "waits: the share of the loop the renderer waited for the writer (encode the "
              "bound), and for the fence of a frame's resolve before copying it out (the "
              "GPU, or llvmpipe, the bound).", "",
-             "| case | frames | writer threads | fps | CPU utilisation | waits for the writer | "
-             "waits for the GPU | whole process s |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| case | frames | writer threads | fps | CPU utilisation | CPU in the loop | "
+             "waits for the writer | waits for the GPU | whole process s |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for row in result["rows"]:
         threads = str(row.get("write_threads", "?")) + (
             f" x {row['exr_threads']}" if row.get("exr_threads") and "EXR" in row["case"]
             else "")
+        loop = row.get("loop_cpu_utilisation")  # not in a report made before it was kept
+        loop_text = "–" if loop is None else f"{100 * loop:.0f}%"
         lines.append(f"| {row['case']} | {row['frames']} | {threads} | {row['fps']:.1f} | "
-                     f"{100 * row['cpu_utilisation']:.0f}% | {100 * row['wait_share']:.0f}% | "
+                     f"{100 * row['cpu_utilisation']:.0f}% | {loop_text} | "
+                     f"{100 * row['wait_share']:.0f}% | "
                      f"{100 * row.get('gpu_wait_share', 0.0):.0f}% | {row['wall_s']:.1f} |")
     return lines + [""]
 

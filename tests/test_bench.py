@@ -72,6 +72,7 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
     assert [row["case"].split()[0] for row in written] == ["shirt", "shirt", "CesiumMan"]
     for row in written:
         assert row["fps"] > 0 and 0 <= row["wait_share"] < 1 and row["cpu_utilisation"] > 0
+        assert 0 < row["loop_cpu_utilisation"] <= 1.05  # process_time over loop_s x cores
         assert 0 <= row["gpu_wait_share"] < 1 and row["readback_buffers"] in (1, 3)
     # writer threads against OpenEXR's own threads per file, for both stages
     combos = {(row["stage"], row["write_threads"], row["exr_threads"])

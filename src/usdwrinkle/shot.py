@@ -133,7 +133,8 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
     ``stats``: filled with per-frame timings in ms (the engine's ``last_timings``, with
     ``profile`` on for the per-pass split, ``fence_wait`` and ``readback`` when the frame
     was copied out, and ``encode`` on the writer), the seconds the loop waited for the
-    writer and for the GPU, and the loop's wall time (``render --stats``).
+    writer and for the GPU, and the loop's wall time and the process's CPU time over it
+    (``render --stats``).
 
     With ``image.readback_buffers`` K > 1, frame f is queued (computed, drawn and resolved
     into one of K readback buffers, behind a fence) and copied out only once frame
@@ -180,6 +181,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
         writer.submit(frame, path, frame_image)
 
     loop_started = time.perf_counter()
+    loop_cpu = time.process_time()  # every thread's: the writer's and OpenEXR's too
     with FrameWriter(write, image.write_threads, image.in_flight) as writer:
         try:
             for frame, path in progress(list(zip(frames, paths, strict=True))):
@@ -208,6 +210,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
         stats.update({"frames": list(rows.values()), "waited_s": writer.waited,
                       "gpu_waited_s": gpu_waited,
                       "loop_s": time.perf_counter() - loop_started,
+                      "loop_cpu_s": time.process_time() - loop_cpu,
                       "write_threads": image.write_threads, "exr_threads": image.exr_threads,
                       "readback_buffers": ring})
     return writer.written

@@ -94,9 +94,9 @@ def add_parser(subparsers) -> None:
                       help="worker processes of the local cluster (default: the CPU cores)")
     p.add_argument("--stats", metavar="FILE.json",
                    help="write per-frame timings (USD read, skin, crush, relax, draw, readback, "
-                        "encode; ms) and the time waited for the writer and the GPU to this "
-                        "JSON file; each pass is then timed with glFinish between passes, "
-                        "unless --no-stats-passes")
+                        "encode; ms), the time waited for the writer and the GPU, and the "
+                        "loop's wall and CPU seconds to this JSON file; each pass is then "
+                        "timed with glFinish between passes, unless --no-stats-passes")
     p.add_argument("--stats-passes", action=argparse.BooleanOptionalAction, default=True,
                    help="with --stats, time each pass (the default; glFinish between passes "
                         "keeps the GPU from working ahead); --no-stats-passes writes the "
