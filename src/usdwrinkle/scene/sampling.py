@@ -5,6 +5,7 @@ and processes the stage's edits; :class:`FrameSampler` reads its records and pri
 only samples."""
 from __future__ import annotations
 
+import functools
 import weakref
 
 import numpy as np
@@ -31,16 +32,31 @@ def time_code(frame: float | None) -> Usd.TimeCode:
 def check_transform(matrix: np.ndarray, path: str, frame, extent: float = 0.0) -> None:
     """Refuse a transform that is not finite, or that takes a mesh of half-size ``extent``
     beyond MAX_WORLD_COORDINATE (where float32 squares of lengths overflow on the GPU)."""
-    matrix = np.asarray(matrix, np.float64)
-    if not finite_in_float32(matrix):
+    matrix = np.ascontiguousarray(matrix, np.float64)
+    # one 4x4 (a mesh's own transform, mostly the last frame's): its reach is remembered
+    reach = _reach(matrix.tobytes(), float(extent)) if matrix.shape == (4, 4) else \
+        _reach_of(matrix, float(extent))
+    if reach is None:
         raise UsdWrinkleError("transform is not finite in float32 (NaN, Inf or beyond 3.4e38)",
                               path, "xformOp", frame)
-    scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
-    reach = scale * extent + float(np.abs(matrix[..., 3, :3]).max(initial=0.0))
     if reach > MAX_WORLD_COORDINATE:
         raise UsdWrinkleError(f"the mesh reaches {reach:.3g} scene units from the origin, "
                               f"beyond +-{MAX_WORLD_COORDINATE:g} (the GPU's float32 range); "
                               "check the units and the transforms", path, "xformOp", frame)
+
+
+def _reach_of(matrix: np.ndarray, extent: float) -> float | None:
+    """How far from the origin ``matrix`` (..., 4, 4) takes a mesh of half-size ``extent``,
+    or None when it is not finite in float32."""
+    if not finite_in_float32(matrix):
+        return None
+    scale = float(np.abs(matrix[..., :3, :3]).sum(axis=-2).max(initial=0.0))
+    return scale * extent + float(np.abs(matrix[..., 3, :3]).max(initial=0.0))
+
+
+@functools.lru_cache(maxsize=256)
+def _reach(data: bytes, extent: float) -> float | None:
+    return _reach_of(np.frombuffer(data, np.float64).reshape(4, 4), extent)
 
 
 def finite_points(points, path, attribute, time=None):

@@ -1,6 +1,8 @@
 """The four passes of Loviscach's method, one module each: skin, crush, relax, draw."""
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 
@@ -74,14 +76,30 @@ def gl_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(row_vector_matrix, dtype=np.float32)
 
 
+def inverse(matrix: np.ndarray) -> np.ndarray:
+    """np.linalg.inv of a square float64 matrix (LinAlgError where it is singular),
+    remembered: a frame's camera, mesh and bind transforms are mostly the last frame's,
+    and numpy's inv of a 4x4 costs about as much as the rest of a uniform's setting (the
+    paper's shirt runs about 300 frames a second on a GPU node, its frame all Python)."""
+    matrix = np.ascontiguousarray(matrix, np.float64)
+    return _inverse(matrix.tobytes(), matrix.shape)
+
+
+@functools.lru_cache(maxsize=64)
+def _inverse(data: bytes, shape: tuple) -> np.ndarray:
+    result = np.linalg.inv(np.frombuffer(data, np.float64).reshape(shape))
+    result.flags.writeable = False  # shared by every caller of the same matrix
+    return result
+
+
 def normal_matrix(row_vector_matrix: np.ndarray) -> np.ndarray:
     """The column-vector 3x3 that takes normals through a row-vector matrix (the inverse
     transpose), as GLSL mat3 bytes."""
     m3 = np.asarray(row_vector_matrix, np.float64)[:3, :3]
     try:
-        inverse = np.linalg.inv(m3)
+        inverted = inverse(m3)
     except np.linalg.LinAlgError:
-        inverse = np.eye(3)
+        inverted = np.eye(3)
     # row-vector normals: n' = n inverse(M3)^T, i.e. column-vector n' = inverse(M3) n;
     # GLSL reads the uploaded rows as columns, so upload the transpose
-    return np.ascontiguousarray(inverse.T, np.float32)
+    return np.ascontiguousarray(inverted.T, np.float32)

@@ -10,7 +10,7 @@ from .. import bindings
 from ..bounds import EyeBound, culled_side
 from ..resources import MeshResources
 from ..shaders import DrawableProgram, Variants, program
-from . import bind, bind_wave, gl_matrix, normal_matrix, set_uniforms
+from . import bind, bind_wave, gl_matrix, inverse, normal_matrix, set_uniforms
 
 #: the turn of the bent normal across one pixel (radians) above which a pixel shades each
 #: of its multisamples (draw.glsl: SHADE_SAMPLES); below it the pixel is shaded once. The
@@ -111,7 +111,7 @@ class DrawPass:
             "u_world_to_eye": gl_matrix(camera.view),
             "u_wrinkles": int(wrinkles),
             # eye space +Z in world: the directional viewer of Storm's fallback surface
-            "u_viewer_direction": tuple(float(v) for v in np.linalg.inv(camera.view)[2, :3]),
+            "u_viewer_direction": tuple(float(v) for v in inverse(camera.view)[2, :3]),
         }
         lights_uniforms, self.dome_lit = light_uniforms(lights)
         self.frame_uniforms.update(lights_uniforms)
@@ -157,7 +157,7 @@ class DrawPass:
         record = res.record
         local_to_world = frame.local_to_world
         try:  # inv, not pinv: pinv's SVD was a tenth of a small frame on a GPU node
-            to_local = np.linalg.inv(local_to_world)
+            to_local = inverse(local_to_world)
         except np.linalg.LinAlgError:  # a scale of 0 flattens the mesh
             to_local = np.linalg.pinv(local_to_world)
         eye_local = np.append(camera.position, 1.0) @ to_local
