@@ -37,7 +37,8 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
 PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.NORMALS, bindings.CRUSH,
                              bindings.RELAX,
                              bindings.DRAW, bindings.MAPS,
-                             bindings.GEOMETRY, bindings.RESOLVE, bindings.RESOLVE_SHAPE)
+                             bindings.GEOMETRY, bindings.RESOLVE, bindings.RESOLVE_SHAPE,
+                             bindings.MIPMAP)
           for name in table}
 
 

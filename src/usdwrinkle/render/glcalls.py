@@ -1,5 +1,6 @@
-"""GL calls that moderngl does not wrap: fences (glFenceSync, glClientWaitSync) and
-persistently mapped readback buffers (glBufferStorage, glMapBufferRange).
+"""GL calls that moderngl does not wrap: fences (glFenceSync, glClientWaitSync),
+persistently mapped readback buffers (glBufferStorage, glMapBufferRange), and a texture's
+mip levels given one by one (glTexImage2D and glTexImage3D at a level: render/mipmaps.py).
 
 The pipelined readback (render/resolve.py) resolves frame f into one of K readback
 buffers, puts a fence behind it, and waits for that fence only after frame f + 1's work
@@ -53,6 +54,16 @@ _SIGNATURES = {
     "glGetError": (_c.c_uint, ()),
 }
 _FENCE_CALLS = ("glFenceSync", "glClientWaitSync", "glDeleteSync", "glFlush")
+#: texture levels given by the caller (render/mipmaps.py); not needed by the readback
+_TEXTURE_SIGNATURES = {
+    "glActiveTexture": (None, (_c.c_uint,)),
+    "glBindTexture": (None, (_c.c_uint, _c.c_uint)),
+    "glPixelStorei": (None, (_c.c_uint, _c.c_int)),
+    "glTexImage2D": (None, (_c.c_uint, _c.c_int, _c.c_int, _c.c_int, _c.c_int, _c.c_int,
+                            _c.c_uint, _c.c_uint, _c.c_void_p)),
+    "glTexImage3D": (None, (_c.c_uint, _c.c_int, _c.c_int, _c.c_int, _c.c_int, _c.c_int,
+                            _c.c_int, _c.c_uint, _c.c_uint, _c.c_void_p)),
+}
 
 
 def _loaders():
@@ -95,17 +106,20 @@ class GLCalls:
 
     def __init__(self, extensions: set | frozenset = frozenset(), version: int = 0):
         self.fns: dict = {}
+        signatures = {**_SIGNATURES, **_TEXTURE_SIGNATURES}
         for load in _loaders():
-            addresses = {name: load(name) for name in _SIGNATURES}
+            addresses = {name: load(name) for name in signatures}
             if all(addresses[name] for name in _FENCE_CALLS):
                 for name, address in addresses.items():
                     if address:
-                        result, arguments = _SIGNATURES[name]
+                        result, arguments = signatures[name]
                         self.fns[name] = ctypes.CFUNCTYPE(result, *arguments)(address)
                 break
         self.fences = all(name in self.fns for name in _FENCE_CALLS)
         self.mapped = self.fences and all(name in self.fns for name in _SIGNATURES) and \
             (version >= 440 or "GL_ARB_buffer_storage" in extensions)
+        #: a texture's levels can be given one by one (render/mipmaps.py)
+        self.textures = all(name in self.fns for name in _TEXTURE_SIGNATURES)
 
     @classmethod
     def get(cls, ctx=None) -> GLCalls:

@@ -21,6 +21,7 @@ from ..scene.records import MeshRecord
 from ..scene.topology import rest_tangents
 from .bindings import TABLE_WIDTH
 from .fields import WaveFields
+from .mipmaps import build_mipmaps
 
 #: relax.glsl stores neighbour indices as floats, exact below 2^24
 
@@ -315,7 +316,10 @@ class MeshResources:
         self.normal_map = self.ctx.texture_array((width, height, len(layers)), 4,
                                                  _bytes(layers), dtype=dtype)
         self.textures.append(self.normal_map)
-        self.normal_map.build_mipmaps()
+        if dtype == "f1":
+            build_mipmaps(self.ctx, self.normal_map, layers, srgb=False)
+        else:
+            self.normal_map.build_mipmaps()
         for layer, (tile, _) in enumerate(normal_map.tiles):
             if tile == -1:  # one texture that repeats (draw.glsl: normal_map)
                 self.udim_layers[:] = UDIM_REPEAT
@@ -337,10 +341,12 @@ class MeshResources:
             self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f1",
                                             internal_format=GL_SRGB8_ALPHA8 if image.srgb
                                             else None)
+            self.textures.append(self.texture)
+            build_mipmaps(self.ctx, self.texture, image.pixels, image.srgb)
         else:
             self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f4")
-        self.textures.append(self.texture)
-        self.texture.build_mipmaps()
+            self.textures.append(self.texture)
+            self.texture.build_mipmaps()
         self.texture.repeat_x = self.texture.repeat_y = True
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
