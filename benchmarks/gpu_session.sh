@@ -32,9 +32,9 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 nproc
 python3 -c "from usdwrinkle.render.context import renderer_info; print(renderer_info())" || exit 1
 
-step "tests: the GPU oracle, the resolve, multi-frame identity (EXR, PNG)"
+step "tests: the GPU oracle, the resolve, the mip chains, multi-frame identity (EXR, PNG)"
 timeout 150 python3 -m pytest -q -p no:cacheprovider -n 8 --dist loadfile \
-    tests/test_gpu_oracle.py tests/test_resolve.py \
+    tests/test_gpu_oracle.py tests/test_resolve.py tests/test_mipmaps.py \
     "tests/test_trust.py::test_every_file_is_the_frame_it_names"
 
 # the bench's files-written rows run the default (2 readback buffers); this is the before
