@@ -1,6 +1,7 @@
 #version 430
-// Mipmap pass: one level of an 8-bit texture's mip chain from the level above it
-// (render/mipmaps.py), all levels in one storage buffer of RGBA8 words.
+// Mipmap pass: one level of a texture's mip chain from the level above it
+// (render/mipmaps.py), all levels in one storage buffer: of RGBA8 words, or with FLOAT
+// of RGBA32F texels.
 //
 // Each texel of level k is the bilinear sample of level k - 1 at its centre, as GL's
 // glGenerateMipmap blit takes it: the average of a 2x2 block where the size halves
@@ -10,14 +11,22 @@
 #include "include/common.glsl"
 
 layout(local_size_x = LOCAL_SIZE) in;
+#if defined FLOAT
+layout(std430, binding = MIPMAP_LEVELS) buffer Levels { vec4 texels[]; };
+vec4 load(int i) { return texels[i]; }
+void store(int i, vec4 value) { texels[i] = value; }
+#else
 layout(std430, binding = MIPMAP_LEVELS) buffer Levels { uint words[]; };
+vec4 load(int i) { return unpackUnorm4x8(words[i]); }
+void store(int i, vec4 value) { words[i] = packUnorm4x8(value); }
+#endif
 
 uniform ivec2 u_source_size;  // level k - 1 (width, height)
 uniform ivec2 u_size;         // level k
 uniform int u_layers;         // layers of a texture array (1: a 2D texture)
-uniform int u_source_first;   // first word of level k - 1, layer 0 (layers follow)
-uniform int u_first;          // first word of level k
-uniform int u_srgb;
+uniform int u_source_first;   // first texel of level k - 1, layer 0 (layers follow)
+uniform int u_first;          // first texel of level k
+uniform int u_srgb;           // 8-bit only
 
 vec3 decode(vec3 c) {
     return mix(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, lessThanEqual(c, vec3(0.04045)));
@@ -30,7 +39,7 @@ vec3 encode(vec3 linear) {
 }
 
 vec4 source(int layer, int x, int y) {
-    vec4 c = unpackUnorm4x8(words[u_source_first + (layer * u_source_size.y + y) * u_source_size.x + x]);
+    vec4 c = load(u_source_first + (layer * u_source_size.y + y) * u_source_size.x + x);
     return u_srgb != 0 ? vec4(decode(c.rgb), c.a) : c;
 }
 
@@ -60,5 +69,5 @@ void main() {
     vec4 bottom = mix(source(layer, x0, y1), source(layer, x1, y1), wx);
     vec4 value = mix(top, bottom, wy);
     if (u_srgb != 0) value.rgb = encode(value.rgb);
-    words[u_first + n] = packUnorm4x8(value);
+    store(u_first + n, value);
 }

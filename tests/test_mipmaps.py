@@ -106,6 +106,33 @@ def test_each_level_is_the_exact_filter_of_the_one_above(gl_context, shape, srgb
         texture.release()
 
 
+def read_float_level(ctx, texture, level: int, size: tuple[int, int]) -> np.ndarray:
+    c = ctypes
+    _gl("glActiveTexture", c.c_uint)(0x84C0 + ctx.default_texture_unit)
+    _gl("glBindTexture", c.c_uint, c.c_uint)(0x0DE1, texture.glo)
+    out = np.empty((size[1], size[0], 4), np.float32)
+    _gl("glGetTexImage", c.c_uint, c.c_int, c.c_uint, c.c_uint, c.c_void_p)(
+        0x0DE1, level, 0x1908, 0x1406, out.ctypes.data_as(c.c_void_p))
+    return out
+
+
+def test_a_float_texture_gets_the_same_filter_in_float(gl_context):
+    """An environment or EXR texture (RGBA32F, high dynamic range): each level the exact
+    filter of the level above, to float32 rounding."""
+    pixels = (np.random.default_rng(9).random((90, 200, 4)) ** 4 * 50).astype(np.float32)
+    texture = gl_context.texture((200, 90), 4, pixels.tobytes(), dtype="f4")
+    try:
+        build_mipmaps(gl_context, texture, pixels, srgb=False)
+        above = pixels.astype(np.float64)
+        for level, size in enumerate(level_sizes(200, 90), 1):
+            got = read_float_level(gl_context, texture, level, size)
+            exact = exact_level(above * 255.0, False) / 255.0
+            np.testing.assert_allclose(got, exact, rtol=1e-5, atol=1e-6, err_msg=str(level))
+            above = got.astype(np.float64)
+    finally:
+        texture.release()
+
+
 def test_the_levels_are_what_the_gls_own_generator_makes(gl_context):
     """Against glGenerateMipmap on the same texture: the first level (both from the same
     base) within one code, and on average far closer (the driver rounds its sRGB encode

@@ -316,11 +316,11 @@ class MeshResources:
         self.normal_map = self.ctx.texture_array((width, height, len(layers)), 4,
                                                  _bytes(layers), dtype=dtype)
         self.textures.append(self.normal_map)
-        if dtype == "f1" and not self.record.material.normal_map_varies:
+        if not self.record.material.normal_map_varies:
             build_mipmaps(self.ctx, self.normal_map, layers, srgb=False)
         else:
-            # a map per frame (a bake's wrinkle maps), or float: the driver's generator,
-            # every frame the same. Its shader compile is paid once a process, and a
+            # a map per frame (a bake's wrinkle maps): the driver's generator, every frame
+            # the same. Its shader compile is paid once a process, and a
             # frame's chain is quicker in the GL than through our pass's read-back
             # (llvmpipe, 2048²: 25-39 ms a frame against 80-120)
             self.normal_map.build_mipmaps()
@@ -350,7 +350,7 @@ class MeshResources:
         else:
             self.texture = self.ctx.texture(size, 4, _bytes(image.pixels), dtype="f4")
             self.textures.append(self.texture)
-            self.texture.build_mipmaps()
+            build_mipmaps(self.ctx, self.texture, image.pixels, srgb=False)
         self.texture.repeat_x = self.texture.repeat_y = True
 
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:

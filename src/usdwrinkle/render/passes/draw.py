@@ -8,6 +8,7 @@ from ...contract import MAX_LIGHTS
 from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..bounds import EyeBound, culled_side
+from ..mipmaps import build_mipmaps
 from ..resources import MeshResources
 from ..shaders import DrawableProgram, Variants, program
 from . import bind, bind_wave, gl_matrix, inverse, normal_matrix, set_uniforms
@@ -122,8 +123,6 @@ class DrawPass:
 
     def _dome_texture(self, lights) -> dict:
         """Upload a textured dome's environment (mip-mapped) when it is new; its uniforms."""
-        import moderngl
-
         dome = next((light for light in reversed(lights) if light.kind == "dome"), None)
         if dome is None or dome.dome_texture is None:
             return {"u_dome_textured": 0}
@@ -134,8 +133,7 @@ class DrawPass:
             pixels = np.ascontiguousarray(dome.dome_texture.linear(), np.float32)
             height, width = pixels.shape[:2]
             texture = self.ctx.texture((width, height), 4, pixels.tobytes(), dtype="f4")
-            texture.build_mipmaps()
-            texture.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            build_mipmaps(self.ctx, texture, pixels, srgb=False)
             texture.repeat_x, texture.repeat_y = True, False  # longitude wraps
             levels = int(np.floor(np.log2(max(width, height))))
             self.dome = (dome.dome_key, texture, levels)
