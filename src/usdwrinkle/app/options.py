@@ -194,16 +194,12 @@ class RenderOptions(_Checked):
         """The AOVs each frame stores, in aovs.AOV_BLOCKS order (refuses unknown names);
         with the output ``path``: for an 8-bit file the colour, and only the colour."""
         from ..aovs import AOV_BLOCKS, parse_aovs
-        from ..outputs.images import FLOAT_FORMATS, check_aovs
+        from ..outputs.images import stored_aovs
 
-        aovs = AOV_BLOCKS if self.aovs is None else parse_aovs(self.aovs)
+        aovs = None if self.aovs is None else parse_aovs(self.aovs)
         if path is None:
-            return aovs
-        if os.path.splitext(path)[1].lower() not in FLOAT_FORMATS:
-            if self.aovs is None:
-                return ("color",)
-            check_aovs(path, aovs)
-        return aovs
+            return AOV_BLOCKS if aovs is None else aovs
+        return stored_aovs(path, aovs)
 
 
 @dataclass(frozen=True)

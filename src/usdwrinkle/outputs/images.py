@@ -43,19 +43,23 @@ EXR_THREADS = 0
 def layout_for(path: str, half: bool = True, aovs: tuple[str, ...] = AOV_BLOCKS) -> ImageLayout:
     """The layout a frame written to ``path`` is read back in: an EXR's planes of
     ``aovs`` (colour and normals half float with ``half``), else 8-bit codes (the
-    beauty: check_aovs refuses other AOVs for them)."""
+    beauty: stored_aovs refuses other AOVs for them)."""
     ext = check_format(path)
     if ext in FLOAT_FORMATS:
         return ImageLayout("exr", aovs=tuple(aovs), half=half)
     return ImageLayout("8bit", over_black=ext in (".jpg", ".jpeg"))
 
 
-def check_aovs(path: str, aovs: tuple[str, ...]) -> None:
-    """Refuse AOVs other than the beauty for an 8-bit file, which stores the beauty alone."""
-    if check_format(path) not in FLOAT_FORMATS and tuple(aovs) != ("color",):
-        ext = os.path.splitext(path)[1].lower()
+def stored_aovs(path: str, aovs: tuple[str, ...] | None) -> tuple[str, ...]:
+    """The AOVs a frame written to ``path`` stores: ``aovs`` (None: every one) for an EXR;
+    the beauty alone for an 8-bit file, which refuses any other AOV asked for."""
+    ext = check_format(path)
+    if ext in FLOAT_FORMATS:
+        return AOV_BLOCKS if aovs is None else tuple(aovs)
+    if aovs is not None and tuple(aovs) != ("color",):
         raise UsdWrinkleError(f"`aovs` {','.join(aovs)}: a {ext} frame stores the colour "
                               "alone (`aovs` color); write .exr for the other AOVs")
+    return ("color",)
 
 
 def image_from_buffers(buffers: dict, layout: ImageLayout) -> ResolvedImage:

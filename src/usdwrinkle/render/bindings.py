@@ -67,5 +67,5 @@ GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
 RESOLVE_SHAPE = {"OFFSET_SLOTS": OFFSET_SLOTS}
 RESOLVE = {"RESOLVE_COLOR": 0, "RESOLVE_WRINKLE": 1, "RESOLVE_NORMAL": 2,
            "RESOLVE_OUT": 0, "RESOLVE_BAD": 1}
-#: the mipmap pass (render/mipmaps.py): the whole chain of an 8-bit texture (storage buffer)
+#: the mipmap pass (render/mipmaps.py): the whole chain of a texture (storage buffer)
 MIPMAP = {"MIPMAP_LEVELS": 0}
