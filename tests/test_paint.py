@@ -47,7 +47,7 @@ def test_falloff_profiles():
     np.testing.assert_allclose(falloff("linear", t), [1.0, 0.5, 0.0, 0.0])
     np.testing.assert_allclose(falloff("constant", t), [1.0, 1.0, 0.0, 0.0])
     np.testing.assert_allclose(falloff("sphere", t), [1.0, np.sqrt(0.75), 0.0, 0.0])
-    with pytest.raises(ValueError):
+    with pytest.raises(UsdWrinkleError, match="unknown falloff 'spiky'"):
         falloff("spiky", t)
 
 
@@ -216,7 +216,7 @@ def test_a_session_stroke_is_authored_undone_and_saved(sheet_session):
     assert not session.dirty
     saved = Usd.Stage.Open(str(out))
     np.testing.assert_array_equal(WrinkleAPI(saved.GetPrimAtPath(path)).get_q(), q1)
-    assert saved.GetRootLayer().subLayerPaths[0] == os.path.basename(stage_path)
+    assert saved.GetRootLayer().subLayerPaths[0] == "./" + os.path.basename(stage_path)
     assert saved.GetStartTimeCode() == 1.0 and saved.GetEndTimeCode() == 2.0
 
 
@@ -302,3 +302,144 @@ def test_paint_refuses_in_one_line_before_any_window(tmp_path, capsys, corpus):
     assert main(["paint", shirt, "--size", "10x10"]) == 2
     assert "--size 10x10 must be between" in capsys.readouterr().err
     assert not (tmp_path / "p.usda").exists()
+
+
+def test_paint_refuses_an_unusable_display_in_one_line(tmp_path, capsys, monkeypatch):
+    """Issue 54, finding 13: DISPLAY set but unreachable died by SIGABRT (Qt's xcb), and
+    QT_QPA_PLATFORM=offscreen hung after 'QOpenGLWidget is not supported'."""
+    from usdwrinkle.cli.main import main
+
+    stage = sheet_stage(tmp_path / "sheet.usda", nx=5)
+    monkeypatch.delenv("QT_QPA_PLATFORM", raising=False)
+    monkeypatch.setenv("DISPLAY", ":97")  # no X server there
+    assert main(["paint", stage, "-o", str(tmp_path / "p.usda")]) == 2
+    err = capsys.readouterr().err
+    assert "cannot reach the X display DISPLAY=':97' (no X server answers there)" in err
+    for platform in ("offscreen", "minimal"):
+        monkeypatch.setenv("QT_QPA_PLATFORM", platform)
+        assert main(["paint", stage]) == 2
+        assert f"cannot open on Qt's '{platform}' platform" in capsys.readouterr().err
+    monkeypatch.delenv("QT_QPA_PLATFORM")
+    monkeypatch.delenv("DISPLAY")
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["paint", stage]) == 2
+    assert "needs a display (no DISPLAY is set)" in capsys.readouterr().err
+    assert not (tmp_path / "p.usda").exists()
+
+
+def test_paint_refuses_a_missing_camera_an_unwrinkled_prim_and_a_bad_frame(tmp_path, capsys,
+                                                                          monkeypatch):
+    """Issue 54, finding 16: ``--camera nocam`` opened a black, dead window with a
+    traceback; a --prim without WrinkleAPI and a frame that is not a number reached the
+    window too. Each is one line before any window (the display is never asked)."""
+    from pxr import UsdGeom
+
+    from usdwrinkle.cli.main import main
+
+    monkeypatch.setattr("usdwrinkle.cli.paint.check_display", lambda: pytest.fail("asked"))
+    stage_path = sheet_stage(tmp_path / "sheet.usda", nx=5)
+    stage = Usd.Stage.Open(stage_path)
+    plain = UsdGeom.Mesh.Define(stage, "/Plain")
+    plain.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    plain.CreateFaceVertexCountsAttr([3])
+    plain.CreateFaceVertexIndicesAttr([0, 1, 2])
+    stage.Save()
+    assert main(["paint", stage_path, "--camera", "nocam"]) == 2
+    assert "camera 'nocam' not found on the stage (cameras: none)" in capsys.readouterr().err
+    assert main(["paint", stage_path, "--prim", "/Plain"]) == 2
+    assert "--prim /Plain has no WrinkleAPI applied" in capsys.readouterr().err
+    assert main(["paint", stage_path, "--frame", "nan"]) == 2
+    assert "--frame nan is not a finite time code" in capsys.readouterr().err
+
+
+def test_session_inputs_are_refused_naming_the_field(sheet_session, gl_context, tmp_path):
+    """Issue 54, finding 18: frame=nan raised ValueError, set_control('width', 'abc')
+    ValueError, and a brush radius '0.1' TypeError; a frame outside the stage's range is
+    said, as render says it."""
+    from usdwrinkle import log
+    from usdwrinkle.app.paint import with_brush
+
+    session, stage_path, _ = sheet_session
+    with pytest.raises(UsdWrinkleError, match="`frame` nan is not a finite time code"):
+        PaintSession(session.stage, session.layer, None, frame=float("nan"), ctx=gl_context)
+    with pytest.raises(UsdWrinkleError, match="`frame`='3' must be a number"):
+        PaintSession(session.stage, session.layer, None, frame="3", ctx=gl_context)
+    with log.collect() as messages:
+        PaintSession(session.stage, session.layer, None, frame=999.0,
+                     ctx=gl_context).release()
+    assert any("lie outside the stage's time range 1..2" in m for m in messages), messages
+    with pytest.raises(UsdWrinkleError, match="`width` must be a number, not 'abc'"):
+        session.set_control("width", "abc")
+    for field, value, message in (("radius", "0.1", "brush `radius` must be a number"),
+                                  ("width", 0.0, r"brush `width` 0 must be in \(0"),
+                                  ("width", float("nan"), "brush `width` must be finite"),
+                                  ("width", 2e15, "brush `width` 2e\\+15 must be in"),
+                                  ("strength", True, "brush `strength` must be a number"),
+                                  ("mode", "paint", "`mode` 'paint' is not a brush mode")):
+        with pytest.raises(UsdWrinkleError, match=message):
+            with_brush(session, **{field: value})
+    assert session.brush.width == pytest.approx(0.2)  # the brush before stays
+
+
+def test_an_edit_that_authoring_refuses_leaves_nothing_behind(sheet_session, monkeypatch):
+    """Issue 54, finding 3: a width stroke that authoring refused stayed on the mesh: its
+    q stayed on the layer, it was not an undo step, dirty stayed False, and every later
+    comb stroke raised."""
+    from usdwrinkle.authoring import WrinkleAPI
+
+    session, _, _ = sheet_session
+    mesh = session.mesh
+    q0, w0 = mesh.q.copy(), mesh.width.copy()
+    real = WrinkleAPI.CreateWidthPrimvar
+
+    def refuse(self, values):
+        raise UsdWrinkleError("width refused (a test's authoring failure)")
+
+    monkeypatch.setattr(WrinkleAPI, "CreateWidthPrimvar", refuse)
+    from usdwrinkle.app.paint import with_brush
+
+    with_brush(session, mode="width", width=0.05)
+    with pytest.raises(UsdWrinkleError, match="width refused"):
+        session.flood()
+    np.testing.assert_array_equal(mesh.q, q0)
+    np.testing.assert_array_equal(mesh.width, w0)
+    assert not session.dirty and not session.undo_stack
+    assert not session.layer.GetAttributeAtPath("/Sheet.primvars:wrinkle:q")
+    monkeypatch.setattr(WrinkleAPI, "CreateWidthPrimvar", real)
+    with_brush(session, mode="comb")
+    assert session.flood() is not None and session.dirty  # painting goes on
+
+
+def test_undo_of_a_w_change_right_after_it_is_saved_undone(sheet_session):
+    """Issue 54, finding 5: the engine's copy of W is stale until its next frame, so an
+    undo right after a change compared with the old W, authored nothing, and the new W
+    stayed in the saved layer. The controls read the session's own W (finding 10)."""
+    session, _, out = sheet_session
+    session.set_control("width", 0.0305)
+    assert session.control("width") == pytest.approx(0.0305)
+    session.undo()  # no frame drawn in between
+    assert session.control("width") == pytest.approx(0.2)
+    session.save()
+    saved = Usd.Stage.Open(str(out))
+    width = WrinkleAPI(saved.GetPrimAtPath("/Sheet")).GetWidthPrimvar().Get()
+    assert list(width) == [pytest.approx(0.2)]
+
+
+def test_esc_during_a_stroke_over_painted_q_shows_what_the_layer_holds(sheet_session):
+    """Issue 54, finding 9: a cancelled stroke over painted q stayed on screen while the
+    data held only the stroke before it."""
+    session, _, _ = sheet_session
+    session.render(320, 180, FULL)
+    assert session.begin_stroke(*sheet_pixel(session, [-0.5, 0.0, 0.0]), 320, 180)
+    for x in np.linspace(-0.45, 0.5, 12):
+        session.drag(*sheet_pixel(session, [x, 0.0, 0.0]), 320, 180)
+    session.end_stroke()
+    first = session.render(320, 180, FULL).pixels
+    assert session.begin_stroke(*sheet_pixel(session, [0.0, -0.5, 0.0]), 320, 180)
+    for y in np.linspace(-0.45, 0.5, 12):
+        session.drag(*sheet_pixel(session, [0.0, y, 0.0]), 320, 180)
+    during = session.render(320, 180, FULL).pixels
+    assert np.abs(during.astype(int) - first).max() > 16  # the stroke shows while painted
+    session.cancel_stroke()
+    np.testing.assert_array_equal(session.render(320, 180, FULL).pixels, first)
+    assert len(session.undo_stack) == 1

@@ -18,6 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import UsdWrinkleError
+from ..limits import MAX_WORLD_COORDINATE
+
 MODES = ("comb", "smooth", "erase", "width")
 FALLOFFS = ("smooth", "linear", "constant", "sphere")
 MIRROR_AXES = (None, "x", "y", "z")
@@ -35,7 +38,7 @@ def falloff(name: str, t: np.ndarray) -> np.ndarray:
     elif name == "sphere":
         value = np.sqrt(np.maximum(1.0 - t * t, 0.0))
     else:
-        raise ValueError(f"unknown falloff {name!r} (one of {', '.join(FALLOFFS)})")
+        raise UsdWrinkleError(f"unknown falloff {name!r} (one of {', '.join(FALLOFFS)})")
     return np.where(t < 1.0, value, 0.0)
 
 
@@ -62,18 +65,44 @@ class BrushSettings:
     width: float = 0.05
 
     def __post_init__(self):
+        # every refusal is a UsdWrinkleError naming the field (issue 54): a brush made by a
+        # script, a preset file or the window is checked alike
         if self.mode not in MODES:
-            raise ValueError(f"unknown brush mode {self.mode!r} (one of {', '.join(MODES)})")
+            raise UsdWrinkleError(f"`mode` {self.mode!r} is not a brush mode (one of "
+                                  f"{', '.join(MODES)})")
         if self.falloff not in FALLOFFS:
-            raise ValueError(f"unknown falloff {self.falloff!r}")
-        if not (self.radius > 0 and np.isfinite(self.radius)):
-            raise ValueError(f"brush radius {self.radius} must be finite and > 0")
-        if not 0.0 <= self.strength <= 1.0 or not 0.0 <= self.amount <= 1.0:
-            raise ValueError("brush strength and amount must be in [0, 1]")
+            raise UsdWrinkleError(f"`falloff` {self.falloff!r} is not a falloff (one of "
+                                  f"{', '.join(FALLOFFS)})")
+        for name, low, high, open_low in (("radius", 0.0, MAX_WORLD_COORDINATE, True),
+                                          ("strength", 0.0, 1.0, False),
+                                          ("amount", 0.0, 1.0, False),
+                                          ("spacing", 0.0, 100.0, True),
+                                          ("width", 0.0, MAX_WORLD_COORDINATE, True)):
+            value = _number(getattr(self, name), name)
+            if not (low < value if open_low else low <= value) or not value <= high:
+                raise UsdWrinkleError(f"brush `{name}` {value:g} must be in "
+                                      f"{'(' if open_low else '['}{low:g}, {high:g}]")
+            object.__setattr__(self, name, value)
+        if not isinstance(self.geodesic, (bool, np.bool_)):
+            raise UsdWrinkleError(f"brush `geodesic` must be True or False, not "
+                                  f"{self.geodesic!r}")
+        if not isinstance(self.front_facing_only, (bool, np.bool_)):
+            raise UsdWrinkleError(f"brush `front_facing_only` must be True or False, not "
+                                  f"{self.front_facing_only!r}")
         if self.mirror not in MIRROR_AXES:
-            raise ValueError(f"mirror plane must be x, y, z or none, not {self.mirror!r}")
-        if not self.spacing > 0:
-            raise ValueError("stamp spacing must be > 0")
+            raise UsdWrinkleError(f"brush `mirror` must be x, y, z or None, not "
+                                  f"{self.mirror!r}")
+
+
+def _number(value, name: str) -> float:
+    """A real number (numpy's too), never a bool or a string."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                      np.floating)):
+        raise UsdWrinkleError(f"brush `{name}` must be a number, not {value!r}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise UsdWrinkleError(f"brush `{name}` must be finite, not {value:g}")
+    return value
 
 
 @dataclass

@@ -95,15 +95,25 @@ def open_paint_stage(stage_path: str, output: str | None):
     from ..outputs.layers import check_layer_path
 
     check_layer_path(output)
-    if os.path.realpath(output) == os.path.realpath(stage_path):
-        return stage, stage.GetRootLayer(), os.path.realpath(output)
+    output = os.path.abspath(output)  # as named: USD anchors relative paths lexically
+    folder = os.path.dirname(output)
+    if not os.path.isdir(folder):
+        raise UsdWrinkleError(f"`output` '{output}': the folder '{folder}' does not exist")
+    _probe_writable(folder, output)
     if not os.path.exists(output):
+        _refuse_input(stage, output)
         layer = Sdf.Layer.CreateAnonymous(".usda")
-        layer.subLayerPaths.append(os.path.realpath(stage_path))
+        # as the user named it: the saved layer names it relative to its own folder
+        layer.subLayerPaths.append(os.path.abspath(stage_path))
         copy_stage_info(stage.GetRootLayer(), layer)
+        if stage.GetRootLayer().HasDefaultPrim():
+            layer.defaultPrim = stage.GetRootLayer().defaultPrim
         painted = Usd.Stage.Open(layer)
-        return painted, layer, os.path.realpath(output)
+        return painted, layer, output
     require_regular_file(output, "paint layer")
+    if not os.access(output, os.W_OK):
+        raise UsdWrinkleError(f"`output` '{output}' is not writable")
+    _refuse_input(stage, output)
     layer = open_layer(output, f"cannot open paint layer '{output}' (an existing file that "
                                "is not a USD layer?)")
     painted = Usd.Stage.Open(layer)
@@ -111,9 +121,35 @@ def open_paint_stage(stage_path: str, output: str | None):
     stack = [os.path.realpath(item.realPath) for item in painted.GetLayerStack()
              if item.realPath]
     if wanted in stack:
-        return painted, layer, os.path.realpath(output)
+        return painted, layer, output
     over = Usd.Stage.Open(stage.GetRootLayer(), layer)
-    return over, layer, os.path.realpath(output)
+    return over, layer, output
+
+
+def _probe_writable(folder: str, output: str) -> None:
+    """A file can be made in ``folder`` (tried: permissions alone do not say so for root,
+    nor on a read-only file system)."""
+    import tempfile
+
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".usdwrinkle-probe.", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsdWrinkleError(f"`output` '{output}': the folder '{folder}' is not writable "
+                              f"({exc.strerror})") from None
+
+
+def _refuse_input(stage, output: str) -> None:
+    """``-o`` means "leave my stage alone": never the stage or a file it reads, by any
+    spelling (real path and inode: a symlink, a hard link, '..', '//')."""
+    from ..scene.stage import stage_inputs
+
+    if stage_inputs(stage).protects(output):
+        raise UsdWrinkleError(f"`output` '{output}' is a file the stage reads (the stage, "
+                              "one of its layers, a package or a texture); the paint layer "
+                              "must be a new layer or an earlier paint layer (without "
+                              "`output`, the stage's root layer is edited in place)")
 
 
 class PaintSession:
@@ -134,6 +170,7 @@ class PaintSession:
         from .shot import Shot
 
         require_schema()
+        frame = check_frame(frame, stage)
         self.stage = stage
         self.layer = layer
         self.save_path = save_path
@@ -343,7 +380,9 @@ class PaintSession:
         mesh = self.mesh
         mesh.q[:], mesh.width[:] = self._stroke_before
         self._stroke = self._stroke_before = None
-        self._author(mesh.path, "paint", (mesh.q.copy(), mesh.width.copy()))
+        # the stroke was only previewed (never authored): the engine's tables go back to
+        # the values before it, so the next frame shows what the layer holds
+        self._preview_mesh(mesh)
 
     def flood(self) -> Edit | None:
         """The brush's mode over the whole active mesh (one undo step); comb floods
@@ -374,10 +413,15 @@ class PaintSession:
 
     # -- live controls ------------------------------------------------------------------
     def control(self, name: str) -> float:
-        """A live control's value on the active mesh (width: the median W)."""
-        params = self.engine.meshes[self.active].params
-        value = getattr(params, name)
-        return float(np.median(value)) if name == "width" else float(value)
+        """A live control's value on the active mesh (width: the median W), as the session
+        holds it now: its own W, and the stage's authored value of the others (the
+        engine's copy is stale until its next frame, so an undo reads the stage)."""
+        if name == "width":
+            return float(np.median(self.mesh.width))
+        attribute = self.stage.GetPrimAtPath(self.active).GetAttribute(CONTROLS[name][0])
+        if attribute and attribute.HasAuthoredValue():
+            return float(attribute.Get())
+        return float(getattr(self.engine.meshes[self.active].params, name))
 
     def set_control(self, name: str, value: float, live: bool = False) -> Edit | None:
         """Set a control of the active mesh: ``live`` while the slider moves (drawn at
@@ -386,6 +430,10 @@ class PaintSession:
         if name not in CONTROLS:
             raise UsdWrinkleError(f"unknown control {name!r} (one of {', '.join(CONTROLS)})")
         _, low, high = CONTROLS[name]
+        import numbers
+
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise UsdWrinkleError(f"`{name}` must be a number, not {value!r}", self.active)
         value = float(value)
         if not np.isfinite(value) or value < low or (high is not None and value > high):
             raise UsdWrinkleError(f"{name} {value:g} must be in [{low:g}, "
@@ -421,12 +469,31 @@ class PaintSession:
 
     # -- undo -----------------------------------------------------------------------
     def _record(self, edit: Edit) -> Edit:
-        self._author(edit.path, edit.name, edit.after)
+        snapshot = _snapshot(self.layer, edit.path)
+        try:
+            self._author(edit.path, edit.name, edit.after)
+        except Exception:
+            self._roll_back(edit, snapshot)
+            raise
         if len(self.undo_stack) < self._saved_at:
             self._saved_at = -1  # the saved state is gone from the stack
         self.undo_stack.append(edit)
         self.redo_stack.clear()
         return edit
+
+    def _roll_back(self, edit: Edit, snapshot) -> None:
+        """An edit that authoring refused leaves nothing behind: the layer's specs of the
+        prim as they were, and the values before it on the mesh and in the view (never
+        half an edit on the layer, nor a session that refuses every later stroke)."""
+        _restore(self.layer, edit.path, snapshot)
+        mesh = self.meshes.get(edit.path)
+        if mesh is not None:
+            if edit.name == "paint":
+                mesh.q[:], mesh.width[:] = edit.before
+            elif edit.name == "width":
+                mesh.width[:] = edit.before
+            self._preview_mesh(mesh)
+        self._live = None
 
     def undo(self) -> Edit | None:
         if not self.undo_stack:
@@ -478,9 +545,14 @@ class PaintSession:
 
     def _author_width(self, api, width: np.ndarray) -> None:
         """W as authored: one value when it is the same everywhere, else per point; not
-        authored where it equals what the stage gives already (a cloth preset, say)."""
-        current = self.engine.meshes[api.GetPath().pathString].params.width
-        if np.array_equal(np.asarray(current, np.float32), width):
+        authored where it equals what the stage gives already (a cloth preset, say) and
+        the edit layer holds no W yet. Once it holds one, every step writes its W: the
+        engine's copy of the stage is stale until its next frame, so an undo right after
+        a change must not be compared with it."""
+        path = api.GetPath()
+        held = self.layer.GetAttributeAtPath(path.AppendProperty(schema.WIDTH))
+        current = self.engine.meshes[path.pathString].params.width
+        if held is None and np.array_equal(np.asarray(current, np.float32), width):
             return
         values = width[:1] if np.all(width == width[0]) else width
         api.CreateWidthPrimvar(np.asarray(values, np.float32))
@@ -488,9 +560,14 @@ class PaintSession:
     # -- save -----------------------------------------------------------------------
     def save(self, path: str | None = None) -> str | None:
         """Write the edit layer atomically to ``path`` (default: the session's save path);
-        returns where it went (None: an in-memory layer, only marked saved)."""
+        returns where it went (None: an in-memory layer, only marked saved).
+
+        Save As never replaces a file the stage reads (the stage, its sublayers, packages,
+        references, textures; by real path and by inode, so no spelling gets through)
+        other than the edit layer's own file, and rewrites the layer's relative asset
+        paths so that they name the same files from the new folder."""
         from ..outputs.atomic import atomic_path
-        from ..outputs.layers import check_layer_path, export_layer
+        from ..outputs.layers import check_layer_path, export_layer, reanchored_copy
 
         target = path or self.save_path
         if target is None:
@@ -499,26 +576,113 @@ class PaintSession:
                                       "package is not edited in place): save as a new layer")
             self._saved_at = len(self.undo_stack)
             return None
+        if not isinstance(target, (str, os.PathLike)):
+            raise UsdWrinkleError(f"`path` must be a file path, not {type(target).__name__}")
+        target = os.fspath(target)
         check_layer_path(target)
+        if not self._is_own_file(target) and self._inputs().protects(target):
+            raise UsdWrinkleError(f"cannot save the painted layer as '{target}': it is a "
+                                  "file the stage reads (the stage, one of its layers, a "
+                                  "package or a texture); choose a new layer path")
+        folder = os.path.dirname(os.path.abspath(target))
+        if not os.path.isdir(folder):
+            raise UsdWrinkleError(f"cannot save the painted layer as '{target}': the folder "
+                                  f"'{folder}' does not exist")
         layer = self.layer
-        if layer.anonymous:
-            # the sublayer of the painted stage, relative to where the layer is written
-            layer = Sdf.Layer.CreateAnonymous(".usda")
-            layer.TransferContent(self.layer)
-            folder = os.path.dirname(os.path.realpath(target))
-            paths = [os.path.relpath(p, folder) if os.path.isabs(p) else p
-                     for p in self.layer.subLayerPaths]
-            layer.subLayerPaths.clear()
-            for item in paths:
-                layer.subLayerPaths.append(item)
+        if layer.anonymous or not self._is_own_file(target):
+            layer = reanchored_copy(self.layer, target, relative=self.layer.anonymous)
         with atomic_path(target) as tmp:
             export_layer(layer, tmp, target)
         self.save_path = target
         self._saved_at = len(self.undo_stack)
         return target
 
+    def recovery_path(self) -> str:
+        """Where write_recovery puts the unsaved strokes: beside the layer's file (or the
+        stage's), named ``NAME.recovery.usda``."""
+        base = self.save_path or (None if self.layer.anonymous else self.layer.realPath) \
+            or self.stage.GetRootLayer().realPath or os.path.join(os.getcwd(), "paint")
+        base = base.split("[")[0]
+        stem = os.path.splitext(base)[0]
+        return f"{stem}.recovery.usda"
+
+    def write_recovery(self) -> str:
+        """Write the edit layer, strokes and all, to recovery_path(), whatever the state of
+        the session (a stop that cannot wait for an answer); the session stays dirty and
+        its save path unchanged. Returns the path."""
+        from ..outputs.atomic import atomic_path
+        from ..outputs.layers import export_layer, reanchored_copy
+
+        target = self.recovery_path()
+        if self._inputs().protects(target):
+            target = os.path.join(os.path.dirname(target), "usdwrinkle-paint.recovery.usda")
+        layer = reanchored_copy(self.layer, target, relative=self.layer.anonymous)
+        with atomic_path(target) as tmp:
+            export_layer(layer, tmp, target)
+        return target
+
+    def _is_own_file(self, target: str) -> bool:
+        """Whether ``target`` is the file the edit layer was read from (the session's save
+        path, or the root layer edited in place), by any spelling."""
+        own = [p for p in (self.save_path, None if self.layer.anonymous
+                           else self.layer.realPath) if p and "[" not in p]
+        for item in own:
+            try:
+                if os.path.realpath(item) == os.path.realpath(target) or \
+                        os.path.samefile(item, target):
+                    return True
+            except OSError:
+                continue
+        return False
+
+    def _inputs(self):
+        """Every file the painted stage reads (scene/stage.stage_inputs), also through the
+        sublayers of a new, anonymous paint layer."""
+        from ..scene.inputs import StageInputs, scan_inputs
+        from ..scene.stage import stage_inputs
+
+        inputs = stage_inputs(self.stage) if not self.stage.GetRootLayer().anonymous \
+            else StageInputs()
+        for layer in self.stage.GetUsedLayers():
+            if layer.anonymous or not layer.realPath:
+                continue
+            disk = layer.realPath.split("[")[0]
+            inputs.add_file(disk)
+            if layer is not self.layer and not disk.lower().endswith(".usdz"):
+                scanned = scan_inputs(disk)
+                inputs.files |= scanned.files
+                inputs.inodes |= scanned.inodes
+                inputs.missing |= scanned.missing
+        return inputs
+
     def release(self) -> None:
         self.engine.release()
+
+
+def _snapshot(layer: Sdf.Layer, path: str):
+    """What ``layer`` holds at prim ``path`` (and which of its ancestors it has), so that
+    a refused edit can be undone on the layer exactly: (existing prefixes, a copy)."""
+    prim = Sdf.Path(path)
+    existed = [p for p in prim.GetPrefixes() if layer.GetPrimAtPath(p)]
+    copy = None
+    if layer.GetPrimAtPath(prim):
+        copy = Sdf.Layer.CreateAnonymous(".usda")
+        Sdf.CreatePrimInLayer(copy, prim)
+        Sdf.CopySpec(layer, prim, copy, prim)
+    return existed, copy
+
+
+def _restore(layer: Sdf.Layer, path: str, snapshot) -> None:
+    existed, copy = snapshot
+    prim = Sdf.Path(path)
+    if copy is not None:
+        Sdf.CopySpec(copy, prim, layer, prim)
+        return
+    created = [p for p in prim.GetPrefixes() if p not in existed and layer.GetPrimAtPath(p)]
+    if created:
+        edit = Sdf.BatchNamespaceEdit()
+        edit.Add(Sdf.NamespaceEdit.Remove(created[0]))  # the topmost new one, and below
+        layer.Apply(edit)
 
 
 def session_for(stage_path: str, output: str | None = None, **kwargs) -> PaintSession:
@@ -533,10 +697,14 @@ def with_brush(session: PaintSession, **changes) -> BrushSettings:
     return session.brush
 
 
-def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
-    """Refuse, before a window opens, a stage with nothing to paint, or a ``prim`` that
-    is not a mesh of it (the session would say so inside an empty window)."""
+def check_paintable(stage, prim: str | None, all_meshes: bool,
+                    camera: str | None = None) -> None:
+    """Refuse, before a window opens, a stage with nothing to paint, a ``prim`` that is
+    not a mesh of it (or one without WrinkleAPI, unless ``all_meshes``), and a ``camera``
+    the stage does not have (the session would say so inside an empty window)."""
     from pxr import Usd, UsdGeom
+
+    from ..scene.camera import find_camera
 
     meshes = [p for p in stage.Traverse(Usd.TraverseInstanceProxies()) if p.IsA(UsdGeom.Mesh)]
     if prim is not None and str(prim) not in {str(p.GetPath()) for p in meshes}:
@@ -547,3 +715,31 @@ def check_paintable(stage, prim: str | None, all_meshes: bool) -> None:
         raise UsdWrinkleError("no mesh has WrinkleAPI applied, so there is nothing to paint "
                               "(pass `all_meshes` to paint every mesh, or apply WrinkleAPI "
                               "with usdwrinkle apply)")
+    if prim is not None and not all_meshes and \
+            not schema.has_wrinkle_api(stage.GetPrimAtPath(str(prim))):
+        raise UsdWrinkleError(f"`prim` {prim} has no WrinkleAPI applied (apply it with "
+                              "usdwrinkle apply, or pass `all_meshes`)")
+    if camera is not None:
+        find_camera(stage, camera)
+
+
+def check_frame(frame, stage=None) -> float | None:
+    """The frame a session opens on: None or a finite time code (a UsdWrinkleError naming
+    `frame` otherwise); a frame outside the stage's range is said, as render says it."""
+    import numbers
+
+    from ..scene.stage import outside_range_note
+    from .frames import check_time_code
+
+    if frame is None:
+        return None
+    if isinstance(frame, bool) or not isinstance(frame, numbers.Real):
+        raise UsdWrinkleError(f"`frame`={frame!r} must be a number")
+    value = check_time_code(float(frame), "`frame`")
+    if stage is not None and (note := outside_range_note(stage, [value])):
+        import logging
+
+        logging.getLogger(__name__).warning(note.split(": they show")[0]
+                                            + ": the view shows the animation held at its "
+                                              "ends")
+    return value

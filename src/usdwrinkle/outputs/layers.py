@@ -66,6 +66,43 @@ def check_layer_path(path: str) -> str:
     return ext
 
 
+def reanchored_copy(layer: Sdf.Layer, target: str, relative: bool = False) -> Sdf.Layer:
+    """A copy of ``layer`` to be written at ``target``, its asset paths (sublayers,
+    references, payloads, textures) rewritten so that they name the same files from
+    there: each path anchored at ``layer`` is made relative to ``target``'s folder *as
+    named* (USD anchors a relative path lexically, so a symlinked folder is taken as the
+    user wrote it); a path inside a package keeps its ``[...]`` part
+    ('../CesiumMan.usdz[0/img.jpg]'). Absolute paths stay absolute unless ``relative``
+    (an anonymous paint layer's sublayer, written relative so the pair can move
+    together); search paths that resolve nowhere are kept as written."""
+    from pxr import UsdUtils
+
+    def package_file(path: str) -> str:  # 'a.usdz[b/c.png]' -> 'a.usdz'
+        return path[:path.index("[")] if path.endswith("]") and "[" in path else path
+
+    folder = os.path.dirname(os.path.abspath(target))
+
+    def move(asset: str) -> str:
+        if not asset or asset.startswith("anon:"):
+            return asset
+        outer = package_file(asset)
+        if os.path.isabs(outer) and not relative:
+            return asset
+        absolute = asset if os.path.isabs(outer) else layer.ComputeAbsolutePath(asset)
+        disk = package_file(absolute)
+        if not absolute or not os.path.isabs(disk):
+            return asset  # a search path: resolved the same from anywhere
+        moved = os.path.relpath(disk, folder)
+        if not moved.startswith(("./", "../")):
+            moved = "./" + moved
+        return moved + absolute[len(disk):]
+
+    copy = Sdf.Layer.CreateAnonymous(os.path.splitext(target)[1] or ".usda")
+    copy.TransferContent(layer)
+    UsdUtils.ModifyAssetPaths(copy, move)
+    return copy
+
+
 def _array(values: np.ndarray, type_name):
     values = np.ascontiguousarray(values, np.float32)
     if type_name in (Sdf.ValueTypeNames.FloatArray,):
