@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -112,3 +115,45 @@ def corpus() -> Path:
 @pytest.fixture
 def regenerate_goldens(request) -> bool:
     return request.config.getoption("--regenerate-goldens")
+
+
+def paint_problem() -> str | None:
+    """Why the paint-window tier cannot run here (None: it can)."""
+    missing = [tool for tool in ("Xvfb", "xdotool") if shutil.which(tool) is None]
+    if missing:
+        return (f"{' and '.join(missing)} not found (apt-get install xvfb xdotool "
+                "libxcb-icccm4 libxcb-keysyms1)")
+    try:
+        import PySide6  # noqa: F401
+    except ImportError:
+        return "PySide6 is not installed (pip install -e '.[test]')"
+    return None
+
+
+@pytest.fixture(scope="module")
+def display():
+    """An X server of this module's own: its DISPLAY."""
+    problem = paint_problem()
+    if problem is not None:
+        if os.environ.get("USDWRINKLE_REQUIRE_PAINT") == "1":
+            pytest.fail(f"the paint-window tier cannot run: {problem}")
+        pytest.skip(f"paint-window tier not run: {problem}")
+    read, write = os.pipe()
+    server = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0",
+                               "1600x1000x24", "-nolisten", "tcp"], pass_fds=(write,),
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write)
+    number = b""
+    deadline = time.monotonic() + 30
+    while not number.endswith(b"\n") and time.monotonic() < deadline:
+        chunk = os.read(read, 16)
+        if not chunk:
+            break
+        number += chunk
+    os.close(read)
+    if not number.strip():
+        server.kill()
+        pytest.fail("Xvfb did not start")
+    yield f":{number.decode().strip()}"
+    server.terminate()
+    server.wait(10)

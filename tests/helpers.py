@@ -2,6 +2,8 @@
 shared with the sample generator and the benchmarks."""
 from __future__ import annotations
 
+import os
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -177,3 +179,12 @@ def sheet_stage(path, nx: int = 41) -> str:
     stage = point_cache_stage(points, {1.0: points, 2.0: points}, counts, indices, width=0.2)
     stage.GetRootLayer().Export(str(path))
     return str(path)
+
+
+def x_env(display: str) -> dict:
+    return {**os.environ, "DISPLAY": display, "QT_QPA_PLATFORM": "xcb"}
+
+
+def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -> str:
+    return subprocess.run(["xdotool", *args], env=x_env(display), capture_output=True,
+                          text=True, timeout=timeout, check=check).stdout

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import time
@@ -23,59 +22,13 @@ from pxr import Usd
 
 from usdwrinkle.authoring import WrinkleAPI
 
-from helpers import sheet_stage
+from helpers import sheet_stage, x_env, xdotool
 
 REPO = Path(__file__).resolve().parents[1]
 DRIVER = REPO / "tests" / "paint_driver.py"
 SHIRT = REPO / "sample_stages" / "shirt.usda"
 
 pytestmark = pytest.mark.slow
-
-
-def paint_problem() -> str | None:
-    """Why the paint-window tier cannot run here (None: it can)."""
-    missing = [tool for tool in ("Xvfb", "xdotool") if shutil.which(tool) is None]
-    if missing:
-        return (f"{' and '.join(missing)} not found (apt-get install xvfb xdotool "
-                "libxcb-icccm4 libxcb-keysyms1)")
-    try:
-        import PySide6  # noqa: F401
-    except ImportError:
-        return "PySide6 is not installed (pip install -e '.[test]')"
-    return None
-
-
-@pytest.fixture(scope="module")
-def display():
-    """An X server of this module's own: its DISPLAY."""
-    problem = paint_problem()
-    if problem is not None:
-        if os.environ.get("USDWRINKLE_REQUIRE_PAINT") == "1":
-            pytest.fail(f"the paint-window tier cannot run: {problem}")
-        pytest.skip(f"paint-window tier not run: {problem}")
-    read, write = os.pipe()
-    server = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0",
-                               "1600x1000x24", "-nolisten", "tcp"], pass_fds=(write,),
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    os.close(write)
-    number = b""
-    deadline = time.monotonic() + 30
-    while not number.endswith(b"\n") and time.monotonic() < deadline:
-        chunk = os.read(read, 16)
-        if not chunk:
-            break
-        number += chunk
-    os.close(read)
-    if not number.strip():
-        server.kill()
-        pytest.fail("Xvfb did not start")
-    yield f":{number.decode().strip()}"
-    server.terminate()
-    server.wait(10)
-
-
-def x_env(display: str) -> dict:
-    return {**os.environ, "DISPLAY": display, "QT_QPA_PLATFORM": "xcb"}
 
 
 def drive(display: str, scenario: str, out: Path, stage: Path | str = SHIRT) -> dict:
@@ -175,11 +128,6 @@ def test_the_saved_layer_renders_as_the_window_drew_it(display, tmp_path):
                      "--width", str(width), "--height", str(height), "--quiet"]) == 0
         widget = np.load(tmp_path / f"widget.{frame}.npy")
         assert np.array_equal(widget, png_codes(out)), frame
-
-
-def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -> str:
-    return subprocess.run(["xdotool", *args], env=x_env(display), capture_output=True,
-                          text=True, timeout=timeout, check=check).stdout
 
 
 def test_an_artist_paints_and_saves(display, tmp_path):

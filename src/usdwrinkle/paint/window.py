@@ -11,6 +11,8 @@ the stroke in progress, Space plays.
 from __future__ import annotations
 
 import functools
+import os
+import signal
 import time
 import traceback
 
@@ -767,6 +769,44 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.error_banner.setText(f"error: {text}")
         self.error_banner.show()
 
+    # -- stop signals (SIGINT, SIGTERM, SIGHUP) ---------------------------------------
+    #: the exit code a stop signal asked for (130 SIGINT, 143 SIGTERM and SIGHUP), while
+    #: the window closes (None: no stop asked)
+    stop_code: int | None = None
+
+    def stop_requested(self, signum: int) -> None:
+        """A stop signal: close as Ctrl+W does (asking first when strokes are unsaved), then
+        end with the shell's code. A second one while the question is open does not wait
+        for an answer: the unsaved strokes go to a recovery file beside the layer, and
+        the process ends at once."""
+        from ..errors import print_stderr
+
+        code = 130 if signum == signal.SIGINT else 143
+        said = "interrupted" if code == 130 else "terminated"
+        if self.stop_code is not None or self.session is None:
+            note = ""
+            if self.session is not None and self.session.dirty:
+                try:
+                    note = f"; unsaved strokes written to {self.session.write_recovery()}"
+                except Exception as exc:  # noqa: BLE001 (the stop goes on regardless)
+                    note = f"; unsaved strokes lost ({exc})"
+            print_stderr(f"usdwrinkle: {said}{note}")
+            os._exit(code)
+        self.stop_code = code
+        QtCore.QTimer.singleShot(0, functools.partial(self._close_for_stop, said))
+
+    def _close_for_stop(self, said: str) -> None:
+        from ..errors import print_stderr
+
+        code = self.stop_code
+        if self.close():
+            print_stderr(f"usdwrinkle: {said}")
+            self.stop_code = code
+            QtWidgets.QApplication.exit(code)
+        else:  # the artist answered Cancel: painting goes on
+            self.stop_code = None
+            self.statusBar().showMessage(f"{said}: cancelled, the window stays open", 5000)
+
     def _ask_close(self) -> str:
         box = QtWidgets.QMessageBox(self)
         box.setWindowTitle("Unsaved strokes")
@@ -790,6 +830,53 @@ class PaintWindow(QtWidgets.QMainWindow):
         event.accept()
 
 
+class StopSignals(QtCore.QObject):
+    """SIGINT, SIGTERM and SIGHUP while the window runs, delivered to it in Qt's event
+    loop: Python's handlers run only when Python code runs, and Qt sits in C++ between
+    events, so the signal's number is written to a pipe (``signal.set_wakeup_fd``) that a
+    QSocketNotifier watches. The window then closes as Ctrl+W does (stop_requested). Before,
+    the CLI's handler raised KeyboardInterrupt inside Qt's dispatch, which swallowed it,
+    and left the three signals ignored: only SIGKILL ended the window."""
+
+    SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
+                    if hasattr(signal, name))
+
+    def __init__(self, window: PaintWindow):
+        super().__init__(window)
+        self.window = window
+        self._read, self._write = os.pipe()
+        os.set_blocking(self._read, False)
+        os.set_blocking(self._write, False)
+        self._previous_fd = signal.set_wakeup_fd(self._write)
+        self._previous = {sig: signal.signal(sig, self._caught) for sig in self.SIGNALS}
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, self.SIGNALS)
+        self._notifier = QtCore.QSocketNotifier(self._read, QtCore.QSocketNotifier.Read, self)
+        self._notifier.activated.connect(self._woken)
+
+    def _caught(self, signum, frame) -> None:
+        """Python's handler: the pipe already holds the number (its C handler wrote it)."""
+
+    def _woken(self, *_) -> None:
+        try:
+            numbers = os.read(self._read, 64)
+        except BlockingIOError:
+            return
+        for number in numbers:
+            if number in self.SIGNALS:
+                try:
+                    self.window.stop_requested(number)
+                except Exception as exc:  # noqa: BLE001 (never into Qt's dispatch)
+                    self.window.show_error(f"{type(exc).__name__}: {exc}")
+
+    def restore(self) -> None:
+        self._notifier.setEnabled(False)
+        signal.set_wakeup_fd(self._previous_fd)
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+        os.close(self._read)
+        os.close(self._write)
+
+
 def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700)) -> int:
     """Open the paint window on a session made in its GL context; returns Qt's exit code."""
     from PySide6.QtGui import QSurfaceFormat
@@ -802,7 +889,11 @@ def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700)) 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["usdwrinkle paint"])
     window = PaintWindow(make_session, title)
     window.resize(*size)
+    stops = StopSignals(window)
     window.show()
-    code = app.exec()
+    try:
+        code = app.exec()
+    finally:
+        stops.restore()
     window.view.release()
-    return code
+    return window.stop_code if window.stop_code is not None else code
