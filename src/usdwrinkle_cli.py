@@ -28,11 +28,19 @@ def _standard_descriptors() -> None:
     """Open /dev/null on a closed stdin, stdout or stderr (``2>&-``): otherwise the first
     file the run opens would get that number, and what is written to "stderr" (USD's
     diagnostics, from C++) would land in it."""
+    import sys
+
     for fd in (0, 1, 2):
         try:
             os.fstat(fd)
         except OSError:
             os.open(os.devnull, os.O_RDWR)  # the lowest free descriptor: this one
+    # Python made sys.stderr (or stdout) None for a descriptor closed at start-up: give it
+    # the stream on the /dev/null above, so that a flush of it never fails mid-run (a
+    # refusal exited 3, an internal error, with stderr closed)
+    for name, fd in (("stdin", 0), ("stdout", 1), ("stderr", 2)):
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, "r" if fd == 0 else "w", closefd=False))
 
 
 def entry_point() -> None:

@@ -100,3 +100,73 @@ def test_the_api_warns_through_the_library_logger(gl_context, tmp_path, capfd):
     # without a collector, the warning is usdwrinkle's one line on stderr
     api.render(str(SHIRT), str(tmp_path / "g.####.png"), frames=[30], width=32)
     assert "usdwrinkle: warning: " in capfd.readouterr().err
+
+
+@pytest.mark.parametrize("options,message", [
+    ({"frames": b"1:2"}, "`frames`=b'1:2' must be a FrameSpec text or a list of numbers"),
+    ({"frames": [True]}, "`frames`=[True] must be a FrameSpec text or a list of numbers"),
+    ({"frames": ["1"]}, "`frames`=['1'] must be a FrameSpec text or a list of numbers"),
+    ({"workers": True}, "`workers`=True must be an integer"),
+    ({"workers": "2"}, "`workers`='2' must be an integer"),
+    ({"chunk": "5"}, "`chunk`='5' must be an integer"),
+    ({"dask": 5}, "`dask`=5 must be 'local' or a scheduler's address"),
+    ({"stage": b"shirt.usda"}, "`stage`=b'shirt.usda' must be a file path or a Usd.Stage"),
+    ({"stage": 5}, "`stage`=5 must be a file path or a Usd.Stage"),
+    ({"mask": 5}, "`mask`=5 must be a list"),
+    ({"sublayer": 5}, "`sublayer`=5 must be a list"),
+    ({"sublayer": [5]}, "`sublayer`=5 must be a string"),
+    ({"width": True}, "`width`=True must be an integer"),
+    ({"sublayer": "over.usda"}, "sublayer 'over.usda' does not exist"),
+    ({"sublayer": Path("over.usda")}, "sublayer 'over.usda' does not exist"),
+    ({"variant": "/World{look=red}"}, "/World has no variant set 'look'"),
+])
+def test_api_inputs_are_refused_naming_the_field(tmp_path, monkeypatch, options, message):
+    """Issue 54, findings 7 and 18: bytes were iterated as frame numbers (b"1:2" rendered
+    frames 49, 58 and 50), a bool was a frame or a worker count, and the others raised
+    AttributeError or TypeError; a single text where a list is expected was split into
+    characters. Each is a UsdWrinkleError naming the field, before any output exists."""
+    monkeypatch.chdir(tmp_path)
+    arguments = {"stage": SHIRT, "output": tmp_path / "x.####.png", "frames": "1",
+                 "width": 16, **options}
+    with pytest.raises(UsdWrinkleError, match=message.replace("(", r"\(").replace(
+            "[", r"\[").replace("{", r"\{")):
+        api.render(**arguments)
+    assert not any(p.suffix == ".png" for p in tmp_path.iterdir())
+
+
+def test_jobs_refuse_bytes_frames_when_made():
+    from usdwrinkle.api import RenderJob, Shot
+
+    with pytest.raises(UsdWrinkleError, match="`frames`=b'1' must be a FrameSpec"):
+        RenderJob(Shot(SHIRT), "x.png", b"1")
+
+
+def test_numpy_numbers_and_empty_lists_are_taken(gl_context, tmp_path):
+    """width=np.int64(32) was refused as 'not an integer'; sublayer=None is no layer."""
+    out = api.render(SHIRT, tmp_path / "x.png", frames=np.array([24.0]), width=np.int64(32),
+                     sublayer=None, variant=None, mask=None, samples=np.int32(1))
+    assert out == [str(tmp_path / "x.png")]
+    assert oiio.ImageBuf(out[0]).spec().width == 32
+
+
+def test_api_warnings_carry_the_prefix_in_a_fresh_process(tmp_path):
+    """Issue 54, finding 19: without the CLI, the library logger had no handler, so Python's
+    last-resort handler printed warnings bare. ``import usdwrinkle`` installs it; and
+    use_default_handler(False) leaves the records to the host's logging."""
+    import subprocess
+    import sys
+
+    script = (
+        "import logging, sys\n"
+        "from usdwrinkle import api, log\n"
+        f"api.render({str(SHIRT)!r}, {str(tmp_path / 'a.png')!r}, frames=[30], width=16)\n"
+        "log.use_default_handler(False)\n"
+        "logging.basicConfig(format='HOST %(name)s %(message)s', stream=sys.stderr)\n"
+        f"api.render({str(SHIRT)!r}, {str(tmp_path / 'b.png')!r}, frames=[30], width=16)\n")
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if "outside" in line]
+    assert len(lines) == 2, result.stderr
+    assert lines[0].startswith("usdwrinkle: warning: 1 of the 1 frame(s) lie outside")
+    assert lines[1].startswith("HOST usdwrinkle.app.render 1 of the 1 frame(s)")

@@ -366,3 +366,56 @@ def test_the_quick_exit_keeps_atexit_output_and_threads(tmp_path, late_thread):
     lines = result.stdout.splitlines()
     assert lines[0] == "started" and lines[-1] == "atexit ran", result.stdout
     assert ("thread done" in lines) == late_thread
+
+
+def _console_script() -> str:
+    import shutil
+    import sys
+
+    script = Path(sys.executable).with_name("usdwrinkle")
+    script = str(script) if script.exists() else shutil.which("usdwrinkle")
+    assert script, "the usdwrinkle console script is not installed"
+    return script
+
+
+def test_check_keeps_its_status_when_the_reader_closes_the_pipe(tmp_path):
+    """Issue 54, finding 12: ``check --json | head -c 100`` exited 0 despite findings
+    (BrokenPipe mapped to 0), so a pipeline gating on check passed."""
+    import subprocess
+
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.CreateNew(str(tmp_path / "bare.usda"))  # no upAxis, no defaultPrim
+    UsdGeom.Xform.Define(stage, "/World")
+    stage.Save()
+    result = subprocess.run(["bash", "-c", "set -o pipefail; \"$0\" check --json \"$1\" | "
+                             "head -c 10 >/dev/null", _console_script(),
+                             str(tmp_path / "bare.usda")], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("argv", [
+    ["render", "BAD", "x.png"],
+    ["render", str(SAMPLES / "shirt.usda"), "x.png", "--frames", ""],
+    ["render", str(SAMPLES / "shirt.usda"), "x.png", "--width", "wide"],
+])
+def test_a_refusal_with_stderr_closed_is_still_exit_2(tmp_path, argv):
+    """Issue 54, finding 20: with stderr closed (``2>&-``) Python starts with sys.stderr
+    None, and the flush around USD's diagnostics raised: a refusal exited 3."""
+    import subprocess
+
+    (tmp_path / "bad.usda").write_text("#usda 1.0\ndef Xform \"A\" { bad\n")
+    argv = [str(tmp_path / "bad.usda") if a == "BAD" else a for a in argv]
+    result = subprocess.run(["bash", "-c", "\"$@\" 2>&-", "run", _console_script(), *argv],
+                            cwd=tmp_path, capture_output=True, timeout=120)
+    assert result.returncode == 2
+
+
+def test_an_empty_frame_spec_speaks_the_command_line(capsys):
+    """Issue 54, finding 20: the message said '(None runs the stage's time range)'."""
+    assert main(["render", str(SAMPLES / "shirt.usda"), "x.png", "--frames", ""]) == 2
+    err = capsys.readouterr().err
+    assert "--frames is empty (leave it out to run the stage's time range)" in err
+    assert "None" not in err

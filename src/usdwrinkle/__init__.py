@@ -17,6 +17,7 @@ UNUSABLE = _prepare_address_space()
 __all__ = ["UsdWrinkleError", "WrinkleAPI", "__version__", "profile_from_curve",
            "profile_preset"]
 
+from . import log as _log  # noqa: E402, F401  (the warning handler; standard library only)
 from .errors import UsdWrinkleError  # noqa: E402  (standard library only)
 
 if UNUSABLE is None:

@@ -56,12 +56,14 @@ def _progress(quiet: bool) -> Progress:
 
 
 def _shot(stage: Path, all_meshes: bool, relax_iterations: int | None,
-          history_start: float | None, sublayer: Sequence[str], variant: Sequence[str],
-          mask: str | Sequence[str] | None) -> Shot:
-    masks = (mask,) if isinstance(mask, str) else tuple(mask or ())
+          history_start: float | None, sublayer: Any, variant: Any, mask: Any) -> Shot:
+    # ShotOptions takes a single str or path where a list is expected, and names the
+    # field of anything else; None is the empty list here, as the keywords' default
     return Shot(stage, ShotOptions(all_meshes=all_meshes, relax_iterations=relax_iterations,
-                                   history_start=history_start, sublayer=tuple(sublayer),
-                                   variant=tuple(variant), mask=masks))
+                                   history_start=history_start,
+                                   sublayer=() if sublayer is None else sublayer,
+                                   variant=() if variant is None else variant,
+                                   mask=() if mask is None else mask))
 
 
 def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
@@ -94,6 +96,9 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
                             recompute=recompute, stats=stats, stats_passes=stats_passes)
     job = RenderJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,
                           variant, mask), output, frames, options, progress=_progress(quiet))
+    from .farm.client import check_farm_options
+
+    check_farm_options(dask, workers, chunk)
     if dask is None:
         if workers is not None or chunk is not None:
             from .log import warn
@@ -107,9 +112,8 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
 
 def _render_on_dask(job: RenderJob, frames: Frames, scheduler: str, workers: int | None,
                     chunk: int | None, quiet: bool) -> list[str]:
-    from .farm.client import FarmRender, check_farm_options, render_on_dask
+    from .farm.client import FarmRender, render_on_dask
 
-    check_farm_options(scheduler, workers, chunk)
     plan = job.prepare()
 
     class _Reporter:

@@ -78,12 +78,14 @@ def usd_diagnostics(forward: bool = False):
         yield messages
         return
     with tempfile.TemporaryFile(mode="w+b") as capture:
-        sys.stderr.flush()
+        if sys.stderr is not None:
+            sys.stderr.flush()
         os.dup2(capture.fileno(), 2)
         try:
             yield messages
         finally:
-            sys.stderr.flush()
+            if sys.stderr is not None:
+                sys.stderr.flush()
             os.dup2(saved, 2)
             os.close(saved)
             capture.seek(0)

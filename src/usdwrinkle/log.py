@@ -12,7 +12,11 @@ more. Each warning then reaches:
   ``usdwrinkle: warning: <message>`` (errors.print_warning);
 - and in both cases the host's own logging, if it configured any (the records propagate
   as usual: a farm's log collector sees them). ``logging.getLogger("usdwrinkle")
-  .setLevel(logging.ERROR)`` silences them everywhere.
+  .setLevel(logging.ERROR)`` silences them everywhere; ``use_default_handler(False)``
+  leaves them to the host's logging alone.
+
+``import usdwrinkle`` installs the handler, so a warning of the Python API reads as the
+CLI's, never bare (Python's last-resort handler printed it without the prefix).
 
 Messages are made one line (whitespace runs become one space) before a sink sees them.
 """
@@ -49,9 +53,23 @@ class _SinkHandler(logging.Handler):
 
 
 # once per process, also if this module is reloaded; a handler on the package logger
-# sees its children's records, and keeps Python's lastResort from printing them again
-if not any(type(h).__name__ == "_SinkHandler" for h in LOGGER.handlers):
-    LOGGER.addHandler(_SinkHandler())
+# sees its children's records, and keeps Python's lastResort from printing them again.
+# ``import usdwrinkle`` imports this module, so every door (the API included) has it.
+HANDLER: logging.Handler = next((h for h in LOGGER.handlers
+                                 if type(h).__name__ == "_SinkHandler"), None) \
+    or _SinkHandler()
+if HANDLER not in LOGGER.handlers:
+    LOGGER.addHandler(HANDLER)
+
+
+def use_default_handler(enabled: bool = True) -> None:
+    """Turn usdwrinkle's own warning handler (``usdwrinkle: warning: ...`` on stderr, or
+    the innermost ``warnings_to`` sink) on or off. Off, the records only propagate to the
+    host's logging configuration (a pipeline that formats its own log lines)."""
+    if enabled and HANDLER not in LOGGER.handlers:
+        LOGGER.addHandler(HANDLER)
+    elif not enabled and HANDLER in LOGGER.handlers:
+        LOGGER.removeHandler(HANDLER)
 
 
 def warn(message: str) -> None:

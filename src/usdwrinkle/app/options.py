@@ -54,14 +54,20 @@ def _checked_value(name: str, value: typing.Any, base: typing.Any) -> typing.Any
             raise UsdWrinkleError(f"`{name}`={value!r} must be True or False")
         return value
     if base in (int, float):
-        number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if not number or (base is int and not float(value).is_integer()):
+        import numbers
+
+        # numpy's numbers too (np.int64(32) is an integer); never a bool or a text
+        number = isinstance(value, numbers.Real) and not isinstance(value, bool) and \
+            type(value).__name__ != "bool_"
+        if number and base is int and not float(value).is_integer():
+            number = False
+        if not number:
             raise UsdWrinkleError(f"`{name}`={value!r} must be "
                                   f"{'an integer' if base is int else 'a number'}")
         return base(value)
     if base is str:
         if isinstance(value, os.PathLike):
-            return os.fspath(value)
+            value = os.fspath(value)
         if not isinstance(value, str):
             raise UsdWrinkleError(f"`{name}`={value!r} must be a string")
         return value

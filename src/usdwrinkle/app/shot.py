@@ -41,9 +41,15 @@ class Shot:
     def __init__(self, stage: str | os.PathLike[str] | Any,
                  options: ShotOptions | None = None):
         self.options = options if options is not None else ShotOptions()
+        if not isinstance(options, (ShotOptions, type(None))):
+            raise UsdWrinkleError(f"`options`={options!r} must be ShotOptions")
         if isinstance(stage, (str, os.PathLike)):
             self.path = os.fspath(stage)
+            if not isinstance(self.path, str):
+                raise UsdWrinkleError(f"`stage`={stage!r} must be a file path or a Usd.Stage")
             self._stage = None
+        elif not callable(getattr(stage, "GetRootLayer", None)):
+            raise UsdWrinkleError(f"`stage`={stage!r} must be a file path or a Usd.Stage")
         else:
             if self.options.composition():
                 raise UsdWrinkleError("`sublayer`, `variant` and `mask` compose a stage that is "
@@ -124,8 +130,11 @@ class ShotJob:
                  on_start: Callable[[], None] | None = None):
         if not isinstance(shot, Shot):
             raise UsdWrinkleError(f"`shot`={shot!r} must be a usdwrinkle Shot")
-        if not isinstance(output, (str, os.PathLike)):
+        if not isinstance(output, (str, os.PathLike)) or \
+                not isinstance(os.fspath(output), str):
             raise UsdWrinkleError(f"`output`={output!r} must be a path")
+        if frames is not None:
+            frame_spec_of(frames)  # refused here, with the field's name, not mid-run
         self.shot = shot
         self.output = os.fspath(output)
         self.frames = frames
@@ -141,16 +150,27 @@ def at_frame(frame: float | None) -> Any:
 
 
 def frame_spec_of(frames: str | Sequence[float | None]) -> str:
-    """A FrameSpec text of ``frames`` (a text, or a list of numbers)."""
+    """A FrameSpec text of ``frames`` (a text, or a list of numbers). Bytes are refused,
+    not iterated as numbers (b"1:2" was frames 49, 58 and 50), and so are booleans."""
+    import numbers
+
+    empty = "`frames` is empty (leave it out to run the stage's time range)"
     if isinstance(frames, str):
         if not frames.strip():
-            raise UsdWrinkleError("`frames` is empty (None runs the stage's time range)")
+            raise UsdWrinkleError(empty)
         return frames
+    bad = UsdWrinkleError(f"`frames`={frames!r} must be a FrameSpec text or a list of "
+                          "numbers")
+    if isinstance(frames, (bytes, bytearray, memoryview)) or isinstance(frames, dict):
+        raise bad
     try:
-        values = [float(f) for f in frames]  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise UsdWrinkleError(f"`frames`={frames!r} must be a FrameSpec text or a list of "
-                              "numbers") from None
+        items = list(frames)  # type: ignore[arg-type]
+    except TypeError:
+        raise bad from None
+    if any(isinstance(f, bool) or type(f).__name__ == "bool_" or
+           not isinstance(f, numbers.Real) for f in items):
+        raise bad
+    values = [float(f) for f in items]  # type: ignore[arg-type]
     if not values:
-        raise UsdWrinkleError("`frames` is empty (None runs the stage's time range)")
+        raise UsdWrinkleError(empty)
     return ",".join(repr(f) for f in values)

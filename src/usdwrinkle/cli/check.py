@@ -31,6 +31,9 @@ def run(args) -> int:
     from .common import shot_options
 
     result = CheckJob(Shot(args.stage, shot_options(args)), args.wrinkles_only).run()
+    # the status is known before anything is printed: a reader that closes the pipe early
+    # (check --json | head) still gets it (cli/main.py)
+    args.exit_code = 1 if result.findings else 0
     if args.json:
         json.dump({"stage": args.stage, **result.as_json()}, sys.stdout, indent=2,
                   allow_nan=False)

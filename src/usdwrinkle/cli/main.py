@@ -203,12 +203,14 @@ def _main(argv: list[str] | None) -> int:
             return int(args.run(args) or 0)
     except BrokenPipeError:
         # stdout closed by its reader (usdwrinkle info | head): what it read is what it
-        # wanted; no traceback, and no failing flush at exit
+        # wanted; no traceback, and no failing flush at exit. The command's status stands
+        # where it knew it before printing (check: 1 with findings), so that a pipeline
+        # gating on it (set -o pipefail) is not told "clean"
         import os
 
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        return 0
+        return int(getattr(args, "exit_code", 0))
     except UsdWrinkleError as exc:
         if args.debug:
             traceback.print_exc()

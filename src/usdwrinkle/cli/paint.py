@@ -41,29 +41,78 @@ def _size(text: str) -> tuple[int, int]:
     return width, height
 
 
+#: Qt platforms that cannot show a QOpenGLWidget (Qt says "QOpenGLWidget is not
+#: supported" and the window then waits for a GL context forever)
+_NO_GL_PLATFORMS = ("offscreen", "minimal", "vnc", "linuxfb", "vkkhrdisplay")
+
+
 def check_display() -> None:
-    """Refuse, in one line, a Linux session with no display: Qt's xcb platform would
-    abort the process instead."""
+    """Refuse, in one line, a session where the window cannot open: no display, a display
+    that cannot be reached (Qt's xcb platform aborts the process: SIGABRT), or a Qt
+    platform without OpenGL widgets (QT_QPA_PLATFORM=offscreen hangs)."""
     import os
     import sys
 
-    if sys.platform.startswith("linux") and not os.environ.get("QT_QPA_PLATFORM") and \
-            not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+    platform = os.environ.get("QT_QPA_PLATFORM", "").split(":")[0].strip().lower()
+    if platform in _NO_GL_PLATFORMS:
+        raise UsdWrinkleError(f"the paint window cannot open on Qt's '{platform}' platform "
+                              "(QT_QPA_PLATFORM): it has no OpenGL view; unset "
+                              "QT_QPA_PLATFORM, or run under xvfb-run to script the window")
+    if not sys.platform.startswith("linux") or platform not in ("", "xcb"):
+        return
+    display = os.environ.get("DISPLAY")
+    if not display:
+        if os.environ.get("WAYLAND_DISPLAY") and not platform:
+            return
         raise UsdWrinkleError("the paint window needs a display (no DISPLAY is set): run it "
                               "in a desktop session, or under xvfb-run to script it")
+    reason = x_display_error(display)
+    if reason is not None:
+        raise UsdWrinkleError(f"the paint window cannot reach the X display "
+                              f"DISPLAY={display!r} ({reason}): start the X server, fix "
+                              "DISPLAY, or run under xvfb-run")
+
+
+def x_display_error(display: str) -> str | None:
+    """Why an X client cannot connect to ``display`` (None: it can), asked of libxcb, the
+    library Qt's xcb platform connects through."""
+    import ctypes
+    import ctypes.util
+
+    name = ctypes.util.find_library("xcb") or "libxcb.so.1"
+    try:
+        xcb = ctypes.CDLL(name)
+    except OSError:
+        return None  # no libxcb: Qt's xcb platform says what it lacks itself
+    xcb.xcb_connect.restype = ctypes.c_void_p
+    xcb.xcb_connect.argtypes = [ctypes.c_char_p, ctypes.c_void_p]
+    xcb.xcb_connection_has_error.argtypes = [ctypes.c_void_p]
+    xcb.xcb_disconnect.argtypes = [ctypes.c_void_p]
+    connection = xcb.xcb_connect(display.encode(), None)
+    try:
+        code = xcb.xcb_connection_has_error(connection) if connection else 1
+    finally:
+        if connection:
+            xcb.xcb_disconnect(connection)
+    reasons = {1: "no X server answers there", 2: "an extension is missing",
+               3: "out of memory", 4: "a request was too long", 5: "the display name is "
+               "not valid", 6: "no screen of that number"}
+    return None if code == 0 else reasons.get(code, f"xcb error {code}")
 
 
 def run(args) -> int:
     from ..app.environment import require_schema
     from ..app.frames import check_time_code
-    from ..app.paint import PaintSession, check_paintable, open_paint_stage
+    from ..app.paint import PaintSession, check_frame, check_paintable, open_paint_stage
 
     require_schema()
     size = _size(args.size)
     if args.frame is not None:
         check_time_code(args.frame, "`frame`")
     stage, layer, save = open_paint_stage(args.stage, args.output)
-    check_paintable(stage, args.prim, args.all_meshes)  # before a window opens
+    # before a window opens
+    check_paintable(stage, args.prim, args.all_meshes, args.camera)
+    check_frame(args.frame, stage)
     check_display()
     from ..paint.window import run_window  # a one-line error without PySide6
 

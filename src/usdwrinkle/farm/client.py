@@ -53,6 +53,10 @@ def check_farm_options(scheduler: str | None, workers: int | None,
     """Refuse farm options out of range, before any stage is read."""
     from ..limits import LOCAL_WORKERS_PER_CORE
 
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise UsdWrinkleError(f"`dask`={scheduler!r} must be 'local' or a scheduler's address")
+    chunk = _count(chunk, "chunk")
+    workers = _count(workers, "workers")
     if chunk is not None and chunk < 1:
         raise UsdWrinkleError("`chunk` must be at least 1")
     if workers is not None:
@@ -62,6 +66,19 @@ def check_farm_options(scheduler: str | None, workers: int | None,
             raise UsdWrinkleError(f"`workers` must be in 1..{most} ({LOCAL_WORKERS_PER_CORE} "
                                   f"worker processes per CPU core, {cores} here: each holds "
                                   "its own GL context)")
+
+
+def _count(value, name: str) -> int | None:
+    """An integer option (numpy's too); never a bool (``workers=True`` started one worker)
+    nor a text."""
+    import numbers
+
+    if value is None:
+        return None
+    if isinstance(value, bool) or type(value).__name__ == "bool_" or \
+            not isinstance(value, numbers.Integral):
+        raise UsdWrinkleError(f"`{name}`={value!r} must be an integer")
+    return int(value)
 
 
 def default_chunk(frames: int, workers: int) -> int:
