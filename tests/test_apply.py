@@ -300,3 +300,34 @@ def test_apply_updates_the_override_layer_the_shot_already_sublayers(corpus, tmp
     assert main(["apply", str(tmp_path / "shot.usda"), mesh, "-o",
                  str(corpus / "usd-wg" / "CesiumMan.usdz"), "--width", "0.05"]) == 2
     assert "cannot be edited in place" in capsys.readouterr().err
+
+
+def test_apply_o_naming_the_stage_by_any_spelling_is_refused(tmp_path, monkeypatch, capsys):
+    """Issue 54, finding 11: ``apply -o`` naming the stage as ./stage.usda, ../in/,
+    '//', a symlink or a symlinked folder edited the stage in place, and a hard link was
+    refused with a misleading message. ``-o`` means "leave my stage alone"."""
+    import os
+    import shutil
+
+    from usdwrinkle.cli.main import main
+
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    folder = tmp_path / "in"
+    folder.mkdir()
+    stage = folder / "stage.usda"
+    shutil.copy(shirt, stage)
+    shutil.copytree(shirt.parent / "textures", folder / "textures")
+    (tmp_path / "link.usda").symlink_to(stage)
+    (tmp_path / "linkdir").symlink_to(folder)
+    os.link(stage, tmp_path / "hard.usda")
+    (tmp_path / "other").mkdir()
+    before = stage.read_bytes()
+    monkeypatch.chdir(folder)
+    for spelling in ("stage.usda", "./stage.usda", "../in/stage.usda", f"{folder}//stage.usda",
+                     str(tmp_path / "link.usda"), str(tmp_path / "linkdir" / "stage.usda"),
+                     str(tmp_path / "hard.usda"), "../other/../in/stage.usda"):
+        assert main(["apply", str(stage), "/World/Arm/Sleeve", "-o", spelling, "--width",
+                     "0.3"]) == 2, spelling
+        assert "is the stage itself; leave --output out to edit the stage in place" in \
+            capsys.readouterr().err, spelling
+        assert stage.read_bytes() == before, spelling

@@ -15,6 +15,7 @@ from usdwrinkle.app.brush import (
     Hit,
     PaintMesh,
     Stroke,
+    clamp_unit,
     falloff,
     flood,
     spread,
@@ -443,3 +444,69 @@ def test_esc_during_a_stroke_over_painted_q_shows_what_the_layer_holds(sheet_ses
     session.cancel_stroke()
     np.testing.assert_array_equal(session.render(320, 180, FULL).pixels, first)
     assert len(session.undo_stack) == 1
+
+
+def test_the_mirror_map_matches_all_pairs_and_scales():
+    """Issue 54, finding 14: mirror_map compared all pairs (98-113 s for one stroke at
+    62,500 points). The grid's answer equals the all-pairs oracle on a jittered mesh, and
+    the 62,500-point sheet's partners are its grid's mirror indices (benchmarks/paint.py
+    times it)."""
+    rng = np.random.default_rng(7)
+    mesh = sheet(nx=31)
+    half = mesh.rest_points[:, 0] > 1e-9
+    jitter = rng.normal(0.0, 6e-4, (half.sum(), 3))
+    mesh.rest_points[half] += jitter  # some partners fall outside the tolerance
+    tolerance = 1e-2 * mesh.mean_edge()
+    mirrored = mesh.rest_points * [-1.0, 1.0, 1.0]
+    d2 = ((mirrored[:, None, :] - mesh.rest_points[None, :, :]) ** 2).sum(-1)
+    oracle = np.where(d2.min(1) <= tolerance ** 2, d2.argmin(1), -1)
+    np.testing.assert_array_equal(mesh.mirror_map("x"), oracle)
+    assert 0 < (oracle < 0).sum() < len(oracle)
+    big = sheet(nx=250)
+    partner = big.mirror_map("x")
+    grid = np.arange(250 * 250).reshape(250, 250)
+    np.testing.assert_array_equal(partner.reshape(250, 250), grid[:, ::-1])
+
+
+def symmetric_sheet(nx=21, size=2.0) -> PaintMesh:
+    """A sheet whose triangulation is its own mirror image through x = 0 (smooth averages
+    over neighbours: only a mirror-symmetric mesh can be smoothed symmetrically)."""
+    mesh = sheet(nx, size)
+    quads = np.asarray(grid_sheet(nx, nx, size)[2]).reshape(-1, 4)
+    left = mesh.rest_points[quads].mean(axis=1)[:, 0] < 0.0
+    tris = np.concatenate([quads[left][:, [0, 1, 2]], quads[left][:, [0, 2, 3]],
+                           quads[~left][:, [0, 1, 3]], quads[~left][:, [1, 2, 3]]])
+    out = PaintMesh("/Sheet", mesh.rest_points, mesh.rest_normals, tris, mesh.q, mesh.width)
+    partner = out.mirror_map("x")
+    edges = {tuple(sorted(e)) for t in tris for e in ((t[0], t[1]), (t[1], t[2]),
+                                                      (t[2], t[0]))}
+    assert {tuple(sorted((partner[a], partner[b]))) for a, b in edges} == edges
+    return out
+
+
+@pytest.mark.parametrize("mode", ["comb", "smooth", "erase", "width"])
+def test_a_mirrored_stroke_across_the_plane_is_exactly_symmetric(mode):
+    """Issue 54: where a stamp and its mirror overlap (a stroke across the plane), the
+    second one acted on the first one's result: an error of 0.28. Both now act at once."""
+    mesh = symmetric_sheet() if mode == "smooth" else sheet(flip_diagonals=True)
+    rng = np.random.default_rng(3)
+    start = rng.normal(0.0, 0.3, (mesh.count, 3)) * [1.0, 1.0, 0.0]
+    partner = mesh.mirror_map("x")
+    start = 0.5 * (start + start[partner] * [-1.0, 1.0, 1.0])  # a symmetric start
+    mesh.q[:] = clamp_unit(start) if mode != "comb" else 0.0
+    brush = BrushSettings(mode=mode, radius=0.45, strength=0.8, mirror="x", width=0.05)
+    stroke = Stroke(mesh, brush)
+    centroids = mesh.rest_points[mesh.triangles].mean(axis=1)
+    for x in np.linspace(-0.6, 0.6, 25):  # across the plane x = 0, stamps overlapping
+        point = np.array([x, 0.1 + 0.3 * x, 0.0])
+        triangle = int(np.argmin(np.linalg.norm(centroids - point, axis=1)))
+        stroke.add(Hit("/Sheet", triangle, np.ones(3) / 3, point, 1.0), None)
+    assert len(stroke.centres) > 10
+    mirrored = mesh.q[partner].astype(np.float64) * [-1.0, 1.0, 1.0]
+    # q is a line: on the plane itself a q along x is its own mirror image
+    error = np.minimum(np.abs(mesh.q - mirrored).max(1), np.abs(mesh.q + mirrored).max(1))
+    assert error.max() <= 1e-6
+    np.testing.assert_array_equal(mesh.width, mesh.width[partner])
+    changed = np.linalg.norm(mesh.q - (clamp_unit(start) if mode != "comb" else 0.0),
+                             axis=1) > 1e-3
+    assert mode == "width" or changed[np.abs(mesh.rest_points[:, 0]) < 0.1].sum() > 3

@@ -31,23 +31,6 @@ def test_gprims_that_are_not_meshes_are_named(tmp_path, capsys):
     assert "the stage has no Mesh to wrinkle" in err and "use --all-meshes" not in err
 
 
-def test_apply_o_the_stage_itself_edits_it_in_place(tmp_path, capsys):
-    """Finding 18: apply -o <the root layer> was refused as 'not one of its own layers'."""
-    import shutil
-    from pathlib import Path
-
-    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
-    copy = tmp_path / "shirt.usda"
-    shutil.copy(shirt, copy)
-    shutil.copytree(shirt.parent / "textures", tmp_path / "textures")
-    assert main(["apply", str(copy), "/World/Arm/Sleeve", "-o", str(copy), "--width",
-                 "0.3"]) == 0
-    stage = Usd.Stage.Open(str(copy))
-    width = stage.GetPrimAtPath("/World/Arm/Sleeve").GetAttribute("primvars:wrinkle:width")
-    assert list(width.Get()) == [pytest.approx(0.3)]
-    assert "applied WrinkleAPI to 1 mesh(es)" in capsys.readouterr().err
-
-
 def test_held_from_a_primvar_authored_as_time_samples(tmp_path):
     """Finding 18: --held-from-primvar on a primvar whose only value is a time sample of
     0.5 was refused as 'must be in [0, 1]' (its default time read nothing)."""

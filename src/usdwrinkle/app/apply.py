@@ -167,11 +167,12 @@ def edit_target(args: ApplyOptions, stage: Any) -> tuple[Any, Any]:
         return stage, target
     check_layer_path(args.output)
     root = stage.GetRootLayer()
-    if root.realPath and os.path.realpath(args.output) == os.path.realpath(root.realPath):
-        if root.realPath.lower().endswith(".usdz"):
-            raise UsdWrinkleError(f"cannot edit '{args.stage}' in place (a .usdz package); "
-                                  "use `output` LAYER")
-        return stage, root  # -o the stage itself: edited in place, as without -o
+    if root.realPath and _same_file(args.output, root.realPath.split("[")[0]):
+        # `output` means "leave my stage alone": never the stage itself, by any spelling
+        # (./, .., //, a symlink, a symlinked folder, a hard link)
+        raise UsdWrinkleError(f"`output` '{args.output}' is the stage itself; leave "
+                              "`output` out to edit the stage in place, or name a new "
+                              "override layer")
     try:
         refuse_overwriting_inputs(args.stage, [args.output], stage)
     except UsdWrinkleError:
@@ -191,16 +192,24 @@ def edit_target(args: ApplyOptions, stage: Any) -> tuple[Any, Any]:
     return stage, override
 
 
+def _same_file(a: str, b: str) -> bool:
+    """Whether two paths name one file: by real path, or by inode (a hard link)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
 def _sublayer_named(stage: Any, path: str) -> Any:
     """The layer of the stage's local layer stack at ``path`` (not the root layer, not
     inside a package), or None."""
-    import os
 
-    wanted = os.path.realpath(path)
     for layer in stage.GetLayerStack(includeSessionLayers=False)[1:]:
         real = layer.realPath
         if real and "[" not in real and not real.lower().endswith(".usdz") and \
-                os.path.realpath(real) == wanted:
+                _same_file(real, path):
             return layer
     return None
 
