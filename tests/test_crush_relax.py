@@ -152,3 +152,36 @@ def test_degenerate_geometry_gives_no_wrinkle_and_no_nan(gl_context):
         assert np.all(np.isfinite(value)), name
     np.testing.assert_array_equal(ours["compression"], 1.0)
     np.testing.assert_array_equal(ours["amplitude"], 0.0)
+
+
+def test_a_point_of_huge_valence_reads_a_capped_ring(gl_context):
+    """Issue 54, finding 15: a pass loops over a point's ring serially, so the centre of a
+    fan (2 million triangles) set a whole pass's time, every frame and relax iteration.
+    Beyond MAX_RING a point reads MAX_RING of its ring, evenly spaced: the GPU and the
+    numpy reference agree on that, and a point of ordinary valence reads its whole ring."""
+    from usdwrinkle.limits import MAX_RING
+    from usdwrinkle.scene.topology import build_topology
+
+    n = 5000  # a fan of n triangles about the centre, compressed along x
+    angle = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    rest = np.concatenate([[[0.0, 0.0, 0.0]],
+                           np.stack([np.cos(angle), np.sin(angle), 0 * angle], 1)])
+    faces = np.stack([np.zeros(n, int), np.arange(1, n + 1), np.roll(np.arange(1, n + 1), -1)],
+                     1)
+    posed = rest * [0.6, 1.0, 1.0] + [0.0, 0.0, 0.05] * np.cos(3 * rest[:, :1])
+    topology = build_topology(np.full(n, 3), faces.ravel(), rest)
+    ring_offsets, ring, triangle_offsets, triangles = topology.rings()
+    assert np.diff(ring_offsets)[0] == MAX_RING and np.diff(triangle_offsets)[0] == MAX_RING
+    full = topology.neighbor_indices[topology.neighbor_offsets[0]:topology.neighbor_offsets[1]]
+    np.testing.assert_array_equal(ring[:MAX_RING], full[(np.arange(MAX_RING) * n) // MAX_RING])
+    np.testing.assert_array_equal(np.diff(ring_offsets)[1:],  # the rim: whole rings
+                                  np.diff(topology.neighbor_offsets)[1:])
+    stage = point_cache_stage(rest.astype(np.float32), {1: posed.astype(np.float32)},
+                              np.full(n, 3), faces.ravel(), width=0.2, relax_iterations=0)
+    ours, record = gpu_fields(gl_context, stage)
+    ref = crush_reference(rest, posed, record.topology, np.zeros_like(rest),
+                          record.params.width, slack=record.params.slack,
+                          hold=record.params.hold, gain=record.params.amplitude_gain)
+    np.testing.assert_allclose(ours["normals"][0], ref["normals"][0], atol=1e-5)
+    np.testing.assert_allclose(ours["compression"][0], ref["compression"][0], atol=1e-4)
+    assert ref["compression"][0] == pytest.approx(0.6, abs=0.01)

@@ -14,6 +14,11 @@ MAX_TIME_CODE = 1e9
 MAX_RELAX_ITERATIONS = 10_000
 #: points per mesh (the GPU tables index them with 24 bits)
 MAX_POINTS = 1 << 24
+#: neighbours (and incident triangles) a point's wave is fitted and relaxed from: a pass
+#: loops over a ring serially, so beyond this a point reads this many of its ring, evenly
+#: spaced (scene/topology.Topology.rings; a fan of 2 million triangles made one point's
+#: ring the whole pass's time)
+MAX_RING = 64
 #: |profile sample|: profiles are shapes of order 1, scaled by the amplitude
 MAX_PROFILE_VALUE = 1e3
 #: wrinkle:amplitudeScale (a multiplier of the physical amplitude, normally about 1)

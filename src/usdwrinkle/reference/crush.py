@@ -39,18 +39,19 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     T2 = np.cross(N0, T1)
     n_posed_sum = np.zeros((n, 3))
     tri = topology.triangles
+    ring_offsets, ring_indices, triangle_offsets, triangle_indices = topology.rings()
     if len(tri):
         face = np.cross(posed[tri[:, 1]] - posed[tri[:, 0]], posed[tri[:, 2]] - posed[tri[:, 0]])
-        for c in range(3):
-            np.add.at(n_posed_sum, tri[:, c], face)
+        owner = np.repeat(np.arange(n), np.diff(triangle_offsets))
+        np.add.at(n_posed_sum, owner, face[triangle_indices])
     has_normal = np.linalg.norm(n_posed_sum, axis=1) > 0
     usable = (np.linalg.norm(N0, axis=1) > 0.5) & has_normal
     nrm = _normalize(n_posed_sum, N0)
     t1 = _normalize(minimal_rotation(N0, nrm, T1, T1), T1)
     t2 = np.cross(nrm, t1)
 
-    src = np.repeat(np.arange(n), np.diff(topology.neighbor_offsets))
-    dst = topology.neighbor_indices
+    src = np.repeat(np.arange(n), np.diff(ring_offsets))
+    dst = ring_indices
     rest_edge = rest[dst] - rest[src]
     posed_edge = posed[dst] - posed[src]
     a = np.stack([np.sum(rest_edge * T1[src], 1), np.sum(rest_edge * T2[src], 1)], 1)
@@ -59,7 +60,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     BA = np.zeros((n, 2, 2))
     np.add.at(AA, src, a[:, :, None] * a[:, None, :])
     np.add.at(BA, src, b[:, :, None] * a[:, None, :])
-    count = np.diff(topology.neighbor_offsets)
+    count = np.diff(ring_offsets)
     det_a = np.linalg.det(AA)
     trace_a = AA[:, 0, 0] + AA[:, 1, 1]
     usable &= (count >= 2) & (trace_a > 0) & (det_a > 1e-6 * trace_a ** 2)

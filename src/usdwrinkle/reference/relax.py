@@ -14,8 +14,8 @@ def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations:
     weight = np.asarray(amplitude, np.float64) + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
     n = len(points)
-    src = np.repeat(np.arange(n), np.diff(topology.neighbor_offsets))
-    dst = topology.neighbor_indices
+    ring_offsets, dst = topology.rings()[:2]
+    src = np.repeat(np.arange(n), np.diff(ring_offsets))
     sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
     k_j = k[dst] * sign[:, None]
     k_bar = 0.5 * (k[src] + k_j)

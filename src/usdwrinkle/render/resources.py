@@ -41,8 +41,7 @@ def vec4(points: np.ndarray, w: float | np.ndarray = 1.0) -> np.ndarray:
 def topology_block(topo) -> tuple[np.ndarray, dict]:
     """The int table of include/topology.glsl for a mesh's Topology (scene/topology.py)
     and the uniforms giving its part offsets."""
-    parts = [topo.neighbor_offsets, topo.neighbor_indices, topo.triangle_offsets,
-             topo.triangle_indices]
+    parts = list(topo.rings())
     starts = np.concatenate([[0], np.cumsum([len(p) for p in parts])])
     uniforms = {"u_neighbor_indices_base": int(starts[1]),
                 "u_triangle_offsets_base": int(starts[2]),
@@ -139,7 +138,7 @@ class MeshResources:
                                   f"than {MAX_POINTS:,} per mesh", record.path, "points")
         self.num_points = n
         self.num_triangles = len(record.topology.triangles)
-        self.num_edges = len(record.topology.neighbor_indices)
+        self.num_edges = len(record.topology.rings()[1])  # the directed edges relax reads
         self.buffers = []
         self.tables = []
         self.textures = []

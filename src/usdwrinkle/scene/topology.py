@@ -43,6 +43,19 @@ class Topology:
     triangle_offsets: np.ndarray
     triangle_indices: np.ndarray
 
+    def rings(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The 1-rings and incident triangles the passes read (CSR, as the attributes):
+        at most MAX_RING of each per point, evenly spaced through its full list. A pass
+        loops over a point's ring serially, so a point of huge valence (the centre of a
+        2-million-triangle fan) set the whole pass's time on every frame and relax
+        iteration (crush, relax and the posed normals took seconds a frame); its wave is
+        fitted from MAX_RING of its edges instead. Ordinary meshes (valence far below
+        it) read exactly their whole rings."""
+        from ..limits import MAX_RING
+
+        return (*_capped(self.neighbor_offsets, self.neighbor_indices, MAX_RING),
+                *_capped(self.triangle_offsets, self.triangle_indices, MAX_RING))
+
     @property
     def edges(self) -> np.ndarray:
         """(e/2, 2) int32 unique undirected edges (i < j)."""
@@ -182,6 +195,20 @@ def triangulate(counts: np.ndarray, indices: np.ndarray, points: np.ndarray,
     triangles = indices[corner] if corner.size else np.zeros((0, 3), np.int64)
     return (triangles.astype(np.int32).reshape(-1, 3), face_of_tri.astype(np.int32),
             corner.astype(np.int32).reshape(-1, 3))
+
+
+def _capped(offsets: np.ndarray, indices: np.ndarray, most: int):
+    """A CSR list with at most ``most`` entries per row, evenly spaced through the row."""
+    counts = np.diff(offsets).astype(np.int64)
+    if counts.max(initial=0) <= most:
+        return offsets, indices
+    take = np.minimum(counts, most)
+    new_offsets = np.zeros(len(offsets), np.int32)
+    np.cumsum(take, out=new_offsets[1:])
+    row = np.repeat(np.arange(len(counts)), take)
+    k = np.arange(int(take.sum())) - np.repeat(new_offsets[:-1].astype(np.int64), take)
+    position = offsets[row].astype(np.int64) + (k * counts[row]) // take[row]
+    return new_offsets, indices[position]
 
 
 def _csr(src: np.ndarray, dst: np.ndarray, n: int):
