@@ -348,6 +348,54 @@ def scenario_faults(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_undo_and_escape(out: Path, stage: str) -> dict:
+    """Issue 54, findings 9 and 10: the W slider after Ctrl+Z, and Esc during a stroke over
+    painted q (the window must show what the layer holds), with real events."""
+    window = open_window(stage, str(out / "undo.usda"), size=(1000, 640))
+    session = window.session
+    result = {"w_before": session.control("width")}
+    slider = window.width_slider
+    # drag W's slider a quarter of its travel, as an artist does, and let go
+    handle = slider.slider
+    rect = handle.rect()
+    x0 = rect.left() + rect.width() * handle.value() / 1000.0
+    y = rect.center().y()
+    mouse(handle, QtCore.QEvent.MouseButtonPress, x0, y)
+    for step in range(1, 11):
+        mouse(handle, QtCore.QEvent.MouseMove, x0 - step * rect.width() / 40.0, y,
+              Qt.NoButton, Qt.LeftButton)
+    mouse(handle, QtCore.QEvent.MouseButtonRelease, x0 - rect.width() / 4.0, y)
+    settle(window)
+    result["w_changed"] = session.control("width")
+    key(window, Qt.Key_Z, Qt.ControlModifier)
+    result["w_after_undo"] = session.control("width")
+    result["slider_after_undo"] = slider.value()
+    result["label_after_undo"] = slider.value_label.text()
+    # a stroke, then a second one dropped with Esc halfway
+    w, h = window.view.width(), window.view.height()
+    drag(window, line((0.3 * w, 0.5 * h), (0.7 * w, 0.5 * h)))
+    settle(window)
+    first = window.view.last_frame.pixels.copy()
+    view = window.view
+    points = line((0.5 * w, 0.25 * h), (0.5 * w, 0.75 * h))
+    mouse(view, QtCore.QEvent.MouseButtonPress, *points[0])
+    for x, y in points[1:]:
+        count = len(view.frame_times)
+        mouse(view, QtCore.QEvent.MouseMove, x, y, Qt.NoButton, Qt.LeftButton)
+        wait_for(lambda c=count: len(view.frame_times) > c, "a preview frame")
+    result["stroke_shown"] = bool(session.stroking)
+    QTest.keyClick(window.view, Qt.Key_Escape)
+    mouse(view, QtCore.QEvent.MouseButtonRelease, *points[-1])
+    settle(window)
+    after = window.view.last_frame.pixels
+    result["same_after_escape"] = bool(after.shape == first.shape and
+                                       np.array_equal(after, first))
+    result["undo_steps"] = len(session.undo_stack)
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def scenario_render_equal(out: Path, stage: str) -> dict:
     """Paint, save with Ctrl+S, and keep the widget's full-quality frames through the
     stage's camera at two frames (the test renders the saved layer and compares)."""

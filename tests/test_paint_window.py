@@ -35,7 +35,9 @@ def drive(display: str, scenario: str, out: Path, stage: Path | str = SHIRT) -> 
     proc = subprocess.run([sys.executable, str(DRIVER), scenario, str(out), str(stage)],
                           env=x_env(display), capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    return json.loads((out / "result.json").read_text())
+    result = json.loads((out / "result.json").read_text())
+    result["stderr"] = proc.stderr
+    return result
 
 
 def screenshot_codes(path: Path) -> np.ndarray:
@@ -106,6 +108,25 @@ def test_errors_show_in_the_window_and_it_goes_on(display, tmp_path):
                               ["RuntimeError: injected fault in the brush"],
                               ["RuntimeError: injected fault in save"]]
     assert result["drew_after"] and result["closed"]
+    # one line each on stderr, no traceback without --debug (issue 54, finding 17)
+    assert "usdwrinkle: paint: error: RuntimeError: injected fault in paintGL" in \
+        result["stderr"]
+    assert "Traceback" not in result["stderr"]
+
+
+def test_undo_refreshes_the_w_slider_and_esc_shows_the_layer(display, tmp_path):
+    """Issue 54: after Ctrl+Z the W slider still said the undone value (finding 10), and a
+    stroke dropped with Esc over painted q stayed on screen (finding 9)."""
+    stage = sheet_stage(tmp_path / "sheet.usda", nx=21)
+    result = drive(display, "undo_and_escape", tmp_path, stage)
+    assert result["errors"] == []
+    assert result["w_changed"] < 0.8 * result["w_before"]
+    assert result["w_after_undo"] == pytest.approx(result["w_before"])
+    assert result["slider_after_undo"] == pytest.approx(result["w_before"])
+    assert float(result["label_after_undo"]) == pytest.approx(result["w_before"], rel=1e-3)
+    assert result["stroke_shown"] and result["same_after_escape"]
+    assert result["undo_steps"] == 1  # the first stroke; W was undone, Esc left no step
+    assert "Traceback" not in result["stderr"]
 
 
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):

@@ -120,4 +120,5 @@ def run(args) -> int:
         return PaintSession(stage, layer, save, prim=args.prim, frame=args.frame,
                             camera=args.camera, all_meshes=args.all_meshes, ctx=ctx)
 
-    return run_window(make_session, f"usdwrinkle paint {args.stage}", size)
+    return run_window(make_session, f"usdwrinkle paint {args.stage}", size,
+                      debug=bool(getattr(args, "debug", False)))

@@ -412,8 +412,10 @@ class _Slider(QtWidgets.QWidget):
 class PaintWindow(QtWidgets.QMainWindow):
     """``usdwrinkle paint``: the view, the brush and control panel, the timeline."""
 
-    def __init__(self, make_session, title: str = "usdwrinkle paint"):
+    def __init__(self, make_session, title: str = "usdwrinkle paint", debug: bool = False):
         super().__init__()
+        #: print each error's traceback too (``usdwrinkle --debug paint``)
+        self.debug = debug
         self.setWindowTitle(title)
         self._title = title
         self.session: PaintSession | None = None
@@ -759,7 +761,8 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.errors.append(text)
         from ..errors import print_stderr
 
-        print_stderr(f"usdwrinkle: paint: error: {text}" + (f"\n{detail}" if detail else ""))
+        print_stderr(f"usdwrinkle: paint: error: {text}"
+                     + (f"\n{detail}" if detail and self.debug else ""))
         # shown from the event loop, not here: inside paintGL a new banner re-lays the
         # window out and resizes the GL widget while it paints, which crashed the process
         # (measured: 3 of 4 runs, PySide6 6.12 on llvmpipe)
@@ -877,7 +880,8 @@ class StopSignals(QtCore.QObject):
         os.close(self._write)
 
 
-def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700)) -> int:
+def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700),
+               debug: bool = False) -> int:
     """Open the paint window on a session made in its GL context; returns Qt's exit code."""
     from PySide6.QtGui import QSurfaceFormat
 
@@ -887,7 +891,7 @@ def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700)) 
     fmt.setDepthBufferSize(24)
     QSurfaceFormat.setDefaultFormat(fmt)
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["usdwrinkle paint"])
-    window = PaintWindow(make_session, title)
+    window = PaintWindow(make_session, title, debug=debug)
     window.resize(*size)
     stops = StopSignals(window)
     window.show()
