@@ -337,3 +337,19 @@ def test_a_time_sampled_display_color_is_read_each_frame(gl_context):
         engine.release()
     ratio = {frame: pixels[frame][0] / pixels[frame][2] for frame in pixels}
     assert ratio[1.0] > 3.0 and ratio[2.0] < 0.6, ratio
+
+
+@pytest.mark.parametrize("size", [(1, 1), (2, 1), (2, 2), (3, 5), (64, 32), (256, 128)])
+def test_a_uniform_sky_lights_alike_at_any_texture_size(size):
+    """Issue 54, finding 8: a 1x1 dome texture lit a scene 6.5x too bright and a 2x2 one
+    0.4x, against the same uniform sky at 64x32 (the SH basis sampled at one row of texel
+    centres, with sin(theta) d(theta) as its solid angle)."""
+    width, height = size
+    sky = np.ones((height, width, 3)) * [0.2, 0.5, 1.0]
+    coefficients = project_sh9(sky, np.eye(3))
+    for normal in ([0, 1, 0], [1, 0, 0], [0, -1, 0], [0.6, 0.0, 0.8], [0, 0, 1]):
+        n = np.asarray(normal, float) / np.linalg.norm(normal)
+        irradiance = (sh9_basis(n[None]) * IRRADIANCE_BANDS) @ coefficients
+        np.testing.assert_allclose(irradiance[0], [0.2, 0.5, 1.0], rtol=2e-3)
+    _, solid_angle = latlong_directions(width, height)
+    assert solid_angle.sum() == pytest.approx(4 * math.pi, rel=1e-12)

@@ -249,14 +249,29 @@ def latlong_directions(width: int, height: int) -> tuple[np.ndarray, np.ndarray]
     phi = 2.0 * np.pi * u[None, :] - 0.5 * np.pi
     directions = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.cos(theta),
                                               np.sin(theta) * np.sin(phi)), axis=-1)
-    solid_angle = (2.0 * np.pi / width) * (np.pi / height) * np.sin(theta) * np.ones_like(phi)
+    # each row's exact band, 2 pi (cos theta0 - cos theta1) / width: the whole sphere is
+    # 4 pi at any size (sin(theta) d(theta) at the centre gave 2 pi^2 for a 1x1 map)
+    edges = np.cos(np.pi * np.arange(height + 1) / height)
+    band = (2.0 * np.pi / width) * (edges[:-1] - edges[1:])
+    solid_angle = band[:, None] * np.ones_like(phi)
     return directions, solid_angle
+
+
+#: a lat-long map is projected at this many columns and rows at least (its texels
+#: repeated): the basis is sampled at texel centres, and one row at the equator read a
+#: uniform 1x1 sky 6.5x too bright and a 2x2 one 0.4x
+SH_MIN_SIZE = (64, 32)
 
 
 def project_sh9(radiance: np.ndarray, to_world: np.ndarray) -> np.ndarray:
     """SH9 coefficients (9, 3) of a lat-long radiance map (h, w, 3), in world directions
     (``to_world``: the dome's row-vector 3x3)."""
     height, width = radiance.shape[:2]
+    repeat_x = -(-SH_MIN_SIZE[0] // width)
+    repeat_y = -(-SH_MIN_SIZE[1] // height)
+    if repeat_x > 1 or repeat_y > 1:  # each texel covers its whole area (as a lookup does)
+        radiance = np.repeat(np.repeat(radiance, repeat_y, axis=0), repeat_x, axis=1)
+        height, width = radiance.shape[:2]
     directions, solid_angle = latlong_directions(width, height)
     world = directions.reshape(-1, 3) @ to_world
     world /= np.maximum(np.linalg.norm(world, axis=1, keepdims=True), 1e-30)
