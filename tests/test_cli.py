@@ -311,9 +311,12 @@ def test_a_stop_signal_during_start_up_is_one_line(tmp_path, name, code, said):
     script = str(script) if script.exists() else shutil.which("usdwrinkle")
     assert script, "the usdwrinkle console script is not installed"
     for delay in (0.0, 0.1, 0.25, 0.5, 0.8):
+        # 4,601 sub-frames: seconds of work on any machine, so the signal always lands in
+        # the run (24 frames at 64 px took 0.78-0.84 s here, and at the 0.8 s delay the
+        # render could end first: issue 54); a dropped signal would run past the timeout
         process = subprocess.Popen(
             [script, "render", str(SAMPLES / "shirt.usda"), str(tmp_path / "f.####.png"),
-             "--frames", "1:24", "--width", "64"],
+             "--frames", "1:24x0.005", "--width", "64"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
         _wait_until_caught(process.pid, signal.SIGTERM)  # the console script's first lines
         time.sleep(delay)
