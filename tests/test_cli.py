@@ -422,3 +422,33 @@ def test_an_empty_frame_spec_speaks_the_command_line(capsys):
     err = capsys.readouterr().err
     assert "--frames is empty (leave it out to run the stage's time range)" in err
     assert "None" not in err
+
+
+def _dead_pid() -> int:
+    """The pid of a process that has ended (its number is not reused this instant)."""
+    import subprocess
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-c", "pass"])
+    process.wait()
+    return process.pid
+
+
+def test_a_killed_runs_temporaries_are_swept_by_the_next_run(tmp_path):
+    """Issue 54: a SIGKILLed run leaves ``.NAME.PID.RANDOM.tmp.EXT`` beside its outputs
+    (it never reaches atomic_path's cleanup). The next render of those frames, and the
+    next bake of that layer, remove those of dead processes, and keep a live one's."""
+    import os
+
+    dead, alive = _dead_pid(), os.getpid()
+    left = [tmp_path / f".f.0001.{dead}.ab12cd.tmp.png", tmp_path / f".f.0002.{dead}.x9.tmp.png",
+            tmp_path / f".b.{dead}.q7.tmp.usda"]
+    kept = [tmp_path / f".f.0001.{alive}.zz.tmp.png", tmp_path / f".other.{dead}.q.tmp.png"]
+    for path in left + kept:
+        path.write_bytes(b"half a file")
+    assert main(["render", str(SAMPLES / "shirt.usda"), str(tmp_path / "f.####.png"),
+                 "--frames", "1:2", "--width", "32", "--quiet"]) == 0
+    assert main(["bake", str(SAMPLES / "shirt.usda"), str(tmp_path / "b.usda"), "--frames",
+                 "24", "--quiet"]) == 0
+    assert not any(path.exists() for path in left)
+    assert all(path.exists() for path in kept)

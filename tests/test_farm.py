@@ -80,6 +80,12 @@ def test_dask_local_cluster_equals_a_serial_render_from_the_same_bake(gl_context
     assert "wrote 24 frame(s)" in done.stderr and "fps over the whole run" in done.stderr
     assert "baked wave fields: /World/Arm/Sleeve" in done.stderr
     assert done.stdout == ""  # what a run says is on stderr, with its progress
+    # the log starts as a serial render's does: version, stage and GL (issue 54)
+    from usdwrinkle import __version__
+
+    first = done.stderr.splitlines()[0]
+    assert first.startswith(f"usdwrinkle: version {__version__}, render --dask {SHIRT}, "
+                            "GL renderer "), first
     serial = tmp_path / "serial"
     assert main(["render", str(layer), str(serial / "s.####.exr"), "--width", "160",
                  "--quiet"]) == 0

@@ -607,3 +607,17 @@ def test_mikktspace_maps_decode_to_the_triangle_maps_normals_on_the_shirt(gl_con
         maps["mikktspace"][row, texel[:, 0]] * c, 1) / np.linalg.norm(c, axis=1)
         / np.linalg.norm(maps["mikktspace"][row, texel[:, 0]], axis=1), -1, 1)))
     assert np.percentile(frames, 90) > 2.0
+
+
+def test_a_map_folder_that_is_the_layers_own_path_is_refused_before_any_work(tmp_path,
+                                                                             capsys):
+    """Issue 54: ``--map-dir`` naming the layer's own path left a partial map set there
+    (the maps moved in, then the layer could not replace the folder). All or nothing."""
+    from usdwrinkle.cli.main import main
+
+    layer = tmp_path / "x.usda"
+    for spelling in (str(layer), str(tmp_path / "." / "x.usda")):
+        assert main(["bake", str(SHIRT), str(layer), "--frames", "1:2", "--maps", "normal",
+                     "--map-size", "64", "--map-dir", spelling]) == 2
+        assert "--map-dir" in capsys.readouterr().err
+        assert not list(tmp_path.iterdir())

@@ -85,11 +85,16 @@ def geometry_options(options: BakeOptions) -> Any:
     return geometry
 
 
-def check_map_folder(folder: str) -> None:
+def check_map_folder(folder: str, layer: str | None = None) -> None:
     """Refuse a map folder that cannot be written, before any work; one that does not
-    exist yet is made only when the maps are committed (a failed bake leaves none)."""
+    exist yet is made only when the maps are committed (a failed bake leaves none). The
+    folder may not be the layer's own path: the maps would be moved there first and the
+    layer then fail to replace a folder, leaving a partial map set."""
     from ..outputs.atomic import check_writable
 
+    if layer is not None and os.path.realpath(folder) == os.path.realpath(layer):
+        raise UsdWrinkleError(f"`map_dir` '{folder}' is the layer's own path; the maps go in "
+                              "a folder of their own (default: LAYER_maps beside the layer)")
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise UsdWrinkleError(f"cannot write maps to '{folder}': it is a file, not a folder")
     probe = folder if os.path.isdir(folder) else os.path.dirname(os.path.abspath(folder))
@@ -132,8 +137,11 @@ class BakeJob(ShotJob):
         if not self.shot.held:
             refuse_overwriting_inputs(self.shot.path, [self.output], stage)
         check_writable([self.output])
+        from ..outputs.atomic import sweep_dead_temporaries
+
+        sweep_dead_temporaries([self.output])  # what a killed bake of this layer left
         if maps is not None:
-            check_map_folder(maps.folder_for(self.output))
+            check_map_folder(maps.folder_for(self.output), self.output)
         frames = self.shot.frames(self.frames)
         # a bake always computes: fields already baked into the input are not its input
         engine = self.shot.start_engine(use_baked=False, progress=self.progress, ctx=ctx)
