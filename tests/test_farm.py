@@ -84,7 +84,7 @@ def test_dask_local_cluster_equals_a_serial_render_from_the_same_bake(gl_context
     from usdwrinkle import __version__
 
     first = done.stderr.splitlines()[0]
-    assert first.startswith(f"usdwrinkle: version {__version__}, render --dask {SHIRT}, "
+    assert first.startswith(f"usdwrinkle: version {__version__}, render on Dask {SHIRT}, "
                             "GL renderer "), first
     serial = tmp_path / "serial"
     assert main(["render", str(layer), str(serial / "s.####.exr"), "--width", "160",

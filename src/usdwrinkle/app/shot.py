@@ -164,7 +164,7 @@ def frame_spec_of(frames: str | Sequence[float | None]) -> str:
     if isinstance(frames, (bytes, bytearray, memoryview)) or isinstance(frames, dict):
         raise bad
     try:
-        items = list(frames)  # type: ignore[arg-type]
+        items = list(frames)
     except TypeError:
         raise bad from None
     if any(isinstance(f, bool) or type(f).__name__ == "bool_" or

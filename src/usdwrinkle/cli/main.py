@@ -83,6 +83,12 @@ def _stop_signals() -> list:
             if hasattr(signal, name)]
 
 
+#: stop signals put off by _on_stop (asked again in 20 ms): a run that ends before they come
+#: back still ends as stopped, never with 0 (a signal held in a writer thread's atomic
+#: rename, then put off in a fragile moment of the last frame, was lost to the quick exit)
+_DEFERRED: list = []
+
+
 def _on_stop(signum, frame):
     """The first stop signal unwinds the run (its cleanup removes temporary files and
     finishes the frames handed to the writer). Later ones are ignored until the process
@@ -94,8 +100,10 @@ def _on_stop(signum, frame):
         # (OpenImageIO's nanobind enums abort the process, USD's boost.python swallows
         # it) or inside moderngl's wrapper of a GL object being made (a half-made object
         # whose release segfaulted, about once in 150 Ctrl-Cs): ask again in 20 ms
+        _DEFERRED.append(signum)
         threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
         return
+    _DEFERRED.clear()
     for other in _stop_signals():
         signal.signal(other, signal.SIG_IGN)
     if signum == signal.SIGINT:
@@ -156,6 +164,12 @@ def main(argv: list[str] | None = None) -> int:
     previous = _install_stop_handlers()
     try:
         code = _main(argv)
+        if _DEFERRED and code not in (130, 143):  # a stop that was put off, then outrun
+            said = "interrupted" if _DEFERRED[0] == signal.SIGINT else "terminated"
+            print_stderr(f"usdwrinkle: {said}")
+            code = 130 if said == "interrupted" else 143
+            for sig in _stop_signals():  # its repeat, still on its way, changes nothing
+                signal.signal(sig, signal.SIG_IGN)
     except KeyboardInterrupt:  # before the command ran (start-up: imports, parsing)
         print_stderr("usdwrinkle: interrupted")
         code = 130

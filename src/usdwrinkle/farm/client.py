@@ -207,7 +207,7 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
         # the run's header (version, stage, this process's GL, which bakes), as a serial
         # render's log starts: made once the workers are spawned, so no context precedes them
         if hasattr(reporter, "header"):
-            reporter.header("render --dask", shot.path)
+            reporter.header("render on Dask", shot.path)
         if not reporter.quiet:
             where = "a local cluster" if cluster is not None else request.scheduler
             dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
