@@ -5,10 +5,11 @@ derivation in docs/method.md.
 
 For each profile preset and compression r, a sheet compressed uniformly by r along x is
 baked with ``--geometry --levels 3``; along its middle row the fine mesh's height is the
-plane wave (amplitude, wavelength), and its arc length over five whole wavelengths,
-divided by their rest length, is the measured ratio. ``profiles.length_ratio`` gives the
-derived one. The shirt's inner elbow line (rest angle 0 around the sleeve, from 1.0 to
-2.0 along it, frame 24, default levels) gives the ratio on a real shot. ``--write``
+plane wave (amplitude, wavelength), and its arc length over the whole wavelengths that
+fit inside 80% of the sheet, divided by their rest length, is the measured ratio; the
+fold law restores the length exactly for every profile (folds.slope_table), so the
+derived ratio is 1. The shirt's inner elbow line (rest angle 0 around the sleeve, from
+1.0 to 2.0 along it, frame 24, default levels) gives the ratio on a real shot. ``--write``
 replaces the table between the markers in docs/method.md.
 """
 from __future__ import annotations
@@ -44,8 +45,9 @@ def sheet_lengths(preset: str, ratio: float, folder: str, levels: int = LEVELS) 
 
     from usdwrinkle.authoring.api import WrinkleAPI
     from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
+    from usdwrinkle.folds import excess_length, material_wavelength, profile_slope, slope_table
     from usdwrinkle.geometry.measure import length_ratio_along, plane_wave
-    from usdwrinkle.profiles import length_ratio, profile_preset
+    from usdwrinkle.profiles import profile_preset
 
     rest, counts, indices = grid_sheet(31, 31, 2.0)
     posed = rest * np.array([ratio, 1, 1], np.float32)
@@ -63,13 +65,17 @@ def sheet_lengths(preset: str, ratio: float, folder: str, levels: int = LEVELS) 
     x, z = points[row, 0], points[row, 2]
     inner = np.abs(x) < 0.8 * ratio                   # away from the free edges
     amplitude, wavelength = plane_wave(x[inner], z[inner])
-    periods = 5
-    start = -0.5 * periods * ratio * WIDTH
+    rho = excess_length(ratio, ratio, 0.0)           # the analytic sheet authors slack 0
+    material = float(material_wavelength(WIDTH, rho))
+    posed = ratio * material
+    periods = int(2 * 0.8 * ratio / posed)            # whole waves away from the edges
+    start = -0.5 * periods * posed
     return {"preset": preset, "ratio": ratio, "amplitude": amplitude,
-            "expected_amplitude": WIDTH / 4 * np.sqrt(1 - ratio ** 2),
-            "wavelength": wavelength, "expected_wavelength": ratio * WIDTH,
-            "measured": length_ratio_along(x, z, ratio, WIDTH, start, periods),
-            "derived": length_ratio(preset, ratio)}
+            "expected_amplitude": float(profile_slope(slope_table(profile_preset(preset)), rho)
+                                        * posed / (2 * np.pi)),
+            "wavelength": wavelength, "expected_wavelength": posed,
+            "measured": length_ratio_along(x, z, ratio, material, start, periods),
+            "derived": 1.0}
 
 
 def elbow(folder: str) -> dict:
@@ -111,12 +117,12 @@ def table(rows: list[dict], shirt: dict) -> str:
              "Made by `python -m benchmarks.lengths --write docs/method.md` (sheet: W = 0.3, "
              f"--levels {LEVELS}, five whole wavelengths of the middle row).", "",
              "| profile | r | derived L/L0 | measured L/L0 | amplitude / law | "
-             "wavelength / rW |", "|---|---|---|---|---|---|"]
+             "wavelength / r L |", "|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['preset']} | {r['ratio']:g} | {r['derived']:.4f} | "
                      f"{r['measured']:.4f} | {r['amplitude'] / r['expected_amplitude']:.4f} | "
                      f"{r['wavelength'] / r['expected_wavelength']:.4f} |")
-    lines += ["", f"The shirt's inner elbow at frame 24 (cosine profile, {shirt['levels']} "
+    lines += ["", f"The shirt's inner elbow at frame 24 (fold profile, {shirt['levels']} "
               f"levels): the coarse mesh keeps {shirt['coarse']:.3f} of the line's rest "
               f"length ({shirt['rest']:.3f}); the displaced mesh {shirt['displaced']:.3f}.",
               "", END]

@@ -57,6 +57,9 @@ uniform float u_slack;              // wrinkle:slack, compression taken in-plane
 uniform float u_damping_alpha;
 uniform float u_damping_deadband;
 uniform int u_has_history;          // damped_in holds the previous grid frame's directions
+// the mesh's profile's length-exact slope a|k| at u = sqrt(rho^2 - 1) = i * SLOPE_STEP
+// (profiles.slope_table): the inextensible wave of that profile
+uniform float u_slope[SLOPE_SAMPLES];
 
 #if defined FACE_NORMALS
 
@@ -113,17 +116,75 @@ vec3 rest_direction(vec2 d, vec3 T1, vec3 T2) {
     return lead < 0.0 ? -d3 : d3;
 }
 
-// The posed wave vector of a wave of rest wavelength L along rest direction d:
-// k = M^-T (2pi/L) d. With M = U S V^T and d a right singular vector, M^-T d = u / sigma
-// where u = M d / sigma: the direction of M d, length 1/sigma. sigma is floored at r_min
-// so that |k| <= 2pi/(L r_min) stays finite.
+// The posed wave vector of a wave of rest (material) wavelength L along the rest
+// direction d, carried by the fitted map M of the mesh alone: k = M^-T (2pi/L) d, the
+// posed gradient of the material phase (2pi/L) d.X. With M = U S V^T, M^-T = U S^-1 V^T;
+// each singular value is floored at r_min so that |k| <= 2pi/(L r_min) stays finite.
 vec3 wave_vector(mat2 M, vec2 d, float L, vec3 t1, vec3 t2) {
-    vec2 md = M * d;
-    float sigma = length(md);
-    vec2 k2 = sigma > 1e-12
-        ? (TWO_PI / L) * (md / sigma) / max(sigma, MIN_RATIO)
-        : (TWO_PI / (L * MIN_RATIO)) * d;
+    mat2 S = transpose(M) * M;
+    float sa = S[0][0], sb = S[1][0], sc = S[1][1];
+    float mean = 0.5 * (sa + sc);
+    float radius = sqrt(max(0.25 * (sa - sc) * (sa - sc) + sb * sb, 0.0));
+    float l1 = max(mean - radius, 0.0), l2 = mean + radius;
+    vec2 v1;
+    vec2 c1 = vec2(l1 - sc, sb), c2 = vec2(sb, l1 - sa);
+    if (max(dot(c1, c1), dot(c2, c2)) > 1e-24 * max(mean * mean, 1e-30)) {
+        v1 = normalize(dot(c1, c1) >= dot(c2, c2) ? c1 : c2);
+    } else {
+        v1 = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
+    }
+    vec2 v2 = vec2(-v1.y, v1.x);
+    float s1 = sqrt(l1), s2 = sqrt(l2);
+    vec2 u2 = s2 > 1e-12 ? (M * v2) / s2 : v2;
+    vec2 u1 = s1 > 1e-12 ? (M * v1) / s1 : vec2(u2.y, -u2.x) * sign(determinant(M) + 1e-30);
+    vec2 k2 = (TWO_PI / L) * (dot(v1, d) / max(s1, MIN_RATIO) * u1
+                              + dot(v2, d) / max(s2, MIN_RATIO) * u2);
     return k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
+}
+
+// a|k| of the profile's inextensible wave for the excess length rho (u_slope's table,
+// linear between samples and beyond the last)
+float profile_slope(float rho) {
+    float u = sqrt(max(rho * rho - 1.0, 0.0)) / SLOPE_STEP;
+    int i = min(int(floor(u)), SLOPE_SAMPLES - 2);
+    return mix(u_slope[i], u_slope[i + 1], u - float(i));
+}
+
+// The fold law (docs/method.md, "Folds that read as cloth"). r is the compression along
+// d with the painted q, r_geo the mesh's alone. rho is the length the wave restores per
+// posed length: the mesh's compression beyond the slack (the cloth takes the first of it
+// in-plane), times what the painted gather adds. The material wavelength coarsens with
+// rho; the slope is the profile's inextensible one; where the fold would rise beyond
+// the room the posed surface's curvature leaves (``room``; the height after the
+// amplitude scale), it is lowered to the room: its wave unchanged, so that the phases
+// and crests stay as they are (a shorter wave that kept the length moved crests).
+struct Fold {
+    vec3 k;
+    float amplitude;   // before the amplitude scale and the held edges
+    float wavelength;  // material (rest space): what the anchored phase counts
+};
+
+Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float W, float room, float scale,
+          vec3 t1, vec3 t2) {
+    Fold f;
+    // the slack c: the first of the compression is taken in-plane; the folds begin at a
+    // compression of c (restoring all but c) and restore the whole rest length from 3c
+    // on (a smooth onset, so that a compression that comes and goes near it does not
+    // make crests appear and vanish)
+    float restored = 1.0 - u_slack * smoothstep(1.0 - 3.0 * u_slack, 1.0 - u_slack, r_geo);
+    float rho = max(1.0, restored / r_geo) * min(r_geo / r, PAINT_GATHER_MAX);
+    if (!(rho > 1.0)) {
+        f.k = wave_vector(M_geo, d, W, t1, t2);
+        f.amplitude = 0.0;
+        f.wavelength = W;
+        return f;
+    }
+    float L = W * min(pow(rho, COARSENING_EXPONENT), COARSENING_MAX);
+    f.k = wave_vector(M_geo, d, L, t1, t2);
+    f.amplitude = profile_slope(rho) / max(length(f.k), 1e-30);
+    f.amplitude = min(f.amplitude, room / max(scale, 1e-30));
+    f.wavelength = L;
+    return f;
 }
 
 void main() {
@@ -149,6 +210,7 @@ void main() {
     mat2 AA = mat2(0.0);
     mat2 BA = mat2(0.0);
     int count = 0;
+    float bend = 0.0;  // the posed surface's largest normal curvature over the ring
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
         vec3 rest_edge = fetch(rest_points, j).xyz - X_i;     // rest, local space
@@ -158,12 +220,25 @@ void main() {
         AA += outerProduct(a, a);
         BA += outerProduct(b, a);
         ++count;
+        // how fast the posed normals turn along this edge: a fold displaced along them
+        // that rises beyond 1 / turn on the inner side meets its neighbour (the normals
+        // converge there); and the circle through both points tangent to the plane of n
+        // (2 |e.n| / |e|^2), which a coarse ring of a cylinder gives exactly
+        float e2 = dot(posed_edge, posed_edge);
+        if (e2 > 0.0) {
+            bool usable_j;
+            vec3 n_j = posed_normal(j, fetch(rest_frame, 2 * j).xyz, usable_j);
+            bend = max(bend, max(2.0 * abs(dot(posed_edge, n)), length(n_j - n) * sqrt(e2))
+                             / e2);
+        }
     }
     float det_a = determinant(AA);
     float trace_a = AA[0][0] + AA[1][1];
     // fewer than 2 independent edges (collinear, coincident, isolated): no wrinkle
     usable = usable && count >= 2 && trace_a > 0.0 && det_a > 1e-6 * trace_a * trace_a;
-    mat2 M = usable ? BA * inverse(AA) : mat2(1.0);
+    // the mesh's own map, before the painted bias: the posed waves ride on it
+    mat2 M_geo = usable ? BA * inverse(AA) : mat2(1.0);
+    mat2 M = M_geo;
 
     // painted bias: M <- M (I - q q^T), q projected to the rest tangent plane
     vec3 q3 = q_w.xyz;
@@ -207,22 +282,23 @@ void main() {
     vec3 e3 = rest_direction(e, T1, T2);
     if (dot(e3, e.x * T1 + e.y * T2) < 0.0) e = -e;
 
-    // r in [r_min, 1]: a ring crushed flat still has a finite wavelength W r_min
+    // r in [r_min, 1]: a ring crushed flat still has a finite wavelength
     bool any_wave = usable || q_len > 0.0;
     // |M d| = sqrt(lambda) for the eigenvector; a damped d reads the compression along it
     float r = any_wave ? clamp(length(M * d), MIN_RATIO, 1.0) : 1.0;
+    float r_geo = any_wave ? clamp(length(M_geo * d), MIN_RATIO, 1.0) : 1.0;
     // held edges (docs/method.md): a wave whose crests run into the held edge (d across u)
     // fades towards it by the strength x; one whose crests run along it keeps its amplitude
     vec4 holder = fetch(hold, i);
     float along = dot(normalize(d3), holder.yzw);
     float held = 1.0 - holder.x * (1.0 - along * along);
-    // curved cloth folds steeper for its width (docs/method.md): the point's gain
     float local = held * fetch(gain, i).x;
-    // slack (docs/method.md): the cloth takes the first compression in-plane; the
-    // amplitude law reads r_b = min(r / (1 - slack), 1), the wavelength keeps r
-    float r_b = min(r / (1.0 - u_slack), 1.0);
-    float amplitude = local * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r_b * r_b, 0.0));
-    float wavelength = W;  // rest space
+    // room for a fold: FOLD_ROOM of the posed surface's radius of curvature
+    float room = bend > 0.0 ? FOLD_ROOM / bend : 1e30;
+    Fold f1 = fold(M_geo, d, r, r_geo, W, room, u_amplitude_scale, t1, t2);
+    float amplitude = local * u_amplitude_scale * f1.amplitude;
+    vec3 k = f1.k;
+    float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
 
     // Tension (docs/method.md): across the largest stretch s1 = sqrt(lambda2) beyond the
     // onset, crests along the pull. It shares the direction d (the other principal
@@ -236,17 +312,17 @@ void main() {
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
             wavelength = tension_wavelength;
+            k = wave_vector(M_geo, d, wavelength, t1, t2);
         }
     }
-    vec3 k = wave_vector(M, d, wavelength, t1, t2);
 
     // The second system: the other principal direction, where it is compressed too
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
-    float r2_b = min(r2 / (1.0 - u_slack), 1.0);
-    float amplitude2 = u_biaxial > 0.0
-        ? local * u_biaxial * u_amplitude_scale * 0.25 * W * sqrt(max(1.0 - r2_b * r2_b, 0.0))
-        : 0.0;
-    vec3 k2 = wave_vector(M, e, W, t1, t2);
+    float r2_geo = any_wave ? clamp(length(M_geo * e), MIN_RATIO, 1.0) : 1.0;
+    Fold f2 = fold(M_geo, e, r2, r2_geo, W, room, u_amplitude_scale * u_biaxial, t1, t2);
+    float amplitude2 = u_biaxial > 0.0 ? local * u_biaxial * u_amplitude_scale * f2.amplitude
+                                        : 0.0;
+    vec3 k2 = f2.k;
 
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
     STORE(fields, FIELD_WAVE(i), vec4(k, amplitude));
@@ -254,8 +330,8 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
     // material-anchored start: crests ride with the cloth, frames stay independent
-    STORE(phase, i, vec4((TWO_PI / wavelength) * dot(d3, X_i), (TWO_PI / W) * dot(e3, X_i),
-                         0.0, 0.0));
+    STORE(phase, i, vec4((TWO_PI / wavelength) * dot(d3, X_i),
+                         (TWO_PI / f2.wavelength) * dot(e3, X_i), 0.0, 0.0));
 }
 
 #endif

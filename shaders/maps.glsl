@@ -27,7 +27,9 @@ layout(binding = MAPS_FRAME_NORMALS) uniform sampler2D corner_frame_normals;
 out vec3 v_local;
 out vec3 v_normal_local;
 out vec3 v_bary;
-out float v_full;  // g W / 4: the amplitude where the cloth is crushed flat, over s
+// L_max g W / 4: about the fold law's height where the cloth is crushed flat (the material
+// wavelength coarsened to L_max W, the triangle's slope), over s
+out float v_full;
 #if defined MIKKTSPACE
 out vec4 v_tangent;
 out vec3 v_frame_normal;
@@ -41,7 +43,7 @@ void main() {
     vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
-    v_full = fetch(q_width, i).w * fetch(gain, i).x / 4.0;
+    v_full = COARSENING_MAX * fetch(q_width, i).w * fetch(gain, i).x / 4.0;
 #if defined MIKKTSPACE
     v_tangent = fetch(corner_tangents, corner);
     v_frame_normal = fetch(corner_frame_normals, corner).xyz;
@@ -95,7 +97,8 @@ void main() {
 #endif
     float full = u_amplitude_scale * v_full;
     out_normal = vec4(encoded, 1.0);
-    out_wrinkle = vec4(wave.height, full > 0.0 ? wave.amplitude / full : 0.0, 0.0, 1.0);
+    out_wrinkle = vec4(wave.height, full > 0.0 ? min(wave.amplitude / full, 1.0) : 0.0, 0.0,
+                       1.0);
 }
 
 #endif

@@ -188,3 +188,19 @@ def x_env(display: str) -> dict:
 def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -> str:
     return subprocess.run(["xdotool", *args], env=x_env(display), capture_output=True,
                           text=True, timeout=timeout, check=check).stdout
+
+
+def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
+    """(amplitude, |k|) of the fold law (usdwrinkle/folds.py, docs/method.md) on an
+    analytic sheet: ``ratio`` the compression along the wave with the painted q,
+    ``geometric`` the mesh's alone (default: ``ratio``), on flat cloth (no room limit)."""
+    from usdwrinkle.folds import excess_length, material_wavelength, profile_slope, slope_table
+    from usdwrinkle.profiles import default_profile
+
+    geometric = ratio if geometric is None else geometric
+    rho = excess_length(ratio, geometric, slack)
+    wavelength = material_wavelength(width, rho)
+    k = 2 * np.pi / (np.maximum(geometric, 1e-30) * wavelength)
+    table = slope_table(default_profile() if height is None else height)
+    amplitude = np.where(rho > 1.0, profile_slope(table, rho) / k, 0.0)
+    return amplitude, k

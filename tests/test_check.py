@@ -13,6 +13,7 @@ from usdwrinkle.cli.main import main
 from usdwrinkle.validation import VALIDATOR_NAME, register_validators
 
 from conftest import grid_sheet
+from helpers import fold_law
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 
@@ -148,10 +149,10 @@ def test_a_scalar_width_is_read_but_flagged(gl_context, tmp_path, capsys):
     stage = Usd.Stage.Open(str(tmp_path / "baked.usda"))
     amplitude = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Cloth")).GetPrimvar(
         "wrinkle:amplitude").Get(2)
-    # uniform compression by 0.6 with W = 0.3 and the fallback slack: h = (W/4)
-    # sqrt(1 - r_b^2), r_b = 0.6 / (1 - slack)
-    r_b = 0.6 / (1.0 - schema.DEFAULT_SLACK)
-    np.testing.assert_allclose(amplitude, 0.3 / 4 * np.sqrt(1 - r_b ** 2), rtol=1e-4)
+    # uniform compression by 0.6 with W = 0.3 and the fallback slack: the fold law
+    # (compressed beyond 3 x the slack: the whole length restored)
+    expected, _ = fold_law(0.6, 0.3, slack=schema.DEFAULT_SLACK)
+    np.testing.assert_allclose(amplitude, expected, rtol=1e-4)
     capsys.readouterr()
     assert main(["check", str(path), "--json"]) == 1
     report = json.loads(capsys.readouterr().out)

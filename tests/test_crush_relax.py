@@ -10,7 +10,14 @@ from usdwrinkle.reference.relax import phase_misfit, relax_shot, wrap
 from usdwrinkle.render.delegate import COLD_START_FACTOR
 
 from conftest import grid_sheet
-from helpers import gpu_fields, interior, point_cache_stage, random_cloth, rotation_matrix
+from helpers import (
+    fold_law,
+    gpu_fields,
+    interior,
+    point_cache_stage,
+    random_cloth,
+    rotation_matrix,
+)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -81,8 +88,9 @@ def test_uniform_compression_is_analytic(gl_context, ratio):
     stage = point_cache_stage(rest, {1: posed}, counts, indices, width=width)
     ours, record = gpu_fields(gl_context, stage)
     inside = interior(rest, 0.1)
-    expected_h = width / 4 * np.sqrt(1 - ratio ** 2)
-    expected_k = 2 * np.pi / (ratio * width)
+    # the fold law (docs/method.md): the material wavelength coarsens with the excess
+    # length 1/r, the wave restores the cloth's length for the default profile
+    expected_h, expected_k = fold_law(ratio, width)
     np.testing.assert_allclose(ours["amplitude"][inside], expected_h, rtol=0.01)
     k = ours["wave_vector"][inside]
     np.testing.assert_allclose(np.linalg.norm(k, axis=1), expected_k, rtol=0.01)
@@ -116,6 +124,13 @@ def test_painted_q_without_deformation(gl_context, amount):
     np.testing.assert_allclose(ours["compression"], 1 - amount ** 2, atol=1e-4)
     d = ours["direction"]
     assert np.all(np.abs(d @ direction) > 0.9999)  # compression along q
+    # painting means folds (issue 55): the painted gather is excess length on an
+    # uncompressed mesh, so the posed wave is the coarsened material wave, not finer
+    expected_h, expected_k = fold_law(1 - amount ** 2, 0.25, geometric=1.0)
+    np.testing.assert_allclose(ours["amplitude"], expected_h, rtol=0.01)
+    np.testing.assert_allclose(np.linalg.norm(ours["wave_vector"], axis=1), expected_k,
+                               rtol=0.01)
+    assert expected_k <= 2 * np.pi / 0.25 + 1e-9  # never finer than W
 
 
 def test_rigid_motion_changes_nothing(gl_context):

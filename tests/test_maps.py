@@ -12,10 +12,11 @@ import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 from usdwrinkle.cli.main import main
+from usdwrinkle.contract import COARSENING_MAX
 from usdwrinkle.scene.material import load_texture
 
 from conftest import grid_sheet
-from helpers import bind_purpose_looks, point_cache_stage, rotation_matrix
+from helpers import bind_purpose_looks, fold_law, point_cache_stage, rotation_matrix
 from helpers import read_pixels as read
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
@@ -67,13 +68,17 @@ def sheet_maps(tmp_path, ratio, rotation=None):
 @pytest.mark.parametrize("ratio", [0.6, 0.85])
 def test_maps_of_the_analytic_sheet(gl_context, tmp_path, ratio):
     normal, height, amplitude = sheet_maps(tmp_path, ratio)
-    a = WIDTH / 4 * np.sqrt(1 - ratio ** 2)   # the amplitude law (docs/method.md)
-    k = 2 * np.pi / (ratio * WIDTH)
+    a, k = fold_law(ratio, WIDTH)   # the fold law (docs/method.md)
+    a, k = float(a), float(k)
     tilt = np.arccos(np.clip(normal[..., 2] / np.linalg.norm(normal, axis=2), -1, 1))
-    # the largest tilt, on the flanks halfway between crest and trough: atan(a |k|)
-    np.testing.assert_allclose(tilt.max(), np.arctan(a * k), rtol=0.03)
+    # the largest tilt, on the flanks: atan of the fold profile's steepest slope
+    from usdwrinkle.folds import gradient_of
+    from usdwrinkle.profiles import default_profile
+
+    steepest = float(np.abs(gradient_of(default_profile())).max())
+    np.testing.assert_allclose(tilt.max(), np.arctan(a * k * steepest), rtol=0.03)
     np.testing.assert_allclose(np.abs(height).max(), a, rtol=0.02)
-    np.testing.assert_allclose(amplitude, np.sqrt(1 - ratio ** 2), rtol=0.02)
+    np.testing.assert_allclose(amplitude, a / (COARSENING_MAX * WIDTH / 4), rtol=0.02)
     # the wave runs along x (s): no tilt along t
     assert np.abs(normal[..., 1]).max() < 1e-3
     # the map holds the wave itself: its slope along s matches the height map's
@@ -90,7 +95,7 @@ def test_maps_are_in_tangent_space(gl_context, tmp_path):
         (tmp_path / name).mkdir()
     plain = sheet_maps(tmp_path / "plain", 0.7)
     moved = sheet_maps(tmp_path / "moved", 0.7, rotation_matrix([0.3, -0.5, 0.8], 1.1))
-    a = WIDTH / 4 * np.sqrt(1 - 0.7 ** 2)
+    a = float(fold_law(0.7, WIDTH)[0])
     assert np.abs(moved[0] - plain[0]).max() < 0.01        # unit normals
     assert np.abs(moved[1] - plain[1]).max() < 0.01 * a    # heights
     assert np.abs(moved[2] - plain[2]).max() < 0.01        # normalised amplitude
@@ -121,7 +126,8 @@ def test_udim_tiles_are_written_and_read_back(gl_context, tmp_path):
     for tile in (1001, 1002):
         amplitude = read(folder / f"Sheet.amplitude.{tile}.0001.png")[..., 0]
         inner = amplitude[SIZE // 8:-SIZE // 8, SIZE // 8:-SIZE // 8]
-        np.testing.assert_allclose(inner, np.sqrt(1 - 0.7 ** 2), rtol=0.02)
+        np.testing.assert_allclose(inner, float(fold_law(0.7, WIDTH)[0])
+                                   / (COARSENING_MAX * WIDTH / 4), rtol=0.02)
     stage = Usd.Stage.Open(str(layer))
     _, values = file_samples(stage, "/WrinkleMaterials/Sheet", "wrinkleNormalFile")
     assert all("<UDIM>" in value.path for value in values)

@@ -5,8 +5,9 @@ import numpy as np
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from usdwrinkle.contract import COARSENING_MAX
 from usdwrinkle.engine import WrinkleEngine
-from usdwrinkle.scene.params import curved_gain
+from usdwrinkle.folds import height_bound
 
 from conftest import grid_sheet
 from helpers import point_cache_stage
@@ -50,12 +51,18 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
         engine.compute_frame(1.0)
         fields = engine.read_fields("/Sheet").arrays()
         image = engine.render_frame(1.0, 48, 48)
-        # the law's bound, s g W / 4: g is what the rest curvature multiplies it by
-        gain = engine.meshes["/Sheet"].params.amplitude_gain
+        # the law's bound: the tallest fold it draws, s W height_bound (folds.py)
+        record = engine.meshes["/Sheet"]
+        bound = height_bound(record.params.slope_table(), record.params.slack)
     finally:
         engine.release()
-    gain = np.ones(len(rest)) if gain is None else np.asarray(gain, np.float64)
-    assert np.all((gain >= 1.0) & (gain <= curved_gain(np.array([1e9]))[0] * (1 + 1e-6)))
+    from usdwrinkle.reference.crush import crush
+
+    # a posed wave is the material one carried by the mesh: where the mesh stretches, the
+    # posed wavelength (and with it the fold's height) grows by the stretch
+    stretch = np.maximum(crush(record.rest_points, fields["points"], record.topology,
+                               record.params.q, record.params.width)["stretch"], 1.0)
+    assert record.params.amplitude_gain is None  # no gain draws more length
     for name, value in fields.items():
         assert np.all(np.isfinite(value)), name
     for name, aov in image.items():
@@ -67,11 +74,13 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
     # float32's precision: relative 1e-5, and below its smallest normal number (a scale of
     # 1e-45 leaves denormals, rounded by up to an ulp at each product) none
     tiny = float(np.finfo(np.float32).tiny)
-    assert np.all(amplitude <= scale * gain * width / 4 * (1 + 1e-5) + tiny)
+    assert np.all(amplitude <= scale * bound * width * stretch * (1 + 1e-4) + tiny)
     compression = fields["compression"]
     assert np.all((compression > 0) & (compression <= 1))
     wrinkled = amplitude > 0
     k = np.linalg.norm(fields["wave_vector"], axis=1)
-    assert np.all(k[wrinkled] >= 2 * np.pi / width * (1 - 1e-3))
+    # coarsened at most to COARSENING_MAX W, and never longer posed than material
+    assert np.all(k[wrinkled] >= 2 * np.pi / (COARSENING_MAX * width * stretch[wrinkled])
+                  * (1 - 1e-3))
     assert np.all(np.abs(image["wrinkle.height"].pixels)
-                  <= scale * gain.max() * width / 4 * (1 + 1e-4) + tiny)
+                  <= scale * bound * width * stretch.max() * (1 + 1e-4) + tiny)

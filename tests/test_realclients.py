@@ -236,12 +236,13 @@ def test_display_color_layer_shows_the_amplitude_in_storm(bake_views, name):
     assert order <= -0.95, (name, order)
 
 
-@pytest.mark.parametrize("name,least", [("shirt", 0.98), ("pull", 0.98), ("CesiumMan", 0.90)])
+@pytest.mark.parametrize("name,least", [("shirt", 0.98), ("pull", 0.98), ("CesiumMan", 0.89)])
 def test_display_color_layer_looks_the_same_in_usdwrinkle_and_storm(bake_views, name, least):
     """usdwrinkle draws the display-colour layer as Storm does: each corner's
     displayColor through the preview material's UsdPrimvarReader_float3 (it drew the
     clay default before, ignoring per-vertex colours). CesiumMan, lit by usdview's
-    head-light only, measures 0.913: the same ramp, brighter in places in Storm. The
+    head-light only, measures 0.899 (0.913 before the fold law's amplitude ramp): the
+    same ramp, brighter all over in Storm, and the arms' highlights differ. The
     cause is not found yet: the plain frame with his own material agrees at 0.997, and a
     glossy preview surface under the head-light alone agrees at 0.9994 (the
     headlight_glossy probe), so it is neither the head-light nor the surface."""
@@ -300,22 +301,24 @@ def _cycles_maps_angles(views):
 
 @pytest.mark.parametrize("frame,bounds", [
     # (raw: median, p90, p99, elbow p99; clamped: p90, p99, elbow p99), measured + margin
-    ("triangle", (0.3, 8.0, 28.0, 30.0, 5.0, 28.0, 23.0)),
+    ("triangle", (0.3, 8.0, 28.0, 30.0, 5.0, 28.0, 26.0)),
     ("default", (0.2, 4.5, 23.0, 26.0, 2.5, 23.0, 18.0)),
 ])
 def test_maps_normals_in_cycles_as_measured(cycles_shirt, frame, bounds):
     """Cycles decodes the maps (Blender's USD importer, normal-map node), per triangle
     and the default bake's MikkTSpace set, against usdwrinkle's N AOV; issue 23 asks for
     p99 <= 5 degrees at the elbow. Measured over the shirt at 640 pixels (median, p90,
-    p99; the lower third, the elbow's, p99): triangle 0.11 / 6.8 / 24.3; 26.9; default
-    (MikkTSpace) 0.03 / 3.6 / 19.8; 22.2.
+    p99; the lower third, the elbow's, p99): triangle 0.11 / 5.5 / 25.2; 28.0 with the
+    fold law (0.11 / 6.8 / 24.3; 26.9 before it); default (MikkTSpace) 0.03 / 3.6 / 19.8;
+    22.2.
 
     Most of what is left is not the frame: Cycles tilts any shading normal whose mirror
     reflection of the view would fall below the surface back toward the geometric normal
     (ensure_valid_specular_reflection), so normal-map wrinkles steeper than about 45
     degrees show shallower in Cycles (13% of the shirt's pixels, the cuff's crests and
     the elbow's pinch). With usdwrinkle's normals put through that clamp (our smooth
-    normal standing in for Cycles' flat one): triangle p90 4.1, p99 24.4, elbow 20.1;
+    normal standing in for Cycles' flat one): triangle p90 3.3, p99 21.0, elbow 24.1
+    with the fold law (4.1, 24.4, 20.1 before);
     default 1.6, 19.4, 15.0. This test holds the measured values: the Normal pass is not
     the decoded normal (the test below measures that; the geometry layer meets the 5
     degrees in the Normal pass: the test above). Measured with

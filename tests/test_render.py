@@ -10,7 +10,7 @@ import pytest
 from usdwrinkle.engine import WrinkleEngine
 
 from conftest import REPO, grid_sheet
-from helpers import point_cache_stage
+from helpers import fold_law, point_cache_stage
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 GOLDENS = Path(__file__).resolve().parent / "goldens"
@@ -86,10 +86,10 @@ def test_height_is_bounded_by_amplitude(gl_context):
     finally:
         engine.release()
     height = buffers["wrinkle.height"].pixels
-    bound = 0.7 * 0.3 / 4
-    assert np.abs(height).max() <= bound * (1 + 1e-4)
-    # and it reaches close to the analytic amplitude s (W/4) sqrt(1 - r^2)
-    assert np.abs(height).max() > 0.9 * bound * np.sqrt(1 - 0.6 ** 2)
+    law = 0.7 * float(fold_law(0.6, 0.3)[0])  # s times the fold law's height
+    assert np.abs(height).max() <= law * (1 + 1e-4)
+    # and it reaches close to it
+    assert np.abs(height).max() > 0.9 * law
 
 
 def test_buffers_handed_out_are_never_overwritten(gl_context):

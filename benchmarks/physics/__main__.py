@@ -86,48 +86,12 @@ def calibration(cache: Path, shots: dict) -> dict:
         sim = shots["sleeve"][1] if radius == 0.10 else simulated(sleeve(radius=radius), cache)
         sleeves[radius] = (sim.wavelength, sim.seconds)
     exponent, radius = curvature_fit(list(sleeves), [v[0] for v in sleeves.values()], cotton)
-    steeper = amplitude_fit(cache, shots)
     fine = sheet(2)
     fine_sim = simulated(fine, cache)
     return {"sheet": sheet_wavelengths, "widths": widths, "flat": flat,
-            "sleeves": sleeves, "exponent": exponent, "radius": radius, "steeper": steeper,
+            "sleeves": sleeves, "exponent": exponent, "radius": radius,
             "fine": (fine_sim.wavelength, measure.rms(fine_sim.h[measured_frames(fine)]),
                      fine_sim.seconds, fine.spacing)}
-
-
-#: the coarse spacings (grid lines kept) at which the sleeves' amplitudes are fitted
-STRIDES = (8, 4)
-
-
-def amplitude_fit(cache: Path, shots: dict) -> dict:
-    """Curved cloth folds steeper: each sleeve of CURVED_RADII, its coarse mesh at each of
-    STRIDES, baked at matched W. Its amplitude ratio (ours / sim) over the gain that
-    usdwrinkle gave it (curved_gain, the median over its coarse points) is what the law
-    without the gain gives; the exponent q of (R / R_c) ** -q through those ratios (a
-    line through the origin in the logs: R_c is flat cloth, whose ratio is 1).
-    {"rows": [(radius, coarse spacing (m), ratio without, gain, ratio with)],
-    "exponent": q}."""
-    import dataclasses
-
-    rows = []
-    for radius in CURVED_RADII:
-        sim = shots["sleeve"][1] if radius == 0.10 else simulated(sleeve(radius=radius), cache)
-        for stride in STRIDES:
-            shot = dataclasses.replace(sim.shot, stride=stride)
-            ratio = compare(sim, bake(shot, sim, "matched", width=sim.wavelength))[
-                "amplitude_ratio"]
-            gain = coarse_gain(shot)
-            rows.append((radius, stride * shot.spacing, ratio / gain, gain, ratio))
-    return {"rows": rows, "exponent": steepness_fit([r[0] for r in rows], [r[2] for r in rows])}
-
-
-def steepness_fit(radii, ratios) -> float:
-    """The exponent q of ratio = (R / R_c) ** q through tubes' (radius, amplitude ratio
-    without the gain): a line through the logs and through 1 at R_c =
-    schema.CURVED_RADIUS_M, where cloth counts as flat."""
-    x = np.log(np.asarray(radii, np.float64) / schema.CURVED_RADIUS_M)
-    y = np.log(np.asarray(ratios, np.float64))
-    return float((x @ y) / (x @ x))
 
 
 #: the slacks the sweep bakes at the default W, beside the fallback's own
@@ -218,14 +182,6 @@ def default_width(shot) -> float:
     return float(np.median(curved_width(cotton, coarse_curvature(shot))))
 
 
-def coarse_gain(shot) -> float:
-    """The amplitude gain usdwrinkle gives the shot's coarse mesh (the median over its
-    points), as scene/params.curved_gain computes it."""
-    from usdwrinkle.scene.params import curved_gain
-
-    return float(np.median(curved_gain(coarse_curvature(shot))))
-
-
 def band_limit(shot, sim, default) -> dict:
     """The elbow pinch: the posed wavelengths the crush pass gives there (the baked wave
     vectors at the coarse vertices) against the fine mesh's edges, and what the draw pass's
@@ -293,8 +249,12 @@ def main(argv=None) -> int:
     shot, sim, default = results["sleeve"][:3]
     limited = band_limit(shot, sim, default)
     seconds = time.perf_counter() - started
-    out.write_text(report(results, calibrated, limited, slacks, seconds), encoding="utf-8")
-    print(f"wrote {out} ({seconds:.0f} s)")
+    from ..blocks import emit, markers
+
+    begin, end = markers("blender")
+    text = report(results, calibrated, limited, slacks, seconds)
+    emit(["--write", str(out)], "blender", f"{begin}\n\n{text}\n{end}")
+    print(f"({seconds:.0f} s)")
     return 0
 
 
@@ -302,7 +262,7 @@ def report(results: dict, calibrated: dict, limited: dict, slacks: dict,
            seconds: float) -> str:
     cotton = schema.CLOTH_WIDTHS_M[schema.DEFAULT_CLOTH]
     lines = [
-        "# The cloth oracle: usdwrinkle against a cloth simulator",
+        "## The first oracle: Blender's cloth",
         "",
         "Made by `python -m benchmarks.physics` (benchmarks/physics/; "
         f"{seconds:.0f} s on this 2-core VM with the simulations cached in `--cache`; the "
@@ -474,8 +434,7 @@ def _summary(results: dict) -> list[str]:
         + listing({n: _within(default[n]["amplitude_ratio"], 1.5) for n in names}) + ".",
         "- Amplitude at matched W within 1.2x: "
         + listing({n: _within(matched[n]["amplitude_ratio"], 1.2) for n in names})
-        + " (curved cloth folds steeper for its width: see \"Curved cloth folds "
-        "steeper\").",
+        + ".",
         "- Where (amplitude-field correlation, 0.9 / 0.9 / 0.75): "
         + listing({n: default[n]["correlation"] >= BARS["correlation"][n] for n in names})
         + ". Away from the held edges (10 cm) the correlation is "
@@ -585,48 +544,8 @@ def _curvature_lines(calibrated: dict) -> list[str]:
         "the shear's clamp distance set their tension fields, which a per-vertex method "
         "does not see): cotton's flat width is their geometric mean.",
         "",
-        *_steeper_lines(calibrated["steeper"]),
     ]
     return lines
-
-
-def _steeper_lines(steeper: dict) -> list[str]:
-    """Curved cloth folds steeper: the sleeves' amplitudes at matched W against the
-    gain."""
-    from usdwrinkle.scene.params import curved_gain
-
-    exponent = steeper["exponent"]
-    most = float(curved_gain(np.array([np.inf]))[0])
-    flag = "" if abs(exponent - schema.CURVED_AMPLITUDE_EXPONENT) < 0.03 else \
-        " **(update schema.py)**"
-    lines = [
-        "**Curved cloth folds steeper.** At matched W, the flat shots' folds are as high "
-        "as the amplitude law draws them, but a sleeve's are higher the narrower it is, "
-        "for the same coarse compression. Each sleeve baked at matched W, its coarse mesh "
-        f"keeping every {' or every '.join(f'{s}th' for s in STRIDES)} grid line (a finer "
-        "coarse mesh keeps more of the compression), its amplitude ratio without the gain "
-        "(the ratio over the gain it "
-        "was given) against the radius: a line through the logs and through 1 at "
-        f"{100 * schema.CURVED_RADIUS_M:g} cm, where cloth counts as flat, gives the "
-        f"exponent {exponent:.2f}. The cause is not derived here (the sleeves hang in no "
-        "gravity that would pull slack out, and their coarse rings are polygons of 5 to 12 "
-        "sides): the law is fitted, within 0.9-1.12x at both spacings, and not extrapolated "
-        "beyond the radii simulated. Every wave's amplitude is multiplied by (R / "
-        f"{100 * schema.CURVED_RADIUS_M:g} cm)^-{schema.CURVED_AMPLITUDE_EXPONENT:g}{flag}, "
-        "R as for the width, held between "
-        f"{100 * schema.CURVED_AMPLITUDE_RADIUS_MIN_M:g} cm (the narrowest sleeve "
-        f"simulated: at most {most:.2f}x) "
-        f"and {100 * schema.CURVED_RADIUS_M:g} cm (1 on flatter cloth), whatever gave W; "
-        "not with `wrinkle:cloth = \"mesh\"`, which has no units:",
-        "",
-        "| sleeve radius | coarse spacing | amplitude at matched W without the gain | "
-        "the gain | with it |",
-        "|---|---|---|---|---|",
-    ]
-    for radius, spacing, without, gain, ratio in steeper["rows"]:
-        lines.append(f"| {100 * radius:.0f} cm | {100 * spacing:.1f} cm | {without:.2f}x | "
-                     f"{gain:.2f} | {ratio:.2f}x |")
-    return lines + [""]
 
 
 def _band_section(limited: dict) -> list[str]:

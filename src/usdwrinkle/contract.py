@@ -14,6 +14,23 @@ import numpy as np
 
 #: Floor of the compression ratio r: |k| <= 2 pi / (W * MIN_RATIO) (crush).
 MIN_RATIO = 0.05
+#: The fold law beyond the paper (docs/method.md, "The fold law"; usdwrinkle/folds.py):
+#: - inextensible: a wave restores, per posed length, the length the cloth has there (its
+#:   excess length rho), exactly for the mesh's profile (folds.slope_table);
+#: - coarsening: L = W * min(rho ** COARSENING_EXPONENT, COARSENING_MAX). Measured on the
+#:   cloth referee (folds widen about 1.8x by 32% compression) but off: enabled, it made
+#:   the crests unstable (docs/physics.md, "Coarsening");
+#: - room: a fold rises at most FOLD_ROOM over the rate at which the posed normals turn,
+#:   so that the displaced surface does not pass through itself.
+COARSENING_EXPONENT = 1.0
+COARSENING_MAX = 1.5
+FOLD_ROOM = 0.5
+#: the most a painted gather adds: |q| = 1 gathers the cloth to half its length (the
+#: paper's r = 1 - |q|^2 would reach 1 / r_min = 20 times it, folds 7 W tall)
+PAINT_GATHER_MAX = 1.5
+#: samples of the length-exact slope table: a|k| at u = sqrt(rho^2 - 1) = i * SLOPE_STEP
+SLOPE_SAMPLES = 64
+SLOPE_STEP = 0.3125
 #: A tiny floor on the relax weights keeps arg() defined where no vertex is wrinkled.
 WEIGHT_FLOOR = 1e-7
 #: A frame with no phase history starts from the material-anchored phase and relaxes
@@ -82,7 +99,10 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
     ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL), ("FIELD_WAVE2_TEXEL", FIELD_WAVE2_TEXEL),
     ("FIELD_DIRECTION2_TEXEL", FIELD_DIRECTION2_TEXEL), ("WAVE_SYSTEMS", WAVE_SYSTEMS),
-    ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE))}
+    ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE),
+    ("COARSENING_EXPONENT", COARSENING_EXPONENT), ("COARSENING_MAX", COARSENING_MAX),
+    ("FOLD_ROOM", FOLD_ROOM), ("PAINT_GATHER_MAX", PAINT_GATHER_MAX),
+    ("SLOPE_SAMPLES", SLOPE_SAMPLES), ("SLOPE_STEP", SLOPE_STEP))}
 
 
 @dataclass(frozen=True)

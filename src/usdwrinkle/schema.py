@@ -69,44 +69,39 @@ DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0
 DEFAULT_TENSION_THRESHOLD = 0.02
 
-#: Fallback width: the cloth's (wrinkle:cloth) fold wavelength in metres on flat cloth,
-#: measured with Blender 5.0's cloth solver on its cloth presets (benchmarks/physics,
-#: docs/physics.md): cotton is the geometric mean of the flat oracle shots' simulated
-#: wavelengths (the curtain and the sheared square), the others cotton's scaled by their
-#: sheet's wavelength over cotton's sheet's. Converted to scene units through the stage's
-#: metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.079, "cotton": 0.085, "denim": 0.101, "leather": 0.196}
+#: Fallback width: the cloth's (wrinkle:cloth) onset fold wavelength in metres on flat
+#: cloth (W: the posed wavelength folds keep while they coarsen, docs/method.md), from
+#: the cloth referee's curtains (Newton's VBD, benchmarks/physics/referee.py, 1 cm grid;
+#: docs/physics.md): 1.15 x the material wavelength at 8% compression of silk, cotton
+#: and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m); denim (4e-5 N m) between them by
+#: the curtains' own power law, wavelength ~ D^(1/6). Converted to scene units through
+#: the stage's metersPerUnit.
+CLOTH_WIDTHS_M = {"silk": 0.046, "cotton": 0.050, "denim": 0.063, "leather": 0.086}
 #: Where the rest surface curves tighter than CURVED_RADIUS_M (a sleeve, a trouser leg),
 #: the fallback width narrows as (R / CURVED_RADIUS_M) ** CURVED_EXPONENT, R the point's
-#: smallest radius of curvature (never taken below CURVED_RADIUS_MIN_M): fitted to the
-#: oracle's sleeves of radius 6, 10 and 15 cm (docs/physics.md; shell buckling theory
-#: gives an exponent of 1/2)
+#: smallest radius of curvature (never taken below CURVED_RADIUS_MIN_M): shell buckling
+#: theory's 1/2 (an axially compressed cylinder's 3.5 sqrt(R t)), through the referee's
+#: 10 cm cotton sleeve (W 3.3 cm: its folds, 4.9 cm, are 1.5 W coarsened) and cotton's
+#: flat width at 23 cm (docs/physics.md)
 CURVED_RADIUS_M = 0.23
-CURVED_EXPONENT = 0.78
+CURVED_EXPONENT = 0.5
 CURVED_RADIUS_MIN_M = 0.02
-#: Curved cloth also folds steeper for its width: at matched W the oracle's sleeves fold
-#: higher than the flat shots for the same coarse compression, as (R / CURVED_RADIUS_M)
-#: ** -CURVED_AMPLITUDE_EXPONENT, so every width's amplitude is multiplied by that gain
-#: (R held in [CURVED_AMPLITUDE_RADIUS_MIN_M, CURVED_RADIUS_M]: not extrapolated beyond the
-#: sleeves it was fitted to, radius 6, 10 and 15 cm at coarse spacings of 8 and 4 cm;
-#: docs/method.md, docs/physics.md)
-CURVED_AMPLITUDE_EXPONENT = 0.37
-CURVED_AMPLITUDE_RADIUS_MIN_M = 0.06
 DEFAULT_CLOTH = "cotton"
 #: wrinkle:cloth = "mesh": the width follows the mesh, this multiple of its mean rest edge
 #: length (the fallback before the cloth oracle)
 MESH_CLOTH = "mesh"
 WIDTH_EDGE_MULTIPLE = 4.0
 CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
-#: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles (fitted
-#: to the cloth oracle's amplitudes, docs/physics.md)
-DEFAULT_SLACK = 0.06
+#: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles. 0: the
+#: converging referee's cloth keeps its area (docs/physics.md), and with the inextensible
+#: law a slack c leaves the wrinkled surface 1 - c of its rest area
+DEFAULT_SLACK = 0.05
 #: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
 #: the strain are followed (docs/method.md: crest damping)
 DEFAULT_CREST_DAMPING = 4.0
 #: wrinkle:held: waves reach full amplitude this many widths W away from a held point
 HELD_REACH = 3.0
-#: Samples of the default (cosine) profile.
+#: Samples of a height profile over one period (the default: profiles.default_profile).
 PROFILE_SAMPLES = 256
 DEFAULT_RELAX_ITERATIONS = 8
 

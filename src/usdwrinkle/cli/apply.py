@@ -53,8 +53,9 @@ def add_parser(subparsers) -> None:
                    help="wrinkle:tensionThreshold in [0, 1]: the strain where tension "
                         "wrinkles begin (fallback 0.02)")
     p.add_argument("--profile", metavar="NAME|FILE",
-                   help="height profile: cosine (the default), sharp, rounded, box, triangle, "
-                        "or a text file of heights over one period (or 'theta height' pairs)")
+                   help="height profile: fold (the default), cosine, sharp, rounded, box, "
+                        "triangle, or a text file of heights over one period (or 'theta "
+                        "height' pairs)")
     p.add_argument("--q", metavar="X,Y,Z:AMOUNT",
                    help="uniform rest-space direction, projected onto each vertex's tangent "
                         "plane, with |q| = AMOUNT")

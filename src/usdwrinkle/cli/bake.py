@@ -39,8 +39,8 @@ def add_parser(subparsers) -> None:
     maps.add_argument("--maps", metavar="KINDS",
                       help="comma-separated: normal (tangent-space normal, 0.5n+0.5), height "
                            "(signed height in scene units, float EXR), amplitude (amplitude "
-                           "over s*g*W/4, g the curved-cloth gain: a [0, 1] "
-                           "mask)")
+                           "over s*1.5*W/4, about the fold law's height of cloth "
+                           "crushed flat: a [0, 1] mask)")
     maps.add_argument("--map-size", type=int, metavar="N",
                       help="texels per side of each map (per UDIM tile); default "
                            f"{MAP_DEFAULTS.size}")

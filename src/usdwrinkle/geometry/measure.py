@@ -1,9 +1,9 @@
 """Measures of displaced geometry: the plane wave along a line, and length restoration.
 
 Wrinkles exist because cloth keeps its length while its support shrinks; a displaced
-mesh makes that measurable. Used by the tests (against the derivation in
-``profiles.length_ratio``) and by ``python -m benchmarks.lengths`` (the table in
-docs/method.md).
+mesh makes that measurable. Used by the tests (the fold law restores the length exactly,
+usdwrinkle/folds.py) and by ``python -m benchmarks.lengths`` (the table in
+docs/method.md); and the area and self-intersection measures of the displaced surface.
 """
 from __future__ import annotations
 
@@ -37,7 +37,92 @@ def plane_wave(x: np.ndarray, h: np.ndarray) -> tuple[float, float]:
 def length_ratio_along(x: np.ndarray, z: np.ndarray, ratio: float, width: float,
                        start: float, periods: int) -> float:
     """Displaced length over rest length of ``periods`` whole wavelengths (r W each, rest
-    length W each) of the graph (x, z) from ``start``."""
+    length W each: W the material wavelength) of the graph (x, z) from ``start``."""
     order = np.argsort(x)
     end = start + periods * ratio * width
     return clipped_length(x[order], z[order], start, end) / (periods * width)
+
+
+def triangle_areas(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(m,) float64 areas of triangles ``faces`` (m, 3) over ``points`` (n, 3)."""
+    p = np.asarray(points, np.float64)
+    f = np.asarray(faces, np.int64)
+    return 0.5 * np.linalg.norm(np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]),
+                                axis=1)
+
+
+def _segments_cross(origin: np.ndarray, end: np.ndarray, a: np.ndarray, b: np.ndarray,
+                    c: np.ndarray, eps: float = 1e-9) -> np.ndarray:
+    """Whether each segment origin->end passes through triangle (a, b, c), its ends and
+    the triangle's border excluded by ``eps`` (Moller-Trumbore, vectorised)."""
+    direction = end - origin
+    e1, e2 = b - a, c - a
+    p = np.cross(direction, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    # a segment (nearly) in the triangle's plane: no crossing through it (the division
+    # would amplify rounding into false hits between coplanar neighbours)
+    scale = np.linalg.norm(direction, axis=1) * np.linalg.norm(e1, axis=1) * \
+        np.linalg.norm(e2, axis=1)
+    ok = np.abs(det) > 1e-9 * scale
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = origin - a
+    u = np.einsum("ij,ij->i", s, p) * inv
+    q = np.cross(s, e1)
+    v = np.einsum("ij,ij->i", direction, q) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    return ok & (u > eps) & (v > eps) & (u + v < 1 - eps) & (t > eps) & (t < 1 - eps)
+
+
+def self_intersections(points: np.ndarray, faces: np.ndarray, cell: float | None = None,
+                       chunk: int = 1 << 20) -> np.ndarray:
+    """Pairs (k, 2) of triangles that pass through each other and share no vertex: an
+    edge of one crosses the other's interior. Candidate pairs come from a uniform grid of
+    cells (default: twice the mean edge) that the triangles' boxes overlap, so the time
+    grows with the triangles, not their square."""
+    p = np.asarray(points, np.float64)
+    f = np.asarray(faces, np.int64)
+    if not len(f):
+        return np.zeros((0, 2), np.int64)
+    corners = p[f]
+    if cell is None:
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+        cell = 2.0 * float(edges.mean()) or 1.0
+    lo = np.floor((corners.min(axis=1) - p.min(axis=0)) / cell).astype(np.int64)
+    hi = np.floor((corners.max(axis=1) - p.min(axis=0)) / cell).astype(np.int64)
+    span = hi - lo + 1
+    count = span.prod(axis=1)
+    owner = np.repeat(np.arange(len(f)), count)
+    local = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    sy, sz = span[owner, 1], span[owner, 2]
+    cx = lo[owner, 0] + local // (sy * sz)
+    cy = lo[owner, 1] + (local // sz) % sy
+    cz = lo[owner, 2] + local % sz
+    dims = hi.max(axis=0) + 2
+    key = (cx * dims[1] + cy) * dims[2] + cz
+    order = np.argsort(key, kind="stable")
+    key, owner = key[order], owner[order]
+    starts = np.flatnonzero(np.concatenate([[True], key[1:] != key[:-1]]))
+    sizes = np.diff(np.concatenate([starts, [len(key)]]))
+    pairs = []
+    for size in np.unique(sizes[sizes > 1]):
+        group = starts[sizes == size]
+        members = owner[group[:, None] + np.arange(size)[None, :]]
+        i, j = np.triu_indices(size, 1)
+        pairs.append(np.stack([members[:, i].ravel(), members[:, j].ravel()], 1))
+    if not pairs:
+        return np.zeros((0, 2), np.int64)
+    pairs = np.sort(np.concatenate(pairs), axis=1)
+    pairs = np.unique(pairs, axis=0)
+    shared = (f[pairs[:, 0], :, None] == f[pairs[:, 1], None, :]).any(axis=(1, 2))
+    pairs = pairs[~shared]
+    found = []
+    for begin in range(0, len(pairs), chunk):
+        block = pairs[begin:begin + chunk]
+        A, B = corners[block[:, 0]], corners[block[:, 1]]
+        hit = np.zeros(len(block), bool)
+        for one, other in ((A, B), (B, A)):
+            for k in range(3):
+                hit |= _segments_cross(one[:, k], one[:, (k + 1) % 3], other[:, 0],
+                                       other[:, 1], other[:, 2])
+        found.append(block[hit])
+    return np.concatenate(found) if found else np.zeros((0, 2), np.int64)

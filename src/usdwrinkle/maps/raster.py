@@ -54,8 +54,8 @@ class MapPixels:
 
     normal : (h, w, 3) float32, tangent-space unit normal ((0, 0, 1) off the islands).
     height : (h, w) float32, the wrinkle height h in scene units.
-    amplitude : (h, w) float32, the amplitude over s g W / 4 (g the curved-cloth gain),
-        in [0, 1].
+    amplitude : (h, w) float32, the amplitude over s COARSENING_MAX W / 4 (about the
+        fold law's height of cloth crushed flat), clamped to [0, 1].
     covered : (h, w) bool, texels a triangle covers (before padding).
     """
 

@@ -14,7 +14,7 @@ from pxr import Sdf, UsdGeom, Vt
 
 from .. import __version__, schema
 from ..colour import srgb_decode
-from ..contract import MIN_RATIO
+from ..contract import COARSENING_MAX, MIN_RATIO
 from ..errors import UsdWrinkleError
 from .atomic import atomic_path
 from .sink import BakeScene
@@ -51,10 +51,11 @@ def viridis(values: np.ndarray) -> np.ndarray:
 
 def display_values(field: str, fields: dict, params) -> np.ndarray:
     """The [0, 1] quantity shown by --display-color."""
-    if field == "amplitude":
+    if field == "amplitude":  # over about the fold law's height of cloth crushed flat
         gain = 1.0 if params.amplitude_gain is None else params.amplitude_gain
-        full = np.maximum(params.amplitude_scale * gain * params.width / 4.0, 1e-30)
-        return fields.amplitude / full
+        full = np.maximum(params.amplitude_scale * gain * COARSENING_MAX * params.width / 4.0,
+                          1e-30)
+        return np.minimum(fields.amplitude / full, 1.0)
     return (1.0 - fields.compression) / (1.0 - MIN_RATIO)  # r in [MIN_RATIO, 1] -> [1, 0]
 
 

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import MIN_RATIO
+from ..contract import FOLD_ROOM, MIN_RATIO
+from ..folds import excess_length, material_wavelength, profile_slope
 from ..scene.topology import Topology, rest_tangents, vertex_normals
 
 
@@ -21,12 +22,24 @@ def _normalize(v, fallback):
     return np.where(length > 1e-30, v / np.maximum(length, 1e-30), fallback)
 
 
+def wave_vector(M: np.ndarray, d: np.ndarray, wavelength) -> np.ndarray:
+    """k = M^-T (2 pi / L) d in the posed tangent coordinates, each singular value of M
+    floored at MIN_RATIO (crush.glsl's wave_vector): (n, 2)."""
+    U, sigma, Vt = np.linalg.svd(M)
+    sigma = np.maximum(sigma, MIN_RATIO)
+    inverse_t = U @ (Vt / sigma[:, :, None])  # U S^-1 V^T
+    return (2 * np.pi / np.asarray(wavelength, np.float64))[:, None] * \
+        np.einsum("nij,nj->ni", inverse_t, d)
+
+
 def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray,
           width: np.ndarray, amplitude_scale: float = 1.0, slack: float = 0.0,
-          hold: np.ndarray | None = None, gain: np.ndarray | None = None) -> dict:
+          hold: np.ndarray | None = None, gain: np.ndarray | None = None,
+          slope: np.ndarray | None = None) -> dict:
     """Per-vertex wave fields, as crush.glsl computes them (``slack``: wrinkle:slack;
-    ``hold``: what held edges leave each point, scene.params.held_weights; ``gain``: what
-    the rest curvature multiplies the amplitude by, scene.params.curved_gain).
+    ``hold``: what held edges leave each point, scene.params.held_weights; ``gain``: a
+    per-point amplitude factor; ``slope``: the profile's slope table, folds.slope_table,
+    the default profile's by default).
 
     Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
     direction (n,3), compression (n,), phase (n,), usable (n,) bool.
@@ -67,6 +80,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     M = np.tile(np.eye(2), (n, 1, 1))
     ok = usable
     M[ok] = BA[ok] @ np.linalg.inv(AA[ok])
+    M_geo = M.copy()
 
     q = np.asarray(q, np.float64)
     q2 = np.stack([np.sum(q * T1, 1), np.sum(q * T2, 1)], 1)
@@ -76,29 +90,53 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
 
     S = np.transpose(M, (0, 2, 1)) @ M
     lam_all, vec_all = np.linalg.eigh(S)
-    lam = np.maximum(lam_all[:, 0], 0.0)
     d = vec_all[:, :, 0]
     d3 = d[:, :1] * T1 + d[:, 1:] * T2
     lead = d3[np.arange(n), np.argmax(np.abs(d3), axis=1)]
     flip = np.where(lead < 0, -1.0, 1.0)
     d, d3 = d * flip[:, None], d3 * flip[:, None]
-    r = np.where(usable | (q_len > 0), np.clip(np.sqrt(lam), MIN_RATIO, 1.0), 1.0)
+    any_wave = usable | (q_len > 0)
+    r = np.where(any_wave, np.clip(np.linalg.norm(np.einsum("nij,nj->ni", M, d), axis=1),
+                                   MIN_RATIO, 1.0), 1.0)
+    r_geo = np.where(any_wave, np.clip(np.linalg.norm(np.einsum("nij,nj->ni", M_geo, d),
+                                                      axis=1), MIN_RATIO, 1.0), 1.0)
     width = np.asarray(width, np.float64)
-    r_b = np.minimum(r / (1.0 - slack), 1.0)
-    amplitude = amplitude_scale * 0.25 * width * np.sqrt(np.maximum(1 - r_b * r_b, 0))
+    # the posed surface's room for a fold (crush.glsl: 2 |e.n| / |e|^2 over the ring)
+    e2 = np.sum(posed_edge * posed_edge, 1)
+    turn = np.linalg.norm(nrm[dst] - nrm[src], axis=1) * np.sqrt(e2)
+    bend_edge = np.where(e2 > 0, np.maximum(2 * np.abs(np.sum(posed_edge * nrm[src], 1)),
+                                            turn) / np.maximum(e2, 1e-300), 0.0)
+    bend = np.zeros(n)
+    np.maximum.at(bend, src, bend_edge)
+    room = np.where(bend > 0, FOLD_ROOM / np.maximum(bend, 1e-300), np.inf)
+    table = default_slope() if slope is None else np.asarray(slope, np.float64)
+    rho = excess_length(r, r_geo, slack)
+    folding = rho > 1.0
+    wavelength = np.where(folding, material_wavelength(width, rho), width)
+    k2 = wave_vector(M_geo, d, wavelength)
+    kl = np.linalg.norm(k2, axis=1)
+    amplitude = np.where(folding, profile_slope(table, rho) / np.maximum(kl, 1e-30), 0.0)
+    capped = amplitude * amplitude_scale > room
+    amplitude = np.minimum(amplitude, room / max(amplitude_scale, 1e-30)) * amplitude_scale
     if hold is not None:
         hold = np.asarray(hold, np.float64)
         along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
         amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
     if gain is not None:
         amplitude = amplitude * np.asarray(gain, np.float64)
-    md = np.einsum("nij,nj->ni", M, d)
-    sigma = np.linalg.norm(md, axis=1)
-    k2 = (2 * np.pi / width)[:, None] * md / (np.maximum(sigma, 1e-30)
-                                              * np.maximum(sigma, MIN_RATIO))[:, None]
-    tiny = sigma <= 1e-12
-    k2[tiny] = ((2 * np.pi / (width * MIN_RATIO))[:, None] * d)[tiny]
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
-    phase = (2 * np.pi / width) * np.sum(d3 * rest, 1)
+    phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
+    stretch = np.sqrt(np.linalg.eigvalsh(np.transpose(M_geo, (0, 2, 1)) @ M_geo)[:, 1])
     return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "direction": d3,
-            "compression": r, "phase": phase, "usable": usable}
+            "compression": r, "phase": phase, "usable": usable,
+            # beyond crush.glsl's outputs: the mesh's own compression along d and largest
+            # stretch, and where the room limited the fold (the area tests read them)
+            "geometric": r_geo, "stretch": stretch, "capped": capped & folding}
+
+
+def default_slope() -> np.ndarray:
+    """The default profile's slope table (folds.slope_table of profiles.default_profile)."""
+    from ..folds import slope_table
+    from ..profiles import default_profile
+
+    return slope_table(default_profile()).astype(np.float64)

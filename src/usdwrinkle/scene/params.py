@@ -8,7 +8,7 @@ import numpy as np
 from pxr import Usd, UsdGeom
 
 from .. import schema
-from ..profiles import cosine_profile, derive_gradient
+from ..profiles import default_profile, derive_gradient
 from ..validation import parameter_findings, refuse
 from ..values import static_flattened, static_value
 from .records import WrinkleParams
@@ -112,9 +112,6 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
         width_note = "wrinkle:width"
     else:
         width, width_note = cloth_width(prim, cloth, kappa, rest_points, topology)
-    gain = None if kappa is None else curved_gain(kappa)
-    if gain is not None and not np.any(gain > 1.0):
-        gain = None
 
     slack = _get(prim, schema.SLACK)
     slack = schema.DEFAULT_SLACK if slack is None else float(slack)
@@ -130,7 +127,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     height = _profile(prim, schema.HEIGHT_PROFILE)
     gradient = _profile(prim, schema.GRADIENT_PROFILE)
     if height is None:
-        height = cosine_profile()
+        height = default_profile()
     if gradient is None:
         gradient = derive_gradient(height)
 
@@ -145,24 +142,20 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
                            (schema.TENSION_THRESHOLD, schema.DEFAULT_TENSION_THRESHOLD)):
         value = _get(prim, name)
         controls.append(fallback if value is None else float(value))
+    from ..folds import slope_table
+
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,
-                         crest_damping=damping, amplitude_gain=gain)
+                         crest_damping=damping, slope=slope_table(height))
 
 
 def width_summary(params: WrinkleParams) -> dict:
     """The effective width of one mesh as ``check`` and the bake summary print it: the
-    smallest and largest W (scene units), where it came from, and the smallest and largest
-    amplitude gain of curved cloth (curved_gain)."""
+    smallest and largest W (scene units) and where it came from."""
     width = np.asarray(params.width, np.float64)
     low, high = (float(width.min()), float(width.max())) if width.size else (0.0, 0.0)
     text = f"W = {_span(low, high)} scene units ({params.width_note})"
-    gain = params.amplitude_gain
-    gains = [1.0, 1.0] if gain is None else [float(np.min(gain)), float(np.max(gain))]
-    if gains[1] > 1.0:
-        text += f"; amplitude x{_span(*gains, digits=3)} where curved"
-    return {"width": [low, high], "source": params.width_note, "amplitude_gain": gains,
-            "text": text}
+    return {"width": [low, high], "source": params.width_note, "text": text}
 
 
 def _span(low: float, high: float, digits: int = 4) -> str:
@@ -204,19 +197,9 @@ def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
     return flat * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
 
 
-def curved_gain(kappa: np.ndarray) -> np.ndarray:
-    """What the curvature multiplies the amplitude by at points whose largest rest
-    curvature is ``kappa`` (1/m), (n,) float32: (R / R_c) ** -q with R = 1 / kappa held in
-    [schema.CURVED_AMPLITUDE_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], q =
-    schema.CURVED_AMPLITUDE_EXPONENT; 1 on cloth flatter than R_c (docs/method.md)."""
-    radius = _curved_radius(kappa, schema.CURVED_AMPLITUDE_RADIUS_MIN_M)
-    return ((radius / schema.CURVED_RADIUS_M) ** -schema.CURVED_AMPLITUDE_EXPONENT).astype(
-        np.float32)
-
-
 def _curved_radius(kappa: np.ndarray, smallest: float) -> np.ndarray:
     """The rest radius of curvature 1 / ``kappa`` (1/m) held in [``smallest``,
-    schema.CURVED_RADIUS_M], where the curvature laws start and stop."""
+    schema.CURVED_RADIUS_M], where the curvature law starts and stops."""
     radius = 1.0 / np.maximum(np.asarray(kappa, np.float64), 1.0 / schema.CURVED_RADIUS_M)
     return np.maximum(radius, smallest)
 

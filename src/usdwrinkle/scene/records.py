@@ -82,8 +82,11 @@ class WrinkleParams:
     width_note : str, where the width came from (check and the bake summary print it).
     crest_damping : float, the time constant in frames with which small changes of the
         strain are followed (wrinkle:crestDamping; 0: none).
-    amplitude_gain : (n,) float32 or None, what the rest surface's curvature multiplies
-        each point's amplitude by (params.curved_gain); None: 1 everywhere.
+    amplitude_gain : (n,) float32 or None, what multiplies each point's amplitude (None:
+        1 everywhere; the curved-cloth gain that filled it is retired: it drew more length
+        than the cloth has).
+    slope : (SLOPE_SAMPLES,) float32 or None, the height profile's inextensible slope
+        table (folds.slope_table; None: derived from height_profile where it is read).
     """
 
     q: np.ndarray
@@ -100,6 +103,15 @@ class WrinkleParams:
     width_note: str = ""
     crest_damping: float = 0.0
     amplitude_gain: np.ndarray | None = None
+    slope: np.ndarray | None = None
+
+    def slope_table(self) -> np.ndarray:
+        """folds.slope_table of the height profile (``slope`` when given)."""
+        if self.slope is not None:
+            return np.asarray(self.slope, np.float32)
+        from ..folds import slope_table
+
+        return slope_table(self.height_profile)
 
 
 @dataclass(frozen=True)

@@ -59,6 +59,7 @@ class CrushPass:
                                    "u_damping_alpha": damping_alpha(params.crest_damping),
                                    "u_damping_deadband": DAMPING_DEADBAND,
                                    "u_has_history": int(history),
+                                   "u_slope": params.slope_table(),
                                    **res.topology_uniforms})
         self._face_normals(res)
         bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
