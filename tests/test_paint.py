@@ -510,3 +510,70 @@ def test_a_mirrored_stroke_across_the_plane_is_exactly_symmetric(mode):
     changed = np.linalg.norm(mesh.q - (clamp_unit(start) if mode != "comb" else 0.0),
                              axis=1) > 1e-3
     assert mode == "width" or changed[np.abs(mesh.rest_points[:, 0]) < 0.1].sum() > 3
+
+
+@pytest.fixture
+def shirt_session(gl_context, tmp_path):
+    shirt = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+    stage, layer, save = open_paint_stage(str(shirt), str(tmp_path / "painted.usda"))
+    session = PaintSession(stage, layer, save, ctx=gl_context)
+    yield session
+    session.release()
+
+
+def _upper_arm_comb(session, amount: float):
+    """A comb stroke along rest x from 0.3 to 1.0 over the front of the shirt's upper arm,
+    as an artist drags it (pixels of the posed front vertices), with the default brush at
+    ``amount``; returns the vertices it touched and the stroke's rest direction."""
+    from usdwrinkle.app.paint import with_brush
+
+    with_brush(session, amount=amount)
+    session.render(640, 360, FULL)
+    path = session.active
+    rest = session.mesh.rest_points
+    facing = session.facing(path)
+    posed = session.engine.posed_points(path)
+    frame = session.last_frame
+
+    def pixel(x):
+        near = facing & (np.abs(rest[:, 0] - x) < 0.1) & (rest[:, 2] > 0)
+        xy, _ = project(frame.camera, posed[near], frame.width, frame.height)
+        return xy.mean(axis=0) * [640 / frame.width, 360 / frame.height]
+
+    a, b = pixel(0.3), pixel(1.0)
+    assert session.begin_stroke(*a, 640, 360)
+    for t in np.linspace(0.0, 1.0, 40)[1:]:
+        session.drag(*(a + t * (b - a)), 640, 360)
+    session.end_stroke()
+    return np.array(session.last_touched)
+
+
+def test_painting_more_gives_deeper_folds_across_the_stroke(shirt_session):
+    """Issue 55: a comb stroke gave a narrow band of short, blobby crests, and painting
+    more made them finer and darker. Amount 0.5, then 1.0 (each from the unpainted
+    shirt): the second's folds are deeper and not finer, and both fold across at least
+    80% of the stroke's width."""
+    session = shirt_session
+    results = {}
+    for amount in (0.5, 1.0):
+        while session.undo_stack:  # from the unpainted shirt
+            session.undo()
+        touched = _upper_arm_comb(session, amount)
+        session.engine.compute_frame(session.frame)
+        fields = session.engine.read_fields(session.active).arrays()
+        rest = session.mesh.rest_points
+        # the stroke's width: its touched vertices across the stroke (rest y, z around x)
+        across = np.arctan2(rest[touched, 2], rest[touched, 1])
+        folded = touched[fields["amplitude"][touched] > 0.2 * fields["amplitude"][touched].max()]
+        folded_across = np.arctan2(rest[folded, 2], rest[folded, 1])
+        central = touched[np.abs(rest[touched, 0] - 0.65) < 0.2]
+        k = np.linalg.norm(fields["wave_vector"][central], axis=1)
+        results[amount] = {
+            "height": float(np.sqrt(np.mean(fields["amplitude"][central] ** 2))),
+            "wavelength": float(np.median(2 * np.pi / k)),
+            "coverage": float(np.ptp(folded_across) / max(np.ptp(across), 1e-9)),
+        }
+    low, high = results[0.5], results[1.0]
+    assert high["height"] > 1.3 * low["height"], results
+    assert high["wavelength"] >= 0.98 * low["wavelength"], results
+    assert low["coverage"] >= 0.8 and high["coverage"] >= 0.8, results

@@ -22,7 +22,10 @@ from ..errors import UsdWrinkleError
 from ..limits import MAX_WORLD_COORDINATE
 
 MODES = ("comb", "smooth", "erase", "width")
-FALLOFFS = ("smooth", "linear", "constant", "sphere")
+#: the stamp profiles, the default first: ``sphere`` combs nearly the brush's whole width
+#: (a comb's teeth rake across it), so that a stroke's folds span it (issue 55: with
+#: ``smooth`` they covered the middle 62% of it on the shirt's sleeve)
+FALLOFFS = ("sphere", "smooth", "linear", "constant")
 MIRROR_AXES = (None, "x", "y", "z")
 
 
@@ -53,7 +56,7 @@ class BrushSettings:
     strength: float = 0.5
     #: |q| that comb paints, in [0, 1]
     amount: float = 1.0
-    falloff: str = "smooth"
+    falloff: str = "sphere"
     #: distances along the surface (True) or straight through space
     geodesic: bool = True
     front_facing_only: bool = True

@@ -562,6 +562,10 @@ class PaintWindow(QtWidgets.QMainWindow):
         """The view made its session (initializeGL): fill the controls from it."""
         self.session = session
         brush = session.brush
+        for combo, value in ((self.mode, brush.mode), (self.falloff, brush.falloff)):
+            blocked = combo.blockSignals(True)
+            combo.setCurrentText(value)
+            combo.blockSignals(blocked)
         self.radius.low, self.radius.high = brush.radius / 100, brush.radius * 20
         self.radius.set_value(brush.radius)
         self.strength.set_value(brush.strength)
