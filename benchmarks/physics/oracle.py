@@ -3,6 +3,7 @@ against the simulation (measure.py) at the same material points."""
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +32,8 @@ class Baked:
     width: float | None
     metrics: dict = field(default_factory=dict)
     waves: dict = field(default_factory=dict)   # the coarse mesh's baked waves
+    points: np.ndarray | None = None            # (frames, n, 3) the displaced fine points
+    flat: np.ndarray | None = None              # the same with no wrinkles
 
 
 def measured_frames(shot: Shot) -> list[int]:
@@ -74,6 +77,7 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
     """Bake the coarse shot with --geometry (and once with wrinkle:amplitudeScale 0 for
     the undisplaced surface) and read back the fold height on the grid."""
     from usdwrinkle import api
+    from usdwrinkle.log import collect
 
     frames = f"0:{shot.frames}"
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-physics-") as scratch:
@@ -83,13 +87,18 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
             layer = os.path.join(scratch, f"{name}_geometry.usdc")
             write_stage(stage, shot, sim.points, width=width, amplitude_scale=scale,
                         attributes=attributes)
-            api.bake(stage, layer, frames=frames, geometry=True, levels=levels(shot))
+            with collect() as messages:  # frame 0 (the rest pose) lies before the shot
+                api.bake(stage, layer, frames=frames, geometry=True, levels=levels(shot))
+            for message in messages:
+                if "lie outside the stage's time range" not in message:
+                    print(f"usdwrinkle: warning: {message}", file=sys.stderr)
             fields[name] = read_fine(layer, shot, shot.frames)
             if name == "wrinkled":
                 waves = read_waves(layer, shot.frames)
     (points, _), (flat, normals) = fields["wrinkled"], fields["flat"]
     baked = Baked(label, measure.our_height(shot, points, flat, normals), width)
     baked.waves = waves
+    baked.points, baked.flat = points, flat
     return baked
 
 

@@ -50,3 +50,59 @@ def _spec(shot: Shot, preset: str) -> dict:
         rest, quads, keys = shot.collider
         spec.update(collider_rest=rest, collider_quads=quads, collider_keys=np.stack(keys))
     return spec
+
+
+def newton_python() -> str:
+    """The Python with ``newton`` (USDWRINKLE_NEWTON_PYTHON, or the checkout's
+    .venv-newton: ``python3 -m venv .venv-newton && .venv-newton/bin/pip install newton``)."""
+    path = os.environ.get("USDWRINKLE_NEWTON_PYTHON")
+    if path:
+        return path
+    local = HERE.parents[1] / ".venv-newton" / "bin" / "python"
+    if local.exists():
+        return str(local)
+    raise RuntimeError("the converging referee needs a Python with Newton: "
+                       "python3 -m venv .venv-newton && .venv-newton/bin/pip install newton "
+                       "(or set USDWRINKLE_NEWTON_PYTHON)")
+
+
+def _newton_path(sweep_shot, cache: Path, solver: dict | None = None) -> tuple[Path, dict]:
+    from .sweep import spec
+
+    arrays = spec(sweep_shot, solver)
+    digest = hashlib.sha1(b"".join(np.ascontiguousarray(v).tobytes()
+                                   for v in arrays.values())).hexdigest()[:10]
+    spacing = sweep_shot.shot.spacing
+    return cache / f"newton-{sweep_shot.shot.name}-{1000 * spacing:.2f}mm-{digest}.npz", arrays
+
+
+def cached_newton(sweep_shot, cache: Path, solver: dict | None = None) -> bool:
+    """Whether the shot's simulation is in the cache already."""
+    return _newton_path(sweep_shot, cache, solver)[0].exists()
+
+
+def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
+                    progress: bool = False) -> tuple[np.ndarray, float, float]:
+    """Newton's VBD on a sweep shot (sweep.py): the fine points of every frame, the solver's
+    seconds and the 99th percentile of the last frame's edge strain; cached in ``cache`` by
+    the shot's arrays."""
+    out, arrays = _newton_path(sweep_shot, cache, solver)
+    if not out.exists():
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") as scratch:
+            path = os.path.join(scratch, "shot.npz")
+            np.savez(path, **arrays)
+            env = {**os.environ, "PYTHONNOUSERSITE": "1",
+                   "WARP_CACHE_PATH": str(cache / "warp-kernels")}
+            if progress:
+                env["NEWTON_CLIENT_PROGRESS"] = "1"
+            done = subprocess.run([newton_python(), str(HERE / "newton_client.py"), path,
+                                   str(out) + ".tmp.npz"], stdout=subprocess.PIPE,
+                                  stderr=None if progress else subprocess.PIPE, text=True,
+                                  timeout=4 * 3600, env=env)
+            if done.returncode != 0 or not os.path.exists(str(out) + ".tmp.npz"):
+                raise RuntimeError(f"Newton's cloth failed on {sweep_shot.shot.name}: "
+                                   f"{(done.stderr or '').strip()[-800:]}")
+            os.replace(str(out) + ".tmp.npz", out)
+    data = np.load(out)
+    return data["points"], float(data["seconds"]), float(data["stretch_p99"])

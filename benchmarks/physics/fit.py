@@ -1,0 +1,116 @@
+"""Choosing the fold law's constants over the sweep (issue 55): each candidate baked on
+every shot of the referee, and the worst case over the sweep of the phase-by-phase
+wavelength ratio, the amplitude ratio and the amplitude-field correlation.
+
+    python -m benchmarks.physics.fit [--only NAME ...] [--grid]
+
+The law's constants are #defines of the crush pass (contract.py): a candidate is compiled
+in, baked and measured in this process. Not a test: it chose the defaults that
+docs/physics.md tabulates.
+"""
+from __future__ import annotations
+
+import argparse
+import itertools
+from pathlib import Path
+
+import numpy as np
+
+from . import measure
+from .oracle import bake, compare, zones
+from .referee import ROOT, SPACING, SWEEP, simulated
+
+
+def set_law(exponent: float, most: float, room: float | None = None) -> None:
+    from usdwrinkle import contract
+    from usdwrinkle.render import bindings
+
+    for table in (contract.SHADER_DEFINES, bindings.COMMON):
+        table["COARSENING_EXPONENT"] = contract.glsl_literal(float(exponent))
+        table["COARSENING_MAX"] = contract.glsl_literal(float(most))
+        table["FOLD_ROOM"] = contract.glsl_literal(float(room if room is not None
+                                                         else contract.FOLD_ROOM))
+
+
+def per_phase(sim, ours) -> dict:
+    """Each phase end: (ours / sim) of the material wavelength and of the RMS height."""
+    shot = sim.shot
+    inner = zones(shot)["all"]
+    out = {}
+    for name, (_, end) in shot.phases.items():
+        f = end - 1
+        out[name] = (measure.wavelength(shot, ours.h[f], inner)
+                     / measure.wavelength(shot, sim.h[f], inner),
+                     measure.rms(ours.h[f], inner) / max(measure.rms(sim.h[f], inner), 1e-12))
+    return out
+
+
+def profile_values(name: str) -> list[float]:
+    """A preset's samples, or ``fold<K>``: (2/pi) asin(K cos theta) / asin(K) normalised,
+    a triangle whose crests are rounded (K < 1)."""
+    from usdwrinkle.profiles import profile_preset
+    from usdwrinkle.schema import PROFILE_SAMPLES
+
+    if name.startswith("fold"):
+        k = float(name[4:])
+        theta = np.arange(PROFILE_SAMPLES) * 2 * np.pi / PROFILE_SAMPLES
+        return (np.arcsin(k * np.cos(theta)) / np.arcsin(k)).tolist()
+    return profile_preset(name).tolist()
+
+
+def evaluate(sim, width: float, slack: float, profile: str = "cosine") -> dict:
+    from pxr import Sdf
+
+    attributes = {"wrinkle:slack": (Sdf.ValueTypeNames.Float, float(slack))}
+    if profile != "cosine":
+        attributes["wrinkle:heightProfile"] = (Sdf.ValueTypeNames.FloatArray,
+                                               profile_values(profile))
+    ours = bake(sim.shot, sim, "fit", width=width, attributes=attributes)
+    result = compare(sim, ours)
+    result["phases"] = per_phase(sim, ours)
+    return result
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.fit")
+    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    parser.add_argument("--only", nargs="*", default=None)
+    parser.add_argument("--exponent", type=float, nargs="*", default=[1.0])
+    parser.add_argument("--most", type=float, nargs="*", default=[2.0])
+    parser.add_argument("--slack", type=float, nargs="*", default=[0.0])
+    parser.add_argument("--profile", nargs="*", default=["cosine"])
+    parser.add_argument("--room", type=float, nargs="*", default=[None])
+    parser.add_argument("--onset", type=float, nargs="*", default=[1.0],
+                        help="W as a share of the simulation's first phase's wavelength")
+    args = parser.parse_args(argv)
+    sims = {name: simulated(SWEEP[name](SPACING), args.cache)
+            for name in (args.only or list(SWEEP))}
+    for exponent, most, slack, onset, profile, room in itertools.product(
+            args.exponent, args.most, args.slack, args.onset, args.profile, args.room):
+        set_law(exponent, most, room)
+        worst = {"wavelength": 1.0, "amplitude": 1.0, "correlation": 1.0}
+        print(f"exponent {exponent} most {most} slack {slack} onset {onset} {profile} "
+              f"room {room}")
+        for name, sim in sims.items():
+            first = min(sim.shot.phases.values())[1] - 1
+            inner = zones(sim.shot)["all"]
+            width = onset * measure.wavelength(sim.shot, sim.h[first], inner)
+            result = evaluate(sim, width, slack, profile)
+            phases = result["phases"]
+            text = " ".join(f"{w:.2f}/{a:.2f}" for w, a in phases.values())
+            motion = " ".join(f"{key[7:-4]} {result[key[:-4]] / max(result[key], 1e-12):.2f}x"
+                              for key in result if key.startswith("motion") and
+                              key.endswith(" sim"))
+            print(f"  {name:16s} W {100 * width:.1f} cm corr {result['correlation']:.3f} "
+                  f"amp {result['amplitude_ratio']:.2f} per phase (wavelength/height): "
+                  f"{text} {motion}")
+            for w, a in phases.values():
+                worst["wavelength"] = max(worst["wavelength"], w, 1 / w)
+                worst["amplitude"] = max(worst["amplitude"], a, 1 / a)
+            worst["correlation"] = min(worst["correlation"], result["correlation"])
+        print("  worst:", {k: round(v, 3) for k, v in worst.items()})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

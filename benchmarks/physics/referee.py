@@ -1,0 +1,226 @@
+"""The converging referee (issue 55): Newton's VBD cloth on the sweep's shots (sweep.py),
+its convergence with the grid, and usdwrinkle against it over the whole sweep.
+
+    python -m benchmarks.physics.referee [--write docs/physics.md] [--cache .physics-cache]
+                                          [--only NAME ...]
+
+Needs a Python with ``newton`` (simulate.newton_python: .venv-newton); the simulations are
+cached in --cache by their arrays. Measured as the Blender oracle is (measure.py): the
+coarse mesh is the simulation low-passed, usdwrinkle bakes it with --geometry, and both
+are measured at the same material points.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import measure
+from .oracle import Simulated, bake, compare, measured_frames, zones
+from .simulate import simulate_newton
+from .sweep import FABRICS, SweepShot, curtain, shear, sleeve
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: the sweep: (label, maker) at the referee's spacing
+SPACING = 0.01
+SWEEP = {
+    "curtain-silk": lambda h: curtain("silk", h),
+    "curtain-cotton": lambda h: curtain("cotton", h),
+    "curtain-leather": lambda h: curtain("leather", h),
+    "sleeve5-cotton": lambda h: sleeve("cotton", h, 0.05),
+    "sleeve10-cotton": lambda h: sleeve("cotton", h, 0.10),
+    "sleeve10-silk": lambda h: sleeve("silk", h, 0.10),
+    "shear-cotton": lambda h: shear("cotton", h),
+    "shear-leather": lambda h: shear("leather", h),
+}
+#: the shots whose convergence is checked at half the spacing
+CONVERGENCE = ("curtain-cotton", "sleeve10-cotton", "shear-cotton")
+
+#: issue 55's bars, over the worst case of the sweep
+BARS = {"wavelength": 1.3, "amplitude_matched": 1.25, "correlation_flat": 0.85,
+        "correlation_shear": 0.75, "motion": 1.5, "area": (0.95, 1.05)}
+
+
+def simulated(sweep_shot: SweepShot, cache: Path) -> Simulated:
+    points, seconds, stretch = simulate_newton(sweep_shot, cache)
+    shot = sweep_shot.shot
+    sim = Simulated(shot, points, measure.sim_height(shot, points), seconds)
+    inner = zones(shot)["all"]
+    sim.wavelength = float(np.mean([measure.wavelength(shot, sim.h[f], inner)
+                                    for f in measured_frames(shot)]))
+    sim.stretch = stretch
+    return sim
+
+
+def phase_table(sim: Simulated) -> dict:
+    """Per phase end: the simulation's material wavelength and fold height (RMS)."""
+    shot = sim.shot
+    inner = zones(shot)["all"]
+    return {name: (measure.wavelength(shot, sim.h[end - 1], inner),
+                   measure.rms(sim.h[end - 1], inner))
+            for name, (_, end) in shot.phases.items()}
+
+
+def convergence(name: str, cache: Path, simulate: bool = True) -> dict:
+    """The shot at SPACING and at half of it: each phase's wavelength and height, and
+    their ratios (fine / coarse). ``simulate`` False: FileNotFoundError where the half
+    spacing is not in the cache."""
+    from .simulate import cached_newton
+
+    if not simulate and not cached_newton(SWEEP[name](SPACING / 2), cache):
+        raise FileNotFoundError(name)
+    coarse = simulated(SWEEP[name](SPACING), cache)
+    fine = simulated(SWEEP[name](SPACING / 2), cache)
+    a, b = phase_table(coarse), phase_table(fine)
+    return {"coarse": a, "fine": b, "seconds": (coarse.seconds, fine.seconds),
+            "ratios": {phase: (b[phase][0] / a[phase][0], b[phase][1] / a[phase][1])
+                       for phase in a}}
+
+
+def area_ratio(sim: Simulated, baked, slack: float) -> float:
+    """Our displaced surface's area over its rest area at the last frame, over the fine
+    triangles where the coarse surface (the simulation low-passed) shrinks below 1 - 3
+    slack of its rest area: where the folds should restore all of it."""
+    from usdwrinkle.geometry.measure import triangle_areas
+
+    from .coarse import lowpass
+    from .newton_client import triangles
+    shot = sim.shot
+    tri = triangles(shot.quads())
+    rest = triangle_areas(shot.rest, tri)
+    low = triangle_areas(lowpass(shot, sim.points[-1:])[0], tri)
+    inner = zones(shot)["all"][tri].all(axis=1)
+    compressed = inner & (low < (1.0 - 3.0 * slack) * rest)
+    if not compressed.any():
+        return float("nan")
+    return float(triangle_areas(baked.points[-1], tri)[compressed].sum()
+                 / rest[compressed].sum())
+
+
+def sweep_row(sim: Simulated) -> dict:
+    """usdwrinkle at the default width and at the width matched to the simulation's mean
+    wavelength, against the simulation: per phase (ours / sim) wavelength and height, the
+    amplitude-field correlation, the crest motion at the elbow, our area ratio."""
+    from usdwrinkle import schema
+
+    from .fit import per_phase
+
+    default = bake(sim.shot, sim, "default")
+    first = per_phase(sim, default)
+    mean = float(np.exp(np.mean([np.log(w) for w, _ in first.values()])))
+    width = default_width(sim.shot) / mean
+    matched = bake(sim.shot, sim, "matched", width=width)
+    result = compare(sim, matched)
+    motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
+              if key.startswith("motion") and key.endswith(" sim")}
+    return {"default": first, "matched": per_phase(sim, matched), "width": width,
+            "correlation": result["correlation"], "motion": motion,
+            "area": area_ratio(sim, matched, schema.DEFAULT_SLACK),
+            "default_width": default_width(sim.shot)}
+
+
+def default_width(shot) -> float:
+    """The fallback W usdwrinkle gives the shot's coarse mesh (m; the median over its
+    points): the cloth preset through the curvature law."""
+    from usdwrinkle import schema
+    from usdwrinkle.scene.params import curved_width
+
+    from .__main__ import coarse_curvature
+    fabric = shot.name.split("-")[-1]
+    return float(np.median(curved_width(schema.CLOTH_WIDTHS_M[fabric],
+                                        coarse_curvature(shot))))
+
+
+def report(names: list[str], cache: Path) -> str:
+    """The referee's tables for docs/physics.md."""
+    from ..blocks import markers
+
+    begin, end = markers("referee")
+    lines = [begin, "", "Made by `python -m benchmarks.physics.referee --write docs/physics.md` "
+             f"(Newton {_newton_version()} VBD, {100 * SPACING:g} cm grid; the simulations "
+             "cached in .physics-cache).", ""]
+    lines += ["### Does the referee converge?", "",
+              "Each shot at 1 cm and at 0.5 cm: the material wavelength and fold height (RMS) "
+              "at the end of each phase, and the ratio (0.5 cm over 1 cm).", "",
+              "| shot | phase | 1 cm | 0.5 cm | ratio (wavelength, height) |",
+              "|---|---|---|---|---|"]
+    for name in CONVERGENCE:
+        try:
+            conv = convergence(name, cache, simulate=False)
+        except FileNotFoundError:
+            lines.append(f"| {name} | not simulated at 0.5 cm | | | |")
+            continue
+        for phase, (a, b) in zip(conv["coarse"], zip(conv["coarse"].values(),
+                                                        conv["fine"].values(), strict=True),
+                                 strict=True):
+            ratio = conv["ratios"][phase]
+            lines.append(f"| {name} | {phase} | {100 * a[0]:.1f} cm, {1000 * a[1]:.1f} mm | "
+                         f"{100 * b[0]:.1f} cm, {1000 * b[1]:.1f} mm | "
+                         f"{ratio[0]:.2f}, {ratio[1]:.2f} |")
+    lines += ["", "### usdwrinkle against the referee, over the sweep", "",
+              "Per shot: the fabric's bending D, the default W (the preset through the "
+              "curvature law) and the W matched to the simulation's mean wavelength; at the "
+              "default W, the worst phase's wavelength ratio (ours / sim); at matched W, the "
+              "worst phase's height ratio, the amplitude-field correlation, the crest motion "
+              "at the elbow (ours / sim; sleeves) and our wrinkled area over the rest area "
+              "where the coarse surface is compressed beyond 3 x the slack. Bars (issue 55): "
+              "wavelength and height within 1.3x and 1.25x, correlation >= 0.85 (0.75 shear), "
+              "motion <= 1.5x, area in [0.95, 1.05].", "",
+              "| shot | D (N m) | W default, matched | wavelength (default W) | "
+              "height (matched) | correlation | crest motion | area |",
+              "|---|---|---|---|---|---|---|---|"]
+    rows = {}
+    for name in names:
+        sim = simulated(SWEEP[name](SPACING), cache)
+        row = rows[name] = sweep_row(sim)
+        fabric = name.split("-")[-1]
+        waves = [w for w, _ in row["default"].values()]
+        heights = [h for _, h in row["matched"].values()]
+        worst_w = max(waves, key=lambda w: max(w, 1 / w))
+        worst_h = max(heights, key=lambda h: max(h, 1 / h))
+        motion = ", ".join(f"{k} {v:.2f}x" for k, v in row["motion"].items()) or "-"
+        lines.append(f"| {name} | {FABRICS[fabric]:.1e} | {100 * row['default_width']:.1f}, "
+                     f"{100 * row['width']:.1f} cm | {worst_w:.2f}x | {worst_h:.2f}x | "
+                     f"{row['correlation']:.2f} | {motion} | {row['area']:.3f} |")
+    lines += ["", "Phase by phase (ours / sim at the default W: wavelength, height):", ""]
+    for name, row in rows.items():
+        lines.append(f"- {name}: " + "; ".join(
+            f"{phase} {w:.2f}, {h:.2f}" for phase, (w, h) in row["default"].items()))
+    lines += ["", end]
+    return "\n".join(lines)
+
+
+def _newton_version() -> str:
+    import subprocess
+
+    from .simulate import newton_python
+
+    try:
+        done = subprocess.run([newton_python(), "-c", "import newton; print(newton.__version__)"],
+                              capture_output=True, text=True, timeout=120)
+        return done.stdout.strip() or "?"
+    except (OSError, RuntimeError, subprocess.TimeoutExpired):
+        return "?"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.referee")
+    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    parser.add_argument("--only", nargs="*", default=None)
+    parser.add_argument("--write", type=Path, default=None,
+                        help="replace the referee's block of this file (docs/physics.md)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    text = report(args.only or list(SWEEP), args.cache)
+    from ..blocks import emit
+
+    emit(["--write", str(args.write)] if args.write else [], "referee", text)
+    print(f"{time.perf_counter() - started:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

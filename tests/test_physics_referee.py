@@ -1,0 +1,66 @@
+"""The converging referee's shots (benchmarks/physics/sweep.py, elbow.py), without running
+a simulator: the same cloth at every grid spacing, and the shirt's sleeve riding on the
+shirt's joints as UsdSkel poses them."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pxr import Usd, UsdSkel
+
+from benchmarks.physics import elbow
+from benchmarks.physics.sweep import FABRICS, curtain, shear, sleeve, spec
+
+SHIRT = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
+
+
+@pytest.mark.parametrize("make", [curtain, shear, lambda f, h: sleeve(f, h, 0.10)])
+def test_a_sweep_shot_is_the_same_cloth_at_half_the_spacing(make):
+    """Halving the grid keeps the cloth: its material extent, its pins' material places
+    (the curtain's rings every 6 cm), its keyed motion and its bending in N m."""
+    coarse, fine = make("cotton", 0.01), make("cotton", 0.005)
+    assert fine.shot.spacing == pytest.approx(coarse.shot.spacing / 2, rel=0.02)
+    a, b = coarse.shot, fine.shot
+    np.testing.assert_allclose(np.ptp(a.material, 0), np.ptp(b.material, 0), rtol=0.02)
+    # every coarse pin has a fine pin at its material place
+    pa, pb = a.material[a.pinned], b.material[b.pinned]
+    near = np.min(np.linalg.norm(pa[:, None] - pb[None], axis=2), axis=1)
+    assert near.max() < 0.5 * a.spacing
+    assert [f for f, _ in a.keys] == [f for f, _ in b.keys]
+    assert spec(fine)["bending"] == FABRICS["cotton"]
+
+
+def _ring_centres(points: np.ndarray, x: np.ndarray, at: float) -> np.ndarray:
+    ring = np.abs(x - at) < 1e-6
+    return points[ring].mean(axis=0)
+
+
+@pytest.mark.parametrize("frame", [12, 24])
+def test_the_simulated_sleeve_rides_on_the_shirt_s_joints(frame):
+    """The fine sleeve's pinned end rings, keyed for the simulation, sit where UsdSkel
+    skins the coarse shirt's end rings (ComputeSkinnedPoints), centre and radius, in the
+    simulation's metres."""
+    sweep_shot, sim_frame = elbow.shirt_sleeve(shirt_frames=range(1, 25))
+    shot = sweep_shot.shot
+    keyed = dict(shot.keys)[sim_frame[frame]]
+    stage = Usd.Stage.Open(str(SHIRT))
+    cache = UsdSkel.Cache()
+    root = UsdSkel.Root(stage.GetPrimAtPath("/World/Arm"))
+    cache.Populate(root, Usd.TraverseInstanceProxies())
+    skel_query = cache.GetSkelQuery(UsdSkel.Skeleton(stage.GetPrimAtPath(elbow.SKELETON)))
+    skinning = cache.GetSkinningQuery(stage.GetPrimAtPath(elbow.SLEEVE))
+    mesh = stage.GetPrimAtPath(elbow.SLEEVE)
+    rest = np.asarray(mesh.GetAttribute("points").Get(), np.float64)
+    points = mesh.GetAttribute("points").Get()
+    skinning.ComputeSkinnedPoints(skel_query.ComputeSkinningTransforms(frame), points, frame)
+    posed = np.asarray(points, np.float64)
+    fine_rest_x = elbow.from_sim(shot.rest)[:, 0]
+    for end in (0.0, elbow.LENGTH):
+        ours = elbow.from_sim(_ring_centres(keyed, fine_rest_x, end))
+        theirs = _ring_centres(posed, rest[:, 0], end)
+        np.testing.assert_allclose(ours, theirs, atol=0.01 * elbow.RADIUS)
+        ring = np.abs(fine_rest_x - end) < 1e-6
+        radius = np.linalg.norm(elbow.from_sim(keyed[ring]) - ours, axis=1)
+        coarse = np.linalg.norm(posed[np.abs(rest[:, 0] - end) < 1e-6] - theirs, axis=1)
+        assert np.median(radius) == pytest.approx(np.median(coarse), rel=0.01)
