@@ -115,7 +115,8 @@ def elbow(folder: str) -> dict:
 def table(rows: list[dict], shirt: dict) -> str:
     lines = [BEGIN, "",
              "Made by `python -m benchmarks.lengths --write docs/method.md` (sheet: W = 0.3, "
-             f"--levels {LEVELS}, five whole wavelengths of the middle row).", "",
+             f"--levels {LEVELS}, the whole wavelengths of the middle row inside 80% of the "
+             "sheet).", "",
              "| profile | r | derived L/L0 | measured L/L0 | amplitude / law | "
              "wavelength / r L |", "|---|---|---|---|---|---|"]
     for r in rows:
