@@ -51,20 +51,19 @@ def profile_values(name: str) -> list[float]:
     from usdwrinkle.profiles import profile_preset
     from usdwrinkle.schema import PROFILE_SAMPLES
 
-    if name.startswith("fold"):
+    if name.startswith("fold") and name != "fold":
         k = float(name[4:])
         theta = np.arange(PROFILE_SAMPLES) * 2 * np.pi / PROFILE_SAMPLES
         return (np.arcsin(k * np.cos(theta)) / np.arcsin(k)).tolist()
     return profile_preset(name).tolist()
 
 
-def evaluate(sim, width: float, slack: float, profile: str = "cosine") -> dict:
+def evaluate(sim, width: float, slack: float, profile: str = "fold") -> dict:
     from pxr import Sdf
 
-    attributes = {"wrinkle:slack": (Sdf.ValueTypeNames.Float, float(slack))}
-    if profile != "cosine":
-        attributes["wrinkle:heightProfile"] = (Sdf.ValueTypeNames.FloatArray,
-                                               profile_values(profile))
+    attributes = {"wrinkle:slack": (Sdf.ValueTypeNames.Float, float(slack)),
+                  "wrinkle:heightProfile": (Sdf.ValueTypeNames.FloatArray,
+                                            profile_values(profile))}
     ours = bake(sim.shot, sim, "fit", width=width, attributes=attributes)
     result = compare(sim, ours)
     result["phases"] = per_phase(sim, ours)
@@ -75,10 +74,14 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.fit")
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
     parser.add_argument("--only", nargs="*", default=None)
-    parser.add_argument("--exponent", type=float, nargs="*", default=[1.0])
-    parser.add_argument("--most", type=float, nargs="*", default=[2.0])
-    parser.add_argument("--slack", type=float, nargs="*", default=[0.0])
-    parser.add_argument("--profile", nargs="*", default=["cosine"])
+    from usdwrinkle import contract, schema
+
+    parser.add_argument("--exponent", type=float, nargs="*",
+                        default=[contract.COARSENING_EXPONENT])
+    parser.add_argument("--most", type=float, nargs="*", default=[contract.COARSENING_MAX])
+    parser.add_argument("--slack", type=float, nargs="*", default=[schema.DEFAULT_SLACK])
+    parser.add_argument("--profile", nargs="*", default=["fold"],
+                        help="presets (fold, cosine, ...) or fold<K>")
     parser.add_argument("--room", type=float, nargs="*", default=[None])
     parser.add_argument("--onset", type=float, nargs="*", default=[1.0],
                         help="W as a share of the simulation's first phase's wavelength")
