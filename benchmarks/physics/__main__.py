@@ -445,8 +445,8 @@ def _summary(results: dict) -> list[str]:
         "- Fold energy near held edges at most 1.3x the simulation's: "
         + listing({n: default[n]["held_ratio"] <= 1.3 for n in names}) + ".",
         "- Crest motion at the elbow at most 1.5x: "
-        + "; ".join(f"{'holds' if ok else '**does not hold**'} while {'bending' if p == 'bend' else p}"
-                    for p, ok in motion.items()) + ".",
+        + "; ".join(f"{'holds' if ok else '**does not hold**'} while "
+                    f"{'bending' if p == 'bend' else p}" for p, ok in motion.items()) + ".",
         "- The analytic bars of earlier issues hold with `wrinkle:slack = 0` and no held "
         "points (the tests' analytic sheets author them); tests/test_cloth.py and "
         "tests/test_folds.py check the laws against numpy and analytic cases.",
@@ -483,8 +483,8 @@ def _calibration_section(calibrated: dict, results: dict) -> list[str]:
         supported = widths[preset.lower()]
         lines.append(f"| {preset} | {100 * wavelength:.1f} cm | {1000 * height:.1f} mm | "
                      f"{seconds:.0f} s | {100 * supported:.1f} cm | {100 * ours:.1f} cm"
-                     f" ({ours / supported:.2f}x) | {scaling:.2f}x, measured {wavelength / sheets['Cotton'][0]:.2f}x "
-                     "|")
+                     f" ({ours / supported:.2f}x) | {scaling:.2f}x, measured "
+                     f"{wavelength / sheets['Cotton'][0]:.2f}x |")
     fine_wavelength, fine_height, fine_seconds, spacing = calibrated["fine"]
     coarse_wavelength, coarse_height = sheets["Cotton"][:2]
     ratios = [schema.CLOTH_WIDTHS_M[p.lower()] / widths[p.lower()] for p in sheets]
