@@ -17,11 +17,13 @@ MIN_RATIO = 0.05
 #: The fold law beyond the paper (docs/method.md, "The fold law"; usdwrinkle/folds.py):
 #: - inextensible: a wave restores, per posed length, the length the cloth has there (its
 #:   excess length rho), exactly for the mesh's profile (folds.slope_table);
-#: - coarsening: L = W * min(rho ** COARSENING_EXPONENT, COARSENING_MAX). Measured on the
-#:   cloth referee (folds widen about 1.8x by 32% compression) but off: enabled, it made
-#:   the crests unstable (docs/physics.md, "Coarsening");
-#: - room: a fold rises at most FOLD_ROOM over the rate at which the posed normals turn,
-#:   so that the displaced surface does not pass through itself.
+#: - coarsening: L = W * min(rho ** COARSENING_EXPONENT, COARSENING_MAX). The cloth
+#:   referee's folds widen about 1.8x by 32% compression; a steeper law (exponent 2, cap
+#:   1.7) matched that but moved the crests, so a = 1 keeps the posed wavelength uniform
+#:   and the cap 1.5 keeps the crests stable (docs/method.md, "The fold law");
+#: - room: a fold rises at most FOLD_ROOM over the rate at which the posed normals turn
+#:   (FOLD_ROOM of the posed surface's radius of curvature), so that the displaced
+#:   surface does not pass through itself.
 COARSENING_EXPONENT = 1.0
 COARSENING_MAX = 1.5
 FOLD_ROOM = 0.5
