@@ -18,7 +18,7 @@ import numpy as np
 
 from . import measure
 from .oracle import bake, compare, zones
-from .referee import ROOT, SPACING, SWEEP, simulated
+from .referee import ROOT, SPACING, SWEEP, area_ratio, simulated
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
@@ -67,6 +67,7 @@ def evaluate(sim, width: float, slack: float, profile: str = "fold") -> dict:
     ours = bake(sim.shot, sim, "fit", width=width, attributes=attributes)
     result = compare(sim, ours)
     result["phases"] = per_phase(sim, ours)
+    result["area"] = area_ratio(sim, ours, slack)
     return result
 
 
@@ -91,7 +92,7 @@ def main(argv=None) -> int:
     for exponent, most, slack, onset, profile, room in itertools.product(
             args.exponent, args.most, args.slack, args.onset, args.profile, args.room):
         set_law(exponent, most, room)
-        worst = {"wavelength": 1.0, "amplitude": 1.0, "correlation": 1.0}
+        worst = {"wavelength": 1.0, "amplitude": 1.0, "correlation": 1.0, "area": 1.0}
         print(f"exponent {exponent} most {most} slack {slack} onset {onset} {profile} "
               f"room {room}")
         for name, sim in sims.items():
@@ -105,12 +106,15 @@ def main(argv=None) -> int:
                               for key in result if key.startswith("motion") and
                               key.endswith(" sim"))
             print(f"  {name:16s} W {100 * width:.1f} cm corr {result['correlation']:.3f} "
+                  f"area {result['area']:.3f} "
                   f"amp {result['amplitude_ratio']:.2f} per phase (wavelength/height): "
                   f"{text} {motion}")
             for w, a in phases.values():
                 worst["wavelength"] = max(worst["wavelength"], w, 1 / w)
                 worst["amplitude"] = max(worst["amplitude"], a, 1 / a)
             worst["correlation"] = min(worst["correlation"], result["correlation"])
+            if np.isfinite(result["area"]):
+                worst["area"] = max(worst["area"], result["area"], 1 / result["area"])
         print("  worst:", {k: round(v, 3) for k, v in worst.items()})
     return 0
 
