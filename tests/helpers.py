@@ -190,6 +190,29 @@ def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -
                           text=True, timeout=timeout, check=check).stdout
 
 
+def find_window(display: str, name: str, pid: int | None = None,
+                timeout: float = 120) -> str:
+    """The first visible window called ``name`` (of process ``pid``, by its _NET_WM_PID,
+    where given), polled until it shows. Not ``xdotool search --sync``: a window that Qt
+    destroys while xdotool walks the tree ends xdotool with Xlib's BadWindow (exit 1),
+    and a search by name alone may find another process's window (a test's window that
+    outlived it)."""
+    import time
+
+    args = ["search", "--all", "--onlyvisible", *(["--pid", str(pid)] if pid else []), "--name",
+            name]
+    deadline = time.monotonic() + timeout
+    last = None
+    while time.monotonic() < deadline:
+        last = subprocess.run(["xdotool", *args], env=x_env(display), capture_output=True,
+                              text=True, timeout=60)
+        if last.returncode == 0 and last.stdout.split():
+            return last.stdout.split()[0]
+        time.sleep(0.2)
+    raise AssertionError(f"no visible window {name!r} within {timeout:g} s "
+                         f"(xdotool: {last.stderr.strip() if last else ''})")
+
+
 def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
     """(amplitude, |k|) of the fold law (usdwrinkle/folds.py, docs/method.md) on an
     analytic sheet: ``ratio`` the compression along the wave with the painted q,

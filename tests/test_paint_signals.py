@@ -20,7 +20,7 @@ from pxr import Usd
 
 from usdwrinkle.authoring import WrinkleAPI
 
-from helpers import sheet_stage, x_env, xdotool
+from helpers import find_window, sheet_stage, x_env, xdotool
 
 pytestmark = pytest.mark.slow
 
@@ -57,8 +57,11 @@ class Window:
             [sys.executable, "-m", "usdwrinkle", "paint", self.stage, "-o", str(self.out),
              "--size", "800x500"], env=x_env(display), stdout=self.log,
             stderr=subprocess.STDOUT)
-        self.id = xdotool(display, "search", "--sync", "--onlyvisible", "--name",
-                          "usdwrinkle paint", timeout=120).split()[0]
+        try:
+            self.id = find_window(display, "usdwrinkle paint", self.process.pid)
+        except BaseException:
+            self.close()  # a window that never showed must not outlive its test
+            raise
 
     def title(self) -> str:
         return xdotool(self.display, "getwindowname", self.id, check=False).strip()
@@ -86,8 +89,7 @@ class Window:
 
     def question(self, timeout: float = 60) -> str:
         """The unsaved-strokes question's window, once it shows."""
-        return xdotool(self.display, "search", "--sync", "--onlyvisible", "--name",
-                       "Unsaved strokes", timeout=timeout).split()[0]
+        return find_window(self.display, "Unsaved strokes", self.process.pid, timeout)
 
     def send(self, name: str) -> None:
         self.process.send_signal(getattr(signal, name))
@@ -143,8 +145,8 @@ def test_cancelling_the_question_keeps_the_window_and_its_signals(window):
     xdotool(window.display, "windowfocus", "--sync", question, check=False)
     xdotool(window.display, "key", "Escape")  # Cancel
     deadline = time.monotonic() + 30
-    while xdotool(window.display, "search", "--onlyvisible", "--name", "Unsaved strokes",
-                  check=False).strip():
+    while xdotool(window.display, "search", "--all", "--onlyvisible", "--pid",
+                  str(window.process.pid), "--name", "Unsaved strokes", check=False).strip():
         assert time.monotonic() < deadline, "the question stayed open"
         time.sleep(0.2)
     time.sleep(1.0)

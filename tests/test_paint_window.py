@@ -23,7 +23,7 @@ from pxr import Usd
 
 from usdwrinkle.authoring import WrinkleAPI
 
-from helpers import sheet_stage, x_env, xdotool
+from helpers import find_window, sheet_stage, x_env, xdotool
 
 REPO = Path(__file__).resolve().parents[1]
 DRIVER = REPO / "tests" / "paint_driver.py"
@@ -165,8 +165,7 @@ def test_an_artist_paints_and_saves(display, tmp_path):
                             stdout=log, stderr=subprocess.STDOUT)
     try:
         # the main window (Qt also makes hidden helper windows of that name)
-        window = xdotool(display, "search", "--sync", "--onlyvisible", "--name",
-                         "usdwrinkle paint").split()[0]
+        window = find_window(display, "usdwrinkle paint", proc.pid)
         xdotool(display, "windowfocus", "--sync", window)
         time.sleep(4)  # the first frame (llvmpipe)
         geometry = dict(line.split("=") for line in
@@ -253,8 +252,7 @@ def test_usdview_paints_through_usdwrinkle_python(display, tmp_path, monkeypatch
     assert stage.GetSessionLayer().subLayerPaths[0] == strokes
     q0 = WrinkleAPI(sleeve).get_q()
     try:
-        window = xdotool(display, "search", "--sync", "--onlyvisible", "--name",
-                         "usdwrinkle paint").split()[0]
+        window = find_window(display, "usdwrinkle paint", process.pid)
         xdotool(display, "windowfocus", "--sync", window)
         time.sleep(4)
         geometry = dict(line.split("=") for line in
