@@ -524,10 +524,87 @@ def scenario_bench(out: Path, stage: str) -> dict:
     return result
 
 
+def x_events(window, *args: str) -> None:
+    """xdotool on this process's own window (real X events through the X server, as an
+    artist's keyboard and mouse send them), then the events handled."""
+    import subprocess
+
+    subprocess.run(["xdotool", *args], check=True, timeout=60, capture_output=True)
+    app = QtWidgets.QApplication.instance()
+    deadline = time.monotonic() + 0.5
+    while time.monotonic() < deadline:
+        app.processEvents(QtCore.QEventLoop.AllEvents, 50)
+        time.sleep(0.01)
+
+
+def x_click(window, widget) -> None:
+    """A real left click in the middle of ``widget``."""
+    centre = widget.mapTo(window, QtCore.QPoint(widget.width() // 2, widget.height() // 2))
+    x_events(window, "mousemove", "--window", str(int(window.winId())), str(centre.x()),
+             str(centre.y()), "click", "1")
+
+
+def scenario_help_and_typed(out: Path, stage: str) -> dict:
+    """Issue 57: the help overlay (H, then ?, with real key events), its key list read
+    from the widget; W = 0.05 and a strength typed into their fields; a word typed into
+    a field; every control's tooltip."""
+    window = open_window(stage, str(out / "typed.usda"), size=(1100, 640))
+    session = window.session
+    wid = str(int(window.winId()))
+    x_events(window, "windowfocus", "--sync", wid)
+    result = {"overlay_before": window.help_overlay.isVisible()}
+    x_events(window, "key", "h")
+    result["overlay_after_h"] = window.help_overlay.isVisible()
+    result["listed"] = window.help_overlay.listed()
+    screenshot(window, out / "help.png")
+    x_events(window, "key", "question")
+    result["overlay_after_question"] = window.help_overlay.isVisible()
+    result["help_menu"] = [a.text().replace("&", "") for a in
+                           window.menuBar().actions()[-1].menu().actions()]
+    # W typed into its field: click, select all, type, Enter
+    result["w_before"] = session.control("width")
+    x_click(window, window.width_slider.field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", "0.05")
+    x_events(window, "key", "Return")
+    settle(window)
+    result["w_control"] = session.control("width")
+    result["w_engine"] = float(np.median(session.engine.meshes[session.active].params.width))
+    result["w_field"] = window.width_slider.field.text()
+    result["undo_steps_after_w"] = len(session.undo_stack)
+    # a brush value, then a word
+    x_click(window, window.strength.field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", "0.8")
+    x_events(window, "key", "Return")
+    result["strength"] = session.brush.strength
+    x_click(window, window.amplitude.field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", "lots")
+    x_events(window, "key", "Return")
+    settle(window)
+    result["amplitude_after_word"] = session.control("amplitude_scale")
+    result["amplitude_field"] = window.amplitude.field.text()
+    # a slack the session refuses (must be below 1): one line, the field back
+    x_click(window, window.slack.field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", "2")
+    x_events(window, "key", "Return")
+    settle(window)
+    result["slack_after_refusal"] = session.control("slack")
+    result["slack_field"] = window.slack.field.text()
+    result["errors"] = list(window.errors)
+    result["tooltips"] = {name: widget.toolTip() for name, widget in window._tipped().items()}
+    result["tooltips"]["play"] = window.play_button.toolTip()
+    result["tooltips"]["timeline"] = window.timeline.toolTip()
+    window.close()
+    return result
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,
-    q shown as segments."""
+    q shown as segments; the keys overlay (H)."""
     window = open_window(stage, str(out / "paint_figures.usda"), size=(1100, 620))
     screenshot(window, out / "paint_before.png")
     points, _ = upper_arm_stroke(window)
@@ -536,10 +613,15 @@ def scenario_figures(out: Path, stage: str) -> dict:
     window.view.cursor_pos = QtCore.QPointF(*points[len(points) // 2])
     settle(window)
     screenshot(window, out / "paint_after.png")
+    window.show_q.setChecked(False)
+    window.view.cursor_pos = None
+    window.toggle_help()
+    settle(window)
+    screenshot(window, out / "paint_help.png")
     window.session.dirty and window.session.undo()
     window.close()
     (out / "paint_figures.usda").unlink(missing_ok=True)
-    return {"written": ["paint_before.png", "paint_after.png"]}
+    return {"written": ["paint_before.png", "paint_after.png", "paint_help.png"]}
 
 
 def main(argv: list[str]) -> int:

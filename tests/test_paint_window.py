@@ -130,6 +130,36 @@ def test_undo_refreshes_the_w_slider_and_esc_shows_the_layer(display, tmp_path):
     assert "Traceback" not in result["stderr"]
 
 
+def test_the_help_overlay_and_typed_values(display, tmp_path):
+    """Issue 57: no help, no tooltips and no typed values. With real X events (xdotool):
+    H shows the keys over the view and ? hides them, the list read from the widget; W =
+    0.05 typed into its field is the engine's W (one undo step); a typed strength is the
+    brush's; a word and a refused slack leave the values and say so in one line."""
+    result = drive(display, "help_and_typed", tmp_path)
+    assert not result["overlay_before"] and result["overlay_after_h"]
+    assert not result["overlay_after_question"]
+    keys = {keys for keys, _ in result["listed"]}
+    for expected in ("Left drag", "Alt+left drag", "Ctrl+Z", "Ctrl+Shift+Z", "Ctrl+S",
+                     "Esc", "F", "[ and ]", "Space", "H or ?"):
+        assert expected in keys, result["listed"]
+    assert "Keys and mouse" in result["help_menu"]
+    assert result["w_before"] != pytest.approx(0.05)
+    assert result["w_control"] == pytest.approx(0.05, rel=1e-6)
+    assert result["w_engine"] == pytest.approx(0.05, rel=1e-6)
+    assert result["w_field"] == "0.05"
+    assert result["undo_steps_after_w"] == 1
+    assert result["strength"] == pytest.approx(0.8)
+    assert result["amplitude_after_word"] == pytest.approx(1.0)
+    assert result["amplitude_field"] == "1"
+    assert result["slack_after_refusal"] < 1.0 and result["slack_field"] != "2"
+    assert len(result["errors"]) == 2, result["errors"]
+    assert result["errors"][0] == "amplitude: 'lots' is not a number"
+    assert "slack" in result["errors"][1]
+    assert "Traceback" not in result["stderr"]
+    for name, tip in result["tooltips"].items():
+        assert len(tip) > 15, name
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -6,7 +6,7 @@ surface, live controls, a timeline. Every Qt override and slot runs through
 Mouse (usdview and Maya): left button paints; Alt+left tumbles, middle (or Alt+middle)
 tracks, right (or Alt+right) and the wheel dolly. Keys: Ctrl+S save, Ctrl+Shift+S save
 as, Ctrl+Z undo, Ctrl+Shift+Z redo, F frames the meshes, [ and ] the radius, Esc drops
-the stroke in progress, Space plays.
+the stroke in progress, Space plays, H or ? shows these (BINDINGS, the Help menu).
 """
 from __future__ import annotations
 
@@ -36,6 +36,51 @@ Qt = QtCore.Qt
 
 #: the view's background (linear grey, under the frame's alpha), as usdview's
 BACKGROUND = (0.18, 0.18, 0.2)
+
+#: the keys and mouse bindings, as the Help menu and the H overlay list them
+BINDINGS = (
+    ("Left drag", "paint with the brush"),
+    ("Alt+left drag", "tumble the view"),
+    ("Middle drag", "track the view (also Alt+middle)"),
+    ("Right drag, wheel", "dolly the view (also Alt+right)"),
+    ("[ and ]", "a smaller and a larger brush"),
+    ("Esc", "drop the stroke in progress"),
+    ("F", "frame the meshes"),
+    ("Space", "play or stop the timeline"),
+    ("Ctrl+Z", "undo"),
+    ("Ctrl+Shift+Z", "redo"),
+    ("Ctrl+S", "save"),
+    ("Ctrl+Shift+S", "save as"),
+    ("Ctrl+W", "close (asks about unsaved strokes)"),
+    ("H or ?", "show or hide this list"),
+    ("a value field", "type a value and press Enter"),
+)
+
+#: each control's tooltip
+TIPS = {
+    "mode": "What a stroke paints: comb lays the wrinkle vector q along the stroke (folds "
+            "across it), smooth averages q, erase removes it, width paints W",
+    "falloff": "How a stamp fades from its centre to the brush's edge: sphere acts on "
+               "nearly the whole width, smooth on its middle, constant evenly",
+    "mirror": "Paint the mirror image too, through the rest pose's plane at 0 on this axis",
+    "radius": "The brush's radius in the mesh's rest units ([ and ] change it)",
+    "strength": "How far one stamp moves the painted value towards its target (0 to 1)",
+    "amount": "How strongly comb gathers the cloth: |q| from 0 (no fold) to 1 (folds that "
+              "take up half the length); more amount gives deeper folds, not finer ones",
+    "geodesic": "Measure the brush's reach along the surface (on), or straight through "
+                "space (off: a stroke on one arm may reach the other)",
+    "front_only": "Paint only what faces the camera",
+    "flood": "Apply the brush's mode to every vertex of the active mesh (one undo step)",
+    "show_q": "Draw the painted wrinkle vectors as short segments",
+    "width": "W, the wrinkle width (rest wavelength) of the active mesh, in scene units; "
+             "width mode paints this value",
+    "amplitude": "wrinkle:amplitudeScale: scales every fold's height (1 is the fold law's)",
+    "slack": "wrinkle:slack: the compression the cloth takes in-plane before it folds",
+    "cloth": "Set W from a cloth preset's fold width through the stage's metersPerUnit",
+    "view": "Orbit with the mouse, or look through the stage's camera",
+    "play": "Play the timeline (Space)",
+    "timeline": "The frame shown and painted on",
+}
 
 
 def guarded(method):
@@ -355,7 +400,13 @@ def posed_directions(mesh, posed: np.ndarray, vectors: np.ndarray) -> np.ndarray
 
 
 class _Slider(QtWidgets.QWidget):
-    """A labelled float slider: ``moved(value)`` while dragged, ``released(value)``."""
+    """A labelled float slider with a field that takes a typed value: the slider's own
+    signals while dragged and on release; ``typed(value)`` when a value is typed and
+    Enter pressed (any finite number, also beyond the slider's range: whoever takes it
+    checks it), ``refused(text)`` when the text is not a number."""
+
+    typed = QtCore.Signal(float)
+    refused = QtCore.Signal(str)
 
     def __init__(self, label: str, low: float, high: float, value: float, decimals: int = 3,
                  log: bool = False):
@@ -367,14 +418,46 @@ class _Slider(QtWidgets.QWidget):
         self.label.setMinimumWidth(70)
         self.slider = QtWidgets.QSlider(Qt.Horizontal)
         self.slider.setRange(0, 1000)
-        self.value_label = QtWidgets.QLabel()
-        self.value_label.setMinimumWidth(52)
+        #: the value, shown and typed (Enter takes it, Esc restores the shown value)
+        self.field = QtWidgets.QLineEdit()
+        self.field.setFixedWidth(64)
+        self.field.setToolTip("Type a value and press Enter")
+        self.value_label = self.field  # the shown value (its text)
         layout.addWidget(self.label)
         layout.addWidget(self.slider, 1)
-        layout.addWidget(self.value_label)
+        layout.addWidget(self.field)
         self._exact: float | None = None
         self.set_value(value)
         self.slider.valueChanged.connect(self._moved)
+        self.field.returnPressed.connect(self._typed)
+
+    def setToolTip(self, text: str) -> None:  # noqa: N802 (Qt naming)
+        """The label and slider carry the control's tooltip; the field says it is typed."""
+        super().setToolTip(text)
+        self.label.setToolTip(text)
+        self.slider.setToolTip(text)
+        self.field.setToolTip(f"{text}. Type a value and press Enter")
+
+    def keyPressEvent(self, event):  # noqa: N802
+        if event.key() == Qt.Key_Escape and self.field.hasFocus():
+            self._show()
+            self.field.clearFocus()
+            return
+        super().keyPressEvent(event)
+
+    def _typed(self) -> None:
+        text = self.field.text().strip()
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not np.isfinite(value):
+            self._show()
+            self.refused.emit(f"{self.label.text()}: {text!r} is not a number")
+            return
+        self.set_value(value)
+        self.field.clearFocus()
+        self.typed.emit(value)
 
     def _to_value(self, position: int) -> float:
         t = position / 1000.0
@@ -406,7 +489,37 @@ class _Slider(QtWidgets.QWidget):
         self._show()
 
     def _show(self, *_):
-        self.value_label.setText(f"{self.value():.{self.decimals}g}")
+        self.field.setText(f"{self.value():.{self.decimals}g}")
+        self.field.setCursorPosition(0)
+
+
+class HelpOverlay(QtWidgets.QLabel):
+    """The keys and mouse bindings (BINDINGS) over the top left of the view, H or ? to
+    show or hide; :meth:`listed` reads them back from the text shown."""
+
+    def __init__(self, parent: QtWidgets.QWidget):
+        import html
+
+        super().__init__(parent)
+        rows = "".join(f"<tr><td><b>{html.escape(keys)}</b></td>"
+                       f"<td>&nbsp;&nbsp;{html.escape(what)}</td></tr>"
+                       for keys, what in BINDINGS)
+        self.setText(f"<table>{rows}</table>")
+        self.setTextFormat(Qt.RichText)
+        self.setStyleSheet("background: rgba(20, 20, 24, 215); color: #f0f0f0; "
+                           "padding: 10px; border-radius: 6px;")
+        self.setAttribute(Qt.WA_TransparentForMouseEvents)
+        self.adjustSize()
+        self.move(12, 12)
+
+    def listed(self) -> list[tuple[str, str]]:
+        """The (keys, what) rows the overlay shows, read back from its text."""
+        import html
+        import re
+
+        rows = re.findall(r"<tr><td><b>(.*?)</b></td><td>(?:&nbsp;)*(.*?)</td></tr>",
+                          self.text())
+        return [(html.unescape(keys), html.unescape(what)) for keys, what in rows]
 
 
 class PaintWindow(QtWidgets.QMainWindow):
@@ -499,6 +612,23 @@ class PaintWindow(QtWidgets.QMainWindow):
                                                                    name))
         self.cloth.currentTextChanged.connect(self._cloth_changed)
         self.view_mode.currentTextChanged.connect(self._view_mode_changed)
+        for slider in (self.radius, self.strength, self.amount):
+            slider.typed.connect(functools.partial(self._brush_typed, slider))
+        for name, slider in self._controls().items():
+            slider.typed.connect(functools.partial(self._control_typed, name))
+        for slider in (*self._controls().values(), self.radius, self.strength, self.amount):
+            slider.refused.connect(self._field_refused)
+        for name, widget in self._tipped().items():
+            widget.setToolTip(TIPS[name])
+
+    def _tipped(self) -> dict:
+        """The controls, by their TIPS names."""
+        return {"mode": self.mode, "falloff": self.falloff, "mirror": self.mirror,
+                "radius": self.radius, "strength": self.strength, "amount": self.amount,
+                "geodesic": self.geodesic, "front_only": self.front_only,
+                "flood": self.flood_button, "show_q": self.show_q,
+                "width": self.width_slider, "amplitude": self.amplitude,
+                "slack": self.slack, "cloth": self.cloth, "view": self.view_mode}
 
     def _controls(self) -> dict:
         return {"width": self.width_slider, "amplitude_scale": self.amplitude,
@@ -518,11 +648,14 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.addToolBar(Qt.BottomToolBarArea, bar)
         self.timeline.valueChanged.connect(self._scrub)
         self.play_button.toggled.connect(self._toggle_play)
+        self.play_button.setToolTip(TIPS["play"])
+        self.timeline.setToolTip(TIPS["timeline"])
 
     def _build_actions(self) -> None:
         menu = self.menuBar().addMenu("&File")
         edit = self.menuBar().addMenu("&Edit")
         view = self.menuBar().addMenu("&View")
+        help_menu = self.menuBar().addMenu("&Help")
         specs = (
             (menu, "&Save", QtGui.QKeySequence.Save, self.save),
             (menu, "Save &As...", QtGui.QKeySequence("Ctrl+Shift+S"), self.save_as),
@@ -537,6 +670,8 @@ class PaintWindow(QtWidgets.QMainWindow):
             (view, "&Frame meshes", QtGui.QKeySequence(Qt.Key_F), self.frame_meshes),
             (view, "Play", QtGui.QKeySequence(Qt.Key_Space),
              lambda: self.play_button.toggle()),
+            (help_menu, "&Keys and mouse", QtGui.QKeySequence(Qt.Key_H), self.toggle_help),
+            (help_menu, "&About", QtGui.QKeySequence(), self._about),
         )
         self.actions_by_name = {}
         for owner, text, keys, slot in specs:
@@ -546,6 +681,58 @@ class PaintWindow(QtWidgets.QMainWindow):
             action.triggered.connect(self._guard_slot(slot))
             owner.addAction(action)
             self.actions_by_name[text.replace("&", "")] = action
+        keys = self.actions_by_name["Keys and mouse"]
+        keys.setShortcuts([QtGui.QKeySequence(Qt.Key_H), QtGui.QKeySequence("?")])
+        keys.setCheckable(True)
+        self.help_overlay = HelpOverlay(self.view)
+        self.help_overlay.hide()
+
+    def toggle_help(self) -> None:
+        """Show or hide the keys and mouse bindings over the view (H or ?)."""
+        show = not self.help_overlay.isVisible()
+        self.help_overlay.setVisible(show)
+        if show:
+            self.help_overlay.raise_()
+        self.actions_by_name["Keys and mouse"].setChecked(show)
+
+    def _about(self) -> None:
+        from .. import __version__
+
+        QtWidgets.QMessageBox.about(
+            self, "About usdwrinkle paint",
+            f"usdwrinkle {__version__}: paint rest-pose wrinkle vectors q and W on "
+            "WrinkleAPI meshes; the saved layer renders as this window draws it. "
+            "The README's paint section has the whole story; H lists the keys.")
+
+    @guarded
+    def _brush_typed(self, slider, value: float) -> None:
+        """A typed brush value: taken when the brush accepts it, else the field goes
+        back to the brush's value and the window says why."""
+        if self.session is None:
+            return
+        name = {self.radius: "radius", self.strength: "strength",
+                self.amount: "amount"}[slider]
+        try:
+            self._brush_changed()
+        finally:
+            if getattr(self.session.brush, name) != slider.value():
+                slider.set_value(getattr(self.session.brush, name))
+
+    @guarded
+    def _control_typed(self, name: str, value: float) -> None:
+        """A typed W, amplitude or slack: authored as one undo step, or refused in one
+        line with the field back at the session's value."""
+        if self.session is None:
+            return
+        try:
+            self.session.set_control(name, value, live=False)
+        finally:
+            self._controls()[name].set_value(self.session.control(name))
+        self.after_edit()
+        self.view.update()
+
+    def _field_refused(self, text: str) -> None:
+        self.show_error(text)  # one line in the banner, as the session's refusals
 
     def _guard_slot(self, slot):
         def run(*_):
