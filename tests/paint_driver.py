@@ -544,6 +544,14 @@ def x_click(window, widget) -> None:
              str(centre.y()), "click", "1")
 
 
+def x_type(window, field, text: str) -> None:
+    """Click into ``field``, select all, type ``text`` and press Enter (real X events)."""
+    x_click(window, field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", text)
+    x_events(window, "key", "Return")
+
+
 def scenario_help_and_typed(out: Path, stage: str) -> dict:
     """Issue 57: the help overlay (H, then ?, with real key events), its key list read
     from the widget; W = 0.05 and a strength typed into their fields; a word typed into
@@ -563,33 +571,21 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
                            window.menuBar().actions()[-1].menu().actions()]
     # W typed into its field: click, select all, type, Enter
     result["w_before"] = session.control("width")
-    x_click(window, window.width_slider.field)
-    x_events(window, "key", "ctrl+a")
-    x_events(window, "type", "0.05")
-    x_events(window, "key", "Return")
+    x_type(window, window.width_slider.field, "0.05")
     settle(window)
     result["w_control"] = session.control("width")
     result["w_engine"] = float(np.median(session.engine.meshes[session.active].params.width))
     result["w_field"] = window.width_slider.field.text()
     result["undo_steps_after_w"] = len(session.undo_stack)
     # a brush value, then a word
-    x_click(window, window.strength.field)
-    x_events(window, "key", "ctrl+a")
-    x_events(window, "type", "0.8")
-    x_events(window, "key", "Return")
+    x_type(window, window.strength.field, "0.8")
     result["strength"] = session.brush.strength
-    x_click(window, window.amplitude.field)
-    x_events(window, "key", "ctrl+a")
-    x_events(window, "type", "lots")
-    x_events(window, "key", "Return")
+    x_type(window, window.amplitude.field, "lots")
     settle(window)
     result["amplitude_after_word"] = session.control("amplitude_scale")
     result["amplitude_field"] = window.amplitude.field.text()
     # a slack the session refuses (must be below 1): one line, the field back
-    x_click(window, window.slack.field)
-    x_events(window, "key", "ctrl+a")
-    x_events(window, "type", "2")
-    x_events(window, "key", "Return")
+    x_type(window, window.slack.field, "2")
     settle(window)
     result["slack_after_refusal"] = session.control("slack")
     result["slack_field"] = window.slack.field.text()
