@@ -370,7 +370,7 @@ def scenario_undo_and_escape(out: Path, stage: str) -> dict:
     key(window, Qt.Key_Z, Qt.ControlModifier)
     result["w_after_undo"] = session.control("width")
     result["slider_after_undo"] = slider.value()
-    result["label_after_undo"] = slider.value_label.text()
+    result["label_after_undo"] = slider.field.text()
     # a stroke, then a second one dropped with Esc halfway
     w, h = window.view.width(), window.view.height()
     drag(window, line((0.3 * w, 0.5 * h), (0.7 * w, 0.5 * h)))

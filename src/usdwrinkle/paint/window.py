@@ -418,11 +418,10 @@ class _Slider(QtWidgets.QWidget):
         self.label.setMinimumWidth(70)
         self.slider = QtWidgets.QSlider(Qt.Horizontal)
         self.slider.setRange(0, 1000)
-        #: the value, shown and typed (Enter takes it, Esc restores the shown value)
+        #: the value, shown and typed (Enter takes it)
         self.field = QtWidgets.QLineEdit()
         self.field.setFixedWidth(64)
         self.field.setToolTip("Type a value and press Enter")
-        self.value_label = self.field  # the shown value (its text)
         layout.addWidget(self.label)
         layout.addWidget(self.slider, 1)
         layout.addWidget(self.field)
@@ -437,13 +436,6 @@ class _Slider(QtWidgets.QWidget):
         self.label.setToolTip(text)
         self.slider.setToolTip(text)
         self.field.setToolTip(f"{text}. Type a value and press Enter")
-
-    def keyPressEvent(self, event):  # noqa: N802
-        if event.key() == Qt.Key_Escape and self.field.hasFocus():
-            self._show()
-            self.field.clearFocus()
-            return
-        super().keyPressEvent(event)
 
     def _typed(self) -> None:
         text = self.field.text().strip()
