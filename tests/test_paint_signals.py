@@ -20,7 +20,7 @@ from pxr import Usd
 
 from usdwrinkle.authoring import WrinkleAPI
 
-from helpers import find_window, sheet_stage, x_env, xdotool
+from helpers import find_window, sheet_stage, start_window, xdotool
 
 pytestmark = pytest.mark.slow
 
@@ -52,16 +52,9 @@ class Window:
         self.stage = sheet_stage(tmp_path / "sheet.usda", nx=21)
         self.out = tmp_path / "painted.usda"
         self.log_path = tmp_path / "paint.log"
-        self.log = open(self.log_path, "w")
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "usdwrinkle", "paint", self.stage, "-o", str(self.out),
-             "--size", "800x500"], env=x_env(display), stdout=self.log,
-            stderr=subprocess.STDOUT)
-        try:
-            self.id = find_window(display, "usdwrinkle paint", self.process.pid)
-        except BaseException:
-            self.close()  # a window that never showed must not outlive its test
-            raise
+        self.process, self.log, self.id = start_window(
+            display, [sys.executable, "-m", "usdwrinkle", "paint", self.stage, "-o",
+                      str(self.out), "--size", "800x500"], self.log_path)
 
     def title(self) -> str:
         return xdotool(self.display, "getwindowname", self.id, check=False).strip()
