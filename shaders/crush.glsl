@@ -151,10 +151,13 @@ float profile_slope(float rho) {
 }
 
 // The fold law (docs/method.md, "Folds that read as cloth"). r is the compression along
-// d with the painted q, r_geo the mesh's alone. rho is the length the wave restores per
-// posed length: the mesh's compression beyond the slack (the cloth takes the first of it
-// in-plane), times what the painted gather adds. The material wavelength coarsens with
-// rho; the slope is the profile's inextensible one; where the fold would rise beyond
+// d with the painted q, r_geo the mesh's alone, across the mesh's along the other
+// principal direction (1 where it is not compressed, at least ACROSS_MIN). rho is the
+// length the wave restores per posed length: the mesh's compression beyond the slack
+// (the cloth takes the first of it in-plane), times what the painted gather adds. The
+// material wavelength coarsens with rho; the slope is the profile's inextensible one for
+// the area's excess, rho with r_geo * across in place of r_geo (one wave restores the
+// area where the cloth is compressed both ways); where the fold would rise beyond
 // the room the posed surface's curvature leaves (``room``; the height after the
 // amplitude scale), it is lowered to the room: its wave unchanged, so that the phases
 // and crests stay as they are (a shorter wave that kept the length moved crests).
@@ -164,15 +167,21 @@ struct Fold {
     float wavelength;  // material (rest space): what the anchored phase counts
 };
 
-Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float W, float room, float scale,
-          vec3 t1, vec3 t2) {
-    Fold f;
-    // the slack c: the first of the compression is taken in-plane; the folds begin at a
-    // compression of c (restoring all but c) and restore the whole rest length from 3c
-    // on (a smooth onset, so that a compression that comes and goes near it does not
-    // make crests appear and vanish)
+// the slack c: the first of the compression is taken in-plane; the folds begin at a
+// compression of c (restoring all but c) and restore the whole rest length from 3c on (a
+// smooth onset, so that a compression that comes and goes near it does not make crests
+// appear and vanish). What the mesh's compression r_geo asks the folds to restore.
+float excess_of(float r_geo) {
     float restored = 1.0 - u_slack * smoothstep(1.0 - 3.0 * u_slack, 1.0 - u_slack, r_geo);
-    float rho = max(1.0, restored / r_geo) * min(r_geo / r, PAINT_GATHER_MAX);
+    return max(1.0, restored / r_geo);
+}
+
+Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float W, float room,
+          float scale, vec3 t1, vec3 t2) {
+    Fold f;
+    float gather = min(r_geo / r, PAINT_GATHER_MAX);
+    float rho = excess_of(r_geo) * gather;
+    float rho_area = max(rho, excess_of(r_geo * across) * gather);
     if (!(rho > 1.0)) {
         f.k = wave_vector(M_geo, d, W, t1, t2);
         f.amplitude = 0.0;
@@ -181,7 +190,7 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float W, float room, float s
     }
     float L = W * min(pow(rho, COARSENING_EXPONENT), COARSENING_MAX);
     f.k = wave_vector(M_geo, d, L, t1, t2);
-    f.amplitude = profile_slope(rho) / max(length(f.k), 1e-30);
+    f.amplitude = profile_slope(rho_area) / max(length(f.k), 1e-30);
     f.amplitude = min(f.amplitude, room / max(scale, 1e-30));
     f.wavelength = L;
     return f;
@@ -295,7 +304,11 @@ void main() {
     float local = held * fetch(gain, i).x;
     // room for a fold: FOLD_ROOM of the posed surface's radius of curvature
     float room = bend > 0.0 ? FOLD_ROOM / bend : 1e30;
-    Fold f1 = fold(M_geo, d, r, r_geo, W, room, u_amplitude_scale, t1, t2);
+    // the mesh's compression across d, which one wave restores with its own where the
+    // second system is off (with it on, that system restores it)
+    float across = u_biaxial > 0.0 || !usable ? 1.0
+                   : clamp(length(M_geo * e), ACROSS_MIN, 1.0);
+    Fold f1 = fold(M_geo, d, r, r_geo, across, W, room, u_amplitude_scale, t1, t2);
     float amplitude = local * u_amplitude_scale * f1.amplitude;
     vec3 k = f1.k;
     float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
@@ -319,7 +332,8 @@ void main() {
     // The second system: the other principal direction, where it is compressed too
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
     float r2_geo = any_wave ? clamp(length(M_geo * e), MIN_RATIO, 1.0) : 1.0;
-    Fold f2 = fold(M_geo, e, r2, r2_geo, W, room, u_amplitude_scale * u_biaxial, t1, t2);
+    Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, W, room, u_amplitude_scale * u_biaxial,
+                   t1, t2);
     float amplitude2 = u_biaxial > 0.0 ? local * u_biaxial * u_amplitude_scale * f2.amplitude
                                         : 0.0;
     vec3 k2 = f2.k;

@@ -28,7 +28,7 @@ def fields_at(ctx, stage, frames):
 # measured swim (rad per frame, amplitude weighted) with history: 0.21, 0.04, 0.13;
 # without it (every frame relaxed from the anchored start) the zeppelin swam 1.17. The
 # fold law's coarsening (issue 55) moves the deflating zeppelin's crests as its folds widen
-# all along the shot: 0.15 (docs/method.md, "The fold law").
+# all along the shot: 0.16 (docs/method.md, "The fold law").
 @pytest.mark.parametrize("name,bound", [("shirt", 0.35), ("zeppelin", 0.18), ("curtain", 0.25)])
 def test_crests_ride_with_the_cloth(gl_context, name, bound):
     frames = fields_at(gl_context, SAMPLES / f"{name}.usda", [float(f) for f in range(9, 25)])

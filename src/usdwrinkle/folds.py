@@ -6,7 +6,9 @@ the profile's slope table from here.
 - **Inextensible.** Along the compression a posed length of cloth holds ``rho`` times as
   much material (its excess length): the mesh's compression beyond the slack, times what
   a painted gather adds. The wave restores exactly that length for the mesh's profile H:
-  its slope ``a |k|`` solves ``mean sqrt(1 + (a |k| H')^2) = rho`` (slope_table).
+  its slope ``a |k|`` solves ``mean sqrt(1 + (a |k| H')^2) = rho`` (slope_table). Where
+  the mesh is compressed across the wave too, the slope restores the area instead
+  (``area_excess``: the compression across joins, down to ACROSS_MIN).
 - **Coarsening.** ``L = W min(rho^COARSENING_EXPONENT, COARSENING_MAX)``: the cloth
   referee's folds widen under compression while their posed wavelength stays about
   constant (docs/physics.md); exponent 1 keeps the posed wavelength at W up to rho =
@@ -21,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .contract import (
+    ACROSS_MIN,
     COARSENING_EXPONENT,
     COARSENING_MAX,
     MIN_RATIO,
@@ -84,6 +87,19 @@ def excess_length(r, r_geo, slack: float) -> np.ndarray:
         np.minimum(r_geo / r, PAINT_GATHER_MAX)
 
 
+def area_excess(r, r_geo, across, slack: float) -> np.ndarray:
+    """The excess length the fold's slope restores: ``excess_length`` with the mesh's
+    compression ``r_geo * across`` in place of ``r_geo`` (``across``: the mesh's
+    compression across the wave, clipped to [ACROSS_MIN, 1]), so that where the cloth is
+    compressed both ways one wave restores its area. Never less than excess_length."""
+    r = np.asarray(r, np.float64)
+    r_geo = np.asarray(r_geo, np.float64)
+    area = r_geo * np.clip(np.asarray(across, np.float64), ACROSS_MIN, 1.0)
+    gather = np.minimum(r_geo / r, PAINT_GATHER_MAX)
+    return np.maximum(excess_length(r, r_geo, slack),
+                      np.maximum(1.0, restored(area, slack) / area) * gather)
+
+
 def restored(r_geo, slack: float) -> np.ndarray:
     """The share of the rest length that folds restore where the mesh is compressed to
     ``r_geo``: the cloth takes the first ``slack`` in-plane, so folds begin at r = 1 -
@@ -106,10 +122,13 @@ def material_wavelength(width, rho) -> np.ndarray:
 
 def height_bound(table: np.ndarray, slack: float = 0.0) -> float:
     """The tallest fold the law draws, over W (on flat cloth, before the amplitude scale):
-    the largest slope(rho) r_geo L / (2 pi W) over every compression r_geo in
-    [MIN_RATIO, 1] and painted gather up to PAINT_GATHER_MAX."""
-    r_geo = np.linspace(MIN_RATIO, 1.0, 2001)[:, None]
-    gather = np.linspace(1.0, PAINT_GATHER_MAX, 41)[None, :]
+    the largest slope(rho_area) r_geo L / (2 pi W) over every compression r_geo in
+    [MIN_RATIO, 1], painted gather up to PAINT_GATHER_MAX and compression across in
+    [ACROSS_MIN, 1]."""
+    r_geo = np.linspace(MIN_RATIO, 1.0, 2001)[:, None, None]
+    gather = np.linspace(1.0, PAINT_GATHER_MAX, 41)[None, :, None]
+    across = np.linspace(ACROSS_MIN, 1.0, 7)[None, None, :]
     rho = excess_length(r_geo / gather, r_geo, slack)
-    height = profile_slope(table, rho) * r_geo * material_wavelength(1.0, rho) / (2 * np.pi)
+    slope = profile_slope(table, area_excess(r_geo / gather, r_geo, across, slack))
+    height = slope * r_geo * material_wavelength(1.0, rho) / (2 * np.pi)
     return float(np.where(rho > 1.0, height, 0.0).max())

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import FOLD_ROOM, MIN_RATIO
-from ..folds import excess_length, material_wavelength, profile_slope
+from ..folds import area_excess, excess_length, material_wavelength, profile_slope
 from ..scene.topology import Topology, rest_tangents, vertex_normals
 
 
@@ -111,11 +111,17 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     room = np.where(bend > 0, FOLD_ROOM / np.maximum(bend, 1e-300), np.inf)
     table = default_slope() if slope is None else np.asarray(slope, np.float64)
     rho = excess_length(r, r_geo, slack)
+    # the compression across d (crush.glsl: one wave restores the area; wrinkle:biaxial,
+    # which the reference does not draw, would restore it with a second system)
+    e = np.stack([-d[:, 1], d[:, 0]], 1)
+    across = np.where(usable, np.linalg.norm(np.einsum("nij,nj->ni", M_geo, e), axis=1), 1.0)
+    rho_area = area_excess(r, r_geo, across, slack)
     folding = rho > 1.0
     wavelength = np.where(folding, material_wavelength(width, rho), width)
     k2 = wave_vector(M_geo, d, wavelength)
     kl = np.linalg.norm(k2, axis=1)
-    amplitude = np.where(folding, profile_slope(table, rho) / np.maximum(kl, 1e-30), 0.0)
+    amplitude = np.where(folding, profile_slope(table, rho_area) / np.maximum(kl, 1e-30),
+                         0.0)
     capped = amplitude * amplitude_scale > room
     amplitude = np.minimum(amplitude, room / max(amplitude_scale, 1e-30)) * amplitude_scale
     if hold is not None:
