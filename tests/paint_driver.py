@@ -597,6 +597,117 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
     return result
 
 
+def x_drag(window, points, hold=None) -> dict:
+    """A left-button drag through widget pixels ``points`` with real X events (xdotool:
+    press, moves, release); ``hold(k)`` runs after the k-th move, the button still down.
+    Returns what ``hold`` returned, by move."""
+    wid = str(int(window.winId()))
+    origin = window.view.mapTo(window, QtCore.QPoint(0, 0))
+    seen = {}
+
+    def at(x, y):
+        return str(int(round(origin.x() + x))), str(int(round(origin.y() + y)))
+
+    x_events(window, "mousemove", "--window", wid, *at(*points[0]), "mousedown", "1")
+    for k, (x, y) in enumerate(points[1:], 1):
+        x_events(window, "mousemove", "--window", wid, *at(x, y))
+        if hold is not None:
+            seen[k] = hold(k)
+    x_events(window, "mouseup", "1")
+    settle(window)
+    return seen
+
+
+def scenario_big_brush(out: Path, stage: str) -> dict:
+    """Issue 57: with a huge brush (radius 6, typed) a short drag did nothing and showed
+    no outline. With real X events: an 80 px comb drag over the shirt at radius 6 paints
+    (one undo step), the outline stays drawn while the button is down with an arrow
+    along the drag; a drag over the empty background paints nothing and says so in the
+    status bar."""
+    window = open_window(stage, str(out / "big.usda"), size=(1100, 640))
+    session, view = window.session, window.view
+    x_events(window, "windowfocus", "--sync", str(int(window.winId())))
+    x_type(window, window.radius.field, "6")
+    settle(window)
+    result = {"radius": session.brush.radius, "mode": session.brush.mode}
+    points, _ = upper_arm_stroke(window)
+    start = np.asarray(points[len(points) // 2])
+    drag_points = [tuple(start + [k * 10.0, 0.0]) for k in range(9)]  # 80 px
+    before = session.mesh.q.copy()
+
+    def outline(k):
+        view.repaint()  # the overlay as the next paint draws it
+        if k == 4:
+            screenshot(window, out / "big_brush_drag.png")
+        drawn = view.outline
+        if drawn is None:
+            return None
+        return {"painting": drawn["painting"],
+                "tip": None if drawn["tip"] is None else [float(v) for v in drawn["tip"]],
+                "ring_px": float(np.ptp(drawn["ring"][:, 0]))}
+
+    seen = x_drag(window, drag_points, hold=outline)
+    amount = np.linalg.norm(session.mesh.q - before, axis=1)
+    result.update({"outlines": seen, "cursor": [float(v) for v in drag_points[-1]],
+                   "changed_points": int(np.sum(amount > 1e-6)),
+                   "undo_steps": len(session.undo_stack),
+                   "stamps": len(session.stamp_centres)})
+    screenshot(window, out / "big_brush.png")
+    # the background: the window's top-left corner, far from the shirt
+    q_before = session.mesh.q.copy()
+    x_drag(window, [(12.0 + k * 10.0, 12.0) for k in range(9)])
+    result["missed_message"] = window.statusBar().currentMessage()
+    result["missed_changed"] = bool(not np.array_equal(q_before, session.mesh.q))
+    result["undo_steps_after_miss"] = len(session.undo_stack)
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
+def scenario_modifiers(out: Path, stage: str) -> dict:
+    """Issue 57: Shift smooths and Ctrl erases while held. With real X events: a comb
+    stroke along the upper arm, then a short drag across it with Shift held, and the same
+    drag in the smooth mode (each from the same state: Ctrl+Z between); the same with
+    Ctrl and the erase mode. Returns the q arrays' differences."""
+    window = open_window(stage, str(out / "modifiers.usda"), size=(1100, 640))
+    session = window.session
+    wid = str(int(window.winId()))
+    x_events(window, "windowfocus", "--sync", wid)
+    points, _ = upper_arm_stroke(window)
+    x_drag(window, points[::3])
+    combed = session.mesh.q.copy()
+    middle = np.asarray(points[len(points) // 2])
+    across = [tuple(middle + [0.0, dy]) for dy in range(-40, 41, 8)]
+    result = {"combed": float(np.linalg.norm(combed, axis=1).max())}
+
+    def stroke(modifier=None, mode=None) -> np.ndarray:
+        if mode is not None:
+            window.mode.setCurrentText(mode)
+        if modifier is not None:
+            x_events(window, "keydown", modifier)
+        x_drag(window, across)
+        if modifier is not None:
+            x_events(window, "keyup", modifier)
+        q = session.mesh.q.copy()
+        x_events(window, "key", "ctrl+z")
+        settle(window)
+        result.setdefault("restored", []).append(bool(np.array_equal(session.mesh.q, combed)))
+        window.mode.setCurrentText("comb")
+        return q
+
+    for modifier, mode in (("shift", "smooth"), ("ctrl", "erase")):
+        held, chosen = stroke(modifier=modifier), stroke(mode=mode)
+        result[mode] = {"held_vs_mode": float(np.abs(held - chosen).max()),
+                        "changed": float(np.abs(held - combed).max()),
+                        "amount_after": float(np.linalg.norm(held, axis=1).sum()
+                                              / max(np.linalg.norm(combed, axis=1).sum(),
+                                                    1e-12))}
+    result["mode_after"] = session.brush.mode
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,

@@ -144,8 +144,30 @@ def test_stamps_are_spaced_along_the_drag():
 
     assert stroke.add(hit(-0.5), None) == 0  # comb waits for a direction
     assert stroke.add(hit(-0.48), None) == 0  # less than a spacing (0.05)
-    assert stroke.add(hit(0.0), None) == 10  # 0.5 of travel: a stamp every 0.05
-    np.testing.assert_allclose(np.diff([c[0] for c in stroke.centres]), 0.05)
+    # 0.5 of travel: a stamp every 0.05, and the press point's now that comb has a direction
+    assert stroke.add(hit(0.0), None) == 11
+    np.testing.assert_allclose([c[0] for c in stroke.centres], np.arange(11) * 0.05 - 0.5,
+                               atol=1e-12)
+    assert stroke.add(hit(0.07), None) == 1  # later steps stamp only the new spacings
+
+
+def test_a_huge_brush_stamps_by_screen_distance_too():
+    """Issue 57: at radius 6 a quarter radius (1.5) is farther than a short drag goes, so
+    nothing was painted. ``min_step`` (PaintSession: SCREEN_SPACING pixels in rest space)
+    caps the spacing: 0.5 of travel with min_step 0.1 stamps at the press and every 0.1."""
+    mesh = sheet()
+    brush = BrushSettings(radius=6.0, spacing=0.25, geodesic=False)
+    stroke = Stroke(mesh, brush)
+
+    def hit(x):
+        return Hit("/Sheet", 0, np.array([1.0, 0, 0]), np.array([x, 0.0, 0.0]), 1.0)
+
+    stroke.add(hit(-0.25), None)
+    assert stroke.add(hit(0.25), None) == 0  # the brush's own spacing: 1.5
+    assert stroke.add(hit(0.25), None, min_step=0.1) == 6
+    np.testing.assert_allclose([c[0] for c in stroke.centres], [-0.25, -0.15, -0.05, 0.05,
+                                                                0.15, 0.25], atol=1e-12)
+    assert np.linalg.norm(mesh.q, axis=1).max() > 0.1
 
 
 def test_flood_combs_every_vertex():

@@ -163,6 +163,40 @@ def test_the_help_overlay_and_typed_values(display, tmp_path):
         assert len(tip) > 15, name
 
 
+def test_a_short_drag_with_a_huge_brush_paints_and_a_miss_says_so(display, tmp_path):
+    """Issue 57: at radius 6.37 a short drag did nothing (stamps a quarter radius apart
+    in rest space) and the outline vanished while painting. With real X events: an 80 px
+    comb drag at radius 6 (typed) paints, as one undo step, its outline drawn while the
+    button is down with an arrow along the drag (+x); a drag over the background changes
+    nothing and the status bar says it missed."""
+    result = drive(display, "big_brush", tmp_path)
+    assert result["radius"] == pytest.approx(6.0) and result["mode"] == "comb"
+    assert result["changed_points"] > 0 and result["undo_steps"] == 1
+    assert result["stamps"] >= 2
+    drawn = [seen for seen in result["outlines"].values() if seen is not None]
+    assert len(drawn) == len(result["outlines"]) and all(seen["painting"] for seen in drawn)
+    tip = drawn[-1]["tip"]
+    assert tip is not None and tip[0] > result["cursor"][0] + 10  # the arrow points along +x
+    assert abs(tip[1] - result["cursor"][1]) < 2
+    assert "missed" in result["missed_message"]
+    assert not result["missed_changed"] and result["undo_steps_after_miss"] == 1
+    assert result["errors"] == []
+
+
+def test_shift_smooths_and_ctrl_erases_while_held(display, tmp_path):
+    """Issue 57: no modifier keys. With real X events over a combed upper arm: a drag
+    with Shift held equals the same drag in the smooth mode, and with Ctrl held the same
+    drag in the erase mode (each from the same state, Ctrl+Z between, which restores it
+    exactly); erasing lowers the painted amount, and the brush's mode stays comb."""
+    result = drive(display, "modifiers", tmp_path)
+    assert result["combed"] > 0.5 and all(result["restored"]), result
+    for mode in ("smooth", "erase"):
+        assert result[mode]["changed"] > 1e-3, (mode, result[mode])
+        assert result[mode]["held_vs_mode"] == 0.0, (mode, result[mode])
+    assert result["erase"]["amount_after"] < 0.95
+    assert result["mode_after"] == "comb" and result["errors"] == []
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

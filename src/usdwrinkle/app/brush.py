@@ -395,8 +395,10 @@ def spread(q: np.ndarray, index: np.ndarray) -> float:
 
 class Stroke:
     """Stamps spaced along a drag: each new sample places stamps every
-    ``spacing * radius`` of rest-space travel since the last one, each combing along
-    the travel's direction."""
+    ``spacing * radius`` of rest-space travel since the last one (or closer: ``min_step``,
+    the rest-space length of a few pixels, so that a short drag with a huge brush paints
+    too), each combing along the travel's direction. A mode without a direction stamps on
+    the press; comb stamps at the press point as soon as the first step gives it one."""
 
     def __init__(self, mesh: PaintMesh, brush: BrushSettings):
         self.mesh, self.brush = mesh, brush
@@ -405,12 +407,18 @@ class Stroke:
         self.touched: set[int] = set()
         #: the rest-space centre of every stamp placed
         self.centres: list[np.ndarray] = []
+        #: the press's triangle and pressure (comb stamps there once it has a direction)
+        self._first: tuple = (None, 1.0)
 
-    def add(self, hit: Hit, facing: np.ndarray | None, pressure: float = 1.0) -> int:
-        """A new sample of the drag; returns the stamps placed."""
+    def add(self, hit: Hit, facing: np.ndarray | None, pressure: float = 1.0,
+            min_step: float | None = None) -> int:
+        """A new sample of the drag; returns the stamps placed. ``min_step``: the
+        rest-space spacing that stamps never exceed (PaintSession passes the length of
+        SCREEN_SPACING pixels there)."""
         point = np.asarray(hit.rest_point, np.float64)
         if self.last is None:
             self.last = point
+            self._first = (hit.triangle, pressure)
             if self.brush.mode != "comb":  # comb needs a direction: the first move gives it
                 self._stamp(point, hit.triangle, None, facing, pressure)
                 return 1
@@ -418,16 +426,22 @@ class Stroke:
         travel = point - self.last
         length = float(np.linalg.norm(travel))
         step = self.brush.spacing * self.brush.radius
-        if length < step:
+        if min_step is not None and min_step > 0.0:
+            step = min(step, min_step)
+        if length < step or not step > 0.0:
             return 0
         self.direction = travel / length
         count = int(length / step + 1e-9)  # 0.5 / 0.05 is 10 stamps, not 9
-        for k in range(1, count + 1):
+        first = 1
+        if self.brush.mode == "comb" and not self.centres:
+            first = 0  # the press point, now that the stroke has a direction
+        for k in range(first, count + 1):
             centre = self.last + travel * (k * step / length)
-            tri = hit.triangle if k == count else None
-            self._stamp(centre, tri, self.direction, facing, pressure)
+            tri = hit.triangle if k == count else (self._first[0] if k == 0 else None)
+            self._stamp(centre, tri, self.direction, facing,
+                        self._first[1] if k == 0 else pressure)
         self.last = self.last + travel * (count * step / length)
-        return count
+        return count + 1 - first
 
     def _stamp(self, centre, triangle, direction, facing, pressure) -> None:
         touched = stamp(self.mesh, self.brush, centre, triangle, direction, facing, pressure)

@@ -23,6 +23,11 @@ from ..layerinfo import copy_stage_info
 from .brush import BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 
+#: stamps along a drag lie at most this many pixels apart on screen (besides the brush's
+#: spacing in radii): with a huge brush a short drag paints too (issue 57: at radius 6.37
+#: a quarter radius was farther than an 80 px drag reached)
+SCREEN_SPACING = 8.0
+
 #: the live controls: WrinkleParams field -> (schema attribute, lowest, highest)
 CONTROLS = {"width": (schema.WIDTH, 1e-4, None),
             "amplitude_scale": (schema.AMPLITUDE_SCALE, 0.0, 10.0),
@@ -213,6 +218,8 @@ class PaintSession:
         self._stroke: Stroke | None = None
         self._stroke_before: tuple | None = None
         self._stroke_facing: np.ndarray | None = None
+        #: the drag's last sample: pixel x, y, its rest point, rest length per pixel
+        self._stroke_sample: tuple | None = None
         #: the last stroke's rest-space direction (what comb floods along)
         self._last_stroke_direction: np.ndarray | None = None
         self._live: dict | None = None
@@ -328,16 +335,21 @@ class PaintSession:
 
     # -- strokes --------------------------------------------------------------------
     def begin_stroke(self, x: float, y: float, width: int, height: int,
-                     pressure: float = 1.0) -> bool:
-        """Start a stroke at pixel (x, y); False where it misses every painted mesh."""
+                     pressure: float = 1.0, mode: str | None = None) -> bool:
+        """Start a stroke at pixel (x, y); False where it misses every painted mesh.
+        ``mode``: this stroke's brush mode instead of the brush's (the window's Shift
+        smooths and Ctrl erases while held), the brush's other settings as they are."""
         hit = self.pick(x, y, width, height)
         if hit is None:
             return False
         self.active = hit.path
         mesh = self.mesh
-        self._stroke = Stroke(mesh, self.brush)
+        brush = self.brush if mode is None or mode == self.brush.mode else \
+            replace(self.brush, mode=mode)
+        self._stroke = Stroke(mesh, brush)
         self._stroke_before = (mesh.q.copy(), mesh.width.copy())
         self._stroke_facing = self.facing(hit.path)
+        self._stroke_sample = (x, y, np.asarray(hit.rest_point, np.float64), None)
         self._stroke.add(hit, self._stroke_facing, pressure)
         self._preview_mesh(mesh)
         return True
@@ -350,10 +362,23 @@ class PaintSession:
         hit = self.pick(x, y, width, height)
         if hit is None or hit.path != self.active:
             return 0
-        placed = self._stroke.add(hit, self._stroke_facing, pressure)
+        placed = self._stroke.add(hit, self._stroke_facing, pressure,
+                                  min_step=self._screen_step(x, y, hit))
         if placed:
             self._preview_mesh(self.mesh)
         return placed
+
+    def _screen_step(self, x: float, y: float, hit: Hit) -> float | None:
+        """The rest-space length of SCREEN_SPACING pixels where the drag is, measured
+        between its samples (rest travel over pixel travel; the last measure where the
+        cursor has not moved): stamps are never farther apart than that on screen."""
+        last_x, last_y, last_rest, per_pixel = self._stroke_sample
+        rest = np.asarray(hit.rest_point, np.float64)
+        pixels = float(np.hypot(x - last_x, y - last_y))
+        if pixels >= 1.0:
+            per_pixel = float(np.linalg.norm(rest - last_rest)) / pixels
+            self._stroke_sample = (x, y, rest, per_pixel)
+        return None if per_pixel is None else SCREEN_SPACING * per_pixel
 
     @property
     def stroking(self) -> bool:

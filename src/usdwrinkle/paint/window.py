@@ -40,6 +40,8 @@ BACKGROUND = (0.18, 0.18, 0.2)
 #: the keys and mouse bindings, as the Help menu and the H overlay list them
 BINDINGS = (
     ("Left drag", "paint with the brush"),
+    ("Shift+left drag", "smooth, whatever the brush's mode"),
+    ("Ctrl+left drag", "erase, whatever the brush's mode"),
     ("Alt+left drag", "tumble the view"),
     ("Middle drag", "track the view (also Alt+middle)"),
     ("Right drag, wheel", "dolly the view (also Alt+right)"),
@@ -148,6 +150,12 @@ class PaintView(QOpenGLWidget):
         self.interacting = False  # a stroke or a live slider: draw the preview
         self.last_frame = None
         self._drag = None
+        #: the drag's direction on screen (unit, widget pixels), while painting
+        self.drag_direction: np.ndarray | None = None
+        #: the brush mode of the stroke in progress where a modifier overrides it
+        self.stroke_mode: str | None = None
+        #: the brush outline last drawn (_draw_outline), None where none was
+        self.outline: dict | None = None
         self._texture = None
         self._program = None
         self._vao = None
@@ -235,8 +243,9 @@ class PaintView(QOpenGLWidget):
             painter.setRenderHint(QtGui.QPainter.Antialiasing)
             if self.show_q:
                 self._draw_q(painter)
-            if self.cursor_pos is not None and not self._drag:
-                self._draw_outline(painter, session)
+            painting = self._drag is not None and self._drag[0] == "paint"
+            if self.cursor_pos is not None and (self._drag is None or painting):
+                self._draw_outline(painter, session, painting)
         finally:
             painter.end()
 
@@ -247,7 +256,10 @@ class PaintView(QOpenGLWidget):
         xy[:, 1] *= self.height() / frame.height
         return xy, front
 
-    def _draw_outline(self, painter, session) -> None:
+    def _draw_outline(self, painter, session, painting: bool = False) -> None:
+        """The brush's circle on the surface under the cursor; while painting, also an
+        arrow from its centre along the drag (the direction comb combs along)."""
+        self.outline = None
         frame = self.last_frame
         if frame is None:
             return
@@ -271,6 +283,19 @@ class PaintView(QOpenGLWidget):
             return
         painter.setPen(QtGui.QPen(QtGui.QColor(255, 220, 80), 1.5))
         painter.drawPolyline(QtGui.QPolygonF([QtCore.QPointF(*p) for p in xy]))
+        tip = None
+        if painting and self.drag_direction is not None:
+            centre_xy = np.array([self.cursor_pos.x(), self.cursor_pos.y()])
+            reach = float(np.max(np.linalg.norm(xy - centre_xy, axis=1)))
+            tip = centre_xy + self.drag_direction * min(max(reach, 12.0), 60.0)
+            side = np.array([-self.drag_direction[1], self.drag_direction[0]]) * 5.0
+            back = tip - self.drag_direction * 9.0
+            painter.drawLine(QtCore.QPointF(*centre_xy), QtCore.QPointF(*tip))
+            painter.drawPolyline(QtGui.QPolygonF([QtCore.QPointF(*(back + side)),
+                                                  QtCore.QPointF(*tip),
+                                                  QtCore.QPointF(*(back - side))]))
+        #: what was drawn (widget pixels): the circle and the arrow's tip, for the tests
+        self.outline = {"ring": xy, "tip": tip, "painting": painting}
 
     def _draw_q(self, painter) -> None:
         session, frame = self.session, self.last_frame
@@ -309,11 +334,15 @@ class PaintView(QOpenGLWidget):
             if self.fault == "brush":
                 self.fault = None
                 raise RuntimeError("injected fault in the brush")
-            # a stroke may start off the mesh: it begins where the drag first meets it
+            # a stroke may start off the mesh: it begins where the drag first meets it.
+            # Held at the press: Shift smooths, Ctrl erases (Maya's Artisan, Blender)
+            modifiers = event.modifiers()
+            self.stroke_mode = "smooth" if modifiers & Qt.ShiftModifier else \
+                "erase" if modifiers & Qt.ControlModifier else None
             self._drag = ("paint", pos)
             self.interacting = True
             self.session.begin_stroke(pos.x(), pos.y(), self.width(), self.height(),
-                                      self.pressure)
+                                      self.pressure, self.stroke_mode)
             self.update()
             return
         kind = {Qt.LeftButton: "tumble", Qt.MiddleButton: "track",
@@ -334,9 +363,11 @@ class PaintView(QOpenGLWidget):
         kind, last = self._drag
         dx, dy = pos.x() - last.x(), pos.y() - last.y()
         if kind == "paint":
+            if dx or dy:
+                self.drag_direction = np.array([dx, dy]) / float(np.hypot(dx, dy))
             if not self.session.stroking:
                 self.session.begin_stroke(pos.x(), pos.y(), self.width(), self.height(),
-                                          self.pressure)
+                                          self.pressure, self.stroke_mode)
             elif self.session.drag(pos.x(), pos.y(), self.width(), self.height(),
                                    self.pressure):
                 self.owner.mark_dirty()
@@ -356,9 +387,15 @@ class PaintView(QOpenGLWidget):
         kind, _ = self._drag
         self._drag = None
         self.interacting = False
+        self.drag_direction = None
         if kind == "paint":
+            began = self.session.stroking
             self.session.end_stroke()
             self.owner.after_edit()
+            if not began:
+                self.owner.statusBar().showMessage(
+                    "the stroke missed the cloth: start or drag it over a wrinkled mesh "
+                    f"({', '.join(self.session.paths)})", 6000)
         self.update()  # refine: the full-quality frame
 
     @guarded
@@ -535,6 +572,10 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.error_banner.setWordWrap(True)
         self.error_banner.hide()
         self.statusBar().addPermanentWidget(self.error_banner, 1)
+        #: the last frame's numbers, on the status bar's right; its left side keeps the
+        #: messages (saved, a stroke that missed) for their seconds
+        self.frame_info = QtWidgets.QLabel()
+        self.statusBar().addPermanentWidget(self.frame_info)
         self._build_controls()
         self._build_timeline()
         self._build_actions()
@@ -933,7 +974,7 @@ class PaintWindow(QtWidgets.QMainWindow):
 
     def frame_drawn(self, frame) -> None:
         kind = "preview" if frame.quality.preview else "full"
-        self.statusBar().showMessage(
+        self.frame_info.setText(
             f"frame {format_frame(frame.frame)}, {frame.width}x{frame.height} {kind} in "
             f"{1e3 * frame.seconds:.0f} ms; radius {self.session.brush.radius:.3g}; "
             f"mesh {self.session.active}")
