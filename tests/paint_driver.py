@@ -708,6 +708,81 @@ def scenario_modifiers(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_resize(out: Path, stage: str) -> dict:
+    """Issue 57: B + left drag resizes the brush (real X events: B held, a 100 px drag to
+    the right over the shirt); the outline drawn at the drag's start grows with it. Then
+    a plain drag still paints, and q is untouched by the resize."""
+    window = open_window(stage, str(out / "resize.usda"), size=(1100, 640))
+    session, view = window.session, window.view
+    x_events(window, "windowfocus", "--sync", str(int(window.winId())))
+    points, _ = upper_arm_stroke(window)
+    start = np.asarray(points[len(points) // 2])
+    before_q = session.mesh.q.copy()
+    result = {"radius_before": session.brush.radius}
+
+    def outline(k):
+        view.repaint()
+        drawn = view.outline
+        return None if drawn is None else float(np.ptp(drawn["ring"][:, 0]))
+
+    x_events(window, "keydown", "b")
+    seen = x_drag(window, [tuple(start + [dx, 0.0]) for dx in range(0, 101, 20)],
+                  hold=outline)
+    x_events(window, "keyup", "b")
+    result.update({"radius_after": session.brush.radius, "outline_px": seen,
+                   "field": window.radius.field.text(),
+                   "q_untouched": bool(np.array_equal(before_q, session.mesh.q)),
+                   "undo_steps": len(session.undo_stack)})
+    x_drag(window, [tuple(start + [dx, 0.0]) for dx in range(0, 41, 8)])
+    result["painted_after"] = bool(not np.array_equal(before_q, session.mesh.q))
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
+def scenario_follow(out: Path, stage: str) -> dict:
+    """Issue 57: the view stayed framed on the opening frame while the timeline played.
+    ``stage``: a sheet that travels across the frames (the test writes it). The timeline
+    played with Space (real X key events) over every frame, with View > Follow the mesh
+    off and then on: per drawn frame, the share of the mesh's points inside the view."""
+    from usdwrinkle.app.view import project
+
+    window = open_window(stage, str(out / "follow.usda"), size=(1000, 600))
+    session, view = window.session, window.view
+    x_events(window, "windowfocus", "--sync", str(int(window.winId())))
+    frames = range(window.timeline.minimum(), window.timeline.maximum() + 1)
+
+    def inside() -> dict:
+        shares = {}
+
+        def record():
+            frame = view.last_frame
+            if frame is None or frame.frame in shares:
+                return False
+            points = session.engine.posed_points(session.active)
+            xy, front = project(frame.camera, points, frame.width, frame.height)
+            shares[frame.frame] = float(np.mean(front & (xy[:, 0] >= 0) & (xy[:, 1] >= 0) &
+                                                (xy[:, 0] <= frame.width) &
+                                                (xy[:, 1] <= frame.height)))
+            return len(shares) == len(frames)
+
+        window.timeline.setValue(window.timeline.maximum())
+        settle(window)
+        x_events(window, "key", "space")  # play
+        wait_for(record, "every frame drawn while playing", timeout=240)
+        x_events(window, "key", "space")  # stop
+        settle(window)
+        return shares
+
+    result = {"off": inside()}
+    window.actions_by_name["Follow the mesh"].trigger()
+    result["follow_checked"] = window.actions_by_name["Follow the mesh"].isChecked()
+    result["on"] = inside()
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,

@@ -197,6 +197,40 @@ def test_shift_smooths_and_ctrl_erases_while_held(display, tmp_path):
     assert result["mode_after"] == "comb" and result["errors"] == []
 
 
+def test_b_and_a_drag_resize_the_brush(display, tmp_path):
+    """Issue 57: no drag-to-resize. With real X events, B held and a 100 px drag to the
+    right double the radius exactly (2 ** (dx / 100)); the outline grows on screen as it
+    goes, nothing is painted, and a drag without B paints again."""
+    result = drive(display, "resize", tmp_path)
+    assert result["radius_after"] == pytest.approx(2 * result["radius_before"], rel=1e-6)
+    assert float(result["field"]) == pytest.approx(result["radius_after"], rel=1e-2)
+    sizes = [size for _, size in sorted(result["outline_px"].items(), key=lambda kv: int(kv[0]))]
+    assert all(size is not None for size in sizes) and np.all(np.diff(sizes) > 0), sizes
+    assert sizes[-1] / sizes[0] > 1.5
+    assert result["q_untouched"] and result["undo_steps"] == 0
+    assert result["painted_after"] and result["errors"] == []
+
+
+def test_the_view_follows_the_animated_mesh(display, tmp_path):
+    """Issue 57: the view stayed framed on the opening frame while the timeline played, so
+    earlier frames ran off-screen. A sheet 2 units across travels 8 units along x over 17
+    frames; played with Space, the view framed on the last frame loses it on the first
+    frames, and with View > Follow the mesh keeps all of it in view on every frame."""
+    from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
+
+    rest, counts, indices = grid_sheet(9, 9, 2.0)
+    posed = {f: rest * np.float32([0.8, 1.0, 1.0]) + np.float32([0.5 * (f - 17), 0.0, 0.0])
+             for f in range(1, 18)}
+    stage = point_cache_stage(rest, posed, counts, indices, width=0.3)
+    path = tmp_path / "travel.usda"
+    stage.GetRootLayer().Export(str(path))
+    result = drive(display, "follow", tmp_path, stage=str(path))
+    assert result["follow_checked"] and result["errors"] == []
+    assert len(result["off"]) == len(result["on"]) == 17
+    assert min(result["off"].values()) < 0.5, result["off"]  # the test can fail
+    assert min(result["on"].values()) == 1.0, result["on"]
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -212,6 +212,10 @@ class PaintSession:
                                                      up_axis=UsdGeom.GetStageUpAxis(stage))
         #: look through the stage's camera (what render shows) instead of the orbit
         self.stage_camera = False
+        #: the orbit moves with the meshes from frame to frame (View > Follow the mesh):
+        #: its centre by as much as their box's centre moved
+        self.follow = False
+        self._followed: tuple[float, np.ndarray] | None = None
         self.undo_stack: list[Edit] = []
         self.redo_stack: list[Edit] = []
         self._saved_at = 0
@@ -266,6 +270,33 @@ class PaintSession:
         hi = np.max([b.max(axis=0) for b in boxes], axis=0)
         self.orbit.frame(lo, hi, aspect)
         self._framed = True
+        self._followed = (self.frame, 0.5 * (lo + hi))
+
+    def _meshes_centre(self) -> np.ndarray:
+        """The centre of the wrinkled meshes' box at the current frame (posed only: the
+        skin pass, no wrinkles, which the frame's own compute then runs as always)."""
+        self.engine.compute_frame(self.frame, wrinkles=False)
+        boxes = [self.engine.posed_points(path) for path in self.paths]
+        self._posed.clear()
+        lo = np.min([b.min(axis=0) for b in boxes], axis=0)
+        hi = np.max([b.max(axis=0) for b in boxes], axis=0)
+        return 0.5 * (lo + hi)
+
+    def set_follow(self, on: bool) -> None:
+        """Follow the meshes from now on: the next frame frames them (as F does) and the
+        view then moves with them; or stop (the view stays where it is)."""
+        self.follow = bool(on)
+        self._followed = None
+        if self.follow:
+            self.stage_camera = False
+            self._framed = False
+
+    def _follow_meshes(self) -> None:
+        if self._followed is None or self._followed[0] == self.frame:
+            return
+        centre = self._meshes_centre()
+        self.orbit.centre = self.orbit.centre + (centre - self._followed[1])
+        self._followed = (self.frame, centre)
 
     def camera_record(self, width: int, height: int):
         """The camera the view draws through (the orbit, or the stage's as render)."""
@@ -273,6 +304,8 @@ class PaintSession:
             return self.engine.sample(self.frame, width / height).camera
         if not self._framed:
             self.frame_view(width / height)
+        if self.follow:
+            self._follow_meshes()
         return self.orbit.record(width / height)
 
     def render(self, width: int, height: int, quality: Quality = FULL) -> Frame:

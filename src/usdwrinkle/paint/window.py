@@ -37,6 +37,9 @@ Qt = QtCore.Qt
 #: the view's background (linear grey, under the frame's alpha), as usdview's
 BACKGROUND = (0.18, 0.18, 0.2)
 
+#: B + left drag resizes the brush (Maya's B): this many pixels to the right double it
+RESIZE_PIXELS = 100.0
+
 #: the keys and mouse bindings, as the Help menu and the H overlay list them
 BINDINGS = (
     ("Left drag", "paint with the brush"),
@@ -46,6 +49,7 @@ BINDINGS = (
     ("Middle drag", "track the view (also Alt+middle)"),
     ("Right drag, wheel", "dolly the view (also Alt+right)"),
     ("[ and ]", "a smaller and a larger brush"),
+    ("B + left drag", "resize the brush (100 px to the right doubles it)"),
     ("Esc", "drop the stroke in progress"),
     ("F", "frame the meshes"),
     ("Space", "play or stop the timeline"),
@@ -152,6 +156,8 @@ class PaintView(QOpenGLWidget):
         self._drag = None
         #: the drag's direction on screen (unit, widget pixels), while painting
         self.drag_direction: np.ndarray | None = None
+        #: B is held: a left drag resizes the brush instead of painting
+        self.resize_key = False
         #: the brush mode of the stroke in progress where a modifier overrides it
         self.stroke_mode: str | None = None
         #: the brush outline last drawn (_draw_outline), None where none was
@@ -243,8 +249,9 @@ class PaintView(QOpenGLWidget):
             painter.setRenderHint(QtGui.QPainter.Antialiasing)
             if self.show_q:
                 self._draw_q(painter)
-            painting = self._drag is not None and self._drag[0] == "paint"
-            if self.cursor_pos is not None and (self._drag is None or painting):
+            kind = None if self._drag is None else self._drag[0]
+            painting = kind == "paint"
+            if self.cursor_pos is not None and kind in (None, "paint", "resize"):
                 self._draw_outline(painter, session, painting)
         finally:
             painter.end()
@@ -330,6 +337,11 @@ class PaintView(QOpenGLWidget):
         pos = event.position()
         alt = bool(event.modifiers() & Qt.AltModifier)
         button = event.button()
+        if button == Qt.LeftButton and not alt and self.resize_key:
+            self._drag = ("resize", pos, self.session.brush.radius)
+            self.cursor_pos = pos
+            self.update()
+            return
         if button == Qt.LeftButton and not alt:
             if self.fault == "brush":
                 self.fault = None
@@ -360,6 +372,11 @@ class PaintView(QOpenGLWidget):
         if self._drag is None:
             self.update()  # the brush outline follows
             return
+        if self._drag[0] == "resize":  # the outline stays where the drag began
+            _, start, radius = self._drag
+            self.cursor_pos = start
+            self.owner.set_brush_radius(radius * 2.0 ** ((pos.x() - start.x()) / RESIZE_PIXELS))
+            return
         kind, last = self._drag
         dx, dy = pos.x() - last.x(), pos.y() - last.y()
         if kind == "paint":
@@ -384,7 +401,7 @@ class PaintView(QOpenGLWidget):
     def mouseReleaseEvent(self, event):  # noqa: N802
         if self._drag is None:
             return
-        kind, _ = self._drag
+        kind = self._drag[0]
         self._drag = None
         self.interacting = False
         self.drag_direction = None
@@ -397,6 +414,25 @@ class PaintView(QOpenGLWidget):
                     "the stroke missed the cloth: start or drag it over a wrinkled mesh "
                     f"({', '.join(self.session.paths)})", 6000)
         self.update()  # refine: the full-quality frame
+
+    @guarded
+    def keyPressEvent(self, event):  # noqa: N802
+        if event.key() == Qt.Key_B and not event.isAutoRepeat():
+            self.resize_key = True
+            return
+        super().keyPressEvent(event)
+
+    @guarded
+    def keyReleaseEvent(self, event):  # noqa: N802
+        if event.key() == Qt.Key_B and not event.isAutoRepeat():
+            self.resize_key = False
+            return
+        super().keyReleaseEvent(event)
+
+    @guarded
+    def focusOutEvent(self, event):  # noqa: N802
+        self.resize_key = False  # a B released elsewhere
+        super().focusOutEvent(event)
 
     @guarded
     def wheelEvent(self, event):  # noqa: N802
@@ -714,6 +750,13 @@ class PaintWindow(QtWidgets.QMainWindow):
             action.triggered.connect(self._guard_slot(slot))
             owner.addAction(action)
             self.actions_by_name[text.replace("&", "")] = action
+        follow = QtGui.QAction("Follow the &mesh", self)
+        follow.setCheckable(True)
+        follow.setToolTip("While the timeline plays or scrubs, the view moves with the "
+                          "meshes (their box's centre)")
+        follow.toggled.connect(self._follow)
+        view.addAction(follow)
+        self.actions_by_name["Follow the mesh"] = follow
         keys = self.actions_by_name["Keys and mouse"]
         keys.setShortcuts([QtGui.QKeySequence(Qt.Key_H), QtGui.QKeySequence("?")])
         keys.setCheckable(True)
@@ -826,6 +869,12 @@ class PaintWindow(QtWidgets.QMainWindow):
                    amount=self.amount.value(), width=self.width_slider.value())
         self.view.update()
 
+    def set_brush_radius(self, radius: float) -> None:
+        """The brush radius exactly (B + drag): the field shows it, the brush takes it
+        (within the slider's range)."""
+        self.radius.set_value(min(max(radius, self.radius.low), self.radius.high))
+        self._brush_changed()
+
     def _resize_brush(self, factor: float) -> None:
         self.radius.slider.setValue(self.radius._to_position(self.radius.value() * factor))
 
@@ -888,6 +937,12 @@ class PaintWindow(QtWidgets.QMainWindow):
             self.view._drag = None
             self.view.interacting = False
             self.view.update()
+
+    @guarded
+    def _follow(self, on: bool) -> None:
+        self.session.set_follow(on)
+        self.sync_view_mode()
+        self.view.update()
 
     def frame_meshes(self) -> None:
         self.session.stage_camera = False
