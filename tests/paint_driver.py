@@ -783,6 +783,56 @@ def scenario_follow(out: Path, stage: str) -> dict:
     return result
 
 
+def tablet(widget, kind, x: float, y: float, pressure: float, buttons) -> bool:
+    """A QTabletEvent from a pen (synthesized: Xvfb has no tablet), through the
+    application's event dispatch; whether the widget accepted it."""
+    pen = tablet.device = getattr(tablet, "device", None) or QtGui.QPointingDevice(
+        "test pen", 4242, QtGui.QInputDevice.DeviceType.Stylus,
+        QtGui.QPointingDevice.PointerType.Pen,
+        QtGui.QInputDevice.Capability.Position | QtGui.QInputDevice.Capability.Pressure,
+        1, 3)
+    local = QtCore.QPointF(x, y)
+    button = Qt.NoButton if kind == QtCore.QEvent.TabletMove else Qt.LeftButton
+    event = QtGui.QTabletEvent(kind, pen, local, widget.mapToGlobal(local), pressure, 0.0,
+                               0.0, 0.0, 0.0, 0.0, Qt.NoModifier, button, buttons)
+    QtWidgets.QApplication.sendEvent(widget, event)
+    QtWidgets.QApplication.instance().processEvents()
+    return event.isAccepted()
+
+
+def scenario_tablet(out: Path, stage: str) -> dict:
+    """Issue 57: pen pressure was in the code but untested. A comb stroke along the upper
+    arm (mouse), then a pen tap (press, release) in the erase mode at pressure 0.2 and,
+    from the same state (Ctrl+Z between), at 1.0: what each tap took from q. A mouse tap
+    after the pen paints at full strength again."""
+    window = open_window(stage, str(out / "tablet.usda"), size=(1100, 640))
+    session, view = window.session, window.view
+    points, _ = upper_arm_stroke(window)
+    drag(window, points[::3])
+    combed = session.mesh.q.astype(np.float64)
+    window.mode.setCurrentText("erase")
+    x, y = points[len(points) // 2]
+    taken, accepted = {}, []
+    for pressure in (0.2, 1.0):
+        accepted.append(tablet(view, QtCore.QEvent.TabletPress, x, y, pressure,
+                               Qt.LeftButton))
+        accepted.append(tablet(view, QtCore.QEvent.TabletRelease, x, y, pressure,
+                               Qt.NoButton))
+        settle(window)
+        taken[str(pressure)] = (combed - session.mesh.q).tolist()
+        key(window, Qt.Key_Z, Qt.ControlModifier)
+    result = {"accepted": accepted, "taken": taken, "strength": session.brush.strength,
+              "restored": bool(np.array_equal(session.mesh.q, combed.astype(np.float32)))}
+    # a mouse tap after the pen: the pressure is the mouse's (1) again
+    mouse(view, QtCore.QEvent.MouseButtonPress, x, y)
+    mouse(view, QtCore.QEvent.MouseButtonRelease, x, y)
+    settle(window)
+    result["mouse_taken"] = (combed - session.mesh.q).tolist()
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,

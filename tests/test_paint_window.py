@@ -231,6 +231,22 @@ def test_the_view_follows_the_animated_mesh(display, tmp_path):
     assert min(result["on"].values()) == 1.0, result["on"]
 
 
+def test_pen_pressure_scales_the_strength(display, tmp_path):
+    """Issue 57: pen pressure untested. Synthesized QTabletEvents (a stylus) over a combed
+    arm in the erase mode: a tap at pressure 0.2 takes exactly 0.2 of what a tap at 1.0
+    takes from q (erase moves q by strength x pressure x falloff), the pen's events are
+    accepted (no mouse events doubled), and a mouse tap after the pen takes the full
+    amount again."""
+    result = drive(display, "tablet", tmp_path)
+    assert all(result["accepted"]) and result["restored"] and result["errors"] == []
+    low, full = np.array(result["taken"]["0.2"]), np.array(result["taken"]["1.0"])
+    touched = np.abs(full) > 1e-4
+    assert touched.sum() > 10
+    np.testing.assert_allclose(low[touched] / full[touched], 0.2, rtol=2e-3)
+    np.testing.assert_allclose(np.array(result["mouse_taken"])[touched], full[touched],
+                               rtol=1e-4, atol=1e-6)
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -156,6 +156,8 @@ class PaintView(QOpenGLWidget):
         self._drag = None
         #: the drag's direction on screen (unit, widget pixels), while painting
         self.drag_direction: np.ndarray | None = None
+        #: a pen's event is being handled (tabletEvent), not the mouse's
+        self._pen = False
         #: B is held: a left drag resizes the brush instead of painting
         self.resize_key = False
         #: the brush mode of the stroke in progress where a modifier overrides it
@@ -329,11 +331,27 @@ class PaintView(QOpenGLWidget):
     # -- input ------------------------------------------------------------------------
     @guarded
     def tabletEvent(self, event):  # noqa: N802
+        """A pen: its press, moves and release drive the brush as the mouse's do, each
+        stamp's strength times the pen's pressure (1 where the pen reports none).
+        Accepted, so Qt sends no mouse events for it."""
+        handler = {QtCore.QEvent.TabletPress: self.mousePressEvent,
+                   QtCore.QEvent.TabletMove: self.mouseMoveEvent,
+                   QtCore.QEvent.TabletRelease: self.mouseReleaseEvent}.get(event.type())
+        if handler is None:
+            event.ignore()
+            return
         self.pressure = float(event.pressure()) if event.pressure() > 0 else 1.0
-        event.ignore()  # Qt then sends the mouse events the brush reads
+        self._pen = True
+        try:
+            handler(event)
+        finally:
+            self._pen = False
+        event.accept()
 
     @guarded
     def mousePressEvent(self, event):  # noqa: N802
+        if not self._pen:
+            self.pressure = 1.0  # a mouse after a pen: full strength again
         pos = event.position()
         alt = bool(event.modifiers() & Qt.AltModifier)
         button = event.button()
