@@ -833,10 +833,58 @@ def scenario_tablet(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_display(out: Path, stage: str) -> dict:
+    """Issue 57: nothing showed what is painted. A comb stroke along the upper arm, then
+    View > Display > Painted amount and Painted W: the drawn frame's colour (saturation
+    and hue) at the front-facing points painted at |q| > 0.5 and at those left unpainted,
+    in each display; screenshots."""
+    from usdwrinkle.app.view import project
+
+    window = open_window(stage, str(out / "display.usda"), size=(1100, 640))
+    session, view = window.session, window.view
+    points, _ = upper_arm_stroke(window)
+    drag(window, points[::3])
+    path = session.active
+    amount = np.linalg.norm(session.mesh.q, axis=1)
+
+    def colours() -> dict:
+        frame = view.last_frame
+        rgb = frame.pixels[..., :3].astype(np.float64) / 255.0
+        xy, front = project(frame.camera, session._posed_points(path), frame.width,
+                            frame.height)
+        facing = session.facing(path) & front
+        col = np.clip(np.round(xy[:, 0]).astype(int), 0, frame.width - 1)
+        row = np.clip(np.round(xy[:, 1]).astype(int), 0, frame.height - 1)
+        seen = {}
+        for name, chosen in (("painted", facing & (amount > 0.5)),
+                             ("unpainted", facing & (amount == 0.0))):
+            samples = rgb[row[chosen], col[chosen]]
+            saturation = (samples.max(axis=1) - samples.min(axis=1)) / \
+                np.maximum(samples.max(axis=1), 1e-6)
+            seen[name] = {"count": int(chosen.sum()),
+                          "saturation": float(np.median(saturation)),
+                          "rgb": np.median(samples, axis=0).tolist()}
+        return seen
+
+    result = {"shaded": colours()}
+    for name in ("amount", "width"):
+        window.display_actions[name].trigger()
+        settle(window)
+        result[name] = colours()
+        result[name + "_checked"] = window.display_actions[name].isChecked()
+        screenshot(window, out / f"display_{name}.png")
+    window.display_actions["shaded"].trigger()
+    settle(window)
+    result["shaded_again"] = colours()
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,
-    q shown as segments; the keys overlay (H)."""
+    q shown as segments; the painted amount display; the keys overlay (H)."""
     window = open_window(stage, str(out / "paint_figures.usda"), size=(1100, 620))
     screenshot(window, out / "paint_before.png")
     points, _ = upper_arm_stroke(window)
@@ -846,6 +894,10 @@ def scenario_figures(out: Path, stage: str) -> dict:
     settle(window)
     screenshot(window, out / "paint_after.png")
     window.show_q.setChecked(False)
+    window.display_actions["amount"].trigger()
+    settle(window)
+    screenshot(window, out / "paint_amount.png")
+    window.display_actions["shaded"].trigger()
     window.view.cursor_pos = None
     window.toggle_help()
     settle(window)
@@ -853,7 +905,8 @@ def scenario_figures(out: Path, stage: str) -> dict:
     window.session.dirty and window.session.undo()
     window.close()
     (out / "paint_figures.usda").unlink(missing_ok=True)
-    return {"written": ["paint_before.png", "paint_after.png", "paint_help.png"]}
+    return {"written": ["paint_before.png", "paint_after.png", "paint_amount.png",
+                        "paint_help.png"]}
 
 
 def main(argv: list[str]) -> int:

@@ -657,3 +657,23 @@ def test_painting_more_gives_deeper_folds_across_the_stroke(shirt_session):
     assert high["height"] > 1.3 * low["height"], results
     assert high["period px"] >= 0.98 * low["period px"], results
     assert low["coverage"] >= 0.8 and high["coverage"] >= 0.8, results
+
+
+def test_the_display_ramps_read_the_painted_values():
+    """View > Display (issue 57): |q| on the ramp, grey where nothing is painted; W
+    against the reference on a log2 ramp, green at the reference."""
+    from usdwrinkle.app.paint import RAMP, UNPAINTED, display_colors
+
+    mesh = sheet()
+    mesh.q[:] = 0.0
+    mesh.q[:3] = [[1.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.0005]]
+    colors = display_colors(mesh, "amount", 0.1)
+    np.testing.assert_allclose(colors[0], RAMP[-1])  # |q| = 1: red
+    np.testing.assert_allclose(colors[1], RAMP[2])   # 0.5: green
+    np.testing.assert_allclose(colors[2:], np.tile(UNPAINTED, (len(mesh.q) - 2, 1)))
+    mesh.width[:] = 0.1
+    mesh.width[:2] = [0.4, 0.025]
+    colors = display_colors(mesh, "width", 0.1)
+    np.testing.assert_allclose(colors[:3], [RAMP[-1], RAMP[0], RAMP[2]], atol=1e-6)
+    with pytest.raises(UsdWrinkleError):
+        display_colors(mesh, "plaid", 0.1)

@@ -247,6 +247,27 @@ def test_pen_pressure_scales_the_strength(display, tmp_path):
                                rtol=1e-4, atol=1e-6)
 
 
+def test_display_modes_show_what_is_painted(display, tmp_path):
+    """Issue 57: nothing showed what is painted. After a comb stroke, View > Display >
+    Painted amount draws the painted points in the ramp's colours (saturated, warm at
+    |q| > 0.5) and the unpainted ones grey, where the shaded view showed the plaid;
+    Painted W draws the uniform W green (the W control's value); Shaded gives back the
+    very same frame."""
+    result = drive(display, "display", tmp_path)
+    assert result["errors"] == [] and result["amount_checked"] and result["width_checked"]
+    shaded, amount, width = result["shaded"], result["amount"], result["width"]
+    assert amount["painted"]["count"] > 20 and amount["unpainted"]["count"] > 20
+    assert shaded["unpainted"]["saturation"] > 0.3  # the plaid
+    assert amount["unpainted"]["saturation"] < 0.1  # grey: nothing painted
+    assert amount["painted"]["saturation"] > 0.5
+    red, green, blue = amount["painted"]["rgb"]
+    assert red > blue and green > blue  # warm: the ramp's upper half
+    for where in ("painted", "unpainted"):
+        red, green, blue = width[where]["rgb"]
+        assert green > 1.5 * red and green > 1.5 * blue, width[where]
+    assert result["shaded_again"] == shaded
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -132,6 +132,19 @@ class WrinkleEngine:
         outputs (maps, geometry) that run on the same tables."""
         return self.render_delegate.rprims[path].resources
 
+    def set_display_colors(self, path: str, colors) -> None:
+        """Draw ``path`` in ``colors`` per point ((n, 3) linear RGB) instead of its
+        material's colour (the paint window's display modes), or as its material again
+        (None). Held until changed; a mesh not computed yet takes it at its next frame."""
+        resources = self.mesh_resources(path)
+        if resources is None:
+            return
+        if colors is None:
+            resources.set_display_colors(None)
+            return
+        colors = np.asarray(colors, np.float32)
+        resources.set_display_colors(colors[self.meshes[path].topology.triangles])
+
     @property
     def rprim_paths(self) -> list[str]:
         """The meshes that hold GPU resources now (Hydra's rprims)."""

@@ -28,6 +28,39 @@ from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 #: a quarter radius was farther than an 80 px drag reached)
 SCREEN_SPACING = 8.0
 
+#: what the view draws the painted meshes in (View > Display): the material and the
+#: wrinkles; the painted amount |q| on a ramp; the painted W on a ramp
+DISPLAYS = ("shaded", "amount", "width")
+#: the ramp's stops (weight-paint style, linear RGB): 0 blue, 0.25 cyan, 0.5 green,
+#: 0.75 yellow, 1 red; an unpainted point (|q| = 0) in the amount display is grey
+RAMP = np.array([[0.02, 0.05, 0.8], [0.0, 0.6, 0.7], [0.05, 0.7, 0.05], [0.9, 0.8, 0.0],
+                 [0.85, 0.02, 0.02]])
+UNPAINTED = (0.35, 0.35, 0.35)
+
+
+def ramp(t) -> np.ndarray:
+    """Colours of the display ramp at t in [0, 1] (clipped): (n, 3) linear RGB."""
+    t = np.clip(np.asarray(t, np.float64), 0.0, 1.0) * (len(RAMP) - 1)
+    i = np.minimum(np.floor(t).astype(np.int64), len(RAMP) - 2)
+    f = (t - i)[:, None]
+    return RAMP[i] * (1.0 - f) + RAMP[i + 1] * f
+
+
+def display_colors(mesh: PaintMesh, display: str, reference_width: float) -> np.ndarray:
+    """Per point of ``mesh``, its colour in ``display``: ``amount``, |q| on the ramp
+    (grey where nothing is painted); ``width``, log2(W / reference_width) from -2 to 2
+    on the ramp (green: the reference, the W control's value)."""
+    if display == "amount":
+        amount = np.linalg.norm(mesh.q.astype(np.float64), axis=1)
+        colors = ramp(amount)
+        colors[amount < 1e-3] = UNPAINTED
+        return colors
+    if display == "width":
+        ratio = np.asarray(mesh.width, np.float64) / max(float(reference_width), 1e-30)
+        return ramp(0.5 + np.log2(np.maximum(ratio, 1e-30)) / 4.0)
+    raise UsdWrinkleError(f"display {display!r} is not one of {', '.join(DISPLAYS)}")
+
+
 #: the live controls: WrinkleParams field -> (schema attribute, lowest, highest)
 CONTROLS = {"width": (schema.WIDTH, 1e-4, None),
             "amplitude_scale": (schema.AMPLITUDE_SCALE, 0.0, 10.0),
@@ -212,6 +245,8 @@ class PaintSession:
                                                      up_axis=UsdGeom.GetStageUpAxis(stage))
         #: look through the stage's camera (what render shows) instead of the orbit
         self.stage_camera = False
+        #: what the meshes are drawn in (DISPLAYS; set_display)
+        self.display = "shaded"
         #: the orbit moves with the meshes from frame to frame (View > Follow the mesh):
         #: its centre by as much as their box's centre moved
         self.follow = False
@@ -282,6 +317,25 @@ class PaintSession:
         hi = np.max([b.max(axis=0) for b in boxes], axis=0)
         return 0.5 * (lo + hi)
 
+    def set_display(self, display: str) -> None:
+        """Draw the painted meshes in ``display`` (DISPLAYS) from the next frame on."""
+        if display not in DISPLAYS:
+            raise UsdWrinkleError(f"display {display!r} is not one of {', '.join(DISPLAYS)}")
+        self.display = display
+        if display == "shaded":
+            for path in self.paths:
+                self.engine.set_display_colors(path, None)
+
+    def _apply_display(self) -> None:
+        """The display's colours from the painted values as they are now (a stroke's
+        preview included), uploaded before the frame is drawn."""
+        if self.display == "shaded":
+            return
+        reference = self.control("width")
+        for path in self.paths:
+            self.engine.set_display_colors(
+                path, display_colors(self.meshes[path], self.display, reference))
+
     def set_follow(self, on: bool) -> None:
         """Follow the meshes from now on: the next frame frames them (as F does) and the
         view then moves with them; or stop (the view stays where it is)."""
@@ -317,6 +371,7 @@ class PaintSession:
         w = max(1, int(round(width * quality.scale)))
         h = max(1, int(round(height * quality.scale)))
         camera = self.camera_record(w, h)
+        self._apply_display()
         image = self.engine.render_image(self.frame, w, h, self._layout,
                                          samples=quality.samples,
                                          shade_samples=quality.samples > 1, camera=camera)

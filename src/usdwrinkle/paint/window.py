@@ -768,6 +768,24 @@ class PaintWindow(QtWidgets.QMainWindow):
             action.triggered.connect(self._guard_slot(slot))
             owner.addAction(action)
             self.actions_by_name[text.replace("&", "")] = action
+        display = view.addMenu("&Display")
+        group = QtGui.QActionGroup(self)
+        group.setExclusive(True)
+        self.display_actions = {}
+        for name, text, tip in (
+                ("shaded", "&Shaded wrinkles", "The material and the wrinkles, as render"),
+                ("amount", "Painted &amount |q|", "The painted amount |q| from blue (0) to "
+                 "red (1); grey where nothing is painted"),
+                ("width", "Painted &W", "The painted W against the W control's value: "
+                 "green equal, blue a quarter, red four times")):
+            action = QtGui.QAction(text, self)
+            action.setCheckable(True)
+            action.setToolTip(tip)
+            action.setChecked(name == "shaded")
+            action.triggered.connect(functools.partial(self._display, name))
+            group.addAction(action)
+            display.addAction(action)
+            self.display_actions[name] = action
         follow = QtGui.QAction("Follow the &mesh", self)
         follow.setCheckable(True)
         follow.setToolTip("While the timeline plays or scrubs, the view moves with the "
@@ -955,6 +973,13 @@ class PaintWindow(QtWidgets.QMainWindow):
             self.view._drag = None
             self.view.interacting = False
             self.view.update()
+
+    @guarded
+    def _display(self, name: str, *_) -> None:
+        """View > Display: what the meshes are drawn in (app.paint.DISPLAYS)."""
+        self.session.set_display(name)
+        self.display_actions[name].setChecked(True)
+        self.view.update()
 
     @guarded
     def _follow(self, on: bool) -> None:

@@ -176,6 +176,10 @@ class MeshResources:
         #: colour: a per-vertex displayColor (MaterialRecord.corner_colors), else None
         self.corner_colors: Table | None = None
         self._set_corner_colors(record.material.corner_colors)
+        #: a display override (the paint window's |q| and W ramps): colours per triangle
+        #: corner ([3t + c], linear RGB) drawn instead of the material's colour and
+        #: texture, the wrinkles and lights as they are; None: the material
+        self.display_colors: Table | None = None
         #: the normal map's texture coordinates ([3t + c]), its tiles (a texture array)
         #: and their layers by UDIM tile (set_normal_map)
         self.normal_st = self._table(3 * self.num_triangles, 2)
@@ -277,6 +281,19 @@ class MeshResources:
         own, where displayColor is time-sampled)."""
         if colors is not None and self.corner_colors is not None:
             self.corner_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+
+    def set_display_colors(self, colors) -> None:
+        """Draw ``colors`` ((m, 3, 3) per triangle corner, linear) instead of the
+        material's colour, or the material again (None)."""
+        if colors is None:
+            if self.display_colors is not None:
+                self.tables.remove(self.display_colors)
+                self.display_colors.release()
+                self.display_colors = None
+            return
+        if self.display_colors is None:
+            self.display_colors = self._table(3 * self.num_triangles, 4)
+        self.display_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
 
     def update_material(self, record: MeshRecord) -> None:
         """Re-upload the material (texture, texture coordinates) of an edited record."""

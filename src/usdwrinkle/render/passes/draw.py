@@ -160,11 +160,15 @@ class DrawPass:
             to_local = np.linalg.pinv(local_to_world)
         eye_local = np.append(camera.position, 1.0) @ to_local
         material = record.material
+        # a display override (the paint window's ramps) takes the colour's place
+        display = res.display_colors is not None
+        colors = res.display_colors if display else res.corner_colors
         variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
                                 NORMAL_MAP=res.normal_map is not None,
                                 FALLBACK_SURFACE=material.surface is None,
-                                TEXTURED=res.texture is not None, DOME=self.dome_lit,
-                                VERTEX_COLOR=res.corner_colors is not None,
+                                TEXTURED=res.texture is not None and not display,
+                                DOME=self.dome_lit,
+                                VERTEX_COLOR=colors is not None,
                                 SHADE_SAMPLES=self.shade_samples,
                                 MASKED=material.surface is not None and
                                 material.surface.opacity_threshold > 0.0)
@@ -176,7 +180,8 @@ class DrawPass:
             "u_normal_to_world": normal_matrix(local_to_world),
             "u_eye_local": tuple(float(v) for v in eye_local[:3] / eye_local[3]),
             "u_eye_world": tuple(float(v) for v in camera.position[:3]),
-            "u_diffuse_color": tuple(float(c) for c in material.diffuse_color),
+            "u_diffuse_color": (1.0, 1.0, 1.0) if display else
+            tuple(float(c) for c in material.diffuse_color),
             "u_double_sided": int(record.double_sided),
             **material_uniforms(material),
             "u_texture_scale": tuple(float(v) for v in material.texture_scale[:4]),
@@ -194,7 +199,7 @@ class DrawPass:
             self.ctx.cull_face = side
         units = bindings.DRAW
         bind_wave(units, res, variant.program)
-        if res.texture is not None:
+        if res.texture is not None and not display:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
         if self.dome[1] is not None:
             self.dome[1].use(location=units["DRAW_DOME_TEXTURE"])
@@ -205,7 +210,7 @@ class DrawPass:
                            "DRAW_NORMAL_CORNERS": res.normal_corners})
         if res.normal_map is not None:
             bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
-        if res.corner_colors is not None:
-            bind(units, reads={"DRAW_CORNER_COLORS": res.corner_colors})
+        if colors is not None:
+            bind(units, reads={"DRAW_CORNER_COLORS": colors})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
 
