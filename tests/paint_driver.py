@@ -881,6 +881,60 @@ def scenario_display(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_presets(out: Path, stage: str) -> dict:
+    """Issue 57: brush presets. With real X events: the brush set (smooth, linear,
+    radius 0.2 and strength 0.8 typed), Save... clicked (the name answered), the brush
+    changed, then the preset chosen from its list (click, Down, Enter): the brush's
+    values before and after. Then a preset file with one bad entry: a window opened on it
+    lists the good one and says the bad one in one line."""
+    import json as json_module
+
+    window = open_window(stage, str(out / "presets.usda"), size=(1100, 640))
+    session = window.session
+    x_events(window, "windowfocus", "--sync", str(int(window.winId())))
+    window.mode.setCurrentText("smooth")
+    window.falloff.setCurrentText("linear")
+    x_type(window, window.radius.field, "0.2")
+    x_type(window, window.strength.field, "0.8")
+    saved = dataclasses_dict(session.brush)
+    window.ask_preset_name = lambda: "soft smooth"
+    x_click(window, window.save_preset_button)
+    result = {"saved": saved, "file": json_module.loads(
+        (out / "config" / "brushes.json").read_text()),
+        "listed_after_save": [window.preset.itemText(i) for i in range(window.preset.count())]}
+    window.mode.setCurrentText("comb")
+    x_type(window, window.radius.field, "0.5")
+    x_type(window, window.strength.field, "0.3")
+    result["changed"] = dataclasses_dict(session.brush)
+    window.preset.setCurrentIndex(0)
+    x_click(window, window.preset)
+    x_events(window, "key", "Down")
+    x_events(window, "key", "Return")
+    result["chosen"] = dataclasses_dict(session.brush)
+    result["controls"] = {"mode": window.mode.currentText(),
+                          "falloff": window.falloff.currentText(),
+                          "radius": window.radius.field.text(),
+                          "strength": window.strength.field.text()}
+    result["errors"] = list(window.errors)
+    window.close()
+    # a file with a bad preset beside the good one
+    data = json_module.loads((out / "config" / "brushes.json").read_text())
+    data["presets"]["broken"] = {**data["presets"]["soft smooth"], "radius": -1.0}
+    (out / "config" / "brushes.json").write_text(json_module.dumps(data))
+    window = open_window(stage, str(out / "presets2.usda"), size=(1100, 640))
+    result["listed_with_broken"] = [window.preset.itemText(i)
+                                    for i in range(window.preset.count())]
+    result["errors_with_broken"] = list(window.errors)
+    window.close()
+    return result
+
+
+def dataclasses_dict(brush) -> dict:
+    import dataclasses
+
+    return dataclasses.asdict(brush)
+
+
 def scenario_figures(out: Path, stage: str) -> dict:
     """The README's screenshots (python tests/paint_driver.py figures docs/images, under
     xvfb-run): the window before and after a comb stroke along the shirt's upper arm,
@@ -913,6 +967,8 @@ def main(argv: list[str]) -> int:
     scenario, out = argv[0], Path(argv[1])
     stage = argv[2] if len(argv) > 2 else str(SHIRT)
     out.mkdir(parents=True, exist_ok=True)
+    # brush presets from a folder of the test's own, never the user's config
+    os.environ.setdefault("USDWRINKLE_CONFIG_DIR", str(out / "config"))
     app = application()
     result = globals()[f"scenario_{scenario}"](out, stage)
     if scenario != "figures":  # the figures' folder holds the README's images only

@@ -268,6 +268,31 @@ def test_display_modes_show_what_is_painted(display, tmp_path):
     assert result["shaded_again"] == shaded
 
 
+def test_brush_presets_are_saved_and_chosen(display, tmp_path):
+    """Issue 57: no brush presets. With real X events: a brush saved as a preset (Save...,
+    the name answered) is written to the config folder's brushes.json; after changing the
+    brush, choosing the preset from its list gives back every setting, the controls
+    showing them; a file with a bad preset still lists the good one and says the bad one
+    in one line, naming it."""
+    result = drive(display, "presets", tmp_path)
+    saved = result["saved"]
+    assert saved["mode"] == "smooth" and saved["falloff"] == "linear"
+    assert saved["radius"] == pytest.approx(0.2) and saved["strength"] == pytest.approx(0.8)
+    assert result["file"]["presets"]["soft smooth"] == saved
+    assert result["listed_after_save"] == ["(choose)", "soft smooth"]
+    assert result["changed"]["mode"] == "comb" and result["changed"]["radius"] == 0.5
+    chosen = dict(result["chosen"])
+    assert chosen.pop("width") == result["changed"]["width"]  # W stays the W control's
+    assert chosen == {k: v for k, v in saved.items() if k != "width"}
+    assert result["controls"] == {"mode": "smooth", "falloff": "linear", "radius": "0.2",
+                                  "strength": "0.8"}
+    assert result["errors"] == []
+    assert result["listed_with_broken"] == ["(choose)", "soft smooth"]
+    assert len(result["errors_with_broken"]) == 1
+    assert "'broken'" in result["errors_with_broken"][0]
+    assert "radius" in result["errors_with_broken"][0]
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -78,6 +78,9 @@ TIPS = {
     "front_only": "Paint only what faces the camera",
     "flood": "Apply the brush's mode to every vertex of the active mesh (one undo step)",
     "show_q": "Draw the painted wrinkle vectors as short segments",
+    "preset": "Brush presets: choose one to take its mode, falloff, size, strength, amount "
+              "and the rest (kept in your config folder, for every window)",
+    "save_preset": "Save the brush as it is now under a name (the same name replaces it)",
     "width": "W, the wrinkle width (rest wavelength) of the active mesh, in scene units; "
              "width mode paints this value",
     "amplitude": "wrinkle:amplitudeScale: scales every fold's height (1 is the fold law's)",
@@ -619,6 +622,8 @@ class PaintWindow(QtWidgets.QMainWindow):
         #: asked when closing with unsaved strokes: returns "save", "discard" or "cancel"
         #: (a dialog by default; tests answer it)
         self.confirm_close = self._ask_close
+        #: the name a brush preset is saved under (a dialog by default; tests answer it)
+        self.ask_preset_name = self._ask_preset_name
         self.view = PaintView(self, make_session)
         self.setCentralWidget(self.view)
         self.error_banner = QtWidgets.QLabel()
@@ -665,6 +670,13 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.cloth.addItems(["(as authored)", *CLOTH_PRESETS])
         self.view_mode = QtWidgets.QComboBox()
         self.view_mode.addItems(["orbit", "stage camera"])
+        self.preset = QtWidgets.QComboBox()
+        self.save_preset_button = QtWidgets.QPushButton("Save...")
+        preset_row = QtWidgets.QHBoxLayout()
+        preset_row.addWidget(QtWidgets.QLabel("preset"))
+        preset_row.addWidget(self.preset, 1)
+        preset_row.addWidget(self.save_preset_button)
+        form.addLayout(preset_row)
         for label, widget in (("mode", self.mode), ("falloff", self.falloff),
                               ("mirror", self.mirror)):
             row = QtWidgets.QHBoxLayout()
@@ -698,6 +710,9 @@ class PaintWindow(QtWidgets.QMainWindow):
             slider.slider.sliderReleased.connect(functools.partial(self._control_released,
                                                                    name))
         self.cloth.currentTextChanged.connect(self._cloth_changed)
+        self._fill_presets()
+        self.preset.activated.connect(self._preset_chosen)
+        self.save_preset_button.clicked.connect(self._save_preset)
         self.view_mode.currentTextChanged.connect(self._view_mode_changed)
         for slider in (self.radius, self.strength, self.amount):
             slider.typed.connect(functools.partial(self._brush_typed, slider))
@@ -715,7 +730,8 @@ class PaintWindow(QtWidgets.QMainWindow):
                 "geodesic": self.geodesic, "front_only": self.front_only,
                 "flood": self.flood_button, "show_q": self.show_q,
                 "width": self.width_slider, "amplitude": self.amplitude,
-                "slack": self.slack, "cloth": self.cloth, "view": self.view_mode}
+                "slack": self.slack, "cloth": self.cloth, "view": self.view_mode,
+                "preset": self.preset, "save_preset": self.save_preset_button}
 
     def _controls(self) -> dict:
         return {"width": self.width_slider, "amplitude_scale": self.amplitude,
@@ -884,6 +900,72 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.sync_view_mode()
         self._update_title()
         self._update_frame_label()
+
+    # -- brush presets (app/presets.py) ---------------------------------------------
+    def _fill_presets(self) -> None:
+        """The preset list from the file; a preset the file holds badly is one line."""
+        from ..app.presets import load_presets
+
+        try:
+            self.presets, refused = load_presets()
+        except Exception as exc:  # noqa: BLE001 (an unreadable file: said, not fatal)
+            self.presets, refused = {}, [exc.one_line() if hasattr(exc, "one_line")
+                                         else str(exc)]
+        for line in refused:
+            self.show_error(line)
+        self.preset.blockSignals(True)
+        self.preset.clear()
+        self.preset.addItem("(choose)")
+        self.preset.addItems(sorted(self.presets))
+        self.preset.blockSignals(False)
+
+    @guarded
+    def _preset_chosen(self, index: int) -> None:
+        name = self.preset.itemText(index)
+        if name not in self.presets:
+            return
+        self.apply_brush(self.presets[name])
+        self.statusBar().showMessage(f"brush preset {name!r}", 4000)
+
+    def apply_brush(self, brush) -> None:
+        """Set every brush control from ``brush`` (a preset), then the brush from them;
+        the width mode's W stays the W control's."""
+        from ..app.paint import with_brush
+
+        for widget in (self.mode, self.falloff, self.mirror, self.geodesic, self.front_only):
+            widget.blockSignals(True)
+        try:
+            self.mode.setCurrentText(brush.mode)
+            self.falloff.setCurrentText(brush.falloff)
+            self.mirror.setCurrentText(brush.mirror or "none")
+            self.geodesic.setChecked(bool(brush.geodesic))
+            self.front_only.setChecked(bool(brush.front_facing_only))
+            for slider, value in ((self.radius, brush.radius), (self.strength, brush.strength),
+                                  (self.amount, brush.amount)):
+                slider.set_value(value)
+        finally:
+            for widget in (self.mode, self.falloff, self.mirror, self.geodesic,
+                           self.front_only):
+                widget.blockSignals(False)
+        self._brush_changed()
+        with_brush(self.session, spacing=brush.spacing)
+
+    @guarded
+    def _save_preset(self, *_) -> None:
+        from ..app.presets import save_preset
+
+        name = self.ask_preset_name()
+        if not name:
+            return
+        where = save_preset(name, self.session.brush)
+        self._fill_presets()
+        self.preset.setCurrentText(name.strip())
+        self.statusBar().showMessage(f"saved brush preset {name.strip()!r} to {where}", 6000)
+
+    def _ask_preset_name(self) -> str | None:
+        name, ok = QtWidgets.QInputDialog.getText(self, "Save the brush preset",
+                                                  "Preset name:")
+        return name if ok else None
 
     def _fill_controls(self) -> None:
         for name, slider in self._controls().items():
