@@ -16,6 +16,15 @@ REPO = Path(__file__).resolve().parents[1]
 CORPUS = Path(os.environ.get("USDWRINKLE_CORPUS", REPO.parent / "shared" / "corpus"))
 
 
+def pytest_configure(config):
+    """The user's files (brush presets, recent stages: app/presets.py) go to a folder of
+    this run's own, in this process and every process it starts, never ~/.config."""
+    import tempfile
+
+    if "USDWRINKLE_CONFIG_DIR" not in os.environ:
+        os.environ["USDWRINKLE_CONFIG_DIR"] = tempfile.mkdtemp(prefix="usdwrinkle-config-")
+
+
 def pytest_addoption(parser):
     parser.addoption("--regenerate-goldens", action="store_true",
                      help="rewrite tests/goldens/*.exr from the current renderer")

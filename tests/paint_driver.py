@@ -41,7 +41,8 @@ def open_window(stage: str, output: str, size=(1200, 700), **kwargs):
     from usdwrinkle.paint.window import PaintWindow
 
     stage_, layer, save = open_paint_stage(stage, output)
-    window = PaintWindow(lambda ctx: PaintSession(stage_, layer, save, ctx=ctx, **kwargs))
+    window = PaintWindow(lambda ctx: PaintSession(stage_, layer, save, ctx=ctx, **kwargs),
+                         stage_path=os.path.abspath(stage))
     window.resize(*size)
     window.show()
     window.confirm_close = lambda: "discard"
@@ -929,6 +930,54 @@ def scenario_presets(out: Path, stage: str) -> dict:
     return result
 
 
+def scenario_open(out: Path, stage: str) -> dict:
+    """Issue 57: no File > Open, no recent files, Save As in the current folder. ``stage``:
+    a second stage to open (the test writes it). With the shirt painted (unsaved):
+    Ctrl+O (a real key) answered with the second stage, the unsaved question cancelled,
+    then discarded; a stroke on the second stage; File > Open Recent's entries; the shirt
+    again from it; where Save As starts."""
+    shirt = str(SHIRT)
+    window = open_window(shirt, str(out / "first.usda"), size=(1000, 600))
+    x_events(window, "windowfocus", "--sync", str(int(window.winId())))
+    points, _ = upper_arm_stroke(window)
+    drag(window, points[::3])
+    asked = []
+    window.ask_open_path = lambda start: asked.append(start) or stage
+    window.confirm_close = lambda: "cancel"
+    x_events(window, "key", "ctrl+o")
+    result = {"open_started_in": asked[-1],
+              "after_cancel": window.stage_path,
+              "dirty_after_cancel": window.session.dirty}
+    window.confirm_close = lambda: "discard"
+    x_events(window, "key", "ctrl+o")
+    settle(window)
+    session = window.session
+    result.update({"after_open": window.stage_path,
+                   "root_after_open": session.stage.GetRootLayer().realPath,
+                   "paths": list(session.paths), "title": window.windowTitle(),
+                   "dirty_after_open": session.dirty,
+                   "timeline": [window.timeline.minimum(), window.timeline.maximum()]})
+    # a stroke on the new stage: across the view's middle
+    w, h = window.view.width(), window.view.height()
+    before = session.mesh.q.copy()
+    drag(window, line((0.35 * w, 0.5 * h), (0.65 * w, 0.5 * h), 12))
+    result["painted_new"] = bool(not np.array_equal(before, session.mesh.q))
+    window._fill_recent()
+    result["recent"] = [a.text() for a in window.recent_menu.actions()]
+    starts = []
+    window.ask_save_path = lambda start: starts.append(start) or None
+    window.save_as()
+    result["save_as_started_at"] = starts[-1]
+    shirt_entry = next(a for a in window.recent_menu.actions() if a.text() == shirt)
+    shirt_entry.trigger()
+    settle(window)
+    result["after_recent"] = window.stage_path
+    result["paths_after_recent"] = list(window.session.paths)
+    result["errors"] = list(window.errors)
+    window.close()
+    return result
+
+
 def dataclasses_dict(brush) -> dict:
     import dataclasses
 
@@ -968,7 +1017,7 @@ def main(argv: list[str]) -> int:
     stage = argv[2] if len(argv) > 2 else str(SHIRT)
     out.mkdir(parents=True, exist_ok=True)
     # brush presets from a folder of the test's own, never the user's config
-    os.environ.setdefault("USDWRINKLE_CONFIG_DIR", str(out / "config"))
+    os.environ["USDWRINKLE_CONFIG_DIR"] = str(out / "config")
     app = application()
     result = globals()[f"scenario_{scenario}"](out, stage)
     if scenario != "figures":  # the figures' folder holds the README's images only

@@ -293,6 +293,36 @@ def test_brush_presets_are_saved_and_chosen(display, tmp_path):
     assert "radius" in result["errors_with_broken"][0]
 
 
+def test_file_open_recent_files_and_save_as_in_the_layers_folder(display, tmp_path):
+    """Issue 57: no File > Open, no recent files, Save As in the current folder. With the
+    shirt painted and unsaved, Ctrl+O (a real key, the dialog answered, starting in the
+    shirt's folder) asks first: cancel keeps the shirt and its strokes, discard opens the
+    second stage in the same window (its mesh, timeline and title), which then paints;
+    File > Open Recent lists both stages, newest first, and opens the shirt again; Save
+    As starts at the layer itself, in its folder."""
+    from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
+
+    rest, counts, indices = grid_sheet(9, 9, 2.0)
+    posed = {f: rest * np.float32([1.0 - 0.02 * f, 1.0, 1.0]) for f in range(1, 11)}
+    second = tmp_path / "second" / "sheet.usda"
+    second.parent.mkdir()
+    stage = point_cache_stage(rest, posed, counts, indices, width=0.3)
+    stage.GetRootLayer().Export(str(second))
+    result = drive(display, "open", tmp_path / "out", stage=str(second))
+    assert result["open_started_in"] == str(SHIRT.parent)
+    assert result["after_cancel"] == str(SHIRT) and result["dirty_after_cancel"]
+    assert result["after_open"] == result["root_after_open"] == str(second)
+    assert result["paths"] == ["/Sheet"]
+    assert str(second) in result["title"] and not result["dirty_after_open"]
+    assert result["timeline"] == [1, 10]
+    assert result["painted_new"]
+    assert result["recent"][:2] == [str(second), str(SHIRT)]
+    assert result["save_as_started_at"] == str(second)  # edited in place: the stage itself
+    assert result["after_recent"] == str(SHIRT)
+    assert result["paths_after_recent"] == ["/World/Arm/Sleeve"]
+    assert result["errors"] == []
+
+
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
     result = drive(display, "close", tmp_path)
     assert result["asked"] == ["cancel", "save"] and result["errors"] == []

@@ -59,3 +59,24 @@ def test_a_bad_preset_is_refused_in_one_line_and_the_others_load(tmp_path):
         load_presets(path)
     with pytest.raises(UsdWrinkleError, match="needs a name"):
         save_preset("  ", BrushSettings(), tmp_path / "other.json")
+
+
+def test_recent_stages_keep_the_newest_first_and_only_existing_files(tmp_path):
+    from usdwrinkle.app.recent import KEEP, recent_stages, remember_stage
+
+    path = tmp_path / "cfg" / "recent.json"
+    assert recent_stages(path) == []
+    files = []
+    for k in range(KEEP + 2):
+        stage = tmp_path / f"s{k}.usda"
+        stage.write_text("#usda 1.0\n")
+        files.append(str(stage))
+        remember_stage(str(stage), path)
+    assert recent_stages(path) == files[::-1][:KEEP]
+    remember_stage(files[5], path)  # again: moved to the front, not doubled
+    assert recent_stages(path)[:2] == [files[5], files[-1]]
+    assert len(recent_stages(path)) == KEEP
+    (tmp_path / "s11.usda").unlink()  # a stage that is gone is not listed
+    assert files[-1] not in recent_stages(path)
+    path.write_text("{broken")
+    assert recent_stages(path) == []  # a convenience: an unreadable list is empty

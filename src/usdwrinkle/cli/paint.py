@@ -1,6 +1,8 @@
 """usdwrinkle paint STAGE [-o LAYER]: the paint window (paint/window.py)."""
 from __future__ import annotations
 
+import os
+
 from ..errors import UsdWrinkleError
 
 
@@ -121,4 +123,5 @@ def run(args) -> int:
                             camera=args.camera, all_meshes=args.all_meshes, ctx=ctx)
 
     return run_window(make_session, f"usdwrinkle paint {args.stage}", size,
-                      debug=bool(getattr(args, "debug", False)))
+                      debug=bool(getattr(args, "debug", False)),
+                      stage_path=os.path.abspath(args.stage))

@@ -55,6 +55,7 @@ BINDINGS = (
     ("Space", "play or stop the timeline"),
     ("Ctrl+Z", "undo"),
     ("Ctrl+Shift+Z", "redo"),
+    ("Ctrl+O", "open another stage (File > Open Recent lists the last ones)"),
     ("Ctrl+S", "save"),
     ("Ctrl+Shift+S", "save as"),
     ("Ctrl+W", "close (asks about unsaved strokes)"),
@@ -611,8 +612,12 @@ class HelpOverlay(QtWidgets.QLabel):
 class PaintWindow(QtWidgets.QMainWindow):
     """``usdwrinkle paint``: the view, the brush and control panel, the timeline."""
 
-    def __init__(self, make_session, title: str = "usdwrinkle paint", debug: bool = False):
+    def __init__(self, make_session, title: str = "usdwrinkle paint", debug: bool = False,
+                 stage_path: str | None = None):
         super().__init__()
+        #: the stage file painted (File > Open Recent remembers it); None: the stage's
+        #: root layer where it is a file
+        self.stage_path = stage_path
         #: print each error's traceback too (``usdwrinkle --debug paint``)
         self.debug = debug
         self.setWindowTitle(title)
@@ -624,6 +629,11 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.confirm_close = self._ask_close
         #: the name a brush preset is saved under (a dialog by default; tests answer it)
         self.ask_preset_name = self._ask_preset_name
+        #: the stage File > Open paints, and the file Save As writes, given where the
+        #: dialog starts (dialogs by default; tests answer them)
+        self.ask_open_path = self._ask_open_path
+        self.ask_save_path = self._ask_save_path
+        self._closing_what = "closing"
         self.view = PaintView(self, make_session)
         self.setCentralWidget(self.view)
         self.error_banner = QtWidgets.QLabel()
@@ -760,6 +770,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         view = self.menuBar().addMenu("&View")
         help_menu = self.menuBar().addMenu("&Help")
         specs = (
+            (menu, "&Open...", QtGui.QKeySequence.Open, self.open_dialog),
             (menu, "&Save", QtGui.QKeySequence.Save, self.save),
             (menu, "Save &As...", QtGui.QKeySequence("Ctrl+Shift+S"), self.save_as),
             (menu, "&Close", QtGui.QKeySequence.Close, self.close),
@@ -802,6 +813,9 @@ class PaintWindow(QtWidgets.QMainWindow):
             group.addAction(action)
             display.addAction(action)
             self.display_actions[name] = action
+        self.recent_menu = QtWidgets.QMenu("Open &Recent", self)
+        menu.insertMenu(self.actions_by_name["Save"], self.recent_menu)
+        self.recent_menu.aboutToShow.connect(self._fill_recent)
         follow = QtGui.QAction("Follow the &mesh", self)
         follow.setCheckable(True)
         follow.setToolTip("While the timeline plays or scrubs, the view moves with the "
@@ -900,6 +914,11 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.sync_view_mode()
         self._update_title()
         self._update_frame_label()
+        stage_path = self.stage_path or session.stage.GetRootLayer().realPath
+        if stage_path and os.path.isfile(stage_path):
+            from ..app.recent import remember_stage
+
+            remember_stage(stage_path)  # File > Open Recent
 
     # -- brush presets (app/presets.py) ---------------------------------------------
     def _fill_presets(self) -> None:
@@ -1129,13 +1148,105 @@ class PaintWindow(QtWidgets.QMainWindow):
         return True
 
     def save_as(self) -> bool:
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(
-            self, "Save the painted layer", "painted.usda", "USD layers (*.usda *.usdc *.usd)")
+        path = self.ask_save_path(self._save_as_start())
         if not path:
             return False
         where = self.session.save(path)
         self.statusBar().showMessage(f"saved {where}", 5000)
         self._update_title()
+        return True
+
+    def _save_as_start(self) -> str:
+        """Where Save As starts: the layer's own folder and name, else the stage's folder
+        (issue 57: it started in the current folder)."""
+        session = self.session
+        if session.save_path:
+            return session.save_path
+        stage = self.stage_path or session.stage.GetRootLayer().realPath
+        folder = os.path.dirname(stage) if stage else os.getcwd()
+        return os.path.join(folder, "painted.usda")
+
+    def _ask_save_path(self, start: str) -> str | None:
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(
+            self, "Save the painted layer", start, "USD layers (*.usda *.usdc *.usd)")
+        return path or None
+
+    # -- opening another stage --------------------------------------------------------
+    def open_dialog(self) -> bool:
+        """File > Open: a stage to paint in this window instead (asking about unsaved
+        strokes first)."""
+        return self.open_stage(self.ask_open_path(self._open_start()))
+
+    def _open_start(self) -> str:
+        """Where File > Open starts: the painted stage's folder."""
+        stage = self.stage_path or (self.session.stage.GetRootLayer().realPath
+                                    if self.session else "")
+        return os.path.dirname(stage) if stage else os.getcwd()
+
+    def _ask_open_path(self, start: str) -> str | None:
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(
+            self, "Open a stage to paint", start,
+            "USD stages (*.usda *.usdc *.usd *.usdz);;All files (*)")
+        return path or None
+
+    def _fill_recent(self) -> None:
+        from ..app.recent import recent_stages
+
+        self.recent_menu.clear()
+        stages = recent_stages()
+        for stage in stages:
+            action = self.recent_menu.addAction(stage)
+            action.triggered.connect(functools.partial(self._open_recent, stage))
+        if not stages:
+            self.recent_menu.addAction("(none yet)").setEnabled(False)
+
+    @guarded
+    def _open_recent(self, stage: str, *_) -> None:
+        self.open_stage(stage)
+
+    def open_stage(self, path: str | None) -> bool:
+        """Paint ``path`` in this window, as ``usdwrinkle paint PATH`` does (its root
+        layer edited in place; a .usdz needs Save As). Unsaved strokes are asked about
+        first; a stage that cannot be painted is one line in the banner and the window
+        keeps the one it had."""
+        if not path:
+            return False
+        if self.session is not None and self.session.dirty:
+            self._closing_what = "opening another stage"
+            try:
+                answer = self.confirm_close()
+            finally:
+                self._closing_what = "closing"
+            if answer == "cancel" or (answer == "save" and not self.save()):
+                return False
+        from ..app.paint import PaintSession, check_paintable, open_paint_stage
+
+        try:
+            stage, layer, save = open_paint_stage(path, None)
+            check_paintable(stage, None, False)
+            view = self.view
+            view.makeCurrent()
+            try:
+                session = PaintSession(stage, layer, save, ctx=view.ctx)
+                old, view.session = view.session, session
+                if old is not None:
+                    old.release()
+            finally:
+                view.doneCurrent()
+        except Exception as exc:  # noqa: BLE001 (one line; the window keeps its stage)
+            text = exc.one_line() if hasattr(exc, "one_line") else f"{type(exc).__name__}: {exc}"
+            self.show_error(text, traceback.format_exc())
+            return False
+        self._title = f"usdwrinkle paint {path}"
+        self.stage_path = path
+        self.display_actions["shaded"].setChecked(True)
+        follow = self.actions_by_name["Follow the mesh"]
+        blocked = follow.blockSignals(True)
+        follow.setChecked(False)
+        follow.blockSignals(blocked)
+        self.session_ready(session)
+        self.statusBar().showMessage(f"opened {path}", 5000)
+        self.view.update()
         return True
 
     def mark_dirty(self) -> None:
@@ -1217,7 +1328,8 @@ class PaintWindow(QtWidgets.QMainWindow):
     def _ask_close(self) -> str:
         box = QtWidgets.QMessageBox(self)
         box.setWindowTitle("Unsaved strokes")
-        box.setText("The painted layer has unsaved strokes. Save them before closing?")
+        box.setText("The painted layer has unsaved strokes. Save them before "
+                    f"{self._closing_what}?")
         box.setStandardButtons(QtWidgets.QMessageBox.Save | QtWidgets.QMessageBox.Discard |
                                QtWidgets.QMessageBox.Cancel)
         answer = box.exec()
@@ -1285,7 +1397,7 @@ class StopSignals(QtCore.QObject):
 
 
 def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700),
-               debug: bool = False) -> int:
+               debug: bool = False, stage_path: str | None = None) -> int:
     """Open the paint window on a session made in its GL context; returns Qt's exit code."""
     from PySide6.QtGui import QSurfaceFormat
 
@@ -1295,7 +1407,7 @@ def run_window(make_session, title: str = "usdwrinkle paint", size=(1200, 700),
     fmt.setDepthBufferSize(24)
     QSurfaceFormat.setDefaultFormat(fmt)
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(["usdwrinkle paint"])
-    window = PaintWindow(make_session, title, debug=debug)
+    window = PaintWindow(make_session, title, debug=debug, stage_path=stage_path)
     window.resize(*size)
     stops = StopSignals(window)
     window.show()
