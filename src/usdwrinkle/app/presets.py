@@ -41,7 +41,7 @@ def presets_path() -> Path:
     return config_dir() / FILE_NAME
 
 
-def _read(path: Path) -> dict:
+def _read(path: Path) -> dict[str, object]:
     if not path.exists():
         return {}
     try:
@@ -97,7 +97,7 @@ def delete_preset(name: str, path: Path | None = None) -> None:
     _write(path, presets)
 
 
-def _write(path: Path, presets: dict) -> None:
+def _write(path: Path, presets: dict[str, object]) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         text = json.dumps({"version": VERSION, "presets": presets}, indent=1, sort_keys=True)
