@@ -578,6 +578,21 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
     result["w_engine"] = float(np.median(session.engine.meshes[session.active].params.width))
     result["w_field"] = window.width_slider.field.text()
     result["undo_steps_after_w"] = len(session.undo_stack)
+    slider = window.width_slider
+    result["w_slider_after_typed"] = [slider.low, slider.high, slider.slider.value()]
+    # a 26 px drag of the W slider's handle (real X events): how much W changes
+    handle = slider.slider.mapTo(window, QtCore.QPoint(slider.slider.width() // 2,
+                                                       slider.slider.height() // 2))
+    wid = str(int(window.winId()))
+    x_events(window, "mousemove", "--window", wid, str(handle.x()), str(handle.y()),
+             "mousedown", "1")
+    x_events(window, "mousemove", "--window", wid, str(handle.x() + 26), str(handle.y()))
+    x_events(window, "mouseup", "1")
+    settle(window)
+    result["w_after_drag"] = session.control("width")
+    result["w_slider_after_drag"] = [slider.low, slider.high, slider.slider.value(),
+                                     slider.slider.width()]
+    result["undo_steps_after_drag"] = len(session.undo_stack)
     # a brush value, then a word
     x_type(window, window.strength.field, "0.8")
     result["strength"] = session.brush.strength

@@ -151,6 +151,17 @@ def test_the_help_overlay_and_typed_values(display, tmp_path):
     assert result["w_engine"] == pytest.approx(0.05, rel=1e-6)
     assert result["w_field"] == "0.05"
     assert result["undo_steps_after_w"] == 1
+    # the W slider is fine around the value: 0.05 / 2 to 0.05 * 2, the handle mid-way
+    low, high, position = result["w_slider_after_typed"]
+    assert (low, high, position) == (pytest.approx(0.025), pytest.approx(0.1), 500)
+    # a 26 px drag of its handle changes W by at most 4 ** (26 / the groove's width)
+    # (over 400x before: 9x), then the slider centres on the new W
+    low, high, position, pixels = result["w_slider_after_drag"]
+    factor = result["w_after_drag"] / 0.05
+    assert 1.05 < factor <= 4 ** (26 / (pixels - 20)), (factor, pixels)
+    assert (low, high, position) == (pytest.approx(result["w_after_drag"] / 2),
+                                     pytest.approx(result["w_after_drag"] * 2), 500)
+    assert result["undo_steps_after_drag"] == 2
     assert result["strength"] == pytest.approx(0.8)
     assert result["amplitude_after_word"] == pytest.approx(1.0)
     assert result["amplitude_field"] == "1"

@@ -37,6 +37,9 @@ Qt = QtCore.Qt
 #: the view's background (linear grey, under the frame's alpha), as usdview's
 BACKGROUND = (0.18, 0.18, 0.2)
 
+#: the W slider spans the current W divided and multiplied by this (log scale)
+W_SPAN = 2.0
+
 #: B + left drag resizes the brush (Maya's B): this many pixels to the right double it
 RESIZE_PIXELS = 100.0
 
@@ -870,6 +873,8 @@ class PaintWindow(QtWidgets.QMainWindow):
             self.session.set_control(name, value, live=False)
         finally:
             self._controls()[name].set_value(self.session.control(name))
+            if name == "width":
+                self._centre_width_slider()
         self.after_edit()
         self.view.update()
 
@@ -899,8 +904,6 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.radius.set_value(brush.radius)
         self.strength.set_value(brush.strength)
         self.amount.set_value(brush.amount)
-        width = session.control("width")
-        self.width_slider.low, self.width_slider.high = width / 20, width * 20
         self._fill_controls()
         frames = session.frames
         if len(frames) > 1 and frames[0] is not None:
@@ -989,6 +992,15 @@ class PaintWindow(QtWidgets.QMainWindow):
     def _fill_controls(self) -> None:
         for name, slider in self._controls().items():
             slider.set_value(self.session.control(name))
+        self._centre_width_slider()
+
+    def _centre_width_slider(self) -> None:
+        """The W slider spans W_SPAN around the current W, its handle in the middle
+        (issue 57: over 400x, a 26 px drag was a 9x change); re-centred after each
+        release, typed value, undo or preset, so that the next drag refines from there."""
+        width = self.session.control("width")
+        self.width_slider.low, self.width_slider.high = width / W_SPAN, width * W_SPAN
+        self.width_slider.set_value(width)
 
     @guarded
     def _brush_changed(self, *_):
@@ -1038,6 +1050,8 @@ class PaintWindow(QtWidgets.QMainWindow):
             return
         self.view.interacting = False
         self.session.set_control(name, self._controls()[name].value(), live=False)
+        if name == "width":
+            self._centre_width_slider()
         self.after_edit()
         self.view.update()
 
