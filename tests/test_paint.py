@@ -506,7 +506,7 @@ def symmetric_sheet(nx=21, size=2.0) -> PaintMesh:
     return out
 
 
-@pytest.mark.parametrize("mode", ["comb", "smooth", "erase", "width"])
+@pytest.mark.parametrize("mode", ["comb", "smooth", "erase", "width", "attract"])
 def test_a_mirrored_stroke_across_the_plane_is_exactly_symmetric(mode):
     """Issue 54: where a stamp and its mirror overlap (a stroke across the plane), the
     second one acted on the first one's result: an error of 0.28. Both now act at once."""
@@ -531,7 +531,10 @@ def test_a_mirrored_stroke_across_the_plane_is_exactly_symmetric(mode):
     np.testing.assert_array_equal(mesh.width, mesh.width[partner])
     changed = np.linalg.norm(mesh.q - (clamp_unit(start) if mode != "comb" else 0.0),
                              axis=1) > 1e-3
-    assert mode == "width" or changed[np.abs(mesh.rest_points[:, 0]) < 0.1].sum() > 3
+    near = np.abs(mesh.rest_points[:, 0]) < 0.1
+    # attract on the plane turns q towards the mean of the stroke and its mirror image,
+    # along the plane, where the symmetric start's q already lies: it changes off it
+    assert mode == "width" or (changed if mode == "attract" else changed[near]).sum() > 3
 
 
 @pytest.fixture
@@ -677,3 +680,29 @@ def test_the_display_ramps_read_the_painted_values():
     np.testing.assert_allclose(colors[:3], [RAMP[-1], RAMP[0], RAMP[2]], atol=1e-6)
     with pytest.raises(UsdWrinkleError):
         display_colors(mesh, "plaid", 0.1)
+
+
+def test_attract_turns_q_towards_the_stroke_and_keeps_its_amount():
+    """Comb's attract (issue 57): q turns towards the stroke's direction by the stamp's
+    weight, its amount kept; where nothing is painted it stays nothing."""
+    mesh = sheet()
+    painted = np.abs(mesh.rest_points[:, 0]) < 0.5
+    mesh.q[painted] = [0.6, 0.0, 0.0]
+    before = np.linalg.norm(mesh.q, axis=1)
+    brush = BrushSettings(mode="attract", radius=0.4, strength=1.0, falloff="constant",
+                          geodesic=False)
+    stamp(mesh, brush, np.array([0.0, 0.0, 0.0]), None, np.array([0.0, 1.0, 0.0]))
+    after = np.linalg.norm(mesh.q, axis=1)
+    np.testing.assert_allclose(after, before, atol=1e-6)
+    centre = np.argmin(np.linalg.norm(mesh.rest_points, axis=1))
+    np.testing.assert_allclose(np.abs(mesh.q[centre]), [0.0, 0.6, 0.0], atol=1e-6)
+    outside = np.linalg.norm(mesh.rest_points, axis=1) > 0.45
+    np.testing.assert_allclose(mesh.q[outside & painted], [[0.6, 0.0, 0.0]] * int(
+        np.sum(outside & painted)), atol=1e-7)
+    assert not mesh.q[~painted].any()
+    # half the weight: half way round (45 degrees), the amount kept
+    mesh.q[painted] = [0.6, 0.0, 0.0]
+    stamp(mesh, BrushSettings(mode="attract", radius=0.4, strength=0.5, falloff="constant",
+                              geodesic=False), np.zeros(3), None, np.array([0.0, 1.0, 0.0]))
+    np.testing.assert_allclose(np.abs(mesh.q[centre]), [0.6 / np.sqrt(2)] * 2 + [0.0],
+                               atol=1e-6)

@@ -21,7 +21,9 @@ import numpy as np
 from ..errors import UsdWrinkleError
 from ..limits import MAX_WORLD_COORDINATE
 
-MODES = ("comb", "smooth", "erase", "width")
+MODES = ("comb", "smooth", "erase", "width", "attract")
+#: the modes that need the stroke's direction (the first move of a drag gives it)
+DIRECTED = ("comb", "attract")
 #: the stamp profiles, the default first: ``sphere`` combs nearly the brush's whole width
 #: (a comb's teeth rake across it), so that a stroke's folds span it (issue 55: with
 #: ``smooth`` they covered the middle 62% of it on the shirt's sleeve)
@@ -318,7 +320,7 @@ def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.
         return
     q = mesh.q[index].astype(np.float64)
     w = combined[:, None]
-    if brush.mode == "comb":
+    if brush.mode in DIRECTED:
         if direction is None or not np.any(direction):
             return
         target = _comb_target(mesh, brush, index, q, direction)
@@ -334,7 +336,16 @@ def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.
             kept = np.delete(target, axis, axis=1)
             lead = kept[np.arange(len(kept)), np.argmax(np.abs(kept), axis=1)]
             target[empty & (lead < 0.0)] *= -1.0
-        q = q + w * (target - q)
+        if brush.mode == "attract":
+            # Comb's attract: q turns towards the stroke, its amount kept
+            amount = np.linalg.norm(q, axis=1, keepdims=True)
+            length = np.linalg.norm(target, axis=1, keepdims=True)
+            target = np.where(length > 1e-12, target / np.maximum(length, 1e-300), 0.0) * amount
+            turned = q + w * (target - q)
+            size = np.linalg.norm(turned, axis=1, keepdims=True)
+            q = np.where(size > 1e-12, turned / np.maximum(size, 1e-300) * amount, q)
+        else:
+            q = q + w * (target - q)
     elif brush.mode == "erase":
         q = q * (1.0 - w)
     elif brush.mode == "smooth":
@@ -419,7 +430,7 @@ class Stroke:
         if self.last is None:
             self.last = point
             self._first = (hit.triangle, pressure)
-            if self.brush.mode != "comb":  # comb needs a direction: the first move gives it
+            if self.brush.mode not in DIRECTED:  # the first move gives comb a direction
                 self._stamp(point, hit.triangle, None, facing, pressure)
                 return 1
             return 0
@@ -433,7 +444,7 @@ class Stroke:
         self.direction = travel / length
         count = int(length / step + 1e-9)  # 0.5 / 0.05 is 10 stamps, not 9
         first = 1
-        if self.brush.mode == "comb" and not self.centres:
+        if self.brush.mode in DIRECTED and not self.centres:
             first = 0  # the press point, now that the stroke has a direction
         for k in range(first, count + 1):
             centre = self.last + travel * (k * step / length)

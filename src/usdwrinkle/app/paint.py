@@ -20,7 +20,7 @@ from pxr import Sdf, Usd, UsdGeom
 from .. import schema
 from ..errors import UsdWrinkleError
 from ..layerinfo import copy_stage_info
-from .brush import BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
+from .brush import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 
 #: stamps along a drag lie at most this many pixels apart on screen (besides the brush's
@@ -503,7 +503,7 @@ class PaintSession:
         mesh = self.mesh
         before = (mesh.q.copy(), mesh.width.copy())
         direction = None
-        if self.brush.mode == "comb":
+        if self.brush.mode in DIRECTED:
             direction = self._last_direction()
         flood(mesh, self.brush, direction)
         if np.array_equal(before[0], mesh.q) and np.array_equal(before[1], mesh.width):

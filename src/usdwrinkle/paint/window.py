@@ -69,7 +69,8 @@ BINDINGS = (
 #: each control's tooltip
 TIPS = {
     "mode": "What a stroke paints: comb lays the wrinkle vector q along the stroke (folds "
-            "across it), smooth averages q, erase removes it, width paints W",
+            "across it), smooth averages q, erase removes it (Comb's lift), width paints W, "
+            "attract turns q towards the stroke keeping its amount",
     "falloff": "How a stamp fades from its centre to the brush's edge: sphere acts on "
                "nearly the whole width, smooth on its middle, constant evenly",
     "mirror": "Paint the mirror image too, through the rest pose's plane at 0 on this axis",
