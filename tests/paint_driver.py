@@ -113,7 +113,7 @@ def view_pixels(window, path: str, mask: np.ndarray) -> np.ndarray:
     from usdwrinkle.app.view import project
 
     session, frame = window.session, window.view.last_frame
-    xy, _ = project(frame.camera, session._posed_points(path)[mask], frame.width, frame.height)
+    xy, _ = project(frame.camera, session.posed_points(path)[mask], frame.width, frame.height)
     xy[:, 0] *= window.view.width() / frame.width
     xy[:, 1] *= window.view.height() / frame.height
     return xy.mean(axis=0)
@@ -866,7 +866,7 @@ def scenario_display(out: Path, stage: str) -> dict:
     def colours() -> dict:
         frame = view.last_frame
         rgb = frame.pixels[..., :3].astype(np.float64) / 255.0
-        xy, front = project(frame.camera, session._posed_points(path), frame.width,
+        xy, front = project(frame.camera, session.posed_points(path), frame.width,
                             frame.height)
         facing = session.facing(path) & front
         col = np.clip(np.round(xy[:, 0]).astype(int), 0, frame.width - 1)

@@ -300,7 +300,7 @@ class PaintSession:
     def frame_view(self, aspect: float) -> None:
         """Frame the orbit camera on the wrinkled meshes at the current frame (F)."""
         self._ensure_posed()
-        boxes = [self._posed_points(path) for path in self.paths]
+        boxes = [self.posed_points(path) for path in self.paths]
         lo = np.min([b.min(axis=0) for b in boxes], axis=0)
         hi = np.max([b.max(axis=0) for b in boxes], axis=0)
         self.orbit.frame(lo, hi, aspect)
@@ -387,7 +387,9 @@ class PaintSession:
         if self.engine.render_delegate.rprims[self.active].frame is None:
             self.engine.compute_frame(self.frame)
 
-    def _posed_points(self, path: str) -> np.ndarray:
+    def posed_points(self, path: str) -> np.ndarray:
+        """``path``'s posed points (world) at the last drawn frame (the brush outline, the
+        q segments and picking read them); read from the engine once per frame."""
         if path not in self._posed:
             self._posed[path] = self.engine.posed_points(path)
         return self._posed[path]
@@ -402,7 +404,7 @@ class PaintSession:
         origin, direction = pixel_ray(camera, x * w / width, y * h / height, w, h)
         best: Hit | None = None
         for path in self.engine.visible_paths():
-            points = self._posed_points(path)
+            points = self.posed_points(path)
             triangles = self.engine.meshes[path].topology.triangles
             found = ray_triangles(origin, direction, points, triangles)
             if found is None or (best is not None and found[1] >= best.distance):
@@ -417,7 +419,7 @@ class PaintSession:
     def facing(self, path: str) -> np.ndarray:
         """Per vertex of ``path``: whether its posed normal faces the eye."""
         camera = self._camera[0]
-        points = self._posed_points(path)
+        points = self.posed_points(path)
         normals = vertex_normals(points, self.engine.meshes[path].topology.triangles)
         return np.einsum("ij,ij->i", normals, camera.position - points) > 0.0
 

@@ -283,7 +283,7 @@ class PaintView(QOpenGLWidget):
         hit = session.pick(self.cursor_pos.x(), self.cursor_pos.y(), self.width(), self.height())
         if hit is None:
             return
-        posed = session._posed_points(hit.path)
+        posed = session.posed_points(hit.path)
         tri = session.engine.meshes[hit.path].topology.triangles[hit.triangle]
         corners = posed[tri]
         centre = hit.barycentric @ corners
@@ -325,7 +325,7 @@ class PaintView(QOpenGLWidget):
             show = np.nonzero(length > 0.02)[0]
             if not len(show):
                 continue
-            posed = session._posed_points(path)
+            posed = session.posed_points(path)
             facing = session.facing(path)
             show = show[facing[show]]
             directions = posed_directions(mesh, posed, mesh.q)
