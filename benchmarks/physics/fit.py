@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from . import measure
-from .oracle import bake, compare, zones
+from .oracle import bake, compare, per_phase, zones
 from .referee import ROOT, SPACING, SWEEP, area_ratio, simulated
 
 
@@ -30,19 +30,6 @@ def set_law(exponent: float, most: float, room: float | None = None) -> None:
         table["COARSENING_MAX"] = contract.glsl_literal(float(most))
         table["FOLD_ROOM"] = contract.glsl_literal(float(room if room is not None
                                                          else contract.FOLD_ROOM))
-
-
-def per_phase(sim, ours) -> dict:
-    """Each phase end: (ours / sim) of the material wavelength and of the RMS height."""
-    shot = sim.shot
-    inner = zones(shot)["all"]
-    out = {}
-    for name, (_, end) in shot.phases.items():
-        f = end - 1
-        out[name] = (measure.wavelength(shot, ours.h[f], inner)
-                     / measure.wavelength(shot, sim.h[f], inner),
-                     measure.rms(ours.h[f], inner) / max(measure.rms(sim.h[f], inner), 1e-12))
-    return out
 
 
 def profile_values(name: str) -> list[float]:

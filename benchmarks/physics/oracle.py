@@ -155,3 +155,16 @@ def compare(sim: Simulated, ours: Baked) -> dict:
 def _share(h: np.ndarray, mask: np.ndarray, inner: np.ndarray) -> float:
     energy = (h ** 2).sum(0)
     return float(energy[mask].sum() / max(energy[inner].sum(), 1e-300))
+
+
+def per_phase(sim, ours) -> dict:
+    """Each phase end: (ours / sim) of the material wavelength and of the RMS height."""
+    shot = sim.shot
+    inner = zones(shot)["all"]
+    out = {}
+    for name, (_, end) in shot.phases.items():
+        f = end - 1
+        out[name] = (measure.wavelength(shot, ours.h[f], inner)
+                     / measure.wavelength(shot, sim.h[f], inner),
+                     measure.rms(ours.h[f], inner) / max(measure.rms(sim.h[f], inner), 1e-12))
+    return out

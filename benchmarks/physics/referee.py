@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import measure
-from .oracle import Simulated, bake, compare, measured_frames, zones
+from .oracle import Simulated, bake, compare, measured_frames, per_phase, zones
 from .simulate import simulate_newton
 from .sweep import FABRICS, SweepShot, curtain, shear, sleeve
 
@@ -105,8 +105,6 @@ def sweep_row(sim: Simulated) -> dict:
     wavelength, against the simulation: per phase (ours / sim) wavelength and height, the
     amplitude-field correlation, the crest motion at the elbow, our area ratio."""
     from usdwrinkle import schema
-
-    from .fit import per_phase
 
     default = bake(sim.shot, sim, "default")
     first = per_phase(sim, default)
