@@ -605,6 +605,17 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
     settle(window)
     result["slack_after_refusal"] = session.control("slack")
     result["slack_field"] = window.slack.field.text()
+    # Esc while typing: the field goes back, nothing is taken, the focus leaves it
+    amplitude_before = session.control("amplitude_scale")
+    x_click(window, window.amplitude.field)
+    x_events(window, "key", "ctrl+a")
+    x_events(window, "type", "3.5")
+    result["amplitude_field_typing"] = window.amplitude.field.text()
+    x_events(window, "key", "Escape")
+    settle(window)
+    result["amplitude_field_after_esc"] = window.amplitude.field.text()
+    result["amplitude_after_esc"] = [amplitude_before, session.control("amplitude_scale")]
+    result["field_focus_after_esc"] = window.amplitude.field.hasFocus()
     result["errors"] = list(window.errors)
     result["tooltips"] = {name: widget.toolTip() for name, widget in window._tipped().items()}
     result["tooltips"]["play"] = window.play_button.toolTip()

@@ -166,6 +166,11 @@ def test_the_help_overlay_and_typed_values(display, tmp_path):
     assert result["amplitude_after_word"] == pytest.approx(1.0)
     assert result["amplitude_field"] == "1"
     assert result["slack_after_refusal"] < 1.0 and result["slack_field"] != "2"
+    # Esc while typing puts the field back (the window's own Esc took the key before)
+    assert result["amplitude_field_typing"] == "3.5"
+    assert result["amplitude_field_after_esc"] == "1"
+    before, after = result["amplitude_after_esc"]
+    assert before == after == pytest.approx(1.0) and not result["field_focus_after_esc"]
     assert len(result["errors"]) == 2, result["errors"]
     assert result["errors"][0] == "amplitude: 'lots' is not a number"
     assert "slack" in result["errors"][1]

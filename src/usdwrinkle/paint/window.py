@@ -63,7 +63,7 @@ BINDINGS = (
     ("Ctrl+Shift+S", "save as"),
     ("Ctrl+W", "close (asks about unsaved strokes)"),
     ("H or ?", "show or hide this list"),
-    ("a value field", "type a value and press Enter"),
+    ("a value field", "type a value and press Enter (Esc puts it back)"),
 )
 
 #: each control's tooltip
@@ -498,6 +498,26 @@ def posed_directions(mesh, posed: np.ndarray, vectors: np.ndarray) -> np.ndarray
     return np.where(length > 1e-12, out / np.maximum(length, 1e-300), 0.0)
 
 
+class _Field(QtWidgets.QLineEdit):
+    """A slider's typed value. Esc while typing puts the value back (the window's own Esc,
+    drop the stroke, would take the key first: the field claims it through Qt's shortcut
+    override while it has focus)."""
+
+    escaped = QtCore.Signal()
+
+    def event(self, event):  # noqa: D401 (Qt override)
+        if event.type() == QtCore.QEvent.ShortcutOverride and event.key() == Qt.Key_Escape:
+            event.accept()
+            return True
+        return super().event(event)
+
+    def keyPressEvent(self, event):  # noqa: N802
+        if event.key() == Qt.Key_Escape:
+            self.escaped.emit()
+            return
+        super().keyPressEvent(event)
+
+
 class _Slider(QtWidgets.QWidget):
     """A labelled float slider with a field that takes a typed value: the slider's own
     signals while dragged and on release; ``typed(value)`` when a value is typed and
@@ -518,7 +538,7 @@ class _Slider(QtWidgets.QWidget):
         self.slider = QtWidgets.QSlider(Qt.Horizontal)
         self.slider.setRange(0, 1000)
         #: the value, shown and typed (Enter takes it)
-        self.field = QtWidgets.QLineEdit()
+        self.field = _Field()
         self.field.setFixedWidth(64)
         self.field.setToolTip("Type a value and press Enter")
         layout.addWidget(self.label)
@@ -528,6 +548,7 @@ class _Slider(QtWidgets.QWidget):
         self.set_value(value)
         self.slider.valueChanged.connect(self._moved)
         self.field.returnPressed.connect(self._typed)
+        self.field.escaped.connect(self._escaped)
 
     def setToolTip(self, text: str) -> None:  # noqa: N802 (Qt naming)
         """The label and slider carry the control's tooltip; the field says it is typed."""
@@ -535,6 +556,11 @@ class _Slider(QtWidgets.QWidget):
         self.label.setToolTip(text)
         self.slider.setToolTip(text)
         self.field.setToolTip(f"{text}. Type a value and press Enter")
+
+    def _escaped(self) -> None:
+        """Esc in the field: the value as it was, the keyboard back to the view."""
+        self._show()
+        self.field.clearFocus()
 
     def _typed(self) -> None:
         text = self.field.text().strip()
