@@ -1,4 +1,7 @@
-"""The four passes of Loviscach's method, one module each: skin, crush, relax, draw."""
+"""The passes of the draw, one module each: Loviscach's four (skin, crush, relax, draw)
+and the posed normals (normals.py). The resolve and the mip chains are render/resolve.py
+and render/mipmaps.py; the maps and the displaced geometry evaluate the waves with their
+own passes (maps/raster.py, geometry/evaluate.py)."""
 from __future__ import annotations
 
 import functools
