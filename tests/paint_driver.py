@@ -1000,6 +1000,16 @@ def scenario_open(out: Path, stage: str) -> dict:
     result["after_recent"] = window.stage_path
     result["paths_after_recent"] = list(window.session.paths)
     result["errors"] = list(window.errors)
+    # a file that is not a stage, and a stage with nothing to paint: one line each, and
+    # the window keeps the shirt
+    not_usd = out / "notes.usda"
+    not_usd.write_text("these are not USD")
+    plain = out / "plain.usda"
+    plain.write_text('#usda 1.0\n\ndef Mesh "M"\n{\n    point3f[] points = [(0, 0, 0)]\n}\n')
+    result["refused"] = [window.open_stage(str(not_usd)), window.open_stage(str(plain))]
+    result["errors_after_refused"] = list(window.errors)
+    result["after_refused"] = window.stage_path
+    result["paths_after_refused"] = list(window.session.paths)
     window.close()
     return result
 

@@ -337,6 +337,12 @@ def test_file_open_recent_files_and_save_as_in_the_layers_folder(display, tmp_pa
     assert result["after_recent"] == str(SHIRT)
     assert result["paths_after_recent"] == ["/World/Arm/Sleeve"]
     assert result["errors"] == []
+    # refused: not a stage, and nothing to paint; one line each, the shirt kept
+    assert result["refused"] == [False, False]
+    assert len(result["errors_after_refused"]) == 2, result["errors_after_refused"]
+    assert "WrinkleAPI" in result["errors_after_refused"][1]
+    assert result["after_refused"] == str(SHIRT)
+    assert result["paths_after_refused"] == ["/World/Arm/Sleeve"]
 
 
 def test_closing_with_unsaved_strokes_asks_first(display, tmp_path):
