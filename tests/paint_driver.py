@@ -943,6 +943,16 @@ def scenario_presets(out: Path, stage: str) -> dict:
                           "radius": window.radius.field.text(),
                           "strength": window.strength.field.text()}
     result["errors"] = list(window.errors)
+    # a second preset, then deleted again (Delete clicked with it shown)
+    window.ask_preset_name = lambda: "to go"
+    x_click(window, window.save_preset_button)
+    result["listed_with_second"] = [window.preset.itemText(i)
+                                    for i in range(window.preset.count())]
+    x_click(window, window.delete_preset_button)
+    result["listed_after_delete"] = [window.preset.itemText(i)
+                                     for i in range(window.preset.count())]
+    result["file_after_delete"] = sorted(json_module.loads(
+        (out / "config" / "brushes.json").read_text())["presets"])
     window.close()
     # a file with a bad preset beside the good one
     data = json_module.loads((out / "config" / "brushes.json").read_text())

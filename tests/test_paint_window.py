@@ -303,6 +303,9 @@ def test_brush_presets_are_saved_and_chosen(display, tmp_path):
     assert result["controls"] == {"mode": "smooth", "falloff": "linear", "radius": "0.2",
                                   "strength": "0.8"}
     assert result["errors"] == []
+    assert result["listed_with_second"] == ["(choose)", "soft smooth", "to go"]
+    assert result["listed_after_delete"] == ["(choose)", "soft smooth"]
+    assert result["file_after_delete"] == ["soft smooth"]
     assert result["listed_with_broken"] == ["(choose)", "soft smooth"]
     assert len(result["errors_with_broken"]) == 1
     assert "'broken'" in result["errors_with_broken"][0]

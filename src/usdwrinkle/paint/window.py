@@ -86,6 +86,7 @@ TIPS = {
     "preset": "Brush presets: choose one to take its mode, falloff, size, strength, amount "
               "and the rest (kept in your config folder, for every window)",
     "save_preset": "Save the brush as it is now under a name (the same name replaces it)",
+    "delete_preset": "Delete the preset shown in the list (the brush stays as it is)",
     "width": "W, the wrinkle width (rest wavelength) of the active mesh, in scene units; "
              "width mode paints this value",
     "amplitude": "wrinkle:amplitudeScale: scales every fold's height (1 is the fold law's)",
@@ -712,10 +713,12 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.view_mode.addItems(["orbit", "stage camera"])
         self.preset = QtWidgets.QComboBox()
         self.save_preset_button = QtWidgets.QPushButton("Save...")
+        self.delete_preset_button = QtWidgets.QPushButton("Delete")
         preset_row = QtWidgets.QHBoxLayout()
         preset_row.addWidget(QtWidgets.QLabel("preset"))
         preset_row.addWidget(self.preset, 1)
         preset_row.addWidget(self.save_preset_button)
+        preset_row.addWidget(self.delete_preset_button)
         form.addLayout(preset_row)
         for label, widget in (("mode", self.mode), ("falloff", self.falloff),
                               ("mirror", self.mirror)):
@@ -753,6 +756,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         self._fill_presets()
         self.preset.activated.connect(self._preset_chosen)
         self.save_preset_button.clicked.connect(self._save_preset)
+        self.delete_preset_button.clicked.connect(self._delete_preset)
         self.view_mode.currentTextChanged.connect(self._view_mode_changed)
         for slider in (self.radius, self.strength, self.amount):
             slider.typed.connect(functools.partial(self._brush_typed, slider))
@@ -771,7 +775,8 @@ class PaintWindow(QtWidgets.QMainWindow):
                 "flood": self.flood_button, "show_q": self.show_q,
                 "width": self.width_slider, "amplitude": self.amplitude,
                 "slack": self.slack, "cloth": self.cloth, "view": self.view_mode,
-                "preset": self.preset, "save_preset": self.save_preset_button}
+                "preset": self.preset, "save_preset": self.save_preset_button,
+                "delete_preset": self.delete_preset_button}
 
     def _controls(self) -> dict:
         return {"width": self.width_slider, "amplitude_scale": self.amplitude,
@@ -1010,6 +1015,18 @@ class PaintWindow(QtWidgets.QMainWindow):
         self._fill_presets()
         self.preset.setCurrentText(name.strip())
         self.statusBar().showMessage(f"saved brush preset {name.strip()!r} to {where}", 6000)
+
+    @guarded
+    def _delete_preset(self, *_) -> None:
+        from ..app.presets import delete_preset
+
+        name = self.preset.currentText()
+        if name not in self.presets:
+            self.statusBar().showMessage("choose a preset in the list to delete it", 4000)
+            return
+        delete_preset(name)
+        self._fill_presets()
+        self.statusBar().showMessage(f"deleted brush preset {name!r}", 4000)
 
     def _ask_preset_name(self) -> str | None:
         name, ok = QtWidgets.QInputDialog.getText(self, "Save the brush preset",
