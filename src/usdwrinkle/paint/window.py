@@ -717,9 +717,11 @@ class PaintWindow(QtWidgets.QMainWindow):
         preset_row = QtWidgets.QHBoxLayout()
         preset_row.addWidget(QtWidgets.QLabel("preset"))
         preset_row.addWidget(self.preset, 1)
-        preset_row.addWidget(self.save_preset_button)
-        preset_row.addWidget(self.delete_preset_button)
         form.addLayout(preset_row)
+        preset_buttons = QtWidgets.QHBoxLayout()
+        preset_buttons.addWidget(self.save_preset_button)
+        preset_buttons.addWidget(self.delete_preset_button)
+        form.addLayout(preset_buttons)
         for label, widget in (("mode", self.mode), ("falloff", self.falloff),
                               ("mirror", self.mirror)):
             row = QtWidgets.QHBoxLayout()
