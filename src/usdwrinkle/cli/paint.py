@@ -13,7 +13,9 @@ def add_parser(subparsers) -> None:
                     "combs q along the stroke (rest space, whatever the pose), the folds "
                     "follow at once; W, amplitude, slack and the cloth preset are live "
                     "controls. Ctrl+S writes the strokes as overs through the WrinkleAPI. "
-                    "Needs PySide6 (pip install 'usdwrinkle[paint]') and a display.")
+                    "In the window, H lists every key and mouse binding, View > Display "
+                    "shows the painted amount and W. Needs PySide6 (pip install "
+                    "'usdwrinkle[paint]') and a display.")
     p.add_argument("stage", help="the USD stage (.usda, .usdc, .usdz)")
     p.add_argument("-o", "--output", metavar="LAYER",
                    help="the layer the strokes are saved into: a new one sublayers the stage "
