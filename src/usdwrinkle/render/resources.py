@@ -264,17 +264,23 @@ class MeshResources:
             old.release()
         self.profile_curvature = profile_curvature(record.params.gradient_profile)
 
+    def _corner_table(self, table: Table | None, colors) -> Table | None:
+        """A table of colours per triangle corner ((m, 3, 3), linear) with ``colors``
+        written into it (made where ``table`` is None), or none for None (``table``
+        freed)."""
+        if colors is None:
+            if table is not None:
+                self.tables.remove(table)
+                table.release()
+            return None
+        if table is None:
+            table = self._table(3 * self.num_triangles, 4)
+        table.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+        return table
+
     def _set_corner_colors(self, colors) -> None:
         """Upload colours per triangle corner ((m, 3, 3)), or drop them (None)."""
-        if colors is None:
-            if self.corner_colors is not None:
-                self.tables.remove(self.corner_colors)
-                self.corner_colors.release()
-                self.corner_colors = None
-            return
-        if self.corner_colors is None:
-            self.corner_colors = self._table(3 * self.num_triangles, 4)
-        self.set_frame_colors(colors)
+        self.corner_colors = self._corner_table(self.corner_colors, colors)
 
     def set_frame_colors(self, colors) -> None:
         """Write corner colours ((m, 3, 3)) into the table the material made (a frame's
@@ -285,15 +291,7 @@ class MeshResources:
     def set_display_colors(self, colors) -> None:
         """Draw ``colors`` ((m, 3, 3) per triangle corner, linear) instead of the
         material's colour, or the material again (None)."""
-        if colors is None:
-            if self.display_colors is not None:
-                self.tables.remove(self.display_colors)
-                self.display_colors.release()
-                self.display_colors = None
-            return
-        if self.display_colors is None:
-            self.display_colors = self._table(3 * self.num_triangles, 4)
-        self.display_colors.write(vec4(np.asarray(colors, np.float32).reshape(-1, 3), 1.0))
+        self.display_colors = self._corner_table(self.display_colors, colors)
 
     def update_material(self, record: MeshRecord) -> None:
         """Re-upload the material (texture, texture coordinates) of an edited record."""
