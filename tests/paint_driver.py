@@ -1046,16 +1046,31 @@ def scenario_figures(out: Path, stage: str) -> dict:
     window.display_actions["amount"].trigger()
     settle(window)
     screenshot(window, out / "paint_amount.png")
+    # W painted at twice the mesh's over the forearm's front, shown on its ramp
+    from dataclasses import replace
+
+    window.mode.setCurrentText("width")
+    session = window.session
+    session.brush = replace(session.brush, width=2.0 * session.control("width"))
+    rest = session.mesh.rest_points
+    fore = view_pixels(window, session.active, session.facing(session.active) &
+                       (rest[:, 0] > 1.4) & (rest[:, 0] < 1.8))
+    drag(window, line(fore - [0, 60], fore + [0, 60], 12))
+    window.display_actions["width"].trigger()
+    settle(window)
+    screenshot(window, out / "paint_width.png")
+    window.mode.setCurrentText("comb")
     window.display_actions["shaded"].trigger()
     window.view.cursor_pos = None
     window.toggle_help()
     settle(window)
     screenshot(window, out / "paint_help.png")
-    window.session.dirty and window.session.undo()
+    while window.session.dirty and window.session.undo() is not None:
+        pass
     window.close()
     (out / "paint_figures.usda").unlink(missing_ok=True)
     return {"written": ["paint_before.png", "paint_after.png", "paint_amount.png",
-                        "paint_help.png"]}
+                        "paint_width.png", "paint_help.png"]}
 
 
 def main(argv: list[str]) -> int:
