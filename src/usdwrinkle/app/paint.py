@@ -97,7 +97,7 @@ PREVIEW = Quality(1, 0.5)
 
 
 @dataclass
-class Frame:
+class ViewImage:
     """What the view shows: RGBA codes (row 0 at the top), its size and camera."""
 
     pixels: np.ndarray
@@ -265,7 +265,7 @@ class PaintSession:
         self._camera = None
         #: per mesh: its posed points (world) at the last drawn frame, read on first use
         self._posed: dict[str, np.ndarray] = {}
-        self.last_frame: Frame | None = None
+        self.last_frame: ViewImage | None = None
         self._framed = False
         #: the last stroke's stamp centres (rest space) and the vertices it touched
         self.stamp_centres: list[np.ndarray] = []
@@ -362,7 +362,7 @@ class PaintSession:
             self._follow_meshes()
         return self.orbit.record(width / height)
 
-    def render(self, width: int, height: int, quality: Quality = FULL) -> Frame:
+    def render(self, width: int, height: int, quality: Quality = FULL) -> ViewImage:
         """Draw the current frame: RGBA codes, as ``usdwrinkle render`` writes a PNG
         (with the stage's camera and FULL quality, the same codes)."""
         import time
@@ -379,7 +379,7 @@ class PaintSession:
         image.release()
         self._camera = (camera, w, h)
         self._posed.clear()
-        self.last_frame = Frame(pixels, w, h, camera, quality, self.frame,
+        self.last_frame = ViewImage(pixels, w, h, camera, quality, self.frame,
                                 time.perf_counter() - started, dict(self.engine.last_timings))
         return self.last_frame
 
