@@ -94,10 +94,10 @@ def area_excess(r, r_geo, across, slack: float) -> np.ndarray:
     compressed both ways one wave restores its area. Never less than excess_length."""
     r = np.asarray(r, np.float64)
     r_geo = np.asarray(r_geo, np.float64)
-    area = r_geo * np.clip(np.asarray(across, np.float64), ACROSS_MIN, 1.0)
-    gather = np.minimum(r_geo / r, PAINT_GATHER_MAX)
+    across = np.clip(np.asarray(across, np.float64), ACROSS_MIN, 1.0)
+    # scaling r and r_geo alike keeps the painted gather r_geo / r as it is
     return np.maximum(excess_length(r, r_geo, slack),
-                      np.maximum(1.0, restored(area, slack) / area) * gather)
+                      excess_length(r * across, r_geo * across, slack))
 
 
 def restored(r_geo, slack: float) -> np.ndarray:

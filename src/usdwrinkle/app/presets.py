@@ -17,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import tempfile
 from pathlib import Path
 
 from ..errors import UsdWrinkleError
@@ -97,14 +96,15 @@ def delete_preset(name: str, path: Path | None = None) -> None:
     _write(path, presets)
 
 
+def write_json(path: Path, data: dict[str, object]) -> None:
+    """``data`` as JSON at ``path``, atomically (outputs.atomic.atomic_path: the folder
+    made, never a half-written file); a failure is the one-line UsdWrinkleError."""
+    from ..outputs.atomic import atomic_path
+
+    text = json.dumps(data, indent=1, sort_keys=True) + "\n"
+    with atomic_path(str(path)) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+
 def _write(path: Path, presets: dict[str, object]) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        text = json.dumps({"version": VERSION, "presets": presets}, indent=1, sort_keys=True)
-        handle, temporary = tempfile.mkstemp(prefix=".brushes-", suffix=".json",
-                                             dir=path.parent)
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text + "\n")
-        os.replace(temporary, path)
-    except OSError as exc:
-        raise UsdWrinkleError(f"brush presets {path}: cannot be written ({exc})") from None
+    write_json(path, {"version": VERSION, "presets": presets})

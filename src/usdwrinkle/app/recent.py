@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
-from .presets import config_dir
+from ..errors import UsdWrinkleError
+from .presets import config_dir, write_json
 
 #: how many stages the list keeps
 KEEP = 10
@@ -34,18 +34,13 @@ def recent_stages(path: Path | None = None) -> list[str]:
 
 def remember_stage(stage: str, path: Path | None = None) -> list[str]:
     """Put ``stage`` (made absolute) first in the list; returns the list. A list that
-    cannot be written is left as it was (OSError is not raised: painting goes on)."""
+    cannot be written is left as it was (nothing is raised: painting goes on)."""
     path = recent_path() if path is None else path
     stage = os.path.abspath(stage)
     stages = [stage] + [s for s in recent_stages(path) if s != stage]
     stages = stages[:KEEP]
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(prefix=".recent-", suffix=".json",
-                                             dir=path.parent)
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            json.dump({"version": 1, "stages": stages}, out, indent=1)
-        os.replace(temporary, path)
-    except OSError:
+        write_json(path, {"version": 1, "stages": stages})
+    except UsdWrinkleError:
         pass
     return stages

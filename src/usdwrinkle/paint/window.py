@@ -930,14 +930,8 @@ class PaintWindow(QtWidgets.QMainWindow):
         """The view made its session (initializeGL): fill the controls from it."""
         self.session = session
         brush = session.brush
-        for combo, value in ((self.mode, brush.mode), (self.falloff, brush.falloff)):
-            blocked = combo.blockSignals(True)
-            combo.setCurrentText(value)
-            combo.blockSignals(blocked)
         self.radius.low, self.radius.high = brush.radius / 100, brush.radius * 20
-        self.radius.set_value(brush.radius)
-        self.strength.set_value(brush.strength)
-        self.amount.set_value(brush.amount)
+        self._show_brush(brush)
         self._fill_controls()
         frames = session.frames
         if len(frames) > 1 and frames[0] is not None:
@@ -988,7 +982,14 @@ class PaintWindow(QtWidgets.QMainWindow):
         the width mode's W stays the W control's."""
         from ..app.paint import with_brush
 
-        for widget in (self.mode, self.falloff, self.mirror, self.geodesic, self.front_only):
+        self._show_brush(brush)
+        self._brush_changed()
+        with_brush(self.session, spacing=brush.spacing)
+
+    def _show_brush(self, brush) -> None:
+        """Every brush control shows ``brush``, its signals held (nothing is applied)."""
+        toggles = (self.mode, self.falloff, self.mirror, self.geodesic, self.front_only)
+        for widget in toggles:
             widget.blockSignals(True)
         try:
             self.mode.setCurrentText(brush.mode)
@@ -1000,11 +1001,8 @@ class PaintWindow(QtWidgets.QMainWindow):
                                   (self.amount, brush.amount)):
                 slider.set_value(value)
         finally:
-            for widget in (self.mode, self.falloff, self.mirror, self.geodesic,
-                           self.front_only):
+            for widget in toggles:
                 widget.blockSignals(False)
-        self._brush_changed()
-        with_brush(self.session, spacing=brush.spacing)
 
     @guarded
     def _save_preset(self, *_) -> None:
