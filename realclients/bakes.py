@@ -468,3 +468,85 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     views["plain"] = plain
     views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     return views
+
+
+#: issue 56's shot: the plaid shirt's sleeve at frame 24, 960 px, its textures as they are
+TEXTURE_SHOT = BakeShot("shirt", SAMPLES / "shirt.usda", 24, width=960)
+
+
+def turned_camera(stage, camera: str, frame: float, degrees: float, path: str) -> str:
+    """Define ``path`` in ``stage``'s edit target: ``camera`` turned by ``degrees`` about
+    the stage's up axis through the centre of the wrinkled meshes' bounds at ``frame``
+    (the camera the bake never saw); returns ``path``."""
+    from pxr import Gf, Usd, UsdGeom
+
+    time = Usd.TimeCode(frame)
+    source = UsdGeom.Camera(stage.GetPrimAtPath(camera))
+    cache = UsdGeom.BBoxCache(time, [UsdGeom.Tokens.default_, UsdGeom.Tokens.render])
+    centre = cache.ComputeWorldBound(stage.GetPseudoRoot()).ComputeAlignedRange().GetMidpoint()
+    up = Gf.Vec3d(0, 1, 0) if UsdGeom.GetStageUpAxis(stage) == "Y" else Gf.Vec3d(0, 0, 1)
+    turn = Gf.Matrix4d().SetTranslate(-centre) * \
+        Gf.Matrix4d().SetRotate(Gf.Rotation(up, degrees)) * Gf.Matrix4d().SetTranslate(centre)
+    gf_camera = source.GetCamera(time)
+    gf_camera.transform = gf_camera.transform * turn
+    turned = UsdGeom.Camera.Define(stage, path)
+    turned.SetFromCamera(gf_camera, Usd.TimeCode.Default())
+    return path
+
+
+@dataclass
+class TextureViews:
+    """usdwrinkle's and Storm's renders of the texture shot, at the shot's camera and at
+    each turned one: {degrees: {label: path}}; labels ours, ours_plain, storm_parallax
+    (the maps layer with --maps normal,parallax: its MaterialX network), storm_normal
+    (--maps normal: the UsdPreviewSurface alone) and storm_points (--with-points)."""
+
+    images: dict
+
+    def contribution(self, degrees: float, label: str = "storm_parallax") -> Contribution:
+        i = self.images[degrees]
+        return contribution(i["ours"], i["ours_plain"], i[label], i["storm_points"])
+
+
+def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT,
+                  map_size: int = 2048) -> TextureViews:
+    """The texture deformation through Storm: the shot's layers baked once (no camera
+    in them), each seen through the shot's camera turned by each of ``turns``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    framed, camera = shared_camera(shot.stage.resolve(), folder)
+    lit = has_lights(shot.stage)
+    layers = {}
+    size = ("--map-size", map_size)
+    for label, flags in (("parallax", ("--maps", "normal,parallax", *size)),
+                         ("normal", ("--maps", "normal", *size)),
+                         ("points", ("--with-points",))):
+        layers[label] = folder / f"{shot.name}.{label}.usda"
+        _usdwrinkle("bake", framed, layers[label], "--frames", f"{shot.frame:g}", "--quiet",
+                    *flags)
+    images, jobs = {}, []
+    for degrees in turns:
+        tag = f"turn{degrees:g}"
+        views = {}
+        cameras = {}
+        for label, stage_path in [("source", Path(framed)), *layers.items()]:
+            stage, layer = over_layer(stage_path.resolve(),
+                                      folder / f"{stage_path.stem}.{tag}.usda")
+            cameras[label] = turned_camera(stage, camera, shot.frame, degrees, "/TurnedCamera") \
+                if degrees else camera
+            layer.Save()
+            views[label] = Path(layer.realPath)
+        out = {}
+        for name, extra in (("ours", ()), ("ours_plain", ("--no-wrinkles",))):
+            out[name] = folder / f"{shot.name}.{tag}.{name}.png"
+            _usdwrinkle("render", views["source"], out[name], "--frames", f"{shot.frame:g}",
+                        "--width", shot.width, "--camera", cameras["source"], "--quiet", *extra)
+        for label in layers:
+            out[f"storm_{label}"] = folder / f"{shot.name}.{tag}.storm_{label}.png"
+            jobs.append({"stage": str(views[label]), "camera": cameras[label],
+                         "frame": shot.frame, "width": shot.width,
+                         "out": str(out[f"storm_{label}"]), "camera_light": not lit})
+        images[degrees] = out
+    failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
+    if failed:
+        raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
+    return TextureViews(images)

@@ -14,6 +14,11 @@ layout(binding = MAPS_GAIN) uniform sampler2D gain;  // .x: the curved-cloth gai
 layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
 layout(binding = MAPS_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
+#if defined PARALLAX
+// the texture coordinates the mesh's textures read, per triangle corner ([3t + c]): the
+// parallax maps hold their gradients (the texture deformation's st per local offset)
+layout(binding = MAPS_TEXTURE_ST) uniform sampler2D texture_st;
+#endif
 #if defined MIKKTSPACE
 // MikkTSpace per triangle corner ([3t + c]): unit tangent, bitangent sign (maps/tangents.py)
 layout(binding = MAPS_TANGENTS) uniform sampler2D corner_tangents;
@@ -68,11 +73,22 @@ uniform int u_count;              // 1: count the triangles over each texel (ove
 
 layout(location = 0) out vec4 out_normal;   // xyz: tangent-space unit normal; w: coverage
 layout(location = 1) out vec4 out_wrinkle;  // x: height h; y: a / (s g W / 4); w: coverage
+#if defined PARALLAX
+// the texture deformation's inputs, local (object) space: the bent unit normal n', and h
+// times the rows of inverse(gram) [dP/ds; dP/dt] of the texture's st (draw.glsl's
+// v_st_from_local): a renderer's st offset is (hS.x', hT.x') with x' = v/(v.n') - n'
+layout(location = 2) out vec4 out_bent;     // xyz: n'; w: coverage
+layout(location = 3) out vec4 out_hs;       // xyz: h S; w: coverage
+layout(location = 4) out vec4 out_ht;       // xyz: h T; w: coverage
+#endif
 
 void main() {
     if (u_count != 0) {  // additive blending sums these
         out_normal = vec4(1.0);
         out_wrinkle = vec4(1.0);
+#if defined PARALLAX
+        out_bent = out_hs = out_ht = vec4(1.0);
+#endif
         return;
     }
     int t = gl_PrimitiveID;
@@ -99,6 +115,22 @@ void main() {
     out_normal = vec4(encoded, 1.0);
     out_wrinkle = vec4(wave.height, full > 0.0 ? min(wave.amplitude / full, 1.0) : 0.0, 0.0,
                        1.0);
+#if defined PARALLAX
+    vec3 row_s = vec3(0.0), row_t = vec3(0.0);
+    vec3 dp_ds, dp_dt;
+    if (uv_derivatives(t, texture_st, dp_ds, dp_dt)) {
+        mat2 gram = mat2(dot(dp_ds, dp_ds), dot(dp_ds, dp_dt),
+                         dot(dp_ds, dp_dt), dot(dp_dt, dp_dt));
+        if (abs(determinant(gram)) > 1e-30) {
+            mat2 inv = inverse(gram);  // column-major: inv[col][row]
+            row_s = inv[0][0] * dp_ds + inv[1][0] * dp_dt;
+            row_t = inv[0][1] * dp_ds + inv[1][1] * dp_dt;
+        }
+    }
+    out_bent = vec4(shading, 1.0);
+    out_hs = vec4(wave.height * row_s, 1.0);
+    out_ht = vec4(wave.height * row_t, 1.0);
+#endif
 }
 
 #endif

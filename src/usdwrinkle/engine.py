@@ -400,6 +400,11 @@ class WrinkleEngine:
         if "q" in changes or "width" in changes:
             mesh.resources.q_width.write(vec4(params.q, params.width))
 
+    def local_to_world(self, path: str) -> np.ndarray:
+        """``path``'s local-to-world transform at the last computed frame ((4, 4) float64,
+        USD's row vectors)."""
+        return np.asarray(self.render_delegate.rprims[path].frame.local_to_world, np.float64)
+
     def posed_points(self, path: str) -> np.ndarray:
         """``path``'s posed points at the last computed frame, world space, (n, 3)
         float64 (a viewer's picking)."""

@@ -63,7 +63,10 @@ def baked_names_text() -> str:
 #: one island per face, maps/islands.py
 MAP_ST = "wrinkleMapST"
 MAP_INPUTS = {"normal": "wrinkleNormalFile", "height": "wrinkleHeightFile",
-              "amplitude": "wrinkleAmplitudeFile"}
+              "amplitude": "wrinkleAmplitudeFile",
+              # the texture deformation's inputs (bake --maps parallax; maps/material.py)
+              "parallaxN": "wrinkleParallaxNormalFile", "parallaxS": "wrinkleParallaxSFile",
+              "parallaxT": "wrinkleParallaxTFile"}
 #: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain
 DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0

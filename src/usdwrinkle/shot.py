@@ -285,7 +285,7 @@ def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: 
     facts = read_overrides(engine.stage, stage_path, wrinkled, frames,
                            carry_primvars=geometry is not None)
     scene = BakeScene(facts, output, tuple(frames), wrinkled, engine.meshes, engine.ctx,
-                      engine.corner_primvar)
+                      engine.corner_primvar, engine.local_to_world)
     sinks = [LayerBaker(scene, LayerOptions(
         with_points=request.with_points or maps is not None,
         display_color=request.display_color, sparse=request.sparse, frame_spec=frame_spec))]

@@ -40,7 +40,11 @@ def add_parser(subparsers) -> None:
                       help="comma-separated: normal (tangent-space normal, 0.5n+0.5), height "
                            "(signed height in scene units, float EXR), amplitude (amplitude "
                            "over s*1.5*W/4, about the fold law's height of cloth "
-                           "crushed flat: a [0, 1] mask)")
+                           "crushed flat: a [0, 1] mask), parallax (the texture deformation: "
+                           "three float EXRs and a MaterialX network, render context mtlx, "
+                           "that moves the look's textures with the folds for any camera; "
+                           "Storm and MaterialX renderers show it, others keep the "
+                           "UsdPreviewSurface)")
     maps.add_argument("--map-size", type=int, metavar="N",
                       help="texels per side of each map (per UDIM tile); default "
                            f"{MAP_DEFAULTS.size}")

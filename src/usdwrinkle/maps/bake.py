@@ -18,8 +18,11 @@ from ..outputs.writer import FrameWriter
 from ..schema import MAP_ST
 from .files import (
     MAP_KINDS,
+    PARALLAX_FILES,
+    PIXELS,
     MapStaging,
     encode_map,
+    file_kinds,
     frame_token,
     map_file_name,
     mesh_file_names,
@@ -51,6 +54,9 @@ MAX_TARGET_BYTES = 2**31
 #: bytes per texel: two float targets, their read-back copies, the planes handed to the
 #: writer (up to two frames in flight) and the encoded ones
 BYTES_PER_TEXEL = 2 * 16 + 2 * 16 + 2 * 16 + 16
+#: and per texel of the parallax maps: three more targets, their read-back copies, and
+#: their planes in flight
+PARALLAX_BYTES_PER_TEXEL = 3 * 16 + 3 * 16 + 3 * 2 * 12
 #: a texel covered more than once over this fraction of a tile's islands gets a warning
 OVERLAP_WARNING = 0.002
 
@@ -70,7 +76,9 @@ def check_map_options(options: MapOptions, max_texture_size: int | None = None) 
         raise UsdWrinkleError(f"`map_size` {options.size} needs render targets of "
                               f"{target / 2**30:.2f} GiB each; at most {largest} fits "
                               "the 2 GiB a GL target may hold (llvmpipe refuses larger)")
-    require_memory(options.size * options.size * BYTES_PER_TEXEL,
+    per_texel = BYTES_PER_TEXEL + (PARALLAX_BYTES_PER_TEXEL if "parallax" in options.kinds
+                                   else 0)
+    require_memory(options.size * options.size * per_texel,
                    f"{options.size}x{options.size} maps need", "lower `map_size`")
 
 
@@ -91,6 +99,9 @@ class MeshMaps:
     #: the islands layout per face corner (faceVarying, authored as primvars:wrinkleMapST),
     #: or None: the mesh's own texture coordinates
     face_uv: np.ndarray | None = None
+    #: the texture coordinates the mesh's textures read (``uv``) per triangle corner, whose
+    #: gradients the parallax maps hold; None: the mesh has none
+    texture_uv: np.ndarray | None = None
 
     @property
     def udim(self) -> bool:
@@ -138,7 +149,10 @@ class MapBake:
                              "bindMaterialAs = strongerThanDescendants, which wins over the "
                              "mesh's own binding; bind the maps' material there, or make "
                              "that binding weakerThanDescendants")
+        #: path -> the mesh's parallax maps (one set per mesh, in its own UVs)
+        self.parallax = self._parallax_plans()
         self._rasterizer: MapRasterizer | None = None
+        self._parallax_rasterizer: MapRasterizer | None = None
         self._staging: MapStaging | None = None
         self._writer: FrameWriter | None = None
         self._checked_overlap: set[tuple] = set()
@@ -186,7 +200,33 @@ class MapBake:
         if plan is None:
             return None
         return replace(plan, stem=map_set.file_stem(stem), map_set=map_set,
-                       files={kind: [] for kind in options.kinds})
+                       files={kind: [] for kind in self.kinds})
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The kinds of file each map set's maps are (the parallax maps are per mesh)."""
+        return tuple(kind for kind in file_kinds(self.options.kinds)
+                     if kind not in PARALLAX_FILES)
+
+    def _parallax_plans(self) -> dict:
+        """path -> the plan of a mesh's parallax maps (``parallax``): one set per mesh,
+        whichever map sets it has, laid out in the texture coordinates its textures
+        read (``uv``), which are continuous where the textures are; islands would jump
+        at every face, and a renderer's filter across that jump draws a seam."""
+        if "parallax" not in self.options.kinds:
+            return {}
+        plans = {}
+        for path in dict.fromkeys(plan.path for plan in self.plans):
+            own = self._own_uv(path)
+            if own is None:
+                _log.warning(f"mesh has no texture coordinates '{self.options.uv}' (`uv`) "
+                             "for its textures to move with the folds; no parallax maps "
+                             f"for it ({path})")
+                continue
+            plan = self._asset_plan(path, self.stems[path], own)
+            plans[path] = replace(plan, files={kind: [] for kind in PARALLAX_FILES},
+                                  texture_uv=own)
+        return plans
 
     def _own_uv(self, path: str) -> np.ndarray | None:
         """The mesh's texture coordinates (--uv) per triangle corner, or None."""
@@ -226,8 +266,9 @@ class MapBake:
     def file_names(self, frames: list[float]) -> list[str]:
         """Every map file the bake will write (to refuse overwriting an input)."""
         names = []
-        for plan in self.plans:
-            for kind in self.options.kinds:
+        for plan, kinds in [(plan, self.kinds) for plan in self.plans] + \
+                [(plan, PARALLAX_FILES) for plan in self.parallax.values()]:
+            for kind in kinds:
                 for frame in frames:
                     name = map_file_name(plan.stem, kind, frame_token(frame), self.options.fmt,
                                          plan.udim)
@@ -239,11 +280,14 @@ class MapBake:
         if self._rasterizer is None:
             self._staging = MapStaging(self.folder)
             self._rasterizer = MapRasterizer(self.scene.ctx, self.options.size)
+            if self.parallax:
+                self._parallax_rasterizer = MapRasterizer(self.scene.ctx, self.options.size,
+                                                          parallax=True)
             # frame f's maps encode while frame f + 1 computes and rasterises
             # (outputs/writer.py: OpenImageIO releases the GIL while it encodes)
             self._writer = FrameWriter(
                 lambda path, item: encode_map(path, item[0], item[1], item[2]), threads=1,
-                max_in_flight=2 * len(MAP_KINDS))
+                max_in_flight=2 * len(PIXELS))
 
     def begin(self, layer) -> None:
         self.layer = layer
@@ -258,20 +302,62 @@ class MapBake:
             res = resources[plan.path]
             if (plan.path, plan.stem) not in self._checked_overlap:
                 self._check_overlap(plan, res)
-            for kind in self.options.kinds:
+            for kind in self.kinds:
                 name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
                 plan.files[kind].append(
                     (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            if not self.kinds:  # parallax alone
+                continue
             tangents = self._tangents(plan, res) \
                 if plan.map_set.tangent_space == "mikktspace" else None
             for tile in plan.tiles:
                 pixels = self._rasterizer.render(res, plan.corner_uv, tile,
                                                  self.options.padding, tangents, plan.stem)
-                for kind in self.options.kinds:
+                for kind in self.kinds:
                     name = tile_file_name(
                         map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
                     self._writer.submit(frame, self._staging.path(name),
-                                        (kind, getattr(pixels, kind), self._staging.final(name)))
+                                        (kind, getattr(pixels, PIXELS[kind]),
+                                         self._staging.final(name)))
+        self._add_parallax(frame, token, resources)
+
+    def _add_parallax(self, frame: float, token: str | None, resources: dict) -> None:
+        """Render, move to world space and stage a frame's parallax maps."""
+        for path, plan in self.parallax.items():
+            res = resources[path]
+            for kind in PARALLAX_FILES:
+                name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
+                plan.files[kind].append(
+                    (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            for tile in plan.tiles:
+                pixels = self._parallax_rasterizer.render(
+                    res, plan.corner_uv, tile, self.options.padding, None,
+                    f"{plan.stem}.parallax", texture_st=plan.texture_uv)
+                self._to_world(pixels, plan)
+                for kind in PARALLAX_FILES:
+                    name = tile_file_name(
+                        map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
+                    self._writer.submit(frame, self._staging.path(name),
+                                        (kind, getattr(pixels, PIXELS[kind]),
+                                         self._staging.final(name)))
+
+    def _to_world(self, pixels, plan: MeshMaps) -> None:
+        """The parallax maps from the mesh's local space into world space, in place: the
+        bent normal and the st gradients (covectors of a local offset) both go through
+        the inverse transpose, and the normal is made unit again. World space because
+        renderers' MaterialX networks know the view and the frame there (Storm gives
+        no object space: measured, its object-space normal was constant)."""
+        to_world = self.scene.local_to_world(plan.path) \
+            if self.scene.local_to_world is not None else np.eye(4)
+        linear = np.asarray(to_world, np.float64)[:3, :3]
+        try:
+            covector = np.linalg.inv(linear).T.astype(np.float32)
+        except np.linalg.LinAlgError:  # a scale of 0 flattens the mesh
+            covector = np.linalg.pinv(linear).T.astype(np.float32)
+        for image in (pixels.bent, pixels.hs, pixels.ht):
+            image[...] = image @ covector
+        length = np.linalg.norm(pixels.bent, axis=-1, keepdims=True)
+        np.divide(pixels.bent, length, out=pixels.bent, where=length > 1e-12)
 
     def _tangents(self, plan: MeshMaps, res) -> tuple[np.ndarray, np.ndarray]:
         """This frame's MikkTSpace tangents per triangle corner, and the normals they are
@@ -322,9 +408,12 @@ class MapBake:
             if plan.face_uv is not None and path not in authored:
                 author_islands(self.layer, path, plan.face_uv)
                 authored.add(path)
+            parallax = self.parallax.get(path)
             target = MaterialTarget(facts.meshes[path], material_path(
                 facts.default_prim_path, path, plan.map_set.material_name(self.stems[path])),
-                plan.files, plan.udim, self.uv_name(plan), plan.map_set.purpose)
+                {**plan.files, **(parallax.files if parallax is not None else {})},
+                plan.udim, self.uv_name(plan), plan.map_set.purpose, self.layer_path,
+                parallax_udim=parallax is not None and parallax.udim)
             author_material(self.layer, target, self.options)
         return {"maps": self.metadata()}
 
@@ -361,9 +450,10 @@ class MapBake:
             self._writer.shutdown()  # before the staging folder goes
         if self._staging is not None:
             self._staging.discard()
-        if self._rasterizer is not None:
-            self._rasterizer.release()
-            self._rasterizer = None
+        for rasterizer in (self._rasterizer, self._parallax_rasterizer):
+            if rasterizer is not None:
+                rasterizer.release()
+        self._rasterizer = self._parallax_rasterizer = None
 
 
 __all__ = ["MAP_KINDS", "MapBake", "MapOptions", "check_map_options"]

@@ -20,7 +20,19 @@ from ..outputs.images import copy_complete, encode_file, memory_file
 from ..timecode import frame_text
 
 #: the maps ``bake --maps`` can write
-MAP_KINDS = ("normal", "height", "amplitude")
+MAP_KINDS = ("normal", "height", "amplitude", "parallax")
+#: the files the parallax kind writes (float EXR, the mesh's local space): the bent normal
+#: n', and the height times the gradients of the texture's s and t (maps/raster.MapPixels)
+PARALLAX_FILES = ("parallaxN", "parallaxS", "parallaxT")
+#: each file kind's image in maps/raster.MapPixels
+PIXELS = {"normal": "normal", "height": "height", "amplitude": "amplitude",
+          "parallaxN": "bent", "parallaxS": "hs", "parallaxT": "ht"}
+
+
+def file_kinds(kinds) -> tuple[str, ...]:
+    """The file kinds ``kinds`` (MAP_KINDS) write: parallax is three files."""
+    return tuple(part for kind in kinds
+                 for part in (PARALLAX_FILES if kind == "parallax" else (kind,)))
 MAP_FORMATS = ("png", "exr")
 UDIM_TOKEN = "<UDIM>"
 #: UDIM tiles are 1001 + u + 10 v, u in 0..9; v in 0..9 here (draw.glsl's tile table)
@@ -41,9 +53,9 @@ def parse_map_kinds(text: str) -> tuple[str, ...]:
 
 
 def extension(kind: str, fmt: str) -> str:
-    """The height map is always float EXR (signed scene units); the others follow
-    ``--map-format``."""
-    return ".exr" if kind == "height" or fmt == "exr" else ".png"
+    """The height and parallax maps are always float EXR (signed, in scene units); the
+    others follow ``--map-format``."""
+    return ".exr" if kind == "height" or kind in PARALLAX_FILES or fmt == "exr" else ".png"
 
 
 #: the names a bake's material scope holds besides the meshes' (outputs/layers.py: the
@@ -128,8 +140,8 @@ def _spec(width: int, height: int, channels: int, data_format: str, names=None):
 
 def encode_map(path: str, kind: str, pixels: np.ndarray, final_path: str) -> None:
     """Encode one map (row 0 at t = 0) to ``path``: the normal as 0.5 n + 0.5 (16-bit PNG
-    or float EXR, read back with scale 2 and bias -1), the height as float EXR, the
-    amplitude as a 16-bit grey PNG or a float EXR."""
+    or float EXR, read back with scale 2 and bias -1), the height and the parallax maps
+    as float EXR, the amplitude as a 16-bit grey PNG or a float EXR."""
     image = np.ascontiguousarray(pixels[::-1])  # files store the top row first
     if kind == "normal":
         image = 0.5 * image + 0.5

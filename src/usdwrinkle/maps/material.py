@@ -32,6 +32,7 @@ from pxr import Sdf
 
 from ..outputs.layers import attribute_spec, bind_material, define_prim
 from ..schema import MAP_INPUTS
+from .files import PARALLAX_FILES
 
 _log = logging.getLogger(__name__)
 
@@ -43,6 +44,9 @@ TEXTURES = {
     "height": (MAP_INPUTS["height"], "WrinkleHeightTexture", ("r", "float"),
                ("displacement", "float")),
     "amplitude": (MAP_INPUTS["amplitude"], None, None, None),
+    # read by the MaterialX network only (maps/mtlx.py)
+    **{kind: (MAP_INPUTS[kind], None, None, None) for kind in ("parallaxN", "parallaxS",
+                                                              "parallaxT")},
 }
 READER = "WrinkleUV"
 VALUE_TYPES = Sdf.ValueTypeNames
@@ -80,6 +84,11 @@ class MaterialTarget:
     #: the material purpose it is bound for (maps/options.MapSet): "all", "full" (the
     #: all-purpose binding only) or "preview"
     purpose: str = "all"
+    #: the bake layer's path (the MaterialX network names the look's textures relative
+    #: to it)
+    layer_path: str = ""
+    #: the parallax maps (laid out in ``st`` whatever the set's layout) are UDIM sets
+    parallax_udim: bool = False
 
 
 def author_islands(layer: Sdf.Layer, mesh_path: str, face_uv) -> None:
@@ -118,7 +127,9 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         if look.normal_mapped:
             _log.warning(f"the mesh's material has a normal map; the wrinkle normal map replaces "
                          f"it ({mesh_path})")
+        look_inputs = look.inputs
     else:
+        look_inputs = (("diffuseColor", "value", tuple(float(c) for c in mesh.display_color)),)
         if source_material is not None:
             _log.warning(f"the mesh's material {source_material} has no UsdPreviewSurface; the "
                          f"wrinkle material is a plain UsdPreviewSurface ({mesh_path})")
@@ -162,6 +173,11 @@ def author_material(layer: Sdf.Layer, target: MaterialTarget, options) -> None:
         type_name = VALUE_TYPES.Normal3f if input_type == "normal3f" else VALUE_TYPES.Float
         attribute_spec(surface_spec, f"inputs:{input_name}", type_name,
                        connect=texture.AppendProperty(f"outputs:{output_name}"))
+    if all(kind in files for kind in PARALLAX_FILES):
+        from .mtlx import author_network
+
+        author_network(layer, path, look_inputs, options.uv,
+                       "clamp" if target.parallax_udim else "periodic", target.layer_path)
     if target.purpose == "preview":
         bind_material(layer, mesh_path, path, purpose="preview")
         return

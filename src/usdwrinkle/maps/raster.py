@@ -57,28 +57,39 @@ class MapPixels:
     amplitude : (h, w) float32, the amplitude over s COARSENING_MAX W / 4 (about the
         fold law's height of cloth crushed flat), clamped to [0, 1].
     covered : (h, w) bool, texels a triangle covers (before padding).
+    bent, hs, ht : (h, w, 3) float32 or None, the parallax maps (with ``parallax``): the
+        bent unit normal n' in the mesh's local space, and the height times the gradients
+        of the texture's s and t per local offset (draw.glsl's texture deformation:
+        ds = hS.(v/(v.n') - n'), dt likewise); zero off the islands.
     """
 
     normal: np.ndarray
     height: np.ndarray
     amplitude: np.ndarray
     covered: np.ndarray
+    bent: np.ndarray | None = None
+    hs: np.ndarray | None = None
+    ht: np.ndarray | None = None
 
 
 class MapRasterizer:
     """The maps program, the dilation kernel and render targets of one size."""
 
-    def __init__(self, ctx, size: int):
+    def __init__(self, ctx, size: int, parallax: bool = False):
         import moderngl
 
         self.ctx = ctx
         self.size = int(size)
+        #: also the parallax maps (three more targets)
+        self.parallax = bool(parallax)
         defines = {**bindings.COMMON, **bindings.MAPS}
         self.variants = Variants(lambda extra: DrawableProgram(
             ctx, program(ctx, "maps.glsl", {**defines, **extra})))
         self.mode = moderngl.TRIANGLES
         shape = (self.size, self.size)
-        self.targets = [ctx.texture(shape, 4, dtype="f4") for _ in range(2)]  # normal, wrinkle
+        # normal, wrinkle; with parallax bent, hS, hT
+        self.targets = [ctx.texture(shape, 4, dtype="f4")
+                        for _ in range(5 if self.parallax else 2)]
         self.framebuffer = ctx.framebuffer(color_attachments=self.targets)
         #: UVs per triangle corner, by layout (a mesh's path, or the name its map set
         #: gives it: a mesh may be mapped in more than one layout)
@@ -87,6 +98,8 @@ class MapRasterizer:
         self.tangent_tables: dict[str, Table] = {}
         #: the normals those frames are built about, per triangle corner (each frame)
         self.frame_tables: dict[str, Table] = {}
+        #: the textures' st per triangle corner, by mesh path (parallax)
+        self.texture_tables: dict[str, Table] = {}
         #: (layout, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -113,6 +126,14 @@ class MapRasterizer:
             table.write(np.asarray(corner_uv, np.float32).reshape(-1, 2))
         return table
 
+    def texture_table(self, res: MeshResources, corner_st: np.ndarray) -> Table:
+        """The texture coordinates the mesh's textures read, per triangle corner, on the
+        GPU (uploaded once per mesh)."""
+        table, new = self._corner_table(self.texture_tables, res, 2)
+        if new:
+            table.write(np.asarray(corner_st, np.float32).reshape(-1, 2))
+        return table
+
     def tangent_table(self, res: MeshResources, tangents: np.ndarray) -> Table:
         """This frame's MikkTSpace tangents ([3t + c]: xyz, sign) on the GPU."""
         table, _ = self._corner_table(self.tangent_tables, res, 4)
@@ -128,7 +149,8 @@ class MapRasterizer:
         return table
 
     def _draw(self, res: MeshResources, uv: Table, tile: tuple[int, int], count: bool,
-              tangents: tuple[Table, Table] | None = None) -> None:
+              tangents: tuple[Table, Table] | None = None,
+              texture_st: Table | None = None) -> None:
         import moderngl
 
         fbo = self.framebuffer
@@ -142,7 +164,8 @@ class MapRasterizer:
         else:
             self.ctx.disable(moderngl.BLEND)
         variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
-                                MIKKTSPACE=tangents is not None and not count)
+                                MIKKTSPACE=tangents is not None and not count,
+                                PARALLAX=self.parallax)
         set_uniforms(variant.program, {
             "u_tile": (float(tile[0]), float(tile[1])),
             "u_count": int(count),
@@ -155,6 +178,8 @@ class MapRasterizer:
                            "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:
             bind(units, reads={"MAPS_TANGENTS": tangents[0], "MAPS_FRAME_NORMALS": tangents[1]})
+        if self.parallax:  # without the texture's st the gradients read the layout's
+            bind(units, reads={"MAPS_TEXTURE_ST": texture_st if texture_st is not None else uv})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
@@ -173,22 +198,26 @@ class MapRasterizer:
 
     def render(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
                padding: int = 8, tangents: tuple | None = None,
-               layout: str | None = None) -> MapPixels:
+               layout: str | None = None, texture_st: np.ndarray | None = None) -> MapPixels:
         """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``; the
         normal map in MikkTSpace when this frame's ``tangents`` are given ((tangents,
         the normals their frames are built about), per triangle corner;
         maps/tangents.py), else in the per-triangle frame. ``layout`` names the layout
         of ``corner_uv`` (default: the mesh's path): its UV table and padding plan are
-        made once per name."""
+        made once per name. With parallax, ``texture_st`` are the texture coordinates the
+        mesh's textures read, per triangle corner (default: ``corner_uv``)."""
         uv = self.uv_table(res, corner_uv, layout)
         if res.num_triangles:
             table = (self.tangent_table(res, tangents[0]), self.frame_table(res, tangents[1])) \
                 if tangents is not None else None
-            self._draw(res, uv, tile, count=False, tangents=table)
+            st = self.texture_table(res, texture_st) \
+                if self.parallax and texture_st is not None else None
+            self._draw(res, uv, tile, count=False, tangents=table, texture_st=st)
         else:
             self.framebuffer.clear(0.0, 0.0, 0.0, 0.0)
         normal = self._read(self.targets[0])
         wrinkle = self._read(self.targets[1])
+        extra = [self._read(target) for target in self.targets[2:]]
         covered = wrinkle[..., 3] > 0.0
         key = (layout or res.record.path, tuple(tile), int(padding))
         plan = self.plans.get(key)
@@ -202,16 +231,24 @@ class MapRasterizer:
         empty = normal[..., 3] == 0.0
         normal[empty] = (0.0, 0.0, 1.0, 0.0)  # flat beyond the padding
         wrinkle[empty] = 0.0
-        return MapPixels(normal[..., :3], wrinkle[..., 0], wrinkle[..., 1], covered)
+        for image in extra:  # padded as the others: no seam where a renderer's filter
+            flat = image.reshape(-1, 4)  # reaches past an island's border
+            flat[destination] = flat[source]
+            image[empty] = 0.0
+        parallax = {name: image[..., :3]
+                    for name, image in zip(("bent", "hs", "ht")[:len(extra)], extra, strict=True)}
+        return MapPixels(normal[..., :3], wrinkle[..., 0], wrinkle[..., 1], covered,
+                         **parallax)
 
     def _read(self, texture) -> np.ndarray:
         return np.frombuffer(texture.read(), np.float32).reshape(self.size, self.size, 4).copy()
 
     def release(self) -> None:
         for table in [*self.uv_tables.values(), *self.tangent_tables.values(),
-                      *self.frame_tables.values()]:
+                      *self.frame_tables.values(), *self.texture_tables.values()]:
             table.release()
         self.uv_tables.clear()
+        self.texture_tables.clear()
         self.tangent_tables.clear()
         self.frame_tables.clear()
         self.framebuffer.release()

@@ -34,7 +34,8 @@ class BakeScene:
     MeshRecord of the wrinkled meshes the layer overrides; ``records``: path ->
     MeshRecord of every mesh of the stage. ``ctx``: the moderngl context the GPU sinks
     draw with. ``corner_primvar(path, name)``: the scene's reader of a primvar per
-    triangle corner (the maps' UVs)."""
+    triangle corner (the maps' UVs). ``local_to_world(path)``: a mesh's transform at the
+    frame being added (the parallax maps are in world space)."""
 
     facts: object
     output: str
@@ -43,6 +44,7 @@ class BakeScene:
     records: dict = field(default_factory=dict)
     ctx: object = None
     corner_primvar: Callable | None = None
+    local_to_world: Callable | None = None
 
 
 class BakeSink(Protocol):

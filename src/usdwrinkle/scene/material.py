@@ -333,6 +333,54 @@ def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time) -> SurfacePara
     return SurfaceParams(**values)
 
 
+#: UsdPreviewSurface inputs a MaterialX network of the bake copies (maps/mtlx.py), and
+#: their MaterialX types
+LOOK_INPUTS = {"diffuseColor": "color3", "emissiveColor": "color3",
+               "useSpecularWorkflow": "integer", "specularColor": "color3",
+               "metallic": "float", "roughness": "float", "clearcoat": "float",
+               "clearcoatRoughness": "float", "opacity": "float", "opacityThreshold": "float",
+               "ior": "float", "occlusion": "float"}
+
+
+def look_inputs(shader: UsdShade.Shader) -> tuple:
+    """A UsdPreviewSurface's inputs as a network of another render context needs them:
+    ((name, "value", value) for an authored constant, (name, "texture", (resolved file,
+    wrapS, wrapT, sourceColorSpace, texture coordinates' primvar, output name, scale,
+    bias)) for one a UsdUVTexture feeds), in LOOK_INPUTS order; other sources are left
+    out (the network keeps their fallback). Read at the default time."""
+    time = Usd.TimeCode.Default()
+    found = []
+    for name in LOOK_INPUTS:
+        inp = shader.GetInput(name)
+        if not inp:
+            continue
+        value, source = _resolve(shader, name, time)
+        if source is None:
+            if value is not None:
+                found.append((name, "value", tuple(np.ravel(np.asarray(value, np.float64))
+                                                   .tolist())))
+            continue
+        if source.GetIdAttr().Get() != "UsdUVTexture":
+            continue
+        file_value, _ = _resolve(source, "file", time)
+        if file_value is None or not file_value.resolvedPath:
+            continue
+        output = next((attr.GetBaseName() for attr in inp.GetValueProducingAttributes()
+                       if UsdShade.Output.IsOutput(attr)), "rgb")
+        wrap = [str(_resolve(source, f"wrap{axis}", time)[0] or "useMetadata") for axis in "ST"]
+        varname = "st"
+        _, reader = _resolve(source, "st", time)
+        if reader is not None:
+            reader_name, _ = _resolve(reader, "varname", time)
+            varname = str(reader_name) if reader_name else varname
+        scale, bias = _scale_bias(source, time)
+        found.append((name, "texture", (str(file_value.resolvedPath), wrap[0], wrap[1],
+                                        _color_space(source, time), varname, output,
+                                        tuple(float(v) for v in scale),
+                                        tuple(float(v) for v in bias))))
+    return tuple(found)
+
+
 def bound_surface(prim: Usd.Prim, purpose: str = UsdShade.Tokens.allPurpose):
     """(the mesh's bound Material or None, its UsdPreviewSurface or None), for the material
     ``purpose`` (a purpose's own binding, else the all-purpose one)."""

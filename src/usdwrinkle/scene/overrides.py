@@ -13,7 +13,7 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
 
 from ..values import flattened
-from .material import bound_surface, corner_values, display_color
+from .material import bound_surface, corner_values, display_color, look_inputs
 from .sampling import time_code
 from .stage import stage_inputs
 
@@ -31,6 +31,8 @@ class SourceLook:
     material: str | None = None
     surface: str | None = None
     normal_mapped: bool = False
+    #: the surface's inputs as scene/material.look_inputs reads them (maps/mtlx.py)
+    inputs: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -176,7 +178,8 @@ def _look(prim: Usd.Prim, purpose: str) -> SourceLook:
     normal = shader.GetInput("normal") if surface is not None else None
     return SourceLook(str(material.GetPath()) if material else None,
                       str(surface) if surface is not None else None,
-                      bool(normal) and normal.HasConnectedSource())
+                      bool(normal) and normal.HasConnectedSource(),
+                      look_inputs(shader) if shader is not None else ())
 
 
 def _mesh_facts(prim: Usd.Prim, record, frames: tuple, carry_primvars: bool) -> MeshFacts:
