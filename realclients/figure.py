@@ -14,6 +14,12 @@ geometry layer), textures flattened to one grey (bakes.py says why), and prints 
 row per shot. Cycles' lights are scaled by CYCLES_LIGHT_SCALE at import: Blender's USD
 importer does not read UsdLux distant-light intensities as Storm does; the figure
 compares wrinkles, not exposure. Needs the real-client Python (realclients/__init__.py).
+
+    python -m realclients.figure --texture docs/images/renderers
+
+writes ``texture.png``: the plaid shirt's upper arm at frame 24 (960 px frames, cropped):
+usdwrinkle, Storm through ``--maps normal,parallax``'s MaterialX network, Storm through the
+UsdPreviewSurface alone, and prints their correlations (bakes.texture_views).
 """
 from __future__ import annotations
 
@@ -78,6 +84,42 @@ def bake_figure(folder: Path, width: int, scratch: Path) -> None:
               f"{np.round(geometry, 3):.3f} |")
 
 
+#: the texture figure's crop of the 960 x 640 frame (rows, columns): the upper arm
+TEXTURE_CROP = (slice(120, 460), slice(380, 660))
+
+
+def texture_figure(folder: Path, scratch: Path) -> None:
+    from .bakes import texture_views
+    from .compare import read_rgba8, side_by_side
+
+    views = texture_views(scratch, turns=(0.0,))
+    images = views.images[0.0]
+    panels = []
+    for label in ("ours", "storm_parallax", "storm_normal"):
+        crop = scratch / f"crop_{label}.png"
+        _write_rgba8(read_rgba8(images[label])[TEXTURE_CROP], crop)
+        panels.append(crop)
+    target = folder / "texture.png"
+    side_by_side(panels, target)
+    network, preview = (views.contribution(0.0, label)
+                        for label in ("storm_parallax", "storm_normal"))
+    print(f"{target}: correlation {network.correlation():.3f} (network) and "
+          f"{preview.correlation():.3f} (UsdPreviewSurface); fine part "
+          f"{network.high_pass_correlation():.3f} and {preview.high_pass_correlation():.3f}")
+
+
+def _write_rgba8(pixels, path: Path) -> None:
+    import numpy as np
+    import OpenImageIO as oiio
+
+    pixels = np.ascontiguousarray(pixels)
+    buf = oiio.ImageBuf(oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2],
+                                       oiio.UINT8))
+    buf.set_pixels(oiio.ROI(0, pixels.shape[1], 0, pixels.shape[0], 0, 1, 0,
+                            pixels.shape[2]), pixels)
+    buf.write(str(path))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m realclients.figure",
                                      description=__doc__.split("\n\n")[0])
@@ -85,8 +127,15 @@ def main(argv=None) -> int:
     parser.add_argument("--width", type=int, default=360)
     parser.add_argument("--bakes", action="store_true",
                         help="the bake outputs in Storm and Cycles beside usdwrinkle")
+    parser.add_argument("--texture", action="store_true",
+                        help="the texture deformation in Storm (--maps parallax) beside "
+                             "usdwrinkle")
     args = parser.parse_args(argv)
     args.folder.mkdir(parents=True, exist_ok=True)
+    if args.texture:
+        with tempfile.TemporaryDirectory() as scratch:
+            texture_figure(args.folder, Path(scratch))
+        return 0
     if args.bakes:
         with tempfile.TemporaryDirectory() as scratch:
             bake_figure(args.folder, args.width, Path(scratch))

@@ -315,3 +315,46 @@ def test_the_networks_glsl_compiles_on_our_context(gl_context, shirt_parallax):
     program = gl_context.program(vertex_shader=vertex, fragment_shader=pixel)
     assert program.glo > 0
     program.release()
+
+
+
+def _dilated(mask, steps):
+    for _ in range(steps):
+        grown = mask.copy()
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                shifted = np.zeros_like(mask)
+                shifted[max(dy, 0):mask.shape[0] + min(dy, 0),
+                        max(dx, 0):mask.shape[1] + min(dx, 0)] = \
+                    mask[max(-dy, 0):mask.shape[0] + min(-dy, 0),
+                         max(-dx, 0):mask.shape[1] + min(-dx, 0)]
+                grown |= shifted
+        mask = grown
+    return mask
+
+
+def test_parallax_maps_are_dilated_past_their_borders(gl_context, tmp_path):
+    """The sheet's st cover the middle of the map: with --map-padding 8, every texel within
+    8 steps (8-connected) of a covered one holds a covered neighbour's values (a unit
+    normal, the same h S), so a renderer's filter reading across the border finds no zero,
+    and none beyond."""
+    rest = (np.mgrid[-1:1:31j, -1:1:31j][::-1].reshape(2, -1).T + 1.0) / 4.0 + 0.25
+    source = sheet_stage(tmp_path, 0.7, st=rest)
+    images = {}
+    for padding in (0, 8):
+        layer = tmp_path / f"pad{padding}.usda"
+        assert bake_maps(source, layer, "--map-padding", str(padding),
+                         "--map-dir", str(tmp_path / f"pad{padding}"),
+                         kinds="parallax") == 0
+        images[padding] = {kind: read(tmp_path / f"pad{padding}" / f"Sheet.{kind}.0001.exr")
+                           [..., :3] for kind in PARALLAX}
+    covered = np.linalg.norm(images[0]["parallaxN"], axis=-1) > 0.5
+    padded = np.linalg.norm(images[8]["parallaxN"], axis=-1) > 0.5
+    assert 0.15 < covered.mean() < 0.4
+    np.testing.assert_array_equal(padded, _dilated(covered, 8))
+    np.testing.assert_allclose(np.linalg.norm(images[8]["parallaxN"][padded], axis=-1), 1.0,
+                               atol=1e-5)
+    for kind in PARALLAX:  # the islands themselves are the same
+        np.testing.assert_array_equal(images[8][kind][covered], images[0][kind][covered])
+    ring = padded & ~covered
+    assert np.abs(images[8]["parallaxS"][ring]).max() > 0.0  # copied, not zero
