@@ -266,3 +266,42 @@ def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
     table = slope_table(default_profile() if height is None else height)
     amplitude = np.where(rho > 1.0, profile_slope(table, rho) / k, 0.0)
     return amplitude, k
+
+
+#: the analytic sheet of the maps tests: W, and the map size
+MAPS_WIDTH = 0.3
+MAPS_SIZE = 256
+
+
+def maps_sheet_stage(tmp_path, ratio, rotation=None, st=None, frames=(1,),
+                     name="sheet.usda", **kwargs):
+    """The analytic sheet compressed by ``ratio`` along x, UVs (x, y) -> [0, 1]^2."""
+    from pxr import UsdGeom
+
+    from usdwrinkle.authoring.builders import grid_sheet
+
+    rest, counts, indices = grid_sheet(31, 31, 2.0)
+    posed = rest * np.array([ratio, 1, 1], np.float32)
+    if rotation is not None:
+        posed = posed @ rotation.T.astype(np.float32) + np.array([0.3, -2.0, 1.0], np.float32)
+    stage = point_cache_stage(rest, {f: posed for f in frames}, counts, indices,
+                              width=MAPS_WIDTH, **kwargs)
+    if st is None:
+        st = (rest[:, :2] + 1.0) / 2.0
+    if st is not False:
+        UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
+            Vt.Vec2fArray.FromNumpy(np.asarray(st, np.float32)))
+    path = tmp_path / name
+    stage.GetRootLayer().Export(str(path))
+    return path
+
+
+def bake_maps(source, layer, *args, kinds="normal,height,amplitude", size=MAPS_SIZE):
+    """bake --maps; in the mesh's own texture coordinates unless ``args`` choose a layout
+    (these tests read the maps' texels at the asset's UVs)."""
+    from usdwrinkle.cli.main import main
+
+    layout = () if "--map-layout" in args else ("--map-layout", "asset")
+    return main(["bake", str(source), str(layer), "--quiet", "--maps", kinds,
+                 "--map-size", str(size), *layout, *args])

@@ -16,43 +16,14 @@ from usdwrinkle.contract import COARSENING_MAX
 from usdwrinkle.scene.material import load_texture
 
 from conftest import grid_sheet
-from helpers import bind_purpose_looks, fold_law, point_cache_stage, rotation_matrix
+from helpers import MAPS_SIZE as SIZE
+from helpers import MAPS_WIDTH as WIDTH
+from helpers import bake_maps, bind_purpose_looks, fold_law, point_cache_stage, rotation_matrix
+from helpers import maps_sheet_stage as sheet_stage
 from helpers import read_pixels as read
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
 SHIRT = str(SAMPLES / "shirt.usda")
-WIDTH = 0.3
-SIZE = 256
-
-
-def sheet_stage(tmp_path, ratio, rotation=None, st=None, frames=(1,), name="sheet.usda",
-                **kwargs):
-    """The analytic sheet compressed by ``ratio`` along x, UVs (x, y) -> [0, 1]^2."""
-    rest, counts, indices = grid_sheet(31, 31, 2.0)
-    posed = rest * np.array([ratio, 1, 1], np.float32)
-    if rotation is not None:
-        posed = posed @ rotation.T.astype(np.float32) + np.array([0.3, -2.0, 1.0], np.float32)
-    stage = point_cache_stage(rest, {f: posed for f in frames}, counts, indices, width=WIDTH,
-                              **kwargs)
-    if st is None:
-        st = (rest[:, :2] + 1.0) / 2.0
-    if st is not False:
-        UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
-            "st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex).Set(
-            Vt.Vec2fArray.FromNumpy(np.asarray(st, np.float32)))
-    path = tmp_path / name
-    stage.GetRootLayer().Export(str(path))
-    return path
-
-
-def bake_maps(source, layer, *args, kinds="normal,height,amplitude", size=SIZE):
-    """bake --maps; in the mesh's own texture coordinates unless ``args`` choose a layout
-    (these tests read the maps' texels at the asset's UVs)."""
-    layout = () if "--map-layout" in args else ("--map-layout", "asset")
-    return main(["bake", str(source), str(layer), "--quiet", "--maps", kinds,
-                 "--map-size", str(size), *layout, *args])
-
-
 def sheet_maps(tmp_path, ratio, rotation=None):
     source = sheet_stage(tmp_path, ratio, rotation)
     layer = tmp_path / "maps.usda"

@@ -9,11 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdShade
-from test_maps import SIZE, WIDTH, bake_maps, sheet_stage
 
 from usdwrinkle.maps.mtlx import MIN_FACING, PREFIX, SURFACE_OUTPUT
 
-from helpers import fold_law, rotation_matrix
+from helpers import MAPS_SIZE as SIZE
+from helpers import MAPS_WIDTH as WIDTH
+from helpers import bake_maps, fold_law, rotation_matrix
+from helpers import maps_sheet_stage as sheet_stage
 from helpers import read_pixels as read
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"

@@ -67,6 +67,13 @@ MAP_INPUTS = {"normal": "wrinkleNormalFile", "height": "wrinkleHeightFile",
               # the texture deformation's inputs (bake --maps parallax; maps/material.py)
               "parallaxN": "wrinkleParallaxNormalFile", "parallaxS": "wrinkleParallaxSFile",
               "parallaxT": "wrinkleParallaxTFile"}
+#: UsdPreviewSurface's inputs that a bake's MaterialX network copies from the look
+#: (scene/material.look_inputs, maps/mtlx.py), with their MaterialX types
+PREVIEW_SURFACE_TYPES = {"diffuseColor": "color3", "emissiveColor": "color3",
+                         "useSpecularWorkflow": "integer", "specularColor": "color3",
+                         "metallic": "float", "roughness": "float", "clearcoat": "float",
+                         "clearcoatRoughness": "float", "opacity": "float",
+                         "opacityThreshold": "float", "ior": "float", "occlusion": "float"}
 #: fallbacks of the beyond-the-paper controls: both off, onset at 2% strain
 DEFAULT_BIAXIAL = 0.0
 DEFAULT_TENSION = 0.0

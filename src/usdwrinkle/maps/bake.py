@@ -54,9 +54,9 @@ MAX_TARGET_BYTES = 2**31
 #: bytes per texel: two float targets, their read-back copies, the planes handed to the
 #: writer (up to two frames in flight) and the encoded ones
 BYTES_PER_TEXEL = 2 * 16 + 2 * 16 + 2 * 16 + 16
-#: and per texel of the parallax maps: three more targets, their read-back copies, and
-#: their planes in flight
-PARALLAX_BYTES_PER_TEXEL = 3 * 16 + 3 * 16 + 3 * 2 * 12
+#: and per texel of the parallax maps: a second rasteriser's five targets, their read-back
+#: copies, and three planes in flight
+PARALLAX_BYTES_PER_TEXEL = 5 * 16 + 5 * 16 + 3 * 2 * 12
 #: a texel covered more than once over this fraction of a tile's islands gets a warning
 OVERLAP_WARNING = 0.002
 

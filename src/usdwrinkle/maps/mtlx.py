@@ -29,7 +29,7 @@ import os
 from pxr import Sdf
 
 from ..outputs.layers import attribute_spec, define_prim
-from ..schema import MAP_INPUTS
+from ..schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
 from .files import relative_asset
 
 VALUE_TYPES = Sdf.ValueTypeNames
@@ -100,7 +100,7 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
                    wrap: str, layer_path: str) -> None:
     """The MaterialX network on ``material`` (already holding the parallax maps' file
     inputs, MAP_INPUTS): ``inputs`` are its look's surface inputs
-    (scene/material.look_inputs), ``map_st`` the primvar the maps are laid out in,
+    (as scene/material.look_inputs reads them), ``map_st`` the primvar the maps are laid out in,
     ``wrap`` their address mode ("periodic", or "clamp" for UDIM sets), ``layer_path``
     the bake layer's (texture paths are written relative to it)."""
     graph = _Graph(layer, material)
@@ -150,10 +150,8 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
                         in2=("vector3", (0.0, 0.0, 1.0)))
     surface_inputs = {"normal": ("vector3", normal)}
     deformed = {}
-    from ..scene.material import LOOK_INPUTS
-
     for name, how, payload in inputs:
-        kind = LOOK_INPUTS[name]
+        kind = PREVIEW_SURFACE_TYPES[name]
         if how == "value":
             value = payload[0] if kind in ("float", "integer") else tuple(payload[:3])
             surface_inputs[name] = (kind, int(value) if kind == "integer" else value)

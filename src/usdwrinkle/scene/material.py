@@ -20,7 +20,7 @@ from ..colour import srgb_decode
 from ..contract import UDIM_TILES
 from ..errors import UsdWrinkleError
 from ..limits import MAX_TEXTURE_SIZE
-from ..schema import MAP_INPUTS
+from ..schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
 from ..values import frame_of, static_flattened, static_value
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
@@ -333,24 +333,15 @@ def surface_params(shader: UsdShade.Shader, prim: Usd.Prim, time) -> SurfacePara
     return SurfaceParams(**values)
 
 
-#: UsdPreviewSurface inputs a MaterialX network of the bake copies (maps/mtlx.py), and
-#: their MaterialX types
-LOOK_INPUTS = {"diffuseColor": "color3", "emissiveColor": "color3",
-               "useSpecularWorkflow": "integer", "specularColor": "color3",
-               "metallic": "float", "roughness": "float", "clearcoat": "float",
-               "clearcoatRoughness": "float", "opacity": "float", "opacityThreshold": "float",
-               "ior": "float", "occlusion": "float"}
-
-
 def look_inputs(shader: UsdShade.Shader) -> tuple:
     """A UsdPreviewSurface's inputs as a network of another render context needs them:
     ((name, "value", value) for an authored constant, (name, "texture", (resolved file,
     wrapS, wrapT, sourceColorSpace, texture coordinates' primvar, output name, scale,
-    bias)) for one a UsdUVTexture feeds), in LOOK_INPUTS order; other sources are left
+    bias)) for one a UsdUVTexture feeds), in PREVIEW_SURFACE_TYPES order; other sources are left
     out (the network keeps their fallback). Read at the default time."""
     time = Usd.TimeCode.Default()
     found = []
-    for name in LOOK_INPUTS:
+    for name in PREVIEW_SURFACE_TYPES:
         inp = shader.GetInput(name)
         if not inp:
             continue
