@@ -33,7 +33,7 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   "SAMPLES", "NEED_FIELDS", "NEED_NORMAL", "OUTPUT_AOVS", "OUTPUT_EXR",
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK",
                   # the maps' (maps/raster.py)
-                  "MIKKTSPACE",
+                  "MIKKTSPACE", "PARALLAX",
                   # the mipmap pass's (render/mipmaps.py)
                   "FLOAT"}
 PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.NORMALS, bindings.CRUSH,
