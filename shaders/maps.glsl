@@ -14,11 +14,6 @@ layout(binding = MAPS_GAIN) uniform sampler2D gain;  // .x: the curved-cloth gai
 layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
 layout(binding = MAPS_NORMAL_CORNERS) uniform isampler2D normal_corners;
 uniform vec2 u_tile;  // the tile drawn: its lower-left corner in UV space
-#if defined PARALLAX
-// the texture coordinates the mesh's textures read, per triangle corner ([3t + c]): the
-// parallax maps hold their gradients (the texture deformation's st per local offset)
-layout(binding = MAPS_TEXTURE_ST) uniform sampler2D texture_st;
-#endif
 #if defined MIKKTSPACE
 // MikkTSpace per triangle corner ([3t + c]): unit tangent, bitangent sign (maps/tangents.py)
 layout(binding = MAPS_TANGENTS) uniform sampler2D corner_tangents;
@@ -118,7 +113,8 @@ void main() {
 #if defined PARALLAX
     vec3 row_s = vec3(0.0), row_t = vec3(0.0);
     vec3 dp_ds, dp_dt;
-    if (uv_derivatives(t, texture_st, dp_ds, dp_dt)) {
+    // the parallax maps are laid out in the texture's own st: their gradients are these
+    if (uv_derivatives(t, corner_uv, dp_ds, dp_dt)) {
         mat2 gram = mat2(dot(dp_ds, dp_ds), dot(dp_ds, dp_dt),
                          dot(dp_ds, dp_dt), dot(dp_dt, dp_dt));
         if (abs(determinant(gram)) > 1e-30) {

@@ -99,9 +99,6 @@ class MeshMaps:
     #: the islands layout per face corner (faceVarying, authored as primvars:wrinkleMapST),
     #: or None: the mesh's own texture coordinates
     face_uv: np.ndarray | None = None
-    #: the texture coordinates the mesh's textures read (``uv``) per triangle corner, whose
-    #: gradients the parallax maps hold; None: the mesh has none
-    texture_uv: np.ndarray | None = None
 
     @property
     def udim(self) -> bool:
@@ -224,8 +221,7 @@ class MapBake:
                              f"for it ({path})")
                 continue
             plan = self._asset_plan(path, self.stems[path], own)
-            plans[path] = replace(plan, files={kind: [] for kind in PARALLAX_FILES},
-                                  texture_uv=own)
+            plans[path] = replace(plan, files={kind: [] for kind in PARALLAX_FILES})
         return plans
 
     def _own_uv(self, path: str) -> np.ndarray | None:
@@ -302,10 +298,7 @@ class MapBake:
             res = resources[plan.path]
             if (plan.path, plan.stem) not in self._checked_overlap:
                 self._check_overlap(plan, res)
-            for kind in self.kinds:
-                name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
-                plan.files[kind].append(
-                    (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            self._record(plan, self.kinds, frame, token)
             if not self.kinds:  # parallax alone
                 continue
             tangents = self._tangents(plan, res) \
@@ -313,33 +306,35 @@ class MapBake:
             for tile in plan.tiles:
                 pixels = self._rasterizer.render(res, plan.corner_uv, tile,
                                                  self.options.padding, tangents, plan.stem)
-                for kind in self.kinds:
-                    name = tile_file_name(
-                        map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
-                    self._writer.submit(frame, self._staging.path(name),
-                                        (kind, getattr(pixels, PIXELS[kind]),
-                                         self._staging.final(name)))
+                self._submit(plan, self.kinds, frame, token, tile, pixels)
         self._add_parallax(frame, token, resources)
+
+    def _record(self, plan: MeshMaps, kinds, frame: float, token: str | None) -> None:
+        """Name ``plan``'s files of ``kinds`` for ``frame`` (the material's time samples)."""
+        for kind in kinds:
+            name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
+            plan.files[kind].append(
+                (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+
+    def _submit(self, plan: MeshMaps, kinds, frame: float, token: str | None, tile,
+                pixels) -> None:
+        """Hand one tile's maps of ``kinds`` to the writer, into the staging folder."""
+        for kind in kinds:
+            name = tile_file_name(
+                map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
+            self._writer.submit(frame, self._staging.path(name),
+                                (kind, getattr(pixels, PIXELS[kind]), self._staging.final(name)))
 
     def _add_parallax(self, frame: float, token: str | None, resources: dict) -> None:
         """Render, move to world space and stage a frame's parallax maps."""
         for path, plan in self.parallax.items():
-            res = resources[path]
-            for kind in PARALLAX_FILES:
-                name = map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim)
-                plan.files[kind].append(
-                    (frame, relative_asset(os.path.join(self.folder, name), self.layer_path)))
+            self._record(plan, PARALLAX_FILES, frame, token)
             for tile in plan.tiles:
                 pixels = self._parallax_rasterizer.render(
-                    res, plan.corner_uv, tile, self.options.padding, None,
-                    f"{plan.stem}.parallax", texture_st=plan.texture_uv)
+                    resources[path], plan.corner_uv, tile, self.options.padding, None,
+                    f"{plan.stem}.parallax")
                 self._to_world(pixels, plan)
-                for kind in PARALLAX_FILES:
-                    name = tile_file_name(
-                        map_file_name(plan.stem, kind, token, self.options.fmt, plan.udim), tile)
-                    self._writer.submit(frame, self._staging.path(name),
-                                        (kind, getattr(pixels, PIXELS[kind]),
-                                         self._staging.final(name)))
+                self._submit(plan, PARALLAX_FILES, frame, token, tile, pixels)
 
     def _to_world(self, pixels, plan: MeshMaps) -> None:
         """The parallax maps from the mesh's local space into world space, in place: the

@@ -98,8 +98,6 @@ class MapRasterizer:
         self.tangent_tables: dict[str, Table] = {}
         #: the normals those frames are built about, per triangle corner (each frame)
         self.frame_tables: dict[str, Table] = {}
-        #: the textures' st per triangle corner, by mesh path (parallax)
-        self.texture_tables: dict[str, Table] = {}
         #: (layout, tile, padding) -> padding_plan
         self.plans: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -126,14 +124,6 @@ class MapRasterizer:
             table.write(np.asarray(corner_uv, np.float32).reshape(-1, 2))
         return table
 
-    def texture_table(self, res: MeshResources, corner_st: np.ndarray) -> Table:
-        """The texture coordinates the mesh's textures read, per triangle corner, on the
-        GPU (uploaded once per mesh)."""
-        table, new = self._corner_table(self.texture_tables, res, 2)
-        if new:
-            table.write(np.asarray(corner_st, np.float32).reshape(-1, 2))
-        return table
-
     def tangent_table(self, res: MeshResources, tangents: np.ndarray) -> Table:
         """This frame's MikkTSpace tangents ([3t + c]: xyz, sign) on the GPU."""
         table, _ = self._corner_table(self.tangent_tables, res, 4)
@@ -149,8 +139,7 @@ class MapRasterizer:
         return table
 
     def _draw(self, res: MeshResources, uv: Table, tile: tuple[int, int], count: bool,
-              tangents: tuple[Table, Table] | None = None,
-              texture_st: Table | None = None) -> None:
+              tangents: tuple[Table, Table] | None = None) -> None:
         import moderngl
 
         fbo = self.framebuffer
@@ -178,8 +167,6 @@ class MapRasterizer:
                            "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:
             bind(units, reads={"MAPS_TANGENTS": tangents[0], "MAPS_FRAME_NORMALS": tangents[1]})
-        if self.parallax:  # without the texture's st the gradients read the layout's
-            bind(units, reads={"MAPS_TEXTURE_ST": texture_st if texture_st is not None else uv})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
@@ -198,21 +185,19 @@ class MapRasterizer:
 
     def render(self, res: MeshResources, corner_uv: np.ndarray, tile=(0, 0),
                padding: int = 8, tangents: tuple | None = None,
-               layout: str | None = None, texture_st: np.ndarray | None = None) -> MapPixels:
+               layout: str | None = None) -> MapPixels:
         """The maps of ``res`` (its synced, computed frame) in UV tile ``tile``; the
         normal map in MikkTSpace when this frame's ``tangents`` are given ((tangents,
         the normals their frames are built about), per triangle corner;
         maps/tangents.py), else in the per-triangle frame. ``layout`` names the layout
         of ``corner_uv`` (default: the mesh's path): its UV table and padding plan are
-        made once per name. With parallax, ``texture_st`` are the texture coordinates the
-        mesh's textures read, per triangle corner (default: ``corner_uv``)."""
+        made once per name. With parallax, ``corner_uv`` must be the texture coordinates
+        the mesh's textures read: the parallax maps hold their gradients."""
         uv = self.uv_table(res, corner_uv, layout)
         if res.num_triangles:
             table = (self.tangent_table(res, tangents[0]), self.frame_table(res, tangents[1])) \
                 if tangents is not None else None
-            st = self.texture_table(res, texture_st) \
-                if self.parallax and texture_st is not None else None
-            self._draw(res, uv, tile, count=False, tangents=table, texture_st=st)
+            self._draw(res, uv, tile, count=False, tangents=table)
         else:
             self.framebuffer.clear(0.0, 0.0, 0.0, 0.0)
         normal = self._read(self.targets[0])
@@ -245,10 +230,9 @@ class MapRasterizer:
 
     def release(self) -> None:
         for table in [*self.uv_tables.values(), *self.tangent_tables.values(),
-                      *self.frame_tables.values(), *self.texture_tables.values()]:
+                      *self.frame_tables.values()]:
             table.release()
         self.uv_tables.clear()
-        self.texture_tables.clear()
         self.tangent_tables.clear()
         self.frame_tables.clear()
         self.framebuffer.release()

@@ -55,7 +55,7 @@ DRAW = {**WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
 #: wrinkle maps (maps/): the blend rasterised in UV space
 MAPS = {**WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9, "MAPS_SHADING_NORMALS": 10,
         "MAPS_NORMAL_CORNERS": 11, "MAPS_TANGENTS": 12, "MAPS_GAIN": 13,
-        "MAPS_FRAME_NORMALS": 14, "MAPS_TEXTURE_ST": 2}
+        "MAPS_FRAME_NORMALS": 14}
 #: displaced geometry (geometry/): the blend at every fine vertex
 GEOMETRY = {**WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
             "GEOMETRY_SHADING_NORMALS": 11, "GEOMETRY_NORMAL_CORNERS": 12,
