@@ -456,3 +456,20 @@ def test_a_killed_runs_temporaries_are_swept_by_the_next_run(tmp_path):
                  "24", "--quiet"]) == 0
     assert not any(path.exists() for path in left)
     assert all(path.exists() for path in kept)
+
+
+def test_blender_addon_prints_and_copies_the_addon(tmp_path, capsys):
+    """usdwrinkle blender-addon prints the add-on's file; --copy DIR writes the same bytes
+    into DIR (made if missing) and prints the copy, leaving no staging file."""
+    from usdwrinkle.cli.main import main
+
+    assert main(["blender-addon"]) == 0
+    source = Path(capsys.readouterr().out.strip())
+    assert source.name == "usdwrinkle_blender.py" and source.is_file()
+    assert "bl_info" in source.read_text()
+    folder = tmp_path / "scripts" / "addons"
+    assert main(["blender-addon", "--copy", str(folder)]) == 0
+    copy = Path(capsys.readouterr().out.strip())
+    assert copy == folder / "usdwrinkle_blender.py"
+    assert copy.read_bytes() == source.read_bytes()
+    assert sorted(p.name for p in folder.iterdir()) == ["usdwrinkle_blender.py"]

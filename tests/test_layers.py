@@ -257,3 +257,29 @@ def test_no_time_is_nan():
              if tested.search(line) or made.search(line)]
     assert found == []
     assert tested.search("if math.isnan(frame):") and made.search('return [float("nan")]')
+
+
+def test_the_blender_addon_stands_alone():
+    """Issue 56: the Blender add-on runs in Blender's Python, where usdwrinkle and its
+    dependencies are not installed: it imports Blender's bpy, the pxr Blender bundles and
+    the standard library, nothing else; it is a legacy add-on file (bl_info, register,
+    unregister) that Blender's Install from Disk takes."""
+    import ast
+
+    path = layering.PACKAGE / "blender" / "usdwrinkle_blender.py"
+    tree = ast.parse(path.read_text(), str(path))
+    imported = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            imported |= {alias.name.split(".")[0] for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            assert node.level == 0, "a relative import"
+            imported.add((node.module or "").split(".")[0])
+    assert imported - sys.stdlib_module_names == {"bpy", "pxr"}
+    names = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)} | \
+        {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets
+         if isinstance(t, ast.Name)}
+    assert {"bl_info", "register", "unregister"} <= names
+    _, edges, _ = graph()
+    assert not [m for m, targets in edges.items() for t in targets
+                if layering.room(t) == "blender"]  # and nothing imports it

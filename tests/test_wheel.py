@@ -20,7 +20,8 @@ def test_wheel_ships_its_data_and_runs(tmp_path, gl_context):
                      "usdwrinkle/shaders/skin.glsl", "usdwrinkle/shaders/include/common.glsl",
                      "usdwrinkle/sample_stages/shirt.usda",
                      "usdwrinkle/sample_stages/textures/plaid.png",
-                     "usdwrinkle/usdview/plugInfo.json"):
+                     "usdwrinkle/usdview/plugInfo.json",
+                     "usdwrinkle/blender/usdwrinkle_blender.py"):
         assert required in names, required
     # development tools stay in the checkout: the benchmarks and the sample generator
     assert not [n for n in names if n.startswith("benchmarks/") or n.endswith("generate.py")]
@@ -37,3 +38,9 @@ def test_wheel_ships_its_data_and_runs(tmp_path, gl_context):
     assert run.returncode == 0, run.stderr
     assert f"FROM {target}" in run.stdout
     assert len(list((tmp_path / "demo").glob("shirt.*.png"))) == 24
+    # the Blender add-on is found in the installed package
+    code = "import sys; from usdwrinkle.cli.main import main; sys.exit(main(['blender-addon']))"
+    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == str(target / "usdwrinkle" / "blender" / "usdwrinkle_blender.py")

@@ -1,8 +1,10 @@
 """What the doors show of the installation and the machine: the GL renderer, the schema's
-registration, the process's one GL context."""
+registration, the process's one GL context, the Blender add-on's file."""
 from __future__ import annotations
 
+import os
 import sys
+from pathlib import Path
 from typing import Any
 
 
@@ -39,3 +41,29 @@ def schema_dir() -> str:
     from .. import schema
 
     return str(schema.schema_dir())
+
+
+#: the Blender add-on's module name (its file is src/usdwrinkle/blender/ADDON_MODULE.py)
+ADDON_MODULE = "usdwrinkle_blender"
+
+
+def blender_addon() -> Path:
+    """The Blender add-on's file (it runs in Blender's Python, so it is found, never
+    imported, here)."""
+    path = Path(__file__).resolve().parents[1] / "blender" / f"{ADDON_MODULE}.py"
+    if not path.is_file():
+        raise FileNotFoundError(f"the Blender add-on {path} is missing from the installation")
+    return path
+
+
+def copy_blender_addon(folder: str | Path) -> Path:
+    """Copy the add-on into ``folder`` (made if missing), as Blender's add-on folders
+    hold it (``scripts/addons``); returns the copy's path. The copy is written beside
+    and renamed into place, so a Blender reading the folder never sees half a file."""
+    target_dir = Path(folder)
+    target_dir.mkdir(parents=True, exist_ok=True)
+    target = target_dir / f"{ADDON_MODULE}.py"
+    staging = target_dir / f".{ADDON_MODULE}.py.partial"
+    staging.write_bytes(blender_addon().read_bytes())
+    os.replace(staging, target)
+    return target

@@ -30,7 +30,7 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import apply, bake, bench, check, demo, info, paint, render
+    from . import addon, apply, bake, bench, check, demo, info, paint, render
 
     parser = OneLineParser(
         prog="usdwrinkle",
@@ -39,7 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"usdwrinkle {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (render, bake, apply, paint, check, bench, info, demo):
+    for module in (render, bake, apply, paint, check, bench, info, demo, addon):
         module.add_parser(sub)
     #: each subcommand's parser (usdwrinkle.api checks its keywords with them)
     parser.commands = dict(sub.choices)
