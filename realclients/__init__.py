@@ -56,14 +56,16 @@ def _run(script: str, jobs: list[dict], timeout: float) -> dict[str, str]:
     render took inside the client goes to SECONDS."""
     python = bpy_python()
     # Blender makes a blender_* folder in TMPDIR that os._exit never removes: give each
-    # client run its own TMPDIR and remove it afterwards
+    # client run its own TMPDIR (and Blender user scripts folder) and remove it afterwards
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-client-") as scratch:
         jobs_path = os.path.join(scratch, "jobs.json")
         with open(jobs_path, "w", encoding="utf-8") as handle:
             json.dump(jobs, handle)
         done = subprocess.run([python, str(HERE / script), jobs_path], capture_output=True,
                               text=True, timeout=timeout,
-                              env={**os.environ, "PYTHONNOUSERSITE": "1", "TMPDIR": scratch})
+                              env={**os.environ, "PYTHONNOUSERSITE": "1", "TMPDIR": scratch,
+                                   # an add-on a job installs stays in the scratch folder
+                                   "BLENDER_USER_SCRIPTS": os.path.join(scratch, "scripts")})
     results = {}
     for line in done.stdout.splitlines():
         if line.startswith("ok "):

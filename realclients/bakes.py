@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import storm
+from . import cycles, storm
 from .compare import eroded as erode
 from .compare import read_rgba8
 from .shots import (
@@ -456,8 +456,6 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     complexity), the render purpose on for the geometry layer."""
     from pxr import Usd, UsdGeom
 
-    from . import cycles
-
     p = prepare(shot, folder)
     up_axis = UsdGeom.GetStageUpAxis(Usd.Stage.Open(str(p.stage)))
     layers = {"maps": p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size",
@@ -513,34 +511,77 @@ def turned_camera(stage, camera: str, frame: float, degrees: float, path: str) -
 
 @dataclass
 class TextureViews:
-    """usdwrinkle's and Storm's renders of the texture shot, at the shot's camera and at
-    each turned one: {degrees: {label: path}}; labels ours, ours_plain, storm_parallax
-    (the maps layer with --maps normal,parallax: its MaterialX network), storm_normal
-    (--maps normal: the UsdPreviewSurface alone) and storm_points (--with-points)."""
+    """usdwrinkle's and the clients' renders of the texture shot, at the shot's camera and
+    at each turned one: {degrees: {label: path}}; labels ours, ours_plain, and per client
+    (storm, cycles, eevee) CLIENT_parallax (the maps layer with --maps normal,parallax:
+    its MaterialX network; in Blender through the add-on), CLIENT_points (--with-points),
+    storm_normal (--maps normal: the UsdPreviewSurface alone), cycles_stock (the parallax
+    layer imported without the add-on: its UsdPreviewSurface)."""
 
     images: dict
 
     def contribution(self, degrees: float, label: str = "storm_parallax") -> Contribution:
+        """The wrinkle contribution of ``label`` (minus its client's points render)
+        against usdwrinkle's."""
         i = self.images[degrees]
-        return contribution(i["ours"], i["ours_plain"], i[label], i["storm_points"])
+        plain = f"{label.split('_')[0]}_points"
+        return contribution(i["ours"], i["ours_plain"], i[label], i[plain])
+
+
+#: Blender's importer's light_intensity_scale: Cycles' renders of the samples at about
+#: Storm's mean brightness (measured on the shirt; realclients.figure's panels too)
+CYCLES_LIGHT_SCALE = 0.3
+#: the strength of Cycles' head-light (a sun along the view) for a stage without lights
+CYCLES_HEAD_LIGHT = 3.0
+
+#: usdwrinkle's Blender add-on (Cycles' and EEVEE's import of the MaterialX network)
+BLENDER_ADDON = Path(__file__).resolve().parents[1] / "src" / "usdwrinkle" / "blender" / \
+    "usdwrinkle_blender.py"
+
+
+def uniform_dome(stage, intensity: float = 1.0) -> None:
+    """In ``stage``'s edit target: every light of the stage off, and one white dome light
+    without a texture on. Under it, a surface's diffuse shading is its albedo whatever
+    its normal, in every renderer, so that a comparison sees the texture where it moved
+    and not how each renderer models lights (Cycles' Principled BSDF and sun lamps against
+    UsdPreviewSurface's distant lights)."""
+    from pxr import UsdLux
+
+    for prim in stage.Traverse():
+        if prim.HasAPI(UsdLux.LightAPI):
+            prim.SetActive(False)
+    dome = UsdLux.DomeLight.Define(stage, "/UniformDome")
+    dome.CreateIntensityAttr(intensity)
+    dome.CreateColorAttr((1.0, 1.0, 1.0))
 
 
 def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT,
-                  map_size: int = 2048) -> TextureViews:
-    """The texture deformation through Storm: the shot's layers baked once (no camera
-    in them), each seen through the shot's camera turned by each of ``turns``."""
+                  map_size: int = 2048, clients=("storm",), samples: int = 16,
+                  lighting: str = "stage") -> TextureViews:
+    """The texture deformation through Storm, Cycles and/or EEVEE (``clients``): the
+    shot's layers baked once (no camera in them), each seen through the shot's camera
+    turned by each of ``turns``. Storm: storm_parallax, storm_normal, storm_points
+    (TextureViews). Cycles (through Blender's importer, ``samples`` per pixel, without
+    shadows or inter-reflection, as usdwrinkle and Storm draw): cycles_parallax with the
+    add-on (BLENDER_ADDON), cycles_stock the same layer without it (the
+    UsdPreviewSurface), cycles_points the --with-points layer. EEVEE: eevee_parallax
+    (with the add-on) and eevee_points. ``lighting``: "stage" (its own lights; Storm's
+    without lights get usdview's head-light), or "dome" (uniform_dome())."""
     folder.mkdir(parents=True, exist_ok=True)
     framed, camera = shared_camera(shot.stage.resolve(), folder)
-    lit = has_lights(shot.stage)
+    lit = has_lights(shot.stage) or lighting == "dome"
     layers = {}
     size = ("--map-size", map_size)
-    for label, flags in (("parallax", ("--maps", "normal,parallax", *size)),
-                         ("normal", ("--maps", "normal", *size)),
-                         ("points", ("--with-points",))):
+    wanted = (("parallax", ("--maps", "normal,parallax", *size)),
+              ("normal", ("--maps", "normal", *size)),
+              ("points", ("--with-points",)))
+    for label, flags in wanted:
+        if label == "normal" and "storm" not in clients:
+            continue
         layers[label] = folder / f"{shot.name}.{label}.usda"
         _usdwrinkle("bake", framed, layers[label], "--frames", f"{shot.frame:g}", "--quiet",
                     *flags)
-    images, jobs = {}, []
+    images, jobs, cycles_jobs = {}, [], []
     for degrees in turns:
         tag = f"turn{degrees:g}"
         views = {}
@@ -550,6 +591,8 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
                                       folder / f"{stage_path.stem}.{tag}.usda")
             cameras[label] = turned_camera(stage, camera, shot.frame, degrees, "/TurnedCamera") \
                 if degrees else camera
+            if lighting == "dome":
+                uniform_dome(stage)
             layer.Save()
             views[label] = Path(layer.realPath)
         out = {}
@@ -557,13 +600,34 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
             out[name] = folder / f"{shot.name}.{tag}.{name}.png"
             _usdwrinkle("render", views["source"], out[name], "--frames", f"{shot.frame:g}",
                         "--width", shot.width, "--camera", cameras["source"], "--quiet", *extra)
-        for label in layers:
-            out[f"storm_{label}"] = folder / f"{shot.name}.{tag}.storm_{label}.png"
-            jobs.append({"stage": str(views[label]), "camera": cameras[label],
-                         "frame": shot.frame, "width": shot.width,
-                         "out": str(out[f"storm_{label}"]), "camera_light": not lit})
+        height = read_rgba8(out["ours"]).shape[0]
+        if "storm" in clients:
+            for label in layers:
+                out[f"storm_{label}"] = folder / f"{shot.name}.{tag}.storm_{label}.png"
+                jobs.append({"stage": str(views[label]), "camera": cameras[label],
+                             "frame": shot.frame, "width": shot.width,
+                             "out": str(out[f"storm_{label}"]), "camera_light": not lit})
+        for client in ("cycles", "eevee"):
+            if client not in clients:
+                continue
+            runs = (("parallax", "parallax", True), ("stock", "parallax", False),
+                    ("points", "points", False))
+            for name, label, addon in runs if client == "cycles" else runs[::2]:
+                out[f"{client}_{name}"] = folder / f"{shot.name}.{tag}.{client}_{name}.png"
+                cycles_jobs.append({"stage": str(views[label]), "camera": cameras[label],
+                                    "frame": shot.frame, "width": shot.width,
+                                    "height": height, "samples": samples,
+                                    "engine": "CYCLES" if client == "cycles"
+                                    else "BLENDER_EEVEE",
+                                    "out": str(out[f"{client}_{name}"]),
+                                    "camera_light": None if lit else CYCLES_HEAD_LIGHT,
+                                    "light_scale": CYCLES_LIGHT_SCALE, "shadows": False,
+                                    "world": (1.0, 1.0, 1.0) if lighting == "dome" else None,
+                                    "addon": str(BLENDER_ADDON) if addon else None})
         images[degrees] = out
-    failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
+    failed = {k: v for k, v in storm(jobs).items() if v != "ok"} if jobs else {}
+    if cycles_jobs:
+        failed.update({k: v for k, v in cycles(cycles_jobs).items() if v != "ok"})
     if failed:
-        raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
+        raise RuntimeError(f"a client could not render {shot.name}: {failed}")
     return TextureViews(images)

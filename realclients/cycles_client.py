@@ -12,7 +12,12 @@ in the stage's axes; .png: the combined image, 8-bit, Standard view transform),
 default none), "light_scale" (the importer's light_intensity_scale, default 1),
 "subdivision" (import subdivision surfaces as such; default false: the coarse mesh, as
 usdview's default complexity shows it), "engine" ("CYCLES", default, or "BLENDER_EEVEE"),
-"samples" (default 16),
+"samples" (default 16), "world" (a linear RGB: the world's uniform radiance, as a dome
+light without a texture; default: the importer's world, or Blender's dark grey),
+"shadows" (default true: false turns every light's shadows off, and every object's
+visibility to diffuse, glossy and shadow rays, as usdwrinkle and Storm draw without
+occlusion or inter-reflection), "addon" (the path of usdwrinkle's Blender add-on,
+installed and enabled for the job as a user does: realclients/addon.py; default none),
 "purposes" (default ["default", "proxy"]: Blender's importer defaults; add "render" for
 the geometry layer's render mesh), "decoded" (default false: with an .exr, a shader AOV
 "Decoded" holds the world-space output of every Normal Map node, the normal decoded from
@@ -33,6 +38,21 @@ def render(job: dict) -> None:
     import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    hook = None
+    if job.get("addon"):
+        import addon
+
+        hook = addon.register(job["addon"])
+    try:
+        _import_and_render(job)
+    finally:
+        if hook is not None:  # the next job imports as it says, with or without it
+            hook.unregister()
+
+
+def _import_and_render(job: dict) -> None:
+    import bpy
+
     purposes = set(job.get("purposes") or ["default", "proxy"])
     bpy.ops.wm.usd_import(filepath=job["stage"], set_frame_range=True,
                           import_proxy="proxy" in purposes,
@@ -54,6 +74,11 @@ def render(job: dict) -> None:
         light.data.energy = float(job["camera_light"])
         light.parent = camera
         scene.collection.objects.link(light)
+    if not job.get("shadows", True):
+        for light in bpy.data.lights:
+            light.use_shadow = False
+        for obj in scene.objects:  # nor does a mesh occlude or reflect light onto another
+            obj.visible_diffuse = obj.visible_glossy = obj.visible_shadow = False
     scene.frame_set(int(round(float(job["frame"]))))
     scene.render.engine = job.get("engine", "CYCLES")
     scene.render.resolution_x = int(job["width"])
@@ -68,6 +93,8 @@ def render(job: dict) -> None:
         scene.cycles.pixel_filter_type = "BOX"
     if scene.world is None:
         scene.world = bpy.data.worlds.new("World")
+    if job.get("world"):
+        uniform_world(scene.world, job["world"])
     exr = job["out"].endswith(".exr")
     if exr and job.get("decoded"):
         decoded_aov(scene)
@@ -83,6 +110,16 @@ def render(job: dict) -> None:
     bpy.ops.render.render(write_still=True)
     if not os.path.isfile(job["out"]):
         raise RuntimeError("Blender wrote no image")
+
+
+def uniform_world(world, colour) -> None:
+    """The world lights every direction with radiance ``colour`` (linear RGB): a
+    UsdLux dome light without a texture, whose colour x intensity it is (Blender's
+    importer makes no world of such a dome)."""
+    world.use_nodes = True
+    background = next(n for n in world.node_tree.nodes if n.type == "BACKGROUND")
+    background.inputs["Color"].default_value = (*[float(c) for c in colour], 1.0)
+    background.inputs["Strength"].default_value = 1.0
 
 
 def decoded_aov(scene) -> None:

@@ -28,14 +28,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from .bakes import CYCLES_HEAD_LIGHT, CYCLES_LIGHT_SCALE
 from .shots import PLAIN_SHOTS, Shot, compare_plain_frames
-
-#: Blender's importer's light_intensity_scale for the Cycles panels: brings the samples'
-#: Cycles renders to about Storm's mean brightness (measured on the shirt)
-CYCLES_LIGHT_SCALE = 0.3
-#: the strength of the Cycles panels' head-light for stages without lights (usdview's
-#: camera light)
-CYCLES_HEAD_LIGHT = 3.0
 
 #: shot name -> frame shown
 FIGURE_FRAMES = {"shirt": 24, "pillow": 24, "CesiumMan": 24, "test_lbs": 60}

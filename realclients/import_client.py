@@ -8,8 +8,9 @@ Runs in a Python that has Blender's ``bpy`` wheel; realclients/__init__.py start
 
 JOBS.json: a list of {"stage": a USD file, "out": a .json to write with {object name:
 {"materials": [material names], "normal_images": [file names of the images that feed a
-Normal Map node], "base_colours": [the Principled BSDFs' Base Color, RGBA]}}}. One line
-"ok OUT" or "failed OUT: reason" per job.
+Normal Map node], "base_colours": [the Principled BSDFs' Base Color, RGBA],
+"image_sequences": [file names of the image sequences its nodes read]}}, "addon":
+optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT: reason" per job.
 """
 from __future__ import annotations
 
@@ -23,12 +24,21 @@ def imported(job: dict) -> None:
     import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.wm.usd_import(filepath=job["stage"])
+    hook = None
+    if job.get("addon"):
+        import addon
+
+        hook = addon.register(job["addon"])
+    try:
+        bpy.ops.wm.usd_import(filepath=job["stage"])
+    finally:
+        if hook is not None:
+            hook.unregister()
     found = {}
     for obj in bpy.data.objects:
         if obj.type != "MESH":
             continue
-        materials, images, colours = [], [], []
+        materials, images, colours, sequences = [], [], [], []
         for slot in obj.material_slots:
             material = slot.material
             if material is None:
@@ -36,6 +46,9 @@ def imported(job: dict) -> None:
             materials.append(material.name)
             nodes = material.node_tree.nodes if material.use_nodes else []
             for node in nodes:
+                if node.type == "TEX_IMAGE" and node.image is not None and \
+                        node.image.source == "SEQUENCE":
+                    sequences.append(os.path.basename(node.image.filepath))
                 if node.type == "BSDF_PRINCIPLED":
                     colours.append([round(c, 4) for c in node.inputs["Base Color"].default_value])
                 if node.type != "NORMAL_MAP":
@@ -44,7 +57,7 @@ def imported(job: dict) -> None:
                            for upstream in _upstream(node) if upstream.type == "TEX_IMAGE"
                            and upstream.image is not None]
         found[obj.name] = {"materials": materials, "normal_images": images,
-                           "base_colours": colours}
+                           "base_colours": colours, "image_sequences": sorted(sequences)}
     with open(job["out"], "w", encoding="utf-8") as handle:
         json.dump(found, handle)
 

@@ -428,7 +428,7 @@ def test_blender_imports_the_full_map_set_with_the_full_look(realclient, tmp_pat
     assert results[str(out)] == "ok", results
     sleeve = json.loads(out.read_text())["Sleeve"]
     assert sleeve == {"materials": ["Sleeve"], "normal_images": ["Sleeve.normal.0024.png"],
-                      "base_colours": [[0.0, 0.0, 1.0, 1.0]]}, sleeve
+                      "base_colours": [[0.0, 0.0, 1.0, 1.0]], "image_sequences": []}, sleeve
 
 
 def test_mikktspace_matches_blenders_calc_tangents(realclient, tmp_path):
