@@ -95,11 +95,12 @@ def test_plugin_registers_a_wrinkles_menu():
     container.registerPlugins(Registry(), None)
     container.configureView(Registry(), Builder())
     assert [c[1] for c in commands] == ["Bake current frame", "Render current frame",
-                                        "Paint..."]
+                                        "Paint...", "Live (on/off)"]
     assert commands[0][2] is usdview.bake_current_frame
     assert commands[2][2] is usdview.paint_current_stage
+    assert commands[3][2] is usdview.toggle_live
     assert menus["Wrinkles"].items == ["Wrinkles.BakeCurrentFrame", "Wrinkles.RenderCurrentFrame",
-                                       "Wrinkles.Paint"]
+                                       "Wrinkles.Paint", "Wrinkles.Live"]
 
 
 def test_plug_info_names_the_container():
@@ -127,8 +128,20 @@ amplitude = stage.GetPrimAtPath("/World/Zeppelin/Hull").GetAttribute(
     "primvars:wrinkle:amplitude").Get(12)
 opened = []
 paths = plugin.render_current_frame(api, outdir=sys.argv[2], opener=opened.append, width=96)
+session = stage.GetSessionLayer()
+before = session.ExportToString()
+plugin.toggle_live(api)
+api.frame = Usd.TimeCode(6)
+plugin.live_tick(api, wait=False)
+live = plugin._LIVE["bake"]
+hull = stage.GetPrimAtPath("/World/Zeppelin/Hull")
+live_state = {"frame": live.frame, "baked": live.baked,
+              "first_sublayer_is_live": session.subLayerPaths[0] == live.current,
+              "amplitude6": len(hull.GetAttribute("primvars:wrinkle:amplitude").Get(6) or [])}
+plugin.toggle_live(api)
+live_state["restored"] = session.ExportToString() == before
 print(json.dumps({"baked": baked, "amplitude": len(amplitude or []), "paths": paths,
-                  "opened": opened, "status": status,
+                  "opened": opened, "status": status, "live": live_state,
                   "numpy": "numpy" in sys.modules}))
 """
 
@@ -138,7 +151,8 @@ def test_the_plugin_works_from_a_python_with_only_pxr(tmp_path):
     """Issue 27: from usdview's own Python (pxr and nothing else: no numpy, moderngl or
     OpenImageIO) with only the paths usdwrinkle info prints, both commands failed with
     ModuleNotFoundError. They now run usdwrinkle in USDWRINKLE_PYTHON (which info prints)
-    on the stage as usdview holds it, and bring the bake back as a session sublayer."""
+    on the stage as usdview holds it, and bring the bake back as a session sublayer (and
+    Live, issue 56, runs there too)."""
     import os
     import subprocess
     import sys
@@ -171,3 +185,118 @@ def test_the_plugin_works_from_a_python_with_only_pxr(tmp_path):
     assert result["opened"] == [result["paths"][1]]
     image = oiio.ImageBuf(result["paths"][1]).get_pixels(oiio.UINT8)
     assert image.shape[1] == 96 and image[..., 3].max() == 255
+    # Wrinkles > Live, out of process too (issue 56): frames 12 and 6 baked by usdwrinkle
+    # bake in USDWRINKLE_PYTHON, shown through the session layer, which Live off restores
+    assert result["live"] == {"frame": 6.0, "baked": 2, "first_sublayer_is_live": True,
+                              "amplitude6": 506, "restored": True}, result["live"]
+
+
+def _baked_values(layer_path, frame):
+    """{attribute path: value at ``frame``} of every time-sampled attribute a bake layer
+    authors, asset paths resolved (a map's pixels in place of its file name)."""
+    from pxr import Sdf
+
+    layer = Sdf.Layer.FindOrOpen(str(layer_path))
+    values = {}
+
+    def visit(path):
+        if not path.IsPropertyPath():
+            return
+        spec = layer.GetAttributeAtPath(path)
+        if spec is None or not layer.ListTimeSamplesForPath(path):
+            return
+        value = layer.QueryTimeSample(path, frame)
+        if isinstance(value, Sdf.AssetPath):
+            file = layer.ComputeAbsolutePath(value.path)
+            value = oiio.ImageBuf(file).get_pixels(oiio.FLOAT)
+        values[str(path)] = np.asarray(value)
+
+    layer.Traverse(Sdf.Path.absoluteRootPath, visit)
+    return values
+
+
+def _shown_values(stage, names, frame):
+    """The same attributes as the stage composes them at ``frame``."""
+    from pxr import Sdf
+
+    values = {}
+    for name in names:
+        attribute = stage.GetAttributeAtPath(Sdf.Path(name))
+        value = attribute.Get(frame)
+        if isinstance(value, Sdf.AssetPath):
+            value = oiio.ImageBuf(value.resolvedPath).get_pixels(oiio.FLOAT)
+        values[name] = np.asarray(value)
+    return values
+
+
+def test_live_shows_each_frames_bake_and_leaves_the_session_as_it_was(gl_context, tmp_path):
+    """Issue 56: Wrinkles > Live, scrubbing 1 -> 24 -> 12: at each frame the stage shows,
+    through its session layer, the primvars and maps (normal and parallax, with the
+    MaterialX network) of ``usdwrinkle bake --frames F --sparse --maps normal,parallax
+    --map-size 1024``; back at 24 the kept bake is swapped in without baking; turning Live
+    off leaves the session layer as it was and deletes Live's files."""
+    import os
+
+    from usdwrinkle.cli.main import main
+
+    stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    session = stage.GetSessionLayer()
+    before = session.ExportToString()
+    api, status = stand_in(stage, 1)
+    assert usdview.toggle_live(api, ctx=gl_context) is True
+    live = usdview._LIVE["bake"]
+    try:
+        for frame in (1, 24, 12):
+            if frame != 1:
+                api.frame = Usd.TimeCode(frame)
+                usdview.live_tick(api)  # the frame has not held for one look yet
+                assert live.frame != frame
+                usdview.live_tick(api)
+            assert live.frame == frame and session.subLayerPaths[0] == live.current
+            reference = tmp_path / f"bake{frame}.usda"
+            assert main(["bake", str(SAMPLES / "shirt.usda"), str(reference), "--quiet",
+                         "--frames", str(frame), "--sparse", "--maps", "normal,parallax",
+                         "--map-size", "1024"]) == 0
+            expected = _baked_values(reference, frame)
+            assert any("Parallax" in name for name in expected)
+            assert any("wrinkle:amplitude" in name for name in expected)
+            shown = _shown_values(stage, expected, frame)
+            for name, value in expected.items():
+                np.testing.assert_array_equal(shown[name], value, err_msg=name)
+            assert f"Live at frame {frame} (baked" in status[-1]
+        api.frame = Usd.TimeCode(24)
+        usdview.live_tick(api, wait=False)
+        assert live.baked == 3 and "Live at frame 24 (kept)" in status[-1]
+    finally:
+        folder = live.folder
+        assert usdview.toggle_live(api) is False
+    assert session.ExportToString() == before
+    assert not os.path.exists(folder) and not usdview._LIVE
+
+
+def test_live_bakes_again_after_an_edit(gl_context):
+    """A kept bake shows the stage as it was when it was baked: an edit (here a width in
+    the session layer, as the paint window writes strokes) forgets them all, so that the
+    next frame shown is baked from the edited stage."""
+    stage = Usd.Stage.Open(str(SAMPLES / "zeppelin.usda"))
+    api, status = stand_in(stage, 12)
+    usdview.toggle_live(api, ctx=gl_context)
+    live = usdview._LIVE["bake"]
+    try:
+        api.frame = Usd.TimeCode(6)
+        usdview.live_tick(api, wait=False)
+        assert live.baked == 2 and len(live.cache) == 2
+        hull = stage.GetPrimAtPath("/World/Zeppelin/Hull")
+        amplitude = np.asarray(hull.GetAttribute("primvars:wrinkle:amplitude").Get(6))
+        with Usd.EditContext(stage, stage.GetSessionLayer()):
+            hull.GetAttribute("primvars:wrinkle:width").Set([0.6])
+        assert live.cache == {}
+        api.frame = Usd.TimeCode(12)
+        usdview.live_tick(api, wait=False)
+        api.frame = Usd.TimeCode(6)
+        usdview.live_tick(api, wait=False)
+        assert live.baked == 4 and "(baked" in status[-1]
+        edited = np.asarray(hull.GetAttribute("primvars:wrinkle:amplitude").Get(6))
+        assert not np.array_equal(edited, amplitude)
+    finally:
+        usdview.toggle_live(api)

@@ -104,6 +104,7 @@ class _Builder:
         self.import_context = import_context
         self.values: dict = {}
         self.column = 0
+        self.rows: dict = {}  # nodes placed so far in each column
         self._frame = None
 
     # -- node helpers ---------------------------------------------------------------
@@ -111,7 +112,11 @@ class _Builder:
         node = self.tree.nodes.new(kind)
         for key, value in settings.items():
             setattr(node, key, value)
-        node.location = (-300.0 * self.column, 0.0)
+        # laid out right to left by depth from the surface, each column top to bottom, so
+        # that the tree reads in the node editor
+        row = self.rows.get(self.column, 0)
+        self.rows[self.column] = row + 1
+        node.location = (-220.0 * self.column, -170.0 * row)
         return node
 
     def feed(self, socket, value) -> None:

@@ -1,5 +1,6 @@
-"""usdview plugin: a "Wrinkles" menu with "Bake current frame", "Render current frame" and
-"Paint..." (the paint window on usdview's stage).
+"""usdview plugin: a "Wrinkles" menu with "Bake current frame", "Render current frame",
+"Paint..." (the paint window on usdview's stage) and "Live" (the current frame's bake,
+maps and texture deformation included, shown on every frame change: app/live.py).
 
 usdview finds it when ``PXR_PLUGINPATH_NAME`` names this folder and ``PYTHONPATH``
 can import ``usdwrinkle`` (``usdwrinkle info`` prints both). usd-core has no
@@ -359,6 +360,122 @@ def _watch_layer(path: str, process) -> None:
     _PAINT_WINDOWS.append(timer)
 
 
+#: Wrinkles > Live in this usdview: "bake" (app/live.LiveBake), "api", "timer", "seen"
+_LIVE: dict = {}
+#: how often Live looks at usdview's frame (ms); it bakes once a frame has held for one look,
+#: so that dragging the time slider does not bake every frame it passes
+LIVE_POLL_MS = 150
+
+
+def _live_bake(usdview_api, ctx):
+    """LiveBake's bake: a BakeJob here, or usdwrinkle bake in USDWRINKLE_PYTHON."""
+    from ..app.live import LIVE_FLAGS, bake_in_process
+
+    if not _in_process():
+        def bake(stage, frame, path):
+            with tempfile.TemporaryDirectory(prefix="usdwrinkle-usdview-") as held:
+                return _run_usdwrinkle(usdview_api, ["bake", _held_stage(stage, held), path,
+                                                     *LIVE_FLAGS, *_frame_args(frame)])
+        return bake
+    run = bake_in_process(ctx)
+
+    def bake(stage, frame, path):
+        from ..errors import UsdWrinkleError
+        from ..log import silenced
+
+        try:
+            with silenced():  # the status line reports the outcome
+                return run(stage, frame, path)
+        except UsdWrinkleError as exc:
+            usdview_api.PrintStatus(f"Wrinkles: Live: {exc.one_line()}")
+            return False
+    return bake
+
+
+def toggle_live(usdview_api, ctx=None) -> bool:
+    """Wrinkles > Live. On: bake the current frame into the session layer and show it,
+    and again whenever the frame changes (baked frames are kept and swapped back in while
+    the stage is not edited). Off: take Live's layer out of the session layer, which is
+    then as it was, and delete its files. Returns whether Live is on."""
+    if _LIVE:
+        return _stop_live(usdview_api)
+    from ..app.live import LiveBake
+
+    live = LiveBake(usdview_api.stage, _live_bake(usdview_api, ctx))
+    _LIVE.update(bake=live, api=usdview_api, seen=_frame(usdview_api))
+    _show_live(usdview_api, _frame(usdview_api))
+    _start_live_timer(usdview_api)
+    return True
+
+
+def _stop_live(usdview_api) -> bool:
+    timer = _LIVE.get("timer")
+    if timer is not None:
+        timer.stop()
+    live = _LIVE["bake"]
+    _LIVE.clear()
+    live.stop()
+    usdview_api.PrintStatus("Wrinkles: Live off (its layer is out of the session layer)")
+    return False
+
+
+def _show_live(usdview_api, frame) -> None:
+    import time
+
+    live = _LIVE["bake"]
+    baked = live.baked
+    started = time.perf_counter()
+    path = live.show(frame)
+    when = "the default time" if frame is None else f"frame {frame:g}"
+    if path is None:
+        usdview_api.PrintStatus(f"Wrinkles: Live could not bake {when}")
+    elif live.baked > baked:
+        usdview_api.PrintStatus(f"Wrinkles: Live at {when} (baked in "
+                                f"{time.perf_counter() - started:.1f} s; "
+                                f"{len(live.cache)} frame(s) kept)")
+    else:
+        usdview_api.PrintStatus(f"Wrinkles: Live at {when} (kept)")
+
+
+def live_tick(usdview_api=None, wait: bool = True) -> None:
+    """One look at usdview's frame (the Live timer calls it): a frame that differs from
+    the one shown is baked and shown once it has held for one look (``wait=False``: at
+    once)."""
+    if not _LIVE:
+        return
+    usdview_api = usdview_api or _LIVE["api"]
+    if usdview_api.stage is not _LIVE["bake"].stage:  # usdview opened another stage
+        _stop_live(usdview_api)
+        return
+    frame = _frame(usdview_api)
+    if frame == _LIVE["bake"].frame:
+        _LIVE["seen"] = frame
+        return
+    if wait and frame != _LIVE["seen"]:
+        _LIVE["seen"] = frame
+        return
+    _LIVE["seen"] = frame
+    _show_live(usdview_api, frame)
+
+
+def _start_live_timer(usdview_api) -> None:
+    """Poll usdview's frame with a Qt timer, where usdview's Qt runs (tests tick by
+    hand)."""
+    try:
+        from PySide6 import QtCore
+    except ImportError:
+        try:
+            from PySide2 import QtCore
+        except ImportError:
+            return
+    if QtCore.QCoreApplication.instance() is None:
+        return
+    timer = QtCore.QTimer()
+    timer.timeout.connect(lambda: live_tick(usdview_api))
+    timer.start(LIVE_POLL_MS)
+    _LIVE["timer"] = timer
+
+
 class WrinklePluginContainer(_PluginBase):
     """usdview's entry point: registers the commands and the "Wrinkles" menu."""
 
@@ -369,12 +486,15 @@ class WrinklePluginContainer(_PluginBase):
             "Wrinkles.RenderCurrentFrame", "Render current frame", render_current_frame)
         self._paint = plugRegistry.registerCommandPlugin(
             "Wrinkles.Paint", "Paint...", paint_current_stage)
+        self._live = plugRegistry.registerCommandPlugin(
+            "Wrinkles.Live", "Live (on/off)", toggle_live)
 
     def configureView(self, plugRegistry, plugUIBuilder):  # noqa: N802, N803 (usdview API)
         menu = plugUIBuilder.findOrCreateMenu("Wrinkles")
         menu.addItem(self._bake)
         menu.addItem(self._render)
         menu.addItem(self._paint)
+        menu.addItem(self._live)
 
 
 if _PluginBase is not object:  # register with usdview's plugin system
