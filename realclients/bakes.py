@@ -509,14 +509,58 @@ def turned_camera(stage, camera: str, frame: float, degrees: float, path: str) -
     return path
 
 
+def upper_centre(points_layer: Path, frame: float) -> tuple:
+    """The world-space centre of the bounds of the upper half (along the stage's up axis)
+    of the posed points in a --with-points layer at ``frame``: on the shirt, the upper arm
+    with its cuff, where the folds are."""
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(points_layer))
+    time = Usd.TimeCode(frame)
+    axis = 1 if UsdGeom.GetStageUpAxis(stage) == "Y" else 2
+    points = []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Mesh):
+            local = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(time), np.float64)
+            matrix = np.asarray(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(time))
+            points.append(local @ matrix[:3, :3] + matrix[3, :3])
+    points = np.concatenate(points)
+    middle = (points[:, axis].min() + points[:, axis].max()) / 2.0
+    upper = points[points[:, axis] >= middle]
+    return tuple((upper.min(axis=0) + upper.max(axis=0)) / 2.0)
+
+
+def zoomed_camera(stage, camera: str, frame: float, zoom: float, path: str,
+                  centre: tuple) -> str:
+    """Define ``path`` in ``stage``'s edit target: ``camera`` with its apertures divided by
+    ``zoom`` and its aperture offset moved so that the world point ``centre`` is the
+    image's centre (a render ``zoom`` times smaller then shows that region at the
+    original's pixel size); returns ``path``."""
+    from pxr import Gf, Usd, UsdGeom
+
+    time = Usd.TimeCode(frame)
+    gf_camera = UsdGeom.Camera(stage.GetPrimAtPath(camera)).GetCamera(time)
+    ndc = gf_camera.frustum.ComputeViewMatrix() * gf_camera.frustum.ComputeProjectionMatrix()
+    x, y, _ = ndc.Transform(Gf.Vec3d(centre))
+    width, height = gf_camera.horizontalAperture, gf_camera.verticalAperture
+    gf_camera.horizontalApertureOffset += x * width / 2.0
+    gf_camera.verticalApertureOffset += y * height / 2.0
+    gf_camera.horizontalAperture = width / zoom
+    gf_camera.verticalAperture = height / zoom
+    zoomed = UsdGeom.Camera.Define(stage, path)
+    zoomed.SetFromCamera(gf_camera, Usd.TimeCode.Default())
+    return path
+
+
 @dataclass
 class TextureViews:
     """usdwrinkle's and the clients' renders of the texture shot, at the shot's camera and
     at each turned one: {degrees: {label: path}}; labels ours, ours_plain, and per client
     (storm, cycles, eevee) CLIENT_parallax (the maps layer with --maps normal,parallax:
     its MaterialX network; in Blender through the add-on), CLIENT_points (--with-points),
-    storm_normal (--maps normal: the UsdPreviewSurface alone), cycles_stock (the parallax
-    layer imported without the add-on: its UsdPreviewSurface)."""
+    storm_normal (--maps normal: the UsdPreviewSurface alone), storm_flat (the network
+    without the wrinkles: unwrinkled_network; storm_parallax's baseline), cycles_stock
+    (the parallax layer imported without the add-on: its UsdPreviewSurface)."""
 
     images: dict
 
@@ -524,7 +568,9 @@ class TextureViews:
         """The wrinkle contribution of ``label`` (minus its client's points render)
         against usdwrinkle's."""
         i = self.images[degrees]
-        plain = f"{label.split('_')[0]}_points"
+        client = label.split("_")[0]
+        plain = f"{client}_flat" if label == "storm_parallax" and f"{client}_flat" in i \
+            else f"{client}_points"
         return contribution(i["ours"], i["ours_plain"], i[label], i[plain])
 
 
@@ -537,6 +583,38 @@ CYCLES_HEAD_LIGHT = 3.0
 #: usdwrinkle's Blender add-on (Cycles' and EEVEE's import of the MaterialX network)
 BLENDER_ADDON = Path(__file__).resolve().parents[1] / "src" / "usdwrinkle" / "blender" / \
     "usdwrinkle_blender.py"
+
+
+def unwrinkled_network(stage) -> int:
+    """In ``stage``'s edit target: every wrinkle material's MaterialX network with the
+    wrinkles taken out (the texture offset 0, the normal the renderer's own), so that a
+    renderer draws the same shot through the same texture path without them: the baseline
+    of its wrinkle contribution. Storm's UsdPreviewSurface filters textures otherwise than
+    its MaterialX image node (measured: fine differences along the plaid's lines over the
+    whole sleeve, wrinkled or not), which a baseline through the UsdPreviewSurface counted
+    as wrinkles. Returns how many networks it changed."""
+    from pxr import Sdf, UsdShade
+
+    from usdwrinkle.maps.mtlx import PREFIX, SURFACE_OUTPUT
+
+    changed = 0
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdShade.Material) or not prim.GetAttribute(SURFACE_OUTPUT):
+            continue
+        offset = prim.GetChild(f"{PREFIX}Offset")
+        surface = prim.GetChild(f"{PREFIX}Surface")
+        if not offset or not surface:
+            continue
+        for name in ("inputs:in1", "inputs:in2"):
+            attribute = offset.GetAttribute(name)
+            attribute.SetConnections([])
+            attribute.Set(0.0)
+        normal = surface.GetAttribute("inputs:normal")
+        normal.SetConnections([])
+        normal.Set((0.0, 0.0, 1.0))  # tangent space: the renderer's own normal
+        assert normal.GetTypeName() == Sdf.ValueTypeNames.Float3
+        changed += 1
+    return changed
 
 
 def uniform_dome(stage, intensity: float = 1.0) -> None:
@@ -553,11 +631,21 @@ def uniform_dome(stage, intensity: float = 1.0) -> None:
     dome = UsdLux.DomeLight.Define(stage, "/UniformDome")
     dome.CreateIntensityAttr(intensity)
     dome.CreateColorAttr((1.0, 1.0, 1.0))
+    # Storm ignores a dome without a texture (tests/test_realclients.py): a white one
+    folder = Path(stage.GetRootLayer().realPath).parent
+    white = folder / "uniform_white.exr"
+    if not white.exists():
+        import OpenImageIO as oiio
+
+        buf = oiio.ImageBuf(oiio.ImageSpec(16, 8, 3, oiio.FLOAT))
+        oiio.ImageBufAlgo.fill(buf, (1.0, 1.0, 1.0))
+        buf.write(str(white))
+    dome.CreateTextureFileAttr(str(white))
 
 
 def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT,
                   map_size: int = 2048, clients=("storm",), samples: int = 16,
-                  lighting: str = "stage") -> TextureViews:
+                  lighting: str = "stage", zoom: float = 1.0) -> TextureViews:
     """The texture deformation through Storm, Cycles and/or EEVEE (``clients``): the
     shot's layers baked once (no camera in them), each seen through the shot's camera
     turned by each of ``turns``. Storm: storm_parallax, storm_normal, storm_points
@@ -566,10 +654,14 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
     add-on (BLENDER_ADDON), cycles_stock the same layer without it (the
     UsdPreviewSurface), cycles_points the --with-points layer. EEVEE: eevee_parallax
     (with the add-on) and eevee_points. ``lighting``: "stage" (its own lights; Storm's
-    without lights get usdview's head-light), or "dome" (uniform_dome())."""
+    without lights get usdview's head-light), or "dome" (uniform_dome()). ``zoom``: the
+    frames are the shot's width divided by it, through a camera zoomed as much on the
+    upper half of the posed meshes (upper_centre, zoomed_camera), so the texture's pattern keeps its pixel size at a
+    fraction of the cost."""
     folder.mkdir(parents=True, exist_ok=True)
     framed, camera = shared_camera(shot.stage.resolve(), folder)
     lit = has_lights(shot.stage) or lighting == "dome"
+    width = int(round(shot.width / zoom))
     layers = {}
     size = ("--map-size", map_size)
     wanted = (("parallax", ("--maps", "normal,parallax", *size)),
@@ -582,15 +674,24 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
         _usdwrinkle("bake", framed, layers[label], "--frames", f"{shot.frame:g}", "--quiet",
                     *flags)
     images, jobs, cycles_jobs = {}, [], []
+    centre = upper_centre(layers["points"], shot.frame) if zoom != 1.0 else None
     for degrees in turns:
         tag = f"turn{degrees:g}"
         views = {}
         cameras = {}
-        for label, stage_path in [("source", Path(framed)), *layers.items()]:
+        sources = [("source", Path(framed)), *layers.items()]
+        if "storm" in clients:
+            sources.append(("flat", layers["parallax"]))
+        for label, stage_path in sources:
             stage, layer = over_layer(stage_path.resolve(),
-                                      folder / f"{stage_path.stem}.{tag}.usda")
+                                      folder / f"{stage_path.stem}.{label}.{tag}.usda")
+            if label == "flat":
+                assert unwrinkled_network(stage) > 0
             cameras[label] = turned_camera(stage, camera, shot.frame, degrees, "/TurnedCamera") \
                 if degrees else camera
+            if zoom != 1.0:
+                cameras[label] = zoomed_camera(stage, cameras[label], shot.frame, zoom,
+                                               "/ZoomedCamera", centre)
             if lighting == "dome":
                 uniform_dome(stage)
             layer.Save()
@@ -599,13 +700,13 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
         for name, extra in (("ours", ()), ("ours_plain", ("--no-wrinkles",))):
             out[name] = folder / f"{shot.name}.{tag}.{name}.png"
             _usdwrinkle("render", views["source"], out[name], "--frames", f"{shot.frame:g}",
-                        "--width", shot.width, "--camera", cameras["source"], "--quiet", *extra)
+                        "--width", width, "--camera", cameras["source"], "--quiet", *extra)
         height = read_rgba8(out["ours"]).shape[0]
         if "storm" in clients:
-            for label in layers:
+            for label in [*layers, "flat"]:
                 out[f"storm_{label}"] = folder / f"{shot.name}.{tag}.storm_{label}.png"
                 jobs.append({"stage": str(views[label]), "camera": cameras[label],
-                             "frame": shot.frame, "width": shot.width,
+                             "frame": shot.frame, "width": width,
                              "out": str(out[f"storm_{label}"]), "camera_light": not lit})
         for client in ("cycles", "eevee"):
             if client not in clients:
@@ -615,7 +716,7 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
             for name, label, addon in runs if client == "cycles" else runs[::2]:
                 out[f"{client}_{name}"] = folder / f"{shot.name}.{tag}.{client}_{name}.png"
                 cycles_jobs.append({"stage": str(views[label]), "camera": cameras[label],
-                                    "frame": shot.frame, "width": shot.width,
+                                    "frame": shot.frame, "width": width,
                                     "height": height, "samples": samples,
                                     "engine": "CYCLES" if client == "cycles"
                                     else "BLENDER_EEVEE",

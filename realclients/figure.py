@@ -18,8 +18,9 @@ compares wrinkles, not exposure. Needs the real-client Python (realclients/__ini
     python -m realclients.figure --texture docs/images/renderers
 
 writes ``texture.png``: the plaid shirt's upper arm at frame 24 (960 px frames, cropped):
-usdwrinkle, Storm through ``--maps normal,parallax``'s MaterialX network, Storm through the
-UsdPreviewSurface alone, and prints their correlations (bakes.texture_views).
+usdwrinkle, Storm through ``--maps normal,parallax``'s MaterialX network, Cycles through
+the Blender add-on, Storm through the UsdPreviewSurface alone, and prints their
+correlations (bakes.texture_views).
 """
 from __future__ import annotations
 
@@ -83,23 +84,25 @@ TEXTURE_CROP = (slice(120, 460), slice(380, 660))
 
 
 def texture_figure(folder: Path, scratch: Path) -> None:
+    """texture.png: the upper arm through usdwrinkle, Storm (the MaterialX network),
+    Cycles (the Blender add-on) and Storm (the UsdPreviewSurface alone), under the
+    stage's lights (Cycles without shadows, as the others draw)."""
     from .bakes import texture_views
     from .compare import read_rgba8, side_by_side
 
-    views = texture_views(scratch, turns=(0.0,))
+    views = texture_views(scratch, turns=(0.0,), clients=("storm", "cycles"), samples=64)
     images = views.images[0.0]
     panels = []
-    for label in ("ours", "storm_parallax", "storm_normal"):
+    for label in ("ours", "storm_parallax", "cycles_parallax", "storm_normal"):
         crop = scratch / f"crop_{label}.png"
         _write_rgba8(read_rgba8(images[label])[TEXTURE_CROP], crop)
         panels.append(crop)
     target = folder / "texture.png"
     side_by_side(panels, target)
-    network, preview = (views.contribution(0.0, label)
-                        for label in ("storm_parallax", "storm_normal"))
-    print(f"{target}: correlation {network.correlation():.3f} (network) and "
-          f"{preview.correlation():.3f} (UsdPreviewSurface); fine part "
-          f"{network.high_pass_correlation():.3f} and {preview.high_pass_correlation():.3f}")
+    for label in ("storm_parallax", "cycles_parallax", "storm_normal", "cycles_stock"):
+        c = views.contribution(0.0, label)
+        print(f"{target}: {label}: correlation {c.correlation():.3f}, fine part "
+              f"{c.high_pass_correlation():.3f}")
 
 
 def _write_rgba8(pixels, path: Path) -> None:
@@ -122,8 +125,8 @@ def main(argv=None) -> int:
     parser.add_argument("--bakes", action="store_true",
                         help="the bake outputs in Storm and Cycles beside usdwrinkle")
     parser.add_argument("--texture", action="store_true",
-                        help="the texture deformation in Storm (--maps parallax) beside "
-                             "usdwrinkle")
+                        help="the texture deformation in Storm (--maps parallax) and in "
+                             "Cycles (the Blender add-on) beside usdwrinkle")
     args = parser.parse_args(argv)
     args.folder.mkdir(parents=True, exist_ok=True)
     if args.texture:

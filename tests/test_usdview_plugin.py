@@ -300,3 +300,16 @@ def test_live_bakes_again_after_an_edit(gl_context):
         assert not np.array_equal(edited, amplitude)
     finally:
         usdview.toggle_live(api)
+
+
+def test_live_out_of_process_asks_for_what_live_bakes_in_process():
+    """Live's bake out of process (usdwrinkle bake with usdview.LIVE_FLAGS) is the one it
+    runs in process (app/live.LIVE_OPTIONS): the command line reads the flags back into
+    the same options."""
+    from usdwrinkle.app.live import LIVE_OPTIONS
+    from usdwrinkle.cli.main import build_parser
+
+    args = build_parser().parse_args(["bake", "in.usda", "out.usda", *usdview.LIVE_FLAGS])
+    assert args.sparse is True and LIVE_OPTIONS["sparse"] is True
+    assert tuple(args.maps.split(",")) == LIVE_OPTIONS["maps"]
+    assert args.map_size == LIVE_OPTIONS["map_size"]

@@ -30,8 +30,6 @@ from typing import Any
 #: that Storm shows, the texture deformation included
 LIVE_OPTIONS: dict[str, Any] = {"sparse": True, "maps": ("normal", "parallax"),
                                 "map_size": 1024}
-#: the same as ``usdwrinkle bake`` flags (for a bake in another process)
-LIVE_FLAGS: tuple[str, ...] = ("--sparse", "--maps", "normal,parallax", "--map-size", "1024")
 
 Bake = Callable[[Any, "float | None", str], bool]
 

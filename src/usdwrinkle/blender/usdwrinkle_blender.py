@@ -193,8 +193,14 @@ class _Builder:
             return value
         source = sources[0]
         prim = source.source.GetPrim()
-        if prim.IsA(UsdShade.Material):
-            return shader_input  # a material input: only a file reads one (image())
+        if prim.IsA(UsdShade.Material):  # a material's interface input: its value
+            attribute = _value_attribute(shader_input)
+            if attribute.GetNumTimeSamples() > 0:
+                raise Unsupported(f"{attribute.GetPath()} is animated (only a file may be)")
+            value = attribute.Get()
+            if value is None:
+                raise Unsupported(f"{attribute.GetPath()} has no value")
+            return value
         key = (prim.GetPath(), source.sourceName)
         if key not in self.values:
             self.values[key] = self.node(UsdShade.Shader(prim))
@@ -382,10 +388,17 @@ _DIGITS = re.compile(r"(\d+)(\.[^./\\]+)$")
 def _load(node, attribute, import_context, srgb: bool) -> None:
     """The Image Texture ``node`` reads ``attribute``'s file: a still image, or, when it
     is time-sampled, the sequence of files whose frame numbers are the time codes."""
+    temporary = []
+
     def local(asset):
         path = asset.resolvedPath or asset.path
         if import_context is not None and hasattr(import_context, "import_texture"):
-            path = import_context.import_texture(path)[0] or path
+            # a texture inside a .usdz comes out as a file (maybe a temporary one)
+            copied, is_temporary = import_context.import_texture(path)
+            if copied:
+                path = copied
+                if is_temporary:
+                    temporary.append(path)
         return path
 
     times = attribute.GetTimeSamples()
@@ -398,6 +411,8 @@ def _load(node, attribute, import_context, srgb: bool) -> None:
     image.colorspace_settings.name = "sRGB" if srgb else "Non-Color"
     node.image = image
     if len(paths) == 1:
+        if temporary:  # the importer's temporary copy goes away: keep the pixels
+            image.pack()
         return
     numbers = []
     for time, path in zip(times, paths, strict=True):

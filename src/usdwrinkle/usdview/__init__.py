@@ -362,6 +362,9 @@ def _watch_layer(path: str, process) -> None:
 
 #: Wrinkles > Live in this usdview: "bake" (app/live.LiveBake), "api", "timer", "seen"
 _LIVE: dict = {}
+#: app/live.LIVE_OPTIONS as ``usdwrinkle bake`` flags, for Live out of process
+#: (tests/test_usdview_plugin.py checks that the command line reads them back the same)
+LIVE_FLAGS = ("--sparse", "--maps", "normal,parallax", "--map-size", "1024")
 #: how often Live looks at usdview's frame (ms); it bakes once a frame has held for one look,
 #: so that dragging the time slider does not bake every frame it passes
 LIVE_POLL_MS = 150
@@ -369,7 +372,7 @@ LIVE_POLL_MS = 150
 
 def _live_bake(usdview_api, ctx):
     """LiveBake's bake: a BakeJob here, or usdwrinkle bake in USDWRINKLE_PYTHON."""
-    from ..app.live import LIVE_FLAGS, bake_in_process
+    from ..app.live import bake_in_process
 
     if not _in_process():
         def bake(stage, frame, path):
