@@ -656,8 +656,8 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
     (with the add-on) and eevee_points. ``lighting``: "stage" (its own lights; Storm's
     without lights get usdview's head-light), or "dome" (uniform_dome()). ``zoom``: the
     frames are the shot's width divided by it, through a camera zoomed as much on the
-    upper half of the posed meshes (upper_centre, zoomed_camera), so the texture's pattern keeps its pixel size at a
-    fraction of the cost."""
+    upper half of the posed meshes (upper_centre, zoomed_camera), so the texture's
+    pattern keeps its pixel size at a fraction of the cost."""
     folder.mkdir(parents=True, exist_ok=True)
     framed, camera = shared_camera(shot.stage.resolve(), folder)
     lit = has_lights(shot.stage) or lighting == "dome"
