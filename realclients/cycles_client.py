@@ -78,7 +78,8 @@ def _import_and_render(job: dict) -> None:
         for light in bpy.data.lights:
             light.use_shadow = False
         for obj in scene.objects:  # nor does a mesh occlude or reflect light onto another
-            obj.visible_diffuse = obj.visible_glossy = obj.visible_shadow = False
+            if obj.type == "MESH":  # (a lamp's own visibility would switch its light off)
+                obj.visible_diffuse = obj.visible_glossy = obj.visible_shadow = False
     scene.frame_set(int(round(float(job["frame"]))))
     scene.render.engine = job.get("engine", "CYCLES")
     scene.render.resolution_x = int(job["width"])
