@@ -324,17 +324,24 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
     return process
 
 
-def _watch_layer(path: str, process) -> None:
-    """Reload ``path`` in usdview whenever the paint process saves it (a Qt timer, where
-    usdview's Qt imports; a reload by hand otherwise)."""
+def _running_qt():
+    """usdview's QtCore (PySide6 or PySide2) where a Qt application runs, else None (a
+    Python without Qt, or tests)."""
     try:
         from PySide6 import QtCore
     except ImportError:
         try:
             from PySide2 import QtCore
         except ImportError:
-            return
-    if QtCore.QCoreApplication.instance() is None:
+            return None
+    return QtCore if QtCore.QCoreApplication.instance() is not None else None
+
+
+def _watch_layer(path: str, process) -> None:
+    """Reload ``path`` in usdview whenever the paint process saves it (a Qt timer, where
+    usdview's Qt imports; a reload by hand otherwise)."""
+    QtCore = _running_qt()
+    if QtCore is None:
         return
     from pxr import Sdf
 
@@ -464,14 +471,8 @@ def live_tick(usdview_api=None, wait: bool = True) -> None:
 def _start_live_timer(usdview_api) -> None:
     """Poll usdview's frame with a Qt timer, where usdview's Qt runs (tests tick by
     hand)."""
-    try:
-        from PySide6 import QtCore
-    except ImportError:
-        try:
-            from PySide2 import QtCore
-        except ImportError:
-            return
-    if QtCore.QCoreApplication.instance() is None:
+    QtCore = _running_qt()
+    if QtCore is None:
         return
     timer = QtCore.QTimer()
     timer.timeout.connect(lambda: live_tick(usdview_api))
