@@ -576,7 +576,7 @@ class TextureViews:
 
 #: Blender's importer's light_intensity_scale: Cycles' renders of the samples at about
 #: Storm's mean brightness (measured on the shirt; realclients.figure's panels too)
-CYCLES_LIGHT_SCALE = 0.3
+CYCLES_LIGHT_SCALE = 0.08
 #: the strength of Cycles' head-light (a sun along the view) for a stage without lights
 CYCLES_HEAD_LIGHT = 3.0
 

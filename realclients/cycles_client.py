@@ -61,6 +61,7 @@ def _import_and_render(job: dict) -> None:
                           light_intensity_scale=float(job.get("light_scale", 1.0)),
                           import_subdivision=bool(job.get("subdivision", False)))
     scene = bpy.context.scene
+    turn_lights_to_blender_axes(job["stage"])
     camera_name = job["camera"].rstrip("/").rsplit("/", 1)[-1]
     cameras = [o for o in scene.objects if o.type == "CAMERA"]
     camera = next((o for o in cameras if o.name == camera_name or
@@ -111,6 +112,37 @@ def _import_and_render(job: dict) -> None:
     bpy.ops.render.render(write_still=True)
     if not os.path.isfile(job["out"]):
         raise RuntimeError("Blender wrote no image")
+
+
+def turn_lights_to_blender_axes(stage_path: str) -> None:
+    """Blender 5.0.1's importer turns a Y-up stage's meshes and cameras into its Z-up world
+    but not its lights (measured: the shirt's key light pointed along its stage direction
+    in Blender's axes, so the folds were lit from elsewhere than in Storm and usdwrinkle).
+    Each imported light that kept its stage direction gets the same +90 degree turn about
+    x as the rest of the stage."""
+    import math
+
+    import bpy
+    from mathutils import Matrix, Vector
+
+    if hasattr(bpy.utils, "expose_bundled_modules"):
+        bpy.utils.expose_bundled_modules()
+    from pxr import Gf, Usd, UsdGeom, UsdLux
+
+    stage = Usd.Stage.Open(stage_path)
+    if UsdGeom.GetStageUpAxis(stage) != UsdGeom.Tokens.y:
+        return
+    turn = Matrix.Rotation(math.radians(90.0), 4, "X")
+    lights = {o.name.split(".")[0]: o for o in bpy.context.scene.objects if o.type == "LIGHT"}
+    for prim in stage.Traverse():
+        if not prim.HasAPI(UsdLux.LightAPI) or prim.GetName() not in lights:
+            continue
+        obj = lights[prim.GetName()]
+        usd = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+        stage_direction = Vector(usd.TransformDir(Gf.Vec3d(0, 0, -1)).GetNormalized())
+        blender_direction = (obj.matrix_world.to_3x3() @ Vector((0, 0, -1))).normalized()
+        if blender_direction.dot(stage_direction) > 0.999:  # not turned by the importer
+            obj.matrix_world = turn @ obj.matrix_world
 
 
 def uniform_world(world, colour) -> None:
