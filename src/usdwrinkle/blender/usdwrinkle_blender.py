@@ -302,16 +302,17 @@ class _Builder:
         """The renderer's tangent frame in the stage's axes: the UV tangent, the shading
         normal and N x T (any frame with N serves: the network's normal is expressed in
         it and decoded with it)."""
-        if axis == "normal":
-            return self.values.setdefault(
-                "normal", self.to_stage(self.geometry().outputs["Normal"]))
-        if axis == "tangent":
-            if "tangent" not in self.values:
+        if axis not in self.values:  # each axis's nodes are made once
+            if axis == "normal":
+                made = self.to_stage(self.geometry().outputs["Normal"])
+            elif axis == "tangent":
                 node = self.new("ShaderNodeTangent", direction_type="UV_MAP")
-                self.values["tangent"] = self.to_stage(node.outputs["Tangent"])
-            return self.values["tangent"]
-        return self.values.setdefault("bitangent", self.vector(
-            "CROSS_PRODUCT", self.frame_axis("normal"), self.frame_axis("tangent")))
+                made = self.to_stage(node.outputs["Tangent"])
+            else:
+                made = self.vector("CROSS_PRODUCT", self.frame_axis("normal"),
+                                   self.frame_axis("tangent"))
+            self.values[axis] = made
+        return self.values[axis]
 
     def transform(self, matrix: _Matrix, v):
         """``matrix`` times ``v`` (MaterialX's mat * in: the columns weighted by v); for an
