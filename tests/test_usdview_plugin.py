@@ -291,6 +291,9 @@ def test_live_bakes_again_after_an_edit(gl_context):
         with Usd.EditContext(stage, stage.GetSessionLayer()):
             hull.GetAttribute("primvars:wrinkle:width").Set([0.6])
         assert live.cache == {}
+        # the layer still shown is not part of the stage the next bake reads
+        assert live.current in stage.GetSessionLayer().subLayerPaths
+        assert live.current not in live.source_stage().GetSessionLayer().subLayerPaths
         api.frame = Usd.TimeCode(12)
         usdview.live_tick(api, wait=False)
         api.frame = Usd.TimeCode(6)

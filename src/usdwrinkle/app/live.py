@@ -57,7 +57,9 @@ class LiveBake:
 
     # -- the stage as shown, without Live -----------------------------------------------
     def _live_paths(self) -> set[str]:
-        return set(self.cache.values())
+        """Every Live layer the session layer may hold: the kept ones and the one shown
+        (which an edit drops from the cache while it is still shown)."""
+        return set(self.cache.values()) | ({self.current} if self.current else set())
 
     def source_stage(self) -> Any:
         """The stage as it is shown, without the Live layers: the same root layer (its
