@@ -283,3 +283,68 @@ def test_the_blender_addon_stands_alone():
     _, edges, _ = graph()
     assert not [m for m, targets in edges.items() for t in targets
                 if layering.room(t) == "blender"]  # and nothing imports it
+
+
+def _trees():
+    import ast
+
+    for path in sorted(layering.PACKAGE.rglob("*.py")):
+        relative = path.relative_to(layering.PACKAGE)
+        room = relative.parts[0] if len(relative.parts) > 1 else relative.stem
+        yield relative, room, ast.parse(path.read_text())
+
+
+def _inside(node) -> bool:
+    import ast
+
+    return isinstance(node, ast.Name) and node.id in ("self", "cls")
+
+
+def test_nothing_outside_the_engine_reaches_into_it():
+    """Issue 58: the engine's scene delegate and render delegate are its own; every
+    other module asks the engine (frame_range, is_posed, local_to_world, ...)."""
+    import ast
+
+    reached = [f"{relative}:{node.lineno} {ast.unparse(node)}"
+               for relative, _, tree in _trees() if str(relative) != "engine.py"
+               for node in ast.walk(tree)
+               if isinstance(node, ast.Attribute) and node.attr in ("scene", "render_delegate")
+               and not _inside(node.value)]
+    assert reached == []
+
+
+def test_no_room_calls_another_rooms_underscored_name():
+    """Issue 58: an underscored name is its room's own. A module may use ``x._name`` or
+    import ``_name`` only where ``_name`` is defined in its own room (a folder of
+    src/usdwrinkle, or a root module)."""
+    import ast
+
+    trees = list(_trees())
+    defined: dict[str, set] = {}
+    for _, room, tree in trees:
+        for node in ast.walk(tree):
+            name = None
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                name = node.name
+            elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+                name = node.attr
+            elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+                name = node.id
+            if name and name.startswith("_") and not name.startswith("__"):
+                defined.setdefault(name, set()).add(room)
+    foreign = []
+    for relative, room, tree in trees:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and not _inside(node.value):
+                names = [node.attr]
+            elif isinstance(node, ast.ImportFrom) and (node.level or (node.module or "")
+                                                       .startswith("usdwrinkle")):
+                names = [alias.name for alias in node.names]
+            else:
+                continue
+            foreign += [f"{relative}:{node.lineno} {name} (of {sorted(defined[name])})"
+                        for name in names if name.startswith("_")
+                        and not name.startswith("__") and name in defined
+                        and room not in defined[name]]
+    assert foreign == []
+    assert "_posed" in defined  # the scan reads definitions (app/paint.py's cache)

@@ -400,6 +400,16 @@ class WrinkleEngine:
         if "q" in changes or "width" in changes:
             mesh.resources.q_width.write(vec4(params.q, params.width))
 
+    def frame_range(self) -> list[float | None]:
+        """The stage's authored start..end frames, or [None] (its default time) when it
+        has none."""
+        return self.scene.frame_range()
+
+    def is_posed(self, path: str) -> bool:
+        """Whether ``path`` has been posed at some frame (compute_frame ran for it)."""
+        mesh = self.render_delegate.rprims.get(path)
+        return mesh is not None and mesh.frame is not None
+
     def local_to_world(self, path: str) -> np.ndarray:
         """``path``'s local-to-world transform at the last computed frame ((4, 4) float64,
         USD's row vectors)."""

@@ -233,7 +233,7 @@ class PaintSession:
         self.paths = [prim] if prim is not None else paths
         self.meshes = {path: self._paint_mesh(path) for path in self.paths}
         self.active = self.paths[0]
-        frames = self.engine.scene.frame_range()
+        frames = self.engine.frame_range()
         #: the frames the timeline offers ([default] for a stage without a time range)
         self.frames = [None if f is None else float(f) for f in frames]
         self.frame_range = (self.frames[0], self.frames[-1])
@@ -384,7 +384,7 @@ class PaintSession:
         return self.last_frame
 
     def _ensure_posed(self) -> None:
-        if self.engine.render_delegate.rprims[self.active].frame is None:
+        if not self.engine.is_posed(self.active):
             self.engine.compute_frame(self.frame)
 
     def posed_points(self, path: str) -> np.ndarray:

@@ -476,8 +476,8 @@ class PaintView(QOpenGLWidget):
 
 def _scale_of(session, path: str) -> float:
     """How many world units one rest-space unit of ``path`` is (its local-to-world)."""
-    frame = session.engine.render_delegate.rprims[path].frame
-    matrix = frame.local_to_world[:3, :3] if frame is not None else np.eye(3)
+    engine = session.engine
+    matrix = engine.local_to_world(path)[:3, :3] if engine.is_posed(path) else np.eye(3)
     return float(np.cbrt(abs(np.linalg.det(matrix)))) or 1.0
 
 
