@@ -1,0 +1,187 @@
+"""Where the blend adds or loses area (issue 55): the wave blend of the sample stages'
+compressed regions, taken apart in numpy.
+
+    python -m benchmarks.physics.blend [--write docs/physics.md] [--only zeppelin ...]
+
+The engine computes each stage's frame 24 (a cold start, as `bake --frames 24` does);
+the fine mesh is the coarse posed mesh subdivided 3 times, displaced along each coarse
+triangle's face normal by the blend h = sum_c b_c a_c H(theta_c) of include/wave.glsl
+(no band limit), and its area is measured where every corner is compressed beyond 3 x
+the slack, unpainted (benchmarks.physics.area's region). The same field is then drawn
+with its phases changed:
+- **relaxed**: the relax pass's Jacobi iterations run to convergence (2,000, numpy);
+- **agreed**: each corner's phase moved so that the three corner waves agree at the
+  triangle's centroid (their amplitude-weighted circular mean), each keeping its own k.
+  This is not a surface (h jumps at the coarse edges); it is what the blend would draw
+  without the phase misfit.
+One system only (a stage with wrinkle:biaxial is skipped). A few seconds here.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+SAMPLES = ROOT / "sample_stages"
+STAGES = ("zeppelin", "shirt", "curtain")
+LEVELS = 3
+CONVERGED = 2000
+#: centroid misfit bins (radians) of the per-triangle table
+BINS = (0.0, 0.2, 0.4, 0.8, np.pi + 1e-9)
+
+
+def _area(x: np.ndarray) -> np.ndarray:
+    return 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+
+
+def _profile(height: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """The height profile read as the shaders read it: periodic, linear."""
+    count = len(height)
+    x = np.mod(theta / (2 * np.pi) * count, count)
+    i = np.floor(x).astype(np.int64)
+    f = x - i
+    return height[i % count] * (1 - f) + height[(i + 1) % count] * f
+
+
+def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal) -> np.ndarray:
+    """Each fine face's area, displaced by the blend of its coarse triangle's corner
+    waves (k, amplitude, ``phase`` per face and corner) along the face normal."""
+    theta = phase[:, None, :] + np.einsum("mcj,mvcj->mvc", k, offset)
+    h = np.einsum("mvc,mvc->mv", bary, amplitude[:, None, :] * _profile(height, theta))
+    return _area(at + h[..., None] * face_normal[:, None, :])
+
+
+def measure_stage(name: str, ctx) -> list[dict]:
+    from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.geometry.subdivide import subdivide
+    from usdwrinkle.reference.crush import crush
+    from usdwrinkle.reference.relax import phase_misfit, relax
+
+    engine = WrinkleEngine(str(SAMPLES / f"{name}.usda"), ctx=ctx)
+    rows = []
+    try:
+        engine.compute_frame(24)
+        for path in engine.wrinkled_paths:
+            record = engine.meshes[path]
+            if record.params.biaxial:
+                continue
+            fields = engine.read_fields(path).arrays()
+            triangles = record.topology.triangles
+            posed = fields["points"].astype(np.float64)
+            law = crush(record.rest_points, posed, record.topology, record.params.q,
+                        record.params.width, slack=record.params.slack)
+            unpainted = np.linalg.norm(record.params.q, axis=1) == 0
+            compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
+            fine = subdivide(posed, triangles, LEVELS)
+            owner = fine.face_triangle.astype(np.int64)
+            bary = np.clip(fine.corner_bary.astype(np.float64), 0, 1)
+            bary /= bary.sum(-1, keepdims=True)  # blend_weights
+            corners = triangles[owner]
+            chosen = compressed[corners].all(1)
+            if chosen.sum() < 100:
+                continue
+            corner_points = posed[corners]
+            face_normal = np.cross(corner_points[:, 1] - corner_points[:, 0],
+                                   corner_points[:, 2] - corner_points[:, 0])
+            face_normal /= np.linalg.norm(face_normal, axis=1, keepdims=True)
+            at = np.einsum("mvc,mcj->mvj", bary, corner_points)
+            rest = np.einsum("mvc,mcj->mvj", bary,
+                             record.rest_points.astype(np.float64)[corners])
+            k = fields["wave_vector"].astype(np.float64)[corners]
+            amplitude = fields["amplitude"].astype(np.float64)[corners]
+            sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
+            k = k * sign[..., None]
+            height = np.asarray(record.params.height_profile, np.float64)
+            offset = at[:, :, None, :] - corner_points[:, None, :, :]
+
+            blend = (k, offset, bary, amplitude, height, at, face_normal)
+
+            def drawn(phase, blend=blend):
+                return _blend_area(phase, *blend)
+
+            rest_area = _area(rest)[chosen].sum()
+            flat = _area(at)
+            phase = fields["phase"].astype(np.float64)
+            converged = relax(posed, fields["wave_vector"], fields["amplitude"], phase,
+                              record.topology, CONVERGED)
+            centroid = corner_points.mean(1)
+            at_centroid = phase[corners] * sign + np.einsum(
+                "mcj,mcj->mc", k, centroid[:, None, :] - corner_points)
+            mean = np.angle((amplitude * np.exp(1j * at_centroid)).sum(1))
+            misfit = np.abs(np.angle(np.exp(1j * (at_centroid - mean[:, None])))).max(1)
+            agreed = mean[:, None] + np.einsum("mcj,mcj->mc", k,
+                                               corner_points - centroid[:, None, :])
+            as_drawn = drawn(phase[corners] * sign)
+            agreed_area = drawn(agreed)
+            row = {"stage": name, "mesh": path, "faces": int(chosen.sum()),
+                   "flat": flat[chosen].sum() / rest_area,
+                   "drawn": as_drawn[chosen].sum() / rest_area,
+                   "relaxed": drawn(converged[corners] * sign)[chosen].sum() / rest_area,
+                   "agreed": agreed_area[chosen].sum() / rest_area,
+                   "misfit": phase_misfit(posed, fields["wave_vector"], phase,
+                                          record.topology, compressed),
+                   "misfit relaxed": phase_misfit(posed, fields["wave_vector"], converged,
+                                                  record.topology, compressed),
+                   "bins": []}
+            for low, high in zip(BINS[:-1], BINS[1:], strict=True):
+                inside = chosen & (misfit >= low) & (misfit < high)
+                if inside.sum():
+                    row["bins"].append((low, high, float(inside.mean() / chosen.mean()),
+                                        as_drawn[inside].sum() / flat[inside].sum(),
+                                        agreed_area[inside].sum() / flat[inside].sum()))
+            rows.append(row)
+    finally:
+        engine.release()
+    return rows
+
+
+def report(rows: list[dict], seconds: float) -> str:
+    from ..blocks import markers
+
+    begin, end = markers("blend")
+    lines = [begin, "", "Made by `python -m benchmarks.physics.blend --write docs/physics.md` "
+             f"({seconds:.0f} s here).", "",
+             "| stage | flat | drawn | relaxed to convergence | phases agreed per triangle | "
+             "edge misfit (rad), drawn / converged |", "|---|---|---|---|---|---|"]
+    for row in rows:
+        lines.append(f"| {row['stage']} | {row['flat']:.3f} | {row['drawn']:.3f} | "
+                     f"{row['relaxed']:.3f} | {row['agreed']:.3f} | "
+                     f"{row['misfit']:.2f} / {row['misfit relaxed']:.2f} |")
+    lines += ["", "Area over rest area in the compressed region. By the three corner "
+              "phases' largest distance from their mean at the centroid (drawn phases): "
+              "the share of the region's fine triangles, and drawn / flat, agreed / flat "
+              "there.", ""]
+    for row in rows:
+        cells = "; ".join(f"{low:.1f}-{min(high, np.pi):.1f} rad: {share:.0%}, "
+                          f"{drawn:.3f}, {agreed:.3f}"
+                          for low, high, share, drawn, agreed in row["bins"])
+        lines.append(f"- {row['stage']}: {cells}")
+    lines += ["", end]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    import moderngl
+
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.blend")
+    parser.add_argument("--write", type=Path, default=None,
+                        help="replace the blend block of this file (docs/physics.md)")
+    parser.add_argument("--only", nargs="*", default=None)
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    ctx = moderngl.create_standalone_context(backend="egl", require=430)
+    rows = []
+    for name in args.only or STAGES:
+        rows += measure_stage(name, ctx)
+    from ..blocks import emit
+
+    emit(["--write", str(args.write)] if args.write else [], "blend",
+         report(rows, time.perf_counter() - started))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
