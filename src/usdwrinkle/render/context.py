@@ -66,6 +66,9 @@ def release_context() -> None:
     """Release the process's context (tests and long-running hosts)."""
     global _context
     if _context is not None:
+        from .shaders import release_programs
+
+        release_programs(_context)
         _context.release()
         _context = None
 

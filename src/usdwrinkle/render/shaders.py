@@ -84,25 +84,76 @@ class ShaderSource:
         return ShaderError(self.name, 0, message.strip())
 
 
+class CompiledPrograms:
+    """The programs one GL context has compiled, by their full source text: a second
+    engine, farm chunk or usdview command in the process compiles none of them again.
+    Kept on the context object (``of``), so they go with it; :meth:`release` frees them
+    (render/context.release_context does, before it releases the context). A program's
+    uniforms keep their values in it, and set_uniforms (render/passes) remembers them on
+    the program itself, so engines that share one stay correct."""
+
+    def __init__(self) -> None:
+        self.programs: dict[tuple, object] = {}
+        #: how many programs this context has compiled (the tests count them)
+        self.compiled = 0
+
+    @classmethod
+    def of(cls, ctx) -> CompiledPrograms:
+        made = getattr(ctx, "_usdwrinkle_programs", None)
+        if made is None:
+            made = cls()
+            ctx._usdwrinkle_programs = made
+        return made
+
+    def get(self, key: tuple, make):
+        program = self.programs.get(key)
+        if program is None:
+            program = make()
+            self.programs[key] = program
+            self.compiled += 1
+        return program
+
+    def release(self) -> None:
+        for program in self.programs.values():
+            program.release()
+        self.programs.clear()
+
+
+def release_programs(ctx) -> None:
+    """Free every program ``ctx`` compiled (before the context itself goes)."""
+    CompiledPrograms.of(ctx).release()
+
+
 def compute_shader(ctx, name: str, defines: dict, root: Path | None = None):
-    """A compute shader from ``root`` (default: the package's shaders/)."""
+    """A compute shader from ``root`` (default: the package's shaders/), compiled once
+    per context (:class:`CompiledPrograms`)."""
     source = ShaderSource(name, defines, root)
-    try:
-        with signals_held():  # LLVM compiling it (llvmpipe) must not take a signal
-            return ctx.compute_shader(source.text())
-    except Exception as exc:
-        raise source.map_error(str(exc)) from None
+    text = source.text()
+
+    def make():
+        try:
+            with signals_held():  # LLVM compiling it (llvmpipe) must not take a signal
+                return ctx.compute_shader(text)
+        except Exception as exc:
+            raise source.map_error(str(exc)) from None
+
+    return CompiledPrograms.of(ctx).get(("compute", text), make)
 
 
 def program(ctx, name: str, defines: dict):
-    """A vertex+fragment program from one file with VERTEX_SHADER/FRAGMENT_SHADER sections."""
+    """A vertex+fragment program from one file with VERTEX_SHADER/FRAGMENT_SHADER
+    sections, compiled once per context (:class:`CompiledPrograms`)."""
     source = ShaderSource(name, defines)
-    try:
-        with signals_held():
-            return ctx.program(vertex_shader=source.text("VERTEX_SHADER"),
-                               fragment_shader=source.text("FRAGMENT_SHADER"))
-    except Exception as exc:
-        raise source.map_error(str(exc)) from None
+    vertex, fragment = source.text("VERTEX_SHADER"), source.text("FRAGMENT_SHADER")
+
+    def make():
+        try:
+            with signals_held():
+                return ctx.program(vertex_shader=vertex, fragment_shader=fragment)
+        except Exception as exc:
+            raise source.map_error(str(exc)) from None
+
+    return CompiledPrograms.of(ctx).get(("program", vertex, fragment), make)
 
 
 class Variants:
@@ -125,8 +176,11 @@ class Variants:
         return program
 
     def release(self) -> None:
+        """Drop the variants: a drawable's vertex array is freed; the programs are the
+        context's (:class:`CompiledPrograms`), kept for the next engine."""
         for program in self.programs.values():
-            program.release()
+            if isinstance(program, DrawableProgram):
+                program.release()
         self.programs.clear()
 
 
@@ -141,5 +195,5 @@ class DrawableProgram:
         self.frame_uniforms: dict | None = None
 
     def release(self) -> None:
+        """Free the vertex array; the program is the context's (CompiledPrograms)."""
         self.vao.release()
-        self.program.release()

@@ -145,6 +145,7 @@ class DrawPass:
         if self.dome[1] is not None:
             self.dome[1].release()
         self.dome = (None, None, 0)
+        self.variants.release()
 
     def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord,
              bound: EyeBound | None = None) -> None:
