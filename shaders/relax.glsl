@@ -16,6 +16,22 @@
 //             material-anchored phases on a shot's first frame) and, per outgoing edge and
 //             system, the rotation e^{-i d_ij}, the flip, the neighbour's weight and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi.
+//   FIT       per vertex and system, after the last step: the wave the relaxed phases
+//             draw. The residual of each edge, r_ij = arg(z~_j e^{-i d_ij} conj(z_i)),
+//             is what the phases advance beyond kbar_ij . (x_j - x_i); the least-squares
+//             c in the tangent plane with c . (x_j - x_i)_t ~ r_ij (weights a_j) corrects
+//             k to k + c, and the amplitude to a min(1, |k| / |k + c|), so that the wave
+//             keeps the slope a |k| that restores the cloth's length (never taller than
+//             crush made it). Edges along which the wave advances more than pi / 2
+//             count less, beyond pi not at all; the fit fades out where the ring's
+//             directions are too few (FIT_CONDITION) or |k| would change by more than
+//             FIT_RANGE either way. Every weight is smooth, so a small change of the
+//             mesh is a small change of the fit.
+//             Phases carried through a shot keep the crest count of the
+//             fold's onset while coarsening asks for fewer: there the corner waves of a
+//             triangle extrapolated with crush's k disagreed inside it, and their blend
+//             drew too much slope (docs/physics.md, "Inextensibility"). Writes the wave
+//             texels of the fields in place (each vertex only its own).
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
@@ -115,6 +131,60 @@ void main() {
     }
     STORE(phase, i, vec4(start, 0.0, 0.0));
     STORE(z_out, i, z);
+}
+
+#elif defined FIT
+
+layout(binding = RELAX_EDGES) uniform sampler2D edges;
+layout(binding = RELAX_Z_IN) uniform sampler2D z_in;  // the relaxed phasors
+layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
+layout(rgba32f, binding = RELAX_FIELDS_OUT) writeonly uniform image2D fields_out;  // = fields
+
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_num_points) return;
+    vec3 n = fetch(fields, FIELD_NORMAL(i)).xyz;
+    vec3 x_i = fetch(posed_points, i).xyz;
+    vec4 z_i = fetch(z_in, i);
+    for (int s = 0; s < SYSTEMS; ++s) {
+        vec4 wave = wave_of(fields, i, s);
+        if (wave.w <= 0.0) continue;
+        vec2 own = s == 0 ? z_i.xy : z_i.zw;
+        mat3 normal_equations = outerProduct(n, n);  // pins c to the tangent plane
+        vec3 rhs = vec3(0.0);
+        float trace = 0.0;
+        for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+            vec4 edge = fetch(edges, EDGE(e, s));
+            float weight = abs(edge.z) - WEIGHT_FLOOR;  // a_j: only neighbours with a wave
+            if (weight <= 0.0) continue;
+            int j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
+            vec4 z_all = fetch(z_in, j);
+            vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
+            if (edge.z < 0.0) z_j.y = -z_j.y;
+            vec2 rel = complex_mul(complex_mul(z_j, edge.xy), vec2(own.x, -own.y));
+            float residual = atan(rel.y, rel.x);
+            vec3 dx = fetch(posed_points, j).xyz - x_i;
+            // an edge along which the wave advances more than pi / 2 counts less, beyond
+            // pi not at all: the ring does not sample the wave there
+            weight *= 1.0 - smoothstep(0.5 * PI, PI, abs(dot(wave.xyz, dx)));
+            dx -= dot(dx, n) * n;
+            normal_equations += weight * outerProduct(dx, dx);
+            rhs += weight * residual * dx;
+            trace += weight * dot(dx, dx);
+        }
+        // two independent tangent directions (the determinant is the tangent block's, at
+        // most trace^2 / 4), and a change of |k| within FIT_RANGE: fitted fully, fading
+        // to crush's wave as either fails
+        float spread = trace > 0.0 ? determinant(normal_equations) / (trace * trace) : 0.0;
+        if (!(spread > FIT_CONDITION)) continue;
+        vec3 c = inverse(normal_equations) * rhs;
+        float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);
+        float trust = smoothstep(FIT_CONDITION, 2.0 * FIT_CONDITION, spread)
+            * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, max(change, 1.0 / max(change, 1e-30))));
+        vec3 k = wave.xyz + trust * c;
+        float scale = min(1.0, length(wave.xyz) / max(length(k), 1e-30));
+        STORE(fields_out, FIELD_WAVE_OF(i, s), vec4(k, wave.w * scale));
+    }
 }
 
 #else

@@ -200,3 +200,64 @@ def test_a_point_of_huge_valence_reads_a_capped_ring(gl_context):
     np.testing.assert_allclose(ours["normals"][0], ref["normals"][0], atol=1e-5)
     np.testing.assert_allclose(ours["compression"][0], ref["compression"][0], atol=1e-4)
     assert ref["compression"][0] == pytest.approx(0.6, abs=0.01)
+
+
+def _sheet_wave(twist: float):
+    """A flat 21 x 21 sheet, one wave k along x everywhere, amplitude 0.02, and phases
+    that advance ``twist`` times as fast as k: (normals, k, a, phases, topology)."""
+    from usdwrinkle.scene.topology import build_topology
+
+    rest, counts, indices = grid_sheet(21, 21, 2.0)
+    points = rest.astype(np.float64)
+    topology = build_topology(counts, indices, rest)
+    n = len(points)
+    k = np.tile([20.0, 0.0, 0.0], (n, 1))
+    normals = np.tile([0.0, 0.0, 1.0], (n, 1))
+    return points, normals, k, np.full(n, 0.02), twist * 20.0 * points[:, 0], topology
+
+
+def test_the_fit_keeps_a_wave_that_its_phases_draw():
+    """relax's fit (reference/relax.py, fit): phases that agree with k leave k and the
+    amplitude as they are; phases that advance 1.3x as fast make k 1.3x as long and the
+    amplitude 1/1.3, the same slope a|k| (the length the fold law restores)."""
+    from usdwrinkle.reference.relax import fit
+
+    points, normals, k, a, phases, topology = _sheet_wave(1.0)
+    fitted, amplitude = fit(points, normals, k, a, phases, topology)
+    np.testing.assert_allclose(fitted, k, atol=1e-9)
+    np.testing.assert_allclose(amplitude, a, atol=1e-12)
+    points, normals, k, a, phases, topology = _sheet_wave(1.3)
+    fitted, amplitude = fit(points, normals, k, a, phases, topology)
+    np.testing.assert_allclose(fitted, 1.3 * k, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(amplitude * np.linalg.norm(fitted, axis=1), 0.02 * 20.0,
+                               rtol=1e-9)
+    # beyond FIT_RANGE the phases are not taken as one wave: k and a stay
+    points, normals, k, a, phases, topology = _sheet_wave(2.5)
+    fitted, amplitude = fit(points, normals, 0.5 * k, a, 0.5 * phases, topology)
+    np.testing.assert_allclose(fitted, 0.5 * k, atol=1e-9)
+
+
+def test_the_fit_matches_numpy_reference(gl_context):
+    """The GPU's fitted waves (relax.glsl's FIT) against reference/relax.fit fed the same
+    relaxed phases and crush's waves (the numpy reference)."""
+    from usdwrinkle.reference.relax import fit
+
+    rest, posed, faces, q = random_cloth(3)
+    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
+                              width=0.2, relax_iterations=6)
+    ours, record = gpu_fields(gl_context, stage)
+    law = crush_reference(rest, posed, record.topology, q, record.params.width,
+                          slack=record.params.slack, hold=record.params.hold,
+                          gain=record.params.amplitude_gain)
+    k, a = fit(posed, ours["normals"], law["wave_vector"], law["amplitude"], ours["phase"],
+               record.topology)
+    wrinkled = law["amplitude"] > 1e-3
+    assert wrinkled.sum() > 50
+    length = np.linalg.norm(k, axis=1)
+    rel = np.linalg.norm(ours["wave_vector"] - k, axis=1)[wrinkled] / length[wrinkled]
+    assert np.percentile(rel, 99) < 1e-2, np.percentile(rel, 99)
+    np.testing.assert_allclose(ours["amplitude"][wrinkled], a[wrinkled], atol=2e-4 * 0.05,
+                               rtol=1e-2)
+    # and the fit did something: k changed by more than 1% at some of the points
+    changed = np.linalg.norm(k - law["wave_vector"], axis=1)[wrinkled] / length[wrinkled]
+    assert np.mean(changed > 1e-2) > 0.05

@@ -3,17 +3,21 @@ compressed regions, taken apart in numpy.
 
     python -m benchmarks.physics.blend [--write docs/physics.md] [--only zeppelin ...]
 
-The engine computes each stage's frame 24 (a cold start, as `bake --frames 24` does);
-the fine mesh is the coarse posed mesh subdivided 3 times, displaced along each coarse
-triangle's face normal by the blend h = sum_c b_c a_c H(theta_c) of include/wave.glsl
-(no band limit), and its area is measured where every corner is compressed beyond 3 x
-the slack, unpainted (benchmarks.physics.area's region). The same field is then drawn
-with its phases changed:
-- **relaxed**: the relax pass's Jacobi iterations run to convergence (2,000, numpy);
-- **agreed**: each corner's phase moved so that the three corner waves agree at the
-  triangle's centroid (their amplitude-weighted circular mean), each keeping its own k.
-  This is not a surface (h jumps at the coarse edges); it is what the blend would draw
-  without the phase misfit.
+The engine computes each stage's frame 24 (its phase history from the shot's start, as
+every render and bake does); the fine mesh is the coarse posed mesh subdivided 3 times,
+displaced along each coarse triangle's face normal by the blend
+h = sum_c b_c a_c H(theta_c) of include/wave.glsl (no band limit), and its area is
+measured where every corner is compressed beyond 3 x the slack, unpainted
+(benchmarks.physics.area's region). The blend is drawn with:
+- **crush's waves**: k and a as the crush pass makes them (the numpy reference), with
+  the engine's relaxed phases: the blend before relax's fit;
+- the same, with the phases relaxed to convergence (2,000 iterations, numpy);
+- **fitted**: the engine's fields, k and a fitted to the relaxed phases (relax.glsl's
+  FIT), as drawn;
+- **agreed**: the fitted waves, each corner's phase moved so that the three corner waves
+  agree at the triangle's centroid (their amplitude-weighted circular mean). This is not
+  a surface (h jumps at the coarse edges); it is what the blend would draw with no phase
+  misfit inside the triangles.
 One system only (a stage with wrinkle:biaxial is skipped). A few seconds here.
 """
 from __future__ import annotations
@@ -72,7 +76,8 @@ def measure_stage(name: str, ctx) -> list[dict]:
             triangles = record.topology.triangles
             posed = fields["points"].astype(np.float64)
             law = crush(record.rest_points, posed, record.topology, record.params.q,
-                        record.params.width, slack=record.params.slack)
+                        record.params.width, slack=record.params.slack,
+                        hold=record.params.hold, gain=record.params.amplitude_gain)
             unpainted = np.linalg.norm(record.params.q, axis=1) == 0
             compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
             fine = subdivide(posed, triangles, LEVELS)
@@ -88,50 +93,57 @@ def measure_stage(name: str, ctx) -> list[dict]:
                                    corner_points[:, 2] - corner_points[:, 0])
             face_normal /= np.linalg.norm(face_normal, axis=1, keepdims=True)
             at = np.einsum("mvc,mcj->mvj", bary, corner_points)
-            rest = np.einsum("mvc,mcj->mvj", bary,
-                             record.rest_points.astype(np.float64)[corners])
-            k = fields["wave_vector"].astype(np.float64)[corners]
-            amplitude = fields["amplitude"].astype(np.float64)[corners]
-            sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
-            k = k * sign[..., None]
+            rest_area = _area(np.einsum("mvc,mcj->mvj", bary,
+                                        record.rest_points.astype(np.float64)[corners]))
+            rest_area = rest_area[chosen].sum()
+            flat = _area(at)
             height = np.asarray(record.params.height_profile, np.float64)
             offset = at[:, :, None, :] - corner_points[:, None, :, :]
-
-            blend = (k, offset, bary, amplitude, height, at, face_normal)
-
-            def drawn(phase, blend=blend):
-                return _blend_area(phase, *blend)
-
-            rest_area = _area(rest)[chosen].sum()
-            flat = _area(at)
             phase = fields["phase"].astype(np.float64)
-            converged = relax(posed, fields["wave_vector"], fields["amplitude"], phase,
+            converged = relax(posed, law["wave_vector"], law["amplitude"], phase,
                               record.topology, CONVERGED)
-            centroid = corner_points.mean(1)
-            at_centroid = phase[corners] * sign + np.einsum(
-                "mcj,mcj->mc", k, centroid[:, None, :] - corner_points)
-            mean = np.angle((amplitude * np.exp(1j * at_centroid)).sum(1))
-            misfit = np.abs(np.angle(np.exp(1j * (at_centroid - mean[:, None])))).max(1)
-            agreed = mean[:, None] + np.einsum("mcj,mcj->mc", k,
-                                               corner_points - centroid[:, None, :])
-            as_drawn = drawn(phase[corners] * sign)
-            agreed_area = drawn(agreed)
+
+            def drawn(wave_vector, amplitude, phases, agree=False,
+                      mesh=(corners, corner_points, offset, bary, height, at, face_normal)):
+                corners, corner_points, offset, bary, height, at, face_normal = mesh
+                k = np.asarray(wave_vector, np.float64)[corners]
+                sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
+                k = k * sign[..., None]
+                a = np.asarray(amplitude, np.float64)[corners]
+                theta = phases[corners] * sign
+                misfit = np.zeros(len(k))
+                if agree:
+                    centroid = corner_points.mean(1)
+                    at_centroid = theta + np.einsum("mcj,mcj->mc", k,
+                                                    centroid[:, None, :] - corner_points)
+                    mean = np.angle((a * np.exp(1j * at_centroid)).sum(1))
+                    misfit = np.abs(np.angle(np.exp(1j * (at_centroid - mean[:, None])))).max(1)
+                    theta = mean[:, None] + np.einsum("mcj,mcj->mc", k,
+                                                      corner_points - centroid[:, None, :])
+                return _blend_area(theta, k, offset, bary, a, height, at, face_normal), misfit
+
+            before, _ = drawn(law["wave_vector"], law["amplitude"], phase)
+            _, misfit = drawn(law["wave_vector"], law["amplitude"], phase, agree=True)
+            after, _ = drawn(fields["wave_vector"], fields["amplitude"], phase)
+            agreed, _ = drawn(fields["wave_vector"], fields["amplitude"], phase, agree=True)
             row = {"stage": name, "mesh": path, "faces": int(chosen.sum()),
                    "flat": flat[chosen].sum() / rest_area,
-                   "drawn": as_drawn[chosen].sum() / rest_area,
-                   "relaxed": drawn(converged[corners] * sign)[chosen].sum() / rest_area,
-                   "agreed": agreed_area[chosen].sum() / rest_area,
-                   "misfit": phase_misfit(posed, fields["wave_vector"], phase,
-                                          record.topology, compressed),
-                   "misfit relaxed": phase_misfit(posed, fields["wave_vector"], converged,
-                                                  record.topology, compressed),
+                   "crush": before[chosen].sum() / rest_area,
+                   "converged": drawn(law["wave_vector"], law["amplitude"], converged)[0][
+                       chosen].sum() / rest_area,
+                   "fitted": after[chosen].sum() / rest_area,
+                   "agreed": agreed[chosen].sum() / rest_area,
+                   "misfit": phase_misfit(posed, law["wave_vector"], phase, record.topology,
+                                          compressed),
+                   "misfit fitted": phase_misfit(posed, fields["wave_vector"], phase,
+                                                 record.topology, compressed),
                    "bins": []}
             for low, high in zip(BINS[:-1], BINS[1:], strict=True):
                 inside = chosen & (misfit >= low) & (misfit < high)
                 if inside.sum():
                     row["bins"].append((low, high, float(inside.mean() / chosen.mean()),
-                                        as_drawn[inside].sum() / flat[inside].sum(),
-                                        agreed_area[inside].sum() / flat[inside].sum()))
+                                        before[inside].sum() / flat[inside].sum(),
+                                        after[inside].sum() / flat[inside].sum()))
             rows.append(row)
     finally:
         engine.release()
@@ -144,20 +156,21 @@ def report(rows: list[dict], seconds: float) -> str:
     begin, end = markers("blend")
     lines = [begin, "", "Made by `python -m benchmarks.physics.blend --write docs/physics.md` "
              f"({seconds:.0f} s here).", "",
-             "| stage | flat | drawn | relaxed to convergence | phases agreed per triangle | "
-             "edge misfit (rad), drawn / converged |", "|---|---|---|---|---|---|"]
+             "| stage | flat | crush's waves | ... relaxed to convergence | fitted (drawn) | "
+             "fitted, phases agreed per triangle | edge misfit (rad): crush's k / fitted k |",
+             "|---|---|---|---|---|---|---|"]
     for row in rows:
-        lines.append(f"| {row['stage']} | {row['flat']:.3f} | {row['drawn']:.3f} | "
-                     f"{row['relaxed']:.3f} | {row['agreed']:.3f} | "
-                     f"{row['misfit']:.2f} / {row['misfit relaxed']:.2f} |")
-    lines += ["", "Area over rest area in the compressed region. By the three corner "
-              "phases' largest distance from their mean at the centroid (drawn phases): "
-              "the share of the region's fine triangles, and drawn / flat, agreed / flat "
-              "there.", ""]
+        lines.append(f"| {row['stage']} | {row['flat']:.3f} | {row['crush']:.3f} | "
+                     f"{row['converged']:.3f} | {row['fitted']:.3f} | {row['agreed']:.3f} | "
+                     f"{row['misfit']:.2f} / {row['misfit fitted']:.2f} |")
+    lines += ["", "Area over rest area in the compressed region. By how far crush's corner "
+              "waves disagree at the triangle's centroid (the three phases' largest distance "
+              "from their mean): the share of the region's fine triangles, and crush's waves / "
+              "flat, fitted / flat there.", ""]
     for row in rows:
         cells = "; ".join(f"{low:.1f}-{min(high, np.pi):.1f} rad: {share:.0%}, "
-                          f"{drawn:.3f}, {agreed:.3f}"
-                          for low, high, share, drawn, agreed in row["bins"])
+                          f"{before:.3f}, {after:.3f}"
+                          for low, high, share, before, after in row["bins"])
         lines.append(f"- {row['stage']}: {cells}")
     lines += ["", end]
     return "\n".join(lines)

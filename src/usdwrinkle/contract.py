@@ -42,6 +42,16 @@ SLOPE_SAMPLES = 64
 SLOPE_STEP = 0.3125
 #: A tiny floor on the relax weights keeps arg() defined where no vertex is wrinkled.
 WEIGHT_FLOOR = 1e-7
+#: The fit of the wave to the relaxed phases (relax.glsl's FIT, reference/relax.fit)
+#: needs two independent tangent directions in a vertex's wrinkled ring: the normal
+#: equations' determinant over their trace squared (at most 1/4, a ring as wide as long)
+#: above FIT_CONDITION, fully trusted from twice that.
+FIT_CONDITION = 0.01
+#: ... and it fades out where it would change a wave's length by more than 0.75 x this
+#: factor either way, and is gone at it (beyond, the phases there are not one wave).
+#: Ring edges along which the wave advances more than pi / 2 count less, beyond pi not at
+#: all (the ring does not sample the wave: one far finer than the mesh is not fitted).
+FIT_RANGE = 2.0
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -102,6 +112,7 @@ def glsl_literal(value) -> str:
 #: What every shader gets as #defines.
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
+    ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),

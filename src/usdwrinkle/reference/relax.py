@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import COLD_START_FACTOR, WEIGHT_FLOOR
+from ..contract import COLD_START_FACTOR, FIT_CONDITION, FIT_RANGE, WEIGHT_FLOOR
 from ..scene.topology import Topology
 
 
@@ -28,6 +28,55 @@ def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations:
         np.add.at(im, src, weight[dst] * np.sin(predicted))
         phi = np.where(re * re + im * im > 0, np.arctan2(im, re), phi)
     return phi
+
+
+def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
+    """The wave the phases draw (relax.glsl's FIT): per vertex with a wave, k + c, c the
+    least-squares fit in the tangent plane of ``normals`` of c . (x_j - x_i) to each ring
+    edge's residual wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)) (weights a_j, neighbours
+    with a wave only, weighted down as k_i advances from pi / 2 to pi along the edge),
+    and the amplitude times min(1, |k| / |k + t c|): the same slope. t fades the fit out
+    where the ring's directions are too few (FIT_CONDITION) or |k| would change by more
+    than FIT_RANGE either way (contract.py).
+    Returns (wave_vector (n, 3), amplitude (n,))."""
+    points = np.asarray(points, np.float64)
+    normals = np.asarray(normals, np.float64)
+    k = np.asarray(wave_vector, np.float64)
+    a = np.asarray(amplitude, np.float64)
+    phi = np.asarray(phase, np.float64)
+    n = len(points)
+    ring_offsets, dst = topology.rings()[:2]
+    src = np.repeat(np.arange(n), np.diff(ring_offsets))
+    sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
+    k_bar = 0.5 * (k[src] + k[dst] * sign[:, None])
+    dx = points[dst] - points[src]
+    residual = wrap(sign * phi[dst] - phi[src] - np.sum(k_bar * dx, 1))
+    sampled = 1.0 - _smoothstep(0.5 * np.pi, np.pi, np.abs(np.sum(k[src] * dx, 1)))
+    dx = dx - np.sum(dx * normals[src], 1)[:, None] * normals[src]
+    weight = np.where(a[dst] > 0, a[dst], 0.0) * sampled
+    equations = normals[:, :, None] * normals[:, None, :]
+    np.add.at(equations, src, weight[:, None, None] * dx[:, :, None] * dx[:, None, :])
+    rhs = np.zeros((n, 3))
+    np.add.at(rhs, src, (weight * residual)[:, None] * dx)
+    trace = np.zeros(n)
+    np.add.at(trace, src, weight * np.sum(dx * dx, 1))
+    spread = np.where(trace > 0, np.linalg.det(equations) / np.maximum(trace ** 2, 1e-300), 0)
+    ok = (a > 0) & (spread > FIT_CONDITION)
+    correction = np.zeros_like(k)
+    if ok.any():
+        correction[ok] = np.linalg.solve(equations[ok], rhs[ok][..., None])[..., 0]
+    length = np.maximum(np.linalg.norm(k, axis=1), 1e-30)
+    change = np.linalg.norm(k + correction, axis=1) / length
+    trust = _smoothstep(FIT_CONDITION, 2 * FIT_CONDITION, spread) * (1.0 - _smoothstep(
+        0.75 * FIT_RANGE, FIT_RANGE, np.maximum(change, 1.0 / np.maximum(change, 1e-30))))
+    fitted = k + np.where(ok, trust, 0.0)[:, None] * correction
+    scale = np.minimum(1.0, length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30))
+    return fitted, np.where(ok, a * scale, a)
+
+
+def _smoothstep(low: float, high: float, x) -> np.ndarray:
+    t = np.clip((np.asarray(x, np.float64) - low) / (high - low), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
 
 
 def wrap(angle):
@@ -76,8 +125,10 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
     ``fields``: the frame's points, wave_vector, amplitude and phase (crush's anchored
     phase). ``state``: the wave state of the shot's previous grid frame (its wave_vector
     and relaxed phase; the GPU's also holds crest damping's directions), or None for a
-    cold start. Returns the relaxed phases and this frame's state. ``state`` is read,
-    never changed: the same frame from the same state is the same frame.
+    cold start. Returns the relaxed phases and this frame's state (its wave_vector and
+    amplitude are the fitted ones, :func:`fit`, as the GPU's fields are after relax;
+    with no iterations there is no fit). ``state`` is read, never changed: the same
+    frame from the same state is the same frame.
     """
     if state is None:
         start, count = fields["phase"], iterations * cold_start_factor
@@ -87,7 +138,12 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
         count = iterations
     phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
                   topology, count)
-    return phase, {"wave_vector": np.array(fields["wave_vector"], copy=True), "phase": phase}
+    wave_vector = np.array(fields["wave_vector"], np.float64, copy=True)
+    amplitude = np.array(fields["amplitude"], np.float64, copy=True)
+    if count > 0:
+        wave_vector, amplitude = fit(fields["points"], fields["normals"], wave_vector,
+                                     amplitude, phase, topology)
+    return phase, {"wave_vector": wave_vector, "amplitude": amplitude, "phase": phase}
 
 
 def relax_shot(frames: list, topology: Topology, iterations: int,

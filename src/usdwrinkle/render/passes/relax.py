@@ -3,7 +3,9 @@
 Seed: with phase history (the wave state of the shot's previous grid frame, read and
 never written), each vertex starts from its previous phase, sign-aligned to its new wave
 vector, so crests ride with the cloth; otherwise from crush's material-anchored phase.
-The last step writes the phase that draw and the bake read.
+The last step writes the phase that draw and the bake read; then the fit makes each
+vertex's wave the one those phases draw (relax.glsl's FIT: k and the amplitude, in place
+in the fields). Without iterations (relaxIterations 0) there is no relaxation and no fit.
 """
 from __future__ import annotations
 
@@ -22,8 +24,11 @@ class RelaxPass:
             lambda extra: compute_shader(ctx, "relax.glsl", {**defines, **extra}))
         self.seeds = Variants(
             lambda extra: compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1, **extra}))
+        self.fits = Variants(
+            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, "FIT": 1, **extra}))
         self.steps()
         self.seeds()
+        self.fits()
 
     def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
         units, waves = bindings.RELAX, res.waves
@@ -54,3 +59,10 @@ class RelaxPass:
             set_uniforms(shader, {"u_write_phase": int(step == iterations - 1)})
             shader.run(count)
             self.ctx.memory_barrier()
+        fit = self.fits(TWO_SYSTEMS=waves.systems > 1)
+        set_uniforms(fit, {"u_num_points": res.num_points, "u_systems": waves.systems,
+                           **res.topology_uniforms})
+        bind(units, reads={"RELAX_Z_IN": waves.phasors[iterations % 2]},
+             writes={"RELAX_FIELDS_OUT": waves.current})
+        fit.run(count)
+        self.ctx.memory_barrier()
