@@ -84,8 +84,8 @@ def floors(ctx, copy_points: int = 1_000_000) -> dict:
            "readback_330k_rgba32f_ms": timed(draw_and_read, repeat=10)}
     out["readback_330k_rgba32f_ms"] -= timed(lambda: (fbo.use(), fbo.clear(0.5, 0.5, 0.5, 1.0),
                                                       ctx.finish()), repeat=10)
-    for obj in (src, dst, idx, empty, gather, gather_tables, copy, a_table, c_table, b_table,
-                big_src, big_dst, fbo, target):
+    # the shaders are the context's (render/shaders.CompiledPrograms), kept for the next run
+    for obj in (src, dst, idx, a_table, c_table, b_table, big_src, big_dst, fbo, target):
         obj.release()
     return out
 

@@ -107,7 +107,8 @@ class CompiledPrograms:
 
     def get(self, key: tuple, make):
         program = self.programs.get(key)
-        if program is None:
+        if program is None or type(program.mglo).__name__ == "InvalidObject":
+            # (a caller that released a program it was handed gets a fresh one)
             program = make()
             self.programs[key] = program
             self.compiled += 1
