@@ -24,9 +24,11 @@
 //             keeps the slope a |k| that restores the cloth's length (never taller than
 //             crush made it). Edges along which the wave advances more than pi / 2
 //             count less, beyond pi not at all; the fit fades out where the ring's
-//             directions are too few (FIT_CONDITION) or |k| would change by more than
-//             FIT_RANGE either way. Every weight is smooth, so a small change of the
-//             mesh is a small change of the fit.
+//             directions are too few (FIT_CONDITION) or |k| would grow by more than
+//             FIT_RANGE; it only shortens waves (from 1x to FIT_ONSET it fades in): a
+//             fit that lengthened them moved the elbow's crests more (docs/method.md).
+//             Every weight is smooth, so a small change of the mesh is a small change
+//             of the fit.
 //             Phases carried through a shot keep the crest count of the
 //             fold's onset while coarsening asks for fewer: there the corner waves of a
 //             triangle extrapolated with crush's k disagreed inside it, and their blend
@@ -179,8 +181,10 @@ void main() {
         if (!(spread > FIT_CONDITION)) continue;
         vec3 c = inverse(normal_equations) * rhs;
         float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);
+        // only a wave the phases draw shorter (the history's twist), fully from FIT_ONSET
         float trust = smoothstep(FIT_CONDITION, 2.0 * FIT_CONDITION, spread)
-            * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, max(change, 1.0 / max(change, 1e-30))));
+            * smoothstep(1.0, FIT_ONSET, change)
+            * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change));
         vec3 k = wave.xyz + trust * c;
         float scale = min(1.0, length(wave.xyz) / max(length(k), 1e-30));
         STORE(fields_out, FIELD_WAVE_OF(i, s), vec4(k, wave.w * scale));

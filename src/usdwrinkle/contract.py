@@ -47,11 +47,15 @@ WEIGHT_FLOOR = 1e-7
 #: equations' determinant over their trace squared (at most 1/4, a ring as wide as long)
 #: above FIT_CONDITION, fully trusted from twice that.
 FIT_CONDITION = 0.01
-#: ... and it fades out where it would change a wave's length by more than 0.75 x this
-#: factor either way, and is gone at it (beyond, the phases there are not one wave).
+#: ... and it fades out where it would make a wave shorter by more than 0.75 x this
+#: factor, and is gone at it (beyond, the phases there are not one wave). It only makes
+#: waves shorter (the phase history's twist under coarsening), fading in from 1x to
+#: FIT_ONSET: lengthening them too moved the 5 cm sleeve's elbow crests 4.1x the
+#: referee's instead of 3.0x (docs/method.md, "The fit").
 #: Ring edges along which the wave advances more than pi / 2 count less, beyond pi not at
 #: all (the ring does not sample the wave: one far finer than the mesh is not fitted).
 FIT_RANGE = 2.0
+FIT_ONSET = 1.05
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -113,6 +117,7 @@ def glsl_literal(value) -> str:
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
+    ("FIT_ONSET", FIT_ONSET),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),

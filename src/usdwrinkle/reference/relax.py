@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import COLD_START_FACTOR, FIT_CONDITION, FIT_RANGE, WEIGHT_FLOOR
+from ..contract import COLD_START_FACTOR, FIT_CONDITION, FIT_ONSET, FIT_RANGE, WEIGHT_FLOOR
 from ..scene.topology import Topology
 
 
@@ -35,9 +35,10 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
     least-squares fit in the tangent plane of ``normals`` of c . (x_j - x_i) to each ring
     edge's residual wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)) (weights a_j, neighbours
     with a wave only, weighted down as k_i advances from pi / 2 to pi along the edge),
-    and the amplitude times min(1, |k| / |k + t c|): the same slope. t fades the fit out
-    where the ring's directions are too few (FIT_CONDITION) or |k| would change by more
-    than FIT_RANGE either way (contract.py).
+    and the amplitude times |k| / |k + t c|: the same slope. t fades the fit out where the
+    ring's directions are too few (FIT_CONDITION) or |k| would grow by more than
+    FIT_RANGE, and in from |k + c| = |k| to FIT_ONSET |k|: only shorter waves are fitted
+    (contract.py).
     Returns (wave_vector (n, 3), amplitude (n,))."""
     points = np.asarray(points, np.float64)
     normals = np.asarray(normals, np.float64)
@@ -67,8 +68,9 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
         correction[ok] = np.linalg.solve(equations[ok], rhs[ok][..., None])[..., 0]
     length = np.maximum(np.linalg.norm(k, axis=1), 1e-30)
     change = np.linalg.norm(k + correction, axis=1) / length
-    trust = _smoothstep(FIT_CONDITION, 2 * FIT_CONDITION, spread) * (1.0 - _smoothstep(
-        0.75 * FIT_RANGE, FIT_RANGE, np.maximum(change, 1.0 / np.maximum(change, 1e-30))))
+    trust = (_smoothstep(FIT_CONDITION, 2 * FIT_CONDITION, spread) *
+             _smoothstep(1.0, FIT_ONSET, change) *
+             (1.0 - _smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change)))
     fitted = k + np.where(ok, trust, 0.0)[:, None] * correction
     scale = np.minimum(1.0, length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30))
     return fitted, np.where(ok, a * scale, a)
