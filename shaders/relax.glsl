@@ -17,23 +17,21 @@
 //             system, the rotation e^{-i d_ij}, the flip, the neighbour's weight and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi.
 //   FIT       per vertex and system, after the last step: the wave the relaxed phases
-//             draw. The residual of each edge, r_ij = arg(z~_j e^{-i d_ij} conj(z_i)),
-//             is what the phases advance beyond kbar_ij . (x_j - x_i); the least-squares
-//             c in the tangent plane with c . (x_j - x_i)_t ~ r_ij (weights a_j) corrects
-//             k to k + c, and the amplitude to a min(1, |k| / |k + c|), so that the wave
-//             keeps the slope a |k| that restores the cloth's length (never taller than
-//             crush made it). Edges along which the wave advances more than pi / 2
-//             count less, beyond pi not at all; the fit fades out where the ring's
-//             directions are too few (FIT_CONDITION) or |k| would grow by more than
-//             FIT_RANGE; it only shortens waves (from 1x to FIT_ONSET it fades in): a
-//             fit that lengthened them moved the elbow's crests more (docs/method.md).
-//             Every weight is smooth, so a small change of the mesh is a small change
-//             of the fit.
-//             Phases carried through a shot keep the crest count of the
-//             fold's onset while coarsening asks for fewer: there the corner waves of a
-//             triangle extrapolated with crush's k disagreed inside it, and their blend
-//             drew too much slope (docs/physics.md, "Inextensibility"). Writes the wave
-//             texels of the fields in place (each vertex only its own).
+//             draw. Phases carried through a shot keep the crest count of the folds'
+//             onset while coarsening asks for fewer; the corner waves of a triangle,
+//             each extrapolated with crush's k, then disagreed inside it, and their
+//             blend drew too much slope (docs/physics.md, "Inextensibility"). The
+//             residual of each edge, r_ij = arg(z~_j e^{-i d_ij} conj(z_i)), is what the
+//             phases advance beyond kbar_ij . (x_j - x_i); the least-squares c in the
+//             tangent plane with c . (x_j - x_i)_t ~ r_ij (weights a_j) gives k + t c and
+//             the amplitude a |k| / |k + t c|: the same slope a |k|, which restores the
+//             cloth's length. t only makes waves shorter (fading in from 1x to
+//             FIT_ONSET), so no fold grows taller than crush made it; it fades out where
+//             the ring's directions are too few (FIT_CONDITION) or |k| would grow by more
+//             than FIT_RANGE. Edges along which the wave advances more than pi / 2 count
+//             less, beyond pi not at all. Every weight is smooth, so a small change of
+//             the mesh is a small change of the fit. Writes the wave texels of the
+//             fields in place (each vertex only its own).
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
@@ -152,7 +150,7 @@ void main() {
         vec4 wave = wave_of(fields, i, s);
         if (wave.w <= 0.0) continue;
         vec2 own = s == 0 ? z_i.xy : z_i.zw;
-        mat3 normal_equations = outerProduct(n, n);  // pins c to the tangent plane
+        mat3 normal_equations = mat3(0.0);
         vec3 rhs = vec3(0.0);
         float trace = 0.0;
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
@@ -174,10 +172,12 @@ void main() {
             rhs += weight * residual * dx;
             trace += weight * dot(dx, dx);
         }
-        // two independent tangent directions (the determinant is the tangent block's, at
-        // most trace^2 / 4), and a change of |k| within FIT_RANGE: fitted fully, fading
-        // to crush's wave as either fails
-        float spread = trace > 0.0 ? determinant(normal_equations) / (trace * trace) : 0.0;
+        // n n^T at the tangent block's scale pins c to the tangent plane (float32 keeps the
+        // block's digits whatever the scene's units); two independent tangent directions:
+        // the determinant, trace times the tangent block's, over trace^3 (at most 1/4)
+        normal_equations += trace * outerProduct(n, n);
+        float spread = trace > 0.0
+            ? determinant(normal_equations) / (trace * trace * trace) : 0.0;
         if (!(spread > FIT_CONDITION)) continue;
         vec3 c = inverse(normal_equations) * rhs;
         float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);

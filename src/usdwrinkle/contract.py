@@ -43,9 +43,9 @@ SLOPE_STEP = 0.3125
 #: A tiny floor on the relax weights keeps arg() defined where no vertex is wrinkled.
 WEIGHT_FLOOR = 1e-7
 #: The fit of the wave to the relaxed phases (relax.glsl's FIT, reference/relax.fit)
-#: needs two independent tangent directions in a vertex's wrinkled ring: the normal
-#: equations' determinant over their trace squared (at most 1/4, a ring as wide as long)
-#: above FIT_CONDITION, fully trusted from twice that.
+#: needs two independent tangent directions in a vertex's wrinkled ring: the tangent
+#: normal equations' determinant over their trace squared (at most 1/4, a ring as wide as
+#: long) above FIT_CONDITION, fully trusted from twice that.
 FIT_CONDITION = 0.01
 #: ... and it fades out where it would make a wave shorter by more than 0.75 x this
 #: factor, and is gone at it (beyond, the phases there are not one wave). It only makes

@@ -55,13 +55,16 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
     sampled = 1.0 - _smoothstep(0.5 * np.pi, np.pi, np.abs(np.sum(k[src] * dx, 1)))
     dx = dx - np.sum(dx * normals[src], 1)[:, None] * normals[src]
     weight = np.where(a[dst] > 0, a[dst], 0.0) * sampled
-    equations = normals[:, :, None] * normals[:, None, :]
+    equations = np.zeros((n, 3, 3))
     np.add.at(equations, src, weight[:, None, None] * dx[:, :, None] * dx[:, None, :])
     rhs = np.zeros((n, 3))
     np.add.at(rhs, src, (weight * residual)[:, None] * dx)
     trace = np.zeros(n)
     np.add.at(trace, src, weight * np.sum(dx * dx, 1))
-    spread = np.where(trace > 0, np.linalg.det(equations) / np.maximum(trace ** 2, 1e-300), 0)
+    # n n^T at the tangent block's scale pins c to the tangent plane
+    equations += trace[:, None, None] * normals[:, :, None] * normals[:, None, :]
+    spread = np.where(trace > 0, np.linalg.det(equations) /
+                      np.maximum(trace ** 3, 1e-300), 0)
     ok = (a > 0) & (spread > FIT_CONDITION)
     correction = np.zeros_like(k)
     if ok.any():
