@@ -264,3 +264,25 @@ def test_the_fit_matches_numpy_reference(gl_context):
     # and the fit did something: k changed by more than 1% at some of the points
     changed = np.linalg.norm(k - law["wave_vector"], axis=1)[wrinkled] / length[wrinkled]
     assert np.mean(changed > 1e-2) > 0.05
+
+
+def test_the_fit_is_the_same_in_any_units(gl_context):
+    """The same cloth in units 100x smaller (a shot in metres instead of centimetres):
+    the fitted wave vectors are 100x longer and the heights 100x lower, to float32
+    precision (the fit's normal equations keep their digits at any scale)."""
+    rest, posed, faces, q = random_cloth(3)
+    fields = []
+    for scale in (1.0, 0.01):
+        stage = point_cache_stage((rest * scale).astype(np.float32),
+                                  {1: (posed * scale).astype(np.float32)},
+                                  np.full(len(faces), 3), faces.ravel(), q=q,
+                                  width=0.2 * scale, relax_iterations=6)
+        fields.append(gpu_fields(gl_context, stage)[0])
+    big, small = fields
+    wrinkled = big["amplitude"] > 1e-3
+    assert wrinkled.sum() > 50
+    length = np.linalg.norm(big["wave_vector"], axis=1)[wrinkled]
+    rel = np.linalg.norm(small["wave_vector"] * 0.01 - big["wave_vector"], axis=1)[wrinkled]
+    assert np.percentile(rel / length, 99) < 1e-3, np.percentile(rel / length, 99)
+    np.testing.assert_allclose(small["amplitude"][wrinkled] * 100, big["amplitude"][wrinkled],
+                               rtol=1e-3)
