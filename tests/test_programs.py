@@ -9,13 +9,9 @@ import moderngl
 
 from usdwrinkle import api
 from usdwrinkle.engine import WrinkleEngine
-from usdwrinkle.render.shaders import CompiledPrograms, release_programs
+from usdwrinkle.render.shaders import CompiledPrograms, is_released, release_programs
 
 SHIRT = Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda"
-
-
-def _released(program) -> bool:
-    return type(program.mglo).__name__ == "InvalidObject"
 
 
 def test_a_second_engine_compiles_no_shader_again(gl_context):
@@ -32,7 +28,7 @@ def test_a_second_engine_compiles_no_shader_again(gl_context):
     assert compiled.compiled == after_first
     # the engine's release left the context's programs alive for the next engine
     released = [key[0] + ":" + key[1][-300:] for key, program in compiled.programs.items()
-                if _released(program)]
+                if is_released(program)]
     assert released == []
 
 
@@ -60,9 +56,9 @@ def test_the_context_frees_every_program_it_compiled(gl_context):
         engine.render_frame(24.0, 64, 48)
         engine.release()
         programs = list(CompiledPrograms.of(ctx).programs.values())
-        assert programs and not any(_released(program) for program in programs)
+        assert programs and not any(is_released(program) for program in programs)
         release_programs(ctx)
-        assert all(_released(program) for program in programs)
+        assert all(is_released(program) for program in programs)
         assert CompiledPrograms.of(ctx).programs == {}
     finally:
         ctx.release()

@@ -107,7 +107,7 @@ class CompiledPrograms:
 
     def get(self, key: tuple, make):
         program = self.programs.get(key)
-        if program is None or type(program.mglo).__name__ == "InvalidObject":
+        if program is None or is_released(program):
             # (a caller that released a program it was handed gets a fresh one)
             program = make()
             self.programs[key] = program
@@ -120,9 +120,27 @@ class CompiledPrograms:
         self.programs.clear()
 
 
+def is_released(program) -> bool:
+    """Whether a moderngl object has been released (its GL object is gone)."""
+    return type(program.mglo).__name__ == "InvalidObject"
+
+
 def release_programs(ctx) -> None:
     """Free every program ``ctx`` compiled (before the context itself goes)."""
     CompiledPrograms.of(ctx).release()
+
+
+def _compiled(ctx, source: ShaderSource, key: tuple, build):
+    """``build()``'s program, compiled once per context for ``key`` (its source texts),
+    with the compiler's errors mapped back to ``source``'s files and lines."""
+    def make():
+        try:
+            with signals_held():  # LLVM compiling it (llvmpipe) must not take a signal
+                return build()
+        except Exception as exc:
+            raise source.map_error(str(exc)) from None
+
+    return CompiledPrograms.of(ctx).get(key, make)
 
 
 def compute_shader(ctx, name: str, defines: dict, root: Path | None = None):
@@ -130,15 +148,7 @@ def compute_shader(ctx, name: str, defines: dict, root: Path | None = None):
     per context (:class:`CompiledPrograms`)."""
     source = ShaderSource(name, defines, root)
     text = source.text()
-
-    def make():
-        try:
-            with signals_held():  # LLVM compiling it (llvmpipe) must not take a signal
-                return ctx.compute_shader(text)
-        except Exception as exc:
-            raise source.map_error(str(exc)) from None
-
-    return CompiledPrograms.of(ctx).get(("compute", text), make)
+    return _compiled(ctx, source, ("compute", text), lambda: ctx.compute_shader(text))
 
 
 def program(ctx, name: str, defines: dict):
@@ -146,15 +156,8 @@ def program(ctx, name: str, defines: dict):
     sections, compiled once per context (:class:`CompiledPrograms`)."""
     source = ShaderSource(name, defines)
     vertex, fragment = source.text("VERTEX_SHADER"), source.text("FRAGMENT_SHADER")
-
-    def make():
-        try:
-            with signals_held():
-                return ctx.program(vertex_shader=vertex, fragment_shader=fragment)
-        except Exception as exc:
-            raise source.map_error(str(exc)) from None
-
-    return CompiledPrograms.of(ctx).get(("program", vertex, fragment), make)
+    return _compiled(ctx, source, ("program", vertex, fragment),
+                     lambda: ctx.program(vertex_shader=vertex, fragment_shader=fragment))
 
 
 class Variants:
