@@ -69,6 +69,16 @@ vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y 
 
 vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(i, s)); }
 
+// The neighbour an edge texel names (EDGE(e, s), below), and its phasor of the partner
+// system, conjugated where the partner's wave is flipped: z~_j.
+vec2 neighbour_phasor(sampler2D phasors, vec4 edge, out int j) {
+    j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
+    vec4 z_all = fetch(phasors, j);
+    vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
+    if (edge.z < 0.0) z_j.y = -z_j.y;
+    return z_j;
+}
+
 #if defined SEED
 
 layout(binding = RELAX_PREVIOUS_FIELDS) uniform sampler2D previous_fields;
@@ -157,10 +167,8 @@ void main() {
             vec4 edge = fetch(edges, EDGE(e, s));
             float weight = abs(edge.z) - WEIGHT_FLOOR;  // a_j: only neighbours with a wave
             if (weight <= 0.0) continue;
-            int j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
-            vec4 z_all = fetch(z_in, j);
-            vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
-            if (edge.z < 0.0) z_j.y = -z_j.y;
+            int j;
+            vec2 z_j = neighbour_phasor(z_in, edge, j);
             vec2 rel = complex_mul(complex_mul(z_j, edge.xy), vec2(own.x, -own.y));
             float residual = atan(rel.y, rel.x);
             vec3 dx = fetch(posed_points, j).xyz - x_i;
@@ -186,7 +194,10 @@ void main() {
             * smoothstep(1.0, FIT_ONSET, change)
             * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change));
         vec3 k = wave.xyz + trust * c;
-        float scale = min(1.0, length(wave.xyz) / max(length(k), 1e-30));
+        // never a longer wave than crush's (a partly trusted c that turns k could shorten
+        // it): k keeps at least crush's length
+        k *= max(1.0, length(wave.xyz) / max(length(k), 1e-30));
+        float scale = length(wave.xyz) / max(length(k), 1e-30);
         STORE(fields_out, FIELD_WAVE_OF(i, s), vec4(k, wave.w * scale));
     }
 }
@@ -210,11 +221,8 @@ void main() {
         vec2 sum = (wave_of(fields, i, s).w + WEIGHT_FLOOR) * own;
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             vec4 edge = fetch(edges, EDGE(e, s));
-            int j = edge.w >= 0.0 ? int(edge.w) : int(-edge.w) - 1;
-            vec4 z_all = fetch(z_in, j);
-            vec2 z_j = edge.w >= 0.0 ? z_all.xy : z_all.zw;
-            if (edge.z < 0.0) z_j.y = -z_j.y;  // conjugate when the partner's wave is flipped
-            sum += abs(edge.z) * complex_mul(z_j, edge.xy);
+            int j;
+            sum += abs(edge.z) * complex_mul(neighbour_phasor(z_in, edge, j), edge.xy);
         }
         float len2 = dot(sum, sum);
         vec2 next = len2 > 0.0 ? sum * inversesqrt(len2) : own;

@@ -75,7 +75,9 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
              _smoothstep(1.0, FIT_ONSET, change) *
              (1.0 - _smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change)))
     fitted = k + np.where(ok, trust, 0.0)[:, None] * correction
-    scale = np.minimum(1.0, length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30))
+    # never a longer wave than crush's (a partly trusted c that turns k could shorten it)
+    fitted *= np.maximum(1.0, length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30))[:, None]
+    scale = length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30)
     return fitted, np.where(ok, a * scale, a)
 
 
