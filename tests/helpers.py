@@ -189,7 +189,8 @@ def x_env(display: str) -> dict:
 #: then under load: 2 of 280 xdotool calls in a row to a live Xvfb failed so while a CI run
 #: ran beside it (10 of 261 while other servers started and stopped). The clients below try
 #: again; the code under test is not involved before it has a connection
-X_REFUSED = ("Can't open display", "could not connect to display")
+X_REFUSED = ("Can't open display", "could not connect to display",
+             "no X server answers there")  # the paint command's own check, asked 4 times
 
 
 def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -> str:

@@ -77,6 +77,11 @@ def check_display() -> None:
                               "DISPLAY, or run under xvfb-run")
 
 
+#: connections tried before "no X server answers there" (a loaded Xvfb refused one now and
+#: then: a CI run's paint test saw the window stop before it opened)
+X_CONNECT_ATTEMPTS = 4
+
+
 def x_display_error(display: str) -> str | None:
     """Why an X client cannot connect to ``display`` (None: it can), asked of libxcb, the
     library Qt's xcb platform connects through."""
@@ -92,12 +97,18 @@ def x_display_error(display: str) -> str | None:
     xcb.xcb_connect.argtypes = [ctypes.c_char_p, ctypes.c_void_p]
     xcb.xcb_connection_has_error.argtypes = [ctypes.c_void_p]
     xcb.xcb_disconnect.argtypes = [ctypes.c_void_p]
-    connection = xcb.xcb_connect(display.encode(), None)
-    try:
-        code = xcb.xcb_connection_has_error(connection) if connection else 1
-    finally:
-        if connection:
-            xcb.xcb_disconnect(connection)
+    import time
+
+    for attempt in range(X_CONNECT_ATTEMPTS):
+        connection = xcb.xcb_connect(display.encode(), None)
+        try:
+            code = xcb.xcb_connection_has_error(connection) if connection else 1
+        finally:
+            if connection:
+                xcb.xcb_disconnect(connection)
+        if code != 1 or attempt == X_CONNECT_ATTEMPTS - 1:
+            break
+        time.sleep(0.25)  # a busy X server refuses a connection now and then: ask again
     reasons = {1: "no X server answers there", 2: "an extension is missing",
                3: "out of memory", 4: "a request was too long", 5: "the display name is "
                "not valid", 6: "no screen of that number"}
