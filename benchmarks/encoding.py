@@ -30,10 +30,12 @@ def frame_images(width: int, height: int, ctx=None) -> dict:
     """{extension: ResolvedImage} of the shirt's frame 24."""
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.outputs.images import layout_for
+    from usdwrinkle.render.request import FrameRequest
 
     engine = WrinkleEngine(str(SHIRT), ctx=ctx)
     try:
-        return {ext: engine.render_image(24.0, width, height, layout_for(f"x{ext}"))
+        return {ext: engine.render(24.0, FrameRequest(width, height,
+                                                      layout=layout_for(f"x{ext}")))
                 for ext in (".exr", ".png")}
     finally:
         engine.release()

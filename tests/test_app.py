@@ -138,10 +138,10 @@ def test_a_job_resolves_its_writer_threads(monkeypatch):
 
     monkeypatch.setattr(writer, "cores", lambda: 16)
     job = RenderJob(Shot(SHIRT), "x.####.png")
-    assert job.image_options(1920, 1080).write_threads == 15
-    assert job.image_options(1920, 1080, chunked=True).write_threads == 1
+    assert job.write_options(1920, 1080).threads == 15
+    assert job.write_options(1920, 1080, chunked=True).threads == 1
     assert RenderJob(Shot(SHIRT), "x.####.png", options=RenderOptions(write_threads=3)) \
-        .image_options(64, 64, chunked=True).write_threads == 3
+        .write_options(64, 64, chunked=True).threads == 3
     with pytest.raises(UsdWrinkleError, match="`write_threads` must be in 0..64"):
         RenderOptions(write_threads=65).check()
 
@@ -156,14 +156,14 @@ def test_exr_files_share_the_cores_with_openexrs_threads(monkeypatch):
     expected = {16: (4, 4), 8: (4, 2), 4: (3, 1), 2: (1, 1), 1: (1, 0)}
     for cores, (threads, per_file) in expected.items():
         monkeypatch.setattr(writer, "cores", lambda cores=cores: cores)
-        image = RenderJob(Shot(SHIRT), "x.####.exr").image_options(1920, 1080)
-        assert (image.write_threads, image.exr_threads) == (threads, per_file), cores
-        png = RenderJob(Shot(SHIRT), "x.####.png").image_options(1920, 1080)
-        assert png.write_threads == max(1, cores - 1)
-        chunk = RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64, chunked=True)
-        assert (chunk.write_threads, chunk.exr_threads) == (1, 0)  # one worker per core
+        image = RenderJob(Shot(SHIRT), "x.####.exr").write_options(1920, 1080)
+        assert (image.threads, image.exr_threads) == (threads, per_file), cores
+        png = RenderJob(Shot(SHIRT), "x.####.png").write_options(1920, 1080)
+        assert png.threads == max(1, cores - 1)
+        chunk = RenderJob(Shot(SHIRT), "x.####.exr").write_options(64, 64, chunked=True)
+        assert (chunk.threads, chunk.exr_threads) == (1, 0)  # one worker per core
     monkeypatch.setenv("USDWRINKLE_EXR_THREADS", "8")
-    assert RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64).exr_threads == 8
+    assert RenderJob(Shot(SHIRT), "x.####.exr").write_options(64, 64).exr_threads == 8
     monkeypatch.setenv("USDWRINKLE_EXR_THREADS", "many")
     with pytest.raises(UsdWrinkleError, match="USDWRINKLE_EXR_THREADS must be in 0..64"):
-        RenderJob(Shot(SHIRT), "x.####.exr").image_options(64, 64)
+        RenderJob(Shot(SHIRT), "x.####.exr").write_options(64, 64)

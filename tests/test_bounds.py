@@ -17,6 +17,7 @@ from usdwrinkle.outputs.images import layout_for
 from usdwrinkle.render import bounds as bounds_mod
 from usdwrinkle.render.bounds import culled_side, eye_bound, screen_rect
 from usdwrinkle.render.passes.draw import FLIP_Y
+from usdwrinkle.render.request import FrameRequest
 from usdwrinkle.scene.topology import closed_orientation
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
@@ -199,7 +200,8 @@ def _frames(path, frames, width, height, suffix, **engine_args):
     try:
         out = []
         for frame in frames:
-            image = engine.render_image(frame, width, height, layout_for("x" + suffix))
+            image = engine.render(frame, FrameRequest(width, height,
+                                                      layout=layout_for("x" + suffix)))
             out.append({name: plane.copy() for name, plane in image.planes.items()})
             image.release()
         return out

@@ -108,7 +108,10 @@ def test_interrupted_render_leaves_only_whole_frames(gl_context, tmp_path, sig, 
 def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
     """The overlapped writer (outputs/writer.py) holds at most two frames: memory stays
     flat over a long shot, and every frame is written whole."""
-    from usdwrinkle.shot import ImageOptions, render_frames
+    from usdwrinkle.outputs.images import layout_for
+    from usdwrinkle.outputs.writer import WriteOptions
+    from usdwrinkle.render.request import FrameRequest
+    from usdwrinkle.shot import render_frames
 
     engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context)
     marks = {}
@@ -122,8 +125,8 @@ def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
     frames = [float(f) for f in range(1, 201)]
     paths = [str(tmp_path / f"z.{int(f):04d}.png") for f in frames]
     try:
-        written = render_frames(engine, ImageOptions(96, 64, samples=1, write_threads=1),
-                                frames, paths, progress=progress)
+        written = render_frames(engine, FrameRequest(96, 64, 1, layout=layout_for(paths[0])),
+                                WriteOptions(threads=1), frames, paths, progress=progress)
     finally:
         engine.release()
     assert written == frames

@@ -578,11 +578,12 @@ def _height_aov(session, width: int, height: int) -> tuple[np.ndarray, np.ndarra
     """The frame's ``wrinkle.height`` AOV and its coverage (alpha), as `render --aovs`
     writes them, from the window's camera."""
     from usdwrinkle.aovs import ImageLayout
+    from usdwrinkle.render.request import FrameRequest
 
     camera = session.camera_record(width, height)
     layout = ImageLayout("exr", aovs=("color", "wrinkle.height"))
-    image = session.engine.render_image(session.frame, width, height, layout, samples=1,
-                                        camera=camera)
+    image = session.engine.render(session.frame, FrameRequest(width, height, 1, layout=layout,
+                                                              camera=camera))
     image.wait()
     out = (np.array(image.planes["wrinkle.height"], np.float64),
            np.array(image.planes["A"], np.float64))

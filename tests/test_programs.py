@@ -34,16 +34,20 @@ def test_a_second_engine_compiles_no_shader_again(gl_context):
 
 def test_a_second_render_job_and_a_second_farm_chunk_compile_nothing(gl_context, tmp_path):
     from usdwrinkle.app.chunks import render_chunk
-    from usdwrinkle.shot import EngineOptions, ImageOptions
+    from usdwrinkle.outputs.images import layout_for
+    from usdwrinkle.outputs.writer import WriteOptions
+    from usdwrinkle.render.request import FrameRequest
+    from usdwrinkle.shot import EngineOptions
 
     compiled = CompiledPrograms.of(gl_context)  # the process's context, as a job's
     api.render(SHIRT, tmp_path / "a.#.png", frames=[24], width=64)
     first = compiled.compiled
     api.render(SHIRT, tmp_path / "b.#.png", frames=[24], width=64)
     assert compiled.compiled == first
-    image = ImageOptions(64, 48)
+    request = FrameRequest(64, 48, layout=layout_for("x.png"))
     for job, iterations in enumerate((4, 6)):  # two jobs: the worker makes a new engine
-        result = render_chunk(EngineOptions(str(SHIRT), relax_iterations=iterations), image,
+        result = render_chunk(EngineOptions(str(SHIRT), relax_iterations=iterations),
+                              request, WriteOptions(),
                               [24.0], [str(tmp_path / f"chunk{job}.0024.png")], [None], False)
         assert result["error"] is None and len(result["written"]) == 1, result
     assert compiled.compiled == first

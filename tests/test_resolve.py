@@ -10,6 +10,7 @@ import pytest
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.outputs.images import image_from_buffers, layout_for
+from usdwrinkle.render.request import FrameRequest
 from usdwrinkle.render.resolve import EXR_CHANNELS, HALF_CHANNELS, ImageLayout
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"
@@ -129,10 +130,11 @@ def test_arrays_held_by_a_writer_are_never_overwritten(drawn):
     """Frames in flight keep their pixels while later frames are resolved."""
     engine, fb, samples = drawn
     layout = ImageLayout("exr", half=True)
-    first = engine.render_image(1.0, *fb.size, layout, samples=samples)
+    request = FrameRequest(*fb.size, samples, layout=layout)
+    first = engine.render(1.0, request)
     kept = {name: plane.copy() for name, plane in first.planes.items()}
     for frame in (12.0, 24.0, 6.0):
-        later = engine.render_image(frame, *fb.size, layout, samples=samples)
+        later = engine.render(frame, request)
     for name, plane in kept.items():
         np.testing.assert_array_equal(first.planes[name], plane, err_msg=name)
     assert not np.array_equal(later.planes["R"], kept["R"])  # an overwrite would show

@@ -31,7 +31,9 @@ def assert_identical(a: dict, b: dict, what: str = "") -> None:
 
 
 def draw(engine, frame, width=160, height=90) -> dict:
-    return planes(engine.render_image(frame, width, height, EXR))
+    from usdwrinkle.render.request import FrameRequest
+
+    return planes(engine.render(frame, FrameRequest(width, height, layout=EXR)))
 
 
 def fresh(ctx, stage, frame, **kwargs) -> dict:

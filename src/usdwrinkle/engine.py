@@ -10,12 +10,14 @@ import time
 
 import numpy as np
 
+from .aovs import ImageLayout
 from .errors import UsdWrinkleError
 from .history import WaveHistory, cache_capacity, on_grid, reads_index
 from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
-from .render.delegate import RenderDelegate, RenderPass, RenderPassState
+from .render.delegate import RenderDelegate, RenderPass
 from .render.fields import STATE_BYTES_PER_POINT
+from .render.request import FrameRequest
 from .scene.dirty import DirtyBits
 from .scene.stage import StageSceneDelegate
 
@@ -344,42 +346,25 @@ class WrinkleEngine:
             if mesh.resources is not None and mesh.resources.waves.slots > keep:
                 mesh.resources.waves.release_slots(keep)
 
+    def render(self, frame: float | None, request: FrameRequest):
+        """Compute and draw ``frame`` as ``request`` says (render/request.py); returns what
+        its layout reads back: {aov name: RenderBuffer}, the frame as an image file stores
+        it (render.resolve.ResolvedImage), or with ``request.readback_ring`` > 1 a
+        render.resolve.PendingImage, whose ``start()`` copies it out: ask for it after the
+        next frame is queued, and the GPU computes that frame meanwhile
+        (shot.render_frames)."""
+        record = self.compute_frame(frame, request.aspect, request.wrinkles)
+        timings: dict = {}
+        result = self.render_pass.execute(request, record.camera, record.lights, timings)
+        self.last_timings.update(timings)
+        return result
+
     def render_frame(self, frame: float | None, width: int, height: int, wrinkles: bool = True,
                      samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):
-        """Compute and draw ``frame``; returns {aov name: RenderBuffer}.
-
-        ``samples``: multisamples per pixel for anti-aliased edges (1 turns it off).
-        ``aovs``: the render buffers to read back (an 8-bit image needs only colour).
-        ``shade_samples``: where folds turn within a pixel, shade each multisample where
-        it lies (the default), or shade every pixel once, at its centroid (render
-        --no-shade-samples).
-        """
-        return self._render(frame, width, height, wrinkles, samples, tuple(aovs), None,
-                            shade_samples)
-
-    def render_image(self, frame: float | None, width: int, height: int, layout,
-                     wrinkles: bool = True, samples: int = 4, shade_samples: bool = True,
-                     camera=None, readback_ring: int = 1):
-        """Compute and draw ``frame``; returns it as an image file stores it
-        (render.resolve.ResolvedImage of ``layout``, from outputs.images.layout_for).
-        ``camera``: a CameraRecord to look through instead of the engine's (a viewer's
-        orbit camera). ``readback_ring`` > 1: the frame is resolved into the next of that
-        many readback buffers and returned as a render.resolve.PendingImage, whose
-        ``result()`` copies it out; ask for it after the next frame is queued, and the GPU
-        computes that frame meanwhile (shot.render_frames)."""
-        return self._render(frame, width, height, wrinkles, samples, (), layout, shade_samples,
-                            camera, readback_ring)
-
-    def _render(self, frame, width, height, wrinkles, samples, aovs, layout,
-                shade_samples=True, camera=None, readback_ring=1):
-        record = self.compute_frame(frame, width / height, wrinkles)
-        state = RenderPassState(camera if camera is not None else record.camera,
-                                record.lights, width, height, wrinkles, samples,
-                                aovs, image=layout, shade_samples=shade_samples,
-                                readback_ring=readback_ring)
-        result = self.render_pass.execute(state)
-        self.last_timings.update(state.timings)
-        return result
+        """``render`` at ``width`` x ``height``, read back as float AOVs: returns
+        {aov name: RenderBuffer} of ``aovs`` (the tests' and benchmarks' shorthand)."""
+        return self.render(frame, FrameRequest(width, height, samples, wrinkles, shade_samples,
+                                               ImageLayout("aovs", tuple(aovs))))
 
     def preview_params(self, path: str, **changes) -> None:
         """Draw ``path`` with some wrinkle parameters changed (WrinkleParams fields: q,

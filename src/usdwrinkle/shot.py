@@ -13,7 +13,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from . import schema
-from .aovs import AOV_BLOCKS
 from .errors import UsdWrinkleError
 from .timecode import format_frame
 
@@ -71,45 +70,6 @@ class EngineOptions:
                              profile=self.profile, **kwargs)
 
 
-@dataclass(frozen=True)
-class ImageOptions:
-    """How each frame is drawn."""
-
-    width: int
-    height: int
-    samples: int = 4
-    wrinkles: bool = True
-    #: writer threads: frame f is encoded while f + 1 renders (outputs/writer.py); 0 encodes
-    #: in the render loop
-    write_threads: int = 1
-    #: EXR compression and half-float colour and normals (outputs/images.py)
-    exr_compression: str = "zip"
-    exr_half: bool = True
-    #: where folds turn within a pixel, shade each multisample where it lies, not the
-    #: pixel once (render --no-shade-samples turns it off)
-    shade_samples: bool = True
-    #: frames that may wait or encode at once (outputs/writer.frames_in_flight)
-    in_flight: int = 2
-    #: readback buffers: frame f is copied out of the GPU while f + 1 .. f + K - 1 compute
-    #: (render/resolve.py); 1 reads each frame as soon as it is drawn; None: 3 on a GPU, 1 on
-    #: a software rasteriser (default_readback_buffers)
-    readback_buffers: int | None = None
-    #: OpenEXR's own threads per EXR file (outputs/writer.exr_threads)
-    exr_threads: int = 0
-    #: the AOVs an EXR frame stores (aovs.AOV_BLOCKS' names; render --aovs)
-    aovs: tuple[str, ...] = AOV_BLOCKS
-
-
-def default_readback_buffers(ctx) -> int:
-    """Readback buffers when none are asked for: 3 on a GPU (an H200 wrote the paper's
-    shirt at 222 fps with 1, 285-396 with 3), 1 on llvmpipe, where the CPU computes the
-    frame anyway and the copy thread only competes with it (CesiumMan, 24 frames at
-    960x540 to PNG: 4% slower with 3, seven paired runs)."""
-    from .render.context import is_software_renderer
-
-    return 1 if is_software_renderer(ctx.info.get("GL_RENDERER", "")) else 3
-
-
 @contextlib.contextmanager
 def at_frame(frame: float | None):
     """Name the frame in a per-frame error that did not name one."""
@@ -122,11 +82,15 @@ def at_frame(frame: float | None):
         raise
 
 
-def render_frames(engine, image: ImageOptions, frames: list[float | None], paths: list[str],
+def render_frames(engine, request, writing, frames: list[float | None], paths: list[str],
                   skip: Callable[[str], bool] = lambda path: False,
                   progress: Callable = lambda items: items,
                   stats: dict | None = None) -> list[float | None]:
     """Render each frame to its path (atomically); returns the frames written.
+
+    ``request`` (render/request.FrameRequest): how each frame is drawn and read back, in
+    the layout of the paths' format (outputs/images.layout_for); ``writing``
+    (outputs/writer.WriteOptions): how the files are written.
 
     ``skip(path)``: leave that frame alone (``--skip-existing``, a farm retry).
     ``progress``: wraps the list of (frame, path) pairs (a progress bar).
@@ -136,7 +100,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
     writer and for the GPU, and the loop's wall time and the process's CPU time over it
     (``render --stats``).
 
-    With ``image.readback_buffers`` K > 1, frame f is queued (computed, drawn and resolved
+    With ``request.readback_ring`` K > 1, frame f is queued (computed, drawn and resolved
     into one of K readback buffers, behind a fence) and copied out only once frame
     f + K - 1 is queued too, on the resolve's copy thread, so the GPU works on the next
     frames while the CPU copies and encodes; the files are the same
@@ -145,18 +109,18 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
     import time
     from collections import deque
 
-    from .outputs.images import layout_for, write_image
+    from .outputs.images import write_image
     from .outputs.writer import FrameWriter
 
-    engine.check_relax_work(frames, image.wrinkles)
+    engine.check_relax_work(frames, request.wrinkles)
     rows: dict[str, dict] = {}
 
     def write(path: str, frame_image) -> None:
         try:
             frame_image.wait()  # copied out of the GPU's readback buffer
             started = time.perf_counter()
-            write_image(path, frame_image, image.exr_compression,
-                        exr_threads=image.exr_threads)
+            write_image(path, frame_image, writing.exr_compression,
+                        exr_threads=writing.exr_threads)
         finally:
             frame_image.release()  # its memory may now hold a later frame, not before
         if stats is not None:
@@ -164,8 +128,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
             if ring > 1 or "readback" not in rows[path]:  # the copy out (ms)
                 rows[path]["readback"] = frame_image.read_ms
 
-    ring = image.readback_buffers if image.readback_buffers is not None else \
-        default_readback_buffers(engine.ctx)
+    ring = request.ring_on(engine.ctx)
     queued: deque = deque()  # (frame, path, PendingImage) not copied out yet
     gpu_waited = 0.0
 
@@ -182,18 +145,14 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
 
     loop_started = time.perf_counter()
     loop_cpu = time.process_time()  # every thread's: the writer's and OpenEXR's too
-    with FrameWriter(write, image.write_threads, image.in_flight) as writer:
+    with FrameWriter(write, writing.threads, writing.in_flight) as writer:
         try:
             for frame, path in progress(list(zip(frames, paths, strict=True))):
                 if skip(path):
                     continue
                 started = time.perf_counter()
                 with at_frame(frame):
-                    pending = engine.render_image(frame, image.width, image.height,
-                                                  layout_for(path, image.exr_half,
-                                                             image.aovs),
-                                                  image.wrinkles, image.samples,
-                                                  image.shade_samples, readback_ring=ring)
+                    pending = engine.render(frame, request)
                 if stats is not None:
                     rows[path] = {"frame": frame, **engine.last_timings,
                                   "render": (time.perf_counter() - started) * 1e3}
@@ -211,7 +170,7 @@ def render_frames(engine, image: ImageOptions, frames: list[float | None], paths
                       "gpu_waited_s": gpu_waited,
                       "loop_s": time.perf_counter() - loop_started,
                       "loop_cpu_s": time.process_time() - loop_cpu,
-                      "write_threads": image.write_threads, "exr_threads": image.exr_threads,
+                      "write_threads": writing.threads, "exr_threads": writing.exr_threads,
                       "readback_buffers": ring})
     return writer.written
 

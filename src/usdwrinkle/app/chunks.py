@@ -20,7 +20,7 @@ from ..aovs import exr_channels
 from ..errors import UsdWrinkleError
 from ..imagefiles import is_complete_image
 from ..log import warnings_to
-from ..shot import EngineOptions, ImageOptions, render_frames
+from ..shot import EngineOptions, render_frames
 
 _lock = threading.Lock()
 _cached: dict[str, Any] = {"key": None, "engine": None}
@@ -58,12 +58,14 @@ def written_this_run(path: str, before: tuple[int, int] | None) -> bool:
     return (st.st_dev, st.st_ino) != before and st.st_size > 0
 
 
-def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float | None],
-                 paths: list[str], before: list[tuple[int, int] | None],
-                 skip_existing: bool) -> dict[str, Any]:
-    """Render ``frames`` to ``paths``; returns {"written", "earlier", "skipped", "warnings",
-    "error", "baked", "worker"}: "earlier" are frames this run wrote in an attempt at the
-    chunk whose worker died, "skipped" the complete frames `skip_existing` kept.
+def render_chunk(options: EngineOptions, request: Any, writing: Any,
+                 frames: list[float | None], paths: list[str],
+                 before: list[tuple[int, int] | None], skip_existing: bool) -> dict[str, Any]:
+    """Render ``frames`` to ``paths`` as ``request`` (render/request.FrameRequest) and
+    ``writing`` (outputs/writer.WriteOptions) say; returns {"written", "earlier",
+    "skipped", "warnings", "error", "baked", "worker"}: "earlier" are frames this run
+    wrote in an attempt at the chunk whose worker died, "skipped" the complete frames
+    `skip_existing` kept.
 
     ``before``: each path's file identity when the run started (file_identity).
     """
@@ -75,8 +77,8 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
         if written_this_run(path, previous[path]):  # by an attempt whose worker died
             result["earlier"].append(path)
             return True
-        if skip_existing and is_complete_image(path, image.width, image.height,
-                                               exr_channels(image.aovs)):
+        if skip_existing and is_complete_image(path, request.width, request.height,
+                                               exr_channels(request.layout.aovs)):
             result["skipped"].append(path)
             return True
         return False
@@ -92,7 +94,8 @@ def render_chunk(options: EngineOptions, image: ImageOptions, frames: list[float
             # releases and compiles GL objects
             with create_context():
                 engine = _engine(options)
-                result["written"] = render_frames(engine, image, frames, paths, skip=skip)
+                result["written"] = render_frames(engine, request, writing, frames, paths,
+                                                  skip=skip)
             result["baked"] = engine.baked_paths
         except UsdWrinkleError as exc:
             result["error"] = {"what": exc.what, "prim_path": exc.prim_path,

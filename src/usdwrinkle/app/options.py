@@ -207,6 +207,17 @@ class RenderOptions(_Checked):
             return AOV_BLOCKS if aovs is None else aovs
         return stored_aovs(path, aovs)
 
+    def frame_request(self, width: int, height: int, path: str) -> typing.Any:
+        """The render/request.FrameRequest of each frame written to ``path`` (its format
+        sets the layout read back), at the resolved ``width`` x ``height``."""
+        from ..outputs.images import layout_for
+        from ..render.request import FrameRequest
+
+        return FrameRequest(width, height, self.samples, not self.no_wrinkles,
+                            self.shade_samples,
+                            layout_for(path, self.exr_half, self.chosen_aovs(path)),
+                            self.readback_buffers)
+
 
 @dataclass(frozen=True)
 class BakeOptions(_Checked):

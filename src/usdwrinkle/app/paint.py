@@ -367,14 +367,16 @@ class PaintSession:
         (with the stage's camera and FULL quality, the same codes)."""
         import time
 
+        from ..render.request import FrameRequest
+
         started = time.perf_counter()
         w = max(1, int(round(width * quality.scale)))
         h = max(1, int(round(height * quality.scale)))
         camera = self.camera_record(w, h)
         self._apply_display()
-        image = self.engine.render_image(self.frame, w, h, self._layout,
-                                         samples=quality.samples,
-                                         shade_samples=quality.samples > 1, camera=camera)
+        image = self.engine.render(self.frame, FrameRequest(
+            w, h, quality.samples, shade_samples=quality.samples > 1, layout=self._layout,
+            camera=camera))
         pixels = np.array(image.planes["RGBA"], copy=True)
         image.release()
         self._camera = (camera, w, h)

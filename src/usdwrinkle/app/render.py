@@ -32,10 +32,12 @@ class RenderPlan:
 
 @dataclass(frozen=True)
 class ChunkPlan:
-    """What a farm spreads: each chunk's image options, and whether wave fields must be
-    baked first."""
+    """What a farm spreads: each chunk's frame request (render/request.FrameRequest) and
+    write options (outputs/writer.WriteOptions), and whether wave fields must be baked
+    first."""
 
-    image: Any
+    request: Any
+    writing: Any
     needs_bake: bool
 
 
@@ -218,7 +220,8 @@ class RenderJob(ShotJob):
                     needs_bake = True
         width, height = image_size(scene, self.options.camera, self.options.width,
                                    self.options.height, plan.frames[0])
-        return ChunkPlan(self.image_options(width, height, chunked=True), needs_bake)
+        return ChunkPlan(self.frame_request(width, height),
+                         self.write_options(width, height, chunked=True), needs_bake)
 
     def check_output(self, path: str) -> None:
         """Refuse a further file the job writes (a farm's bake) that is one of the stage's
@@ -243,11 +246,15 @@ class RenderJob(ShotJob):
 
     # --- the work -----------------------------------------------------------------------
 
-    def image_options(self, width: int, height: int, chunked: bool = False) -> Any:
-        """The frame loop's shot.ImageOptions at the resolved size (``chunked``: for a farm's
-        worker process, one of several on its node: one writer thread unless asked)."""
-        from ..outputs.writer import default_threads, exr_threads, frames_in_flight
-        from ..shot import ImageOptions
+    def frame_request(self, width: int, height: int) -> Any:
+        """The render/request.FrameRequest of every frame, at the resolved size."""
+        return self.options.frame_request(width, height, str(self.output))
+
+    def write_options(self, width: int, height: int, chunked: bool = False) -> Any:
+        """The frame loop's outputs/writer.WriteOptions at the resolved size (``chunked``:
+        for a farm's worker process, one of several on its node: one writer thread unless
+        asked)."""
+        from ..outputs.writer import WriteOptions, default_threads, exr_threads, frames_in_flight
 
         o = self.options
         exr = str(self.output).lower().endswith(".exr")
@@ -256,10 +263,7 @@ class RenderJob(ShotJob):
         # what a frame holds until it is written: at most 32 bytes a pixel (an EXR's
         # colour, normals, depth and wrinkle fields)
         in_flight = frames_in_flight(threads, 32 * width * height)
-        return ImageOptions(width, height, o.samples, self.wrinkles, threads,
-                            o.exr_compression, o.exr_half, o.shade_samples, in_flight,
-                            o.readback_buffers, exr_threads(chunked),
-                            o.chosen_aovs(str(self.output)))
+        return WriteOptions(threads, in_flight, o.exr_compression, exr_threads(chunked))
 
     def run(self, ctx: Any = None) -> RenderResult:
         """Check, start the engine, render every frame; ``ctx``: a moderngl context to
@@ -278,16 +282,17 @@ class RenderJob(ShotJob):
             self._engine_notes(engine, plan.frames)
             width, height = engine.resolution(self.options.width, self.options.height,
                                               plan.frames[0])
-            image = self.image_options(width, height)
+            request = self.frame_request(width, height)
             engine.check_relax_work(plan.frames, self.wrinkles)  # a refusal: before start
             if self.on_start is not None:
                 self.on_start()
             started = time.perf_counter()
             stats: dict[str, Any] | None = {} if self.options.stats else None
-            channels = exr_channels(image.aovs)
+            channels = exr_channels(request.layout.aovs)
             skip = (lambda path: is_complete_image(path, width, height, channels)) \
                 if self.options.skip_existing else (lambda path: False)
-            written = render_frames(engine, image, plan.frames, plan.outputs, skip=skip,
+            written = render_frames(engine, request, self.write_options(width, height),
+                                    plan.frames, plan.outputs, skip=skip,
                                     progress=lambda items: self.progress(items, "render"),
                                     stats=stats)
             if stats is not None and self.options.stats:

@@ -196,8 +196,7 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
     layer = bake_path(job.output, shot.path) if chunks.needs_bake else None
     if layer is not None:
         job.check_output(layer)
-    image = chunks.image
-    width, height = image.width, image.height
+    width, height = chunks.request.width, chunks.request.height
 
     started = time.perf_counter()
     client = cluster = None
@@ -230,8 +229,9 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
         for index, start in enumerate(range(0, len(frames), chunk)):
             part = slice(start, start + chunk)
             futures.append(client.submit(
-                render_chunk, engine_options, image, frames[part], outputs[part],
-                before[part], options.skip_existing, retries=RETRIES, pure=False,
+                render_chunk, engine_options, chunks.request, chunks.writing, frames[part],
+                outputs[part], before[part], options.skip_existing, retries=RETRIES,
+                pure=False,
                 key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
         written, baked, skipped = _gather(distributed, futures, len(frames), chunk, reporter)
         return FarmResult(written, baked, width, height, time.perf_counter() - started,

@@ -47,7 +47,7 @@ def layout_for(path: str, half: bool = True, aovs: tuple[str, ...] = AOV_BLOCKS)
     ext = check_format(path)
     if ext in FLOAT_FORMATS:
         return ImageLayout("exr", aovs=tuple(aovs), half=half)
-    return ImageLayout("8bit", over_black=ext in (".jpg", ".jpeg"))
+    return ImageLayout("8bit", aovs=("color",), over_black=ext in (".jpg", ".jpeg"))
 
 
 def stored_aovs(path: str, aovs: tuple[str, ...] | None) -> tuple[str, ...]:

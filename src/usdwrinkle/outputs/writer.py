@@ -13,11 +13,26 @@ from __future__ import annotations
 import os
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 
 #: the most writer threads (--write-threads); the automatic count stays below it too
 MAX_THREADS = 64
 #: the share of the available memory that frames waiting for or in encoding may hold
 MEMORY_SHARE = 0.25
+
+
+@dataclass(frozen=True)
+class WriteOptions:
+    """How a render's frames are written (the frame loop's writer, images.write_image)."""
+
+    #: writer threads: frame f is encoded while f + 1 renders; 0 encodes in the render loop
+    threads: int = 1
+    #: frames that may wait or encode at once (frames_in_flight)
+    in_flight: int = 2
+    #: EXR compression (images.EXR_COMPRESSIONS)
+    exr_compression: str = "zip"
+    #: OpenEXR's own threads per EXR file (exr_threads)
+    exr_threads: int = 0
 
 
 def cores() -> int:

@@ -3,14 +3,13 @@ render pass that runs skin -> crush -> relax per mesh, then draws.
 
 Vocabulary follows pxr/imaging/hd so that a C++ HdRenderDelegate port is
 mechanical: ``RenderDelegate.create_rprim``, ``Mesh.sync(scene_delegate,
-dirty_bits) -> remaining bits``, ``RenderPass.execute(state)``, ``RenderBuffer``.
+dirty_bits) -> remaining bits``, ``RenderPass.execute(request, ...)`` (one FrameRequest,
+render/request.py), ``RenderBuffer``.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
-from ..aovs import AOV_BLOCKS
 from ..contract import COLD_START_FACTOR
 from ..scene.dirty import DirtyBits
 from .bounds import eye_bound, screen_rect
@@ -21,7 +20,8 @@ from .passes.draw import FLIP_Y, DrawPass
 from .passes.normals import NormalsPass
 from .passes.relax import RelaxPass
 from .passes.skin import SkinPass
-from .resolve import ImageLayout, PendingImage, ResolvedImage, ResolvePass
+from .request import FrameRequest
+from .resolve import PendingImage, ResolvedImage, ResolvePass
 from .resources import MeshResources
 
 
@@ -138,28 +138,6 @@ class _timed:
         self.sink[self.name + ".source"] = "gl-timer-query" if plausible else "wall-clock"
 
 
-@dataclass
-class RenderPassState:
-    """Camera, framing and AOV bindings of one execution."""
-
-    camera: object
-    lights: tuple
-    width: int
-    height: int
-    wrinkles: bool = True
-    samples: int = 4
-    aovs: tuple = AOV_BLOCKS
-    #: where folds turn within a pixel, shade each multisample where it lies, not the
-    #: pixel once (render --no-shade-samples turns it off)
-    shade_samples: bool = True
-    timings: dict = field(default_factory=dict)
-    #: read the frame back as an image file stores it instead of as float AOVs
-    image: ImageLayout | None = None
-    #: with ``image``: readback buffers in a ring; > 1 returns a PendingImage, read
-    #: while the next frames compute (render/resolve.py)
-    readback_ring: int = 1
-
-
 class RenderDelegate:
     """Owns the GL context, the compiled passes and the rprims."""
 
@@ -268,48 +246,52 @@ class RenderPass:
             fb.write_only(previous)
             fb.fbo.depth_mask = True
 
-    def execute(self, state: RenderPassState) -> dict[str, RenderBuffer] | ResolvedImage | \
-            PendingImage:
-        """Draw every rprim; returns the AOVs, or with ``state.image`` the frame as an
-        image file stores it."""
+    def execute(self, request: FrameRequest, camera, lights: tuple,
+                timings: dict) -> dict[str, RenderBuffer] | ResolvedImage | PendingImage:
+        """Draw every rprim through ``camera`` (``request.camera``, else the shot's) in
+        ``lights``; returns what ``request.layout`` reads back: the AOVs, or the frame as
+        an image file stores it. ``timings`` gains the pass times (ms)."""
         d = self.delegate
         ctx = d.ctx
-        attachments = state.image.attachments if state.image is not None else None
+        layout = request.layout
+        if request.camera is not None:
+            camera = request.camera
+        attachments = layout.attachments if layout.kind != "aovs" else None
         # an 8-bit image is as exact from half-float colour samples (11 bits), which
         # halve the multisampled colour's clears, writes and reads
-        eight_bit = state.image is not None and state.image.kind == "8bit"
-        fb = d.framebuffer(state.width, state.height, state.samples,
+        eight_bit = layout.kind == "8bit"
+        fb = d.framebuffer(request.width, request.height, request.samples,
                            3 if attachments is None else max(attachments) + 1,
                            "f2" if eight_bit else "f4")
+        image = layout if attachments is not None else None
         timer = ctx if d.profile else None
         # a host's GL state is not ours (Qt enters paintGL with blending on): reset what
         # the draw relies on
         ctx.disable(ctx.BLEND)
         ctx.scissor = None
-        with _timed(timer, "draw", state.timings):
+        with _timed(timer, "draw", timings):
             drawn = [mesh for mesh in d.rprims.values() if mesh.resources is not None and
                      mesh.frame is not None and mesh.frame.visible and
                      mesh.resources.num_triangles]
             # where each mesh can be this frame: its culling, and the part of the frame
             # that is cleared and read back (render/bounds.py)
             bounds = {id(mesh): eye_bound(mesh.resources.record, mesh.frame,
-                                          state.camera.view) for mesh in drawn}
-            fb.begin(attachments, screen_rect(bounds.values(),
-                                              state.camera.projection @ FLIP_Y,
-                                              state.width, state.height), state.image)
+                                          camera.view) for mesh in drawn}
+            fb.begin(attachments, screen_rect(bounds.values(), camera.projection @ FLIP_Y,
+                                              request.width, request.height), image)
             ctx.enable(ctx.DEPTH_TEST)
             ctx.disable(ctx.CULL_FACE)
-            d.draw.shade_samples = state.shade_samples and state.samples > 1
-            d.draw.begin(state.camera, state.lights, state.wrinkles)
+            d.draw.shade_samples = request.shade_samples and request.samples > 1
+            d.draw.begin(camera, lights, request.wrinkles)
             translucent = [mesh for mesh in drawn if mesh.resources.record.material.translucent]
             for mesh in drawn:
                 if mesh not in translucent:
-                    d.draw.draw(mesh.resources, mesh.frame, state.camera, bounds[id(mesh)])
+                    d.draw.draw(mesh.resources, mesh.frame, camera, bounds[id(mesh)])
             if translucent:
-                self._draw_translucent(translucent, fb, state.camera, bounds)
+                self._draw_translucent(translucent, fb, camera, bounds)
         started = time.perf_counter()
-        buffers = fb.read_image(state.image, state.readback_ring) if state.image is not None \
-            else fb.read(state.aovs)
+        buffers = fb.read_image(image, request.ring_on(ctx)) if image is not None \
+            else fb.read(layout.aovs)
         if d.profile:  # a pending image's copy is timed when it is read (its read_ms)
-            state.timings["readback"] = (time.perf_counter() - started) * 1e3
+            timings["readback"] = (time.perf_counter() - started) * 1e3
         return buffers
