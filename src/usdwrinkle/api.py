@@ -37,8 +37,8 @@ from typing import Any
 from .app.bake import BakeJob, BakeResult
 from .app.options import BakeOptions, RenderOptions, ShotOptions
 from .app.render import RenderJob, RenderResult
-from .app.shot import Progress, Shot, frame_spec_of, no_progress
-from .errors import UsdWrinkleError
+from .app.shot import Progress, Shot, no_progress
+from .errors import UsdWrinkleError, print_stderr
 
 __all__ = ["BakeJob", "BakeOptions", "BakeResult", "RenderJob", "RenderOptions",
            "RenderResult", "Shot", "ShotOptions", "UsdWrinkleError", "bake", "render"]
@@ -93,39 +93,13 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
                             aovs=None if aovs is None else
                             tuple([aovs] if isinstance(aovs, str) else aovs),
                             no_wrinkles=no_wrinkles, skip_existing=skip_existing,
-                            recompute=recompute, stats=stats, stats_passes=stats_passes)
+                            recompute=recompute, stats=stats, stats_passes=stats_passes,
+                            dask=dask, workers=workers, chunk=chunk)
     job = RenderJob(_shot(stage, all_meshes, relax_iterations, history_start, sublayer,
                           variant, mask), output, frames, options, progress=_progress(quiet))
-    from .farm.client import check_farm_options
-
-    check_farm_options(dask, workers, chunk)
-    if dask is None:
-        if workers is not None or chunk is not None:
-            from .log import warn
-
-            warn("`chunk` and `workers` apply to `dask` only; ignored")
-        outputs = job.run().outputs
-    else:
-        outputs = _render_on_dask(job, frames, dask, workers, chunk, quiet)
-    return [path for path in outputs if os.path.isfile(path)]
-
-
-def _render_on_dask(job: RenderJob, frames: Frames, scheduler: str, workers: int | None,
-                    chunk: int | None, quiet: bool) -> list[str]:
-    from .farm.client import FarmRender, render_on_dask
-
-    plan = job.prepare()
-
-    class _Reporter:
-        def __init__(self) -> None:
-            self.quiet = quiet
-
-        def progress(self, items: list[Any], what: str) -> Any:
-            return job.progress(items, what)
-
-    spec = None if frames is None else frame_spec_of(frames)
-    render_on_dask(FarmRender(job, plan, spec, scheduler, workers, chunk), _Reporter())
-    return list(plan.outputs)
+    if not quiet:
+        job.say = print_stderr
+    return [path for path in job.run().outputs if os.path.isfile(path)]
 
 
 def bake(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,

@@ -182,9 +182,25 @@ class RenderOptions(_Checked):
     #: with ``stats``: time each pass (False: the frame loop's times alone, the GPU
     #: working ahead as without ``stats``)
     stats_passes: bool = True
+    #: render on Dask (farm/): "local" (a local cluster) or a scheduler's address; None
+    #: renders here
+    dask: str | None = None
+    #: with ``dask`` "local": worker processes (None: one per core)
+    workers: int | None = None
+    #: with ``dask``: frames per task (None: at most 10, two chunks per worker or more)
+    chunk: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.dask is not None and not isinstance(self.dask, str):
+            raise UsdWrinkleError(f"`dask`={self.dask!r} must be 'local' or a scheduler's "
+                                  "address")
+        super().__post_init__()
 
     def check(self) -> None:
+        from ..farm.client import check_farm_options
         from ..render.buffers import check_samples
+
+        check_farm_options(self.dask, self.workers, self.chunk)
 
         if self.width <= 0 or (self.height is not None and self.height <= 0):
             raise UsdWrinkleError("`width` and `height` must be positive")

@@ -52,14 +52,18 @@ class RenderResult:
     written: list[float | None]
     width: int
     height: int
-    #: seconds of the frame loop (after the checks and the engine's start)
+    #: seconds of the frame loop (after the checks and the engine's start; on Dask, from
+    #: the cluster's start, its bake included)
     elapsed: float
-    #: the meshes drawn from baked wave fields
+    #: the meshes drawn from baked wave fields (on Dask: those the workers drew so)
     baked: list[str] = field(default_factory=list)
     #: frames ``skip_existing`` found complete
     skipped: int = 0
     #: per-frame timings (``stats``), else None
     stats: dict[str, Any] | None = None
+    #: on Dask (``dask``): the workers and the frames per chunk; 0 when rendered here
+    workers: int = 0
+    chunk: int = 0
 
 
 class RenderJob(ShotJob):
@@ -265,9 +269,38 @@ class RenderJob(ShotJob):
         in_flight = frames_in_flight(threads, 32 * width * height)
         return WriteOptions(threads, in_flight, o.exr_compression, exr_threads(chunked))
 
+    def bake_fields(self, layer: str, frame_spec: str | None) -> None:
+        """Bake the shot's wave fields to ``layer`` (a farm's bake before its chunks)."""
+        from .bake import BakeJob
+
+        BakeJob(self.shot, layer, frame_spec, progress=self.progress).run()
+
     def run(self, ctx: Any = None) -> RenderResult:
-        """Check, start the engine, render every frame; ``ctx``: a moderngl context to
-        share (None: the process's own)."""
+        """Check, start the engine, render every frame, here or on Dask (``dask``);
+        ``ctx``: a moderngl context to share (None: the process's own)."""
+        if self.options.dask is not None:
+            return self._run_on_dask()
+        if self.options.chunk is not None or self.options.workers is not None:
+            _log.warning("`chunk` and `workers` apply to `dask` only; ignored")
+        return self._run_here(ctx)
+
+    def _run_on_dask(self) -> RenderResult:
+        from ..farm.client import FarmRender, render_on_dask
+        from .shot import frame_spec_of
+
+        plan = self.prepare()  # every refusal comes first
+        o = self.options
+        if o.stats:
+            _log.warning("`stats` applies to a serial render; ignored with `dask`")
+        spec = None if self.frames is None else frame_spec_of(self.frames)
+        assert o.dask is not None
+        farm = render_on_dask(FarmRender(self, plan, spec, o.dask, o.workers, o.chunk,
+                                         self.progress, self.say, self.on_start))
+        return RenderResult(plan.frames, plan.outputs, farm.written, farm.width, farm.height,
+                            farm.elapsed, farm.baked, farm.skipped, None, farm.workers,
+                            farm.chunk)
+
+    def _run_here(self, ctx: Any) -> RenderResult:
         from ..aovs import exr_channels
         from ..imagefiles import is_complete_image
         from ..shot import render_frames

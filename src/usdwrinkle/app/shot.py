@@ -121,8 +121,9 @@ class Shot:
 class ShotJob:
     """What a job of a shot holds: the shot, what it writes (a path or pattern), the
     frames (usdrecord's FrameSpec text, a list of numbers, or None for the stage's
-    range), a ``progress(items, what)`` callback that wraps each loop, and ``on_start()``,
-    called after every check that can refuse the job, before the frame work."""
+    range), a ``progress(items, what)`` callback that wraps each loop, ``on_start()``,
+    called after every check that can refuse the job, before the frame work, and
+    ``say(text)``, which prints a status line (None: silent; a farm's)."""
 
     def __init__(self, shot: Shot, output: str | os.PathLike[str],
                  frames: str | Sequence[float] | None = None,
@@ -140,6 +141,7 @@ class ShotJob:
         self.frames = frames
         self.progress = progress
         self.on_start = on_start
+        self.say: Callable[[str], None] | None = None
 
 
 def at_frame(frame: float | None) -> Any:

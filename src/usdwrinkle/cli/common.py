@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import print_warning
+from ..errors import print_stderr, print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -66,9 +66,11 @@ def add_shot_args(parser, output_help: str) -> None:
 
 
 def report_to(job, reporter, args) -> None:
-    """Give a job the command's progress bars and header line."""
+    """Give a job the command's progress bars, header line and status lines."""
+    command = args.command + (" on Dask" if getattr(args, "dask", None) is not None else "")
     job.progress = reporter.progress
-    job.on_start = lambda: reporter.header(args.command, args.stage)
+    job.on_start = lambda: reporter.header(command, args.stage)
+    job.say = None if reporter.quiet else print_stderr
 
 
 class Reporter:

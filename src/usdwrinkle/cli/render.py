@@ -123,51 +123,31 @@ def render_job(args, reporter: Reporter | None = None):
         readback_buffers=args.readback_buffers,
         exr_half=args.exr_half, exr_compression=args.exr_compression, aovs=args.aovs,
         no_wrinkles=args.no_wrinkles, skip_existing=args.skip_existing,
-        recompute=args.recompute, stats=args.stats, stats_passes=args.stats_passes)
+        recompute=args.recompute, stats=args.stats, stats_passes=args.stats_passes,
+        dask=args.dask, workers=args.workers, chunk=args.chunk)
     job = RenderJob(shot_of(args), args.output, args.frames, options)
     if reporter is not None:
         report_to(job, reporter, args)
     return job
 
 
-def check_farm_args(args) -> None:
-    """Refuse farm options out of range, before any stage is read."""
-    if args.dask is None and args.chunk is None and args.workers is None:
-        return
-    from ..farm.client import check_farm_options
-
-    check_farm_options(args.dask, args.workers, args.chunk)
-
-
-def summary(written: int, width: int, height: int, output: str, frames: list[float],
-            elapsed: float, baked: list[str], extra: str = "", skipped: int = 0) -> str:
-    """The closing line of a render, serial or on a farm (``skipped``: frames that
-    --skip-existing found complete)."""
+def summary(result, output: str) -> str:
+    """The closing line of a render (an app.RenderResult), serial or on a farm."""
     from ..timecode import format_frame
 
+    frames = result.frames
     last = f" .. {format_frame(frames[-1])}" if len(frames) > 1 else ""
-    kept = f", kept {skipped} complete frame(s) (--skip-existing)" if skipped else ""
-    text = (f"usdwrinkle: wrote {written} frame(s) {width}x{height} to "
-            f"{frame_path(output, frames[0])}{last}{kept} in {elapsed:.1f} s{extra}")
-    if baked:
-        text += f"; baked wave fields: {', '.join(baked)}"
+    kept = f", kept {result.skipped} complete frame(s) (--skip-existing)" \
+        if result.skipped else ""
+    farm = (f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
+            f"{result.workers} Dask worker(s), chunks of {result.chunk})") \
+        if result.workers else ""
+    text = (f"usdwrinkle: wrote {len(result.written)} frame(s) {result.width}x"
+            f"{result.height} to {frame_path(output, frames[0])}{last}{kept} in "
+            f"{result.elapsed:.1f} s{farm}")
+    if result.baked:
+        text += f"; baked wave fields: {', '.join(result.baked)}"
     return text
-
-
-def _render_on_dask(args, reporter, job, plan) -> None:
-    """--dask: the farm's typed request from the job, and the summary of its result."""
-    from ..farm.client import FarmRender, render_on_dask
-
-    frames = plan.frames
-    request = FarmRender(job=job, plan=plan, frame_spec=args.frames, scheduler=args.dask,
-                         workers=args.workers, chunk=args.chunk)
-    result = render_on_dask(request, reporter)
-    if not reporter.quiet:
-        print_stderr(summary(result.written, result.width, result.height, args.output, frames,
-                      result.elapsed, result.baked,
-                      f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
-                      f"{result.workers} Dask worker(s), chunks of {result.chunk})",
-                      skipped=result.skipped))
 
 
 def run(args) -> int:
@@ -178,20 +158,8 @@ def run(args) -> int:
 def render_shot(args) -> list[str]:
     """The render command's work; returns the file of each frame of the shot (written, or
     kept by --skip-existing)."""
-    check_farm_args(args)
     with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
-        job = render_job(args, reporter)
-        if args.dask is not None:
-            plan = job.prepare()  # the job's checks: every refusal comes first
-            if args.stats:
-                reporter.warn("--stats applies to a serial render; ignored with --dask")
-            _render_on_dask(args, reporter, job, plan)
-            return plan.outputs
-        if args.chunk is not None or args.workers is not None:
-            reporter.warn("--chunk and --workers apply to --dask only; ignored")
-        result = job.run()
+        result = render_job(args, reporter).run()
         if not args.quiet:
-            print_stderr(summary(len(result.written), result.width, result.height,
-                                 args.output, result.frames, result.elapsed, result.baked,
-                                 skipped=result.skipped))
+            print_stderr(summary(result, args.output))
         return result.outputs

@@ -26,10 +26,12 @@ import shutil
 import tempfile
 import time
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
-from ..app.chunks import file_identity, remove_temporaries, render_chunk
-from ..errors import UsdWrinkleError, print_stderr
+from ..errors import UsdWrinkleError
+from .worker import file_identity, remove_temporaries, render_chunk
 
 _log = logging.getLogger(__name__)
 
@@ -151,27 +153,41 @@ def _connect(distributed, address: str, workers: int | None):
     return client, None, len(client.scheduler_info()["workers"])
 
 
+def _no_progress(items: list[Any], _what: str) -> list[Any]:
+    return items
+
+
 @dataclass(frozen=True)
 class FarmRender:
-    """What ``usdwrinkle render --dask`` asks for: the render job (app/render.RenderJob),
-    checked and planned by its ``prepare``, and how to spread it."""
+    """A render job spread on Dask (app/render.RenderJob.run with ``dask``): the job,
+    checked and planned by its ``prepare``, and how to spread it.
 
-    job: object
-    plan: object
+    The job gives what the farm asks of it: ``plan_chunks(plan)`` (the frame request and
+    write options, and whether to bake), ``check_output(path)``, ``bake_fields(layer,
+    frame_spec)`` and ``chunk_engine(stage, baked)``; ``output`` and ``shot.path``."""
+
+    job: Any
+    plan: Any
     #: the frames as the user wrote them (recorded in the bake's layer), or None
     frame_spec: str | None = None
     #: "local" (a LocalCluster) or a scheduler's address
     scheduler: str = "local"
     workers: int | None = None
     chunk: int | None = None
+    #: wraps a list of frames in a progress bar (advanced as chunks finish)
+    progress: Callable[[list[Any], str], Any] = _no_progress
+    #: prints a status line (where it renders, the bake's time); None: silent
+    say: Callable[[str], None] | None = None
+    #: called once the workers are up, before the bake (the command's header line)
+    on_start: Callable[[], None] | None = None
 
 
 @dataclass(frozen=True)
 class FarmResult:
-    """What a farm render did: frames written, meshes whose wave fields were baked, the
-    image size, the wall time, and how the frames were spread."""
+    """What a farm render did: the frames written, meshes whose wave fields were baked,
+    the image size, the wall time, and how the frames were spread."""
 
-    written: int
+    written: list
     baked: list
     width: int
     height: int
@@ -182,18 +198,15 @@ class FarmResult:
     skipped: int = 0
 
 
-def render_on_dask(request: FarmRender, reporter) -> FarmResult:
-    """Run a farm render. ``reporter``: progress(items, desc) and quiet
-    (cli/common.Reporter); warnings are logged (usdwrinkle/log.py), the workers' too."""
-    from ..app.bake import BakeJob
-
+def render_on_dask(request: FarmRender) -> FarmResult:
+    """Run a farm render; warnings are logged (usdwrinkle/log.py), the workers' too."""
     distributed = _import_dask()
     job, plan = request.job, request.plan
-    shot, options = job.shot, job.options
+    say = request.say
     frames, outputs = list(plan.frames), list(plan.outputs)
     # the checks of a serial render, once, here (no GL context)
     chunks = job.plan_chunks(plan)
-    layer = bake_path(job.output, shot.path) if chunks.needs_bake else None
+    layer = bake_path(job.output, job.shot.path) if chunks.needs_bake else None
     if layer is not None:
         job.check_output(layer)
     width, height = chunks.request.width, chunks.request.height
@@ -205,22 +218,22 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
         client, cluster, workers = _connect(distributed, request.scheduler, request.workers)
         # the run's header (version, stage, this process's GL, which bakes), as a serial
         # render's log starts: made once the workers are spawned, so no context precedes them
-        if hasattr(reporter, "header"):
-            reporter.header("render on Dask", shot.path)
-        if not reporter.quiet:
+        if request.on_start is not None:
+            request.on_start()
+        if say is not None:
             where = "a local cluster" if cluster is not None else request.scheduler
             dashboard = client.dashboard_link if cluster is None or _has_bokeh() \
                 else "none (pip install bokeh for Dask's dashboard)"
-            print_stderr(f"usdwrinkle: rendering on {where}, {workers} worker(s); "
-                         f"dashboard: {dashboard}")
-        render_stage = shot.path
+            say(f"usdwrinkle: rendering on {where}, {workers} worker(s); "
+                f"dashboard: {dashboard}")
+        render_stage = job.shot.path
         if layer is not None:
             bake_started = time.perf_counter()
             os.makedirs(os.path.dirname(layer), exist_ok=True)
-            BakeJob(shot, layer, request.frame_spec, progress=reporter.progress).run()
-            if not reporter.quiet:
-                print_stderr(f"usdwrinkle: baked wave fields to {layer} in "
-                             f"{time.perf_counter() - bake_started:.1f} s")
+            job.bake_fields(layer, request.frame_spec)
+            if say is not None:
+                say(f"usdwrinkle: baked wave fields to {layer} in "
+                    f"{time.perf_counter() - bake_started:.1f} s")
             render_stage = layer
         engine_options = job.chunk_engine(render_stage, baked=layer is not None)
         chunk = request.chunk or default_chunk(len(frames), workers)
@@ -230,10 +243,9 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
             part = slice(start, start + chunk)
             futures.append(client.submit(
                 render_chunk, engine_options, chunks.request, chunks.writing, frames[part],
-                outputs[part], before[part], options.skip_existing, retries=RETRIES,
-                pure=False,
-                key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
-        written, baked, skipped = _gather(distributed, futures, len(frames), chunk, reporter)
+                outputs[part], before[part], job.options.skip_existing, retries=RETRIES,
+                pure=False, key=f"usdwrinkle-{run_id}-chunk-{index:05d}"))
+        written, baked, skipped = _gather(distributed, futures, plan, request.progress)
         return FarmResult(written, baked, width, height, time.perf_counter() - started,
                           workers, chunk, skipped)
     finally:
@@ -249,16 +261,16 @@ def render_on_dask(request: FarmRender, reporter) -> FarmResult:
         remove_temporaries(outputs)  # killed workers never reach atomic_path's cleanup
 
 
-def _gather(distributed, futures, total: int, chunk: int,
-            reporter) -> tuple[int, list[str], int]:
-    """Wait for every chunk; the first input error raises as the serial one would."""
-    bar = None
-    if not reporter.quiet and total > 1:
-        from ..progress import counter
-
-        bar = counter(total, "render")
-    written = skipped = 0
+def _gather(distributed, futures, plan: Any,
+            progress: Callable[[list[Any], str], Any]) -> tuple[list, list[str], int]:
+    """Wait for every chunk; returns (the frames written, in the plan's order, the baked
+    meshes, the frames skipped). The first input error raises as the serial one would.
+    ``progress`` wraps the plan's frames, one step a frame as its chunk finishes."""
+    frame_of = dict(zip(plan.outputs, plan.frames, strict=True))
+    done: set = set()
+    skipped = 0
     baked: set[str] = set()
+    ticks = iter(progress(list(plan.frames), "render"))
     try:
         for future in distributed.as_completed(futures):
             try:
@@ -275,13 +287,16 @@ def _gather(distributed, futures, total: int, chunk: int,
                 error = result["error"]
                 raise UsdWrinkleError(error["what"], error["prim_path"], error["attribute"],
                                       error["frame"])
-            written += len(result["written"]) + len(result["earlier"])
+            finished = list(result["written"]) + [frame_of[p] for p in result["earlier"]]
+            done.update(finished)
             skipped += len(result["skipped"])
             baked.update(result["baked"])
-            if bar is not None:
-                bar.update(len(result["written"]) + len(result["earlier"]) +
-                           len(result["skipped"]))
+            for _ in range(len(finished) + len(result["skipped"])):
+                next(ticks, None)
+        for _ in ticks:  # the bar's end
+            pass
     finally:
-        if bar is not None:
-            bar.close()
-    return written, sorted(baked), skipped
+        close = getattr(ticks, "close", None)
+        if close is not None:
+            close()
+    return [f for f in plan.frames if f in done], sorted(baked), skipped
