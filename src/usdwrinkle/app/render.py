@@ -168,12 +168,14 @@ class RenderJob(ShotJob):
     def _engine_notes(self, engine: Any, frames: list[float | None]) -> None:
         from ..scene.baked import holds_bake
         from ..scene.stage import outside_range_note
+        from ..timecode import format_frame
 
         computed = self.wrinkles and any(path not in engine.baked
                                          for path in engine.wrinkled_paths)
         options = self.shot.options
-        if computed and self.frames is not None and options.history_start is None and \
-                (note := outside_range_note(engine.stage, frames)):
+        from_start = computed and self.frames is not None and options.history_start is None
+        note = outside_range_note(engine.stage, frames) if from_start else None
+        if note:
             _log.warning(note)  # a preroll from the shot's start (not for baked frames)
         if self.uses_baked and holds_bake(engine.stage):
             # a farm chunk that renders a bake but finds wrinkled meshes without baked
@@ -181,8 +183,9 @@ class RenderJob(ShotJob):
             unbaked = [path for path in engine.wrinkled_paths if path not in engine.baked]
             if unbaked:
                 start = engine.history_start()
-                preroll = f", with a phase-history preroll from frame {start:g}" \
-                    if start is not None else ""
+                preroll = ""
+                if start is not None:
+                    preroll = f", with a phase-history preroll from frame {format_frame(start)}"
                 _log.warning(f"the stage holds a usdwrinkle bake, but {len(unbaked)} wrinkled "
                              f"mesh(es) have no baked wave fields in it; computing them "
                              f"here{preroll} (other machines may compute them slightly "
@@ -262,8 +265,9 @@ class RenderJob(ShotJob):
 
         o = self.options
         exr = str(self.output).lower().endswith(".exr")
-        threads = o.write_threads if o.write_threads is not None else \
-            (1 if chunked else default_threads(exr))
+        threads = o.write_threads
+        if threads is None:
+            threads = 1 if chunked else default_threads(exr)
         # what a frame holds until it is written: at most 32 bytes a pixel (an EXR's
         # colour, normals, depth and wrinkle fields)
         in_flight = frames_in_flight(threads, 32 * width * height)

@@ -136,15 +136,16 @@ def summary(result, output: str) -> str:
     from ..timecode import format_frame
 
     frames = result.frames
-    last = f" .. {format_frame(frames[-1])}" if len(frames) > 1 else ""
-    kept = f", kept {result.skipped} complete frame(s) (--skip-existing)" \
-        if result.skipped else ""
-    farm = (f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
-            f"{result.workers} Dask worker(s), chunks of {result.chunk})") \
-        if result.workers else ""
     text = (f"usdwrinkle: wrote {len(result.written)} frame(s) {result.width}x"
-            f"{result.height} to {frame_path(output, frames[0])}{last}{kept} in "
-            f"{result.elapsed:.1f} s{farm}")
+            f"{result.height} to {frame_path(output, frames[0])}")
+    if len(frames) > 1:
+        text += f" .. {format_frame(frames[-1])}"
+    if result.skipped:
+        text += f", kept {result.skipped} complete frame(s) (--skip-existing)"
+    text += f" in {result.elapsed:.1f} s"
+    if result.workers:
+        text += (f" ({len(frames) / result.elapsed:.1f} fps over the whole run, "
+                 f"{result.workers} Dask worker(s), chunks of {result.chunk})")
     if result.baked:
         text += f"; baked wave fields: {', '.join(result.baked)}"
     return text
@@ -158,8 +159,10 @@ def run(args) -> int:
 def render_shot(args) -> list[str]:
     """The render command's work; returns the file of each frame of the shot (written, or
     kept by --skip-existing)."""
-    with Reporter(args.quiet, library=getattr(args, "library", False)) as reporter:
-        result = render_job(args, reporter).run()
+    reporter = Reporter(args.quiet, library=getattr(args, "library", False))
+    with reporter:
+        job = render_job(args, reporter)
+        result = job.run()
         if not args.quiet:
             print_stderr(summary(result, args.output))
-        return result.outputs
+    return result.outputs
