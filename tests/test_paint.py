@@ -281,6 +281,7 @@ def test_a_live_preview_keeps_the_history_and_the_edit_restarts_it(sheet_session
     is the one a fresh engine renders from the painted stage."""
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.outputs.images import layout_for
+    from usdwrinkle.render.request import FrameRequest
 
     session, _, out = sheet_session
     session.render(320, 180, FULL)
@@ -294,7 +295,7 @@ def test_a_live_preview_keeps_the_history_and_the_edit_restarts_it(sheet_session
     ours = session.render(320, 180, FULL).pixels
     fresh = WrinkleEngine(str(out), ctx=gl_context)
     try:
-        image = fresh.render_image(session.frame, 320, 180, layout_for("x.png"))
+        image = fresh.render(session.frame, FrameRequest(320, 180, layout=layout_for("x.png")))
         np.testing.assert_array_equal(ours, image.planes["RGBA"])
     finally:
         fresh.release()
