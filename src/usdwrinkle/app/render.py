@@ -1,9 +1,10 @@
 """RenderJob: a shot's frames to image files, with every check and warning of a render.
 
-The command line (``usdwrinkle render``), the Python API (``usdwrinkle.api.render``), the
-farm (its client checks with ``prepare`` and ``mesh_notes``; its workers render chunks
-with ``render_chunk``) and usdview's "Render current frame" all run this job, so a render
-policy (a check, a warning) is written once. Warnings go to the ``usdwrinkle`` logger
+The command line (``usdwrinkle render``), the Python API (``usdwrinkle.api.render``) and
+usdview's "Render current frame" all run this job, so a render policy (a check, a
+warning) is written once. The job renders here, or on Dask when its options name a
+scheduler (``dask``): then farm/client.py checks with the job's ``plan_chunks``, bakes
+through ``bake_fields``, and its workers render chunks with farm/worker.render_chunk. Warnings go to the ``usdwrinkle`` logger
 (usdwrinkle/log.py); errors are UsdWrinkleError, naming option fields in backquotes.
 """
 from __future__ import annotations
