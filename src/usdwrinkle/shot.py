@@ -104,7 +104,7 @@ def render_frames(engine, request, writing, frames: list[float | None], paths: l
     into one of K readback buffers, behind a fence) and copied out only once frame
     f + K - 1 is queued too, on the resolve's copy thread, so the GPU works on the next
     frames while the CPU copies and encodes; the files are the same
-    (tests/test_trust.py).
+    (tests/test_whole_frames.py).
     """
     import time
     from collections import deque

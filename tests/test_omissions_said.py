@@ -1,4 +1,4 @@
-"""Trust, round 4 (issue 42): what a render leaves out is said."""
+"""What a render leaves out is said, in one line (issue 42, trust round 4)."""
 from __future__ import annotations
 
 import pytest
