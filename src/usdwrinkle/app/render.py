@@ -4,8 +4,8 @@ The command line (``usdwrinkle render``), the Python API (``usdwrinkle.api.rende
 usdview's "Render current frame" all run this job, so a render policy (a check, a
 warning) is written once. The job renders here, or on Dask when its options name a
 scheduler (``dask``): then farm/client.py checks with the job's ``plan_chunks``, bakes
-through ``bake_fields``, and its workers render chunks with farm/worker.render_chunk. Warnings go to the ``usdwrinkle`` logger
-(usdwrinkle/log.py); errors are UsdWrinkleError, naming option fields in backquotes.
+through ``bake_fields``, and its workers render chunks with farm/worker.render_chunk.
+Warnings go to the ``usdwrinkle`` logger (usdwrinkle/log.py); errors are UsdWrinkleError, naming option fields in backquotes.
 """
 from __future__ import annotations
 
