@@ -5,7 +5,8 @@ usdview's "Render current frame" all run this job, so a render policy (a check, 
 warning) is written once. The job renders here, or on Dask when its options name a
 scheduler (``dask``): then farm/client.py checks with the job's ``plan_chunks``, bakes
 through ``bake_fields``, and its workers render chunks with farm/worker.render_chunk.
-Warnings go to the ``usdwrinkle`` logger (usdwrinkle/log.py); errors are UsdWrinkleError, naming option fields in backquotes.
+Warnings go to the ``usdwrinkle`` logger (usdwrinkle/log.py); errors are
+UsdWrinkleError, naming option fields in backquotes.
 """
 from __future__ import annotations
 
