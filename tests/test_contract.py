@@ -36,11 +36,19 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   "MIKKTSPACE", "PARALLAX",
                   # the mipmap pass's (render/mipmaps.py)
                   "FLOAT"}
-PYTHON = {name for table in (bindings.COMMON, bindings.SKIN, bindings.NORMALS, bindings.CRUSH,
-                             bindings.RELAX,
-                             bindings.DRAW, bindings.MAPS,
-                             bindings.GEOMETRY, bindings.RESOLVE, bindings.RESOLVE_SHAPE,
-                             bindings.MIPMAP)
+def pass_classes():
+    """Every pass of the package: the wave passes (render/passes/base.py's registry), the
+    draw, the maps' and the displaced geometry's."""
+    from usdwrinkle.geometry.evaluate import GeometryEvaluator
+    from usdwrinkle.maps.raster import MapRasterizer
+    from usdwrinkle.render.passes.base import wave_passes
+    from usdwrinkle.render.passes.draw import DrawPass
+
+    return [*wave_passes(), DrawPass, MapRasterizer, GeometryEvaluator]
+
+
+PYTHON = {name for table in (bindings.COMMON, bindings.RESOLVE, bindings.RESOLVE_SHAPE,
+                             bindings.MIPMAP, *(cls.UNITS for cls in pass_classes()))
           for name in table}
 
 

@@ -165,8 +165,10 @@ class WrinkleEngine:
     def run_skin(self, path: str) -> None:
         """Run the skin pass again on ``path``'s last synced frame, alone (the bench times
         it against UsdSkel); its output is mesh_resources(path).posed_points."""
+        from .render.passes.skin import SkinPass
+
         mesh = self.render_delegate.rprims[path]
-        self.render_delegate.skin.run(mesh.resources, mesh.frame)
+        self.render_delegate.wave_pass(SkinPass).skin(mesh.resources, mesh.frame)
 
     @property
     def history_frame(self) -> float | None:

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..render import bindings
-from ..render.passes import bind, bind_wave, groups, set_uniforms
+from ..render.passes import bind_wave
+from ..render.passes.base import Pass
 from ..render.resources import MeshResources, Table
-from ..render.shaders import Variants, compute_shader
 from .subdivide import FineMesh
 
 #: the band limit: no wave on the fine mesh shorter than this many rest fine edges
@@ -33,14 +33,19 @@ class FineFrame:
     normals: np.ndarray
 
 
-class GeometryEvaluator:
-    """The compute program and, per mesh, its fine-vertex table and output tables."""
+class GeometryEvaluator(Pass):
+    """The displaced geometry's pass (render/passes/base.Pass) and, per mesh, its
+    fine-vertex table and output tables."""
+
+    SHADER = "geometry.glsl"
+    #: the wave blend's units (include/wave.glsl) and its own
+    UNITS = {**bindings.WAVE, "GEOMETRY_RANGES": 9, "GEOMETRY_ENTRIES": 10,
+             "GEOMETRY_SHADING_NORMALS": 11, "GEOMETRY_NORMAL_CORNERS": 12,
+             # image units
+             "GEOMETRY_POINTS": 0, "GEOMETRY_NORMALS": 1}
 
     def __init__(self, ctx):
-        self.ctx = ctx
-        defines = {**bindings.COMMON, **bindings.GEOMETRY}
-        self.variants = Variants(
-            lambda extra: compute_shader(ctx, "geometry.glsl", {**defines, **extra}))
+        super().__init__(ctx)
         self.tables: dict[str, tuple[Table, Table, Table, Table]] = {}
 
     def _tables(self, res: MeshResources, fine: FineMesh):
@@ -63,19 +68,16 @@ class GeometryEvaluator:
     def evaluate(self, res: MeshResources, fine: FineMesh, wrinkles: bool = True) -> FineFrame:
         """The fine mesh at the frame ``res`` holds (synced and computed)."""
         ranges, entries, points, normals = self._tables(res, fine)
-        shader = self.variants(TWO_SYSTEMS=res.waves.systems > 1)
-        set_uniforms(shader, {
+        two = res.waves.systems > 1
+        bind_wave(self.UNITS, res, self.variants(TWO_SYSTEMS=two))
+        self.dispatch(len(fine.points), {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_min_wavelength": float(BAND_LIMIT_EDGES * fine.edge_length),
-            "u_profile_samples": float(len(res.record.params.height_profile))})
-        units = bindings.GEOMETRY
-        bind_wave(units, res, shader)
-        bind(units, reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries,
-                           "GEOMETRY_SHADING_NORMALS": res.shading_normals,
-                           "GEOMETRY_NORMAL_CORNERS": res.normal_corners},
-             writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals})
-        shader.run(groups(len(fine.points), bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
+            "u_profile_samples": float(len(res.record.params.height_profile))},
+            reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries,
+                   "GEOMETRY_SHADING_NORMALS": res.shading_normals,
+                   "GEOMETRY_NORMAL_CORNERS": res.normal_corners},
+            writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals}, TWO_SYSTEMS=two)
         out_points = points.read()
         out_normals = normals.read()
         return FineFrame(np.ascontiguousarray(out_points[:, :3]),
@@ -88,4 +90,4 @@ class GeometryEvaluator:
     def release(self) -> None:
         for path in list(self.tables):
             self._release(path)
-        self.variants.release()
+        super().release()

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..render import bindings
-from ..render.passes import bind, bind_wave, set_uniforms
+from ..render.passes import bind_wave, set_uniforms
+from ..render.passes.base import DrawnPass
 from ..render.resources import MeshResources, Table
-from ..render.shaders import DrawableProgram, Variants, program
 
 #: neighbour offsets of one dilation step: edge neighbours first, so that islands grow
 #: round rather than square
@@ -72,19 +72,22 @@ class MapPixels:
     ht: np.ndarray | None = None
 
 
-class MapRasterizer:
-    """The maps program, the dilation kernel and render targets of one size."""
+class MapRasterizer(DrawnPass):
+    """The maps' pass (render/passes/base.DrawnPass) and its render targets of one size."""
+
+    SHADER = "maps.glsl"
+    #: the wave blend's units (include/wave.glsl) and its own
+    UNITS = {**bindings.WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9, "MAPS_SHADING_NORMALS": 10,
+             "MAPS_NORMAL_CORNERS": 11, "MAPS_TANGENTS": 12, "MAPS_GAIN": 13,
+             "MAPS_FRAME_NORMALS": 14}
 
     def __init__(self, ctx, size: int, parallax: bool = False):
         import moderngl
 
-        self.ctx = ctx
+        super().__init__(ctx)
         self.size = int(size)
         #: also the parallax maps (three more targets)
         self.parallax = bool(parallax)
-        defines = {**bindings.COMMON, **bindings.MAPS}
-        self.variants = Variants(lambda extra: DrawableProgram(
-            ctx, program(ctx, "maps.glsl", {**defines, **extra})))
         self.mode = moderngl.TRIANGLES
         shape = (self.size, self.size)
         # normal, wrinkle; with parallax bent, hS, hT
@@ -160,13 +163,12 @@ class MapRasterizer:
             "u_count": int(count),
             "u_amplitude_scale": float(res.record.params.amplitude_scale),
         })
-        units = bindings.MAPS
-        bind_wave(units, res, variant.program)
-        bind(units, reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width, "MAPS_GAIN": res.gain,
-                           "MAPS_SHADING_NORMALS": res.shading_normals,
-                           "MAPS_NORMAL_CORNERS": res.normal_corners})
+        bind_wave(self.UNITS, res, variant.program)
+        self.bind(reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width, "MAPS_GAIN": res.gain,
+                         "MAPS_SHADING_NORMALS": res.shading_normals,
+                         "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:
-            bind(units, reads={"MAPS_TANGENTS": tangents[0], "MAPS_FRAME_NORMALS": tangents[1]})
+            self.bind(reads={"MAPS_TANGENTS": tangents[0], "MAPS_FRAME_NORMALS": tangents[1]})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
         if count:
             self.ctx.disable(moderngl.BLEND)
@@ -238,5 +240,5 @@ class MapRasterizer:
         self.framebuffer.release()
         for tex in self.targets:
             tex.release()
-        self.variants.release()
+        super().release()
 

@@ -15,11 +15,8 @@ from ..scene.dirty import DirtyBits
 from .bounds import eye_bound, screen_rect
 from .buffers import Framebuffer, RenderBuffer
 from .context import create_context, is_software_renderer
-from .passes.crush import CrushPass
+from .passes.base import Step, wave_passes
 from .passes.draw import FLIP_Y, DrawPass
-from .passes.normals import NormalsPass
-from .passes.relax import RelaxPass
-from .passes.skin import SkinPass
 from .request import FrameRequest
 from .resolve import PendingImage, ResolvedImage, ResolvePass
 from .resources import MeshResources
@@ -71,33 +68,26 @@ class Mesh:
 
     def compute(self, wrinkles: bool, timer=None, write: int = 0,
                 read: int | None = None) -> None:
-        """Run skin, crush and relax for the synced frame, into the wave state in slot
-        ``write``.
+        """Run the wave passes (skin, normals, crush, relax: render/passes/base.py) for
+        the synced frame, into the wave state in slot ``write``.
 
         ``read``: the slot of the wave state of the shot's previous grid frame (read,
         never written); relaxation then starts from its phases (``relaxIterations``
         steps). Without one (None) it starts from the material-anchored phase and runs
-        COLD_START_FACTOR times longer.
+        COLD_START_FACTOR times longer. A frame drawn from baked wave fields computes its
+        normals alone: no fit and no relax (scene/baked.py).
         """
-        d = self.delegate
         res = self.resources
         history = read is not None
         res.waves.begin(write, read)
-        with _timed(timer, "skin", self.timings):
-            d.skin.run(res, self.frame)
-            d.normals.run(res, self.frame)
-        if wrinkles and self.frame.baked is not None:
-            # baked wave fields: normals only, no fit and no relax (scene/baked.py)
-            with _timed(timer, "crush", self.timings):
-                d.crush.run_baked(res, self.frame.baked)
-            return
-        with _timed(timer, "crush", self.timings):
-            d.crush.run(res, wrinkles, history=history and wrinkles)
         iterations = res.record.params.relax_iterations if wrinkles else 0
         if not history:
             iterations *= COLD_START_FACTOR
-        with _timed(timer, "relax", self.timings):
-            d.relax.run(res, iterations, with_history=history and wrinkles)
+        step = Step(self.frame, wrinkles, history and wrinkles, iterations,
+                    self.frame.baked if wrinkles else None)
+        for wave_pass in self.delegate.wave_passes:
+            with _timed(timer, wave_pass.TIMING, self.timings):
+                wave_pass.run(res, step)
 
     def release(self) -> None:
         if self.resources is not None:
@@ -144,14 +134,16 @@ class RenderDelegate:
     def __init__(self, ctx=None, profile: bool = False):
         self.ctx = ctx or create_context()
         self.profile = profile
-        self.skin = SkinPass(self.ctx)
-        self.normals = NormalsPass(self.ctx)
-        self.crush = CrushPass(self.ctx)
-        self.relax = RelaxPass(self.ctx)
+        #: the per-mesh compute chain, in order (render/passes/base.wave_passes)
+        self.wave_passes = [cls(self.ctx) for cls in wave_passes()]
         self.draw = DrawPass(self.ctx)
         self.resolve = ResolvePass(self.ctx)
         self.rprims: dict[str, Mesh] = {}
         self._framebuffer: Framebuffer | None = None
+
+    def wave_pass(self, cls):
+        """This delegate's instance of the wave pass class ``cls``."""
+        return next(p for p in self.wave_passes if type(p) is cls)
 
     @property
     def max_texture_size(self) -> int:
@@ -195,6 +187,8 @@ class RenderDelegate:
             self._framebuffer = None
         self.resolve.release()
         self.draw.release()
+        for wave_pass in self.wave_passes:
+            wave_pass.release()
 
 
 class RenderPass:

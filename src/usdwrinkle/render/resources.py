@@ -142,6 +142,8 @@ class MeshResources:
         self.buffers = []
         self.tables = []
         self.textures = []
+        #: tables the passes own (render/passes/base.Pass.table), by pass and name
+        self.owned: dict[str, Table] = {}
         try:
             self._create(record)
         except BaseException:
@@ -372,6 +374,15 @@ class MeshResources:
         self.tables.append(table)
         return table
 
+    def owned_table(self, key: str, spec) -> Table:
+        """The table ``key`` that a pass owns (``spec``: passes/base.TableSpec), made on
+        first use and released with the others."""
+        table = self.owned.get(key)
+        if table is None:
+            table = self.owned[key] = self._table(spec.count(self), spec.components,
+                                                  spec.dtype)
+        return table
+
     def _drop(self, table: Table) -> None:
         """Release one table before the others (WaveFields re-lays its relax tables)."""
         self.tables.remove(table)
@@ -416,6 +427,7 @@ class MeshResources:
         for tex in self.textures:
             tex.release()
         self.buffers, self.tables, self.textures = [], [], []
+        self.owned = {}
 
 
 def profile_curvature(gradient_profile: np.ndarray) -> float:

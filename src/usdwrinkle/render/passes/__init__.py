@@ -1,7 +1,8 @@
-"""The passes of the draw, one module each: Loviscach's four (skin, crush, relax, draw)
-and the posed normals (normals.py). The resolve and the mip chains are render/resolve.py
-and render/mipmaps.py; the maps and the displaced geometry evaluate the waves with their
-own passes (maps/raster.py, geometry/evaluate.py)."""
+"""The passes, one module each, on one interface (base.py): the wave passes that run per
+mesh and frame (skin, the posed normals, crush, relax: each registers itself) and the
+draw. The maps and the displaced geometry evaluate the waves with passes of the same
+interface (maps/raster.py, geometry/evaluate.py); the resolve and the mip chains are
+render/resolve.py and render/mipmaps.py. This module holds the helpers every pass uses."""
 from __future__ import annotations
 
 import functools

@@ -5,10 +5,8 @@ A mesh drawn from baked wave fields runs only the posed-normal part of this pass
 """
 from __future__ import annotations
 
-from .. import bindings
 from ..resources import MeshResources
-from ..shaders import compute_shader
-from . import bind, groups, set_uniforms
+from .base import Step, WavePass, wave_pass
 
 #: crest damping: a turn of the compression direction by less than this a frame (radians,
 #: 5 degrees) is followed with the time constant wrinkle:crestDamping; by twice this and
@@ -24,64 +22,70 @@ def damping_alpha(tau: float) -> float:
     return 1.0 if tau <= 0 else 1.0 - math.exp(-1.0 / tau)
 
 
-class CrushPass:
-    def __init__(self, ctx):
-        self.ctx = ctx
-        defines = {**bindings.COMMON, **bindings.CRUSH}
-        self.shader = compute_shader(ctx, "crush.glsl", defines)
-        self.face_shader = compute_shader(ctx, "crush.glsl", {**defines, "FACE_NORMALS": 1})
-        self.baked_shader = compute_shader(ctx, "crush.glsl", {**defines, "FROM_BAKE": 1})
+@wave_pass
+class CrushPass(WavePass):
+    """Each vertex's compression turned into a plane wave (crush.glsl); with baked wave
+    fields, their posed normals alone."""
+
+    SHADER = "crush.glsl"
+    UNITS = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "TOPOLOGY_TABLE": 2,
+             "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FACE_NORMALS": 5,
+             "CRUSH_TRIANGLES": 6, "CRUSH_BAKED": 7, "CRUSH_HOLD": 8, "CRUSH_GAIN": 9,
+             "CRUSH_DAMPED_IN": 10,
+             # image units
+             "CRUSH_FIELDS": 0, "CRUSH_PHASE": 1, "CRUSH_FACE_NORMALS_OUT": 2,
+             "CRUSH_DAMPED": 3}
+    TIMING = "crush"
+    ORDER = 30
 
     def _face_normals(self, res: MeshResources) -> None:
-        set_uniforms(self.face_shader, {"u_num_triangles": res.num_triangles,
-                                        **res.topology_uniforms})
-        bind(bindings.CRUSH, reads={"CRUSH_POSED_POINTS": res.posed_points,
-                                    "TOPOLOGY_TABLE": res.topology})
+        self.bind(reads={"CRUSH_POSED_POINTS": res.posed_points,
+                         "TOPOLOGY_TABLE": res.topology})
         if res.num_triangles:
-            bind(bindings.CRUSH, reads={"CRUSH_TRIANGLES": res.triangles},
-                 writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals})
-            self.face_shader.run(groups(res.num_triangles, bindings.LOCAL_SIZE))
-            self.ctx.memory_barrier()
+            self.dispatch(res.num_triangles, {"u_num_triangles": res.num_triangles,
+                                              **res.topology_uniforms},
+                          reads={"CRUSH_TRIANGLES": res.triangles},
+                          writes={"CRUSH_FACE_NORMALS_OUT": res.face_normals},
+                          FACE_NORMALS=True)
 
-    def run(self, res: MeshResources, wrinkles: bool = True, history: bool = False) -> None:
+    def run(self, res: MeshResources, step: Step) -> None:
         """Write this frame's fields and damped directions into the wave state it writes
-        (``res.waves.begin`` named it), and the anchored phase. ``history``: crest damping
-        reads the damped directions of the shot's previous grid frame's state."""
+        (``res.waves.begin`` named it), and the anchored phase. With history, crest
+        damping reads the damped directions of the shot's previous grid frame's state."""
+        if step.baked is not None:
+            self.run_baked(res, step.baked)
+            return
         waves = res.waves
         params = res.record.params
-        scale = params.amplitude_scale if (wrinkles and res.record.wrinkled) else 0.0
+        scale = params.amplitude_scale if (step.wrinkles and res.record.wrinkled) else 0.0
         waves.set_systems(2 if params.biaxial > 0 else 1)
-        set_uniforms(self.shader, {"u_num_points": res.num_points, "u_amplitude_scale": scale,
-                                   "u_biaxial": float(params.biaxial),
-                                   "u_tension": float(params.tension),
-                                   "u_tension_threshold": float(params.tension_threshold),
-                                   "u_slack": float(params.slack),
-                                   "u_damping_alpha": damping_alpha(params.crest_damping),
-                                   "u_damping_deadband": DAMPING_DEADBAND,
-                                   "u_has_history": int(history),
-                                   "u_slope": params.slope_table(),
-                                   **res.topology_uniforms})
+        uniforms = {"u_num_points": res.num_points, "u_amplitude_scale": scale,
+                    "u_biaxial": float(params.biaxial),
+                    "u_tension": float(params.tension),
+                    "u_tension_threshold": float(params.tension_threshold),
+                    "u_slack": float(params.slack),
+                    "u_damping_alpha": damping_alpha(params.crest_damping),
+                    "u_damping_deadband": DAMPING_DEADBAND,
+                    "u_has_history": int(step.history),
+                    "u_slope": params.slope_table(),
+                    **res.topology_uniforms}
         self._face_normals(res)
-        bind(bindings.CRUSH, reads={"CRUSH_REST_POINTS": res.rest_points,
-                           "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
-                           "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold,
-                           "CRUSH_GAIN": res.gain,
-                           "CRUSH_DAMPED_IN": waves.history.damped},
-             writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase,
-                     "CRUSH_DAMPED": waves.written.damped})
-        self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
+        self.dispatch(res.num_points, uniforms,
+                      reads={"CRUSH_REST_POINTS": res.rest_points,
+                             "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
+                             "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold,
+                             "CRUSH_GAIN": res.gain, "CRUSH_DAMPED_IN": waves.history.damped},
+                      writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase,
+                              "CRUSH_DAMPED": waves.written.damped})
 
     def run_baked(self, res: MeshResources, baked) -> None:
         """Fields of a frame drawn from a bake: posed normals computed, waves and phases
         as baked (``baked``: scene.baked.BakedFields)."""
         res.waves.write_baked(baked)
         self._face_normals(res)
-        set_uniforms(self.baked_shader, {"u_num_points": res.num_points,
-                                         **res.topology_uniforms})
-        bind(bindings.CRUSH, reads={"CRUSH_REST_FRAME": res.rest_frame,
-                                    "CRUSH_FACE_NORMALS": res.face_normals,
-                                    "CRUSH_BAKED": res.waves.baked_waves},
-             writes={"CRUSH_FIELDS": res.waves.current})
-        self.baked_shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
+        self.dispatch(res.num_points, {"u_num_points": res.num_points,
+                                       **res.topology_uniforms},
+                      reads={"CRUSH_REST_FRAME": res.rest_frame,
+                             "CRUSH_FACE_NORMALS": res.face_normals,
+                             "CRUSH_BAKED": res.waves.baked_waves},
+                      writes={"CRUSH_FIELDS": res.waves.current}, FROM_BAKE=True)

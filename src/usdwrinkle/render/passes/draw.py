@@ -10,8 +10,8 @@ from .. import bindings
 from ..bounds import EyeBound, culled_side
 from ..mipmaps import build_mipmaps
 from ..resources import MeshResources
-from ..shaders import DrawableProgram, Variants, program
-from . import bind, bind_wave, gl_matrix, inverse, normal_matrix, set_uniforms
+from . import bind_wave, gl_matrix, inverse, normal_matrix, set_uniforms
+from .base import DrawnPass
 
 #: the turn of the bent normal across one pixel (radians) above which a pixel shades each
 #: of its multisamples (draw.glsl: SHADE_SAMPLES); below it the pixel is shaded once. The
@@ -82,16 +82,20 @@ def normal_map_uniforms(res: MeshResources) -> dict:
             "u_normal_bias": tuple(float(v) for v in record.bias[:4])}
 
 
-class DrawPass:
+class DrawPass(DrawnPass):
+    """Per pixel: the wave blend, the bent normal and the texture offset (draw.glsl)."""
+
+    SHADER = "draw.glsl"
+    #: the wave blend's units (include/wave.glsl) and its own
+    UNITS = {**bindings.WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
+             "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10, "DRAW_SHADING_NORMALS": 11,
+             "DRAW_NORMAL_CORNERS": 12, "DRAW_DOME_TEXTURE": 13, "DRAW_CORNER_COLORS": 14}
+
     def __init__(self, ctx):
         import moderngl
 
-        self.ctx = ctx
+        super().__init__(ctx)
         self.mode = moderngl.TRIANGLES
-        defines = {**bindings.COMMON, **bindings.DRAW}
-        # (program, vertex array) per wave-system count
-        self.variants = Variants(lambda extra: DrawableProgram(
-            ctx, program(ctx, "draw.glsl", {**defines, **extra})))
         self.variants()  # the paper's variant always; the other on first use
         #: where folds turn within a pixel, shade each multisample where it lies (the
         #: default; render --no-shade-samples turns it off; draw.glsl: SHADE_SAMPLES)
@@ -145,7 +149,7 @@ class DrawPass:
         if self.dome[1] is not None:
             self.dome[1].release()
         self.dome = (None, None, 0)
-        self.variants.release()
+        super().release()
 
     def draw(self, res: MeshResources, frame: MeshFrame, camera: CameraRecord,
              bound: EyeBound | None = None) -> None:
@@ -198,7 +202,7 @@ class DrawPass:
         else:
             self.ctx.enable(moderngl.CULL_FACE)
             self.ctx.cull_face = side
-        units = bindings.DRAW
+        units = self.UNITS
         bind_wave(units, res, variant.program)
         if res.texture is not None and not display:
             res.texture.use(location=units["DRAW_DIFFUSE_TEXTURE"])
@@ -206,12 +210,12 @@ class DrawPass:
             self.dome[1].use(location=units["DRAW_DOME_TEXTURE"])
         if res.normal_map is not None:
             res.normal_map.use(location=units["DRAW_NORMAL_TEXTURE"])
-        bind(units, reads={"DRAW_CORNER_ST": res.corner_st,
-                           "DRAW_SHADING_NORMALS": res.shading_normals,
-                           "DRAW_NORMAL_CORNERS": res.normal_corners})
+        self.bind(reads={"DRAW_CORNER_ST": res.corner_st,
+                         "DRAW_SHADING_NORMALS": res.shading_normals,
+                         "DRAW_NORMAL_CORNERS": res.normal_corners})
         if res.normal_map is not None:
-            bind(units, reads={"DRAW_NORMAL_ST": res.normal_st})
+            self.bind(reads={"DRAW_NORMAL_ST": res.normal_st})
         if colors is not None:
-            bind(units, reads={"DRAW_CORNER_COLORS": colors})
+            self.bind(reads={"DRAW_CORNER_COLORS": colors})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
 

@@ -9,21 +9,27 @@ from __future__ import annotations
 import numpy as np
 
 from ...scene.records import MeshFrame
-from .. import bindings
 from ..resources import MeshResources, vec4
-from ..shaders import Variants, compute_shader
-from . import bind, groups, set_uniforms
+from .base import Step, WavePass, wave_pass
 from .skin import METHODS, skinning_uniforms
 
 
-class NormalsPass:
-    def __init__(self, ctx):
-        self.ctx = ctx
-        defines = {**bindings.COMMON, **bindings.NORMALS}
-        self.variants = Variants(lambda extra: compute_shader(ctx, "normals.glsl",
-                                                              {**defines, **extra}))
+@wave_pass
+class NormalsPass(WavePass):
+    """The posed shading normals (normals.glsl)."""
 
-    def run(self, res: MeshResources, frame: MeshFrame) -> None:
+    SHADER = "normals.glsl"
+    #: its skinned variant also reads the SKIN units of include/skinning.glsl (influences
+    #: 1, joints 3)
+    UNITS = {"NORMALS_PLAN": 0, "NORMALS_POSED_POINTS": 2, "NORMALS_AUTHORED": 4,
+             "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,
+             # image units
+             "NORMALS_OUT": 0}
+    TIMING = "skin"
+    ORDER = 20
+
+    def run(self, res: MeshResources, step: Step) -> None:
+        frame = step.frame
         plan = res.normal_plan
         if plan.source == "authored":
             deformed = blended_normals(res, frame)
@@ -40,28 +46,21 @@ class NormalsPass:
             elif frame.normals is not None:
                 res.shading_normals.write(vec4(frame.normals, 1.0))
             return
-        shader = self.variants(SMOOTH=plan.source == "smooth",
-                               FACETED=plan.source == "faceted")
-        set_uniforms(shader, {"u_entries": plan.entries})
-        bind(bindings.NORMALS, reads={"NORMALS_PLAN": res.normal_plan_table,
-                                      "NORMALS_POSED_POINTS": res.posed_points},
-             writes={"NORMALS_OUT": res.shading_normals})
-        shader.run(groups(plan.entries, bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
+        self.dispatch(plan.entries, {"u_entries": plan.entries},
+                      reads={"NORMALS_PLAN": res.normal_plan_table,
+                             "NORMALS_POSED_POINTS": res.posed_points},
+                      writes={"NORMALS_OUT": res.shading_normals},
+                      SMOOTH=plan.source == "smooth", FACETED=plan.source == "faceted")
 
     def _skin(self, res: MeshResources, frame: MeshFrame) -> None:
         skin = res.record.skin
-        shader = self.variants(SKINNED=True)
-        set_uniforms(shader, {"u_entries": res.normal_plan.entries,
-                              "u_method": METHODS[skin.method],
-                              **skinning_uniforms(res, frame)})
-        bind(bindings.NORMALS, reads={"NORMALS_PLAN": res.normal_plan_table,
-                                      "NORMALS_AUTHORED": res.authored_normals,
-                                      "SKIN_INFLUENCES": res.influence_table,
-                                      "SKIN_JOINTS": res.joints},
-             writes={"NORMALS_OUT": res.shading_normals})
-        shader.run(groups(res.normal_plan.entries, bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
+        self.dispatch(res.normal_plan.entries,
+                      {"u_entries": res.normal_plan.entries, "u_method": METHODS[skin.method],
+                       **skinning_uniforms(res, frame)},
+                      reads={"NORMALS_PLAN": res.normal_plan_table,
+                             "NORMALS_AUTHORED": res.authored_normals,
+                             "SKIN_INFLUENCES": res.influence_table, "SKIN_JOINTS": res.joints},
+                      writes={"NORMALS_OUT": res.shading_normals}, SKINNED=True)
 
 
 def blended_normals(res: MeshResources, frame: MeshFrame) -> np.ndarray | None:

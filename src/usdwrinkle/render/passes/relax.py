@@ -9,60 +9,57 @@ in the fields). Without iterations (relaxIterations 0) there is no relaxation an
 """
 from __future__ import annotations
 
-from .. import bindings
 from ..resources import MeshResources
-from ..shaders import Variants, compute_shader
-from . import bind, groups, set_uniforms
+from .base import Step, WavePass, wave_pass
 
 
-class RelaxPass:
+@wave_pass
+class RelaxPass(WavePass):
+    """Phase alignment (relax.glsl): the seed, Jacobi steps, then the fit."""
+
+    SHADER = "relax.glsl"
+    UNITS = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
+             "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_EDGES": 5, "RELAX_Z_IN": 6,
+             "RELAX_PREVIOUS_PHASE": 7,
+             # image units
+             "RELAX_PHASE": 0, "RELAX_Z_OUT": 1, "RELAX_EDGES_OUT": 2, "RELAX_FIELDS_OUT": 3}
+    TIMING = "relax"
+    ORDER = 40
+
     def __init__(self, ctx):
-        self.ctx = ctx
-        defines = {**bindings.COMMON, **bindings.RELAX}
-        # per wave-system count (render/shaders.py: Variants)
-        self.steps = Variants(
-            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, **extra}))
-        self.seeds = Variants(
-            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, "SEED": 1, **extra}))
-        self.fits = Variants(
-            lambda extra: compute_shader(ctx, "relax.glsl", {**defines, "FIT": 1, **extra}))
-        self.steps()
-        self.seeds()
-        self.fits()
+        super().__init__(ctx)
+        # the seed, the step and the fit compiled with the pass (not in the first frame)
+        self.variants(SEED=True)
+        self.variants()
+        self.variants(FIT=True)
 
-    def run(self, res: MeshResources, iterations: int, with_history: bool = False) -> None:
-        units, waves = bindings.RELAX, res.waves
-        count = groups(res.num_points, bindings.LOCAL_SIZE)
-        seed_shader, shader = self.seeds(TWO_SYSTEMS=waves.systems > 1), self.steps(
-            TWO_SYSTEMS=waves.systems > 1)
-        set_uniforms(seed_shader, {"u_num_points": res.num_points,
-                                        "u_systems": waves.systems,
-                                        "u_has_history": int(with_history),
-                                        **res.topology_uniforms})
-        bind(units, reads={
-            "RELAX_POSED_POINTS": res.posed_points, "TOPOLOGY_TABLE": res.topology,
-            "RELAX_FIELDS": waves.current, "RELAX_PREVIOUS_FIELDS": waves.history.fields,
-            "RELAX_PREVIOUS_PHASE": waves.history.phase, "RELAX_ANCHOR": waves.anchor_phase},
-            writes={"RELAX_Z_OUT": waves.phasors[0], "RELAX_EDGES_OUT": waves.edge_rotations,
-                    "RELAX_PHASE": waves.phase})
-        seed_shader.run(count)
-        self.ctx.memory_barrier()
+    def run(self, res: MeshResources, step: Step) -> None:
+        if step.baked is not None:
+            return  # baked phases: no relaxation and no fit
+        waves = res.waves
+        iterations = step.iterations
+        two = waves.systems > 1
+        count = res.num_points
+        self.dispatch(count, {"u_num_points": res.num_points, "u_systems": waves.systems,
+                              "u_has_history": int(step.history), **res.topology_uniforms},
+                      reads={"RELAX_POSED_POINTS": res.posed_points,
+                             "TOPOLOGY_TABLE": res.topology, "RELAX_FIELDS": waves.current,
+                             "RELAX_PREVIOUS_FIELDS": waves.history.fields,
+                             "RELAX_PREVIOUS_PHASE": waves.history.phase,
+                             "RELAX_ANCHOR": waves.anchor_phase},
+                      writes={"RELAX_Z_OUT": waves.phasors[0],
+                              "RELAX_EDGES_OUT": waves.edge_rotations,
+                              "RELAX_PHASE": waves.phase},
+                      SEED=True, TWO_SYSTEMS=two)
         if iterations <= 0:
             return  # the seed wrote the phase
-        set_uniforms(shader, {"u_num_points": res.num_points, "u_systems": waves.systems,
-                              **res.topology_uniforms})
-        bind(units, reads={"RELAX_EDGES": waves.edge_rotations})
-        for step in range(iterations):
-            src = step % 2
-            bind(units, reads={"RELAX_Z_IN": waves.phasors[src]},
-                 writes={"RELAX_Z_OUT": waves.phasors[1 - src]})
-            set_uniforms(shader, {"u_write_phase": int(step == iterations - 1)})
-            shader.run(count)
-            self.ctx.memory_barrier()
-        fit = self.fits(TWO_SYSTEMS=waves.systems > 1)
-        set_uniforms(fit, {"u_num_points": res.num_points, "u_systems": waves.systems,
-                           **res.topology_uniforms})
-        bind(units, reads={"RELAX_Z_IN": waves.phasors[iterations % 2]},
-             writes={"RELAX_FIELDS_OUT": waves.current})
-        fit.run(count)
-        self.ctx.memory_barrier()
+        self.bind(reads={"RELAX_EDGES": waves.edge_rotations})
+        uniforms = {"u_num_points": res.num_points, "u_systems": waves.systems,
+                    **res.topology_uniforms}
+        for index in range(iterations):
+            src = index % 2
+            self.dispatch(count, {**uniforms, "u_write_phase": int(index == iterations - 1)},
+                          reads={"RELAX_Z_IN": waves.phasors[src]},
+                          writes={"RELAX_Z_OUT": waves.phasors[1 - src]}, TWO_SYSTEMS=two)
+        self.dispatch(count, uniforms, reads={"RELAX_Z_IN": waves.phasors[iterations % 2]},
+                      writes={"RELAX_FIELDS_OUT": waves.current}, FIT=True, TWO_SYSTEMS=two)

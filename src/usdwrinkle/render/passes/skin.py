@@ -5,10 +5,9 @@ import numpy as np
 
 from ...contract import JOINT_TEXELS
 from ...scene.records import MeshFrame
-from .. import bindings
 from ..resources import MeshResources, vec4
-from ..shaders import compute_shader
-from . import bind, gl_matrix, groups, normal_matrix, set_uniforms
+from . import gl_matrix, normal_matrix
+from .base import Step, WavePass, wave_pass
 
 METHODS = {"classicLinear": 1, "dualQuaternion": 2}
 
@@ -64,12 +63,25 @@ def skinning_uniforms(res: MeshResources, frame: MeshFrame) -> dict:
             "u_skel_to_local_normal": normal_matrix(skel_to_local)}
 
 
-class SkinPass:
-    def __init__(self, ctx):
-        self.ctx = ctx
-        self.shader = compute_shader(ctx, "skin.glsl", {**bindings.COMMON, **bindings.SKIN})
+@wave_pass
+class SkinPass(WavePass):
+    """The posed points (skin.glsl): blend shapes, then LBS or DQS; a point cache's
+    points are uploaded as they are."""
 
-    def run(self, res: MeshResources, frame: MeshFrame) -> None:
+    SHADER = "skin.glsl"
+    UNITS = {"SKIN_REST_POINTS": 0, "SKIN_INFLUENCES": 1, "SKIN_JOINTS": 3,
+             # image units (writes)
+             "SKIN_POSED_POINTS": 0,
+             # storage buffers: blend shapes (only the sub-shapes with a weight are read)
+             "SKIN_SUBSHAPE_OFFSETS": 0, "SKIN_SUBSHAPE_WEIGHTS": 1}
+    TIMING = "skin"
+    ORDER = 10
+
+    def run(self, res: MeshResources, step: Step) -> None:
+        self.skin(res, step.frame)
+
+    def skin(self, res: MeshResources, frame: MeshFrame) -> None:
+        """Pose ``res``'s points for ``frame``."""
         record = res.record
         if record.skin is None:
             points = frame.points if frame.points is not None else record.rest_points
@@ -85,15 +97,12 @@ class SkinPass:
                                        frame.skel_to_local, frame.dual_quaternions)
         res.joints.write(block)
         res.has_scale = has_scale
-        set_uniforms(self.shader, {
+        self.dispatch(res.num_points, {
             "u_num_points": res.num_points, "u_num_subshapes": skin.num_subshapes,
             "u_method": METHODS[skin.method] if res.skinned else 0,
-            **skinning_uniforms(res, frame)})
-        bind(bindings.SKIN, reads={
-            "SKIN_REST_POINTS": res.rest_points, "SKIN_INFLUENCES": res.influence_table,
-            "SKIN_JOINTS": res.joints},
+            **skinning_uniforms(res, frame)},
+            reads={"SKIN_REST_POINTS": res.rest_points, "SKIN_INFLUENCES": res.influence_table,
+                   "SKIN_JOINTS": res.joints},
             writes={"SKIN_POSED_POINTS": res.posed_points},
             storage={"SKIN_SUBSHAPE_OFFSETS": res.subshape_offsets,
                      "SKIN_SUBSHAPE_WEIGHTS": res.subshape_weights})
-        self.shader.run(groups(res.num_points, bindings.LOCAL_SIZE))
-        self.ctx.memory_barrier()
