@@ -72,6 +72,32 @@ def test_render_current_frame_writes_and_opens(gl_context, tmp_path):
     assert "rendered" in status[-1]
 
 
+def test_render_current_frame_starts_one_engine_for_both_files(gl_context, tmp_path,
+                                                               monkeypatch):
+    """Issue 58: usdview rendered the frame twice, each time with its own engine and
+    phase-history preroll; the EXR and the PNG now share one engine, and the PNG is still
+    the frame `render` writes alone."""
+    from usdwrinkle import api
+    from usdwrinkle.app.shot import Shot
+
+    started = []
+    start_engine = Shot.start_engine
+
+    def counted(self, *args, **kwargs):
+        started.append(args)
+        return start_engine(self, *args, **kwargs)
+
+    monkeypatch.setattr(Shot, "start_engine", counted)
+    stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    viewer, _ = stand_in(stage, 24, camera=stage.GetPrimAtPath("/World/main_cam"))
+    paths = usdview.render_current_frame(viewer, outdir=str(tmp_path / "viewer"),
+                                         opener=lambda path: None, width=160, ctx=gl_context)
+    assert len(paths) == 2 and len(started) == 1
+    alone = api.render(SAMPLES / "shirt.usda", tmp_path / "alone.png", frames=[24], width=160,
+                       camera="/World/main_cam")
+    assert Path(paths[1]).read_bytes() == Path(alone[0]).read_bytes()
+
+
 def test_plugin_registers_a_wrinkles_menu():
     commands, menus = [], {}
 

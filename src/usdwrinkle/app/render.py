@@ -281,14 +281,25 @@ class RenderJob(ShotJob):
 
         BakeJob(self.shot, layer, frame_spec, progress=self.progress).run()
 
-    def run(self, ctx: Any = None) -> RenderResult:
+    def start_engine(self, ctx: Any = None) -> Any:
+        """The engine this job renders with (``run(engine=...)``): the shot's, with the
+        job's camera, baked fields and profiling."""
+        return self.shot.start_engine(self.options.camera, use_baked=self.uses_baked,
+                                      profile=bool(self.options.stats and
+                                                   self.options.stats_passes),
+                                      progress=self.progress, ctx=ctx)
+
+    def run(self, ctx: Any = None, engine: Any = None) -> RenderResult:
         """Check, start the engine, render every frame, here or on Dask (``dask``);
-        ``ctx``: a moderngl context to share (None: the process's own)."""
+        ``ctx``: a moderngl context to share (None: the process's own). ``engine``: one
+        that ``start_engine`` of a job of the same shot and options made, kept after the
+        run (its phase history too: usdview writes one frame as EXR and PNG with one
+        engine); None: the job starts its own and releases it."""
         if self.options.dask is not None:
             return self._run_on_dask()
         if self.options.chunk is not None or self.options.workers is not None:
             _log.warning("`chunk` and `workers` apply to `dask` only; ignored")
-        return self._run_here(ctx)
+        return self._run_here(ctx, engine)
 
     def _run_on_dask(self) -> RenderResult:
         from ..farm.client import FarmRender, render_on_dask
@@ -306,16 +317,15 @@ class RenderJob(ShotJob):
                             farm.elapsed, farm.baked, farm.skipped, None, farm.workers,
                             farm.chunk)
 
-    def _run_here(self, ctx: Any) -> RenderResult:
+    def _run_here(self, ctx: Any, engine: Any) -> RenderResult:
         from ..aovs import exr_channels
         from ..imagefiles import is_complete_image
         from ..shot import render_frames
 
         plan = self.prepare()
-        engine = self.shot.start_engine(self.options.camera, use_baked=self.uses_baked,
-                                        profile=bool(self.options.stats and
-                                                     self.options.stats_passes),
-                                        progress=self.progress, ctx=ctx)
+        own = engine is None
+        if own:
+            engine = self.start_engine(ctx)
         try:
             engine.check_baked(plan.frames)
             self._engine_notes(engine, plan.frames)
@@ -341,7 +351,8 @@ class RenderJob(ShotJob):
                                 time.perf_counter() - started, list(engine.baked_paths),
                                 skipped, stats)
         finally:
-            engine.release()
+            if own:
+                engine.release()
 
 
 def write_stats(path: str, stats: dict[str, Any]) -> None:

@@ -230,11 +230,19 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     from ..log import silenced
 
     shot = Shot(stage)
+    options = RenderOptions(width=width, camera=camera)
+    jobs = [RenderJob(shot, path, [frame], options) for path in paths]
     try:
         with silenced():  # the status line reports the outcome
-            for path in paths:
-                RenderJob(shot, path, [frame], RenderOptions(width=width, camera=camera)) \
-                    .run(ctx)
+            for job in jobs:
+                job.check()  # both refusals before any GL work
+            # one engine for both files: the phase history up to the frame is computed once
+            engine = jobs[0].start_engine(ctx)
+            try:
+                for job in jobs:
+                    job.run(ctx, engine)
+            finally:
+                engine.release()
     except UsdWrinkleError as exc:
         usdview_api.PrintStatus(f"Wrinkles: {exc.one_line()}")
         return []
