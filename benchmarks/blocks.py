@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 
@@ -24,3 +25,28 @@ def emit(args: list[str], name: str, text: str) -> None:
         raise SystemExit(f"{path} has no {begin} ... {end} block")
     path.write_text(pattern.sub(lambda _: text, doc))
     print(f"wrote {path}")
+
+
+def stage_block_main(argv, name: str, stages: Sequence[str],
+                     measure: Callable[[str, object], list[dict]],
+                     report: Callable[[list[dict], float], str]) -> int:
+    """The command of a block measured per sample stage (``python -m
+    benchmarks.physics.NAME [--write docs/physics.md] [--only STAGE ...]``):
+    ``measure(stage, ctx)`` gives its rows on one GL context, ``report(rows, seconds)``
+    the block."""
+    import argparse
+    import time
+
+    import moderngl
+
+    parser = argparse.ArgumentParser(prog=f"python -m benchmarks.physics.{name}")
+    parser.add_argument("--write", type=Path, default=None,
+                        help=f"replace the {name} block of this file (docs/physics.md)")
+    parser.add_argument("--only", nargs="*", default=None)
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    ctx = moderngl.create_standalone_context(backend="egl", require=430)
+    rows = [row for stage in args.only or stages for row in measure(stage, ctx)]
+    emit(["--write", str(args.write)] if args.write else [], name,
+         report(rows, time.perf_counter() - started))
+    return 0

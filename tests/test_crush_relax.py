@@ -20,15 +20,22 @@ from helpers import (
 )
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_crush_matches_numpy_reference(gl_context, seed):
+def random_cloth_fields(ctx, seed: int, relax_iterations: int):
+    """A random cloth's GPU fields at its posed frame and crush's numpy reference of it:
+    (posed points, the GPU's fields, its MeshRecord, the reference's fields)."""
     rest, posed, faces, q = random_cloth(seed)
     stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
-                              width=0.2, relax_iterations=0)
-    ours, record = gpu_fields(gl_context, stage)
+                              width=0.2, relax_iterations=relax_iterations)
+    ours, record = gpu_fields(ctx, stage)
     ref = crush_reference(rest, posed, record.topology, q, record.params.width,
                           slack=record.params.slack, hold=record.params.hold,
                           gain=record.params.amplitude_gain)
+    return posed, ours, record, ref
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_crush_matches_numpy_reference(gl_context, seed):
+    _, ours, record, ref = random_cloth_fields(gl_context, seed, relax_iterations=0)
     assert np.all(ours["usable"] == ref["usable"])
     np.testing.assert_allclose(ours["compression"], ref["compression"], atol=2e-4)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
@@ -245,13 +252,7 @@ def test_the_fit_matches_numpy_reference(gl_context):
     relaxed phases and crush's waves (the numpy reference)."""
     from usdwrinkle.reference.relax import fit
 
-    rest, posed, faces, q = random_cloth(3)
-    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
-                              width=0.2, relax_iterations=6)
-    ours, record = gpu_fields(gl_context, stage)
-    law = crush_reference(rest, posed, record.topology, q, record.params.width,
-                          slack=record.params.slack, hold=record.params.hold,
-                          gain=record.params.amplitude_gain)
+    posed, ours, record, law = random_cloth_fields(gl_context, 3, relax_iterations=6)
     k, a = fit(posed, ours["normals"], law["wave_vector"], law["amplitude"], ours["phase"],
                record.topology)
     wrinkled = law["amplitude"] > 1e-3

@@ -16,8 +16,6 @@ About a minute here. Not a test: tests/test_folds.py asserts the sample stages' 
 """
 from __future__ import annotations
 
-import argparse
-import time
 from pathlib import Path
 
 import numpy as np
@@ -116,24 +114,12 @@ def report(rows: list[dict], seconds: float) -> str:
 def main(argv=None) -> int:
     import tempfile
 
-    import moderngl
+    from ..blocks import stage_block_main
 
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.area")
-    parser.add_argument("--write", type=Path, default=None,
-                        help="replace the area block of this file (docs/physics.md)")
-    parser.add_argument("--only", nargs="*", default=None)
-    args = parser.parse_args(argv)
-    started = time.perf_counter()
-    ctx = moderngl.create_standalone_context(backend="egl", require=430)
-    rows = []
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-area-") as scratch:
-        for name in args.only or STAGES:
-            rows += measure_stage(name, ctx, Path(scratch))
-    from ..blocks import emit
-
-    emit(["--write", str(args.write)] if args.write else [], "area",
-         report(rows, time.perf_counter() - started))
-    return 0
+        return stage_block_main(argv, "area", STAGES,
+                                lambda name, ctx: measure_stage(name, ctx, Path(scratch)),
+                                report)
 
 
 if __name__ == "__main__":

@@ -22,8 +22,6 @@ One system only (a stage with wrinkle:biaxial is skipped). A few seconds here.
 """
 from __future__ import annotations
 
-import argparse
-import time
 from pathlib import Path
 
 import numpy as np
@@ -177,23 +175,9 @@ def report(rows: list[dict], seconds: float) -> str:
 
 
 def main(argv=None) -> int:
-    import moderngl
+    from ..blocks import stage_block_main
 
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.blend")
-    parser.add_argument("--write", type=Path, default=None,
-                        help="replace the blend block of this file (docs/physics.md)")
-    parser.add_argument("--only", nargs="*", default=None)
-    args = parser.parse_args(argv)
-    started = time.perf_counter()
-    ctx = moderngl.create_standalone_context(backend="egl", require=430)
-    rows = []
-    for name in args.only or STAGES:
-        rows += measure_stage(name, ctx)
-    from ..blocks import emit
-
-    emit(["--write", str(args.write)] if args.write else [], "blend",
-         report(rows, time.perf_counter() - started))
-    return 0
+    return stage_block_main(argv, "blend", STAGES, measure_stage, report)
 
 
 if __name__ == "__main__":
