@@ -42,7 +42,7 @@ def preroll(quick: bool, ctx) -> dict:
     from pxr import Sdf
 
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.shot import BakeRequest, bake_layer
+    from usdwrinkle.frameloop import BakeRequest, bake_layer
 
     late = 90 if quick else 900
     repeats = 3 if quick else 7

@@ -24,7 +24,7 @@ def _bake_seconds(ctx, frames, maps=None, geometry=None, stage=SHIRT,
     from pxr import Sdf
 
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.shot import BakeRequest, bake_layer
+    from usdwrinkle.frameloop import BakeRequest, bake_layer
 
     engine = WrinkleEngine(str(stage), ctx=ctx, use_baked=False,
                            all_meshes=all_meshes)

@@ -72,15 +72,15 @@ def _parameters(function) -> list[str]:
 def test_every_bake_sink_has_the_one_protocol_and_few_parameters():
     """The primvars, the maps and the geometry are written through one protocol
     (outputs/sink.py: begin, add_frame, finish, commit, release), and neither the sinks,
-    their writers nor shot.bake_layer take more than 5 parameters. No sink is handed the
+    their writers nor frameloop.bake_layer take more than 5 parameters. No sink is handed the
     engine: a frame arrives as (frame, fields, resources)."""
+    from usdwrinkle.frameloop import bake_layer
     from usdwrinkle.geometry.bake import GeometryBake
     from usdwrinkle.geometry.layer import FineMeshWriter
     from usdwrinkle.maps.bake import MapBake
     from usdwrinkle.maps.material import author_material
     from usdwrinkle.outputs.layers import LayerBaker, save_layer
     from usdwrinkle.outputs.sink import BakeSink
-    from usdwrinkle.shot import bake_layer
 
     protocol = ("begin", "add_frame", "finish", "commit", "release")
     for sink in (LayerBaker, MapBake, GeometryBake):
@@ -131,7 +131,7 @@ def test_no_bake_writer_reads_the_stage():
                     found += [f"{where}: pxr.{a.name}" for a in node.names
                               if a.name in ("Usd", "UsdShade", "UsdSkel", "UsdLux")]
                 if isinstance(node, ast.ImportFrom) and node.level and \
-                        (node.module or "").split(".")[0] in ("scene", "engine", "shot"):
+                        (node.module or "").split(".")[0] in ("scene", "engine", "frameloop"):
                     found += [f"{where}: ..{node.module}"]
                 if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
                         node.value.id == "UsdGeom" and node.attr != "Tokens":

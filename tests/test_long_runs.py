@@ -108,10 +108,10 @@ def test_interrupted_render_leaves_only_whole_frames(gl_context, tmp_path, sig, 
 def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
     """The overlapped writer (outputs/writer.py) holds at most two frames: memory stays
     flat over a long shot, and every frame is written whole."""
+    from usdwrinkle.frameloop import render_frames
     from usdwrinkle.outputs.images import layout_for
     from usdwrinkle.outputs.writer import WriteOptions
     from usdwrinkle.render.request import FrameRequest
-    from usdwrinkle.shot import render_frames
 
     engine = WrinkleEngine(str(SAMPLES / "zeppelin.usda"), ctx=gl_context)
     marks = {}

@@ -34,10 +34,10 @@ def test_a_second_engine_compiles_no_shader_again(gl_context):
 
 def test_a_second_render_job_and_a_second_farm_chunk_compile_nothing(gl_context, tmp_path):
     from usdwrinkle.farm.worker import render_chunk
+    from usdwrinkle.frameloop import EngineOptions
     from usdwrinkle.outputs.images import layout_for
     from usdwrinkle.outputs.writer import WriteOptions
     from usdwrinkle.render.request import FrameRequest
-    from usdwrinkle.shot import EngineOptions
 
     compiled = CompiledPrograms.of(gl_context)  # the process's context, as a job's
     api.render(SHIRT, tmp_path / "a.#.png", frames=[24], width=64)

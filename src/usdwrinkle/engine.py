@@ -354,7 +354,7 @@ class WrinkleEngine:
         it (render.resolve.ResolvedImage), or with ``request.readback_ring`` > 1 a
         render.resolve.PendingImage, whose ``start()`` copies it out: ask for it after the
         next frame is queued, and the GPU computes that frame meanwhile
-        (shot.render_frames)."""
+        (frameloop.render_frames)."""
         record = self.compute_frame(frame, request.aspect, request.wrinkles)
         timings: dict = {}
         result = self.render_pass.execute(request, record.camera, record.lights, timings)

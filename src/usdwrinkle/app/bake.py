@@ -126,10 +126,10 @@ class BakeJob(ShotJob):
         return maps, geometry
 
     def run(self, ctx: Any = None) -> BakeResult:
+        from ..frameloop import BakeRequest, bake_layer
         from ..outputs.atomic import check_writable
         from ..scene.params import width_summary
         from ..scene.stage import outside_range_note, refuse_overwriting_inputs
-        from ..shot import BakeRequest, bake_layer
 
         maps, geometry = self.check()
         # everything that can be refused without the GPU is checked first

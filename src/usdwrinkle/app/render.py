@@ -131,8 +131,8 @@ class RenderJob(ShotJob):
         """The warnings about which meshes get wrinkles (``wrinkled``: the wrinkled mesh
         paths): controls authored without WrinkleAPI, a displaced-geometry bake, no mesh to
         wrinkle. The serial render and the farm's client both say them."""
+        from ..frameloop import NO_WRINKLED_MESH, unapplied_note
         from ..scene.baked import geometry_bake
-        from ..shot import NO_WRINKLED_MESH, unapplied_note
 
         notes = []
         all_meshes = self.shot.options.all_meshes
@@ -241,7 +241,7 @@ class RenderJob(ShotJob):
             refuse_overwriting_inputs(self.shot.path, [path], self.shot.open())
 
     def chunk_engine(self, stage_path: str, baked: bool) -> Any:
-        """The shot.EngineOptions a chunk renders with: ``stage_path`` is the stage, or the
+        """The frameloop.EngineOptions a chunk renders with: ``stage_path`` is the stage, or the
         farm's bake of it (``baked``: then the bake's layer carries the sublayers and
         variant selections, and only the population mask is applied again)."""
         import dataclasses
@@ -319,8 +319,8 @@ class RenderJob(ShotJob):
 
     def _run_here(self, ctx: Any, engine: Any) -> RenderResult:
         from ..aovs import exr_channels
+        from ..frameloop import render_frames
         from ..imagefiles import is_complete_image
-        from ..shot import render_frames
 
         plan = self.prepare()
         own = engine is None

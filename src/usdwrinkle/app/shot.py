@@ -94,8 +94,8 @@ class Shot:
 
     def engine_options(self, camera: str | None = None, use_baked: bool = True,
                        profile: bool = False) -> Any:
-        """The shot.EngineOptions of this shot (picklable: a farm task carries them)."""
-        from ..shot import EngineOptions
+        """The frameloop.EngineOptions of this shot (picklable: a farm task carries them)."""
+        from ..frameloop import EngineOptions
 
         composition = self.options.composition()
         return EngineOptions(os.path.abspath(self.path), all_meshes=self.options.all_meshes,
@@ -145,8 +145,8 @@ class ShotJob:
 
 
 def at_frame(frame: float | None) -> Any:
-    """A block whose errors name ``frame`` where they named none (shot.at_frame)."""
-    from ..shot import at_frame as frame_block
+    """A block whose errors name ``frame`` where they named none (frameloop.at_frame)."""
+    from ..frameloop import at_frame as frame_block
 
     return frame_block(frame)
 

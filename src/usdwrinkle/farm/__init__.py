@@ -1,7 +1,7 @@
 """Render farms: chunks of a shot rendered from baked wave fields on many machines.
 
 A room below the jobs: app/render.RenderJob runs a render here when its options name a
-Dask scheduler (``dask``), as it runs the serial frame loop (shot.render_frames) when
+Dask scheduler (``dask``), as it runs the serial frame loop (frameloop.render_frames) when
 they do not; the command line and the Python API only build the job.
 
 - :mod:`.client`: bake once (through the job), submit chunks, gather.

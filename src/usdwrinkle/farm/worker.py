@@ -18,9 +18,9 @@ from typing import Any
 
 from ..aovs import exr_channels
 from ..errors import UsdWrinkleError
+from ..frameloop import EngineOptions, render_frames
 from ..imagefiles import is_complete_image
 from ..log import warnings_to
-from ..shot import EngineOptions, render_frames
 
 _lock = threading.Lock()
 _cached: dict[str, Any] = {"key": None, "engine": None}

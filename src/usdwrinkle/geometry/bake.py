@@ -7,7 +7,7 @@ edge is at most W/S long in the rest pose (S samples per wavelength, default 6: 
 uniform compression the wave and the edges shrink together), and (b) fine edges advance
 a wave's phase by at most 2 pi / S on 99% of the wrinkled triangles of every frame (the
 posed waves, painted q included): the bake then surveys every frame's wave fields first
-(shot.bake_layer). The last 1% are the pinches (the shirt's inner elbow) where the
+(frameloop.bake_layer). The last 1% are the pinches (the shirt's inner elbow) where the
 relaxation has already given up on a coherent wave inside one coarse triangle; sampling
 those at 6 per wavelength took the shirt from 4 to 6 levels (1.7 M points instead of
 0.1 M, a 3.5 GB .usda) for no visible gain.

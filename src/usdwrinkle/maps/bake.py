@@ -1,6 +1,6 @@
 """``bake --maps``: per frame, each wrinkled mesh's wrinkle maps, and the materials that
 bind them (maps/raster.py on the GPU, maps/files.py for the files, maps/material.py for
-the layer). The frames come from the bake's loop (shot.bake_layer), so a map is made
+the layer). The frames come from the bake's loop (frameloop.bake_layer), so a map is made
 from exactly the fields the bake writes as primvars.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The one protocol of a bake's writers: the wrinkle primvars (outputs/layers.py), the
 wrinkle maps (maps/bake.py) and the displaced render meshes (geometry/bake.py).
 
-shot.bake_layer makes one ``Sdf.Layer`` and drives every sink the same way::
+frameloop.bake_layer makes one ``Sdf.Layer`` and drives every sink the same way::
 
     sink.begin(layer)                              # once, before the first frame
     sink.add_frame(frame, fields, resources)       # each frame, in time order
@@ -24,7 +24,7 @@ from typing import Protocol
 
 @dataclass(frozen=True)
 class BakeScene:
-    """What the writers of one bake are given, gathered once by shot.bake_layer.
+    """What the writers of one bake are given, gathered once by frameloop.bake_layer.
 
     ``facts``: what the layer needs to know of the input stage, read before the first
     frame (scene/overrides.StageFacts: its path, metadata, default prim, input files,

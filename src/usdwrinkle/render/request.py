@@ -2,7 +2,7 @@
 
 A door builds one from its options (app/options.RenderOptions.frame_request, the paint
 session's quality, a test's size) and it reaches the draw and resolve passes unchanged,
-through the frame loop (shot.render_frames) and the engine's ``render``.
+through the frame loop (frameloop.render_frames) and the engine's ``render``.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """What a bake layer must know of the stage it overrides, read once before the first frame.
 
-shot.bake_layer reads these facts with :func:`read_overrides` and hands them to the bake's
+frameloop.bake_layer reads these facts with :func:`read_overrides` and hands them to the bake's
 writers (outputs/layers.py, maps/, geometry/) in ``outputs.sink.BakeScene``: the writers
 author the layer from plain values and never hold the stage, so the data of a bake only
 flows down (scene -> GPU -> writers), as it does for a render.
