@@ -64,7 +64,7 @@ def window_rows(corpus: Path | None) -> dict:
 
 def engine_rows(ctx, corpus: Path | None, quick: bool = False) -> list[dict]:
     """The session's steps headless, medians of several strokes (no Qt)."""
-    from usdwrinkle.app.paint import FULL, PREVIEW, PaintSession, open_paint_stage
+    from usdwrinkle.app.paint_session import FULL, PREVIEW, PaintSession, open_paint_stage
 
     width, height = VIEW
     rows = []

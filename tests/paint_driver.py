@@ -37,7 +37,7 @@ def application() -> QtWidgets.QApplication:
 
 
 def open_window(stage: str, output: str, size=(1200, 700), **kwargs):
-    from usdwrinkle.app.paint import PaintSession, open_paint_stage
+    from usdwrinkle.app.paint_session import PaintSession, open_paint_stage
     from usdwrinkle.paint.window import PaintWindow
 
     stage_, layer, save = open_paint_stage(stage, output)
@@ -213,7 +213,7 @@ def scenario_stroke(out: Path, stage: str) -> dict:
     # along x, scattered: each vertex's direction off by a random tangent part
     scattered = np.array([1.0, 0.0, 0.0]) + 0.7 * rng.normal(size=(len(region), 3))
     noisy[region] = 0.8 * scattered / np.linalg.norm(scattered, axis=1)[:, None]
-    from usdwrinkle.app.paint import Edit
+    from usdwrinkle.app.paint_session import Edit
 
     session._record(Edit(path, "paint", (session.mesh.q.copy(), session.mesh.width.copy()),
                          (noisy.astype(np.float32), session.mesh.width.copy())))

@@ -351,4 +351,4 @@ def test_no_room_calls_another_rooms_underscored_name():
                         and not name.startswith("__") and name in defined
                         and room not in defined[name]]
     assert foreign == []
-    assert "_posed" in defined  # the scan reads definitions (app/paint.py's cache)
+    assert "_posed" in defined  # the scan reads definitions (app/paint_session.py's cache)

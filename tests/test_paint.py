@@ -1,4 +1,4 @@
-"""The paint mode's core without Qt (app/brush.py, app/paint.py): what a stamp does
+"""The paint mode's core without Qt (app/brush.py, app/paint_session.py): what a stamp does
 to q, against numbers worked out by hand, and a session's strokes, undo, controls and save
 on the engine (tests/test_paint_window.py drives the window itself)."""
 from __future__ import annotations
@@ -21,7 +21,7 @@ from usdwrinkle.app.brush import (
     spread,
     stamp,
 )
-from usdwrinkle.app.paint import FULL, PaintSession, open_paint_stage
+from usdwrinkle.app.paint_session import FULL, PaintSession, open_paint_stage
 from usdwrinkle.app.view import OrbitCamera, pixel_ray, project, ray_triangles
 from usdwrinkle.authoring import WrinkleAPI
 from usdwrinkle.authoring.builders import grid_sheet
@@ -381,7 +381,7 @@ def test_session_inputs_are_refused_naming_the_field(sheet_session, gl_context, 
     ValueError, and a brush radius '0.1' TypeError; a frame outside the stage's range is
     said, as render says it."""
     from usdwrinkle import log
-    from usdwrinkle.app.paint import with_brush
+    from usdwrinkle.app.paint_session import with_brush
 
     session, stage_path, _ = sheet_session
     with pytest.raises(UsdWrinkleError, match="`frame` nan is not a finite time code"):
@@ -420,7 +420,7 @@ def test_an_edit_that_authoring_refuses_leaves_nothing_behind(sheet_session, mon
         raise UsdWrinkleError("width refused (a test's authoring failure)")
 
     monkeypatch.setattr(WrinkleAPI, "CreateWidthPrimvar", refuse)
-    from usdwrinkle.app.paint import with_brush
+    from usdwrinkle.app.paint_session import with_brush
 
     with_brush(session, mode="width", width=0.05)
     with pytest.raises(UsdWrinkleError, match="width refused"):
@@ -552,7 +552,7 @@ def _upper_arm_comb(session, amount: float):
     as an artist drags it (pixels of the posed front vertices), with the default brush at
     ``amount``; returns the vertices it touched and the stroke's ends (pixels of a
     640x360 view)."""
-    from usdwrinkle.app.paint import with_brush
+    from usdwrinkle.app.paint_session import with_brush
 
     with_brush(session, amount=amount)
     session.render(640, 360, FULL)
@@ -667,7 +667,7 @@ def test_painting_more_gives_deeper_folds_across_the_stroke(shirt_session):
 def test_the_display_ramps_read_the_painted_values():
     """View > Display (issue 57): |q| on the ramp, grey where nothing is painted; W
     against the reference on a log2 ramp, green at the reference."""
-    from usdwrinkle.app.paint import RAMP, UNPAINTED, display_colors
+    from usdwrinkle.app.paint_session import RAMP, UNPAINTED, display_colors
 
     mesh = sheet()
     mesh.q[:] = 0.0

@@ -1,4 +1,4 @@
-"""Saving a paint session (app/paint.py): Save As never replaces a file the stage reads,
+"""Saving a paint session (app/paint_session.py): Save As never replaces a file the stage reads,
 by any spelling, and a saved copy names the same files from its new folder (issue 54:
 findings 1, 2, 6, 11 and the paint layer's defaultPrim)."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from pxr import Ar, Sdf, Usd, UsdShade
 
-from usdwrinkle.app.paint import PaintSession, open_paint_stage
+from usdwrinkle.app.paint_session import PaintSession, open_paint_stage
 from usdwrinkle.errors import UsdWrinkleError
 
 from helpers import sheet_stage

@@ -237,7 +237,7 @@ def plan_edits(args: ApplyOptions, meshes: list[Any], q_spec: Any = None,
                profile: Any = None) -> list[MeshEdit]:
     """Compute and check every value before the first edit (nothing is authored here), so
     that a refusal writes nothing. ``q_spec``: parse_q(--q); ``profile``: read_profile."""
-    from ..authoring.paint import (
+    from ..authoring.qsources import (
         MeshSurface,
         q_from_flow_map,
         q_from_primvar,

@@ -118,7 +118,7 @@ def x_display_error(display: str) -> str | None:
 def run(args) -> int:
     from ..app.environment import require_schema
     from ..app.frames import check_time_code
-    from ..app.paint import PaintSession, check_frame, check_paintable, open_paint_stage
+    from ..app.paint_session import PaintSession, check_frame, check_paintable, open_paint_stage
 
     require_schema()
     size = _size(args.size)

@@ -28,7 +28,7 @@ except ImportError as exc:  # the optional extra
                           f"({exc})") from None
 
 from ..app.brush import FALLOFFS, MIRROR_AXES, MODES
-from ..app.paint import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
+from ..app.paint_session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
 from ..app.view import project
 from ..timecode import format_frame
 
@@ -980,7 +980,7 @@ class PaintWindow(QtWidgets.QMainWindow):
     def apply_brush(self, brush) -> None:
         """Set every brush control from ``brush`` (a preset), then the brush from them;
         the width mode's W stays the W control's."""
-        from ..app.paint import with_brush
+        from ..app.paint_session import with_brush
 
         self._show_brush(brush)
         self._brush_changed()
@@ -1050,7 +1050,7 @@ class PaintWindow(QtWidgets.QMainWindow):
     def _brush_changed(self, *_):
         if self.session is None:
             return
-        from ..app.paint import with_brush
+        from ..app.paint_session import with_brush
 
         with_brush(self.session, mode=self.mode.currentText(),
                    falloff=self.falloff.currentText(),
@@ -1135,7 +1135,7 @@ class PaintWindow(QtWidgets.QMainWindow):
 
     @guarded
     def _display(self, name: str, *_) -> None:
-        """View > Display: what the meshes are drawn in (app.paint.DISPLAYS)."""
+        """View > Display: what the meshes are drawn in (app.paint_session.DISPLAYS)."""
         self.session.set_display(name)
         self.display_actions[name].setChecked(True)
         self.view.update()
@@ -1277,7 +1277,7 @@ class PaintWindow(QtWidgets.QMainWindow):
                 self._closing_what = "closing"
             if answer == "cancel" or (answer == "save" and not self.save()):
                 return False
-        from ..app.paint import PaintSession, check_paintable, open_paint_stage
+        from ..app.paint_session import PaintSession, check_paintable, open_paint_stage
 
         try:
             stage, layer, save = open_paint_stage(path, None)

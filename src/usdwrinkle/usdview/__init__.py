@@ -283,7 +283,7 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
     frame = _frame(usdview_api)
     prim = _paint_prim(usdview_api)
     if _in_process() and _has_pyside6():
-        from ..app.paint import PaintSession
+        from ..app.paint_session import PaintSession
         from ..errors import UsdWrinkleError
         from ..paint.window import PaintWindow
 
