@@ -170,7 +170,7 @@ def skin_baseline(quick: bool, ctx) -> list[dict]:
                 engine.compute_frame(float(frame), wrinkles=False)  # syncs the frame
                 ctx.finish()
                 started = time.perf_counter()
-                engine.run_skin(path)
+                engine.debug.run_skin(path)
                 ctx.finish()
                 gpu.append((time.perf_counter() - started) * 1e3)
                 engine.mesh_resources(path).posed_points.read()

@@ -57,7 +57,7 @@ def fresh_render(stage, frame=3.0):
 
 
 def counts(engine, path="/Sheet"):
-    return engine.sync_counts(path)
+    return engine.debug.sync_counts(path)
 
 
 def assert_same(a, b):
@@ -88,7 +88,7 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     stage, engine = tracked
     render(engine, 2.0)
     render(engine, 3.0)
-    assert engine.history_frame == 3.0
+    assert engine.debug.history_frame == 3.0
     resources = engine.mesh_resources("/Sheet")
     synced = counts(engine)
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/Sheet"))
@@ -98,7 +98,7 @@ def test_topology_edit_rebuilds_the_mesh_and_restarts_history(tracked):
     mesh.GetFaceVertexCountsAttr().Set(Vt.IntArray([3] * (2 * len(quads))))
     mesh.GetFaceVertexIndicesAttr().Set(Vt.IntArray(triangles.ravel().tolist()))
     engine.pull_changes()
-    assert engine.history_frame is None  # the phase history restarts
+    assert engine.debug.history_frame is None  # the phase history restarts
     after = render(engine, 3.0)
     assert engine.mesh_resources("/Sheet") is not resources
     assert counts(engine)["resources"] == synced["resources"] + 1
@@ -124,7 +124,7 @@ def test_unrelated_edits_resync_nothing(tracked):
     assert {k: now[k] for k in ("resources", "params", "material")} == \
            {k: synced[k] for k in ("resources", "params", "material")}
     assert now["frame"] == synced["frame"] + 1  # the new frame only
-    assert engine.history_frame == 4.0  # the history went on
+    assert engine.debug.history_frame == 4.0  # the history went on
 
 
 def test_material_edit_and_new_mesh(tracked):

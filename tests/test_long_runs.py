@@ -36,12 +36,12 @@ def test_200_frames_keep_memory_and_gpu_resources_flat(gl_context):
             if frame == 20:
                 after_warmup = rss_bytes()
                 resources = {p: engine.mesh_resources(p) for p in engine.rprim_paths}
-                framebuffer = engine.framebuffer
+                framebuffer = engine.debug.framebuffer
         final = rss_bytes()
         assert final < after_warmup * 1.05, (after_warmup, final)
         # the GPU objects of frame 20 are the ones of frame 200: nothing re-created
         assert all(engine.mesh_resources(p) is r for p, r in resources.items())
-        assert engine.framebuffer is framebuffer
+        assert engine.debug.framebuffer is framebuffer
     finally:
         engine.release()
 

@@ -285,11 +285,11 @@ def test_a_live_preview_keeps_the_history_and_the_edit_restarts_it(sheet_session
 
     session, _, out = sheet_session
     session.render(320, 180, FULL)
-    kept = session.engine.kept_history
+    kept = session.engine.debug.kept_history
     session.flood()  # authored: the history restarts at the next frame
     mesh = session.mesh
     session.engine.preview_params(mesh.path, q=mesh.q * 0.5)
-    assert session.engine.kept_history == kept
+    assert session.engine.debug.kept_history == kept
     session.save()
     session.stage_camera = True
     ours = session.render(320, 180, FULL).pixels

@@ -21,7 +21,7 @@ def drawn(request, gl_context):
     """The shirt at frame 24, drawn; yields (engine, framebuffer, samples)."""
     engine = WrinkleEngine(str(SAMPLES / "shirt.usda"), ctx=gl_context)
     engine.render_frame(24.0, 160, 120, samples=request.param)
-    yield engine, engine.framebuffer, request.param
+    yield engine, engine.debug.framebuffer, request.param
     engine.release()
 
 

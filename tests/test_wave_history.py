@@ -109,11 +109,11 @@ def test_a_step_back_replays_nothing(gl_context):
     engine = WrinkleEngine(stage, ctx=gl_context)
     try:
         first = draw(engine, 24.0)
-        assert engine.computed_count == 24 and engine.preroll_count == 23
+        assert engine.debug.computed_count == 24 and engine.debug.preroll_count == 23
         draw(engine, 23.0)
         again = draw(engine, 24.0)
         # 23 reads 22's kept state and 24 reads 23's: two frames, no preroll
-        assert engine.computed_count == 26 and engine.preroll_count == 23
+        assert engine.debug.computed_count == 26 and engine.debug.preroll_count == 23
         assert_identical(again, first)
         assert_identical(again, fresh(gl_context, stage, 24.0))
     finally:
@@ -125,11 +125,11 @@ def test_a_scrub_past_the_kept_states_replays_from_the_nearest(gl_context):
     engine = WrinkleEngine(stage, ctx=gl_context, history_cache=3)
     try:
         engine.compute_frame(10.0)
-        assert engine.kept_history == [7.0, 8.0, 9.0, 10.0][-3:]
-        before = engine.computed_count
+        assert engine.debug.kept_history == [7.0, 8.0, 9.0, 10.0][-3:]
+        before = engine.debug.computed_count
         engine.compute_frame(6.0)  # needs 5: nothing kept at or below 5, from the start
-        assert engine.computed_count - before == 6
-        assert engine.kept_history == [4.0, 5.0, 6.0]
+        assert engine.debug.computed_count - before == 6
+        assert engine.debug.kept_history == [4.0, 5.0, 6.0]
         fields = engine.read_fields(engine.wrinkled_paths[0]).arrays()
     finally:
         engine.release()

@@ -74,8 +74,10 @@ class WrinkleEngine:
         self.history = WaveHistory(history_cache if history_cache is not None else
                                    cache_capacity(self._state_bytes()))
         #: frames computed (drawn or not) and of them preroll steps, since creation
-        self.computed_count = 0
-        self.preroll_count = 0
+        self._computed = 0
+        self._prerolled = 0
+        #: what tests and benchmarks look at inside (EngineDebug)
+        self.debug = EngineDebug(self)
         #: wraps the list of preroll frames (the CLI shows a progress bar)
         self.preroll_progress = preroll_progress or (lambda frames: frames)
 
@@ -151,33 +153,6 @@ class WrinkleEngine:
     def rprim_paths(self) -> list[str]:
         """The meshes that hold GPU resources now (Hydra's rprims)."""
         return list(self.render_delegate.rprims)
-
-    def sync_counts(self, path: str) -> dict:
-        """How often ``path``'s rprim rebuilt its resources, re-read its parameters, its
-        material and its frame (change tracking: what a change costs)."""
-        return dict(self.render_delegate.rprims[path].sync_counts)
-
-    @property
-    def framebuffer(self):
-        """The framebuffer of the last drawn frame (None before the first)."""
-        return self.render_delegate.current_framebuffer
-
-    def run_skin(self, path: str) -> None:
-        """Run the skin pass again on ``path``'s last synced frame, alone (the bench times
-        it against UsdSkel); its output is mesh_resources(path).posed_points."""
-        from .render.passes.skin import SkinPass
-
-        mesh = self.render_delegate.rprims[path]
-        self.render_delegate.wave_pass(SkinPass).skin(mesh.resources, mesh.frame)
-
-    @property
-    def history_frame(self) -> float | None:
-        """The grid frame whose wave state was recorded last (None: none is kept, the
-        next frame restarts the history)."""
-        start = self.history_start()
-        if self.history.last is None or start is None:
-            return None
-        return start + self.history.last
 
     def sample(self, frame: float | None, aspect: float):
         """The scene's FrameRecord at ``frame`` through this engine's camera (what
@@ -261,12 +236,6 @@ class WrinkleEngine:
         self._sync(self.scene.sample_meshes(frame, with_baked=False))
         self.render_pass.compute(wrinkles, None, write, read, skip=frozenset(self.scene.baked))
 
-    @property
-    def kept_history(self) -> list[float]:
-        """The grid frames whose wave states this engine keeps (ascending)."""
-        start = self.history_start()
-        return [] if start is None else [start + i for i in self.history.indices]
-
     def pull_changes(self) -> None:
         """Turn the stage's edits since the last frame into dirty bits (scene/changes.py):
         rprims for meshes that appeared or went, and the parts of each mesh to sync. An
@@ -331,10 +300,10 @@ class WrinkleEngine:
                              "sync": (synced - read_at) * 1e3}
         if profile:
             self.last_timings["preroll_frames"] = float(len(steps))
-        self.preroll_count += len(steps)
+        self._prerolled += len(steps)
         write = self.history.work_slot(keep=read)
         self.render_pass.compute(wrinkles, self.last_timings, write, read)
-        self.computed_count += 1 + len(steps)
+        self._computed += 1 + len(steps)
         if wrinkles and needs_history and on_grid(frame, start):
             self.advance(int(frame - start), write)
         return record
@@ -441,3 +410,56 @@ def image_size(scene, camera: str | None, width: int, height: int | None,
     # usdrecord: static_cast<size_t>(float(width) / aspectRatio), in single precision
     return width, max(1, int(np.float32(width) / np.float32(aspect)))
 
+
+class EngineDebug:
+    """What tests and benchmarks look at inside an engine (``engine.debug``): its counts,
+    its kept phase history, its framebuffer, one pass run alone. The doors never need
+    it: they use the engine's verbs and queries."""
+
+    def __init__(self, engine: WrinkleEngine):
+        self._engine = engine
+
+    @property
+    def computed_count(self) -> int:
+        """Frames computed (drawn or not) since the engine was made, preroll steps too."""
+        return self._engine._computed
+
+    @property
+    def preroll_count(self) -> int:
+        """Of them, the phase-history preroll steps."""
+        return self._engine._prerolled
+
+    def sync_counts(self, path: str) -> dict:
+        """How often ``path``'s rprim rebuilt its resources, re-read its parameters, its
+        material and its frame (change tracking: what a change costs)."""
+        return dict(self._engine.render_delegate.rprims[path].sync_counts)
+
+    @property
+    def framebuffer(self):
+        """The framebuffer of the last drawn frame (None before the first)."""
+        return self._engine.render_delegate.current_framebuffer
+
+    def run_skin(self, path: str) -> None:
+        """Run the skin pass again on ``path``'s last synced frame, alone (the bench times
+        it against UsdSkel); its output is mesh_resources(path).posed_points."""
+        from .render.passes.skin import SkinPass
+
+        engine = self._engine
+        mesh = engine.render_delegate.rprims[path]
+        engine.render_delegate.wave_pass(SkinPass).skin(mesh.resources, mesh.frame)
+
+    @property
+    def history_frame(self) -> float | None:
+        """The grid frame whose wave state was recorded last (None: none is kept, the
+        next frame restarts the history)."""
+        engine = self._engine
+        start = engine.history_start()
+        if engine.history.last is None or start is None:
+            return None
+        return start + engine.history.last
+
+    @property
+    def kept_history(self) -> list[float]:
+        """The grid frames whose wave states the engine keeps (ascending)."""
+        start = self._engine.history_start()
+        return [] if start is None else [start + i for i in self._engine.history.indices]
