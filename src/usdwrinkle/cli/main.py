@@ -84,16 +84,16 @@ def _stop_signals() -> list:
 
 
 #: stop signals put off by _on_stop (asked again in 20 ms): a run that ends before they come
-#: back still ends as stopped, never with 0 (a signal held in a writer thread's atomic
-#: rename, then put off in a fragile moment of the last frame, was lost to the quick exit)
+#: back still ends as stopped, never with 0, so that a signal held in a writer thread's
+#: atomic rename and put off in a fragile moment of the last frame is not lost to the exit
 _DEFERRED: list = []
 
 
 def _on_stop(signum, frame):
     """The first stop signal unwinds the run (its cleanup removes temporary files and
     finishes the frames handed to the writer). Later ones are ignored until the process
-    exits: a second Ctrl-C a few milliseconds after the first used to land in the middle
-    of that cleanup, or in the GL and thread teardown after it, and abort the process
+    exits: a second Ctrl-C a few milliseconds after the first would land in the middle of
+    that cleanup, or in the GL and thread teardown after it, and abort the process
     (SIGABRT) instead of exit 130."""
     if _fragile(frame):
         # an exception raised here would land inside a C extension's module init

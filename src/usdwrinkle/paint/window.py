@@ -1337,8 +1337,8 @@ class PaintWindow(QtWidgets.QMainWindow):
         print_stderr(f"usdwrinkle: paint: error: {text}"
                      + (f"\n{detail}" if detail and self.debug else ""))
         # shown from the event loop, not here: inside paintGL a new banner re-lays the
-        # window out and resizes the GL widget while it paints, which crashed the process
-        # (measured: 3 of 4 runs, PySide6 6.12 on llvmpipe)
+        # window out and resizes the GL widget while it paints, which can crash the
+        # process (docs/decisions.md, "The paint window's error banner")
         QtCore.QTimer.singleShot(0, functools.partial(self._show_banner, text))
 
     def _show_banner(self, text: str) -> None:

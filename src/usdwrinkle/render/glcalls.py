@@ -180,9 +180,7 @@ class MappedBuffer:
         fns["glGenBuffers"](1, ctypes.byref(name))
         self.glo = name.value
         # not coherent: the resolve ends in glMemoryBarrier(CLIENT_MAPPED_BUFFER) before
-        # its fence. Paired on an H200 (the paper's shirt to PNG, 2 runs each): 356 and 368
-        # fps against 332 and 372 coherent with 3 buffers, 336 and 369 against 277 and 319
-        # with 2
+        # its fence (docs/decisions.md, "Persistent mapped readback buffers")
         flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT
         fns["glBindBuffer"](GL_COPY_WRITE_BUFFER, self.glo)
         try:

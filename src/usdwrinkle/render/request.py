@@ -50,10 +50,9 @@ class FrameRequest:
 
 
 def default_readback_ring(ctx) -> int:
-    """Readback buffers when none are asked for: 3 on a GPU (an H200 wrote the paper's
-    shirt at 222 fps with 1, 285-396 with 3), 1 on llvmpipe, where the CPU computes the
-    frame anyway and the copy thread only competes with it (CesiumMan, 24 frames at
-    960x540 to PNG: 4% slower with 3, seven paired runs)."""
+    """Readback buffers when none are asked for: 3 on a GPU, 1 on llvmpipe, where the CPU
+    computes the frame anyway and the copy thread only competes with it (the
+    measurements: docs/decisions.md, "Readback buffers")."""
     from .context import is_software_renderer
 
     return 1 if is_software_renderer(ctx.info.get("GL_RENDERER", "")) else 3

@@ -335,10 +335,8 @@ class MeshResources:
         if not self.record.material.normal_map_varies:
             build_mipmaps(self.ctx, self.normal_map, layers, srgb=False)
         else:
-            # a map per frame (a bake's wrinkle maps): the driver's generator, every frame
-            # the same. Its shader compile is paid once a process, and a
-            # frame's chain is quicker in the GL than through our pass's read-back
-            # (llvmpipe, 2048²: 25-39 ms a frame against 80-120)
+            # a map per frame (a bake's wrinkle maps): the driver's generator, quicker
+            # than our pass's read-back (docs/decisions.md, "Mip chains of a map a frame")
             self.normal_map.build_mipmaps()
         for layer, (tile, _) in enumerate(normal_map.tiles):
             if tile == -1:  # one texture that repeats (draw.glsl: normal_map)

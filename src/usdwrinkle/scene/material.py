@@ -164,7 +164,8 @@ def _scale_bias(tex: UsdShade.Shader, time) -> tuple[np.ndarray, np.ndarray]:
     bias = np.zeros(4, np.float32) if bias is None else np.asarray(bias, np.float64)
     for name, value in (("scale", scale), ("bias", bias)):
         # a texel (at most 1e15 by load_texture) times scale, plus bias, stays finite in
-        # float32 (the frame used to say only "non-finite values" of the whole scene)
+        # float32, and an input that breaks it is named here, not as a frame's
+        # "non-finite values"
         if not (np.all(np.isfinite(value)) and np.all(np.abs(value) <= 1e15)):
             raise UsdWrinkleError(f"UsdUVTexture inputs:{name} {tuple(value.tolist())} must "
                                   "be finite and within +-1e15", str(tex.GetPath()),
