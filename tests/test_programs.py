@@ -33,8 +33,8 @@ def test_a_second_engine_compiles_no_shader_again(gl_context):
 
 
 def test_a_second_render_job_and_a_second_farm_chunk_compile_nothing(gl_context, tmp_path):
+    from usdwrinkle.engine import EngineOptions
     from usdwrinkle.farm.worker import render_chunk
-    from usdwrinkle.frameloop import EngineOptions
     from usdwrinkle.outputs.images import layout_for
     from usdwrinkle.outputs.writer import WriteOptions
     from usdwrinkle.render.request import FrameRequest

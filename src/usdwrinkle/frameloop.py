@@ -10,7 +10,6 @@ import contextlib
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
 
 from . import schema
 from .errors import UsdWrinkleError
@@ -28,46 +27,6 @@ def unapplied_note(stage) -> str | None:
     there are none): render, bake, the farm and paint say it; check reports it."""
     paths = schema.unapplied_controls(stage)
     return schema.unapplied_message(paths) if paths else None
-
-
-@dataclass(frozen=True)
-class EngineOptions:
-    """What a WrinkleEngine is made with (picklable: a farm task carries it)."""
-
-    stage: str
-    all_meshes: bool = False
-    relax_iterations: int | None = None
-    camera: str | None = None
-    history_start: float | None = None
-    use_baked: bool = True
-    #: time every pass (GL timer queries, or the wall clock between glFinish calls)
-    profile: bool = False
-    #: how the stage is composed (scene/composition.Composition; None: as it is): a farm
-    #: worker opens the stage with it
-    composition: object | None = None
-
-    def create(self, stage: Any = None, preroll_progress: Any = None, ctx: Any = None,
-               history_cache: int | None = None) -> Any:
-        """The engine; ``stage``: an already opened Usd.Stage of ``self.stage``;
-        ``preroll_progress`` wraps the list of preroll frames (a progress bar); ``ctx``: a
-        moderngl context to share (None: the process's own)."""
-        from .engine import WrinkleEngine
-
-        if stage is None and self.composition:
-            from .scene.stage import open_stage
-
-            stage = open_stage(self.stage, self.composition)
-
-        kwargs = {} if preroll_progress is None else {"preroll_progress": preroll_progress}
-        if ctx is not None:
-            kwargs["ctx"] = ctx
-        if history_cache is not None:
-            kwargs["history_cache"] = history_cache
-        return WrinkleEngine(stage if stage is not None else self.stage,
-                             all_meshes=self.all_meshes,
-                             relax_iterations=self.relax_iterations, camera=self.camera,
-                             history_start=self.history_start, use_baked=self.use_baked,
-                             profile=self.profile, **kwargs)
 
 
 @contextlib.contextmanager

@@ -20,34 +20,9 @@ from ..schema import (  # noqa: F401  (what the command line's help says of the 
     DEFAULT_SLACK,
     WIDTH_EDGE_MULTIPLE,
 )
+from .options import ApplyOptions
 
 _log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class ApplyOptions:
-    """What ``usdwrinkle apply`` authors (its --help says what each field does)."""
-
-    stage: str
-    prim_paths: tuple[str, ...]
-    output: str | None = None
-    width: float | None = None
-    cloth: str | None = None
-    slack: float | None = None
-    crest_damping: float | None = None
-    held_from_primvar: str | None = None
-    amplitude_scale: float | None = None
-    biaxial: float | None = None
-    tension: float | None = None
-    tension_threshold: float | None = None
-    profile: str | None = None
-    q: str | None = None
-    q_from_texture: str | None = None
-    uv: str = "st"
-    amount_channel: str | None = None
-    q_from_primvar: str | None = None
-    width_from_texture: str | None = None
-    clear_q: bool = False
 
 
 def _split(path: str) -> list[str]:

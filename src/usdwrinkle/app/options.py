@@ -271,3 +271,29 @@ MAP_FIELDS = {"map_size": "size", "map_dir": "folder", "map_format": "fmt",
               "map_layout": "layout", "map_displacement": "displacement"}
 #: BakeOptions field -> geometry/options.GeometryOptions field
 GEOMETRY_FIELDS = {"levels": "levels", "samples_per_wavelength": "samples_per_wavelength"}
+
+
+@dataclass(frozen=True)
+class ApplyOptions:
+    """What ``usdwrinkle apply`` authors (its --help says what each field does)."""
+
+    stage: str
+    prim_paths: tuple[str, ...]
+    output: str | None = None
+    width: float | None = None
+    cloth: str | None = None
+    slack: float | None = None
+    crest_damping: float | None = None
+    held_from_primvar: str | None = None
+    amplitude_scale: float | None = None
+    biaxial: float | None = None
+    tension: float | None = None
+    tension_threshold: float | None = None
+    profile: str | None = None
+    q: str | None = None
+    q_from_texture: str | None = None
+    uv: str = "st"
+    amount_channel: str | None = None
+    q_from_primvar: str | None = None
+    width_from_texture: str | None = None
+    clear_q: bool = False

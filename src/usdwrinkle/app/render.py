@@ -241,7 +241,7 @@ class RenderJob(ShotJob):
             refuse_overwriting_inputs(self.shot.path, [path], self.shot.open())
 
     def chunk_engine(self, stage_path: str, baked: bool) -> Any:
-        """The frameloop.EngineOptions a chunk renders with: ``stage_path`` is the stage, or the
+        """The engine.EngineOptions a chunk renders with: ``stage_path`` is the stage, or the
         farm's bake of it (``baked``: then the bake's layer carries the sublayers and
         variant selections, and only the population mask is applied again)."""
         import dataclasses

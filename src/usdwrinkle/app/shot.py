@@ -94,8 +94,8 @@ class Shot:
 
     def engine_options(self, camera: str | None = None, use_baked: bool = True,
                        profile: bool = False) -> Any:
-        """The frameloop.EngineOptions of this shot (picklable: a farm task carries them)."""
-        from ..frameloop import EngineOptions
+        """The engine.EngineOptions of this shot (picklable: a farm task carries them)."""
+        from ..engine import EngineOptions
 
         composition = self.options.composition()
         return EngineOptions(os.path.abspath(self.path), all_meshes=self.options.all_meshes,

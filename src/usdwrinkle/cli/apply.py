@@ -74,7 +74,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..app.apply import ApplyJob, ApplyOptions
+    from ..app.apply import ApplyJob
+    from ..app.options import ApplyOptions
 
     options = ApplyOptions(
         stage=args.stage, prim_paths=tuple(args.prim_paths), output=args.output,

@@ -17,8 +17,9 @@ import threading
 from typing import Any
 
 from ..aovs import exr_channels
+from ..engine import EngineOptions
 from ..errors import UsdWrinkleError
-from ..frameloop import EngineOptions, render_frames
+from ..frameloop import render_frames
 from ..imagefiles import is_complete_image
 from ..log import warnings_to
 
