@@ -110,7 +110,7 @@ def line(a, b, steps: int = 30) -> list[tuple[float, float]]:
 
 def view_pixels(window, path: str, mask: np.ndarray) -> np.ndarray:
     """The mean widget position of the posed vertices in ``mask`` (logical pixels)."""
-    from usdwrinkle.app.view import project
+    from usdwrinkle.brush.view import project
 
     session, frame = window.session, window.view.last_frame
     xy, _ = project(frame.camera, session.posed_points(path)[mask], frame.width, frame.height)
@@ -204,7 +204,7 @@ def scenario_stroke(out: Path, stage: str) -> dict:
     result["erased_max"] = float(np.abs(q2[erased]).max()) if len(erased) else 1.0
     # smooth: over a region of scattered directions
     key(window, Qt.Key_Z, Qt.ControlModifier)
-    from usdwrinkle.app.brush import spread
+    from usdwrinkle.brush.stamp import spread
 
     rng = np.random.default_rng(7)
     noisy = session.mesh.q.copy()
@@ -772,7 +772,7 @@ def scenario_follow(out: Path, stage: str) -> dict:
     ``stage``: a sheet that travels across the frames (the test writes it). The timeline
     played with Space (real X key events) over every frame, with View > Follow the mesh
     off and then on: per drawn frame, the share of the mesh's points inside the view."""
-    from usdwrinkle.app.view import project
+    from usdwrinkle.brush.view import project
 
     window = open_window(stage, str(out / "follow.usda"), size=(1000, 600))
     session, view = window.session, window.view
@@ -865,7 +865,7 @@ def scenario_display(out: Path, stage: str) -> dict:
     View > Display > Painted amount and Painted W: the drawn frame's colour (saturation
     and hue) at the front-facing points painted at |q| > 0.5 and at those left unpainted,
     in each display; screenshots."""
-    from usdwrinkle.app.view import project
+    from usdwrinkle.brush.view import project
 
     window = open_window(stage, str(out / "display.usda"), size=(1100, 640))
     session, view = window.session, window.view

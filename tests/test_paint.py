@@ -1,4 +1,4 @@
-"""The paint mode's core without Qt (app/brush.py, app/paint_session.py): what a stamp does
+"""The paint mode's core without Qt (brush/stamp.py, app/paint_session.py): what a stamp does
 to q, against numbers worked out by hand, and a session's strokes, undo, controls and save
 on the engine (tests/test_paint_window.py drives the window itself)."""
 from __future__ import annotations
@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 from pxr import Usd
 
-from usdwrinkle.app.brush import (
+from usdwrinkle.app.paint_session import FULL, PaintSession, open_paint_stage
+from usdwrinkle.authoring import WrinkleAPI
+from usdwrinkle.authoring.builders import grid_sheet
+from usdwrinkle.brush.stamp import (
     BrushSettings,
     Hit,
     PaintMesh,
@@ -21,10 +24,7 @@ from usdwrinkle.app.brush import (
     spread,
     stamp,
 )
-from usdwrinkle.app.paint_session import FULL, PaintSession, open_paint_stage
-from usdwrinkle.app.view import OrbitCamera, pixel_ray, project, ray_triangles
-from usdwrinkle.authoring import WrinkleAPI
-from usdwrinkle.authoring.builders import grid_sheet
+from usdwrinkle.brush.view import OrbitCamera, pixel_ray, project, ray_triangles
 from usdwrinkle.errors import UsdWrinkleError
 
 from helpers import sheet_stage

@@ -6,7 +6,6 @@ import json
 
 import pytest
 
-from usdwrinkle.app.brush import BrushSettings
 from usdwrinkle.app.presets import (
     config_dir,
     delete_preset,
@@ -14,6 +13,7 @@ from usdwrinkle.app.presets import (
     presets_path,
     save_preset,
 )
+from usdwrinkle.brush.stamp import BrushSettings
 from usdwrinkle.errors import UsdWrinkleError
 
 

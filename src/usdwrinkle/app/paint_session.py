@@ -18,10 +18,10 @@ import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
 from .. import schema
+from ..brush.stamp import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
+from ..brush.view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 from ..errors import UsdWrinkleError
 from ..layerinfo import copy_stage_info
-from .brush import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
-from .view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 
 #: stamps along a drag lie at most this many pixels apart on screen (besides the brush's
 #: spacing in radii): with a huge brush a short drag paints too (issue 57: at radius 6.37

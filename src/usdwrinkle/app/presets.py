@@ -19,8 +19,8 @@ import json
 import os
 from pathlib import Path
 
+from ..brush.stamp import BrushSettings
 from ..errors import UsdWrinkleError
-from .brush import BrushSettings
 
 VERSION = 1
 FILE_NAME = "brushes.json"

@@ -27,9 +27,9 @@ except ImportError as exc:  # the optional extra
     raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
                           f"({exc})") from None
 
-from ..app.brush import FALLOFFS, MIRROR_AXES, MODES
 from ..app.paint_session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
-from ..app.view import project
+from ..brush.stamp import FALLOFFS, MIRROR_AXES, MODES
+from ..brush.view import project
 from ..timecode import format_frame
 
 Qt = QtCore.Qt
