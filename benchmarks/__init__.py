@@ -102,7 +102,7 @@ def run(args) -> int:
         result["targets"] = targets(result)  # the words of this report's version
     else:
         corpus = Path(args.corpus) if args.corpus else default_corpus()
-        from usdwrinkle.log import silenced
+        from usdwrinkle.process.log import silenced
 
         def checkpoint(partial: dict) -> None:
             if args.json:  # the sections so far, should the run be stopped
@@ -136,7 +136,7 @@ def run(args) -> int:
 
 def _saved_run(path: str) -> dict:
     """A run saved with --json, or a one-line error naming what is wrong with the file."""
-    from usdwrinkle.errors import UsdWrinkleError
+    from usdwrinkle.process.errors import UsdWrinkleError
 
     try:
         result = json.loads(Path(path).read_text())
@@ -193,7 +193,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m benchmarks``: errors as usdwrinkle's one line, exit 2."""
-    from usdwrinkle.errors import UsdWrinkleError, print_stderr
+    from usdwrinkle.process.errors import UsdWrinkleError, print_stderr
 
     args = parse_args(argv)
     try:

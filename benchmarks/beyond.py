@@ -18,7 +18,7 @@ CASES = ("pillow", "pull")
 def _stage(name: str, features: bool):
     from pxr import Sdf, Usd
 
-    from usdwrinkle import schema
+    from usdwrinkle.usd import schema
 
     stage = Usd.Stage.Open(str(SAMPLES / f"{name}.usda"))
     stage.SetEditTarget(stage.GetSessionLayer())

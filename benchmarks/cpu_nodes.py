@@ -118,8 +118,8 @@ def encoders(ctx, stage: Path, width: int, height: int, repeats: int) -> dict:
     import numpy as np
     import OpenImageIO as oiio
 
-    from usdwrinkle.aovs import AOV_BLOCKS, ImageLayout
     from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.images.aovs import AOV_BLOCKS, ImageLayout
     from usdwrinkle.outputs import images
 
     engine = WrinkleEngine(str(stage), all_meshes=True, ctx=ctx)

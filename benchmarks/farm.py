@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from usdwrinkle._resources import resource_dir
+from usdwrinkle.process._resources import resource_dir
 from usdwrinkle.render.context import is_software_renderer
 
 

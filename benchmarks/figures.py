@@ -98,8 +98,8 @@ def geometry_figure(outdir: Path) -> Path:
 
 def _render_stage(stage, width: int, height: int) -> np.ndarray:
     """Frame 24 of an open stage, over white."""
-    from usdwrinkle.colour import srgb_encode
     from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.images.colour import srgb_encode
 
     engine = WrinkleEngine(stage)
     try:

@@ -45,9 +45,14 @@ def sheet_lengths(preset: str, ratio: float, folder: str, levels: int = LEVELS) 
 
     from usdwrinkle.authoring.api import WrinkleAPI
     from usdwrinkle.authoring.builders import grid_sheet, point_cache_stage
-    from usdwrinkle.folds import excess_length, material_wavelength, profile_slope, slope_table
     from usdwrinkle.geometry.measure import length_ratio_along, plane_wave
-    from usdwrinkle.profiles import profile_preset
+    from usdwrinkle.method.folds import (
+        excess_length,
+        material_wavelength,
+        profile_slope,
+        slope_table,
+    )
+    from usdwrinkle.method.profiles import profile_preset
 
     rest, counts, indices = grid_sheet(31, 31, 2.0)
     posed = rest * np.array([ratio, 1, 1], np.float32)
@@ -131,7 +136,7 @@ def table(rows: list[dict], shirt: dict) -> str:
 
 
 def main(argv=None) -> int:
-    from usdwrinkle.profiles import PRESETS
+    from usdwrinkle.method.profiles import PRESETS
 
     args = sys.argv[1:] if argv is None else argv
     with tempfile.TemporaryDirectory() as folder:

@@ -17,7 +17,7 @@ import numpy as np
 from pxr import Usd, UsdGeom, Vt
 
 from usdwrinkle import __version__
-from usdwrinkle._resources import resource_dir
+from usdwrinkle.process._resources import resource_dir
 
 from .paper import PAPER
 from .stages import sleeve_stage

@@ -115,7 +115,7 @@ def measured_controls(stage, mesh_width: bool, slack: float | None = 0.0) -> Non
     (docs/physics.md tests those)."""
     from pxr import Sdf, UsdGeom
 
-    from usdwrinkle import schema
+    from usdwrinkle.usd import schema
 
     for prim in stage.Traverse():
         if prim.IsA(UsdGeom.Mesh):

@@ -18,7 +18,7 @@ import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its regi
 from usdwrinkle import WrinkleAPI, profile_preset
 from usdwrinkle.authoring.builders import grid_faces, grid_sheet
 from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
-from usdwrinkle.colour import srgb_encode
+from usdwrinkle.images.colour import srgb_encode
 
 FRAMES = (1, 24)
 

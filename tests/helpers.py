@@ -254,11 +254,16 @@ def find_window(display: str, name: str, pid: int | None = None,
 
 
 def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
-    """(amplitude, |k|) of the fold law (usdwrinkle/folds.py, docs/method.md) on an
+    """(amplitude, |k|) of the fold law (usdwrinkle/method/folds.py, docs/method.md) on an
     analytic sheet: ``ratio`` the compression along the wave with the painted q,
     ``geometric`` the mesh's alone (default: ``ratio``), on flat cloth (no room limit)."""
-    from usdwrinkle.folds import excess_length, material_wavelength, profile_slope, slope_table
-    from usdwrinkle.profiles import default_profile
+    from usdwrinkle.method.folds import (
+        excess_length,
+        material_wavelength,
+        profile_slope,
+        slope_table,
+    )
+    from usdwrinkle.method.profiles import default_profile
 
     geometric = ratio if geometric is None else geometric
     rho = excess_length(ratio, geometric, slack)

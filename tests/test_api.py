@@ -10,7 +10,7 @@ import pytest
 
 from usdwrinkle import api
 from usdwrinkle.cli.main import main
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 
 SHIRT = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
 
@@ -89,8 +89,9 @@ def test_the_api_warns_through_the_library_logger(gl_context, tmp_path, capfd):
     warning went to stderr (the API pushed the command line's reporter); and
     UsdWrinkleError could not be imported from usdwrinkle or usdwrinkle.api."""
     import usdwrinkle
-    from usdwrinkle import api, log
-    from usdwrinkle.errors import UsdWrinkleError
+    from usdwrinkle import api
+    from usdwrinkle.process import log
+    from usdwrinkle.process.errors import UsdWrinkleError
 
     assert api.UsdWrinkleError is UsdWrinkleError is usdwrinkle.UsdWrinkleError
     with log.collect() as messages:

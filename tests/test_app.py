@@ -11,13 +11,14 @@ import OpenImageIO as oiio
 import pytest
 from pxr import Usd
 
-from usdwrinkle import api, log, usdview
+from usdwrinkle import api, usdview
 from usdwrinkle.app.options import BakeOptions, RenderOptions, ShotOptions
 from usdwrinkle.app.render import RenderJob
 from usdwrinkle.app.shot import Shot
 from usdwrinkle.cli.flags import flagged
 from usdwrinkle.cli.main import main
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process import log
+from usdwrinkle.process.errors import UsdWrinkleError
 
 SHIRT = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
 POLICY = "a render policy added to the job alone"
@@ -115,8 +116,8 @@ def test_flags_replace_backquoted_fields_only():
 
 def test_writer_threads_follow_the_cores_and_the_memory(monkeypatch):
     """Issue 45: the writer used 1 thread and 2 frames in flight on any node."""
-    from usdwrinkle import memory
     from usdwrinkle.outputs import writer
+    from usdwrinkle.process import memory
 
     monkeypatch.setattr(writer, "cores", lambda: 16)
     assert writer.default_threads() == 15

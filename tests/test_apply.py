@@ -10,7 +10,7 @@ from pxr import Sdf, Usd, UsdGeom, Vt
 
 from usdwrinkle import WrinkleAPI, profile_from_curve, profile_preset
 from usdwrinkle.cli.main import main
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 
 from conftest import grid_sheet
 
@@ -136,7 +136,7 @@ def test_api_refuses_bad_values_before_writing(tmp_path):
     with pytest.raises(UsdWrinkleError, match="Mesh"):
         WrinkleAPI.Apply(stage.GetPrimAtPath("/World"))
     # the reader's bound, not only >= 0 (issue 25: the API wrote what render refused)
-    from usdwrinkle.limits import MAX_RELAX_ITERATIONS
+    from usdwrinkle.process.limits import MAX_RELAX_ITERATIONS
 
     for bad in (-1, MAX_RELAX_ITERATIONS + 1):
         with pytest.raises(UsdWrinkleError, match="relax iterations must be in 0.."):

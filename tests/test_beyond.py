@@ -10,8 +10,8 @@ from pxr import Usd, UsdGeom
 
 from usdwrinkle.authoring.api import WrinkleAPI
 from usdwrinkle.cli.main import main
-from usdwrinkle.contract import TENSION_REFERENCE_STRAIN, TENSION_SLOPE
 from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.method.contract import TENSION_REFERENCE_STRAIN, TENSION_SLOPE
 
 from conftest import grid_sheet
 from helpers import fold_law, point_cache_stage, rotation_matrix

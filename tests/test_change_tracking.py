@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, Vt
 
-from usdwrinkle import schema
 from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.usd import schema
 
 from conftest import grid_sheet
 from helpers import point_cache_stage

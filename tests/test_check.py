@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom, UsdValidation, Vt
 
-from usdwrinkle import schema
 from usdwrinkle.cli.main import main
-from usdwrinkle.validation import VALIDATOR_NAME, register_validators
+from usdwrinkle.usd import schema
+from usdwrinkle.usd.validation import VALIDATOR_NAME, register_validators
 
 from conftest import grid_sheet
 from helpers import fold_law

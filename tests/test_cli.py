@@ -9,9 +9,9 @@ import OpenImageIO as oiio
 import pytest
 
 from usdwrinkle.cli.main import main
-from usdwrinkle.folds import height_bound, slope_table
-from usdwrinkle.profiles import default_profile
-from usdwrinkle.schema import DEFAULT_SLACK
+from usdwrinkle.method.folds import height_bound, slope_table
+from usdwrinkle.method.profiles import default_profile
+from usdwrinkle.usd.schema import DEFAULT_SLACK
 
 from helpers import EXR_CHANNELS, read_exr
 

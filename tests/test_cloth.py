@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from pxr import Sdf, Usd, UsdGeom, Vt
 
-from usdwrinkle import schema
 from usdwrinkle.authoring.builders import grid_faces
 from usdwrinkle.cli.main import main
-from usdwrinkle.contract import COARSENING_MAX
+from usdwrinkle.method.contract import COARSENING_MAX
 from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.render.passes.crush import DAMPING_DEADBAND, damping_alpha
 from usdwrinkle.scene.params import held_weights
 from usdwrinkle.scene.topology import build_topology, curvature, mean_edge_length
-from usdwrinkle.validation import wrinkle_findings
+from usdwrinkle.usd import schema
+from usdwrinkle.usd.validation import wrinkle_findings
 
 from conftest import grid_sheet
 from helpers import (

@@ -11,7 +11,7 @@ import pytest
 from pxr import Sdf, Usd
 
 from usdwrinkle.cli.main import main
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 from usdwrinkle.scene.composition import Composition, parse_variant
 from usdwrinkle.scene.stage import open_stage
 

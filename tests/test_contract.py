@@ -1,4 +1,4 @@
-"""The Python <-> GLSL contract is written once (src/usdwrinkle/contract.py and
+"""The Python <-> GLSL contract is written once (src/usdwrinkle/method/contract.py and
 render/bindings.py): every upper-case name a shader uses is defined by Python or by the
 shader itself, and no shader re-types a Python constant."""
 from __future__ import annotations
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from usdwrinkle import contract
-from usdwrinkle.contract import FIELD_TEXELS, WrinkleFields
+from usdwrinkle.method import contract
+from usdwrinkle.method.contract import FIELD_TEXELS, WrinkleFields
 from usdwrinkle.render import bindings
 
 SHADERS = Path(__file__).resolve().parents[1] / "shaders"
@@ -129,18 +129,18 @@ def test_the_wave_blend_is_written_once():
 
 def test_each_on_disk_contract_is_written_once():
     """Issue 25: the baked primvar names, the AOV and EXR channel names, the half-float
-    mask and the UDIM sentinel stand in one module each (schema.py, aovs.py,
-    contract.py); a writer, reader or shader that types one again fails here."""
+    mask and the UDIM sentinel stand in one module each (usd/schema.py, images/aovs.py,
+    method/contract.py); a writer, reader or shader that types one again fails here."""
     from pathlib import Path
 
     source = Path(__file__).resolve().parents[1] / "src" / "usdwrinkle"
     owners = {
-        '"primvars:wrinkle:waveVector': "schema.py",
-        '"primvars:wrinkle:phase': "schema.py",
-        '"primvars:wrinkle:compression"': "schema.py",
-        '"wrinkle.height"': "aovs.py",
-        '"wrinkle.amplitude"': "aovs.py",
-        '"N.X"': "aovs.py",
+        '"primvars:wrinkle:waveVector': "usd/schema.py",
+        '"primvars:wrinkle:phase': "usd/schema.py",
+        '"primvars:wrinkle:compression"': "usd/schema.py",
+        '"wrinkle.height"': "images/aovs.py",
+        '"wrinkle.amplitude"': "images/aovs.py",
+        '"N.X"': "images/aovs.py",
     }
     for text, owner in owners.items():
         places = sorted(str(p.relative_to(source)) for p in source.rglob("*.py")

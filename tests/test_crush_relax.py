@@ -181,7 +181,7 @@ def test_a_point_of_huge_valence_reads_a_capped_ring(gl_context):
     fan (2 million triangles) set a whole pass's time, every frame and relax iteration.
     Beyond MAX_RING a point reads MAX_RING of its ring, evenly spaced: the GPU and the
     numpy reference agree on that, and a point of ordinary valence reads its whole ring."""
-    from usdwrinkle.limits import MAX_RING
+    from usdwrinkle.process.limits import MAX_RING
     from usdwrinkle.scene.topology import build_topology
 
     n = 5000  # a fan of n triangles about the centre, compressed along x

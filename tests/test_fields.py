@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usdwrinkle.contract import FIELD_TEXELS, FIELD_WAVE_TEXEL
+from usdwrinkle.method.contract import FIELD_TEXELS, FIELD_WAVE_TEXEL
 from usdwrinkle.render.fields import WaveFields
 from usdwrinkle.render.resources import Table
 

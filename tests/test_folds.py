@@ -1,4 +1,4 @@
-"""The fold law (usdwrinkle/folds.py, crush.glsl; issue 55): inextensible waves whose
+"""The fold law (usdwrinkle/method/folds.py, crush.glsl; issue 55): inextensible waves whose
 material wavelength coarsens with compression, that never pass through the surface, and
 painting that makes folds. Against analytic sheets, numpy and the baked geometry."""
 from __future__ import annotations
@@ -10,11 +10,11 @@ import pytest
 from pxr import Usd, UsdGeom
 
 from usdwrinkle import api
-from usdwrinkle.contract import COARSENING_MAX
-from usdwrinkle.folds import length_of, material_wavelength, slope_table
 from usdwrinkle.geometry.measure import self_intersections, triangle_areas
 from usdwrinkle.geometry.subdivide import fine_point_count, subdivide
-from usdwrinkle.profiles import PRESETS, profile_preset
+from usdwrinkle.method.contract import COARSENING_MAX
+from usdwrinkle.method.folds import length_of, material_wavelength, slope_table
+from usdwrinkle.method.profiles import PRESETS, profile_preset
 
 from conftest import grid_sheet
 from helpers import fold_law, point_cache_stage
@@ -28,8 +28,8 @@ def test_every_profile_restores_the_length_it_is_given(name):
     """The slope table of each preset gives a wave exactly sqrt(1 + u^2) times as long as
     its posed length (the inextensible law); the triangle's is the paper's zigzag,
     a|k| = (pi / 2) u."""
-    from usdwrinkle.contract import SLOPE_SAMPLES, SLOPE_STEP
-    from usdwrinkle.folds import gradient_of
+    from usdwrinkle.method.contract import SLOPE_SAMPLES, SLOPE_STEP
+    from usdwrinkle.method.folds import gradient_of
 
     height = profile_preset(name)
     table = slope_table(height)
@@ -43,7 +43,7 @@ def test_every_profile_restores_the_length_it_is_given(name):
 def test_the_material_wavelength_coarsens_and_saturates():
     """L = W min(rho^a, L_max): with a = 1 a uniformly compressed sheet keeps its posed
     wavelength at W (r L = W) until the material wavelength reaches L_max W."""
-    from usdwrinkle.contract import COARSENING_EXPONENT
+    from usdwrinkle.method.contract import COARSENING_EXPONENT
 
     rho = np.array([1.0, 1.05, 1.2, 1.5, 3.0, 20.0])
     law = material_wavelength(0.1, rho)
@@ -91,7 +91,7 @@ def test_a_sheet_compressed_both_ways_keeps_its_area(gl_context, tmp_path, ratio
     across, one wave restores the area, r r2 rho_A = 1, where r2 >= ACROSS_MIN; below it
     the compression across counts as ACROSS_MIN, so the surface keeps r2 / ACROSS_MIN of
     its rest area. The wave itself is the uniaxial law's (its |k|)."""
-    from usdwrinkle.contract import ACROSS_MIN
+    from usdwrinkle.method.contract import ACROSS_MIN
 
     points, faces, rest = _sheet_geometry(tmp_path, ratio, across=across)
     centre = np.abs(rest.points[faces].mean(axis=1)[:, :2]).max(axis=1) < 0.6
@@ -106,7 +106,7 @@ def test_a_sheet_compressed_both_ways_keeps_its_area(gl_context, tmp_path, ratio
 def test_a_painted_gather_adds_its_length(gl_context, tmp_path, amount):
     """Painted q on an uncompressed sheet: the folds hold what the gather says the cloth
     has, 1 / (1 - |q|^2) of the mesh's area, at most PAINT_GATHER_MAX (0.8 is past it)."""
-    from usdwrinkle.contract import PAINT_GATHER_MAX
+    from usdwrinkle.method.contract import PAINT_GATHER_MAX
     rest, _, _ = grid_sheet(21, 21, 2.0)
     q = np.tile([amount, 0.0, 0.0], (len(rest), 1)).astype(np.float32)
     points, faces, rest_fine = _sheet_geometry(tmp_path, 1.0, q=q)
@@ -120,7 +120,7 @@ def test_a_painted_gather_adds_its_length(gl_context, tmp_path, amount):
 def test_painting_more_makes_bigger_folds_not_finer():
     """Issue 55: painting more over one spot made the waves finer and darker. Along q the
     fold law now grows both the wavelength and the height with the amount."""
-    from usdwrinkle.contract import PAINT_GATHER_MAX
+    from usdwrinkle.method.contract import PAINT_GATHER_MAX
 
     amounts = np.array([0.2, 0.4, 0.6, 0.7, 0.8, 0.95, 1.0])
     heights, ks = fold_law(1 - amounts ** 2, 0.1, geometric=np.ones_like(amounts))

@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pxr import Sdf, UsdGeom
 
-from usdwrinkle import schema
+from usdwrinkle.usd import schema
 
 from conftest import grid_sheet
 from helpers import point_cache_stage, scratch_frames_since

@@ -11,7 +11,7 @@ from pxr import Usd, UsdGeom, UsdSkel
 
 from benchmarks.lengths import sheet_lengths
 from usdwrinkle.cli.main import main
-from usdwrinkle.profiles import PRESETS
+from usdwrinkle.method.profiles import PRESETS
 
 from conftest import grid_sheet
 from helpers import point_cache_stage, rotation_matrix

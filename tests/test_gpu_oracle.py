@@ -16,8 +16,8 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from usdwrinkle.colour import srgb_encode
 from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.images.colour import srgb_encode
 
 GOLDENS = Path(__file__).resolve().parent / "goldens"
 BAKE = GOLDENS / "shirt_bake.0024.usdc"

@@ -17,9 +17,9 @@ import OpenImageIO as oiio
 import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux
 
-from usdwrinkle import schema
 from usdwrinkle.app.frames import frame_path, parse_frame_spec
 from usdwrinkle.cli.main import main
+from usdwrinkle.usd import schema
 
 from conftest import grid_sheet
 from helpers import point_cache_stage, read_until, scratch_frames_since
@@ -298,7 +298,7 @@ def test_sub_frames_that_share_a_name_are_refused(gl_context, tmp_path, capsys):
      "GiB of memory are available"),
 ])
 def test_frame_sizes_beyond_the_limits_are_refused(tmp_path, args, fragment):
-    from usdwrinkle.memory import available_memory
+    from usdwrinkle.process.memory import available_memory
 
     if fragment.startswith("GiB"):  # the largest frame GL 4.5 guarantees, 4 samples
         needed = 16384 * 16384 * (52 * 5 + 96)

@@ -167,9 +167,9 @@ def test_a_baked_frame_value_is_set_in_one_place():
 
 # --- issue 44: the doors stand on the application layer --------------------------------
 
-#: the rooms every layer may use: errors, logging, time codes, the package's data
-FOUNDATION = {"errors", "log", "timecode", "layerinfo", "limits", "progress", "_resources",
-              "usdwrinkle", "__main__"}
+#: the rooms every layer may use: the process (errors, logging, time codes, the package's
+#: data) and the stage metadata a layer carries
+FOUNDATION = {"process", "layerinfo", "usdwrinkle", "__main__"}
 #: the doors: each maps what its user gives onto the application layer's jobs
 DOORS = {"api", "cli", "usdview", "paint"}
 #: what a door may still import below the application layer: nothing (issue 44); an entry

@@ -1,4 +1,4 @@
-"""Warnings travel through logging (issue 25, usdwrinkle/log.py): one sink shows them,
+"""Warnings travel through logging (issue 25, usdwrinkle/process/log.py): one sink shows them,
 the host's logging sees them too, and no function threads a ``warn`` callback."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import ast
 import logging
 from pathlib import Path
 
-from usdwrinkle import log
+from usdwrinkle.process import log
 
 PACKAGE = Path(log.__file__).resolve().parent
 
@@ -77,7 +77,7 @@ def test_no_function_takes_a_warn_callback():
 def test_progress_lines_and_warnings_each_print_once(capsys, monkeypatch):
     """Progress lines had a handler on the package logger itself: once a farm's log mode
     had shown progress, every later warning printed twice (once as 'usdwrinkle: ...')."""
-    from usdwrinkle.progress import counter
+    from usdwrinkle.process.progress import counter
 
     monkeypatch.setenv("USDWRINKLE_PROGRESS", "log")
     bar = counter(2, "render")

@@ -137,8 +137,8 @@ def test_200_frames_through_the_writer_keep_memory_flat(gl_context, tmp_path):
 def test_a_failing_write_is_reported_and_earlier_frames_stay(tmp_path):
     """A write error on the writer thread reaches the caller; frames handed over before
     it are complete, and nothing after the in-flight window is started."""
-    from usdwrinkle.errors import UsdWrinkleError
     from usdwrinkle.outputs.writer import FrameWriter
+    from usdwrinkle.process.errors import UsdWrinkleError
 
     started = []
 

@@ -12,7 +12,7 @@ import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 from usdwrinkle.cli.main import main
-from usdwrinkle.contract import COARSENING_MAX
+from usdwrinkle.method.contract import COARSENING_MAX
 from usdwrinkle.scene.material import load_texture
 
 from conftest import grid_sheet
@@ -43,8 +43,8 @@ def test_maps_of_the_analytic_sheet(gl_context, tmp_path, ratio):
     a, k = float(a), float(k)
     tilt = np.arccos(np.clip(normal[..., 2] / np.linalg.norm(normal, axis=2), -1, 1))
     # the largest tilt, on the flanks: atan of the fold profile's steepest slope
-    from usdwrinkle.folds import gradient_of
-    from usdwrinkle.profiles import default_profile
+    from usdwrinkle.method.folds import gradient_of
+    from usdwrinkle.method.profiles import default_profile
 
     steepest = float(np.abs(gradient_of(default_profile())).max())
     np.testing.assert_allclose(tilt.max(), np.arctan(a * k * steepest), rtol=0.03)

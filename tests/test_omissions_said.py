@@ -75,7 +75,7 @@ def test_skip_existing_renders_damaged_frames_again(tmp_path):
 
     import OpenImageIO as oiio
 
-    from usdwrinkle.imagefiles import is_complete_image
+    from usdwrinkle.images.imagefiles import is_complete_image
 
     shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
     args = ["--width", "32", "--height", "20", "--samples", "1", "--quiet"]

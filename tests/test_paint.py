@@ -25,7 +25,7 @@ from usdwrinkle.brush.stamp import (
     stamp,
 )
 from usdwrinkle.brush.view import OrbitCamera, pixel_ray, project, ray_triangles
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 
 from helpers import sheet_stage
 
@@ -380,8 +380,8 @@ def test_session_inputs_are_refused_naming_the_field(sheet_session, gl_context, 
     """Issue 54, finding 18: frame=nan raised ValueError, set_control('width', 'abc')
     ValueError, and a brush radius '0.1' TypeError; a frame outside the stage's range is
     said, as render says it."""
-    from usdwrinkle import log
     from usdwrinkle.app.paint_session import with_brush
+    from usdwrinkle.process import log
 
     session, stage_path, _ = sheet_session
     with pytest.raises(UsdWrinkleError, match="`frame` nan is not a finite time code"):
@@ -578,7 +578,7 @@ def _upper_arm_comb(session, amount: float):
 def _height_aov(session, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
     """The frame's ``wrinkle.height`` AOV and its coverage (alpha), as `render --aovs`
     writes them, from the window's camera."""
-    from usdwrinkle.aovs import ImageLayout
+    from usdwrinkle.images.aovs import ImageLayout
     from usdwrinkle.render.request import FrameRequest
 
     camera = session.camera_record(width, height)

@@ -12,7 +12,7 @@ import pytest
 from pxr import Ar, Sdf, Usd, UsdShade
 
 from usdwrinkle.app.paint_session import PaintSession, open_paint_stage
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 
 from helpers import sheet_stage
 

@@ -89,8 +89,8 @@ def test_the_curvature_fit_recovers_a_power_law():
     product's curved_width with the schema's constants (theory's 1/2 power through the
     referee's sleeve, docs/physics.md) reproduces them."""
     from benchmarks.physics.__main__ import curvature_fit
-    from usdwrinkle import schema
     from usdwrinkle.scene.params import curved_width
+    from usdwrinkle.usd import schema
 
     radii = np.array([0.06, 0.10, 0.15])
     wavelengths = 0.05 * (radii / 0.23) ** 0.5

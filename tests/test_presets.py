@@ -14,7 +14,7 @@ from usdwrinkle.app.presets import (
     save_preset,
 )
 from usdwrinkle.brush.stamp import BrushSettings
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 
 
 def test_the_config_folder_follows_the_environment(tmp_path, monkeypatch):

@@ -5,9 +5,9 @@ import numpy as np
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from usdwrinkle.contract import COARSENING_MAX
 from usdwrinkle.engine import WrinkleEngine
-from usdwrinkle.folds import height_bound
+from usdwrinkle.method.contract import COARSENING_MAX
+from usdwrinkle.method.folds import height_bound
 
 from conftest import grid_sheet
 from helpers import point_cache_stage
@@ -51,7 +51,7 @@ def test_fields_stay_finite_and_bounded(gl_context, params):
         engine.compute_frame(1.0)
         fields = engine.read_fields("/Sheet").arrays()
         image = engine.render_frame(1.0, 48, 48)
-        # the law's bound: the tallest fold it draws, s W height_bound (folds.py)
+        # the law's bound: the tallest fold it draws, s W height_bound (method/folds.py)
         record = engine.meshes["/Sheet"]
         bound = height_bound(record.params.slope_table(), record.params.slack)
     finally:

@@ -182,7 +182,7 @@ def test_shade_samples_shades_only_where_folds_turn(tmp_path):
 def test_profile_curvature_is_the_largest_second_derivative(name):
     """The sample-shading test's max |H''| (render/resources.py) against numpy's second
     derivative of the preset, sampled 64 times finer: cos has 1."""
-    from usdwrinkle.profiles import derive_gradient, preset_at, profile_preset
+    from usdwrinkle.method.profiles import derive_gradient, preset_at, profile_preset
     from usdwrinkle.render.resources import profile_curvature
 
     fine = np.linspace(0.0, 2 * np.pi, 256 * 64, endpoint=False)

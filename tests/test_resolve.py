@@ -94,7 +94,7 @@ def test_exr_planes_are_the_float_aovs_at_file_precision(drawn, half):
 def test_exr_planes_of_chosen_aovs_are_those_of_every_aov(drawn, aovs):
     """render --aovs: the planes of the AOVs asked for, and no other, each the same
     bytes as in the frame of every AOV and as numpy makes them from the float AOVs."""
-    from usdwrinkle.aovs import exr_channels
+    from usdwrinkle.images.aovs import exr_channels
 
     _, fb, _ = drawn
     everything = fb.read_image(ImageLayout("exr", half=True))
@@ -163,8 +163,8 @@ def test_non_finite_values_are_counted(gl_context):
 
 
 def test_a_frame_with_non_finite_values_is_refused_and_leaves_no_file(tmp_path):
-    from usdwrinkle.errors import UsdWrinkleError
     from usdwrinkle.outputs.images import write_image
+    from usdwrinkle.process.errors import UsdWrinkleError
     from usdwrinkle.render.buffers import RenderBuffer
     from usdwrinkle.render.resolve import AOVS
 

@@ -10,7 +10,7 @@ import pytest
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 from usdwrinkle.engine import WrinkleEngine
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 from usdwrinkle.scene.camera import find_camera
 from usdwrinkle.scene.stage import StageSceneDelegate
 from usdwrinkle.scene.topology import build_topology, ear_clip
@@ -128,7 +128,7 @@ def test_missing_texture_warns_and_renders_untextured(tmp_path):
     stage.SetEditTarget(stage.GetSessionLayer())  # the sample's own layer stays as it is
     tex = UsdShade.Shader(stage.GetPrimAtPath("/World/Looks/Plaid/diffuse_texture"))
     tex.GetInput("file").Set(Sdf.AssetPath("./textures/missing.png"))
-    from usdwrinkle.log import collect
+    from usdwrinkle.process.log import collect
 
     with collect() as warnings:
         scene = StageSceneDelegate(stage)
@@ -192,7 +192,7 @@ def test_late_schema_registration_says_how_to_fix():
         "    warnings.simplefilter('always')\n"
         "    import usdwrinkle\n"
         "print('WARN', w[0].message if w else '')\n"
-        "from usdwrinkle import schema\n"
+        "from usdwrinkle.usd import schema\n"
         "try:\n"
         "    schema.require_schema()\n"
         "except Exception as exc:\n"

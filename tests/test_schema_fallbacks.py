@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from pxr import Sdf, Usd, UsdGeom
 
-from usdwrinkle import schema
 from usdwrinkle.render.passes.crush import DAMPING_DEADBAND
+from usdwrinkle.usd import schema
 
 SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 

@@ -1,4 +1,4 @@
-"""Stop signals held back around critical sections (usdwrinkle/signals.py) are acted on
+"""Stop signals held back around critical sections (usdwrinkle/process/signals.py) are acted on
 when the section ends, never dropped (issue 54): a signal sent inside each region where
 signals are held ends the run with the shell's code and one line, in a process of its own
 (the GL context and the shaders are made afresh), while another process burns a core."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from usdwrinkle.errors import UsdWrinkleError
+from usdwrinkle.process.errors import UsdWrinkleError
 from usdwrinkle.render.bindings import COMMON, TABLE_WIDTH
 from usdwrinkle.render.resources import Table
 

@@ -13,7 +13,7 @@ from pxr import Sdf, Usd, UsdGeom
 from usdwrinkle.app.frames import frame_paths
 from usdwrinkle.cli.main import main
 from usdwrinkle.engine import WrinkleEngine
-from usdwrinkle.history import WaveHistory, cache_capacity, on_grid, reads_index
+from usdwrinkle.method.history import WaveHistory, cache_capacity, on_grid, reads_index
 from usdwrinkle.outputs.images import layout_for
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_stages"

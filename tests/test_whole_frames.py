@@ -484,7 +484,7 @@ def test_a_broken_installation_is_one_error_not_a_crash(tmp_path):
 
 
 def test_a_shader_the_driver_rejects_names_its_file_and_line(gl_context, tmp_path):
-    from usdwrinkle.errors import ShaderError, UsdWrinkleError
+    from usdwrinkle.process.errors import ShaderError, UsdWrinkleError
     from usdwrinkle.render.shaders import compute_shader
 
     (tmp_path / "broken.glsl").write_text(

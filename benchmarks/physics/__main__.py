@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from usdwrinkle import schema
+from usdwrinkle.usd import schema
 
 from . import measure
 from .oracle import ELBOW_ZONE, bake, compare, measured_frames, simulated

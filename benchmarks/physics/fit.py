@@ -4,7 +4,7 @@ wavelength ratio, the amplitude ratio and the amplitude-field correlation.
 
     python -m benchmarks.physics.fit [--only NAME ...] [--grid]
 
-The law's constants are #defines of the crush pass (contract.py): a candidate is compiled
+The law's constants are #defines of the crush pass (method/contract.py): a candidate is compiled
 in, baked and measured in this process. Not a test: it chose the defaults that
 docs/physics.md tabulates.
 """
@@ -22,7 +22,7 @@ from .referee import ROOT, SPACING, SWEEP, area_ratio, simulated
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
-    from usdwrinkle import contract
+    from usdwrinkle.method import contract
     from usdwrinkle.render import bindings
 
     for table in (contract.SHADER_DEFINES, bindings.COMMON):
@@ -35,8 +35,8 @@ def set_law(exponent: float, most: float, room: float | None = None) -> None:
 def profile_values(name: str) -> list[float]:
     """A preset's samples, or ``fold<K>``: (2/pi) asin(K cos theta) / asin(K) normalised,
     a triangle whose crests are rounded (K < 1)."""
-    from usdwrinkle.profiles import profile_preset
-    from usdwrinkle.schema import PROFILE_SAMPLES
+    from usdwrinkle.method.profiles import profile_preset
+    from usdwrinkle.usd.schema import PROFILE_SAMPLES
 
     if name.startswith("fold") and name != "fold":
         k = float(name[4:])
@@ -62,7 +62,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.fit")
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
     parser.add_argument("--only", nargs="*", default=None)
-    from usdwrinkle import contract, schema
+    from usdwrinkle.method import contract
+    from usdwrinkle.usd import schema
 
     parser.add_argument("--exponent", type=float, nargs="*",
                         default=[contract.COARSENING_EXPONENT])

@@ -77,7 +77,7 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
     """Bake the coarse shot with --geometry (and once with wrinkle:amplitudeScale 0 for
     the undisplaced surface) and read back the fold height on the grid."""
     from usdwrinkle import api
-    from usdwrinkle.log import collect
+    from usdwrinkle.process.log import collect
 
     frames = f"0:{shot.frames}"
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-physics-") as scratch:

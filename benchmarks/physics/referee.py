@@ -104,7 +104,7 @@ def sweep_row(sim: Simulated) -> dict:
     """usdwrinkle at the default width and at the width matched to the simulation's mean
     wavelength, against the simulation: per phase (ours / sim) wavelength and height, the
     amplitude-field correlation, the crest motion at the elbow, our area ratio."""
-    from usdwrinkle import schema
+    from usdwrinkle.usd import schema
 
     default = bake(sim.shot, sim, "default")
     first = per_phase(sim, default)
@@ -123,8 +123,8 @@ def sweep_row(sim: Simulated) -> dict:
 def default_width(shot) -> float:
     """The fallback W usdwrinkle gives the shot's coarse mesh (m; the median over its
     points): the cloth preset through the curvature law."""
-    from usdwrinkle import schema
     from usdwrinkle.scene.params import curved_width
+    from usdwrinkle.usd import schema
 
     from .__main__ import coarse_curvature
     fabric = shot.name.split("-")[-1]

@@ -8,21 +8,23 @@ import warnings
 
 __version__ = "0.1.0"
 
-from ._address_space import lean_usd as _lean_usd  # noqa: E402
-from ._address_space import prepare as _prepare_address_space  # noqa: E402
+from .process._address_space import lean_usd as _lean_usd  # noqa: E402
+from .process._address_space import prepare as _prepare_address_space  # noqa: E402
 
 #: why usdwrinkle cannot run in this process (None: it can); checked before USD loads
 UNUSABLE = _prepare_address_space()
 
-__all__ = ["UsdWrinkleError", "WrinkleAPI", "__version__", "profile_from_curve",
+__all__ = ["UsdWrinkleError", "WrinkleAPI", "__version__", "log", "profile_from_curve",
            "profile_preset"]
 
-from . import log as _log  # noqa: E402, F401  (the warning handler; standard library only)
-from .errors import UsdWrinkleError  # noqa: E402  (standard library only)
+# the warning handler (standard library only), and the module a host configures it by:
+# usdwrinkle.log.use_default_handler, collect, silenced
+from .process import log  # noqa: E402
+from .process.errors import UsdWrinkleError  # noqa: E402  (standard library only)
 
 if UNUSABLE is None:
     _lean_usd()
-    from . import schema as _schema
+    from .usd import schema as _schema
 
     if not _schema.register():
         warnings.warn(

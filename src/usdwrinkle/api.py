@@ -14,8 +14,8 @@ text ("1:24", "1,5,9", "1:24x2") or a list of numbers; None is the stage's range
 A problem with the input raises :class:`UsdWrinkleError` (also ``usdwrinkle.api.
 UsdWrinkleError``) with a one-line message that names option fields in backquotes
 (`` `width` and `height` must be positive``). Warnings go through the ``usdwrinkle``
-logger (usdwrinkle/log.py): on stderr as ``usdwrinkle: warning: ...`` unless the caller
-collects them (``with usdwrinkle.log.collect() as messages: api.render(...)``) or
+logger (usdwrinkle/process/log.py): on stderr as ``usdwrinkle: warning: ...`` unless the caller
+collects them (``with usdwrinkle.process.log.collect() as messages: api.render(...)``) or
 silences them. ``quiet`` (True by default here) leaves out the progress bars.
 
 For more control, build the jobs yourself::
@@ -38,7 +38,7 @@ from .app.bake import BakeJob, BakeResult
 from .app.options import BakeOptions, RenderOptions, ShotOptions
 from .app.render import RenderJob, RenderResult
 from .app.shot import Progress, Shot, no_progress
-from .errors import UsdWrinkleError, print_stderr
+from .process.errors import UsdWrinkleError, print_stderr
 
 __all__ = ["BakeJob", "BakeOptions", "BakeResult", "RenderJob", "RenderOptions",
            "RenderResult", "Shot", "ShotOptions", "UsdWrinkleError", "bake", "render"]

@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from .aovs import ImageLayout
-from .errors import UsdWrinkleError
-from .history import WaveHistory, cache_capacity, on_grid, reads_index
-from .limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
+from .images.aovs import ImageLayout
+from .method.history import WaveHistory, cache_capacity, on_grid, reads_index
+from .process.errors import UsdWrinkleError
+from .process.limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
 from .render.delegate import RenderDelegate, RenderPass
 from .render.fields import STATE_BYTES_PER_POINT
@@ -110,7 +110,7 @@ class WrinkleEngine:
             self._dirty[path] = DirtyBits.ALL
         self.last_timings: dict[str, float] = {}
         self._history_start = history_start
-        #: the wave states of grid frames this engine keeps (history.py)
+        #: the wave states of grid frames this engine keeps (method/history.py)
         self.history = WaveHistory(history_cache if history_cache is not None else
                                    cache_capacity(self._state_bytes()))
         #: frames computed (drawn or not) and of them preroll steps, since creation
@@ -235,7 +235,7 @@ class WrinkleEngine:
                 "accepted (lower wrinkle:relaxIterations or `relax_iterations`, render fewer "
                 "frames, or pass `history_start` nearer the first frame)")
 
-    # -- phase history (history.py: the wave states of grid frames, as values) ----------
+    # -- phase history (method/history.py: the wave states of grid frames, as values) ----------
     def history_start(self) -> float | None:
         """The frame where the shot's phase history starts (None: every frame cold)."""
         if self._history_start is not None:

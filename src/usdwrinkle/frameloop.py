@@ -11,9 +11,9 @@ import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from . import schema
-from .errors import UsdWrinkleError
-from .timecode import format_frame
+from .process.errors import UsdWrinkleError
+from .process.timecode import format_frame
+from .usd import schema
 
 _log = logging.getLogger(__name__)
 

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..schema import (  # noqa: F401  (what the command line's help says of the fallbacks)
+from ..process.errors import UsdWrinkleError
+from ..usd.schema import (  # noqa: F401  (what the command line's help says of the fallbacks)
     CLOTH_TOKENS,
     CLOTH_WIDTHS_M,
     DEFAULT_CLOTH,
@@ -71,7 +71,7 @@ def parse_q(text: str) -> tuple[np.ndarray, float]:
 
 
 def read_profile(spec: str) -> np.ndarray:
-    from ..profiles import PRESETS, profile_from_curve, profile_preset
+    from ..method.profiles import PRESETS, profile_from_curve, profile_preset
 
     if spec in PRESETS:
         return profile_preset(spec)
@@ -219,7 +219,7 @@ def plan_edits(args: ApplyOptions, meshes: list[Any], q_spec: Any = None,
         q_uniform,
         width_from_texture,
     )
-    from ..validation import (
+    from ..usd.validation import (
         check_amplitude_scale,
         check_biaxial,
         check_cloth,
@@ -329,7 +329,7 @@ def held_from_primvar(prim: Any, name: str) -> np.ndarray:
 
     # held edges are a rest-pose property: the default value, else the first time sample
     # (a primvar authored only as time samples has no default)
-    from ..values import static_flattened
+    from ..usd.values import static_flattened
 
     value = static_flattened(primvar)
     try:
@@ -367,7 +367,7 @@ class ApplyJob:
 
     def run(self) -> ApplyResult:
         from ..scene.stage import open_stage
-        from ..schema import require_schema
+        from ..usd.schema import require_schema
 
         options = self.options
         require_schema()

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from .options import GEOMETRY_FIELDS, MAP_FIELDS, BakeOptions
 from .shot import Progress, Shot, ShotJob, frame_spec_of, no_progress
 

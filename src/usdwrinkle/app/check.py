@@ -65,7 +65,7 @@ def collect(stage: Any, keywords: tuple[str, ...] = KEYWORDS) -> list[dict[str, 
     validator, type)."""
     from pxr import UsdValidation
 
-    from ..validation import register_validators
+    from ..usd.validation import register_validators
 
     register_validators()
     context = UsdValidation.ValidationContext(keywords=list(keywords))
@@ -101,8 +101,8 @@ def read_scene(stage: Any) -> Any:
     """The scene delegate's reading of ``stage`` (what render resolves), read once for the
     units and widths below; None where the stage cannot be read that far (the findings
     say why)."""
-    from ..errors import UsdWrinkleError
-    from ..log import silenced
+    from ..process.errors import UsdWrinkleError
+    from ..process.log import silenced
     from ..scene.stage import StageSceneDelegate
 
     try:
@@ -115,7 +115,7 @@ def read_scene(stage: Any) -> Any:
 def units_findings(stage: Any, scene: Any) -> list[dict[str, Any]]:
     """The stage's metersPerUnit where render and bake refuse it (an error), or where
     they warn about it (a warning: scene.params.units_notes)."""
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
     from ..scene.params import stage_meters, units_notes
 
     try:
@@ -133,7 +133,7 @@ def units_findings(stage: Any, scene: Any) -> list[dict[str, Any]]:
 def unapplied_findings(stage: Any) -> list[dict[str, Any]]:
     """Meshes authoring wrinkle controls without WrinkleAPI (schema.unapplied_controls):
     render draws them unwrinkled."""
-    from .. import schema
+    from ..usd import schema
 
     return [{"prim": path, "attribute": "apiSchemas", "type": "error",
              "validator": "usdWrinkleValidators:WrinkleAPI",

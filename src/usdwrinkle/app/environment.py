@@ -25,20 +25,20 @@ def release_context() -> None:
 
 def require_schema() -> None:
     """Refuse, in one line, when the WrinkleAPI schema cannot be used."""
-    from ..schema import require_schema as require
+    from ..usd.schema import require_schema as require
 
     require()
 
 
 def register_schema() -> bool:
     """Register the WrinkleAPI schema with USD; whether it is usable."""
-    from .. import schema
+    from ..usd import schema
 
     return bool(schema.register())
 
 
 def schema_dir() -> str:
-    from .. import schema
+    from ..usd import schema
 
     return str(schema.schema_dir())
 

@@ -8,9 +8,9 @@ import typing
 
 from pxr import Usd, UsdUtils
 
-from ..errors import UsdWrinkleError
-from ..limits import MAX_FRAMES, MAX_TIME_CODE
-from ..timecode import SUBFRAME_DECIMALS, frame_text
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_FRAMES, MAX_TIME_CODE
+from ..process.timecode import SUBFRAME_DECIMALS, frame_text
 
 _HASHES = re.compile(r"#+")
 

@@ -79,7 +79,7 @@ class LiveBake:
         the bake failed; the caller's bake said why)."""
         if frame in self.cache:
             return self.cache[frame]
-        from ..timecode import format_frame
+        from ..process.timecode import format_frame
 
         # a new name for every bake: a layer the session layer holds is never rewritten
         path = os.path.join(self.folder, f"live.{self.baked + 1}.{format_frame(frame)}.usda")

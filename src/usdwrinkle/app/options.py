@@ -5,7 +5,7 @@ A field is named as the command line's option is, with ``_`` for ``-`` (``width`
 (`` `width` ``): a Python caller reads the field, the command line prints its flag
 instead (cli/flags.py). Each dataclass checks its
 values when it is made: a value of the wrong type, or outside its choices, raises
-:class:`usdwrinkle.errors.UsdWrinkleError` naming the field. Ranges that need no stage
+:class:`usdwrinkle.process.errors.UsdWrinkleError` naming the field. Ranges that need no stage
 are checked by ``check()``; what needs the stage or the GL context, by the job.
 """
 from __future__ import annotations
@@ -15,15 +15,15 @@ import os
 import typing
 from dataclasses import dataclass
 
-from ..aovs import AOVS_TEXT  # noqa: F401  (re-exported: what render --help lists)
-from ..errors import UsdWrinkleError
 from ..geometry.options import GeometryOptions
+from ..images.aovs import AOVS_TEXT  # noqa: F401  (re-exported: what render --help lists)
 from ..maps.options import LAYOUTS as MAP_LAYOUTS
 from ..maps.options import TANGENT_SPACES, MapOptions
 from ..outputs.images import EXR_COMPRESSIONS
 from ..outputs.writer import MAX_THREADS as MAX_WRITE_THREADS
+from ..process.errors import UsdWrinkleError
 from ..render.resolve import MAX_RING
-from ..schema import MAP_ST, baked_names_text
+from ..usd.schema import MAP_ST, baked_names_text
 
 #: what --help shows of the defaults and names below
 MAP_DEFAULTS = MapOptions()
@@ -124,7 +124,7 @@ class ShotOptions(_Checked):
     mask: tuple[str, ...] = ()
 
     def check(self) -> None:
-        from ..limits import MAX_RELAX_ITERATIONS
+        from ..process.limits import MAX_RELAX_ITERATIONS
         from .frames import check_time_code
 
         if self.relax_iterations is not None and \
@@ -215,7 +215,7 @@ class RenderOptions(_Checked):
     def chosen_aovs(self, path: str | None = None) -> tuple[str, ...]:
         """The AOVs each frame stores, in aovs.AOV_BLOCKS order (refuses unknown names);
         with the output ``path``: for an 8-bit file the colour, and only the colour."""
-        from ..aovs import AOV_BLOCKS, parse_aovs
+        from ..images.aovs import AOV_BLOCKS, parse_aovs
         from ..outputs.images import stored_aovs
 
         aovs = None if self.aovs is None else parse_aovs(self.aovs)

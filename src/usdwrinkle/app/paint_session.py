@@ -17,11 +17,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom
 
-from .. import schema
 from ..brush.stamp import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from ..brush.view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
-from ..errors import UsdWrinkleError
 from ..layerinfo import copy_stage_info
+from ..process.errors import UsdWrinkleError
+from ..usd import schema
 
 #: stamps along a drag lie at most this many pixels apart on screen (besides the brush's
 #: spacing in radii): with a huge brush a short drag paints too (issue 57: at radius 6.37
@@ -203,7 +203,7 @@ class PaintSession:
                  camera: str | None = None, all_meshes: bool = False, ctx=None,
                  history_cache: int = 32, in_memory: bool = False):
         from ..outputs.images import layout_for
-        from ..schema import require_schema
+        from ..usd.schema import require_schema
         from .options import ShotOptions
         from .shot import Shot
 

@@ -20,7 +20,7 @@ import os
 from pathlib import Path
 
 from ..brush.stamp import BrushSettings
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 VERSION = 1
 FILE_NAME = "brushes.json"

@@ -6,7 +6,7 @@ import json
 import os
 from pathlib import Path
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from .presets import config_dir, write_json
 
 #: how many stages the list keeps

@@ -5,7 +5,7 @@ usdview's "Render current frame" all run this job, so a render policy (a check, 
 warning) is written once. The job renders here, or on Dask when its options name a
 scheduler (``dask``): then farm/client.py checks with the job's ``plan_chunks``, bakes
 through ``bake_fields``, and its workers render chunks with farm/worker.render_chunk.
-Warnings go to the ``usdwrinkle`` logger (usdwrinkle/log.py); errors are
+Warnings go to the ``usdwrinkle`` logger (usdwrinkle/process/log.py); errors are
 UsdWrinkleError, naming option fields in backquotes.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from .options import RenderOptions
 from .shot import Progress, Shot, ShotJob, no_progress
 
@@ -168,9 +168,9 @@ class RenderJob(ShotJob):
                 f"baked frame ({layer})"]
 
     def _engine_notes(self, engine: Any, frames: list[float | None]) -> None:
+        from ..process.timecode import format_frame
         from ..scene.baked import holds_bake
         from ..scene.stage import outside_range_note
-        from ..timecode import format_frame
 
         computed = self.wrinkles and any(path not in engine.baked
                                          for path in engine.wrinkled_paths)
@@ -318,9 +318,9 @@ class RenderJob(ShotJob):
                             farm.chunk)
 
     def _run_here(self, ctx: Any, engine: Any) -> RenderResult:
-        from ..aovs import exr_channels
         from ..frameloop import render_frames
-        from ..imagefiles import is_complete_image
+        from ..images.aovs import exr_channels
+        from ..images.imagefiles import is_complete_image
 
         plan = self.prepare()
         own = engine is None

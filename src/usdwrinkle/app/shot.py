@@ -7,7 +7,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from .options import ShotOptions
 
 _log = logging.getLogger(__name__)
@@ -26,7 +26,7 @@ def progress_bars(items: list[Any], what: str) -> Any:
     on a terminal a bar, in a farm's log one line per step."""
     if len(items) < 2:
         return items
-    from ..progress import wrap
+    from ..process.progress import wrap
 
     return wrap(items, what)
 

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, Vt
 
-from .. import schema
-from ..errors import UsdWrinkleError
-from ..profiles import derive_gradient
-from ..validation import (
+from ..method.profiles import derive_gradient
+from ..process.errors import UsdWrinkleError
+from ..usd import schema
+from ..usd.validation import (
     check_amplitude_scale,
     check_biaxial,
     check_cloth,
@@ -33,7 +33,7 @@ from ..validation import (
     point_count,
     refuse,
 )
-from ..values import flattened
+from ..usd.values import flattened
 
 
 class WrinkleAPI:
@@ -229,7 +229,7 @@ class WrinkleAPI:
         return self._attr(schema.RELAX_ITERATIONS)
 
     def CreateRelaxIterationsAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
-        # the reader's own check (validation.py), so that what is authored is what renders
+        # the reader's own check (usd/validation.py), so that what is authored is what renders
         return self._create(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int,
                             None if default_value is None else int(default_value),
                             lambda v: check_relax_iterations(v, self._path()))

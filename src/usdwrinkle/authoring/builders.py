@@ -13,7 +13,7 @@ import math
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdSkel, Vt
 
-from .. import schema
+from ..usd import schema
 
 
 def grid_faces(rows: int, cols: int, wrap_cols: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 from pxr import Usd, UsdGeom
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from ..scene.material import corner_values
 from ..scene.stage import read_topology, rest_pose
 from ..scene.topology import Topology, vertex_normals
-from ..values import static_flattened
+from ..usd.values import static_flattened
 
 CHANNELS = {"R": 0, "G": 1, "B": 2, "A": 3}
 
@@ -81,8 +81,8 @@ class MeshSurface:
 
 def read_image(path: str) -> np.ndarray:
     """(h, w, 4) float32 in [0, 1] as stored (no colour conversion: data, not colour)."""
-    from ..imagefiles import read_float_image
-    from ..limits import MAX_TEXTURE_SIZE
+    from ..images.imagefiles import read_float_image
+    from ..process.limits import MAX_TEXTURE_SIZE
 
     try:
         pixels, _ = read_float_image(path, MAX_TEXTURE_SIZE)

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..limits import MAX_WORLD_COORDINATE
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_WORLD_COORDINATE
 
 MODES = ("comb", "smooth", "erase", "width", "attract")
 #: the modes that need the stroke's direction (the first move of a drag gives it)

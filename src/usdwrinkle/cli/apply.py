@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..app import apply as schema  # the schema's fallbacks, for the help
-from ..errors import print_stderr
+from ..process.errors import print_stderr
 
 
 def add_parser(subparsers) -> None:

@@ -9,7 +9,7 @@ from ..app.options import (
     TANGENT_SPACES,
 )
 from ..app.options import MAP_ST_NAME as MAP_ST
-from ..errors import print_stderr
+from ..process.errors import print_stderr
 from .common import Reporter, add_shot_args, report_to
 
 

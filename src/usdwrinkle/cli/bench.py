@@ -12,7 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 #: the checkout's top level, for an editable install (src/usdwrinkle/cli/bench.py)
 CHECKOUT = Path(__file__).resolve().parents[3]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import print_stderr, print_warning
+from ..process.errors import print_stderr, print_warning
 
 
 def add_stage_args(parser) -> None:
@@ -87,7 +87,7 @@ class Reporter:
         self._sink = None
 
     def __enter__(self) -> Reporter:
-        from ..log import warnings_to
+        from ..process.log import warnings_to
 
         if not self.library:
             self._sink = warnings_to(self.warn)
@@ -104,7 +104,7 @@ class Reporter:
             return
         self.seen.add(message)
         if self.library:
-            from ..log import warn
+            from ..process.log import warn
 
             warn(message)
         else:
@@ -120,7 +120,7 @@ class Reporter:
             return
         from .. import __version__
         from ..app.environment import renderer_info
-        from ..errors import print_stderr
+        from ..process.errors import print_stderr
 
         info = renderer_info()
         print_stderr(f"usdwrinkle: version {__version__}, {command} "
@@ -130,6 +130,6 @@ class Reporter:
     def progress(self, items, desc: str):
         if self.quiet or len(items) < 2:
             return items
-        from ..progress import wrap  # a bar on a terminal, log lines in a farm's log
+        from ..process.progress import wrap  # a bar on a terminal, log lines in a farm's log
 
         return wrap(items, desc)

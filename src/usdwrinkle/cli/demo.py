@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 
 def add_parser(subparsers) -> None:
@@ -22,7 +22,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from .._resources import resource_dir
+    from ..process._resources import resource_dir
     from . import render
 
     stage = str(resource_dir("sample_stages") / "shirt.usda")

@@ -28,7 +28,7 @@ def run(args) -> int:
 
     from .. import __version__
     from ..app.environment import register_schema, schema_dir
-    from ..errors import GLContextError
+    from ..process.errors import GLContextError
 
     print(f"usdwrinkle {__version__}")
     print(f"python {platform.python_version()} ({platform.platform()})")

@@ -13,7 +13,7 @@ import threading
 import traceback
 
 from .. import __version__
-from ..errors import STDERR, print_stderr, print_warning
+from ..process.errors import STDERR, print_stderr, print_warning
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -22,7 +22,7 @@ class OneLineParser(argparse.ArgumentParser):
     argparse's usage block followed by its own error line."""
 
     def error(self, message: str):
-        from ..errors import print_stderr
+        from ..process.errors import print_stderr
 
         print_stderr(f"usdwrinkle: error: {' '.join(message.split())} "
                      f"(see '{self.prog} --help')")
@@ -146,7 +146,7 @@ def _one_line_warnings() -> None:
     """Python warnings (numpy's RuntimeWarning and the like) as our one-line warnings."""
     import warnings
 
-    from ..log import warn
+    from ..process.log import warn
 
     def show(message, category, filename, lineno, file=None, line=None):
         warn(f"{message} ({category.__name__})")
@@ -207,8 +207,8 @@ def _main(argv: list[str] | None) -> int:
     if not getattr(args, "command", None):
         parser.print_help(STDERR)
         return 2
-    from ..errors import UsdWrinkleError
-    from ..log import warnings_to
+    from ..process.errors import UsdWrinkleError
+    from ..process.log import warnings_to
     from .flags import flagged
 
     try:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 
 def add_parser(subparsers) -> None:

@@ -5,7 +5,7 @@ import argparse
 
 from ..app.frames import frame_path
 from ..app.options import AOVS_TEXT, EXR_COMPRESSIONS
-from ..errors import print_stderr
+from ..process.errors import print_stderr
 from .common import Reporter, add_shot_args, report_to, shot_options
 
 
@@ -133,7 +133,7 @@ def render_job(args, reporter: Reporter | None = None):
 
 def summary(result, output: str) -> str:
     """The closing line of a render (an app.RenderResult), serial or on a farm."""
-    from ..timecode import format_frame
+    from ..process.timecode import format_frame
 
     frames = result.frames
     text = (f"usdwrinkle: wrote {len(result.written)} frame(s) {result.width}x"

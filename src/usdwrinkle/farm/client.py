@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 from .worker import file_identity, remove_temporaries, render_chunk
 
 _log = logging.getLogger(__name__)
@@ -53,7 +53,7 @@ def _import_dask():
 def check_farm_options(scheduler: str | None, workers: int | None,
                        chunk: int | None) -> None:
     """Refuse farm options out of range, before any stage is read."""
-    from ..limits import LOCAL_WORKERS_PER_CORE
+    from ..process.limits import LOCAL_WORKERS_PER_CORE
 
     if scheduler is not None and not isinstance(scheduler, str):
         raise UsdWrinkleError(f"`dask`={scheduler!r} must be 'local' or a scheduler's address")
@@ -199,7 +199,7 @@ class FarmResult:
 
 
 def render_on_dask(request: FarmRender) -> FarmResult:
-    """Run a farm render; warnings are logged (usdwrinkle/log.py), the workers' too."""
+    """Run a farm render; warnings are logged (usdwrinkle/process/log.py), the workers' too."""
     distributed = _import_dask()
     job, plan = request.job, request.plan
     say = request.say

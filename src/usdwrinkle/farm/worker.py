@@ -16,12 +16,12 @@ import os
 import threading
 from typing import Any
 
-from ..aovs import exr_channels
 from ..engine import EngineOptions
-from ..errors import UsdWrinkleError
 from ..frameloop import render_frames
-from ..imagefiles import is_complete_image
-from ..log import warnings_to
+from ..images.aovs import exr_channels
+from ..images.imagefiles import is_complete_image
+from ..process.errors import UsdWrinkleError
+from ..process.log import warnings_to
 
 _lock = threading.Lock()
 _cached: dict[str, Any] = {"key": None, "engine": None}

@@ -18,9 +18,9 @@ import logging
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..memory import require_memory
 from ..outputs.sink import BakeScene
+from ..process.errors import UsdWrinkleError
+from ..process.memory import require_memory
 from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
 from .options import GeometryOptions

@@ -2,7 +2,7 @@
 
 Wrinkles exist because cloth keeps its length while its support shrinks; a displaced
 mesh makes that measurable. Used by the tests (the fold law restores the length exactly,
-usdwrinkle/folds.py) and by ``python -m benchmarks.lengths`` (the table in
+usdwrinkle/method/folds.py) and by ``python -m benchmarks.lengths`` (the table in
 docs/method.md); and the area and self-intersection measures of the displaced surface.
 """
 from __future__ import annotations

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 #: fine points above which a mesh is refused (``--levels`` lowers the count): what the
 #: render of the displaced mesh holds on any GL 4.5 GPU. Its largest table, the topology

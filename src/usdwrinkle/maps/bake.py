@@ -11,11 +11,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..memory import require_memory
 from ..outputs.sink import BakeScene
 from ..outputs.writer import FrameWriter
-from ..schema import MAP_ST
+from ..process.errors import UsdWrinkleError
+from ..process.memory import require_memory
+from ..usd.schema import MAP_ST
 from .files import (
     MAP_KINDS,
     PARALLAX_FILES,

@@ -14,10 +14,10 @@ import shutil
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
 from ..outputs.atomic import signals_held, sweep_dead, write_error
 from ..outputs.images import copy_complete, encode_file, memory_file
-from ..timecode import frame_text
+from ..process.errors import UsdWrinkleError
+from ..process.timecode import frame_text
 
 #: the maps ``bake --maps`` can write
 MAP_KINDS = ("normal", "height", "amplitude", "parallax")

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..polygons import face_starts
+from ..method.polygons import face_starts
 from .tangents import _unit
 
 #: the MikkTSpace split: |uv2 - uv0|^2 must stay below this share of |uv3 - uv1|^2

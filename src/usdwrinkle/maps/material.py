@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pxr import Sdf
 
 from ..outputs.layers import attribute_spec, bind_material, define_prim
-from ..schema import MAP_INPUTS
+from ..usd.schema import MAP_INPUTS
 from .files import PARALLAX_FILES
 
 _log = logging.getLogger(__name__)
@@ -96,7 +96,7 @@ def author_islands(layer: Sdf.Layer, mesh_path: str, face_uv) -> None:
     faceVarying, one value per face corner (static: made from the rest pose)."""
     from pxr import Vt
 
-    from ..schema import MAP_ST
+    from ..usd.schema import MAP_ST
 
     attribute_spec(Sdf.CreatePrimInLayer(layer, Sdf.Path(mesh_path)), f"primvars:{MAP_ST}",
                    VALUE_TYPES.TexCoord2fArray, Vt.Vec2fArray.FromNumpy(face_uv),

@@ -29,7 +29,7 @@ import os
 from pxr import Sdf
 
 from ..outputs.layers import attribute_spec, define_prim
-from ..schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
+from ..usd.schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
 from .files import relative_asset
 
 VALUE_TYPES = Sdf.ValueTypeNames

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..polygons import face_corners
+from ..method.polygons import face_corners
 
 
 def corner_groups(triangles: np.ndarray, normal_entries: np.ndarray,

@@ -7,10 +7,10 @@ import os
 import re
 import tempfile
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 # held back while a finished file is renamed into place or a temporary file is removed
-from ..signals import STOP_SIGNALS, signals_held  # noqa: E402,F401
+from ..process.signals import STOP_SIGNALS, signals_held  # noqa: E402,F401
 
 
 def _umask() -> int:

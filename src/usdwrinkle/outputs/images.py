@@ -22,10 +22,10 @@ import threading
 
 import numpy as np
 
-from ..aovs import AOV_BLOCKS, HALF_CHANNELS, ImageLayout, ResolvedImage
-from ..colour import srgb_encode
-from ..diagnostics import one_line
-from ..errors import UsdWrinkleError
+from ..images.aovs import AOV_BLOCKS, HALF_CHANNELS, ImageLayout, ResolvedImage
+from ..images.colour import srgb_encode
+from ..process.errors import UsdWrinkleError
+from ..usd.diagnostics import one_line
 from .atomic import atomic_path, sweep_dead, write_error
 
 FLOAT_FORMATS = (".exr",)

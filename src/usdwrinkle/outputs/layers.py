@@ -12,10 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Sdf, UsdGeom, Vt
 
-from .. import __version__, schema
-from ..colour import srgb_decode
-from ..contract import COARSENING_MAX, MIN_RATIO
-from ..errors import UsdWrinkleError
+from .. import __version__
+from ..images.colour import srgb_decode
+from ..method.contract import COARSENING_MAX, MIN_RATIO
+from ..process.errors import UsdWrinkleError
+from ..usd import schema
 from .atomic import atomic_path
 from .sink import BakeScene
 
@@ -346,7 +347,7 @@ def export_layer(layer: Sdf.Layer, tmp: str, output_path: str, ext: str | None =
     reason, not the exception text USD repeats for every failed buffer."""
     from pxr import Tf
 
-    from ..diagnostics import usd_diagnostics, usd_error_text
+    from ..usd.diagnostics import usd_diagnostics, usd_error_text
 
     ext = ext or os.path.splitext(output_path)[1].lower()
     args = {"format": "usdc"} if ext == ".usd" else {}

@@ -71,7 +71,7 @@ def exr_threads(chunked: bool = False) -> int:
     """OpenEXR's threads per EXR file of a render (outputs/images.py): exr_file_threads,
     0 for a farm's worker process (one of one per core), or $USDWRINKLE_EXR_THREADS
     where it is set."""
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     given = os.environ.get("USDWRINKLE_EXR_THREADS", "").strip()
     if not given:
@@ -86,7 +86,7 @@ def frames_in_flight(threads: int, frame_bytes: int) -> int:
     """Frames that may wait or encode at once: one per thread and one more, so that no
     thread idles while the next frame renders, and no more than MEMORY_SHARE of the
     available memory holds (at least 2: frame f encodes while f + 1 renders)."""
-    from ..memory import available_memory
+    from ..process.memory import available_memory
 
     wanted = threads + 1
     available = available_memory()

@@ -22,7 +22,7 @@ try:
     from PySide6 import QtCore, QtGui, QtWidgets
     from PySide6.QtOpenGLWidgets import QOpenGLWidget
 except ImportError as exc:  # the optional extra
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
                           f"({exc})") from None
@@ -30,7 +30,7 @@ except ImportError as exc:  # the optional extra
 from ..app.paint_session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
 from ..brush.stamp import FALLOFFS, MIRROR_AXES, MODES
 from ..brush.view import project
-from ..timecode import format_frame
+from ..process.timecode import format_frame
 
 Qt = QtCore.Qt
 
@@ -1332,7 +1332,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         """A Python error inside a Qt override or slot: shown in the window, logged, and
         the window goes on."""
         self.errors.append(text)
-        from ..errors import print_stderr
+        from ..process.errors import print_stderr
 
         print_stderr(f"usdwrinkle: paint: error: {text}"
                      + (f"\n{detail}" if detail and self.debug else ""))
@@ -1355,7 +1355,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         end with the shell's code. A second one while the question is open does not wait
         for an answer: the unsaved strokes go to a recovery file beside the layer, and
         the process ends at once."""
-        from ..errors import print_stderr
+        from ..process.errors import print_stderr
 
         code = 130 if signum == signal.SIGINT else 143
         said = "interrupted" if code == 130 else "terminated"
@@ -1372,7 +1372,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         QtCore.QTimer.singleShot(0, functools.partial(self._close_for_stop, said))
 
     def _close_for_stop(self, said: str) -> None:
-        from ..errors import print_stderr
+        from ..process.errors import print_stderr
 
         code = self.stop_code
         if self.close():

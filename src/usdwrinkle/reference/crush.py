@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import FOLD_ROOM, MIN_RATIO
-from ..folds import area_excess, excess_length, material_wavelength, profile_slope
+from ..method.contract import FOLD_ROOM, MIN_RATIO
+from ..method.folds import area_excess, excess_length, material_wavelength, profile_slope
 from ..scene.topology import Topology, rest_tangents, vertex_normals
 
 
@@ -142,7 +142,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
 
 def default_slope() -> np.ndarray:
     """The default profile's slope table (folds.slope_table of profiles.default_profile)."""
-    from ..folds import slope_table
-    from ..profiles import default_profile
+    from ..method.folds import slope_table
+    from ..method.profiles import default_profile
 
     return slope_table(default_profile()).astype(np.float64)

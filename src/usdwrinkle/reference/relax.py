@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import COLD_START_FACTOR, FIT_CONDITION, FIT_ONSET, FIT_RANGE, WEIGHT_FLOOR
+from ..method.contract import COLD_START_FACTOR, FIT_CONDITION, FIT_ONSET, FIT_RANGE, WEIGHT_FLOOR
 from ..scene.topology import Topology
 
 
@@ -38,7 +38,7 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
     and the amplitude times |k| / |k + t c|: the same slope. t fades the fit out where the
     ring's directions are too few (FIT_CONDITION) or |k| would grow by more than
     FIT_RANGE, and in from |k + c| = |k| to FIT_ONSET |k|: only shorter waves are fitted
-    (contract.py).
+    (method/contract.py).
     Returns (wave_vector (n, 3), amplitude (n,))."""
     points = np.asarray(points, np.float64)
     normals = np.asarray(normals, np.float64)
@@ -127,7 +127,7 @@ def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anch
 
 def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations: int,
                 cold_start_factor: int = COLD_START_FACTOR) -> tuple[np.ndarray, dict]:
-    """One frame of the phase history, as the engine computes it (history.py).
+    """One frame of the phase history, as the engine computes it (method/history.py).
 
     ``fields``: the frame's points, wave_vector, amplitude and phase (crush's anchored
     phase). ``state``: the wave state of the shot's previous grid frame (its wave_vector

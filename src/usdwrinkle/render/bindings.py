@@ -10,8 +10,8 @@ no stage needs more than 8 image units or 16 texture units (the GL 4.5 minimums)
 """
 from __future__ import annotations
 
-from ..aovs import OFFSET_SLOTS
-from ..contract import SHADER_DEFINES
+from ..images.aovs import OFFSET_SLOTS
+from ..method.contract import SHADER_DEFINES
 
 #: Work group size of every compute pass.
 LOCAL_SIZE = 64
@@ -21,7 +21,7 @@ LOCAL_SIZE = 64
 TABLE_WIDTH_LOG2 = 11
 TABLE_WIDTH = 1 << TABLE_WIDTH_LOG2
 
-#: Defines every shader gets: these, and the constants of the contract (contract.py).
+#: Defines every shader gets: these, and the constants of the contract (method/contract.py).
 COMMON = {"LOCAL_SIZE": LOCAL_SIZE, "TABLE_WIDTH": TABLE_WIDTH,
           "TABLE_WIDTH_LOG2": TABLE_WIDTH_LOG2, **SHADER_DEFINES}
 
@@ -30,7 +30,7 @@ WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS
         "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
 #: the resolve pass (render/resolve.py): the three colour attachments (texture units) and
 #: the output words and the count of non-finite values (storage buffers)
-#: the resolve pass's sizes from the image contract (aovs.py)
+#: the resolve pass's sizes from the image contract (images/aovs.py)
 RESOLVE_SHAPE = {"OFFSET_SLOTS": OFFSET_SLOTS}
 RESOLVE = {"RESOLVE_COLOR": 0, "RESOLVE_WRINKLE": 1, "RESOLVE_NORMAL": 2,
            "RESOLVE_OUT": 0, "RESOLVE_BAD": 1}

@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..aovs import OFFSET_SLOTS
-from ..memory import require_memory
+from ..images.aovs import OFFSET_SLOTS
+from ..process.memory import require_memory
 from .resolve import AOVS, ImageLayout, PendingImage, ResolvedImage, ResolvePass, read_rect
 
 
@@ -29,7 +29,7 @@ _ATTACHMENT_BYTES = 3 * 16 + 4
 
 def check_samples(samples: int) -> None:
     """Multisample counts are powers of two (moderngl and GL drivers take no others)."""
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     if samples < 1 or samples & (samples - 1):
         raise UsdWrinkleError(f"`samples` {samples} is not a power of two (1, 2, 4, 8, ...)")
@@ -38,7 +38,7 @@ def check_samples(samples: int) -> None:
 def check_frame_size(ctx, width: int, height: int, samples: int) -> None:
     """Refuse a frame the GL implementation or the memory cannot hold, naming the limit,
     before anything is allocated (a driver may crash instead of failing cleanly)."""
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     limits = (("GL_MAX_TEXTURE_SIZE", max(width, height)),
               ("GL_MAX_RENDERBUFFER_SIZE", max(width, height)),

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import os
 
-from ..errors import GLContextError
-from ..signals import signals_held
+from ..process.errors import GLContextError
+from ..process.signals import signals_held
 
 REQUIRED_VERSION = 430
 

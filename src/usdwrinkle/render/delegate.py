@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from ..contract import COLD_START_FACTOR
+from ..method.contract import COLD_START_FACTOR
 from ..scene.dirty import DirtyBits
 from .bounds import eye_bound, screen_rect
 from .buffers import Framebuffer, RenderBuffer

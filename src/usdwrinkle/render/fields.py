@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contract import FIELD_FLOATS, FIELD_TEXELS, WAVE_SYSTEMS, WrinkleFields
+from ..method.contract import FIELD_FLOATS, FIELD_TEXELS, WAVE_SYSTEMS, WrinkleFields
 
 #: GPU bytes of one wave state per point: FIELD_TEXELS RGBA float texels, the phases
 #: (WAVE_SYSTEMS floats) and the damped direction (RGBA float) (WaveFields.state)
@@ -77,7 +77,7 @@ class WaveFields:
         n = self.num_points
         while len(self._states) <= slot:
             # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2
-            # (contract.py); phases RG (systems 1, 2); damped: xy the damped direction
+            # (method/contract.py); phases RG (systems 1, 2); damped: xy the damped direction
             # (T1, T2 coordinates), z 1 once written
             self._states.append(WaveState(
                 self._table(FIELD_TEXELS * n, 4,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..aovs import ImageLayout
+from ..images.aovs import ImageLayout
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import threading
 
 import numpy as np
 
-from ..aovs import (  # noqa: F401  (re-exported: the pass's own names for its tables)
+from ..images.aovs import (  # noqa: F401  (re-exported: the pass's own names for its tables)
     AOV_BLOCKS,
     AOVS,
     EXR_CHANNELS,

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
-from ..errors import UsdWrinkleError
-from ..limits import MAX_POINTS
+from ..method.contract import JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_POINTS
 from ..scene.records import MeshRecord
 from ..scene.topology import rest_tangents
 from .bindings import TABLE_WIDTH

@@ -9,9 +9,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from .._resources import resource_dir
-from ..errors import ShaderError
-from ..signals import signals_held
+from ..process._resources import resource_dir
+from ..process.errors import ShaderError
+from ..process.signals import signals_held
 
 MAX_INCLUDE_DEPTH = 8
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')

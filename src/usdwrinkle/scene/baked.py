@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Usd
 
-from .. import schema
-from ..errors import UsdWrinkleError
-from ..timecode import format_frame
+from ..process.errors import UsdWrinkleError
+from ..process.timecode import format_frame
+from ..usd import schema
 
 #: baked primvar -> (field, components), the required ones, the second system's
 BAKED_PRIMVARS = schema.BAKED_PRIMVARS

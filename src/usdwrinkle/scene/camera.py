@@ -12,9 +12,9 @@ import math
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils
 
-from ..diagnostics import usd_diagnostics
-from ..errors import UsdWrinkleError
-from ..values import finite_in_float32, frame_of
+from ..process.errors import UsdWrinkleError
+from ..usd.diagnostics import usd_diagnostics
+from ..usd.values import finite_in_float32, frame_of
 from .records import CameraRecord
 
 

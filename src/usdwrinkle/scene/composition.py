@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from pxr import Sdf, Usd
 
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 #: customLayerData key of the session layer that holds a Composition (a bake reads it)
 SESSION_KEY = "usdwrinkleComposition"

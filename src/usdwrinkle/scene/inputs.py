@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 
 from pxr import Ar, Sdf, Tf, UsdUtils
 
-from ..diagnostics import usd_diagnostics, usd_error_text
-from ..errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
+from ..usd.diagnostics import usd_diagnostics, usd_error_text
 
 
 def package_file(resolved: str) -> str:

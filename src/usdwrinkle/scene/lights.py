@@ -28,8 +28,8 @@ from functools import lru_cache
 import numpy as np
 from pxr import Usd, UsdGeom, UsdLux
 
-from ..errors import UsdWrinkleError
-from ..values import finite_in_float32, frame_of
+from ..process.errors import UsdWrinkleError
+from ..usd.values import finite_in_float32, frame_of
 from .records import LightRecord
 
 _log = logging.getLogger(__name__)

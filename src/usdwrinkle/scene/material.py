@@ -16,12 +16,12 @@ from functools import lru_cache
 import numpy as np
 from pxr import Ar, Usd, UsdGeom, UsdShade
 
-from ..colour import srgb_decode
-from ..contract import UDIM_TILES
-from ..errors import UsdWrinkleError
-from ..limits import MAX_TEXTURE_SIZE
-from ..schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
-from ..values import frame_of, static_flattened, static_value
+from ..images.colour import srgb_decode
+from ..method.contract import UDIM_TILES
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_TEXTURE_SIZE
+from ..usd.schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
+from ..usd.values import frame_of, static_flattened, static_value
 from .inputs import package_file, require_regular_file
 from .records import MaterialRecord, NormalMapRecord, SurfaceParams, TextureImage
 from .topology import Topology
@@ -60,7 +60,7 @@ def load_texture(resolved_path: str, color_space: str = "auto") -> TextureImage:
 @lru_cache(maxsize=32)
 def _decode_texture(resolved_path: str, color_space: str, identity) -> TextureImage:
     """load_texture's decode, cached by the file's identity too."""
-    from ..imagefiles import read_float_image
+    from ..images.imagefiles import read_float_image
 
     asset = Ar.GetResolver().OpenAsset(Ar.ResolvedPath(resolved_path))
     if asset is None:
@@ -376,7 +376,7 @@ def look_inputs(shader: UsdShade.Shader) -> tuple:
 def bound_surface(prim: Usd.Prim, purpose: str = UsdShade.Tokens.allPurpose):
     """(the mesh's bound Material or None, its UsdPreviewSurface or None), for the material
     ``purpose`` (a purpose's own binding, else the all-purpose one)."""
-    from ..diagnostics import usd_diagnostics
+    from ..usd.diagnostics import usd_diagnostics
 
     with usd_diagnostics(forward=True):  # e.g. bindings without MaterialBindingAPI
         material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial(purpose)

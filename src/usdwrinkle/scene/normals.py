@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import UsdGeom
 
-from ..errors import UsdWrinkleError
-from ..polygons import face_corners, face_starts
-from ..values import finite_in_float32, flattened, static_flattened, static_value
+from ..method.polygons import face_corners, face_starts
+from ..process.errors import UsdWrinkleError
+from ..usd.values import finite_in_float32, flattened, static_flattened, static_value
 from .topology import Topology
 
 _log = logging.getLogger(__name__)

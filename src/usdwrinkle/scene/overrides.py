@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pxr import Sdf, Usd, UsdGeom, UsdShade, UsdSkel
 
-from ..values import flattened
+from ..usd.values import flattened
 from .material import bound_surface, corner_values, display_color, look_inputs
 from .sampling import time_code
 from .stage import stage_inputs

@@ -7,10 +7,10 @@ import math
 import numpy as np
 from pxr import Usd, UsdGeom
 
-from .. import schema
-from ..profiles import default_profile, derive_gradient
-from ..validation import parameter_findings, refuse
-from ..values import static_flattened, static_value
+from ..method.profiles import default_profile, derive_gradient
+from ..usd import schema
+from ..usd.validation import parameter_findings, refuse
+from ..usd.values import static_flattened, static_value
 from .records import WrinkleParams
 from .topology import Topology, curvature, mean_edge_length
 
@@ -21,8 +21,8 @@ def stage_meters(stage: Usd.Stage) -> float:
     """The stage's metersPerUnit, which a cloth preset's width and the curvature gain
     divide by: refused in one line unless finite and > 0 (0 divided by zero, NaN and inf
     gave NaN or infinite widths, and -1 negative ones)."""
-    from ..errors import UsdWrinkleError
-    from ..limits import METERS_PER_UNIT_RANGE
+    from ..process.errors import UsdWrinkleError
+    from ..process.limits import METERS_PER_UNIT_RANGE
 
     meters = UsdGeom.GetStageMetersPerUnit(stage)
     low, high = METERS_PER_UNIT_RANGE
@@ -142,7 +142,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
                            (schema.TENSION_THRESHOLD, schema.DEFAULT_TENSION_THRESHOLD)):
         value = _get(prim, name)
         controls.append(fallback if value is None else float(value))
-    from ..folds import slope_table
+    from ..method.folds import slope_table
 
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,

@@ -109,7 +109,7 @@ class WrinkleParams:
         """folds.slope_table of the height profile (``slope`` when given)."""
         if self.slope is not None:
             return np.asarray(self.slope, np.float32)
-        from ..folds import slope_table
+        from ..method.folds import slope_table
 
         return slope_table(self.height_profile)
 
@@ -132,7 +132,7 @@ class TextureImage:
 
     def linear(self) -> np.ndarray:
         """(h, w, 4) float32: what the shaders sample."""
-        from ..colour import srgb_decode_8bit
+        from ..images.colour import srgb_decode_8bit
 
         if self.pixels.dtype != np.uint8:
             return self.pixels

@@ -11,9 +11,9 @@ import weakref
 import numpy as np
 from pxr import Usd, UsdGeom
 
-from ..errors import UsdWrinkleError
-from ..limits import MAX_WORLD_COORDINATE
-from ..values import finite_in_float32, frame_of, static_value
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_WORLD_COORDINATE
+from ..usd.values import finite_in_float32, frame_of, static_value
 from . import camera as camera_mod
 from .lights import default_lights, light_prims, read_lights
 from .material import corner_colors, read_normal_map

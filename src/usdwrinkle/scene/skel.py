@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
-from ..diagnostics import usd_diagnostics
-from ..errors import UsdWrinkleError
-from ..limits import MAX_WORLD_COORDINATE
-from ..values import finite_in_float32
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_WORLD_COORDINATE
+from ..usd.diagnostics import usd_diagnostics
+from ..usd.values import finite_in_float32
 from .records import SkinData
 
 

@@ -16,11 +16,11 @@ from collections import OrderedDict
 import numpy as np
 from pxr import Sdf, Tf, Usd, UsdGeom, UsdShade, UsdSkel
 
-from .. import schema
-from ..diagnostics import usd_diagnostics, usd_error_text
-from ..errors import UsdWrinkleError
-from ..limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE
-from ..values import (
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_FRAMES, MAX_POINTS, MAX_TIME_CODE
+from ..usd import schema
+from ..usd.diagnostics import usd_diagnostics, usd_error_text
+from ..usd.values import (
     require_mesh_array,
     static_flattened,
     static_value,
@@ -154,7 +154,7 @@ def outside_range_note(stage: Usd.Stage, frames: list[float | None]) -> str | No
     outside = [f for f in finite if f < start or f > end]
     if not outside:
         return None
-    from ..timecode import format_frame
+    from ..process.timecode import format_frame
 
     return (f"{len(outside)} of the {len(finite)} frame(s) lie outside the stage's time range "
             f"{format_frame(start)}..{format_frame(end)} (first: {format_frame(outside[0])}): "

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UsdWrinkleError
-from ..limits import MAX_FACE_CORNERS
-from ..polygons import face_starts
+from ..method.polygons import face_starts
+from ..process.errors import UsdWrinkleError
+from ..process.limits import MAX_FACE_CORNERS
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Topology:
         iteration (crush, relax and the posed normals took seconds a frame); its wave is
         fitted from MAX_RING of its edges instead. Ordinary meshes (valence far below
         it) read exactly their whole rings."""
-        from ..limits import MAX_RING
+        from ..process.limits import MAX_RING
 
         return (*_capped(self.neighbor_offsets, self.neighbor_indices, MAX_RING),
                 *_capped(self.triangle_offsets, self.triangle_indices, MAX_RING))

@@ -149,7 +149,7 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
     stage's session layer; returns the baked mesh paths."""
     if not _in_process():
         return _bake_out_of_process(usdview_api)
-    from ..log import silenced
+    from ..process.log import silenced
 
     with silenced():  # the status line reports the outcome (as the out-of-process bake)
         return _bake_in_process(usdview_api, ctx)
@@ -158,7 +158,7 @@ def bake_current_frame(usdview_api, ctx=None) -> list[str]:
 def _bake_in_process(usdview_api, ctx) -> list[str]:
     from ..app.bake import bake_frame_into
     from ..app.shot import Shot
-    from ..errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
@@ -198,7 +198,7 @@ def _open_file(path: str) -> None:
 def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_file,
                          width: int = 960, ctx=None) -> list[str]:
     """Render the current frame through the current camera to EXR and PNG, open the PNG."""
-    from ..timecode import format_frame
+    from ..process.timecode import format_frame
 
     stage = usdview_api.stage
     frame = _frame(usdview_api)
@@ -226,8 +226,8 @@ def render_current_frame(usdview_api, outdir: str | None = None, opener=_open_fi
     from ..app.options import RenderOptions
     from ..app.render import RenderJob
     from ..app.shot import Shot
-    from ..errors import UsdWrinkleError
-    from ..log import silenced
+    from ..process.errors import UsdWrinkleError
+    from ..process.log import silenced
 
     shot = Shot(stage)
     options = RenderOptions(width=width, camera=camera)
@@ -284,8 +284,8 @@ def paint_current_stage(usdview_api, launcher=subprocess.Popen):
     prim = _paint_prim(usdview_api)
     if _in_process() and _has_pyside6():
         from ..app.paint_session import PaintSession
-        from ..errors import UsdWrinkleError
         from ..paint.window import PaintWindow
+        from ..process.errors import UsdWrinkleError
 
         def make_session(ctx):
             return PaintSession(stage, stage.GetSessionLayer(), None, prim=prim,
@@ -398,8 +398,8 @@ def _live_bake(usdview_api, ctx):
     run = bake_in_process(ctx)
 
     def bake(stage, frame, path):
-        from ..errors import UsdWrinkleError
-        from ..log import silenced
+        from ..process.errors import UsdWrinkleError
+        from ..process.log import silenced
 
         try:
             with silenced():  # the status line reports the outcome

@@ -4,7 +4,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from ...contract import MAX_LIGHTS
+from ...method.contract import MAX_LIGHTS
 from ...scene.records import CameraRecord, MeshFrame
 from .. import bindings
 from ..bounds import EyeBound, culled_side

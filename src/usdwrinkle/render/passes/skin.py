@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...contract import JOINT_TEXELS
+from ...method.contract import JOINT_TEXELS
 from ...scene.records import MeshFrame
 from ..resources import MeshResources, vec4
 from . import gl_matrix, normal_matrix

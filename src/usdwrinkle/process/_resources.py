@@ -15,7 +15,7 @@ def resource_dir(name: str) -> Path:
     packaged = importlib.resources.files("usdwrinkle").joinpath(name)
     if packaged.is_dir():
         return Path(str(packaged))
-    checkout = Path(__file__).resolve().parents[2] / name
+    checkout = Path(__file__).resolve().parents[3] / name
     if checkout.is_dir():
         return checkout
     raise FileNotFoundError(f"usdwrinkle data folder '{name}' is missing from the installation")

@@ -3,7 +3,7 @@
 On a terminal, tqdm redraws one line with carriage returns and cursor escapes. In a farm's
 log (stderr redirected to a file or a pipe) those control characters are noise. There,
 progress goes through the standard library's ``logging`` (logger ``usdwrinkle.progress``,
-one handler on usdwrinkle's safe stderr; warnings have their own way, log.py) as whole
+one handler on usdwrinkle's safe stderr; warnings have their own way, process/log.py) as whole
 lines: ``usdwrinkle: render: 12/48 frame(s) (25%)``. It writes a line at every tenth of
 the run, at its end, and at least once a minute in between. ``USDWRINKLE_PROGRESS``
 overrides the choice: ``bar``, ``log`` or ``none``.

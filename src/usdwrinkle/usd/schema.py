@@ -11,8 +11,8 @@ import os
 
 from pxr import Plug, Tf, Usd
 
-from ._resources import resource_dir
-from .errors import SchemaRegistrationError
+from ..process._resources import resource_dir
+from ..process.errors import SchemaRegistrationError
 
 API_NAME = "WrinkleAPI"
 Q = "primvars:wrinkle:q"
@@ -133,8 +133,8 @@ def register() -> bool:
     except Tf.ErrorException as exc:
         # a plugInfo.json on PXR_PLUGINPATH_NAME that cannot be read: USD raises once,
         # skips that plugin, and the registry it built serves every later call
+        from ..process.log import warn
         from .diagnostics import usd_error_text
-        from .log import warn
 
         warn(f"USD skipped a plugin ({usd_error_text(exc)}); check "
              "PXR_PLUGINPATH_NAME")

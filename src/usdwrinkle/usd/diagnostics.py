@@ -15,7 +15,7 @@ import re
 import sys
 import tempfile
 
-from .errors import fold
+from ..process.errors import fold
 
 _DIAGNOSTIC = re.compile(r"^(?:Warning|Error|Runtime Error|Coding Error|Status):?"
                          r"(?: in [^-]*?)?(?: at line \d+ of \S+)? -- (.*)$")
@@ -66,7 +66,7 @@ def diagnostic_messages(text: str) -> list[str]:
 @contextlib.contextmanager
 def usd_diagnostics(forward: bool = False):
     """Capture what C++ prints on stderr inside the block; with ``forward`` each message
-    is then logged as a warning of the caller's (one line each, usdwrinkle/log.py),
+    is then logged as a warning of the caller's (one line each, usdwrinkle/process/log.py),
     otherwise dropped.
 
     Yields a list that holds the messages once the block has ended.

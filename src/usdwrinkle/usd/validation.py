@@ -13,15 +13,15 @@ from dataclasses import dataclass
 import numpy as np
 from pxr import Usd, UsdGeom
 
-from . import schema
-from .errors import UsdWrinkleError
-from .limits import (
+from ..process.errors import UsdWrinkleError
+from ..process.limits import (
     MAX_AMPLITUDE_SCALE,
     MAX_PROFILE_VALUE,
     MAX_RELAX_ITERATIONS,
     MAX_WORLD_COORDINATE,
 )
-from .timecode import format_frame
+from ..process.timecode import format_frame
+from . import schema
 from .values import (
     FLOAT3_TYPES,
     INT_TYPES,

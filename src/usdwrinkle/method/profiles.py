@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import UsdWrinkleError
-from .schema import PROFILE_SAMPLES
+from ..process.errors import UsdWrinkleError
+from ..usd.schema import PROFILE_SAMPLES
 
 _THETA = np.arange(PROFILE_SAMPLES) * (2 * np.pi / PROFILE_SAMPLES)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from pxr import Usd
 
-from .errors import UsdWrinkleError
+from ..process.errors import UsdWrinkleError
 
 
 def static_time(attr: Usd.Attribute) -> Usd.TimeCode:

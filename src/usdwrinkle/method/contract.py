@@ -14,7 +14,7 @@ import numpy as np
 
 #: Floor of the compression ratio r: |k| <= 2 pi / (W * MIN_RATIO) (crush).
 MIN_RATIO = 0.05
-#: The fold law beyond the paper (docs/method.md, "The fold law"; usdwrinkle/folds.py):
+#: The fold law beyond the paper (docs/method.md, "The fold law"; usdwrinkle/method/folds.py):
 #: - inextensible: a wave restores, per posed length, the length the cloth has there (its
 #:   excess length rho), exactly for the mesh's profile (folds.slope_table);
 #: - coarsening: L = W * min(rho ** COARSENING_EXPONENT, COARSENING_MAX). The cloth

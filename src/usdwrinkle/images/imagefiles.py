@@ -8,7 +8,7 @@ import os
 
 import numpy as np
 
-from .diagnostics import one_line, usd_diagnostics
+from ..usd.diagnostics import one_line, usd_diagnostics
 
 
 def read_float_image(path: str, max_size: int | None = None,

@@ -32,7 +32,7 @@ AOVS_TEXT = ", ".join(
 def parse_aovs(value: str | Iterable[str]) -> tuple[str, ...]:
     """``"color,depth"`` (or a list of names, each may hold commas) -> the AOV names in
     AOV_BLOCKS order; refuses an unknown name or none."""
-    from .errors import UsdWrinkleError
+    from ..process.errors import UsdWrinkleError
 
     texts = [value] if isinstance(value, str) else list(value)
     names = [part.strip() for text in texts for part in str(text).split(",") if part.strip()]
