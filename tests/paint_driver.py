@@ -316,7 +316,7 @@ def scenario_faults(out: Path, stage: str) -> dict:
     result = {"seen": []}
     for fault in ("paint", "brush", "save"):
         before = len(window.errors)
-        window.view.fault = fault
+        window.view.faults.arm(fault)
         if fault == "paint":
             window.view.update()
             wait_for(lambda b=before: len(window.errors) > b, "the paint error")

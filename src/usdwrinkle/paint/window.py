@@ -98,6 +98,29 @@ TIPS = {
 }
 
 
+class FaultPoints:
+    """A debug handle for the tests (tests/paint_driver.py): ``arm(name)`` makes the next
+    ``trip(name)`` raise, once, where the window calls it (paintGL "paint", a stroke's
+    press "brush", save "save"), so that a test sees the window show the error and go on.
+    Nothing arms it outside the tests."""
+
+    #: point -> where it is, as the error says
+    POINTS = {"paint": "paintGL", "brush": "the brush", "save": "save"}
+
+    def __init__(self) -> None:
+        self.armed: str | None = None
+
+    def arm(self, name: str) -> None:
+        if name not in self.POINTS:
+            raise ValueError(f"no fault point {name!r} (one of {', '.join(self.POINTS)})")
+        self.armed = name
+
+    def trip(self, name: str) -> None:
+        if self.armed == name:
+            self.armed = None
+            raise RuntimeError(f"injected fault in {self.POINTS[name]}")
+
+
 def guarded(method):
     """Run a Qt override or slot; an exception is shown in the window (and logged),
     and the window goes on."""
@@ -176,8 +199,8 @@ class PaintView(QOpenGLWidget):
         self._texture = None
         self._program = None
         self._vao = None
-        #: injected faults for the tests: "paint", "brush" or "save" raises there
-        self.fault: str | None = None
+        #: the tests' debug handle: a fault armed there raises at its point
+        self.faults = FaultPoints()
         self.frame_times: list[float] = []
 
     # -- GL ---------------------------------------------------------------------------
@@ -217,9 +240,7 @@ class PaintView(QOpenGLWidget):
 
     @guarded
     def paintGL(self):  # noqa: N802
-        if self.fault == "paint":
-            self.fault = None
-            raise RuntimeError("injected fault in paintGL")
+        self.faults.trip("paint")
         if self.session is None or self.ctx is None:
             return
         started = time.perf_counter()
@@ -370,9 +391,7 @@ class PaintView(QOpenGLWidget):
             self.update()
             return
         if button == Qt.LeftButton and not alt:
-            if self.fault == "brush":
-                self.fault = None
-                raise RuntimeError("injected fault in the brush")
+            self.faults.trip("brush")
             # a stroke may start off the mesh: it begins where the drag first meets it.
             # Held at the press: Shift smooths, Ctrl erases (Maya's Artisan, Blender)
             modifiers = event.modifiers()
@@ -1194,9 +1213,7 @@ class PaintWindow(QtWidgets.QMainWindow):
             self.view.update()
 
     def save(self) -> bool:
-        if self.view.fault == "save":
-            self.view.fault = None
-            raise RuntimeError("injected fault in save")
+        self.view.faults.trip("save")
         if self.session.save_path is None and not self.session.in_memory:
             return self.save_as()
         where = self.session.save()
