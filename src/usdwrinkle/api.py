@@ -15,7 +15,7 @@ A problem with the input raises :class:`UsdWrinkleError` (also ``usdwrinkle.api.
 UsdWrinkleError``) with a one-line message that names option fields in backquotes
 (`` `width` and `height` must be positive``). Warnings go through the ``usdwrinkle``
 logger (usdwrinkle/process/log.py): on stderr as ``usdwrinkle: warning: ...`` unless the caller
-collects them (``with usdwrinkle.process.log.collect() as messages: api.render(...)``) or
+collects them (``with usdwrinkle.log.collect() as messages: api.render(...)``) or
 silences them. ``quiet`` (True by default here) leaves out the progress bars.
 
 For more control, build the jobs yourself::

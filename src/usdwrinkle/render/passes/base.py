@@ -15,6 +15,7 @@ tests/passes/motion.py).
 from __future__ import annotations
 
 import contextlib
+import functools
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -147,23 +148,17 @@ def wave_pass(cls: type[WavePass]) -> type[WavePass]:
     return cls
 
 
-_discovered: list[bool] = []
-
-
+@functools.cache
 def _discover() -> None:
     """Import every module of this folder once, so that each pass file registers its
     passes: a new wave pass is one file here, and no list elsewhere names it."""
     import importlib
     import pkgutil
-    from pathlib import Path
 
-    if _discovered:
-        return
     package = __name__.rsplit(".", 1)[0]
     for info in pkgutil.iter_modules([str(Path(__file__).parent)]):
         if info.name != "base":
             importlib.import_module(f"{package}.{info.name}")
-    _discovered.append(True)
 
 
 def wave_passes() -> list[type[WavePass]]:

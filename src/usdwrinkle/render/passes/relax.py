@@ -10,6 +10,7 @@ in the fields). Without iterations (relaxIterations 0) there is no relaxation an
 from __future__ import annotations
 
 from ..resources import MeshResources
+from . import set_uniforms
 from .base import Step, WavePass, wave_pass
 
 
@@ -56,9 +57,10 @@ class RelaxPass(WavePass):
         self.bind(reads={"RELAX_EDGES": waves.edge_rotations})
         uniforms = {"u_num_points": res.num_points, "u_systems": waves.systems,
                     **res.topology_uniforms}
+        set_uniforms(self.variants(TWO_SYSTEMS=two), uniforms)  # once, not every step
         for index in range(iterations):
             src = index % 2
-            self.dispatch(count, {**uniforms, "u_write_phase": int(index == iterations - 1)},
+            self.dispatch(count, {"u_write_phase": int(index == iterations - 1)},
                           reads={"RELAX_Z_IN": waves.phasors[src]},
                           writes={"RELAX_Z_OUT": waves.phasors[1 - src]}, TWO_SYSTEMS=two)
         self.dispatch(count, uniforms, reads={"RELAX_Z_IN": waves.phasors[iterations % 2]},
