@@ -17,7 +17,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, UsdSkel, Vt
 import usdwrinkle  # noqa: F401  registers WrinkleAPI before USD builds its registry
 from usdwrinkle import WrinkleAPI, profile_preset
 from usdwrinkle.authoring.builders import grid_faces, grid_sheet
-from usdwrinkle.authoring.paint import MeshSurface, q_from_flow_map
+from usdwrinkle.authoring.qsources import MeshSurface, q_from_flow_map
 from usdwrinkle.images.colour import srgb_encode
 
 FRAMES = (1, 24)
