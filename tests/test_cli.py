@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 import pytest
+from pxr import Usd
 
 from usdwrinkle.cli.main import main
 from usdwrinkle.method.folds import height_bound, slope_table
@@ -25,7 +26,10 @@ def test_render_writes_every_aov(gl_context, tmp_path):
     covered = image["A"] > 0
     assert 0.05 < covered.mean() < 0.9
     height, amplitude = image["wrinkle.height"], image["wrinkle.amplitude"]
-    width = 0.28  # the shirt's wrinkle:width, amplitude scale 1, the fold profile
+    # the shirt's wrinkle:width as authored, amplitude scale 1, the fold profile
+    shirt = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
+    (width,) = shirt.GetPrimAtPath("/World/Arm/Sleeve").GetAttribute(
+        "primvars:wrinkle:width").Get()
     bound = width * height_bound(slope_table(default_profile()), DEFAULT_SLACK)
     assert 0.3 * bound < np.abs(height).max() <= bound + 1e-5
     assert np.all(np.abs(height) <= amplitude + 1e-6)

@@ -406,7 +406,7 @@ def test_a_time_sampled_width_is_its_first_sample_in_render_and_check(gl_context
             if prim.HasAPI("WrinkleAPI"):
                 primvar = UsdGeom.PrimvarsAPI(prim).CreatePrimvar(
                     "wrinkle:width", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.constant)
-                primvar.GetAttr().Clear()  # the sample's own width (a default of 0.28)
+                primvar.GetAttr().Clear()  # the sample's own width (a default)
                 author(primvar.GetAttr())
         stage.Save()
         shutil.copytree(SAMPLES / "textures", tmp_path / "textures", dirs_exist_ok=True)
