@@ -129,6 +129,36 @@ def test_painting_more_makes_bigger_folds_not_finer():
     assert np.all(np.diff(ks) <= 1e-12)
 
 
+@pytest.mark.parametrize("radius", [0.02, 0.2])
+def test_the_room_lowers_a_fold_to_half_the_radius_of_a_tube(radius):
+    """The room (method/contract.py FOLD_ROOM): a tube compressed along its axis to 0.6 of
+    its length folds at the law's height where its radius leaves room (0.2 m, W 0.3),
+    and at FOLD_ROOM of its radius where it does not (2 cm): the numpy reference's
+    over_room is the law's height over that room, and the drawn amplitude the smaller of
+    the two. 96 points around, so the chord's curvature is the circle's within 0.1%."""
+    from usdwrinkle.authoring.builders import grid_faces
+    from usdwrinkle.method.contract import FOLD_ROOM
+    from usdwrinkle.reference.crush import crush
+    from usdwrinkle.scene.topology import build_topology
+
+    around, along, length = 96, 21, 1.0
+    theta = np.arange(around) * 2 * np.pi / around
+    x, t = np.meshgrid(np.linspace(0, length, along), theta, indexing="ij")
+    rest = np.stack([x.ravel(), radius * np.cos(t).ravel(), radius * np.sin(t).ravel()], 1)
+    counts, indices = grid_faces(along, around, wrap_cols=True)
+    topology = build_topology(counts, indices, rest)
+    posed = rest * [0.6, 1.0, 1.0]
+    width = np.full(len(rest), 0.3)
+    law = crush(rest, posed, topology, np.zeros_like(rest), width)
+    free = fold_law(np.array([0.6]), 0.3)[0][0]  # the law on flat cloth: no room
+    inner = (x.ravel() > 0.2) & (x.ravel() < 0.8)
+    room = FOLD_ROOM * radius
+    np.testing.assert_allclose(law["over_room"][inner], free / room, rtol=2e-3)
+    np.testing.assert_allclose(law["amplitude"][inner], min(free, room), rtol=2e-3)
+    assert np.all(law["capped"][inner] == (free > room))
+    assert (free > room) == (radius == 0.02)  # one case of each
+
+
 def _fine_of(layer_stage, prim_path, record):
     fine = UsdGeom.Mesh(layer_stage.GetPrimAtPath(prim_path + "_wrinkled"))
     faces = np.asarray(fine.GetFaceVertexIndicesAttr().Get(), np.int64).reshape(-1, 3)

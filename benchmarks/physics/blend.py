@@ -22,6 +22,7 @@ One system only (a stage with wrinkle:biaxial is skipped). A few seconds here.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -56,10 +57,64 @@ def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal) -> n
     return _area(at + h[..., None] * face_normal[:, None, :])
 
 
-def measure_stage(name: str, ctx) -> list[dict]:
-    from usdwrinkle.engine import WrinkleEngine
+@dataclass
+class Region:
+    """A mesh's compressed region at the engine's current frame, subdivided: every fine
+    face of the coarse triangles whose corners are all compressed beyond 3 x the slack,
+    unpainted (``chosen``), with what the blend needs per fine face and corner."""
+    law: dict                  # crush's fields (the numpy reference)
+    fields: dict               # the engine's fields (fitted k and a, relaxed phases)
+    posed: np.ndarray          # coarse posed points
+    topology: object
+    compressed: np.ndarray     # per coarse vertex
+    corners: np.ndarray        # (m, 3) coarse vertex of each fine face's corner
+    corner_points: np.ndarray  # (m, 3, 3)
+    bary: np.ndarray           # (m, 3 fine vertices, 3 corners), as blend_weights makes them
+    at: np.ndarray             # (m, 3, 3) the fine vertices, flat
+    normal: np.ndarray         # (m, 3) each coarse triangle's face normal
+    offset: np.ndarray         # (m, 3 fine vertices, 3 corners, 3) fine vertex - corner
+    chosen: np.ndarray         # (m,) the fine faces measured
+    rest_area: float           # their rest area
+    height: np.ndarray         # the mesh's height profile
+
+
+def compressed_region(engine, path: str, levels: int) -> Region | None:
+    """The compressed region of ``path`` (one system only) at the engine's current frame,
+    subdivided ``levels`` times; None where it has fewer than 100 fine faces."""
     from usdwrinkle.geometry.subdivide import subdivide
     from usdwrinkle.reference.crush import crush
+
+    record = engine.meshes[path]
+    fields = engine.read_fields(path).arrays()
+    triangles = record.topology.triangles
+    posed = fields["points"].astype(np.float64)
+    law = crush(record.rest_points, posed, record.topology, record.params.q,
+                record.params.width, slack=record.params.slack,
+                hold=record.params.hold, gain=record.params.amplitude_gain)
+    unpainted = np.linalg.norm(record.params.q, axis=1) == 0
+    compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
+    fine = subdivide(posed, triangles, levels)
+    bary = np.clip(fine.corner_bary.astype(np.float64), 0, 1)
+    bary /= bary.sum(-1, keepdims=True)  # blend_weights
+    corners = triangles[fine.face_triangle.astype(np.int64)]
+    chosen = compressed[corners].all(1)
+    if chosen.sum() < 100:
+        return None
+    corner_points = posed[corners]
+    normal = np.cross(corner_points[:, 1] - corner_points[:, 0],
+                      corner_points[:, 2] - corner_points[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    at = np.einsum("mvc,mcj->mvj", bary, corner_points)
+    rest_area = _area(np.einsum("mvc,mcj->mvj", bary,
+                                record.rest_points.astype(np.float64)[corners]))
+    return Region(law, fields, posed, record.topology, compressed, corners, corner_points,
+                  bary, at, normal, at[:, :, None, :] - corner_points[:, None, :, :], chosen,
+                  float(rest_area[chosen].sum()),
+                  np.asarray(record.params.height_profile, np.float64))
+
+
+def measure_stage(name: str, ctx) -> list[dict]:
+    from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.reference.relax import phase_misfit, relax
 
     engine = WrinkleEngine(str(SAMPLES / f"{name}.usda"), ctx=ctx)
@@ -70,36 +125,17 @@ def measure_stage(name: str, ctx) -> list[dict]:
             record = engine.meshes[path]
             if record.params.biaxial:
                 continue
-            fields = engine.read_fields(path).arrays()
-            triangles = record.topology.triangles
-            posed = fields["points"].astype(np.float64)
-            law = crush(record.rest_points, posed, record.topology, record.params.q,
-                        record.params.width, slack=record.params.slack,
-                        hold=record.params.hold, gain=record.params.amplitude_gain)
-            unpainted = np.linalg.norm(record.params.q, axis=1) == 0
-            compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
-            fine = subdivide(posed, triangles, LEVELS)
-            owner = fine.face_triangle.astype(np.int64)
-            bary = np.clip(fine.corner_bary.astype(np.float64), 0, 1)
-            bary /= bary.sum(-1, keepdims=True)  # blend_weights
-            corners = triangles[owner]
-            chosen = compressed[corners].all(1)
-            if chosen.sum() < 100:
+            region = compressed_region(engine, path, LEVELS)
+            if region is None:
                 continue
-            corner_points = posed[corners]
-            face_normal = np.cross(corner_points[:, 1] - corner_points[:, 0],
-                                   corner_points[:, 2] - corner_points[:, 0])
-            face_normal /= np.linalg.norm(face_normal, axis=1, keepdims=True)
-            at = np.einsum("mvc,mcj->mvj", bary, corner_points)
-            rest_area = _area(np.einsum("mvc,mcj->mvj", bary,
-                                        record.rest_points.astype(np.float64)[corners]))
-            rest_area = rest_area[chosen].sum()
+            law, fields, posed = region.law, region.fields, region.posed
+            corners, corner_points, offset = region.corners, region.corner_points, region.offset
+            bary, height, at, face_normal = region.bary, region.height, region.at, region.normal
+            chosen, rest_area, compressed = region.chosen, region.rest_area, region.compressed
             flat = _area(at)
-            height = np.asarray(record.params.height_profile, np.float64)
-            offset = at[:, :, None, :] - corner_points[:, None, :, :]
             phase = fields["phase"].astype(np.float64)
             converged = relax(posed, law["wave_vector"], law["amplitude"], phase,
-                              record.topology, CONVERGED)
+                              region.topology, CONVERGED)
 
             def drawn(wave_vector, amplitude, phases, agree=False,
                       mesh=(corners, corner_points, offset, bary, height, at, face_normal)):
@@ -131,10 +167,10 @@ def measure_stage(name: str, ctx) -> list[dict]:
                        chosen].sum() / rest_area,
                    "fitted": after[chosen].sum() / rest_area,
                    "agreed": agreed[chosen].sum() / rest_area,
-                   "misfit": phase_misfit(posed, law["wave_vector"], phase, record.topology,
+                   "misfit": phase_misfit(posed, law["wave_vector"], phase, region.topology,
                                           compressed),
                    "misfit fitted": phase_misfit(posed, fields["wave_vector"], phase,
-                                                 record.topology, compressed),
+                                                 region.topology, compressed),
                    "bins": []}
             for low, high in zip(BINS[:-1], BINS[1:], strict=True):
                 inside = chosen & (misfit >= low) & (misfit < high)

@@ -123,6 +123,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     amplitude = np.where(folding, profile_slope(table, rho_area) / np.maximum(kl, 1e-30),
                          0.0)
     capped = amplitude * amplitude_scale > room
+    # how many times its room the law's fold would rise (benchmarks.physics.room)
+    over_room = np.where(folding, amplitude * amplitude_scale / room, 0.0)
     amplitude = np.minimum(amplitude, room / max(amplitude_scale, 1e-30)) * amplitude_scale
     if hold is not None:
         hold = np.asarray(hold, np.float64)
@@ -137,7 +139,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
             "compression": r, "phase": phase, "usable": usable,
             # beyond crush.glsl's outputs: the mesh's own compression along d and largest
             # stretch, and where the room limited the fold (the area tests read them)
-            "geometric": r_geo, "stretch": stretch, "capped": capped & folding}
+            "geometric": r_geo, "stretch": stretch, "capped": capped & folding,
+            "over_room": over_room}
 
 
 def default_slope() -> np.ndarray:
