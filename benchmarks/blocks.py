@@ -11,6 +11,13 @@ def markers(name: str) -> tuple[str, str]:
     return f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
 
 
+def stage_block_head(name: str, seconds: float) -> list[str]:
+    """The first lines of the docs/physics.md block of ``python -m
+    benchmarks.physics.NAME``: its begin marker and the command that made it."""
+    return [markers(name)[0], "", f"Made by `python -m benchmarks.physics.{name} --write "
+            f"docs/physics.md` ({seconds:.0f} s here).", ""]
+
+
 def emit(args: list[str], name: str, text: str) -> None:
     """``--write PATH``: replace the block ``name`` of PATH with ``text`` (which holds the
     markers); otherwise print ``text``."""

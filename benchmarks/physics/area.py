@@ -89,16 +89,14 @@ def measure_stage(name: str, ctx, scratch: Path) -> list[dict]:
 
 
 def report(rows: list[dict], seconds: float) -> str:
-    from ..blocks import markers
+    from ..blocks import markers, stage_block_head
 
     def cell(row, key):
         if not np.isfinite(row[key]):
             return f"- ({row[key + ' triangles']} triangles)"
         return f"{row[key]:.3f} (flat {row[key + ' flat']:.3f}, {row[key + ' triangles']})"
 
-    begin, end = markers("area")
-    lines = [begin, "", f"Made by `python -m benchmarks.physics.area --write docs/physics.md` "
-             f"({seconds:.0f} s here).", "",
+    lines = stage_block_head("area", seconds) + [
              "| stage | mesh | area: compressed | area: uniaxial, with room | "
              "crossings (the coarse mesh's own) |", "|---|---|---|---|---|"]
     for row in rows:
@@ -107,7 +105,7 @@ def report(rows: list[dict], seconds: float) -> str:
                      f"({row['coarse crossings']}) |")
     lines += ["", "Each area cell: the wrinkled area over the rest area, the subdivided "
               "coarse (flat) surface's, and the fine triangles measured; `-` where fewer "
-              f"than {LEAST}.", "", end]
+              f"than {LEAST}.", "", markers("area")[1]]
     return "\n".join(lines)
 
 

@@ -113,83 +113,87 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
                   np.asarray(record.params.height_profile, np.float64))
 
 
-def measure_stage(name: str, ctx) -> list[dict]:
+def stage_regions(name: str, ctx, levels: int = LEVELS):
+    """(engine, path, region) for each one-system mesh of sample stage ``name`` with a
+    compressed region at frame 24; the engine is released after the last."""
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.reference.relax import phase_misfit, relax
 
     engine = WrinkleEngine(str(SAMPLES / f"{name}.usda"), ctx=ctx)
-    rows = []
     try:
         engine.compute_frame(24)
         for path in engine.wrinkled_paths:
-            record = engine.meshes[path]
-            if record.params.biaxial:
+            if engine.meshes[path].params.biaxial:
                 continue
-            region = compressed_region(engine, path, LEVELS)
-            if region is None:
-                continue
-            law, fields, posed = region.law, region.fields, region.posed
-            corners, corner_points, offset = region.corners, region.corner_points, region.offset
-            bary, height, at, face_normal = region.bary, region.height, region.at, region.normal
-            chosen, rest_area, compressed = region.chosen, region.rest_area, region.compressed
-            flat = _area(at)
-            phase = fields["phase"].astype(np.float64)
-            converged = relax(posed, law["wave_vector"], law["amplitude"], phase,
-                              region.topology, CONVERGED)
-
-            def drawn(wave_vector, amplitude, phases, agree=False,
-                      mesh=(corners, corner_points, offset, bary, height, at, face_normal)):
-                corners, corner_points, offset, bary, height, at, face_normal = mesh
-                k = np.asarray(wave_vector, np.float64)[corners]
-                sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
-                k = k * sign[..., None]
-                a = np.asarray(amplitude, np.float64)[corners]
-                theta = phases[corners] * sign
-                misfit = np.zeros(len(k))
-                if agree:
-                    centroid = corner_points.mean(1)
-                    at_centroid = theta + np.einsum("mcj,mcj->mc", k,
-                                                    centroid[:, None, :] - corner_points)
-                    mean = np.angle((a * np.exp(1j * at_centroid)).sum(1))
-                    misfit = np.abs(np.angle(np.exp(1j * (at_centroid - mean[:, None])))).max(1)
-                    theta = mean[:, None] + np.einsum("mcj,mcj->mc", k,
-                                                      corner_points - centroid[:, None, :])
-                return _blend_area(theta, k, offset, bary, a, height, at, face_normal), misfit
-
-            before, _ = drawn(law["wave_vector"], law["amplitude"], phase)
-            _, misfit = drawn(law["wave_vector"], law["amplitude"], phase, agree=True)
-            after, _ = drawn(fields["wave_vector"], fields["amplitude"], phase)
-            agreed, _ = drawn(fields["wave_vector"], fields["amplitude"], phase, agree=True)
-            row = {"stage": name, "mesh": path, "faces": int(chosen.sum()),
-                   "flat": flat[chosen].sum() / rest_area,
-                   "crush": before[chosen].sum() / rest_area,
-                   "converged": drawn(law["wave_vector"], law["amplitude"], converged)[0][
-                       chosen].sum() / rest_area,
-                   "fitted": after[chosen].sum() / rest_area,
-                   "agreed": agreed[chosen].sum() / rest_area,
-                   "misfit": phase_misfit(posed, law["wave_vector"], phase, region.topology,
-                                          compressed),
-                   "misfit fitted": phase_misfit(posed, fields["wave_vector"], phase,
-                                                 region.topology, compressed),
-                   "bins": []}
-            for low, high in zip(BINS[:-1], BINS[1:], strict=True):
-                inside = chosen & (misfit >= low) & (misfit < high)
-                if inside.sum():
-                    row["bins"].append((low, high, float(inside.mean() / chosen.mean()),
-                                        before[inside].sum() / flat[inside].sum(),
-                                        after[inside].sum() / flat[inside].sum()))
-            rows.append(row)
+            region = compressed_region(engine, path, levels)
+            if region is not None:
+                yield engine, path, region
     finally:
         engine.release()
+
+
+def measure_stage(name: str, ctx) -> list[dict]:
+    from usdwrinkle.reference.relax import phase_misfit, relax
+
+    rows = []
+    for _, path, region in stage_regions(name, ctx):
+        law, fields, posed = region.law, region.fields, region.posed
+        corners, corner_points, offset = region.corners, region.corner_points, region.offset
+        bary, height, at, face_normal = region.bary, region.height, region.at, region.normal
+        chosen, rest_area, compressed = region.chosen, region.rest_area, region.compressed
+        flat = _area(at)
+        phase = fields["phase"].astype(np.float64)
+        converged = relax(posed, law["wave_vector"], law["amplitude"], phase,
+                          region.topology, CONVERGED)
+
+        def drawn(wave_vector, amplitude, phases, agree=False,
+                  mesh=(corners, corner_points, offset, bary, height, at, face_normal)):
+            corners, corner_points, offset, bary, height, at, face_normal = mesh
+            k = np.asarray(wave_vector, np.float64)[corners]
+            sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
+            k = k * sign[..., None]
+            a = np.asarray(amplitude, np.float64)[corners]
+            theta = phases[corners] * sign
+            misfit = np.zeros(len(k))
+            if agree:
+                centroid = corner_points.mean(1)
+                at_centroid = theta + np.einsum("mcj,mcj->mc", k,
+                                                centroid[:, None, :] - corner_points)
+                mean = np.angle((a * np.exp(1j * at_centroid)).sum(1))
+                misfit = np.abs(np.angle(np.exp(1j * (at_centroid - mean[:, None])))).max(1)
+                theta = mean[:, None] + np.einsum("mcj,mcj->mc", k,
+                                                  corner_points - centroid[:, None, :])
+            return _blend_area(theta, k, offset, bary, a, height, at, face_normal), misfit
+
+        before, _ = drawn(law["wave_vector"], law["amplitude"], phase)
+        _, misfit = drawn(law["wave_vector"], law["amplitude"], phase, agree=True)
+        after, _ = drawn(fields["wave_vector"], fields["amplitude"], phase)
+        agreed, _ = drawn(fields["wave_vector"], fields["amplitude"], phase, agree=True)
+        row = {"stage": name, "mesh": path, "faces": int(chosen.sum()),
+               "flat": flat[chosen].sum() / rest_area,
+               "crush": before[chosen].sum() / rest_area,
+               "converged": drawn(law["wave_vector"], law["amplitude"], converged)[0][
+                   chosen].sum() / rest_area,
+               "fitted": after[chosen].sum() / rest_area,
+               "agreed": agreed[chosen].sum() / rest_area,
+               "misfit": phase_misfit(posed, law["wave_vector"], phase, region.topology,
+                                      compressed),
+               "misfit fitted": phase_misfit(posed, fields["wave_vector"], phase,
+                                             region.topology, compressed),
+               "bins": []}
+        for low, high in zip(BINS[:-1], BINS[1:], strict=True):
+            inside = chosen & (misfit >= low) & (misfit < high)
+            if inside.sum():
+                row["bins"].append((low, high, float(inside.mean() / chosen.mean()),
+                                    before[inside].sum() / flat[inside].sum(),
+                                    after[inside].sum() / flat[inside].sum()))
+        rows.append(row)
     return rows
 
 
 def report(rows: list[dict], seconds: float) -> str:
-    from ..blocks import markers
+    from ..blocks import markers, stage_block_head
 
-    begin, end = markers("blend")
-    lines = [begin, "", "Made by `python -m benchmarks.physics.blend --write docs/physics.md` "
-             f"({seconds:.0f} s here).", "",
+    lines = stage_block_head("blend", seconds) + [
              "| stage | flat | crush's waves | ... relaxed to convergence | fitted (drawn) | "
              "fitted, phases agreed per triangle | edge misfit (rad): crush's k / fitted k |",
              "|---|---|---|---|---|---|---|"]
@@ -206,7 +210,7 @@ def report(rows: list[dict], seconds: float) -> str:
                           f"{before:.3f}, {after:.3f}"
                           for low, high, share, before, after in row["bins"])
         lines.append(f"- {row['stage']}: {cells}")
-    lines += ["", end]
+    lines += ["", markers("blend")[1]]
     return "\n".join(lines)
 
 

@@ -39,13 +39,25 @@ SWEEP = {
 #: the shots whose convergence is checked at half the spacing
 CONVERGENCE = ("curtain-cotton", "sleeve10-cotton", "shear-cotton")
 
+#: VBD iterations per substep of the sweep (newton_client.py's default)
+DEFAULT_ITERATIONS = 10
+#: the solver's own convergence: shots re-simulated with more iterations per substep, at
+#: these spacings (m)
+ITERATION_STUDY = {"curtain-cotton": {0.02: (10, 40, 160), 0.01: (10, 40)}}
+#: the phases the iteration table shows
+ITERATION_PHASES = ("push to 8%", "push to 24%", "held at 48%")
+
 #: issue 55's bars, over the worst case of the sweep
 BARS = {"wavelength": 1.3, "amplitude_matched": 1.25, "correlation_flat": 0.85,
         "correlation_shear": 0.75, "motion": 1.5, "area": (0.95, 1.05)}
 
 
-def simulated(sweep_shot: SweepShot, cache: Path) -> Simulated:
-    points, seconds, stretch = simulate_newton(sweep_shot, cache)
+def simulated(sweep_shot: SweepShot, cache: Path, iterations: int | None = None
+              ) -> Simulated:
+    """The shot simulated (cached): ``iterations`` VBD iterations per substep, None for
+    newton_client.py's default (DEFAULT_ITERATIONS)."""
+    solver = None if iterations in (None, DEFAULT_ITERATIONS) else {"iterations": iterations}
+    points, seconds, stretch = simulate_newton(sweep_shot, cache, solver)
     shot = sweep_shot.shot
     sim = Simulated(shot, points, measure.sim_height(shot, points), seconds)
     inner = zones(shot)["all"]
@@ -78,6 +90,36 @@ def convergence(name: str, cache: Path, simulate: bool = True) -> dict:
     return {"coarse": a, "fine": b, "seconds": (coarse.seconds, fine.seconds),
             "ratios": {phase: (b[phase][0] / a[phase][0], b[phase][1] / a[phase][1])
                        for phase in a}}
+
+
+def iteration_rows(cache: Path) -> list[str]:
+    """The iteration study's table rows (cached simulations only)."""
+    from .simulate import cached_newton
+
+    rows = []
+    for name, spacings in ITERATION_STUDY.items():
+        for spacing, counts in spacings.items():
+            before = None
+            for count in counts:
+                shot = SWEEP[name](spacing)
+                solver = None if count == DEFAULT_ITERATIONS else {"iterations": count}
+                if not cached_newton(shot, cache, solver):
+                    rows.append(f"| {name} | {100 * spacing:g} cm | {count} | not simulated |"
+                                + " |" * (len(ITERATION_PHASES) - 1))
+                    continue
+                table = phase_table(simulated(shot, cache, count))
+                cells = []
+                for phase in ITERATION_PHASES:
+                    wave, height = table[phase]
+                    cell = f"{100 * wave:.1f} cm, {1000 * height:.1f} mm"
+                    if before is not None:
+                        cell += (f" ({wave / before[phase][0]:.2f}, "
+                                 f"{height / before[phase][1]:.2f})")
+                    cells.append(cell)
+                rows.append(f"| {name} | {100 * spacing:g} cm | {count} | " + " | ".join(cells)
+                            + " |")
+                before = table
+    return rows
 
 
 def area_ratio(sim: Simulated, baked, slack: float) -> float:
@@ -158,6 +200,13 @@ def report(names: list[str], cache: Path) -> str:
             lines.append(f"| {name} | {phase} | {100 * a[0]:.1f} cm, {1000 * a[1]:.1f} mm | "
                          f"{100 * b[0]:.1f} cm, {1000 * b[1]:.1f} mm | "
                          f"{ratio[0]:.2f}, {ratio[1]:.2f} |")
+    lines += ["", "### Does the solver converge?", "",
+              "The same shot with more VBD iterations per substep (the sweep runs "
+              f"{DEFAULT_ITERATIONS}): the material wavelength and fold height at the end of "
+              "three phases, and in brackets their ratio to the row above.", "",
+              "| shot | grid | iterations | " + " | ".join(ITERATION_PHASES) + " |",
+              "|---|---|---|" + "---|" * len(ITERATION_PHASES)]
+    lines += iteration_rows(cache)
     lines += ["", "### usdwrinkle against the referee, over the sweep", "",
               "Per shot: the fabric's bending D, the default W (the preset through the "
               "curvature law) and the W matched to the simulation's mean wavelength; at the "

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .blend import LEVELS, SAMPLES, _area, _profile, compressed_region
+from .blend import LEVELS, _area, _profile, compressed_region, stage_regions
 
 STAGES = ("shirt", "curtain", "zeppelin")
 #: the largest shortening tried (a power of two)
@@ -53,51 +53,33 @@ def _drawn_area(region, amplitude: np.ndarray, shorter: np.ndarray) -> float:
 
 
 def measure_stage(name: str, ctx) -> list[dict]:
-    from usdwrinkle.engine import WrinkleEngine
-
-    engine = WrinkleEngine(str(SAMPLES / f"{name}.usda"), ctx=ctx)
     rows = []
-    try:
-        engine.compute_frame(24)
-        for path in engine.wrinkled_paths:
-            if engine.meshes[path].params.biaxial:
-                continue
-            region = compressed_region(engine, path, LEVELS)
-            if region is None:
-                continue
-            over = region.law["over_room"]
-            lowered = np.maximum(over, 1.0)
-            drawn = region.fields["amplitude"].astype(np.float64)
-            inside = region.compressed & (over > 0)
-            row = {"stage": name, "mesh": path, "faces": int(region.chosen.sum()),
-                   "lowered": float(np.mean(over[inside] > 1.0 + 1e-6)),
-                   "over": np.percentile(over[inside], [50, 90]),
-                   "flat": float(_area(region.at)[region.chosen].sum() / region.rest_area),
-                   "drawn": _drawn_area(region, drawn, np.ones_like(over)),
-                   "no room": _drawn_area(region, drawn * lowered, np.ones_like(over)),
-                   "shorter": []}
-            for top in TOPS:
-                if row["lowered"] == 0.0:
-                    break
-                levels = LEVELS + int(np.log2(top))
-                fine = compressed_region(engine, path, levels)
-                m = np.clip(2.0 ** np.ceil(np.log2(lowered)), 1.0, top)
-                left = np.percentile((lowered / m)[inside], 99)
-                row["shorter"].append((top, levels, _drawn_area(fine, drawn * lowered, m),
-                                       float(left)))
-                del fine
-            rows.append(row)
-    finally:
-        engine.release()
+    for engine, path, region in stage_regions(name, ctx):
+        over = region.law["over_room"]
+        lowered = np.maximum(over, 1.0)
+        drawn = region.fields["amplitude"].astype(np.float64)
+        inside = region.compressed & (over > 0)
+        row = {"stage": name, "mesh": path, "faces": int(region.chosen.sum()),
+               "lowered": float(np.mean(over[inside] > 1.0 + 1e-6)),
+               "over": np.percentile(over[inside], [50, 90]),
+               "flat": float(_area(region.at)[region.chosen].sum() / region.rest_area),
+               "drawn": _drawn_area(region, drawn, np.ones_like(over)),
+               "no room": _drawn_area(region, drawn * lowered, np.ones_like(over)),
+               "shorter": []}
+        for top in TOPS if row["lowered"] > 0.0 else ():
+            levels = LEVELS + int(np.log2(top))
+            m = np.clip(2.0 ** np.ceil(np.log2(lowered)), 1.0, top)
+            left = np.percentile((lowered / m)[inside], 99)
+            row["shorter"].append((top, levels, _drawn_area(
+                compressed_region(engine, path, levels), drawn * lowered, m), float(left)))
+        rows.append(row)
     return rows
 
 
 def report(rows: list[dict], seconds: float) -> str:
-    from ..blocks import markers
+    from ..blocks import markers, stage_block_head
 
-    begin, end = markers("room")
-    lines = [begin, "", "Made by `python -m benchmarks.physics.room --write docs/physics.md` "
-             f"({seconds:.0f} s here).", "",
+    lines = stage_block_head("room", seconds) + [
              "| stage | points lowered by the room | law's fold over its room (median, p90) "
              "| area: flat | drawn (lowered) | without the room | "
              + " | ".join(f"folds up to {top}x shorter (p99 left over the room)"
@@ -111,7 +93,8 @@ def report(rows: list[dict], seconds: float) -> str:
                      f"{row['over'][1]:.2f} | {row['flat']:.3f} | {row['drawn']:.3f} | "
                      f"{row['no room']:.3f} | " + " | ".join(shorter) + " |")
     lines += ["", "Area over rest area in the compressed region (frame 24), displaced along "
-              "the coarse face normals; `-` where the room lowers no fold.", "", end]
+              "the coarse face normals; `-` where the room lowers no fold.", "",
+              markers("room")[1]]
     return "\n".join(lines)
 
 
