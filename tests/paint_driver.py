@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -1077,8 +1078,10 @@ def main(argv: list[str]) -> int:
     scenario, out = argv[0], Path(argv[1])
     stage = argv[2] if len(argv) > 2 else str(SHIRT)
     out.mkdir(parents=True, exist_ok=True)
-    # brush presets from a folder of the test's own, never the user's config
-    os.environ["USDWRINKLE_CONFIG_DIR"] = str(out / "config")
+    # brush presets from a folder of the test's own, never the user's config; the
+    # figures' folder holds the README's images only
+    os.environ["USDWRINKLE_CONFIG_DIR"] = (tempfile.mkdtemp(prefix="usdwrinkle-config-")
+                                           if scenario == "figures" else str(out / "config"))
     app = application()
     result = globals()[f"scenario_{scenario}"](out, stage)
     if scenario != "figures":  # the figures' folder holds the README's images only
