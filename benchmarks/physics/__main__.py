@@ -431,7 +431,7 @@ def _summary(results: dict) -> list[str]:
         "",
         "- Wavelength at the default W within 1.3x: "
         + listing({n: _within(default[n]["wavelength_ratio"], 1.3) for n in names})
-        + " (the fallbacks are the converging referee's widths, 0.4-0.6x Blender's: see "
+        + " (the fallbacks are the Newton referee's widths, 0.4-0.6x Blender's: see "
         "\"Where the cloth widths come from\").",
         "- Amplitude at the default W within 1.5x: "
         + listing({n: _within(default[n]["amplitude_ratio"], 1.5) for n in names}) + ".",
@@ -493,7 +493,7 @@ def _calibration_section(calibrated: dict, results: dict) -> list[str]:
     ratios = [schema.CLOTH_WIDTHS_M[p.lower()] / widths[p.lower()] for p in sheets]
     lines += [
         "",
-        "These were the fallbacks until the converging referee (Newton, above) replaced "
+        "These were the fallbacks until the Newton referee (above) replaced "
         "them: the fallbacks are now the widths that Newton's 1 cm sweep supports, "
         f"{min(ratios):.2f}-{max(ratios):.2f}x Blender's, whose folds are longer at the same "
         "spacing and grow stiffer faster (leather).",

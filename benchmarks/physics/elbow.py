@@ -5,7 +5,7 @@
 
 A fine sleeve of the shirt's own shape (sample_stages/shirt.usda: radius 0.38 and length 3
 units along x), scaled to a sleeve of radius 10 cm (SCALE m per unit: the sweep's sleeve,
-sweep.py), is simulated by the converging referee (Newton's VBD, the sweep's cloth at a 1
+sweep.py), is simulated by the Newton referee (Newton's VBD, the sweep's cloth at a 1
 cm grid, with gravity along the shirt's -y). Its end rings ride on the shirt's two joints
 (UsdSkel's skinning transforms of the shoulder and the elbow, frame by frame, after half a
 second of settling at the rest pose); inside it an arm of two capsules (0.8 of the

@@ -61,7 +61,7 @@ def newton_python() -> str:
     local = HERE.parents[1] / ".venv-newton" / "bin" / "python"
     if local.exists():
         return str(local)
-    raise RuntimeError("the converging referee needs a Python with Newton: "
+    raise RuntimeError("the Newton referee needs a Python with Newton: "
                        "python3 -m venv .venv-newton && .venv-newton/bin/pip install newton "
                        "(or set USDWRINKLE_NEWTON_PYTHON)")
 

@@ -1,6 +1,7 @@
-"""The sweep of the converging referee (issue 55): Newton's VBD cloth (newton_client.py) on
-shots with a length scale of their own (gravity, an arm, clamps), over fabrics whose
-bending is stated in N m, at any grid spacing.
+"""The sweep of the Newton referee (issue 55; meant to converge, docs/physics.md says how
+far it does): Newton's VBD cloth (newton_client.py) on shots with a length scale of their
+own (gravity, an arm, clamps), over fabrics whose bending is stated in N m, at any grid
+spacing.
 
 - ``FABRICS``: silk to leather, bending D over 64x, one areal density and membrane.
 - ``curtain(fabric, spacing)``: a curtain 0.96 x 0.64 m hanging from a rail, its sides and

@@ -103,7 +103,7 @@ MESH_CLOTH = "mesh"
 WIDTH_EDGE_MULTIPLE = 4.0
 CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
 #: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles. 0: the
-#: converging referee's cloth keeps its area (docs/physics.md), and with the inextensible
+#: Newton referee's cloth keeps its area (docs/physics.md), and with the inextensible
 #: law a slack c leaves the wrinkled surface 1 - c of its rest area
 DEFAULT_SLACK = 0.05
 #: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
