@@ -16,19 +16,9 @@ import sys
 import time
 from pathlib import Path
 
-from .cpu_nodes import cpu_nodes
-from .floors import floors
-from .measure import (
-    end_to_end,
-    machine,
-    numpy_baseline,
-    paper_table,
-    scaling,
-    skin_baseline,
-    triangulation,
-)
-from .report import history, markdown, targets
-from .stages import default_corpus
+# the sections are imported where they run: a module of this package run on its own
+# (benchmarks.misfit --before runs itself against another checkout's usdwrinkle) imports
+# none of them
 
 
 def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
@@ -36,6 +26,19 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
     """Every section in turn; ``checkpoint(result)`` after each (the sections so far: a
     run stopped by a time limit keeps what it measured)."""
     from usdwrinkle.render.context import create_context
+
+    from .cpu_nodes import cpu_nodes
+    from .floors import floors
+    from .measure import (
+        end_to_end,
+        machine,
+        numpy_baseline,
+        paper_table,
+        scaling,
+        skin_baseline,
+        triangulation,
+    )
+    from .report import targets
 
     ctx = create_context()
     result = {"quick": quick, "machine": machine(ctx),
@@ -96,6 +99,9 @@ def run_bench(quick: bool = False, corpus: Path | None = None, progress=print,
 
 def run(args) -> int:
     from usdwrinkle.outputs.atomic import atomic_path
+
+    from .report import history, markdown, targets
+    from .stages import default_corpus
 
     if args.from_json:
         result = _saved_run(args.from_json)

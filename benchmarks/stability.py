@@ -123,7 +123,10 @@ def perturbation(path: str, folder: str, all_meshes: bool = False, degrees=(0.01
                  ctx=None) -> dict:
     """degrees -> frame -> moved share, against the unperturbed stage."""
     base = heights(path, all_meshes, ctx=ctx)
-    return {deg: moved_share(base, heights(perturbed(path, deg, f"{folder}/p{deg}.usda"),
+    # named by the stage too: one folder serves several stages, and a layer of the same
+    # name may still be open in USD's registry
+    stem = Path(path).stem
+    return {deg: moved_share(base, heights(perturbed(path, deg, f"{folder}/{stem}-p{deg}.usda"),
                                            all_meshes, ctx=ctx))
             for deg in degrees}
 
