@@ -134,9 +134,14 @@ vec3 wave_vector(mat2 M, vec2 d, float L, vec3 t1, vec3 t2) {
         v1 = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
     }
     vec2 v2 = vec2(-v1.y, v1.x);
-    float s1 = sqrt(l1), s2 = sqrt(l2);
+    float s2 = sqrt(l2);
     vec2 u2 = s2 > 1e-12 ? (M * v2) / s2 : v2;
-    vec2 u1 = s1 > 1e-12 ? (M * v1) / s1 : vec2(u2.y, -u2.x) * sign(determinant(M) + 1e-30);
+    // U is orthonormal with det U = sign(det M) (V = [v1 v2] turns by +90 degrees), so u1
+    // is u2 turned back; and s1 = |M v1|. Not (M v1) / sqrt(l1): where M is nearly
+    // singular, float32's mean - radius leaves l1 as noise of order 1e-7 l2 (2.4e-7 for
+    // a true 1.7e-10), which made u1 0.03 long and k 37x too short
+    vec2 u1 = vec2(u2.y, -u2.x) * sign(determinant(M) + 1e-30);
+    float s1 = length(M * v1);
     vec2 k2 = (TWO_PI / L) * (dot(v1, d) / max(s1, MIN_RATIO) * u1
                               + dot(v2, d) / max(s2, MIN_RATIO) * u2);
     return k2.x * t1 + k2.y * t2;  // posed tangent coords -> local space
