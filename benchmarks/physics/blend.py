@@ -49,12 +49,24 @@ def _profile(height: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return height[i % count] * (1 - f) + height[(i + 1) % count] * f
 
 
-def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal) -> np.ndarray:
+def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal,
+                shorter=1.0) -> np.ndarray:
     """Each fine face's area, displaced by the blend of its coarse triangle's corner
-    waves (k, amplitude, ``phase`` per face and corner) along the face normal."""
+    waves (k, amplitude, ``phase`` per face and corner) along the face normal; each
+    corner's fold ``shorter`` times shorter at amplitude / shorter, the same slope
+    (benchmarks.physics.room; 1: the waves as they are)."""
     theta = phase[:, None, :] + np.einsum("mcj,mvcj->mvc", k, offset)
-    h = np.einsum("mvc,mvc->mv", bary, amplitude[:, None, :] * _profile(height, theta))
+    m = np.broadcast_to(np.asarray(shorter, np.float64), amplitude.shape)[:, None, :]
+    h = np.einsum("mvc,mvc->mv", bary, amplitude[:, None, :] / m * _profile(height, m * theta))
     return _area(at + h[..., None] * face_normal[:, None, :])
+
+
+def aligned_corners(corners: np.ndarray, wave_vector, phases: np.ndarray):
+    """Per fine face and corner: k sign-aligned to corner 0's (as include/wave.glsl's
+    corner_waves aligns it) and the phase with the same sign."""
+    k = np.asarray(wave_vector, np.float64)[corners]
+    sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
+    return k * sign[..., None], phases[corners] * sign
 
 
 @dataclass
@@ -148,11 +160,8 @@ def measure_stage(name: str, ctx) -> list[dict]:
         def drawn(wave_vector, amplitude, phases, agree=False,
                   mesh=(corners, corner_points, offset, bary, height, at, face_normal)):
             corners, corner_points, offset, bary, height, at, face_normal = mesh
-            k = np.asarray(wave_vector, np.float64)[corners]
-            sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
-            k = k * sign[..., None]
+            k, theta = aligned_corners(corners, wave_vector, phases)
             a = np.asarray(amplitude, np.float64)[corners]
-            theta = phases[corners] * sign
             misfit = np.zeros(len(k))
             if agree:
                 centroid = corner_points.mean(1)

@@ -53,12 +53,17 @@ BARS = {"wavelength": 1.3, "amplitude_matched": 1.25, "correlation_flat": 0.85,
         "correlation_shear": 0.75, "motion": 1.5, "area": (0.95, 1.05)}
 
 
+def solver_options(iterations: int | None) -> dict | None:
+    """The solver arrays newton_client.py reads for ``iterations`` VBD iterations per
+    substep; None (its default, DEFAULT_ITERATIONS) keeps the sweep's cache names."""
+    return None if iterations in (None, DEFAULT_ITERATIONS) else {"iterations": iterations}
+
+
 def simulated(sweep_shot: SweepShot, cache: Path, iterations: int | None = None
               ) -> Simulated:
     """The shot simulated (cached): ``iterations`` VBD iterations per substep, None for
     newton_client.py's default (DEFAULT_ITERATIONS)."""
-    solver = None if iterations in (None, DEFAULT_ITERATIONS) else {"iterations": iterations}
-    points, seconds, stretch = simulate_newton(sweep_shot, cache, solver)
+    points, seconds, stretch = simulate_newton(sweep_shot, cache, solver_options(iterations))
     shot = sweep_shot.shot
     sim = Simulated(shot, points, measure.sim_height(shot, points), seconds)
     inner = zones(shot)["all"]
@@ -103,8 +108,7 @@ def iteration_rows(cache: Path) -> list[str]:
             before = None
             for count in counts:
                 shot = SWEEP[name](spacing)
-                solver = None if count == DEFAULT_ITERATIONS else {"iterations": count}
-                if not cached_newton(shot, cache, solver):
+                if not cached_newton(shot, cache, solver_options(count)):
                     rows.append(f"| {name} | {100 * spacing:g} cm | {count} | not simulated |"
                                 + " |" * (len(ITERATION_PHASES) - 1))
                     continue

@@ -25,30 +25,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from .blend import LEVELS, _area, _profile, compressed_region, stage_regions
+from .blend import (
+    LEVELS,
+    _area,
+    _blend_area,
+    aligned_corners,
+    compressed_region,
+    stage_regions,
+)
 
 STAGES = ("shirt", "curtain", "zeppelin")
 #: the largest shortening tried (a power of two)
 TOPS = (2, 4)
 
 
-def _aligned(region, vertex_values: np.ndarray):
-    """Per fine face and corner: k sign-aligned to corner 0's (as corner_waves aligns
-    it), the phase with the same sign, and ``vertex_values`` gathered."""
-    k = region.fields["wave_vector"].astype(np.float64)[region.corners]
-    sign = np.where(np.einsum("mcj,mj->mc", k, k[:, 0]) < 0, -1.0, 1.0)
-    theta = region.fields["phase"].astype(np.float64)[region.corners] * sign
-    theta = theta[:, None, :] + np.einsum("mcj,mvcj->mvc", k * sign[..., None], region.offset)
-    return theta, [np.asarray(v, np.float64)[region.corners][:, None, :]
-                   for v in vertex_values]
-
-
 def _drawn_area(region, amplitude: np.ndarray, shorter: np.ndarray) -> float:
     """The region's displaced area over its rest area, each point's fold ``shorter``
     times shorter at ``amplitude`` / shorter."""
-    theta, (a, m) = _aligned(region, (amplitude, shorter))
-    h = np.einsum("mvc,mvc->mv", region.bary, a / m * _profile(region.height, m * theta))
-    area = _area(region.at + h[..., None] * region.normal[:, None, :])
+    k, theta = aligned_corners(region.corners, region.fields["wave_vector"],
+                               region.fields["phase"].astype(np.float64))
+    area = _blend_area(theta, k, region.offset, region.bary, amplitude[region.corners],
+                       region.height, region.at, region.normal, shorter[region.corners])
     return float(area[region.chosen].sum() / region.rest_area)
 
 
