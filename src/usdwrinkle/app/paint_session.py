@@ -167,12 +167,10 @@ def open_paint_stage(stage_path: str, output: str | None):
 def _probe_writable(folder: str, output: str) -> None:
     """A file can be made in ``folder`` (tried: permissions alone do not say so for root,
     nor on a read-only file system)."""
-    import tempfile
+    from ..outputs.atomic import probe_folder
 
     try:
-        fd, probe = tempfile.mkstemp(prefix=".usdwrinkle-probe.", dir=folder)
-        os.close(fd)
-        os.unlink(probe)
+        probe_folder(folder)
     except OSError as exc:
         raise UsdWrinkleError(f"`output` '{output}': the folder '{folder}' is not writable "
                               f"({exc.strerror})") from None

@@ -119,11 +119,19 @@ def check_writable(paths) -> None:
     for folder, path in folders.items():
         try:
             os.makedirs(folder, exist_ok=True)
-            fd, probe = tempfile.mkstemp(prefix=".usdwrinkle-probe.", dir=folder)
-            os.close(fd)
-            os.unlink(probe)
+            probe_folder(folder)
         except OSError as exc:
             raise write_error(path, exc) from None
+
+
+def probe_folder(folder: str) -> None:
+    """Make and remove a file in ``folder`` (permissions alone do not say whether one can
+    be made: root, a read-only file system); raises the OSError when it cannot. A stop
+    signal waits until the probe is gone: a Ctrl-C between the two left it behind."""
+    with signals_held():
+        fd, probe = tempfile.mkstemp(prefix=".usdwrinkle-probe.", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
 
 
 @contextlib.contextmanager
@@ -136,17 +144,17 @@ def atomic_path(path: str, verify=None):
     folder, an output that is a folder) become the one-line UsdWrinkleError.
     """
     folder, prefix, suffix = _temporary_affixes(path)
-    try:
-        os.makedirs(folder, exist_ok=True)
-        if os.path.isdir(path):
-            raise IsADirectoryError(21, "it is a folder")
-        fd, tmp = tempfile.mkstemp(prefix=f"{prefix}{os.getpid()}.", suffix=suffix,
-                                   dir=folder)
-        os.close(fd)
-    except OSError as exc:
-        raise write_error(path, exc) from None
+    tmp = None
     try:
         try:
+            os.makedirs(folder, exist_ok=True)
+            if os.path.isdir(path):
+                raise IsADirectoryError(21, "it is a folder")
+            # held, so that a Ctrl-C lands after ``tmp`` names the file the cleanup removes
+            with signals_held():
+                fd, tmp = tempfile.mkstemp(prefix=f"{prefix}{os.getpid()}.", suffix=suffix,
+                                           dir=folder)
+                os.close(fd)
             yield tmp
             if verify is not None:
                 verify(tmp)
@@ -157,6 +165,7 @@ def atomic_path(path: str, verify=None):
         except OSError as exc:
             raise write_error(path, exc) from None
     except BaseException:
-        with signals_held(), contextlib.suppress(OSError):
-            os.unlink(tmp)
+        if tmp is not None:
+            with signals_held(), contextlib.suppress(OSError):
+                os.unlink(tmp)
         raise
