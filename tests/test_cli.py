@@ -479,34 +479,41 @@ def test_blender_addon_prints_and_copies_the_addon(tmp_path, capsys):
     assert sorted(p.name for p in folder.iterdir()) == ["usdwrinkle_blender.py"]
 
 
-def test_a_stop_signal_during_the_write_probe_leaves_no_probe(tmp_path, monkeypatch):
+def test_a_stop_signal_during_the_write_probe_leaves_no_probe(tmp_path):
     """CI failure after 510d235: a Ctrl-C that landed between the write probe's mkstemp and
     its unlink (check_writable, before any frame) left ``.usdwrinkle-probe.*`` beside the
     outputs. The signal now waits until the probe is gone, then stops the run; the same for
-    the temporary file of an atomic write."""
-    import os
-    import signal
-    import tempfile
-    import types
+    the temporary file of an atomic write. Run in a process of its own: signals reach
+    Python's main thread, which is not the test's under pytest-xdist."""
+    import subprocess
+    import sys
 
-    from usdwrinkle.outputs import atomic
-
-    made = []
-    real = tempfile.mkstemp
-
-    def mkstemp_then_ctrl_c(*args, **kwargs):
-        fd, path = real(*args, **kwargs)
-        made.append(path)
-        os.kill(os.getpid(), signal.SIGINT)  # lands here, inside the probe
-        return fd, path
-
-    # atomic's own name for the module, so that nothing else (pytest's capture) is touched
-    monkeypatch.setattr(atomic, "tempfile", types.SimpleNamespace(mkstemp=mkstemp_then_ctrl_c))
-    with pytest.raises(KeyboardInterrupt):
-        atomic.check_writable([str(tmp_path / "out" / "f.0001.png")])
-    assert made and not os.path.exists(made[0])
-    assert list((tmp_path / "out").iterdir()) == []
-    # the same for atomic_path's temporary: made, then a Ctrl-C before the caller's body
-    with pytest.raises(KeyboardInterrupt), atomic.atomic_path(str(tmp_path / "out" / "a.png")):
-        raise AssertionError("the body ran: the signal did not land in the temporary's making")
-    assert len(made) == 2 and list((tmp_path / "out").iterdir()) == []
+    script = """
+import os, signal, sys, types, tempfile
+from usdwrinkle.outputs import atomic
+made = []
+def mkstemp_then_ctrl_c(*args, **kwargs):
+    fd, path = tempfile.mkstemp(*args, **kwargs)
+    made.append(path)
+    os.kill(os.getpid(), signal.SIGINT)  # lands here, inside the probe or the temporary
+    return fd, path
+atomic.tempfile = types.SimpleNamespace(mkstemp=mkstemp_then_ctrl_c)
+out = sys.argv[1]
+try:
+    atomic.check_writable([os.path.join(out, "f.0001.png")])
+    print("the probe was not interrupted")
+except KeyboardInterrupt:
+    print("interrupted")
+try:
+    with atomic.atomic_path(os.path.join(out, "a.png")):
+        print("the body ran: the signal did not land in the temporary's making")
+except KeyboardInterrupt:
+    print("interrupted")
+print(len(made))
+"""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-c", script, str(out)], capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["interrupted", "interrupted", "2"], done.stdout
+    assert list(out.iterdir()) == []
