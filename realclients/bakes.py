@@ -485,8 +485,12 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     return views
 
 
-#: issue 56's shot: the plaid shirt's sleeve at frame 24, 960 px, its textures as they are
-TEXTURE_SHOT = BakeShot("shirt", SAMPLES / "shirt.usda", 24, width=960)
+#: issue 56's shot: the plaid shirt's sleeve at frame 24, 960 px, its textures as they are,
+#: at the W its bars were set on (0.28: stages/shirt_w028.usda says why; the demo's 0.1 is
+#: measured by ``python -m realclients.figure --texture ... --demo-width``)
+TEXTURE_SHOT = BakeShot("shirt", Path(__file__).resolve().parent / "stages" /
+                        "shirt_w028.usda", 24, width=960)
+DEMO_TEXTURE_SHOT = BakeShot("shirt", SAMPLES / "shirt.usda", 24, width=960)
 
 
 def turned_camera(stage, camera: str, frame: float, degrees: float, path: str) -> str:

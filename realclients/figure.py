@@ -15,9 +15,11 @@ row per shot. Cycles' lights are scaled by CYCLES_LIGHT_SCALE at import: Blender
 importer does not read UsdLux distant-light intensities as Storm does; the figure
 compares wrinkles, not exposure. Needs the real-client Python (realclients/__init__.py).
 
-    python -m realclients.figure --texture docs/images/renderers
+    python -m realclients.figure --texture docs/images/renderers [--demo-width]
 
-writes ``texture.png``: the plaid shirt's upper arm at frame 24 (960 px frames, cropped):
+writes ``texture.png`` (issue 56's shot, the shirt at W = 0.28; with ``--demo-width``
+``texture_demo.png``, the bundled shirt at its own W): the plaid shirt's upper arm at
+frame 24 (960 px frames, cropped):
 usdwrinkle, Storm through ``--maps normal,parallax``'s MaterialX network, Cycles through
 the Blender add-on, Storm through the UsdPreviewSurface alone, and prints their
 correlations (bakes.texture_views).
@@ -83,21 +85,24 @@ def bake_figure(folder: Path, width: int, scratch: Path) -> None:
 TEXTURE_CROP = (slice(120, 460), slice(380, 660))
 
 
-def texture_figure(folder: Path, scratch: Path) -> None:
+def texture_figure(folder: Path, scratch: Path, demo: bool = False) -> None:
     """texture.png: the upper arm through usdwrinkle, Storm (the MaterialX network),
     Cycles (the Blender add-on) and Storm (the UsdPreviewSurface alone), under the
-    stage's lights (Cycles without shadows, as the others draw)."""
-    from .bakes import texture_views
+    stage's lights (Cycles without shadows, as the others draw); issue 56's shot (the
+    shirt at W = 0.28), or with ``demo`` texture_demo.png, the bundled shirt as it is."""
+    from .bakes import DEMO_TEXTURE_SHOT, TEXTURE_SHOT, texture_views
     from .compare import read_rgba8, side_by_side
 
-    views = texture_views(scratch, turns=(0.0,), clients=("storm", "cycles"), samples=64)
+    shot = DEMO_TEXTURE_SHOT if demo else TEXTURE_SHOT
+    views = texture_views(scratch, turns=(0.0,), shot=shot, clients=("storm", "cycles"),
+                          samples=64)
     images = views.images[0.0]
     panels = []
     for label in ("ours", "storm_parallax", "cycles_parallax", "storm_normal"):
         crop = scratch / f"crop_{label}.png"
         _write_rgba8(read_rgba8(images[label])[TEXTURE_CROP], crop)
         panels.append(crop)
-    target = folder / "texture.png"
+    target = folder / ("texture_demo.png" if demo else "texture.png")
     side_by_side(panels, target)
     for label in ("storm_parallax", "cycles_parallax", "storm_normal", "cycles_stock"):
         c = views.contribution(0.0, label)
@@ -127,11 +132,14 @@ def main(argv=None) -> int:
     parser.add_argument("--texture", action="store_true",
                         help="the texture deformation in Storm (--maps parallax) and in "
                              "Cycles (the Blender add-on) beside usdwrinkle")
+    parser.add_argument("--demo-width", action="store_true",
+                        help="with --texture: the bundled shirt at its own W (0.1; "
+                             "texture_demo.png) instead of issue 56's shot (W = 0.28)")
     args = parser.parse_args(argv)
     args.folder.mkdir(parents=True, exist_ok=True)
     if args.texture:
         with tempfile.TemporaryDirectory() as scratch:
-            texture_figure(args.folder, Path(scratch))
+            texture_figure(args.folder, Path(scratch), demo=args.demo_width)
         return 0
     if args.bakes:
         with tempfile.TemporaryDirectory() as scratch:

@@ -220,7 +220,11 @@ def shirt(outdir):
     q = np.zeros_like(points)
     cuff = np.clip((points[:, 0] - (length - 0.7)) / 0.5, 0, 1)
     q[:, 0] = 0.55 * cuff
-    apply_wrinkles(mesh, width=0.28, q=q, amplitude_scale=1.0)
+    # W = 0.1: at the elbow's pinch (a fifth of its length kept) the posed folds are W r,
+    # and 0.28 drew them as one knot of streaks; 0.1 draws separate folds (issue 55). On a
+    # sleeve of radius 10 cm (benchmarks/physics/elbow.py's scale) it is 2.6 cm, the
+    # cylinder's 3.5 sqrt(R t) for cloth 0.5 mm thick (Cerda-Mahadevan)
+    apply_wrinkles(mesh, width=0.1, q=q, amplitude_scale=1.0)
     add_camera(stage, eye=(2.1, 1.5, 3.7), target=(1.35, 0.45, 0.0))
     add_lights(stage)
     stage.GetRootLayer().Save()

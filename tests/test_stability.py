@@ -37,10 +37,13 @@ def test_a_tiny_joint_change_moves_no_crest_on_cesium_man(gl_context, corpus, tm
 
 
 def test_q_painted_on_the_cuff_changes_crests_only_near_it(gl_context, tmp_path):
-    """Before: crests moved 6.25 W away, along the whole sleeve."""
+    """Before: crests moved 6.25 W (7 edges) away, along the whole sleeve. The bar is 2 W
+    or 2 edges, whichever is farther: the phases live on the points, and where W is
+    shorter than the edges (the shirt's W = 0.1, its rings 0.25 apart: 1.79 W at W =
+    0.28 and 5 W now are the same 2 rings) no change can stay closer than the next ring."""
     rows = stability.locality(str(tmp_path), ctx=gl_context)
-    assert all(count > 0 for count, _ in rows.values())  # the painting changed the cuff
-    assert max(far for _, far in rows.values()) <= 2.0, rows
+    assert all(count > 0 for count, _, _ in rows.values())  # the painting changed the cuff
+    assert all(far <= 2.0 or hops <= 2 for _, far, hops in rows.values()), rows
 
 
 def test_a_zero_perturbation_changes_nothing(gl_context, tmp_path):
@@ -130,8 +133,10 @@ def test_crests_still_ride_with_the_cloth(gl_context, name):
 
 
 #: the mean misfit over the stage and its 15 joint changes before the stability change
-#: (commit f822306; docs/method.md: "What the change costs", benchmarks/misfit.py)
-MISFIT_BEFORE = {"shirt": 0.365, "zeppelin": 0.388, "curtain": 0.562}
+#: (commit f822306; docs/method.md: "What the change costs", benchmarks/misfit.py). The
+#: shirt's measured again with f822306's src when its W went from 0.28 to 0.1 (0.365 at
+#: 0.28): finer waves on the same coarse mesh align worse, before and now
+MISFIT_BEFORE = {"shirt": 0.577, "zeppelin": 0.388, "curtain": 0.562}
 #: the fold law's (issue 55): the zeppelin's material wavelength varies over the hull as
 #: its compression does, and no phase field follows that curl (0.67; docs/method.md)
 MISFIT_BOUND = {**MISFIT_BEFORE, "zeppelin": 0.68}
@@ -141,7 +146,7 @@ MISFIT_BOUND = {**MISFIT_BEFORE, "zeppelin": 0.68}
 def test_neighbouring_waves_align_no_worse_than_before(gl_context, tmp_path, name):
     """The misfit, a distribution where rounding places the dislocations (the curtain's
     0.456 before the change was its luckiest of 16 draws), is no worse in the mean: 0.368,
-    0.376, 0.549 now. The shirt's difference (+0.003) is within the draws' spread."""
+    0.376, 0.549 now; the shirt at W = 0.1 0.454 now, 0.577 before."""
     from benchmarks import misfit
 
     path = stability.ROOT / "sample_stages" / f"{name}.usda"
