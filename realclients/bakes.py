@@ -48,7 +48,13 @@ class BakeShot:
     width: int = 640
 
 
-#: issue 23's shots: the shirt's elbow and cuff, pull's sheet, CesiumMan's body
+#: the bundled shirt at W = 0.28, where issues 23 and 56 set their bars on the baked maps
+#: (stages/shirt_w028.usda says why the sample's own W is 0.1)
+SHIRT_W028 = Path(__file__).resolve().parent / "stages" / "shirt_w028.usda"
+#: issue 23's decoded-normal shot: the shirt's elbow at frame 24 (the angle tests)
+ELBOW_SHOT = BakeShot("shirt", SHIRT_W028, 24)
+
+#: issue 23's shots: the shirt's elbow and cuff, pull's sheet, CesiumMan's body, as bundled
 MAP_SHOTS = (
     BakeShot("shirt", SAMPLES / "shirt.usda", 24),
     BakeShot("pull", SAMPLES / "pull.usda", 24),
@@ -488,8 +494,7 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
 #: issue 56's shot: the plaid shirt's sleeve at frame 24, 960 px, its textures as they are,
 #: at the W its bars were set on (0.28: stages/shirt_w028.usda says why; the demo's 0.1 is
 #: measured by ``python -m realclients.figure --texture ... --demo-width``)
-TEXTURE_SHOT = BakeShot("shirt", Path(__file__).resolve().parent / "stages" /
-                        "shirt_w028.usda", 24, width=960)
+TEXTURE_SHOT = BakeShot("shirt", SHIRT_W028, 24, width=960)
 DEMO_TEXTURE_SHOT = BakeShot("shirt", SAMPLES / "shirt.usda", 24, width=960)
 
 

@@ -291,9 +291,9 @@ def cycles_shirt(realclient, tmp_path_factory):
     --tangent-space triangle), and "default", the default bake, whose all-purpose set
     Blender's importer takes: MikkTSpace in the asset's UVs (byte-identical to bake
     --tangent-space mikktspace --map-layout asset: test_maps.py)."""
-    from realclients.bakes import MAP_SHOTS, cycles_views
+    from realclients.bakes import ELBOW_SHOT, cycles_views
 
-    return {name: cycles_views(MAP_SHOTS[0], tmp_path_factory.mktemp(f"cycles_{name}"),
+    return {name: cycles_views(ELBOW_SHOT, tmp_path_factory.mktemp(f"cycles_{name}"),
                                tangent_space=frame)
             for name, frame in (("triangle", "triangle"), ("default", None))}
 

@@ -61,12 +61,14 @@ def test_eevee_moves_the_texture_with_the_folds_through_the_addon(realclient,
 
 @pytest.fixture(scope="module")
 def shirt_frames(realclient, tmp_path_factory):
-    """The shirt baked with --maps normal,parallax over frames 22-24 and at 22 and at 24
-    alone (512 maps), through one camera."""
-    from realclients.shots import SAMPLES, _usdwrinkle, shared_camera
+    """The shirt (at W = 0.28, realclients/stages/shirt_w028.usda: 512 maps resolve its
+    folds) baked with --maps normal,parallax over frames 22-24 and at 22 and at 24 alone,
+    through one camera."""
+    from realclients.bakes import SHIRT_W028
+    from realclients.shots import _usdwrinkle, shared_camera
 
     folder = tmp_path_factory.mktemp("shirt_frames")
-    framed, camera = shared_camera((SAMPLES / "shirt.usda").resolve(), folder)
+    framed, camera = shared_camera(SHIRT_W028, folder)
     layers = {}
     for name, frames in (("all", "22:24"), ("22", "22"), ("24", "24")):
         layers[name] = folder / f"{name}.usda"

@@ -70,9 +70,9 @@ def test_maps_decoded_normals_in_storm(realclient, tmp_path, frame, slack, layou
     is 9.2 (11.8 shaded once per pixel)."""
     import dataclasses
 
-    from realclients.bakes import MAP_SHOTS, angles, normal_views
+    from realclients.bakes import ELBOW_SHOT, angles, normal_views
 
-    shot = dataclasses.replace(MAP_SHOTS[0], width=width)
+    shot = dataclasses.replace(ELBOW_SHOT, width=width)
     views = normal_views(shot, tmp_path, tangent_space=frame, slack=slack, layout=layout,
                          **options)
     degrees, mask = angles(views["usdwrinkle"], views["storm"])
