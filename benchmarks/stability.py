@@ -180,7 +180,7 @@ def locality(folder: str, ctx=None) -> dict:
     stage.Save()
     base, other = _phases(str(SHIRT), FRAMES, ctx), _phases(out, FRAMES, ctx)
     distance = np.min(np.linalg.norm(rest[:, None] - rest[cuff][None], axis=2), axis=1)
-    hops = _hops(mesh, len(rest), cuff)
+    hops = _hops(mesh, rest, cuff)
     rows = {}
     for frame in FRAMES:
         a, b = base[frame], other[frame]
@@ -194,26 +194,20 @@ def locality(folder: str, ctx=None) -> dict:
     return rows
 
 
-def _hops(mesh, count: int, start: np.ndarray) -> np.ndarray:
-    """Each point's distance from ``start`` in the mesh's edges (breadth first)."""
-    counts = np.asarray(mesh.GetAttribute("faceVertexCounts").Get())
-    indices = np.asarray(mesh.GetAttribute("faceVertexIndices").Get())
-    neighbours: list[set[int]] = [set() for _ in range(count)]
-    offset = 0
-    for n in counts:
-        face = indices[offset:offset + n]
-        for a, b in zip(face, np.roll(face, -1), strict=True):
-            neighbours[a].add(int(b))
-            neighbours[b].add(int(a))
-        offset += n
-    hops = np.full(count, -1)
-    hops[start] = 0
-    front = list(start)
-    while front:
-        nxt = [b for a in front for b in neighbours[a] if hops[b] < 0]
-        for b in nxt:
-            hops[b] = hops[front[0]] + 1
-        front = list(dict.fromkeys(nxt))
+def _hops(mesh, rest: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """Each point's distance from ``start`` in edges of the mesh's triangulated 1-rings
+    (the rings relax averages over: one edge farther per iteration), breadth first."""
+    from usdwrinkle.scene.topology import build_topology
+
+    topology = build_topology(np.asarray(mesh.GetAttribute("faceVertexCounts").Get()),
+                              np.asarray(mesh.GetAttribute("faceVertexIndices").Get()), rest)
+    offsets, ring = topology.neighbor_offsets, topology.neighbor_indices
+    hops = np.full(len(rest), -1)
+    front, level = np.unique(start), 0
+    while front.size:
+        hops[front] = level
+        reached = np.concatenate([ring[offsets[i]:offsets[i + 1]] for i in front])
+        front, level = np.unique(reached[hops[reached] < 0]), level + 1
     return hops
 
 
