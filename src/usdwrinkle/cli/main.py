@@ -14,6 +14,7 @@ import traceback
 
 from .. import __version__
 from ..process.errors import STDERR, print_stderr, print_warning
+from ..process.signals import held_here
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -95,11 +96,13 @@ def _on_stop(signum, frame):
     exits: a second Ctrl-C a few milliseconds after the first would land in the middle of
     that cleanup, or in the GL and thread teardown after it, and abort the process
     (SIGABRT) instead of exit 130."""
-    if _fragile(frame):
+    if _fragile(frame) or held_here():
         # an exception raised here would land inside a C extension's module init
         # (OpenImageIO's nanobind enums abort the process, USD's boost.python swallows
-        # it) or inside moderngl's wrapper of a GL object being made (a half-made object
-        # whose release segfaulted, about once in 150 Ctrl-Cs): ask again in 20 ms
+        # it), inside moderngl's wrapper of a GL object being made (a half-made object
+        # whose release segfaulted, about once in 150 Ctrl-Cs), or inside a section that
+        # holds the signals, which another thread took (a temporary file made and not yet
+        # owned by its cleanup was left behind): ask again in 20 ms
         _DEFERRED.append(signum)
         threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
         return
