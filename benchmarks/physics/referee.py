@@ -98,23 +98,25 @@ def convergence(name: str, cache: Path, simulate: bool = True) -> dict:
                        for phase in a}}
 
 
-def iteration_rows(cache: Path) -> list[str]:
-    """The iteration study's table rows (cached simulations only)."""
+def iteration_rows(cache: Path, study: dict | None = None,
+                   phases: tuple[str, ...] = ITERATION_PHASES) -> list[str]:
+    """An iteration study's table rows (cached simulations only): ``study`` (by default
+    ITERATION_STUDY) maps a sweep shot to {grid spacing: iteration counts}."""
     from .simulate import cached_newton
 
     rows = []
-    for name, spacings in ITERATION_STUDY.items():
+    for name, spacings in (ITERATION_STUDY if study is None else study).items():
         for spacing, counts in spacings.items():
             before = None
             for count in counts:
                 shot = SWEEP[name](spacing)
                 if not cached_newton(shot, cache, solver_options(count)):
                     rows.append(f"| {name} | {100 * spacing:g} cm | {count} | not simulated |"
-                                + " |" * (len(ITERATION_PHASES) - 1))
+                                + " |" * (len(phases) - 1))
                     continue
                 table = phase_table(simulated(shot, cache, count))
                 cells = []
-                for phase in ITERATION_PHASES:
+                for phase in phases:
                     wave, height = table[phase]
                     cell = f"{100 * wave:.1f} cm, {1000 * height:.1f} mm"
                     if before is not None:

@@ -1,0 +1,79 @@
+"""Does the referee's solver converge on a sleeve? (issue 55) The referee block's iteration
+table (referee.py, ITERATION_STUDY) has the cotton curtain: at the sweep's 10 VBD
+iterations per substep its folds were 1.4-1.8x shorter than at 160. This is the same study
+on the sweep's 10 cm cotton sleeve bent on its arm (sweep.sleeve), whose folds the
+curvature law was fitted to: 2 cm and 1 cm grids at 10, 40 and 160 iterations.
+
+    python -m benchmarks.physics.iterations [--write docs/physics.md] [--cache .physics-cache]
+                                            [--simulate]
+
+Without ``--simulate`` only the cached simulations are read (``not simulated`` rows
+otherwise); with it the missing ones are run first, one after another on one core (here:
+about 2 minutes for the 2 cm sleeve at 10 iterations, 40 for the 1 cm one at 160). Needs
+a Python with ``newton`` (simulate.newton_python: .venv-newton). ``--write`` replaces the
+block between the "iterations" markers. A benchmark, not a test.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from .referee import ROOT, SWEEP, iteration_rows, solver_options
+
+#: the sleeve study: sweep shot -> {grid spacing (m): iteration counts}
+SLEEVE_STUDY = {"sleeve10-cotton": {0.02: (10, 40, 160), 0.01: (10, 40, 160)}}
+#: the sleeve's phases (sweep.sleeve): bent to 90 degrees over frames 10-50, then held
+SLEEVE_PHASES = ("bend", "held")
+
+
+def simulate_missing(cache: Path) -> None:
+    from .simulate import cached_newton, simulate_newton
+
+    for name, spacings in SLEEVE_STUDY.items():
+        for spacing, counts in spacings.items():
+            for count in counts:
+                shot = SWEEP[name](spacing)
+                if cached_newton(shot, cache, solver_options(count)):
+                    continue
+                started = time.perf_counter()
+                simulate_newton(shot, cache, solver_options(count))
+                print(f"simulated {name} at {100 * spacing:g} cm, {count} iterations: "
+                      f"{time.perf_counter() - started:.0f} s", flush=True)
+
+
+def report(cache: Path, seconds: float) -> str:
+    from ..blocks import markers, stage_block_head
+
+    lines = stage_block_head("iterations", seconds)
+    lines += ["The sweep's cotton sleeve (radius 10 cm, bent to 90 degrees on its arm) with "
+              "more VBD iterations per substep (the sweep runs 10): the material wavelength "
+              "and fold height (RMS) at the end of the bend and of the hold, and in brackets "
+              "their ratio to the row above.", "",
+              "| shot | grid | iterations | " + " | ".join(SLEEVE_PHASES) + " |",
+              "|---|---|---|" + "---|" * len(SLEEVE_PHASES)]
+    lines += iteration_rows(cache, SLEEVE_STUDY, SLEEVE_PHASES)
+    lines += ["", markers("iterations")[1]]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    from ..blocks import emit
+
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.iterations")
+    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    parser.add_argument("--simulate", action="store_true",
+                        help="run the simulations that are not cached (hours on 2 cores)")
+    parser.add_argument("--write", type=Path, default=None,
+                        help="replace the iterations block of this file (docs/physics.md)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    if args.simulate:
+        simulate_missing(args.cache)
+    emit(["--write", str(args.write)] if args.write else [], "iterations",
+         report(args.cache, time.perf_counter() - started))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
