@@ -9,7 +9,7 @@ curvature law was fitted to: 2 cm and 1 cm grids at 10, 40 and 160 iterations.
 
 Without ``--simulate`` only the cached simulations are read (``not simulated`` rows
 otherwise); with it the missing ones are run first, one after another on one core (here:
-about 2 minutes for the 2 cm sleeve at 10 iterations, 40 for the 1 cm one at 160). Needs
+48 s for the 2 cm sleeve at 10 iterations, 30 minutes for the 1 cm one at 160). Needs
 a Python with ``newton`` (simulate.newton_python: .venv-newton). ``--write`` replaces the
 block between the "iterations" markers. A benchmark, not a test.
 """
@@ -42,10 +42,17 @@ def simulate_missing(cache: Path) -> None:
                       f"{time.perf_counter() - started:.0f} s", flush=True)
 
 
-def report(cache: Path, seconds: float) -> str:
-    from ..blocks import markers, stage_block_head
+def report(cache: Path) -> str:
+    from ..blocks import markers
+    from .simulate import cached_newton, simulate_newton
 
-    lines = stage_block_head("iterations", seconds)
+    solver = [simulate_newton(SWEEP[name](spacing), cache, solver_options(count))[1]
+              for name, spacings in SLEEVE_STUDY.items()
+              for spacing, counts in spacings.items() for count in counts
+              if cached_newton(SWEEP[name](spacing), cache, solver_options(count))]
+    lines = [markers("iterations")[0], "", "Made by `python -m benchmarks.physics.iterations "
+             f"--write docs/physics.md` (the solver's seconds, one core here: "
+             f"{', '.join(f'{s:.0f}' for s in solver) or 'none cached'}).", ""]
     lines += ["The sweep's cotton sleeve (radius 10 cm, bent to 90 degrees on its arm) with "
               "more VBD iterations per substep (the sweep runs 10): the material wavelength "
               "and fold height (RMS) at the end of the bend and of the hold, and in brackets "
@@ -67,11 +74,9 @@ def main(argv=None) -> int:
     parser.add_argument("--write", type=Path, default=None,
                         help="replace the iterations block of this file (docs/physics.md)")
     args = parser.parse_args(argv)
-    started = time.perf_counter()
     if args.simulate:
         simulate_missing(args.cache)
-    emit(["--write", str(args.write)] if args.write else [], "iterations",
-         report(args.cache, time.perf_counter() - started))
+    emit(["--write", str(args.write)] if args.write else [], "iterations", report(args.cache))
     return 0
 
 
