@@ -27,29 +27,33 @@ SLEEVE_STUDY = {"sleeve10-cotton": {0.02: (10, 40, 160), 0.01: (10, 40, 160)}}
 SLEEVE_PHASES = ("bend", "held")
 
 
-def simulate_missing(cache: Path) -> None:
-    from .simulate import cached_newton, simulate_newton
-
+def _runs():
+    """(name, spacing, iterations, sweep shot) of every run of the study."""
     for name, spacings in SLEEVE_STUDY.items():
         for spacing, counts in spacings.items():
             for count in counts:
-                shot = SWEEP[name](spacing)
-                if cached_newton(shot, cache, solver_options(count)):
-                    continue
-                started = time.perf_counter()
-                simulate_newton(shot, cache, solver_options(count))
-                print(f"simulated {name} at {100 * spacing:g} cm, {count} iterations: "
-                      f"{time.perf_counter() - started:.0f} s", flush=True)
+                yield name, spacing, count, SWEEP[name](spacing)
+
+
+def simulate_missing(cache: Path) -> None:
+    from .simulate import cached_newton, simulate_newton
+
+    for name, spacing, count, shot in _runs():
+        if cached_newton(shot, cache, solver_options(count)):
+            continue
+        started = time.perf_counter()
+        simulate_newton(shot, cache, solver_options(count))
+        print(f"simulated {name} at {100 * spacing:g} cm, {count} iterations: "
+              f"{time.perf_counter() - started:.0f} s", flush=True)
 
 
 def report(cache: Path) -> str:
     from ..blocks import markers
     from .simulate import cached_newton, simulate_newton
 
-    solver = [simulate_newton(SWEEP[name](spacing), cache, solver_options(count))[1]
-              for name, spacings in SLEEVE_STUDY.items()
-              for spacing, counts in spacings.items() for count in counts
-              if cached_newton(SWEEP[name](spacing), cache, solver_options(count))]
+    solver = [simulate_newton(shot, cache, solver_options(count))[1]
+              for _, _, count, shot in _runs()
+              if cached_newton(shot, cache, solver_options(count))]
     lines = [markers("iterations")[0], "", "Made by `python -m benchmarks.physics.iterations "
              f"--write docs/physics.md` (the solver's seconds, one core here: "
              f"{', '.join(f'{s:.0f}' for s in solver) or 'none cached'}).", ""]
