@@ -20,7 +20,7 @@ factors are common to both and cancel in the angle between them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -495,7 +495,7 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
 #: at the W its bars were set on (0.28: stages/shirt_w028.usda says why; the demo's 0.1 is
 #: measured by ``python -m realclients.figure --texture ... --demo-width``)
 TEXTURE_SHOT = BakeShot("shirt", SHIRT_W028, 24, width=960)
-DEMO_TEXTURE_SHOT = BakeShot("shirt", SAMPLES / "shirt.usda", 24, width=960)
+DEMO_TEXTURE_SHOT = replace(TEXTURE_SHOT, stage=SAMPLES / "shirt.usda")
 
 
 def turned_camera(stage, camera: str, frame: float, degrees: float, path: str) -> str:

@@ -98,14 +98,14 @@ def convergence(name: str, cache: Path, simulate: bool = True) -> dict:
                        for phase in a}}
 
 
-def iteration_rows(cache: Path, study: dict | None = None,
+def iteration_rows(cache: Path, study: dict = ITERATION_STUDY,
                    phases: tuple[str, ...] = ITERATION_PHASES) -> list[str]:
-    """An iteration study's table rows (cached simulations only): ``study`` (by default
-    ITERATION_STUDY) maps a sweep shot to {grid spacing: iteration counts}."""
+    """An iteration study's table rows (cached simulations only): ``study`` maps a sweep
+    shot to {grid spacing: iteration counts}."""
     from .simulate import cached_newton
 
     rows = []
-    for name, spacings in (ITERATION_STUDY if study is None else study).items():
+    for name, spacings in study.items():
         for spacing, counts in spacings.items():
             before = None
             for count in counts:

@@ -32,14 +32,11 @@ def signals_held():
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
     except (AttributeError, OSError, ValueError):  # no POSIX signal masks here
-        try:
-            yield
-        finally:
-            _HELD.depth -= 1
-        return
+        old = None
     try:
         yield
     finally:
         # out of the section before the held signals arrive: their handler may raise
         _HELD.depth -= 1
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
