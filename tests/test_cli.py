@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -161,6 +162,43 @@ def test_demo_renders_the_shirt(gl_context, tmp_path):
     assert main(["demo", str(tmp_path), "--width", "96", "--quiet"]) == 0
     frames = sorted(tmp_path.glob("shirt.*.png"))
     assert len(frames) == 24
+
+
+def test_a_file_edited_between_two_runs_in_one_process_is_read_anew(gl_context, tmp_path):
+    """A run drops its stage when it returns, with no reference cycle left for a GC pass:
+    USD keeps a layer that is still alive, so a second run on the file would otherwise get
+    the first run's layer back, not the edited file (CI saw a crest-damping test read its
+    previous bake's tau). GC is off here, as it may be between two runs."""
+    import gc
+
+    from pxr import Sdf, UsdGeom
+
+    samples = Path(__file__).resolve().parents[1] / "sample_stages"
+    source = tmp_path / "shirt.usda"
+    text = (samples / "shirt.usda").read_text()
+    assert "primvars:wrinkle:width = [0.1]" in text
+    shutil.copytree(samples / "textures", tmp_path / "textures")
+    widths = []
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for width in ("0.1", "0.3"):
+            source.write_text(text.replace("primvars:wrinkle:width = [0.1]",
+                                           f"primvars:wrinkle:width = [{width}]"))
+            out = tmp_path / f"baked{width}.usda"
+            assert main(["bake", str(source), str(out), "--frames", "24", "--quiet"]) == 0
+            assert Sdf.Layer.Find(str(source)) is None, "the run kept the stage's layer"
+            stage = Usd.Stage.Open(str(out))
+            waves = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Arm/Sleeve")) \
+                .GetPrimvar("wrinkle:waveVector").Get(24)
+            widths.append(np.median(np.linalg.norm(np.asarray(waves), axis=1)[
+                np.linalg.norm(np.asarray(waves), axis=1) > 0]))
+            del stage
+    finally:
+        if enabled:
+            gc.enable()
+    # the wave number is 2 pi / W: the second run read the edited width
+    assert widths[0] / widths[1] == pytest.approx(3.0, rel=0.02)
 
 
 def test_cesium_man_48_frames(gl_context, corpus, tmp_path):

@@ -116,10 +116,16 @@ class WrinkleEngine:
         #: frames computed (drawn or not) and of them preroll steps, since creation
         self._computed = 0
         self._prerolled = 0
-        #: what tests and benchmarks look at inside (EngineDebug)
-        self.debug = EngineDebug(self)
         #: wraps the list of preroll frames (the CLI shows a progress bar)
         self.preroll_progress = preroll_progress or (lambda frames: frames)
+
+    @property
+    def debug(self) -> EngineDebug:
+        """What tests and benchmarks look at inside (EngineDebug). Made on each use: an
+        EngineDebug kept on the engine would be a reference cycle, and a dropped engine (its
+        scene, its stage and the stage's layers) would then live until a GC pass, so that
+        the next open of a changed file in this process got the old layer back."""
+        return EngineDebug(self)
 
     def _state_bytes(self) -> int:
         """GPU bytes of one grid frame's wave state, all meshes (render/fields.py)."""
