@@ -22,7 +22,8 @@ from pathlib import Path
 from .referee import ROOT, SWEEP, iteration_rows, solver_options
 
 #: the sleeve study: sweep shot -> {grid spacing (m): iteration counts}
-SLEEVE_STUDY = {"sleeve10-cotton": {0.02: (10, 40, 160), 0.01: (10, 40, 160)}}
+SLEEVE_STUDY = {"sleeve10-cotton": {0.02: (10, 40, 160), 0.01: (10, 40, 160),
+                                    0.005: (160,)}}
 #: the sleeve's phases (sweep.sleeve): bent to 90 degrees over frames 10-50, then held
 SLEEVE_PHASES = ("bend", "held")
 
