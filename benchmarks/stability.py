@@ -10,6 +10,10 @@ wrapper layer):
   stage. Each frame is rendered at 640x360 and the ``wrinkle.height`` AOVs compared: the
   share of wrinkled pixels (covered in both, amplitude above 1% of the largest in either)
   whose height changes by more than 15% of the largest amplitude.
+- **A painted loop.** The shirt with q painted around its forearm (``painted_loop``), its
+  joints changed as above: where the phase must wind around a loop, the start has no
+  winding to give it (the anchored phase d.X is about constant around the arm), and what
+  the relaxation makes of it is what the change can move (docs/method.md, "Stability").
 - **Locality.** q is painted on the shirt's cuff (the points within 0.6 W of its end:
   0.6 along the sleeve's circumference) in a layer; the farthest point, in rest space,
   whose relaxed phase (sign-aligned, where both runs have a wave above 5% of the largest
@@ -39,6 +43,8 @@ SIZE = (640, 360)
 #: a pixel's crest moved: its height changed by more than this share of the largest
 #: amplitude (the issue's 0.01 of the shirt's 0.068)
 HEIGHT_SHARE = 0.15
+#: |q| painted around the forearm (painted_loop)
+LOOP_AMOUNT = 0.6
 BEGIN, END = markers("stability")
 
 
@@ -150,6 +156,36 @@ def _phases(path: str, frames, ctx=None) -> dict:
     return out
 
 
+def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
+    """A layer over the shirt with q painted around its forearm (the points from 15% to
+    35% of the sleeve's length, ``amount`` along the circumference): waves whose crests run
+    along the arm, whose phase winds around it. Returns the layer's path."""
+    from pxr import Sdf, Usd, UsdGeom, Vt
+
+    source = Usd.Stage.Open(str(SHIRT))
+    mesh = source.GetPrimAtPath(SLEEVE)
+    rest_primvar = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("rest")
+    rest = np.asarray(rest_primvar.Get() if rest_primvar and rest_primvar.HasValue()
+                      else mesh.GetAttribute("points").Get(), np.float64)
+    q = np.asarray(mesh.GetAttribute("primvars:wrinkle:q").Get(), np.float64)
+    axis = int(np.argmax(np.ptp(rest, axis=0)))
+    low, high = rest[:, axis].min(), rest[:, axis].max()
+    band = np.flatnonzero((rest[:, axis] > low + 0.15 * (high - low))
+                          & (rest[:, axis] < low + 0.35 * (high - low)))
+    around = np.cross(rest[band] - rest[band].mean(axis=0), np.eye(3)[axis])
+    painted = q.copy()
+    painted[band] = amount * around / np.linalg.norm(around, axis=1, keepdims=True)
+    out = f"{folder}/loop.usda"
+    stage = Usd.Stage.CreateNew(out)
+    stage.GetRootLayer().subLayerPaths.append(str(SHIRT))
+    _copy_stage_info(source, stage)
+    stage.OverridePrim(SLEEVE).CreateAttribute(
+        "primvars:wrinkle:q", Sdf.ValueTypeNames.Vector3fArray).Set(
+        Vt.Vec3fArray.FromNumpy(painted.astype(np.float32)))
+    stage.Save()
+    return out
+
+
 def locality(folder: str, ctx=None) -> dict:
     """The shirt with q painted on its cuff: per frame, how many points' crests moved and
     the farthest of them from the cuff, in W (module docstring)."""
@@ -217,8 +253,9 @@ def measure(ctx=None) -> dict:
         cesium_man = corpus_dir() / "usd-wg" / "CesiumMan.usdz"
         cesium = perturbation(with_units(str(cesium_man), f"{folder}/cesium.usda"), folder,
                               all_meshes=True, ctx=ctx) if cesium_man.exists() else None
+        loop = perturbation(painted_loop(folder), folder, ctx=ctx)
         local = locality(folder, ctx)
-    return {"shirt": shirt, "cesium_man": cesium, "locality": local}
+    return {"shirt": shirt, "cesium_man": cesium, "loop": loop, "locality": local}
 
 
 def table(result: dict) -> str:
@@ -227,7 +264,8 @@ def table(result: dict) -> str:
              "(640x360, `wrinkle.height`), per frame; bars: 2% at 0.01 degrees, 5% at 0.1.", "",
              "| stage | joint change | " + " | ".join(f"frame {f}" for f in FRAMES) + " |",
              "|---|---|" + "---|" * len(FRAMES)]
-    for name, label in (("shirt", "shirt"), ("cesium_man", "CesiumMan --all-meshes")):
+    for name, label in (("shirt", "shirt"), ("cesium_man", "CesiumMan --all-meshes"),
+                        ("loop", f"shirt, q {LOOP_AMOUNT:g} painted around the forearm")):
         if result[name] is None:
             lines.append(f"| {label} | (corpus missing) |" + " |" * len(FRAMES))
             continue

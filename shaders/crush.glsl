@@ -36,6 +36,9 @@ layout(binding = CRUSH_HOLD) uniform sampler2D hold;
 // x: what the rest surface's curvature multiplies the amplitude by (scene/params.py
 // curved_gain; 1 on flat cloth)
 layout(binding = CRUSH_GAIN) uniform sampler2D gain;
+// the painted waves' start phases (method/anchor.py): xyz the unit painted direction (rest
+// space; zero where nothing is painted), w the start phase along it
+layout(binding = CRUSH_ANCHOR) uniform sampler2D anchor;
 // xy: the damped rest direction d (T1, T2 coordinates), z: 1 once written. Read from the
 // wave state of the shot's previous grid frame, written into this frame's state
 layout(binding = CRUSH_DAMPED_IN) uniform sampler2D damped_in;
@@ -348,9 +351,14 @@ void main() {
     STORE(fields, FIELD_DIRECTION(i), vec4(d3, r));
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
-    // material-anchored start: crests ride with the cloth, frames stay independent
-    STORE(phase, i, vec4((TWO_PI / wavelength) * dot(d3, X_i),
-                         (TWO_PI / f2.wavelength) * dot(e3, X_i), 0.0, 0.0));
+    // material-anchored start: crests ride with the cloth, frames stay independent.
+    // Where the wave runs along the paint (within 45 degrees), the paint's own stripe
+    // pattern in rest space (method/anchor.py), its sign d's
+    float start = (TWO_PI / wavelength) * dot(d3, X_i);
+    vec4 painted = fetch(anchor, i);
+    float along_paint = dot(normalize(d3), painted.xyz);
+    if (abs(along_paint) >= ANCHOR_ALIGNED) start = along_paint < 0.0 ? -painted.w : painted.w;
+    STORE(phase, i, vec4(start, (TWO_PI / f2.wavelength) * dot(e3, X_i), 0.0, 0.0));
 }
 
 #endif

@@ -37,6 +37,9 @@ ACROSS_MIN = 0.7
 #: the most a painted gather adds: |q| = 1 gathers the cloth to half its length (the
 #: paper's r = 1 - |q|^2 would reach 1 / r_min = 20 times it, folds 7 W tall)
 PAINT_GATHER_MAX = 1.5
+#: crush starts a wave from the paint's stripe pattern (method/anchor.py) where its rest
+#: direction is within 45 degrees of the painted q: |cos| at least this
+ANCHOR_ALIGNED = 0.7071
 #: samples of the length-exact slope table: a|k| at u = sqrt(rho^2 - 1) = i * SLOPE_STEP
 SLOPE_SAMPLES = 64
 SLOPE_STEP = 0.3125
@@ -127,6 +130,7 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE),
     ("COARSENING_EXPONENT", COARSENING_EXPONENT), ("COARSENING_MAX", COARSENING_MAX),
     ("FOLD_ROOM", FOLD_ROOM), ("PAINT_GATHER_MAX", PAINT_GATHER_MAX),
+    ("ANCHOR_ALIGNED", ANCHOR_ALIGNED),
     ("ACROSS_MIN", ACROSS_MIN),
     ("SLOPE_SAMPLES", SLOPE_SAMPLES), ("SLOPE_STEP", SLOPE_STEP))}
 

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..method.contract import FOLD_ROOM, MIN_RATIO
+from ..method.anchor import painted_phases
+from ..method.contract import ANCHOR_ALIGNED, FOLD_ROOM, MIN_RATIO
 from ..method.folds import area_excess, excess_length, material_wavelength, profile_slope
 from ..scene.topology import Topology, rest_tangents, vertex_normals
 
@@ -134,6 +135,13 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
         amplitude = amplitude * np.asarray(gain, np.float64)
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
     phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
+    # where the wave runs along the paint, the paint's own start phase (method/anchor.py)
+    painted = painted_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
+                             q, width).astype(np.float64)
+    along_paint = np.sum(d3 / np.maximum(np.linalg.norm(d3, axis=1, keepdims=True), 1e-300)
+                         * painted[:, :3], 1)
+    phase = np.where(np.abs(along_paint) >= ANCHOR_ALIGNED,
+                     np.where(along_paint < 0, -painted[:, 3], painted[:, 3]), phase)
     stretch = np.sqrt(np.linalg.eigvalsh(np.transpose(M_geo, (0, 2, 1)) @ M_geo)[:, 1])
     return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "direction": d3,
             "compression": r, "phase": phase, "usable": usable,

@@ -63,6 +63,22 @@ def _gain(params, n: int) -> np.ndarray:
     return np.asarray(params.amplitude_gain, np.float32).reshape(n, 1)
 
 
+def _anchor(record) -> np.ndarray:
+    """The painted waves' start phases (method/anchor.py), (n, 4)."""
+    from ..method.anchor import painted_phases
+
+    topology = record.topology
+    return painted_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
+                          topology.neighbor_indices, record.params.q, record.params.width)
+
+
+def _anchor_key(record) -> int:
+    """What the painted start phases depend on beyond the topology: the rest pose, q and
+    the width."""
+    return hash(tuple(np.ascontiguousarray(array).tobytes() for array in (
+        record.rest_points, record.params.q, record.params.width)))
+
+
 def _bytes(array: np.ndarray) -> bytes:
     data = np.ascontiguousarray(array).tobytes()
     return data if data else b"\0" * 16  # GL buffers cannot be empty
@@ -170,6 +186,9 @@ class MeshResources:
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         self.hold = self._table(n, 4, data=_hold(record.params, n))
         self.gain = self._table(n, 1, data=_gain(record.params, n))
+        #: the painted waves' start phases (method/anchor.py)
+        self.anchor = self._table(n, 4, data=_anchor(record))
+        self._anchor_key = _anchor_key(record)
         #: the wave fields' ping-pong, phases and relax tables (render/fields.py)
         self.waves = WaveFields(n, self.num_edges, self._table, self._drop)
         self.corner_st = self._table(3 * self.num_triangles, 2,
@@ -255,6 +274,10 @@ class MeshResources:
         self.q_width.write(vec4(record.params.q, record.params.width))
         self.hold.write(_hold(record.params, self.num_points))
         self.gain.write(_gain(record.params, self.num_points))
+        key = _anchor_key(record)
+        if key != self._anchor_key:  # amplitude, profile... edits keep it
+            self.anchor.write(_anchor(record))
+            self._anchor_key = key
         for index, table in enumerate((record.params.height_profile,
                                        record.params.gradient_profile)):
             old = self.profiles[index]

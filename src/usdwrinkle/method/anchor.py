@@ -1,0 +1,151 @@
+"""The painted waves' start phases: a stripe pattern of the painted q, in rest space.
+
+Crush starts each wave from its material-anchored phase ``(2pi/L) d.X`` (docs/method.md,
+"Stability"): exact where d is constant, but where the painted direction turns, its
+gradient is wrong by ``(2pi/L) (grad d)^T X``, and around a loop (q painted around a
+sleeve: crests along the arm) ``d.X`` is about constant, so the start has no winding at all.
+The relaxation must then make the phase wind around the arm from nothing, and where it
+leaves the dislocations that takes is decided by float rounding: a 0.01 degree change of
+the shot moved the crests on up to 2.5% of the wrinkled pixels (the stability block's
+painted-loop row), against 0.1% unpainted.
+
+Here the painted points get a start phase whose gradient is the paint's own wave, ``2pi /
+L`` along q, with L the wavelength the paint alone gives (crush.glsl's fold at r_geo = 1,
+``painted_wavelength``):
+- integrated breadth first over the painted points' 1-rings from the lowest-numbered
+  point of each painted region (which keeps its ``(2pi/L) q.X``), so that around a loop
+  the phase winds as often as the loop is long;
+- then smoothed as phasors (``SMOOTHING`` Jacobi steps, each point's own phasor and its
+  neighbours' carried to it along q), which spreads where the two fronts of the search met
+  around the loop.
+It depends on the rest pose, q and W alone: the same on every frame, every GPU and every
+change of the animation. It is given (else the table holds zeros and crush keeps
+``(2pi/L) d.X``, which unpainted neighbours share) only to a painted region
+- that winds: some edge closes a loop of the search by more than half a wave (a tree of
+  points or a straight stroke does not);
+- whose directions are smooth (``SMOOTH``: q painted at random winds everywhere, and a
+  stripe pattern of noise is no better a start than any other);
+and crush uses it where the wave runs along q (within 45 degrees, ANCHOR_ALIGNED;
+elsewhere the mesh's own compression leads). docs/method.md, "Painted loops", has the
+measurements.
+
+A phase is measured along the painted vector's own sign; crush flips it where its rest
+direction d points the other way. Two painted neighbours whose q point apart carry the
+phase across with a sign flip, as the wave's phase does.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .contract import COARSENING_EXPONENT, COARSENING_MAX, MIN_RATIO, PAINT_GATHER_MAX
+
+#: phasor smoothing steps after the breadth-first integration
+SMOOTHING = 32
+#: a painted region is smooth where its neighbouring directions agree this well (|cos|,
+#: the median): within 30 degrees. The sample stages' paints: 0.92-1.0; q painted at
+#: random: 0.6
+SMOOTH = 0.866
+
+
+def painted_wavelength(q_length: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """The material wavelength of a wave that the paint alone makes (crush.glsl's fold at
+    r_geo = 1): W min(gather ** COARSENING_EXPONENT, COARSENING_MAX), gather =
+    min(1 / r, PAINT_GATHER_MAX), r = clamp(1 - |q|^2, MIN_RATIO, 1) the compression along
+    q that the paint biases."""
+    r = np.clip(1.0 - np.asarray(q_length, np.float64) ** 2, MIN_RATIO, 1.0)
+    gather = np.minimum(1.0 / r, PAINT_GATHER_MAX)
+    return np.asarray(width, np.float64) * np.minimum(gather ** COARSENING_EXPONENT,
+                                                      COARSENING_MAX)
+
+
+def painted_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
+                   neighbor_indices: np.ndarray, q: np.ndarray,
+                   width: np.ndarray) -> np.ndarray:
+    """(n, 4) float32: xyz the unit painted direction (q in the rest tangent plane; zero
+    where nothing is painted), w the start phase (radians) along it (module docstring).
+    ``neighbor_offsets``/``neighbor_indices``: each point's 1-ring (Topology)."""
+    rest = np.asarray(rest, np.float64)
+    normals = np.asarray(rest_normals, np.float64)
+    n = len(rest)
+    out = np.zeros((n, 4), np.float32)
+    q = np.asarray(q, np.float64)
+    tangent = q - np.sum(q * normals, axis=1, keepdims=True) * normals
+    length = np.linalg.norm(tangent, axis=1)
+    painted = length > 0.0
+    if not painted.any():
+        return out
+    direction = np.zeros_like(tangent)
+    direction[painted] = tangent[painted] / length[painted, None]
+    wavenumber = np.zeros(n)
+    wavenumber[painted] = 2.0 * np.pi / painted_wavelength(np.minimum(length[painted], 1.0),
+                                                          np.asarray(width)[painted])
+
+    # the painted points' ring edges (i -> j, both painted)
+    offsets = np.asarray(neighbor_offsets, np.int64)
+    indices = np.asarray(neighbor_indices, np.int64)
+    source = np.repeat(np.arange(n), np.diff(offsets))
+    keep = painted[source] & painted[indices] & (source != indices)
+    source, target = source[keep], indices[keep]
+    # j's phase in i's terms: the sign between their directions, and the advance from i to
+    # j along their mean direction (in i's sign) at their mean wave number
+    sign = np.where(np.sum(direction[source] * direction[target], axis=1) < 0.0, -1.0, 1.0)
+    mean = direction[source] + sign[:, None] * direction[target]
+    mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
+    advance = 0.5 * (wavenumber[source] + wavenumber[target]) * np.sum(
+        mean * (rest[target] - rest[source]), axis=1)
+    order = np.argsort(source, kind="stable")
+    source, target, sign, advance = source[order], target[order], sign[order], advance[order]
+
+    phase = np.full(n, np.nan)
+    region = np.full(n, -1)
+    for root in np.flatnonzero(painted):
+        if region[root] >= 0:
+            continue
+        region[root] = root
+        phase[root] = wavenumber[root] * float(direction[root] @ rest[root])
+        front = np.array([root])
+        while front.size:
+            starts = np.searchsorted(source, front, side="left")
+            counts = np.searchsorted(source, front, side="right") - starts
+            edges = np.repeat(starts - np.concatenate([[0], np.cumsum(counts)[:-1]]),
+                              counts) + np.arange(counts.sum())
+            edges = edges[region[target[edges]] < 0]
+            if not edges.size:
+                break
+            # each new point from its lowest-numbered parent in the front
+            chosen = edges[np.lexsort((source[edges], target[edges]))]
+            first = np.concatenate([[True], target[chosen][1:] != target[chosen][:-1]])
+            chosen = chosen[first]
+            new = target[chosen]
+            phase[new] = sign[chosen] * (phase[source[chosen]] + advance[chosen])
+            region[new] = root
+            front = new
+
+    # a region winds where some edge closes a loop of the search by more than half a wave;
+    # its stripe pattern means something where its painted directions are smooth (their
+    # neighbours' within 30 degrees at the median: noise painted at random would wind too)
+    closing = np.abs(sign * (phase[source] + advance) - phase[target])
+    agreement = np.abs(np.sum(direction[source] * direction[target], axis=1))
+    winding = [r for r in np.unique(region[source[closing > np.pi]])
+               if np.median(agreement[region[source] == r]) >= SMOOTH]
+    used = np.isin(region, winding) & painted
+    if not used.any():
+        return out
+
+    # Jacobi on the phasors: each point's own and its neighbours' carried to it
+    inside = used[source]
+    source, target, sign, advance = source[inside], target[inside], sign[inside], \
+        advance[inside]
+    z = np.exp(1j * phase)
+    z[~used] = 0.0
+    turn = np.exp(-1j * advance)
+    for _ in range(SMOOTHING):
+        carried = np.where(sign < 0.0, np.conj(z[target]), z[target])  # j's phase in i's sign
+        carried = carried * turn
+        total = z + np.bincount(source, carried.real, minlength=n) \
+            + 1j * np.bincount(source, carried.imag, minlength=n)
+        size = np.abs(total)
+        z = np.where(size > 1e-12, total / np.maximum(size, 1e-300), z)
+    out[used, :3] = direction[used]
+    out[used, 3] = np.angle(z[used])
+    return out

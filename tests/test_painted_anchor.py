@@ -1,0 +1,93 @@
+"""The painted waves' start phases (method/anchor.py): a stripe pattern of the painted q in
+rest space, used where a smooth painted region winds around a loop of the mesh, and what
+crush starts such waves from (the GPU against the numpy reference)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from usdwrinkle.method.anchor import painted_phases, painted_wavelength
+from usdwrinkle.reference.crush import crush as crush_reference
+from usdwrinkle.reference.relax import wrap
+from usdwrinkle.scene.topology import build_topology, vertex_normals
+
+from helpers import gpu_fields, point_cache_stage, random_cloth
+
+RADIUS, RINGS, AROUND, AMOUNT, WIDTH = 0.3, 6, 40, 0.6, 0.1
+
+
+def sleeve_band(q_around: bool = True):
+    """A band of a cylinder (RINGS rings of AROUND points, radius RADIUS, along z) with q
+    painted around it (or along it): (rest, quads, q)."""
+    theta = np.arange(AROUND) * 2 * np.pi / AROUND
+    rest = np.array([[RADIUS * np.cos(t), RADIUS * np.sin(t), 0.05 * ring]
+                     for ring in range(RINGS) for t in theta])
+    quads = np.array([[r * AROUND + a, r * AROUND + (a + 1) % AROUND,
+                       (r + 1) * AROUND + (a + 1) % AROUND, (r + 1) * AROUND + a]
+                      for r in range(RINGS - 1) for a in range(AROUND)])
+    angle = np.tile(theta, RINGS)
+    direction = np.stack([-np.sin(angle), np.cos(angle), np.zeros_like(angle)], 1) \
+        if q_around else np.tile([0.0, 0.0, 1.0], (len(rest), 1))
+    return rest, quads, AMOUNT * direction
+
+
+def phases_of(rest, quads, q, width=WIDTH):
+    topology = build_topology(np.full(len(quads), 4), quads.ravel(), rest)
+    return painted_phases(rest, vertex_normals(rest, topology), topology.neighbor_offsets,
+                          topology.neighbor_indices, q, np.full(len(rest), width))
+
+
+def test_a_loop_painted_around_a_sleeve_winds_as_often_as_it_is_long():
+    """Around each ring the start phase winds round(C / L) times (C the circumference, L
+    the wavelength the paint gives), and between neighbours it advances by the paint's
+    wave number times the edge, away from where the search's two fronts met."""
+    rest, quads, q = sleeve_band()
+    out = phases_of(rest, quads, q)
+    length = painted_wavelength(np.array([AMOUNT]), np.array([WIDTH]))[0]
+    assert length == pytest.approx(1.5 * WIDTH)  # the gather 1 / (1 - 0.36), capped at 1.5
+    turns = 2 * np.pi * RADIUS / length
+    chord = 2 * RADIUS * np.sin(np.pi / AROUND)
+    # the rings at the band's edges have their normals tilted by its quads' diagonals
+    inner = slice(AROUND, (RINGS - 1) * AROUND)
+    np.testing.assert_allclose(out[inner, :3], q[inner] / AMOUNT, atol=1e-6)
+    for ring in range(RINGS):
+        phase = out[ring * AROUND:(ring + 1) * AROUND, 3].astype(np.float64)
+        step = wrap(np.roll(phase, -1) - phase)
+        assert step.sum() / (2 * np.pi) == pytest.approx(round(turns), abs=1e-3)
+        assert np.median(step) == pytest.approx(chord * 2 * np.pi / length, rel=0.01)
+
+
+def test_paint_that_does_not_wind_keeps_the_anchored_start():
+    """q along the sleeve (rings of crests): (2pi/L) d.X is consistent there, and the table
+    says so with zeros; q painted at random is noise, not a stripe pattern, and gets zeros
+    too; an unpainted mesh as well."""
+    rest, quads, q = sleeve_band(q_around=False)
+    assert not phases_of(rest, quads, q).any()
+    assert not phases_of(rest, quads, np.zeros_like(q)).any()
+    rest, _, faces, q = random_cloth(3)
+    topology = build_topology(np.full(len(faces), 3), faces.ravel(), rest)
+    out = painted_phases(rest, vertex_normals(rest, topology), topology.neighbor_offsets,
+                         topology.neighbor_indices, q, np.full(len(rest), 0.2))
+    assert not out.any()
+
+
+def test_crush_starts_a_painted_loop_from_its_stripe_pattern(gl_context):
+    """The GPU's start phases (no relaxation) are the reference's, which wind round(C / L)
+    times around each ring (each phase read along q: crush's direction d has the sign of
+    its largest component, so half the ring's phases are along -q); the old start,
+    (2pi/L) d.X, wound 0 times."""
+    rest, quads, q = sleeve_band()
+    rest32 = rest.astype(np.float32)
+    stage = point_cache_stage(rest32, {1: rest32}, np.full(len(quads), 4), quads.ravel(),
+                              q=q.astype(np.float32), width=WIDTH, relax_iterations=0)
+    ours, record = gpu_fields(gl_context, stage)
+    ref = crush_reference(rest32, rest32, record.topology, q, record.params.width,
+                          slack=record.params.slack)
+    assert (ref["amplitude"] > 0).all()
+    np.testing.assert_allclose(wrap(ours["phase"] - ref["phase"]), 0.0, atol=1e-4)
+    length = painted_wavelength(np.array([AMOUNT]), np.array([WIDTH]))[0]
+    along_q = np.where(np.sum(ours["direction"] * q, axis=1) < 0, -1.0, 1.0)
+    for ring in range(RINGS):
+        phase = (along_q * ours["phase"])[ring * AROUND:(ring + 1) * AROUND]
+        winding = wrap(np.roll(phase, -1) - phase).sum() / (2 * np.pi)
+        assert winding == pytest.approx(round(2 * np.pi * RADIUS / length), abs=1e-3)
