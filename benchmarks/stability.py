@@ -156,11 +156,10 @@ def _phases(path: str, frames, ctx=None) -> dict:
     return out
 
 
-def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
-    """A layer over the shirt with q painted around its forearm (the points from 15% to
-    35% of the sleeve's length, ``amount`` along the circumference): waves whose crests run
-    along the arm, whose phase winds around it. Returns the layer's path."""
-    from pxr import Sdf, Usd, UsdGeom, Vt
+def _sleeve():
+    """The shirt's stage, its sleeve prim, the sleeve's rest points and q, and the axis
+    along which the sleeve is longest."""
+    from pxr import Usd, UsdGeom
 
     source = Usd.Stage.Open(str(SHIRT))
     mesh = source.GetPrimAtPath(SLEEVE)
@@ -168,14 +167,18 @@ def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
     rest = np.asarray(rest_primvar.Get() if rest_primvar and rest_primvar.HasValue()
                       else mesh.GetAttribute("points").Get(), np.float64)
     q = np.asarray(mesh.GetAttribute("primvars:wrinkle:q").Get(), np.float64)
-    axis = int(np.argmax(np.ptp(rest, axis=0)))
-    low, high = rest[:, axis].min(), rest[:, axis].max()
-    band = np.flatnonzero((rest[:, axis] > low + 0.15 * (high - low))
-                          & (rest[:, axis] < low + 0.35 * (high - low)))
-    around = np.cross(rest[band] - rest[band].mean(axis=0), np.eye(3)[axis])
+    return source, mesh, rest, q, int(np.argmax(np.ptp(rest, axis=0)))
+
+
+def _painted_layer(source, rest, q, axis, points, amount: float, out: str) -> str:
+    """A layer ``out`` over the shirt whose sleeve has q painted ``amount`` around the
+    sleeve (along its circumference) on ``points``."""
+    from pxr import Sdf, Usd, Vt
+
+    around = np.cross(rest[points] - rest[points].mean(axis=0), np.eye(3)[axis])
     painted = q.copy()
-    painted[band] = amount * around / np.linalg.norm(around, axis=1, keepdims=True)
-    out = f"{folder}/loop.usda"
+    painted[points] = amount * around / np.maximum(np.linalg.norm(around, axis=1,
+                                                                  keepdims=True), 1e-12)
     stage = Usd.Stage.CreateNew(out)
     stage.GetRootLayer().subLayerPaths.append(str(SHIRT))
     _copy_stage_info(source, stage)
@@ -186,34 +189,26 @@ def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
     return out
 
 
+def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
+    """A layer over the shirt with q painted around its forearm (the points from 15% to
+    35% of the sleeve's length, ``amount`` along the circumference): waves whose crests run
+    along the arm, whose phase winds around it. Returns the layer's path."""
+    source, _, rest, q, axis = _sleeve()
+    low, high = rest[:, axis].min(), rest[:, axis].max()
+    band = np.flatnonzero((rest[:, axis] > low + 0.15 * (high - low))
+                          & (rest[:, axis] < low + 0.35 * (high - low)))
+    return _painted_layer(source, rest, q, axis, band, amount, f"{folder}/loop.usda")
+
+
 def locality(folder: str, ctx=None) -> dict:
     """The shirt with q painted on its cuff: per frame, how many points' crests moved and
     the farthest of them from the cuff, in W (module docstring)."""
-    from pxr import Sdf, Usd, UsdGeom, Vt
-
     from usdwrinkle.reference.relax import wrap
 
-    source = Usd.Stage.Open(str(SHIRT))
-    mesh = source.GetPrimAtPath(SLEEVE)
-    rest_primvar = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("rest")
-    rest = np.asarray(rest_primvar.Get() if rest_primvar and rest_primvar.HasValue()
-                      else mesh.GetAttribute("points").Get(), np.float64)
+    source, mesh, rest, q, axis = _sleeve()
     width = float(mesh.GetAttribute("primvars:wrinkle:width").Get()[0])
-    q = np.asarray(mesh.GetAttribute("primvars:wrinkle:q").Get(), np.float64)
-    axis = int(np.argmax(np.ptp(rest, axis=0)))
     cuff = np.flatnonzero(rest[:, axis] > rest[:, axis].max() - 0.6 * width)
-    around = np.cross(rest[cuff] - rest[cuff].mean(axis=0), np.eye(3)[axis])
-    painted = q.copy()
-    painted[cuff] = 0.6 * around / np.maximum(np.linalg.norm(around, axis=1,
-                                                             keepdims=True), 1e-12)
-    out = f"{folder}/cuff.usda"
-    stage = Usd.Stage.CreateNew(out)
-    stage.GetRootLayer().subLayerPaths.append(str(SHIRT))
-    _copy_stage_info(source, stage)
-    stage.OverridePrim(SLEEVE).CreateAttribute(
-        "primvars:wrinkle:q", Sdf.ValueTypeNames.Vector3fArray).Set(
-        Vt.Vec3fArray.FromNumpy(painted.astype(np.float32)))
-    stage.Save()
+    out = _painted_layer(source, rest, q, axis, cuff, 0.6, f"{folder}/cuff.usda")
     base, other = _phases(str(SHIRT), FRAMES, ctx), _phases(out, FRAMES, ctx)
     distance = np.min(np.linalg.norm(rest[:, None] - rest[cuff][None], axis=2), axis=1)
     hops = _hops(mesh, rest, cuff)
