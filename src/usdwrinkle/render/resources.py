@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..method.anchor import painted_phases
 from ..method.contract import JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
 from ..process.errors import UsdWrinkleError
 from ..process.limits import MAX_POINTS
@@ -65,8 +66,6 @@ def _gain(params, n: int) -> np.ndarray:
 
 def _anchor(record) -> np.ndarray:
     """The painted waves' start phases (method/anchor.py), (n, 4)."""
-    from ..method.anchor import painted_phases
-
     topology = record.topology
     return painted_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
                           topology.neighbor_indices, record.params.q, record.params.width)
