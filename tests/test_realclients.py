@@ -207,13 +207,12 @@ def test_storm_moves_the_texture_with_the_folds_for_a_camera_the_bake_never_saw(
     as usdwrinkle does, for any camera. Measured 2026-11-29 (against the network without
     the wrinkles, bakes.unwrinkled_network): 0.887, fine part (7x7 high-pass) 0.890;
     through the UsdPreviewSurface alone 0.142 and 0.249 (zoomed 2x at 480 px: 0.898 and
-    0.905, 0.158 and 0.236). What is left is not Storm's 1-px dots along triangle edges
-    (with any MaterialX material on llvmpipe): without their pixels (3x3-median outliers of
-    either Storm image) 0.884, and 0.867 at the shot's own camera (0.872 with them;
-    2026-12-02). Storm's texture filtering is softer than ours (the plaid's second
-    differences 0.6x ours, with or without wrinkles); ours blurred to match (sigma 0.5 px)
-    gives 0.910 and 0.899, and what remains spreads over the whole sleeve (4x4 tiles
-    0.84-0.93), the cuff's steep rings and the elbow's side the lowest."""
+    0.905, 0.158 and 0.236). What is left is how Storm draws on llvmpipe, not the network
+    (python -m realclients.texture_gap, the README's block): read through a ramp texture,
+    Storm's texture coordinates are wrong on about a quarter of the pixels, with or without
+    wrinkles (its dotted lines along triangle edges with any MaterialX material), and its
+    texture filtering is softer than ours; without those pixels and with ours blurred to
+    its sharpness, 0.952 here and 0.950 at the shot's own camera."""
     network = turned_texture_views.contribution(30.0, "storm_parallax")
     preview = turned_texture_views.contribution(30.0, "storm_normal")
     assert network.correlation() >= 0.85
