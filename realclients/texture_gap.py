@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .bakes import TEXTURE_SHOT, Contribution, erode, grey, read_rgba8, texture_views
+from .shots import over_layer
 
 #: periods of the ramp texture's saw-tooth over [0, 1] of s (R) and of t (G)
 PERIODS = 8
@@ -78,28 +79,20 @@ def write_ramp(folder: Path) -> Path:
 
 
 def ramp_stage(folder: Path) -> Path:
-    """A layer over the texture shot's stage whose plaid reads the ramp instead."""
-    from pxr import Sdf, Usd
+    """A layer over the texture shot's stage whose textures read the ramp instead."""
+    from pxr import Sdf, UsdShade
 
     ramp = write_ramp(folder)
     path = folder / "shirt_ramp.usda"
-    stage = Usd.Stage.CreateNew(str(path))
-    source = Usd.Stage.Open(str(TEXTURE_SHOT.stage.resolve()))
-    stage.GetRootLayer().subLayerPaths.append(str(TEXTURE_SHOT.stage.resolve()))
-    for key in ("defaultPrim", "upAxis", "metersPerUnit", "startTimeCode", "endTimeCode",
-                "framesPerSecond", "timeCodesPerSecond"):
-        if source.GetRootLayer().pseudoRoot.HasInfo(key):
-            stage.GetRootLayer().pseudoRoot.SetInfo(
-                key, source.GetRootLayer().pseudoRoot.GetInfo(key))
+    stage, layer = over_layer(TEXTURE_SHOT.stage.resolve(), path)
     swapped = 0
-    for prim in source.Traverse():
-        if prim.GetAttribute("info:id").Get() == "UsdUVTexture":
-            stage.OverridePrim(prim.GetPath()).CreateAttribute(
-                "inputs:file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(str(ramp)))
+    for prim in stage.Traverse():
+        if UsdShade.Shader(prim) and UsdShade.Shader(prim).GetIdAttr().Get() == "UsdUVTexture":
+            prim.GetAttribute("inputs:file").Set(Sdf.AssetPath(str(ramp)))
             swapped += 1
     if not swapped:
         raise RuntimeError(f"{TEXTURE_SHOT.stage} has no UsdUVTexture to swap")
-    stage.Save()
+    layer.Save()
     return path
 
 
