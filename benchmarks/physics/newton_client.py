@@ -13,6 +13,16 @@ animated closed mesh the cloth rests against: points at the same keys), ``subste
 first, ``seconds`` and ``stretch_p99`` (the 99th percentile of |edge length / rest - 1| at
 the last frame: how inextensible the solve left the cloth).
 
+Long runs (a 0.5 cm sleeve at 160 iterations: hours here) outlast a working session. Every
+NEWTON_CLIENT_CHECKPOINT_FRAMES frames (10; 0: never) the client saves the frames so far
+and the cloth's positions and velocities (and the arm's pose) beside OUT, as
+OUT.resume.npz; a run with the same OUT goes on from there (simulate.py's OUT is named by
+the shot's arrays and the solver's options, so only the same simulation resumes), and the
+finished run removes it. The solver's own scratch (contacts, the colouring) is built
+again: a resumed run is the same simulation, not bit for bit the same numbers (the 2 cm
+cotton sleeve stopped at frame 33 and resumed from frame 30: 0.17 mm RMS from the
+uninterrupted run two frames later, 1.5 mm at frame 70, where its folds are 5.5 mm tall).
+
 Bending in physical units: Newton's VBD bends each interior edge e with the energy
 0.5 ke |e| (theta - theta0)^2. A smooth surface bent to curvature kappa across an edge whose
 two triangles' centroids lie l_e apart turns by theta = kappa l_e, and the patch the edge
@@ -173,7 +183,22 @@ def main(shot_path: str, out_path: str) -> None:
     out = np.empty((frames, len(rest), 3), np.float32)
     started = time.perf_counter()
     out[0] = state_0.particle_q.numpy()
-    for frame in range(2, frames + 1):
+    # a run that was stopped goes on from its last checkpoint (the module docstring)
+    checkpoint = out_path + ".resume.npz"
+    every = int(os.environ.get("NEWTON_CLIENT_CHECKPOINT_FRAMES", "10"))
+    first, spent = 2, 0.0
+    if os.path.exists(checkpoint):
+        saved = np.load(checkpoint)
+        if saved["points"].shape[1:] == out.shape[1:] and int(saved["frames"]) == frames:
+            done = int(saved["frame"])
+            out[:done] = saved["points"][:done]
+            state_0.particle_q.assign(saved["particle_q"])
+            state_0.particle_qd.assign(saved["particle_qd"])
+            if bodies:
+                state_0.body_q.assign(saved["body_q"])
+            first, spent = done + 1, float(saved["seconds"])
+            print(f"resumed at frame {first} of {frames}", file=sys.stderr, flush=True)
+    for frame in range(first, frames + 1):
         for sub in range(substeps):
             at = frame - 1 + (sub + 1) / substeps
             q = state_0.particle_q.numpy()
@@ -196,12 +221,22 @@ def main(shot_path: str, out_path: str) -> None:
         if os.environ.get("NEWTON_CLIENT_PROGRESS"):
             print(f"frame {frame}/{frames} {time.perf_counter() - started:.1f}s",
                   file=sys.stderr, flush=True)
+        if every > 0 and frame % every == 0 and frame < frames:
+            partial = checkpoint + ".tmp.npz"
+            np.savez(partial, points=out[:frame], frame=frame, frames=frames,
+                     particle_q=state_0.particle_q.numpy(),
+                     particle_qd=state_0.particle_qd.numpy(),
+                     body_q=state_0.body_q.numpy() if bodies else np.zeros(0),
+                     seconds=spent + time.perf_counter() - started)
+            os.replace(partial, checkpoint)
     last = out[-1].astype(np.float64)
     edges = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
     strain = np.abs(np.linalg.norm(last[edges[:, 0]] - last[edges[:, 1]], axis=1)
                     / np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1) - 1.0)
-    np.savez_compressed(out_path, points=out, seconds=time.perf_counter() - started,
+    np.savez_compressed(out_path, points=out, seconds=spent + time.perf_counter() - started,
                         stretch_p99=float(np.percentile(strain, 99)))
+    if os.path.exists(checkpoint):
+        os.remove(checkpoint)
 
 
 if __name__ == "__main__":
