@@ -78,16 +78,24 @@ def usd_diagnostics(forward: bool = False):
         yield messages
         return
     with tempfile.TemporaryFile(mode="w+b") as capture:
-        if sys.stderr is not None:
-            sys.stderr.flush()
-        os.dup2(capture.fileno(), 2)
+        # A stop signal's handler raises at any call in here (Ctrl-C during Usd.Stage.Open
+        # runs as soon as the C++ returns): wherever it lands, stderr is given back before
+        # the exception leaves, or the CLI's "usdwrinkle: interrupted" went into this
+        # temporary file and the run ended 130 saying nothing (CI, once in ~150 Ctrl-Cs)
         try:
-            yield messages
-        finally:
             if sys.stderr is not None:
                 sys.stderr.flush()
-            os.dup2(saved, 2)
-            os.close(saved)
+            os.dup2(capture.fileno(), 2)
+            yield messages
+        finally:
+            try:
+                if sys.stderr is not None:
+                    sys.stderr.flush()
+            finally:
+                try:
+                    os.dup2(saved, 2)
+                finally:
+                    os.close(saved)
             capture.seek(0)
             text = capture.read().decode("utf-8", "replace")
             messages.extend(diagnostic_messages(text))
