@@ -294,7 +294,6 @@ void main() {
     }
     vec3 d3 = rest_direction(d, T1, T2);
     if (dot(d3, d.x * T1 + d.y * T2) < 0.0) d = -d;
-    imageStore(damped, TABLE_TEXEL(i), vec4(d, 1.0, 0.0));
     vec2 e = vec2(-d.y, d.x);  // the other principal direction
     vec3 e3 = rest_direction(e, T1, T2);
     if (dot(e3, e.x * T1 + e.y * T2) < 0.0) e = -e;
@@ -354,6 +353,8 @@ void main() {
     // material-anchored start: crests ride with the cloth, frames stay independent.
     // Where the wave runs along the paint (within 45 degrees), the paint's own stripe
     // pattern in rest space (method/anchor.py), its sign d's
+    // the state's damped direction, and the material wave number its mobility reads
+    imageStore(damped, TABLE_TEXEL(i), vec4(d, 1.0, TWO_PI / wavelength));
     float start = (TWO_PI / wavelength) * dot(d3, X_i);
     vec4 painted = fetch(anchor, i);
     float along_paint = dot(normalize(d3), painted.xyz);

@@ -15,7 +15,8 @@
 //   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, or the
 //             material-anchored phases on a shot's first frame) and, per outgoing edge and
 //             system, the rotation e^{-i d_ij}, the flip, the neighbour's weight and system.
-//   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi.
+//   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi,
+//             moved from the seed by only the vertex's mobility m of the way (below).
 //   FIT       per vertex and system, after the last step: the wave the relaxed phases
 //             draw. Phases carried through a shot keep the crest count of the folds'
 //             onset while coarsening asks for fewer; the corner waves of a triangle,
@@ -32,6 +33,16 @@
 //             less, beyond pi not at all. Every weight is smooth, so a small change of
 //             the mesh is a small change of the fit. Writes the wave texels of the
 //             fields in place (each vertex only its own).
+//
+// Mobility (docs/method.md, "Mobility"; reference/relax.py's mobility): with history, a
+// vertex's relaxed phase moves from its seed by m = min(delta / MOBILITY_PHASE, 1) of the
+// way the steps take it, delta the largest change since the previous grid frame of the
+// phase difference its ring asks for along an edge, (kappa_now - kappa_before) . (X_j -
+// X_i) averaged over the edge's two ends, kappa = (2 pi / L) d3 the material wave vector
+// (rest space; crush keeps 2 pi / L in the state's damped table). Input that does not
+// change leaves the phases where they are: cloth whose pose stops keeps its folds, where
+// the relaxation went on creeping towards its far-off fixed point (the referee's held
+// sleeve: crests moving 8.6x the cloth's). A new wave, and a cold start, relax fully.
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
@@ -90,8 +101,45 @@ layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
 layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rgba32f, binding = RELAX_EDGES_OUT) writeonly uniform image2D edges;
+// the rest points, and this frame's and the previous grid frame's damped tables (w: the
+// material wave number 2 pi / L); x: the mobility, yz: the seeds of systems 1 and 2
+layout(binding = RELAX_REST_POINTS) uniform sampler2D rest_points;
+layout(binding = RELAX_DAMPED) uniform sampler2D damped;
+layout(binding = RELAX_PREVIOUS_DAMPED) uniform sampler2D previous_damped;
+layout(rgba32f, binding = RELAX_MOBILITY_OUT) writeonly uniform image2D mobility_out;
 
 uniform int u_has_history;
+
+// vertex v's material wave vector kappa = (2 pi / L) d3 (rest space), of this frame or of
+// the previous grid frame's state
+vec3 kappa_of(sampler2D table, sampler2D wave_numbers, int v) {
+    return fetch(wave_numbers, v).w * fetch(table, FIELD_DIRECTION(v)).xyz;
+}
+
+// how far kappa changed since the previous grid frame at v, its sign matched first
+// ((k, phi) and (-k, -phi) are one wave)
+vec3 kappa_change(int v) {
+    vec3 now = kappa_of(fields, damped, v);
+    vec3 before = kappa_of(previous_fields, previous_damped, v);
+    return now - (dot(now, before) < 0.0 ? -before : before);
+}
+
+// The share of the relaxation's move a vertex takes this frame (the header: mobility)
+float mobility(int i, bool history, vec4 before0) {
+    if (!history || !(wave_of(fields, i, 0).w > 0.0) || !(before0.w > 0.0)) return 1.0;
+    vec3 kappa_i = kappa_of(fields, damped, i);
+    vec3 change_i = kappa_change(i);
+    vec3 X_i = fetch(rest_points, i).xyz;
+    float delta = 0.0;
+    for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+        int j = NEIGHBOR(e);
+        vec3 change_j = kappa_change(j);
+        if (dot(kappa_of(fields, damped, j), kappa_i) < 0.0) change_j = -change_j;
+        delta = max(delta, abs(dot(0.5 * (change_i + change_j),
+                                   fetch(rest_points, j).xyz - X_i)));
+    }
+    return min(delta / MOBILITY_PHASE, 1.0);
+}
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
@@ -139,6 +187,7 @@ void main() {
                                          partner == 0 ? float(j) : -float(j) - 1.0));
         }
     }
+    STORE(mobility_out, i, vec4(mobility(i, history, before0), start, 0.0));
     STORE(phase, i, vec4(start, 0.0, 0.0));
     STORE(z_out, i, z);
 }
@@ -208,8 +257,11 @@ layout(binding = RELAX_EDGES) uniform sampler2D edges;
 layout(binding = RELAX_Z_IN) uniform sampler2D z_in;
 layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
+layout(binding = RELAX_MOBILITY) uniform sampler2D mobility;  // x: m, yz: the seeds
 
-uniform int u_write_phase;  // the last iteration also stores phi = arg z
+uniform int u_write_phase;  // the last iteration also stores phi = arg z, moved by m
+
+float wrap_angle(float a) { return a - TWO_PI * floor((a + PI) / TWO_PI); }
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
@@ -228,14 +280,23 @@ void main() {
         vec2 next = len2 > 0.0 ? sum * inversesqrt(len2) : own;
         if (s == 0) z.xy = next; else z.zw = next;
     }
-    STORE(z_out, i, z);
-    if (u_write_phase != 0) {
-#if defined TWO_SYSTEMS
-        STORE(phase, i, vec4(atan(z.y, z.x), u_systems > 1 ? atan(z.w, z.z) : 0.0, 0.0, 0.0));
-#else
-        STORE(phase, i, vec4(atan(z.y, z.x), 0.0, 0.0, 0.0));
-#endif
+    if (u_write_phase == 0) {
+        STORE(z_out, i, z);
+        return;
     }
+    // the last step: m of the way from the seed, exactly the seed where m = 0 (the fit
+    // reads these phasors too)
+    vec4 seed = fetch(mobility, i);
+    vec2 phi = vec2(atan(z.y, z.x), SYSTEMS > 1 ? atan(z.w, z.z) : 0.0);
+    if (seed.x < 1.0) {
+        for (int s = 0; s < SYSTEMS; ++s) {
+            phi[s] = seed[1 + s] + seed.x * wrap_angle(phi[s] - seed[1 + s]);
+            vec2 unit = vec2(cos(phi[s]), sin(phi[s]));
+            if (s == 0) z.xy = unit; else z.zw = unit;
+        }
+    }
+    STORE(z_out, i, z);
+    STORE(phase, i, vec4(phi, 0.0, 0.0));
 }
 
 #endif

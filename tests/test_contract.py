@@ -105,7 +105,11 @@ def test_fields_follow_the_layout():
     assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
                                      "direction", "compression", "phase", "anchor_phase",
                                      "wave_vector2", "amplitude2", "direction2",
-                                     "compression2", "phase2", "anchor_phase2"]
+                                     "compression2", "phase2", "anchor_phase2", "wavenumber"]
+    np.testing.assert_array_equal(fields.wavenumber, 0.0)  # no damped table given
+    damped = np.arange(n * 4, dtype=np.float32).reshape(n, 4)
+    np.testing.assert_array_equal(
+        WrinkleFields.from_tables(posed, table, phases, phases, damped).wavenumber, damped[:, 3])
 
 
 def test_the_wave_blend_is_written_once():

@@ -72,7 +72,7 @@ def test_relax_matches_numpy_reference(gl_context):
                               slack=record.params.slack, gain=record.params.amplitude_gain)
               for f in (1, 2, 3)]
     for fields, f in zip(starts, (1, 2, 3), strict=True):
-        fields["points"] = frames[f]
+        fields["points"], fields["rest_points"] = frames[f], rest
     ref_phase = relax_shot(starts, record.topology, iterations, COLD_START_FACTOR)[-1]
     wrinkled = starts[-1]["amplitude"] > 1e-3
     assert wrinkled.sum() > 50
@@ -85,6 +85,91 @@ def test_relax_matches_numpy_reference(gl_context):
     after = phase_misfit(last["points"], ours["wave_vector"], ours["phase"], record.topology,
                          wrinkled)
     assert after < 0.5 * before
+
+
+def _shot_fields(ctx, rest, frames, faces, q, iterations):
+    """A point-cached shot's GPU fields per frame (each from the one before)."""
+    stage = point_cache_stage(rest, {f: p.astype(np.float32) for f, p in frames.items()},
+                              np.full(len(faces), 3), faces.ravel(), q=q, width=0.2,
+                              relax_iterations=iterations)
+    engine = WrinkleEngine(stage, ctx=ctx)
+    out = {}
+    try:
+        for frame in sorted(frames):
+            engine.compute_frame(float(frame))
+            out[frame] = engine.read_fields("/Sheet").arrays()
+        topology = engine.meshes["/Sheet"].topology
+    finally:
+        engine.release()
+    return out, topology
+
+
+def test_a_pose_that_stops_keeps_its_phases(gl_context):
+    """Mobility (docs/method.md): frame 3 repeats frame 2's points, so nothing the waves
+    are made of changed and the phases stay where frame 2 left them, exactly, as cloth
+    that stops keeps its folds. Before, every frame's eight Jacobi steps went on moving
+    them towards the relaxation's fixed point (the referee's held sleeve: crests moving
+    8.6x the cloth's); with mobility off (every vertex moving fully) they move here too."""
+    from usdwrinkle.reference.relax import relax_frame
+
+    rest, posed, faces, q = random_cloth(4)
+    frames = {1: rest + 0.5 * (posed - rest), 2: posed, 3: posed.copy()}
+    gpu, topology = _shot_fields(gl_context, rest, frames, faces, q, 8)
+    wave = (gpu[2]["amplitude"] > 0) & (gpu[3]["amplitude"] > 0)
+    assert wave.sum() > 200
+    np.testing.assert_array_equal(gpu[3]["phase"][wave], gpu[2]["phase"][wave])
+    # the fit reads the phases as phasors (cos, sin here; the steps' own before): rounding
+    np.testing.assert_allclose(gpu[3]["wave_vector"], gpu[2]["wave_vector"], rtol=1e-5,
+                               atol=1e-5 * np.abs(gpu[2]["wave_vector"]).max())
+    # the same step with every vertex fully mobile (the reference without kappa) moves them
+    fields = {"points": gpu[3]["points"], "wave_vector": gpu[3]["wave_vector"],
+              "amplitude": gpu[3]["amplitude"], "normals": gpu[3]["normals"],
+              "phase": gpu[3]["anchor_phase"]}
+    state = {"wave_vector": gpu[2]["wave_vector"], "amplitude": gpu[2]["amplitude"],
+             "phase": gpu[2]["phase"]}
+    crush_k = _shot_fields(gl_context, rest, frames, faces, q, 0)[0][3]
+    fields["wave_vector"], fields["amplitude"] = crush_k["wave_vector"], crush_k["amplitude"]
+    moved, _ = relax_frame(fields, state, topology, 8)
+    assert np.percentile(np.abs(wrap(moved - gpu[2]["phase"]))[wave], 90) > 0.01
+
+
+def test_mobility_matches_the_reference(gl_context):
+    """Frames that change a little: relax moves each vertex by its mobility's share of
+    the way, between none and all (reference/relax.py's mobility, fed the GPU's own crush
+    output and previous state, the material wave vectors kappa = (2 pi / L) d3 from its
+    wave numbers), and the GPU's phases are the reference's."""
+    from usdwrinkle.reference.relax import mobility, relax_frame
+
+    rest, posed, faces, q = random_cloth(5)
+    frames = {1: posed, 2: posed + 0.004 * np.sin(4 * rest[:, [2, 0, 1]]),
+              3: posed + 0.008 * np.sin(4 * rest[:, [2, 0, 1]])}
+    iterations = 6
+    gpu, topology = _shot_fields(gl_context, rest, frames, faces, q, iterations)
+    raw, _ = _shot_fields(gl_context, rest, frames, faces, q, 0)  # crush's own waves
+
+    def kappa(fields):
+        return fields["wavenumber"][:, None] * fields["direction"].astype(np.float64)
+
+    for frame in (2, 3):
+        before, crushed = gpu[frame - 1], raw[frame]
+        share = mobility(rest, kappa(crushed), kappa(before), crushed["amplitude"],
+                         before["amplitude"], topology)
+        wave = (crushed["amplitude"] > 0) & (before["amplitude"] > 0)
+        partly = wave & (share > 0.05) & (share < 0.95)
+        assert partly.sum() > 0.2 * wave.sum(), (partly.sum(), wave.sum())
+        fields = {"points": crushed["points"], "wave_vector": crushed["wave_vector"],
+                  "amplitude": crushed["amplitude"], "phase": crushed["anchor_phase"],
+                  "normals": crushed["normals"], "rest_points": rest,
+                  "kappa": kappa(crushed)}
+        state = {"wave_vector": before["wave_vector"], "amplitude": before["amplitude"],
+                 "phase": before["phase"], "kappa": kappa(before)}
+        phase, _ = relax_frame(fields, state, topology, iterations)
+        diff = np.abs(wrap(gpu[frame]["phase"] - phase))[wave]
+        assert np.percentile(diff, 99) < 1e-3, np.percentile(diff, [50, 99, 100])
+        # and all of the way, it would be another frame: the test can tell them apart
+        full, _ = relax_frame({k: v for k, v in fields.items() if k != "kappa"}, state,
+                              topology, iterations)
+        assert np.percentile(np.abs(wrap(full - phase))[partly], 90) > 1e-2
 
 
 @pytest.mark.parametrize("ratio", [0.5, 0.8, 0.95])

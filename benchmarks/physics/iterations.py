@@ -65,8 +65,37 @@ def report(cache: Path) -> str:
               "| shot | grid | iterations | " + " | ".join(SLEEVE_PHASES) + " |",
               "|---|---|---|" + "---|" * len(SLEEVE_PHASES)]
     lines += iteration_rows(cache, SLEEVE_STUDY, SLEEVE_PHASES)
+    lines += ["", "usdwrinkle against each of the referee's grid (1 cm) rows, at the W matched "
+              "to that simulation's mean wavelength (as the sweep's table above): the crest "
+              "motion at the elbow, ours over the simulation's, with the simulation's own "
+              "(rad a frame) in brackets, the amplitude-field correlation, and the height "
+              "ratio (ours / sim), per phase.", "",
+              "| shot | iterations | crest motion: " + " | crest motion: ".join(SLEEVE_PHASES)
+              + " | correlation | height: " + " | height: ".join(SLEEVE_PHASES) + " |",
+              "|---|---|" + "---|" * (2 * len(SLEEVE_PHASES) + 1)]
+    lines += ours_rows(cache)
     lines += ["", markers("iterations")[1]]
     return "\n".join(lines)
+
+
+def ours_rows(cache: Path) -> list[str]:
+    """usdwrinkle against the study's cached simulations at the referee's grid."""
+    from .referee import SPACING, simulated, sweep_row
+    from .simulate import cached_newton
+
+    rows = []
+    for name, spacing, count, shot in _runs():
+        if spacing != SPACING or not cached_newton(shot, cache, solver_options(count)):
+            continue
+        sim = simulated(shot, cache, count)
+        row = sweep_row(sim)
+        raw = row["compared"]
+        motion = [f"{row['motion'][phase]:.2f}x ({raw[f'motion {phase} sim']:.3f})"
+                  for phase in SLEEVE_PHASES]
+        height = [f"{row['matched'][phase][1]:.2f}x" for phase in SLEEVE_PHASES]
+        rows.append(f"| {name} | {count} | " + " | ".join(motion)
+                    + f" | {row['correlation']:.2f} | " + " | ".join(height) + " |")
+    return rows
 
 
 def main(argv=None) -> int:

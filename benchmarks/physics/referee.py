@@ -164,6 +164,7 @@ def sweep_row(sim: Simulated) -> dict:
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
               if key.startswith("motion") and key.endswith(" sim")}
     return {"default": first, "matched": per_phase(sim, matched), "width": width,
+            "compared": result,
             "correlation": result["correlation"], "motion": motion,
             "area": area_ratio(sim, matched, schema.DEFAULT_SLACK),
             "default_width": default_width(sim.shot)}

@@ -59,6 +59,12 @@ FIT_CONDITION = 0.01
 #: all (the ring does not sample the wave: one far finer than the mesh is not fitted).
 FIT_RANGE = 2.0
 FIT_ONSET = 1.05
+#: Mobility (relax.glsl, reference/relax.mobility): with phase history a vertex's relaxed
+#: phase moves from its seed by min(delta / MOBILITY_PHASE, 1) of the way the Jacobi
+#: steps take it, delta (radians) the largest change since the previous grid frame of the
+#: phase difference its ring's material waves ask for along an edge. Unchanged input
+#: keeps the phases; measured choice (docs/method.md, "Mobility").
+MOBILITY_PHASE = 0.1
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -120,7 +126,7 @@ def glsl_literal(value) -> str:
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
-    ("FIT_ONSET", FIT_ONSET),
+    ("FIT_ONSET", FIT_ONSET), ("MOBILITY_PHASE", MOBILITY_PHASE),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),
@@ -162,6 +168,9 @@ class WrinkleFields:
         The material-anchored phase crush starts relax from.
     wave_vector2, amplitude2, direction2, compression2, phase2, anchor_phase2
         The second wave system (biaxial compression; amplitude2 = 0 where there is none).
+    wavenumber : (n,) float32
+        The material wave number 2 pi / L of the first system (rest space; the anchored
+        phase's), which relax's mobility reads from the wave state; 0 where not computed.
     """
 
     points: np.ndarray
@@ -179,12 +188,14 @@ class WrinkleFields:
     compression2: np.ndarray
     phase2: np.ndarray
     anchor_phase2: np.ndarray
+    wavenumber: np.ndarray
 
     @classmethod
     def from_tables(cls, posed: np.ndarray, fields: np.ndarray, phase: np.ndarray,
-                    anchor_phase: np.ndarray) -> WrinkleFields:
+                    anchor_phase: np.ndarray, damped: np.ndarray | None = None
+                    ) -> WrinkleFields:
         """From the read-back tables: posed (n, 4), fields (n * FIELD_TEXELS, 4), phases
-        (n, WAVE_SYSTEMS)."""
+        (n, WAVE_SYSTEMS), and the wave state's damped table (n, 4; w: the wave number)."""
         texels = np.asarray(fields, np.float32).reshape(-1, FIELD_TEXELS, 4)
         normal = texels[:, FIELD_NORMAL_TEXEL]
         wave = texels[:, FIELD_WAVE_TEXEL]
@@ -200,7 +211,9 @@ class WrinkleFields:
                    anchor_phase=anchor[:, 0].copy(), wave_vector2=wave2[:, :3].copy(),
                    amplitude2=wave2[:, 3].copy(), direction2=direction2[:, :3].copy(),
                    compression2=direction2[:, 3].copy(), phase2=phase[:, 1].copy(),
-                   anchor_phase2=anchor[:, 1].copy())
+                   anchor_phase2=anchor[:, 1].copy(),
+                   wavenumber=(np.zeros(len(posed), np.float32) if damped is None else
+                               np.asarray(damped, np.float32).reshape(-1, 4)[:, 3].copy()))
 
     def arrays(self) -> dict:
         """Name -> array, in field order."""

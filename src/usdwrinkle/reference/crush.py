@@ -145,6 +145,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     stretch = np.sqrt(np.linalg.eigvalsh(np.transpose(M_geo, (0, 2, 1)) @ M_geo)[:, 1])
     return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "direction": d3,
             "compression": r, "phase": phase, "usable": usable,
+            # the material wave vector (2 pi / L) d3 that relax's mobility compares
+            "kappa": (2 * np.pi / wavelength)[:, None] * d3,
             # beyond crush.glsl's outputs: the mesh's own compression along d and largest
             # stretch, and where the room limited the fold (the area tests read them)
             "geometric": r_geo, "stretch": stretch, "capped": capped & folding,

@@ -3,7 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..method.contract import COLD_START_FACTOR, FIT_CONDITION, FIT_ONSET, FIT_RANGE, WEIGHT_FLOOR
+from ..method.contract import (
+    COLD_START_FACTOR,
+    FIT_CONDITION,
+    FIT_ONSET,
+    FIT_RANGE,
+    MOBILITY_PHASE,
+    WEIGHT_FLOOR,
+)
 from ..scene.topology import Topology
 
 
@@ -125,17 +132,44 @@ def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anch
     return start
 
 
+def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
+             topology: Topology) -> np.ndarray:
+    """relax.glsl's mobility: the share of the relaxation's move each vertex takes this
+    frame, min(delta / MOBILITY_PHASE, 1), delta the largest change over its ring edges
+    of (kappa_now - kappa_before) . (X_j - X_i), averaged over the edge's two ends (each
+    end's change sign-matched to its own previous kappa, j's to i's kappa). ``kappa``:
+    the material wave vectors (2 pi / L) d3 in rest space, (n, 3). 1 where the vertex has
+    no wave now or had none before (it relaxes fully)."""
+    rest = np.asarray(rest_points, np.float64)
+    now = np.asarray(kappa, np.float64)
+    before = np.asarray(previous_kappa, np.float64)
+    change = now - np.where(np.sum(now * before, 1) < 0, -1.0, 1.0)[:, None] * before
+    ring_offsets, dst = topology.rings()[:2]
+    src = np.repeat(np.arange(len(rest)), np.diff(ring_offsets))
+    sign = np.where(np.sum(now[src] * now[dst], 1) < 0, -1.0, 1.0)
+    edge = np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
+                         * (rest[dst] - rest[src]), 1))
+    delta = np.zeros(len(rest))
+    np.maximum.at(delta, src, edge)
+    moving = np.minimum(delta / MOBILITY_PHASE, 1.0)
+    waves = (np.asarray(amplitude) > 0) & (np.asarray(previous_amplitude) > 0)
+    return np.where(waves, moving, 1.0)
+
+
 def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations: int,
                 cold_start_factor: int = COLD_START_FACTOR) -> tuple[np.ndarray, dict]:
     """One frame of the phase history, as the engine computes it (method/history.py).
 
     ``fields``: the frame's points, wave_vector, amplitude and phase (crush's anchored
-    phase). ``state``: the wave state of the shot's previous grid frame (its wave_vector
-    and relaxed phase; the GPU's also holds crest damping's directions), or None for a
-    cold start. Returns the relaxed phases and this frame's state (its wave_vector and
-    amplitude are the fitted ones, :func:`fit`, as the GPU's fields are after relax;
-    with no iterations there is no fit). ``state`` is read, never changed: the same
-    frame from the same state is the same frame.
+    phase); with ``kappa`` (the material wave vectors, :func:`mobility`) and
+    ``rest_points``, and a state that holds its ``kappa``, the relaxed phases move from the
+    seed by each vertex's mobility (relax.glsl), else fully. ``state``: the wave state of
+    the shot's previous grid frame (its wave_vector, amplitude, relaxed phase and kappa;
+    the GPU's also holds crest damping's directions), or None for a cold start. Returns
+    the relaxed phases and this frame's state (its wave_vector and amplitude are the
+    fitted ones, :func:`fit`, as the GPU's fields are after relax; with no iterations
+    there is no fit). ``state`` is read, never changed: the same frame from the same
+    state is the same frame.
     """
     if state is None:
         start, count = fields["phase"], iterations * cold_start_factor
@@ -145,12 +179,19 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
         count = iterations
     phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
                   topology, count)
+    if state is not None and count > 0 and "kappa" in fields and "kappa" in state:
+        share = mobility(fields["rest_points"], fields["kappa"], state["kappa"],
+                         fields["amplitude"], state["amplitude"], topology)
+        phase = start + share * wrap(phase - start)
     wave_vector = np.array(fields["wave_vector"], np.float64, copy=True)
     amplitude = np.array(fields["amplitude"], np.float64, copy=True)
     if count > 0:
         wave_vector, amplitude = fit(fields["points"], fields["normals"], wave_vector,
                                      amplitude, phase, topology)
-    return phase, {"wave_vector": wave_vector, "amplitude": amplitude, "phase": phase}
+    state = {"wave_vector": wave_vector, "amplitude": amplitude, "phase": phase}
+    if "kappa" in fields:
+        state["kappa"] = np.asarray(fields["kappa"], np.float64)
+    return phase, state
 
 
 def relax_shot(frames: list, topology: Topology, iterations: int,

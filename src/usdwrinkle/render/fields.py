@@ -63,6 +63,8 @@ class WaveFields:
         #: this frame's, not part of the state
         n = num_points
         self.anchor_phase = table(n, WAVE_SYSTEMS, data=np.zeros((n, WAVE_SYSTEMS), np.float32))
+        #: relax's per-vertex mobility and seed phases (x: mobility, yz: seeds): this frame's
+        self.mobility = table(n, 4, data=np.zeros((n, 4), np.float32))
         #: unit phasors during relaxation (ping-pong) and the per-edge rotations, laid
         #: out for the wave systems relaxed (set_systems)
         self.phasors: list = []
@@ -171,4 +173,4 @@ class WaveFields:
         the posed points table they were computed on."""
         fields = self.current.read().reshape(self.num_points, FIELD_FLOATS)
         return WrinkleFields.from_tables(posed_points.read(), fields, self.phase.read(),
-                                         self.anchor_phase.read())
+                                         self.anchor_phase.read(), self.written.damped.read())
