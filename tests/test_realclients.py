@@ -208,7 +208,7 @@ def test_storm_moves_the_texture_with_the_folds_for_a_camera_the_bake_never_saw(
     the wrinkles, bakes.unwrinkled_network): 0.887, fine part (7x7 high-pass) 0.890;
     through the UsdPreviewSurface alone 0.142 and 0.249 (zoomed 2x at 480 px: 0.898 and
     0.905, 0.158 and 0.236). What is left is how Storm draws on llvmpipe, not the network
-    (python -m realclients.texture_gap, the README's block): read through a ramp texture,
+    (python -m benchmarks.texture_gap, the README's block): read through a ramp texture,
     Storm's texture coordinates are wrong on about a quarter of the pixels, with or without
     wrinkles (its dotted lines along triangle edges with any MaterialX material), and its
     texture filtering is softer than ours; without those pixels and with ours blurred to

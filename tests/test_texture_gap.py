@@ -1,13 +1,13 @@
-"""realclients/texture_gap.py's readings, on synthetic frames: the ramp texture decodes back
+"""benchmarks/texture_gap.py's readings, on synthetic frames: the ramp texture decodes back
 to the texture coordinates it was made from, and a pixel whose coordinates are wrong is
-found (the diagnosis itself needs Storm: python -m realclients.texture_gap)."""
+found (the diagnosis itself needs Storm: python -m benchmarks.texture_gap)."""
 from __future__ import annotations
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from realclients.texture_gap import (
+from benchmarks.texture_gap import (
     LOW,
     MID,
     PERIODS,

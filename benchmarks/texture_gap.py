@@ -1,7 +1,7 @@
 """What keeps Storm's texture deformation from usdwrinkle's (issue 56): the real-client
 test's texture shot measured as it is, and again without what is not the network's.
 
-    python -m realclients.texture_gap [--write README.md]
+    python -m benchmarks.texture_gap [--write README.md]
 
 The shot is tests/test_realclients.py's: the plaid shirt at W = 0.28, frame 24, zoomed 3x on
 the upper arm at 320 px (the plaid at its 960 px size), under one uniform white dome
@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .bakes import TEXTURE_SHOT, Contribution, erode, grey, read_rgba8, texture_views
-from .shots import over_layer
+from realclients.bakes import TEXTURE_SHOT, Contribution, erode, grey, read_rgba8, texture_views
+from realclients.shots import over_layer
 
 #: periods of the ramp texture's saw-tooth over [0, 1] of s (R) and of t (G)
 PERIODS = 8
@@ -202,10 +202,10 @@ def measure(folder: Path) -> list[dict]:
 
 
 def report(rows: list[dict], seconds: float) -> str:
-    from benchmarks.blocks import markers
+    from .blocks import markers
 
     begin, end = markers("texture_gap")
-    lines = [begin, "", f"Made by `python -m realclients.texture_gap --write README.md` "
+    lines = [begin, "", f"Made by `python -m benchmarks.texture_gap --write README.md` "
              f"({seconds:.0f} s here; GL {storm_renderer()}).", "",
              "| camera | plaid contribution, as measured | where Storm's st is right | "
              "ours blurred to Storm's sharpness | both | Storm's st wrong | texture offset "
@@ -234,13 +234,21 @@ def storm_renderer() -> str:
 
 
 def main(argv=None) -> int:
-    from benchmarks.blocks import emit
+    import argparse
 
-    args = sys.argv[1:] if argv is None else argv
+    from .blocks import emit
+
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.texture_gap",
+                                     description="What keeps Storm from ours in the texture "
+                                     "shot (about 10 minutes; needs the real-client Python).")
+    parser.add_argument("--write", type=Path, default=None,
+                        help="replace the texture_gap block of this file (README.md)")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
         rows = measure(Path(folder))
-    emit(args, "texture_gap", report(rows, time.perf_counter() - started))
+    emit(["--write", str(args.write)] if args.write else [], "texture_gap",
+         report(rows, time.perf_counter() - started))
     return 0
 
 
