@@ -117,9 +117,9 @@ vec3 kappa_of(sampler2D table, sampler2D wave_numbers, int v) {
 }
 
 // how far kappa changed since the previous grid frame at v, its sign matched first
-// ((k, phi) and (-k, -phi) are one wave)
-vec3 kappa_change(int v) {
-    vec3 now = kappa_of(fields, damped, v);
+// ((k, phi) and (-k, -phi) are one wave); ``now``: v's kappa of this frame
+vec3 kappa_change(int v, out vec3 now) {
+    now = kappa_of(fields, damped, v);
     vec3 before = kappa_of(previous_fields, previous_damped, v);
     return now - (dot(now, before) < 0.0 ? -before : before);
 }
@@ -127,14 +127,15 @@ vec3 kappa_change(int v) {
 // The share of the relaxation's move a vertex takes this frame (the header: mobility)
 float mobility(int i, bool history, vec4 before0) {
     if (!history || !(wave_of(fields, i, 0).w > 0.0) || !(before0.w > 0.0)) return 1.0;
-    vec3 kappa_i = kappa_of(fields, damped, i);
-    vec3 change_i = kappa_change(i);
+    vec3 kappa_i;
+    vec3 change_i = kappa_change(i, kappa_i);
     vec3 X_i = fetch(rest_points, i).xyz;
     float delta = 0.0;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
-        vec3 change_j = kappa_change(j);
-        if (dot(kappa_of(fields, damped, j), kappa_i) < 0.0) change_j = -change_j;
+        vec3 kappa_j;
+        vec3 change_j = kappa_change(j, kappa_j);
+        if (dot(kappa_j, kappa_i) < 0.0) change_j = -change_j;
         delta = max(delta, abs(dot(0.5 * (change_i + change_j),
                                    fetch(rest_points, j).xyz - X_i)));
     }

@@ -14,15 +14,19 @@ from ..method.contract import (
 from ..scene.topology import Topology
 
 
+def ring_edges(topology: Topology) -> tuple[np.ndarray, np.ndarray]:
+    """Every directed ring edge the passes read (Topology.rings: CSR, capped): (i, j)."""
+    ring_offsets, dst = topology.rings()[:2]
+    return np.repeat(np.arange(len(ring_offsets) - 1), np.diff(ring_offsets)), dst
+
+
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
     """``iterations`` Jacobi steps; returns the new phases (n,)."""
     points = np.asarray(points, np.float64)
     k = np.asarray(wave_vector, np.float64)
     weight = np.asarray(amplitude, np.float64) + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
-    n = len(points)
-    ring_offsets, dst = topology.rings()[:2]
-    src = np.repeat(np.arange(n), np.diff(ring_offsets))
+    src, dst = ring_edges(topology)
     sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
     k_j = k[dst] * sign[:, None]
     k_bar = 0.5 * (k[src] + k_j)
@@ -53,8 +57,7 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
     a = np.asarray(amplitude, np.float64)
     phi = np.asarray(phase, np.float64)
     n = len(points)
-    ring_offsets, dst = topology.rings()[:2]
-    src = np.repeat(np.arange(n), np.diff(ring_offsets))
+    src, dst = ring_edges(topology)
     sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
     k_bar = 0.5 * (k[src] + k[dst] * sign[:, None])
     dx = points[dst] - points[src]
@@ -144,8 +147,7 @@ def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
     now = np.asarray(kappa, np.float64)
     before = np.asarray(previous_kappa, np.float64)
     change = now - np.where(np.sum(now * before, 1) < 0, -1.0, 1.0)[:, None] * before
-    ring_offsets, dst = topology.rings()[:2]
-    src = np.repeat(np.arange(len(rest)), np.diff(ring_offsets))
+    src, dst = ring_edges(topology)
     sign = np.where(np.sum(now[src] * now[dst], 1) < 0, -1.0, 1.0)
     edge = np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
                          * (rest[dst] - rest[src]), 1))
