@@ -6,7 +6,8 @@ compressed regions, taken apart in numpy.
 The engine computes each stage's frame 24 (its phase history from the shot's start, as
 every render and bake does); the fine mesh is the coarse posed mesh subdivided 3 times,
 displaced along each coarse triangle's face normal by the blend
-h = sum_c b_c a_c H(theta_c) of include/wave.glsl (no band limit), and its area is
+h = sum_c b_c a_c H(theta_c) of include/wave.glsl, divided by its coherence (no band
+limit), and its area is
 measured where every corner is compressed beyond 3 x the slack, unpainted
 (benchmarks.physics.area's region). The blend is drawn with:
 - **crush's waves**: k and a as the crush pass makes them (the numpy reference), with
@@ -52,12 +53,23 @@ def _profile(height: np.ndarray, theta: np.ndarray) -> np.ndarray:
 def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal,
                 shorter=1.0) -> np.ndarray:
     """Each fine face's area, displaced by the blend of its coarse triangle's corner
-    waves (k, amplitude, ``phase`` per face and corner) along the face normal; each
-    corner's fold ``shorter`` times shorter at amplitude / shorter, the same slope
-    (benchmarks.physics.room; 1: the waves as they are)."""
+    waves (k, amplitude, ``phase`` per face and corner) along the face normal, divided by
+    its coherence as include/wave.glsl divides it (at most 1 / BLEND_COHERENCE_FLOOR
+    times, within the interpolated amplitude); each corner's fold ``shorter`` times
+    shorter at amplitude / shorter, the same slope (benchmarks.physics.room; 1: the
+    waves as they are)."""
+    from usdwrinkle.method.contract import BLEND_COHERENCE_FLOOR
+
     theta = phase[:, None, :] + np.einsum("mcj,mvcj->mvc", k, offset)
     m = np.broadcast_to(np.asarray(shorter, np.float64), amplitude.shape)[:, None, :]
-    h = np.einsum("mvc,mvc->mv", bary, amplitude[:, None, :] / m * _profile(height, m * theta))
+    weighted = bary * (amplitude[:, None, :] / m)
+    h = np.einsum("mvc,mvc->mv", weighted, _profile(height, m * theta))
+    total = weighted.sum(-1)
+    magnitude = np.abs(np.einsum("mvc,mvc->mv", weighted, np.exp(1j * m * theta)))
+    keep = np.where(total > 0, total / np.maximum(np.maximum(magnitude,
+                                                             BLEND_COHERENCE_FLOOR * total),
+                                                  1e-300), 1.0)
+    h = np.clip(h * keep, -total, total)
     return _area(at + h[..., None] * face_normal[:, None, :])
 
 

@@ -180,6 +180,13 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     bary = blend_weights(bary);
     for (int s = 0; s < SYSTEMS; ++s) {
+        float height = 0.0;      // this system's blend, before its coherence
+        vec3 gradient = vec3(0.0);
+        float total = 0.0;       // sum b_c a_c
+        vec2 phasor = vec2(0.0); // sum b_c a_c e^(i theta_c)
+        vec3 d_total = vec3(0.0);  // their gradients (exact_gradient)
+        vec3 d_cos = vec3(0.0);
+        vec3 d_sin = vec3(0.0);
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
             vec3 k = wave.xyz;
@@ -190,14 +197,48 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
             float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
             if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
-            float height = profile(u_height_profile, theta);
-            w.height += b * a * height;
-            w.gradient += b * a * profile(u_gradient_profile, theta) * k;
+            float h = profile(u_height_profile, theta);
+            height += b * a * h;
+            gradient += b * a * profile(u_gradient_profile, theta) * k;
+            total += b * a;
+            phasor += b * a * vec2(cos(theta), sin(theta));
             if (exact_gradient) {
-                w.gradient += a * height * weight_gradient(c, cw.corner[0], cw.corner[1],
-                                                           cw.corner[2]);
+                vec3 db = weight_gradient(c, cw.corner[0], cw.corner[1], cw.corner[2]);
+                gradient += a * h * db;
+                d_total += a * db;
+                d_cos += a * (cos(theta) * db - b * sin(theta) * k);
+                d_sin += a * (sin(theta) * db + b * cos(theta) * k);
             }
         }
+        // coherence: corner waves that drift out of phase inside the triangle cancel in
+        // the blend, which then draws less than the interpolated amplitude (and less
+        // length than the law's). The blend is divided by its coherence |phasor| / total
+        // (1 where the corners agree), at most 1 / BLEND_COHERENCE_FLOOR times, and held
+        // within the interpolated amplitude total (as the blend alone is: a profile that
+        // is not a cosine can pass it by a few percent), so |h| never exceeds the
+        // largest corner amplitude. It depends only on the corners whose weight is not
+        // zero, so it is continuous across the coarse edges.
+        float magnitude = length(phasor);
+        if (total > 0.0 && magnitude < total) {
+            float keep = total / max(magnitude, BLEND_COHERENCE_FLOOR * total);
+            if (abs(height) * keep >= total) {
+                // the crest held at the interpolated amplitude
+                gradient = exact_gradient ? sign(height) * d_total : vec3(0.0);
+                height = sign(height) * total;
+            } else {
+                if (exact_gradient && magnitude > BLEND_COHERENCE_FLOOR * total) {
+                    // keep = total / |phasor|: its gradient, so that h keep differentiates
+                    vec3 d_magnitude = (phasor.x * d_cos + phasor.y * d_sin) / magnitude;
+                    gradient = keep * gradient
+                             + height * (d_total - keep * d_magnitude) / magnitude;
+                } else {
+                    gradient *= keep;
+                }
+                height *= keep;
+            }
+        }
+        w.height += height;
+        w.gradient += gradient;
     }
     if (!exact_gradient) {
         w.gradient -= dot(w.gradient, n) * n;  // keep the gradient in the tangent plane
