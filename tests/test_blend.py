@@ -1,7 +1,8 @@
-"""The wave blend (include/wave.glsl, blend_corner_waves) number by number against numpy:
-the paper's barycentric blend of the corner waves, divided by its coherence (docs/method.md,
-"Coherence"), with its exact gradient. The draw pass, the maps and the displaced geometry
-all call this one function (tests/test_contract.py checks that it is written once)."""
+"""The wave blend (include/wave.glsl, blend_corner_waves) number by number against its numpy
+reference (usdwrinkle/reference/blend.py): the paper's barycentric blend of the corner
+waves, divided by its coherence (docs/method.md, "Coherence"), with its exact gradient. The
+draw pass, the maps and the displaced geometry all call this one function
+(tests/test_contract.py checks that it is written once)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,60 +12,12 @@ import pytest
 
 from usdwrinkle.method.contract import BLEND_COHERENCE_FLOOR
 from usdwrinkle.method.profiles import default_profile, derive_gradient
+from usdwrinkle.reference.blend import blend_at
 from usdwrinkle.render.bindings import COMMON, WAVE
 from usdwrinkle.render.shaders import compute_shader
 
 SHADERS = Path(__file__).resolve().parent / "shaders"
 COUNT = 400
-
-
-def periodic(table: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """A profile table read as the shaders read it: sample s at theta = 2 pi s / N,
-    linear between samples, repeating."""
-    count = len(table)
-    x = np.mod(theta / (2 * np.pi) * count, count)
-    i = np.floor(x).astype(np.int64)
-    f = x - i
-    return table[i % count] * (1 - f) + table[(i + 1) % count] * f
-
-
-def weight_gradients(corners: np.ndarray) -> np.ndarray:
-    """(3, 3): the gradient of each barycentric weight over the triangle."""
-    normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
-    opposite = [corners[2] - corners[1], corners[0] - corners[2], corners[1] - corners[0]]
-    return np.array([np.cross(normal, e) for e in opposite]) / normal.dot(normal)
-
-
-def reference(waves, phases, corners, bary, p, height, gradient):
-    """The blend and its exact gradient at p, in numpy (float64)."""
-    b = np.clip(bary, 0, 1)
-    b = b / b.sum()
-    k, a = waves[:, :3], waves[:, 3]
-    theta = phases + np.einsum("cj,cj->c", k, p - corners)
-    H, G = periodic(height, theta), periodic(gradient, theta)
-    db = weight_gradients(corners)
-    h = np.sum(b * a * H)
-    g = np.einsum("c,cj->j", b * a * G, k) + np.einsum("c,cj->j", a * H, db)
-    total = np.sum(b * a)
-    phasor = np.array([np.sum(b * a * np.cos(theta)), np.sum(b * a * np.sin(theta))])
-    magnitude = np.linalg.norm(phasor)
-    if total > 0 and magnitude < total:
-        keep = total / max(magnitude, BLEND_COHERENCE_FLOOR * total)
-        if abs(h) * keep >= total:
-            return np.sign(h) * total, np.sign(h) * np.einsum("c,cj->j", a, db), keep
-        if magnitude > BLEND_COHERENCE_FLOOR * total:
-            d_total = np.einsum("c,cj->j", a, db)
-            d_cos = np.einsum("c,cj->j", a * np.cos(theta), db) \
-                - np.einsum("c,cj->j", b * a * np.sin(theta), k)
-            d_sin = np.einsum("c,cj->j", a * np.sin(theta), db) \
-                + np.einsum("c,cj->j", b * a * np.cos(theta), k)
-            d_magnitude = (phasor[0] * d_cos + phasor[1] * d_sin) / magnitude
-            g = keep * g + h * (d_total - keep * d_magnitude) / magnitude
-        else:
-            g = keep * g
-        h = keep * h
-        return h, g, keep
-    return h, g, 1.0
 
 
 def cases(seed: int, agree: bool):
@@ -154,7 +107,7 @@ def test_the_blend_and_its_gradient_match_numpy(blend, agree):
     gpu = run(items)
     keeps = []
     for (waves, phases, corners, bary, p), got in zip(items, gpu, strict=True):
-        h, g, keep = reference(waves, phases, corners, bary, p, height, gradient)
+        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient)
         keeps.append(keep)
         scale = waves[:, 3].max()
         slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
@@ -182,7 +135,7 @@ def test_the_exact_gradient_is_the_gradient_of_the_height():
     step = 1e-6
     checked = 0
     for waves, phases, corners, bary, p in cases(11, False):
-        h, g, keep = reference(waves, phases, corners, bary, p, height, gradient)
+        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient)
         if not 1.0 < keep < 0.95 / BLEND_COHERENCE_FLOOR or abs(h) >= 0.99 * np.sum(
                 bary * waves[:, 3]):
             continue
@@ -198,8 +151,8 @@ def test_the_exact_gradient_is_the_gradient_of_the_height():
                 weights = np.array([1 - uv.sum(), uv[0], uv[1]])
                 if weights.min() < 0:
                     break
-                values.append(reference(waves, phases, corners, weights, q, height,
-                                        gradient)[0])
+                values.append(blend_at(waves, phases, corners, weights, q, height,
+                                       gradient)[0])
             else:
                 slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
                 assert abs((values[0] - values[1]) / (2 * step) - g[axis]) <= 1e-3 * slope

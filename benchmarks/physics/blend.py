@@ -41,35 +41,19 @@ def _area(x: np.ndarray) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
 
 
-def _profile(height: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """The height profile read as the shaders read it: periodic, linear."""
-    count = len(height)
-    x = np.mod(theta / (2 * np.pi) * count, count)
-    i = np.floor(x).astype(np.int64)
-    f = x - i
-    return height[i % count] * (1 - f) + height[(i + 1) % count] * f
-
-
 def _blend_area(phase, k, offset, bary, amplitude, height, at, face_normal,
                 shorter=1.0) -> np.ndarray:
     """Each fine face's area, displaced by the blend of its coarse triangle's corner
-    waves (k, amplitude, ``phase`` per face and corner) along the face normal, divided by
-    its coherence as include/wave.glsl divides it (at most 1 / BLEND_COHERENCE_FLOOR
-    times, within the interpolated amplitude); each corner's fold ``shorter`` times
+    waves (k, amplitude, ``phase`` per face and corner) along the face normal, as
+    include/wave.glsl blends them (usdwrinkle.reference.blend: divided by its coherence,
+    within the interpolated amplitude); each corner's fold ``shorter`` times
     shorter at amplitude / shorter, the same slope (benchmarks.physics.room; 1: the
     waves as they are)."""
-    from usdwrinkle.method.contract import BLEND_COHERENCE_FLOOR
+    from usdwrinkle.reference.blend import blended_height
 
     theta = phase[:, None, :] + np.einsum("mcj,mvcj->mvc", k, offset)
     m = np.broadcast_to(np.asarray(shorter, np.float64), amplitude.shape)[:, None, :]
-    weighted = bary * (amplitude[:, None, :] / m)
-    h = np.einsum("mvc,mvc->mv", weighted, _profile(height, m * theta))
-    total = weighted.sum(-1)
-    magnitude = np.abs(np.einsum("mvc,mvc->mv", weighted, np.exp(1j * m * theta)))
-    keep = np.where(total > 0, total / np.maximum(np.maximum(magnitude,
-                                                             BLEND_COHERENCE_FLOOR * total),
-                                                  1e-300), 1.0)
-    h = np.clip(h * keep, -total, total)
+    h = blended_height(bary * (amplitude[:, None, :] / m), m * theta, height)
     return _area(at + h[..., None] * face_normal[:, None, :])
 
 
