@@ -34,6 +34,8 @@ NOISE = 3e-4               # m, the smooth symmetry-breaking field's height
 
 #: m, the curtain's rings along its rail
 RING_SPACING = 0.06
+#: the fewest coarse points around a sleeve (its coarse mesh keeps every stride-th line)
+SLEEVE_AROUND = 8
 #: the compression steps at which the curtain's folds are read (share of the width)
 CURTAIN_PUSH = 0.48
 CURTAIN_STEPS = (0.08, 0.16, 0.24, 0.32, 0.40, 0.48)
@@ -179,7 +181,11 @@ def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
                 {"bend": (10, 50), "held": (50, 70)},
                 f"a {fabric} sleeve of radius {100 * radius:.0f} cm on an arm of radius "
                 f"{80 * radius:.0f} cm, its end rings pinned, bent 90 degrees over 20 cm")
+    # coarse lines 8 cm apart, as on the flat shots, but at least SLEEVE_AROUND of them
+    # around the sleeve (4 around the 5 cm sleeve made its coarse mesh a square tube)
     shot.stride = max(1, int(round(0.08 / spacing)))
+    while shot.stride > 1 and cols // shot.stride < SLEEVE_AROUND:
+        shot.stride //= 2
     return SweepShot(shot, fabric, clean, capsules)
 
 
