@@ -18,6 +18,7 @@ are measured at the same material points.
 from __future__ import annotations
 
 import argparse
+import functools
 import time
 from pathlib import Path
 
@@ -277,7 +278,9 @@ def sweep_report(names: list[str], cache: Path) -> str:
     return "\n".join(lines)
 
 
+@functools.cache
 def _newton_version() -> str:
+    """Newton's version in the simulation Python (asked once: both blocks name it)."""
     import subprocess
 
     from .simulate import newton_python
