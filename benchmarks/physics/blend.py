@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_stages"
 STAGES = ("zeppelin", "shirt", "curtain")
 #: subdivision levels of the compressed regions: the shirt's area moves by under 1% from
-#: 5 to 6 (at 3 it read 9% low displaced along the face normals, which then happened to
+#: 5 to 6 (at 3 it read 8% low displaced along the face normals, which then happened to
 #: agree with the bake)
 LEVELS = 5
 CONVERGED = 2000
