@@ -101,7 +101,8 @@ void main() {
     if (i >= u_num_points) return;
     bool usable;
     vec3 n = posed_normal(i, fetch(rest_frame, 2 * i).xyz, usable);
-    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
+    // a bake holds the drawn amplitude: all of it is drawn
+    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 2.0 : 0.0));
     STORE(fields, FIELD_WAVE(i), fetch(baked, 4 * i));
     STORE(fields, FIELD_DIRECTION(i), fetch(baked, 4 * i + 1));
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, fetch(baked, 4 * i + 2));
@@ -173,6 +174,10 @@ struct Fold {
     vec3 k;
     float amplitude;   // before the amplitude scale and the held edges
     float wavelength;  // material (rest space): what the anchored phase counts
+    // the share of the amplitude the surface draws: below 1 where the mesh is stretched
+    // across d (it holds that share of the cloth's area already); the relaxation weighs
+    // the phases by the whole amplitude (weighing by the drawn one moved the crests)
+    float drawn;
 };
 
 // the slack c: the first of the compression is taken in-plane; the folds begin at a
@@ -184,9 +189,10 @@ float excess_of(float r_geo) {
     return max(1.0, restored / r_geo);
 }
 
-Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float W, float room,
-          float scale, vec3 t1, vec3 t2) {
+Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretched,
+          float W, float room, float scale, vec3 t1, vec3 t2) {
     Fold f;
+    f.drawn = 1.0;
     float gather = min(r_geo / r, PAINT_GATHER_MAX);
     float rho = excess_of(r_geo) * gather;
     float rho_area = max(rho, excess_of(r_geo * across) * gather);
@@ -199,7 +205,13 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float W, float
     float L = W * min(pow(rho, COARSENING_EXPONENT), COARSENING_MAX);
     f.k = wave_vector(M_geo, d, L, t1, t2);
     f.amplitude = profile_slope(rho_area) / max(length(f.k), 1e-30);
+    // the fold that restores the area the stretched mesh lacks (its slope for the excess
+    // with r_geo * across * stretched in place of r_geo), within the same room
+    float lowered = profile_slope(excess_of(r_geo * across * stretched) * gather)
+                    / max(length(f.k), 1e-30);
     f.amplitude = min(f.amplitude, room / max(scale, 1e-30));
+    lowered = min(lowered, room / max(scale, 1e-30));
+    f.drawn = f.amplitude > 0.0 ? min(lowered / f.amplitude, 1.0) : 1.0;
     f.wavelength = L;
     return f;
 }
@@ -312,10 +324,16 @@ void main() {
     // room for a fold: FOLD_ROOM of the posed surface's radius of curvature
     float room = bend > 0.0 ? FOLD_ROOM / bend : 1e30;
     // the mesh's compression across d, which one wave restores with its own where the
-    // second system is off (with it on, that system restores it)
+    // second system is off (with it on, that system restores it) ...
     float across = u_biaxial > 0.0 || !usable ? 1.0
                    : clamp(length(M_geo * e), ACROSS_MIN, 1.0);
-    Fold f1 = fold(M_geo, d, r, r_geo, across, W, room, u_amplitude_scale, t1, t2);
+    // and its stretch across d beyond STRETCH_ONSET (a wrinkling cloth's own stretch
+    // lies below it), up to ACROSS_MAX, which lowers only the drawn fold
+    float stretched = usable ? clamp(length(M_geo * e) / STRETCH_ONSET, 1.0, ACROSS_MAX)
+                             : 1.0;
+    Fold f1 = fold(M_geo, d, r, r_geo, across, stretched, W, room, u_amplitude_scale,
+                   t1, t2);
+    float drawn = f1.drawn;
     float amplitude = local * u_amplitude_scale * f1.amplitude;
     vec3 k = f1.k;
     float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
@@ -331,6 +349,7 @@ void main() {
             * sqrt(strain) * tension_wavelength;
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
+            drawn = 1.0;
             wavelength = tension_wavelength;
             k = wave_vector(M_geo, d, wavelength, t1, t2);
         }
@@ -339,13 +358,13 @@ void main() {
     // The second system: the other principal direction, where it is compressed too
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
     float r2_geo = any_wave ? clamp(length(M_geo * e), MIN_RATIO, 1.0) : 1.0;
-    Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, W, room, u_amplitude_scale * u_biaxial,
+    Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, 1.0, W, room, u_amplitude_scale * u_biaxial,
                    t1, t2);
     float amplitude2 = u_biaxial > 0.0 ? local * u_biaxial * u_amplitude_scale * f2.amplitude
                                         : 0.0;
     vec3 k2 = f2.k;
 
-    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 : 0.0));
+    STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 + drawn : 0.0));
     STORE(fields, FIELD_WAVE(i), vec4(k, amplitude));
     STORE(fields, FIELD_DIRECTION(i), vec4(d3, r));
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));

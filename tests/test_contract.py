@@ -103,10 +103,17 @@ def test_fields_follow_the_layout():
     np.testing.assert_array_equal(fields.phase2, phases[:, 1])      # system 2: y
     np.testing.assert_array_equal(fields.anchor_phase2, phases[:, 1] + 100)
     assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
-                                     "direction", "compression", "phase", "anchor_phase",
+                                     "drawn", "direction", "compression", "phase", "anchor_phase",
                                      "wave_vector2", "amplitude2", "direction2",
                                      "compression2", "phase2", "anchor_phase2", "wavenumber"]
     np.testing.assert_array_equal(fields.wavenumber, 0.0)  # no damped table given
+    # the normal texel's w: 0 where the ring is not usable (all drawn), else 1 + the share
+    # drawn (in [0, 1])
+    table[0::FIELD_TEXELS, 3] = [0.0, 1.0, 1.25, 2.0, 7.0]
+    drawn = WrinkleFields.from_tables(posed, table, phases, phases)
+    np.testing.assert_array_equal(drawn.usable, [False, True, True, True, True])
+    np.testing.assert_array_equal(drawn.drawn, [1.0, 0.0, 0.25, 1.0, 1.0])
+    np.testing.assert_array_equal(drawn.drawn_amplitude, drawn.amplitude * drawn.drawn)
     damped = np.arange(n * 4, dtype=np.float32).reshape(n, 4)
     np.testing.assert_array_equal(
         WrinkleFields.from_tables(posed, table, phases, phases, damped).wavenumber, damped[:, 3])

@@ -99,11 +99,14 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
 
     record = engine.meshes[path]
     fields = engine.read_fields(path).arrays()
+    # the amplitude as the surface draws it (lowered where the mesh is stretched across)
+    fields["amplitude"] = fields["amplitude"] * fields["drawn"]
     triangles = record.topology.triangles
     posed = fields["points"].astype(np.float64)
     law = crush(record.rest_points, posed, record.topology, record.params.q,
                 record.params.width, slack=record.params.slack,
                 hold=record.params.hold, gain=record.params.amplitude_gain)
+    law["amplitude"] = law["amplitude"] * law["drawn"]
     unpainted = np.linalg.norm(record.params.q, axis=1) == 0
     compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
     fine = subdivide(posed, triangles, levels)

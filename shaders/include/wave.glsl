@@ -80,6 +80,12 @@ struct CornerWaves {
 #define NO_RATIOS vec3[1](vec3(1.0))
 #endif
 
+// the share of vertex i's first wave that the surface draws (crush: FIELD_NORMAL's w is
+// 1 + it where the ring is usable; 0 where not, and no wave there)
+float drawn_share(int i) {
+    return clamp(fetch(fields, FIELD_NORMAL(i)).w - 1.0, 0.0, 1.0);
+}
+
 CornerWaves corner_waves(int t) {
     CornerWaves cw;
     ivec3 corners = fetch(triangles, t).xyz;
@@ -109,11 +115,13 @@ CornerWaves corner_waves(int t) {
 #if defined TWO_SYSTEMS
             int system = swapped[c] ? 1 - s : s;
             vec4 wave = s < SYSTEMS ? fetch(fields, FIELD_WAVE_OF(i, system)) : vec4(0.0);
+            if (system == 0) wave.w *= drawn_share(i);
             float phi = fetch(phase, i)[system];
             cw.ratio[s][c] = fetch(fields, FIELD_TEXELS * i + (system == 0
                 ? FIELD_DIRECTION_TEXEL : FIELD_DIRECTION2_TEXEL)).w;
 #else
             vec4 wave = fetch(fields, FIELD_WAVE(i));
+            wave.w *= drawn_share(i);
             float phi = fetch(phase, i).x;
             cw.ratio[s][c] = fetch(fields, FIELD_DIRECTION(i)).w;
 #endif

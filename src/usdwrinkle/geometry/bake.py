@@ -105,7 +105,7 @@ class GeometryBake:
         for path, fields in fields_by_path.items():
             if path in self.advances:
                 advance = phase_advance(fields.points, self.meshes[path].topology.triangles,
-                                        fields.wave_vector, fields.amplitude)
+                                        fields.wave_vector, fields.drawn_amplitude)
                 self.advances[path].append(advance[advance > 0])
 
     def phase_step(self, path: str) -> float:

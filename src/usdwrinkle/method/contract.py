@@ -29,11 +29,25 @@ MIN_RATIO = 0.05
 #:   its excess length takes r * max(r2, ACROSS_MIN). The referee's sleeves are compressed
 #:   both ways in the pinch (the low-passed cloth's larger principal stretch is 0.91 at
 #:   the median, 0.74 at the 10th percentile), and their folds kept 0.78-0.82 of the rest
-#:   area (docs/physics.md, "The area across").
+#:   area (docs/physics.md, "The area across"). Where the mesh is stretched across
+#:   instead (a squashed pillow's bulging sides), the posed surface holds some of the
+#:   cloth's area already, and the surface draws the fold lowered to restore only the
+#:   rest: its slope for r * min(r2 / STRETCH_ONSET, ACROSS_MAX) where r2 exceeds
+#:   STRETCH_ONSET. Only the drawn height is lowered (FIELD_NORMAL's w); the relaxation
+#:   weighs the phases by the whole fold, since weighing them by the lowered one moved
+#:   the shirt's crests past their bar. The onset: a wrinkling cloth is stretched across
+#:   its folds by itself (the referee's shears, curtains and sleeves by 1-6%), and
+#:   counting a stretch from 1 lowered the referee's sheared folds to 0.49-0.76x; from
+#:   10%, only an animation's stretch (a squashed pillow's sides, 10-20%) counts, and the
+#:   referee's rows stay within 0.03. The pillow drew 1.289 of its rest area where
+#:   stretched across by over 10% (1.082 over its compressed region), 1.086 (1.026) now
+#:   (docs/physics.md, "The pillow").
 COARSENING_EXPONENT = 1.0
 COARSENING_MAX = 1.5
 FOLD_ROOM = 0.5
 ACROSS_MIN = 0.7
+ACROSS_MAX = 1.0 / ACROSS_MIN
+STRETCH_ONSET = 1.1
 #: The blend keeps the interpolated amplitude where the corner waves drift out of phase
 #: inside a coarse triangle (wave.glsl, blend_corner_waves): it is divided by its
 #: coherence |sum b a e^(i theta)| / sum b a, at least this (so at most 2x where the
@@ -91,7 +105,9 @@ UDIM_REPEAT = -2
 
 #: Per-vertex fields table (crush writes it; relax and draw read it): FIELD_TEXELS RGBA
 #: texels per vertex, in this order:
-#:   normal     xyz: posed unit normal (local space); w: 1 if the 1-ring is usable
+#:   normal     xyz: posed unit normal (local space); w: 0 if the 1-ring is not usable,
+#:              else 1 + the share of the wave's amplitude the surface draws (below 1
+#:              where the mesh is stretched across the wave beyond STRETCH_ONSET)
 #:   wave       xyz: wave vector k (local space, posed); w: amplitude h
 #:   direction  xyz: rest-space unit direction d of strongest compression; w: r
 #:   wave2      the second wave system (biaxial compression): k2, h2 (h2 = 0: none)
@@ -143,7 +159,8 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("COARSENING_EXPONENT", COARSENING_EXPONENT), ("COARSENING_MAX", COARSENING_MAX),
     ("FOLD_ROOM", FOLD_ROOM), ("PAINT_GATHER_MAX", PAINT_GATHER_MAX),
     ("ANCHOR_ALIGNED", ANCHOR_ALIGNED),
-    ("ACROSS_MIN", ACROSS_MIN), ("BLEND_COHERENCE_FLOOR", BLEND_COHERENCE_FLOOR),
+    ("ACROSS_MIN", ACROSS_MIN), ("ACROSS_MAX", ACROSS_MAX), ("STRETCH_ONSET", STRETCH_ONSET),
+    ("BLEND_COHERENCE_FLOOR", BLEND_COHERENCE_FLOOR),
     ("SLOPE_SAMPLES", SLOPE_SAMPLES), ("SLOPE_STEP", SLOPE_STEP))}
 
 
@@ -163,7 +180,11 @@ class WrinkleFields:
     wave_vector : (n, 3) float32
         Wave vector k (local space, posed).
     amplitude : (n,) float32
-        Amplitude h (scene units).
+        Amplitude h (scene units): the fold law's, which the relaxation weighs by.
+    drawn : (n,) float32
+        The share of ``amplitude`` the surface draws (1, less where the mesh is stretched
+        across the wave): ``drawn_amplitude`` is what the draw pass, the maps, the
+        geometry and the bake's primvar carry.
     direction : (n, 3) float32
         Rest-space unit direction of strongest compression.
     compression : (n,) float32
@@ -184,6 +205,7 @@ class WrinkleFields:
     usable: np.ndarray
     wave_vector: np.ndarray
     amplitude: np.ndarray
+    drawn: np.ndarray
     direction: np.ndarray
     compression: np.ndarray
     phase: np.ndarray
@@ -212,7 +234,10 @@ class WrinkleFields:
         anchor = np.asarray(anchor_phase, np.float32).reshape(-1, WAVE_SYSTEMS)
         return cls(points=posed[:, :3].copy(), normals=normal[:, :3].copy(),
                    usable=normal[:, 3] > 0.5, wave_vector=wave[:, :3].copy(),
-                   amplitude=wave[:, 3].copy(), direction=direction[:, :3].copy(),
+                   amplitude=wave[:, 3].copy(),
+                   drawn=np.where(normal[:, 3] > 0.5, np.clip(normal[:, 3] - 1.0, 0.0, 1.0),
+                                  1.0).astype(np.float32),
+                   direction=direction[:, :3].copy(),
                    compression=direction[:, 3].copy(), phase=phase[:, 0].copy(),
                    anchor_phase=anchor[:, 0].copy(), wave_vector2=wave2[:, :3].copy(),
                    amplitude2=wave2[:, 3].copy(), direction2=direction2[:, :3].copy(),
@@ -220,6 +245,12 @@ class WrinkleFields:
                    anchor_phase2=anchor[:, 1].copy(),
                    wavenumber=(np.zeros(len(posed), np.float32) if damped is None else
                                np.asarray(damped, np.float32).reshape(-1, 4)[:, 3].copy()))
+
+    @property
+    def drawn_amplitude(self) -> np.ndarray:
+        """The first system's amplitude as the surface draws it (``amplitude`` times
+        ``drawn``): what a bake writes as primvars:wrinkle:amplitude."""
+        return (self.amplitude * self.drawn).astype(np.float32)
 
     def arrays(self) -> dict:
         """Name -> array, in field order."""

@@ -8,7 +8,9 @@ the profile's slope table from here.
   a painted gather adds. The wave restores exactly that length for the mesh's profile H:
   its slope ``a |k|`` solves ``mean sqrt(1 + (a |k| H')^2) = rho`` (slope_table). Where
   the mesh is compressed across the wave too, the slope restores the area instead
-  (``area_excess``: the compression across joins, down to ACROSS_MIN).
+  (``area_excess``: the compression across joins, down to ACROSS_MIN); the surface
+  draws it lowered where the mesh is stretched across beyond STRETCH_ONSET, up to
+  ACROSS_MAX (``drawn_excess``).
 - **Coarsening.** ``L = W min(rho^COARSENING_EXPONENT, COARSENING_MAX)``: the cloth
   referee's folds widen under compression while their posed wavelength stays about
   constant (docs/physics.md); exponent 1 keeps the posed wavelength at W up to rho =
@@ -23,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from .contract import (
+    ACROSS_MAX,
     ACROSS_MIN,
     COARSENING_EXPONENT,
     COARSENING_MAX,
@@ -30,6 +33,7 @@ from .contract import (
     PAINT_GATHER_MAX,
     SLOPE_SAMPLES,
     SLOPE_STEP,
+    STRETCH_ONSET,
 )
 
 
@@ -98,6 +102,21 @@ def area_excess(r, r_geo, across, slack: float) -> np.ndarray:
     # scaling r and r_geo alike keeps the painted gather r_geo / r as it is
     return np.maximum(excess_length(r, r_geo, slack),
                       excess_length(r * across, r_geo * across, slack))
+
+
+def drawn_excess(r, r_geo, across, slack: float) -> np.ndarray:
+    """The excess length of the fold the surface draws: ``area_excess`` with a stretch
+    across the wave beyond STRETCH_ONSET counted too (``across`` below 1 clipped to
+    [ACROSS_MIN, 1], above it divided by STRETCH_ONSET and clipped to [1, ACROSS_MAX]):
+    where the mesh is stretched across by more than a wrinkling cloth stretches itself,
+    the posed surface holds that share of the cloth's area already. The relaxation
+    weighs the phases by ``area_excess``'s fold."""
+    r = np.asarray(r, np.float64)
+    r_geo = np.asarray(r_geo, np.float64)
+    across = np.asarray(across, np.float64)
+    across = np.where(across < 1.0, np.clip(across, ACROSS_MIN, 1.0),
+                      np.clip(across / STRETCH_ONSET, 1.0, ACROSS_MAX))
+    return excess_length(r * across, r_geo * across, slack)
 
 
 def restored(r_geo, slack: float) -> np.ndarray:

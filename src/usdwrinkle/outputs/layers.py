@@ -50,13 +50,19 @@ def viridis(values: np.ndarray) -> np.ndarray:
     return srgb_decode(rgb).astype(np.float32)  # displayColor is linear
 
 
+def _baked(fields, field: str) -> np.ndarray:
+    """A baked primvar's values: the amplitude as the surface draws it (a render from the
+    bake draws the baked amplitude as it is), every other field as computed."""
+    return fields.drawn_amplitude if field == "amplitude" else getattr(fields, field)
+
+
 def display_values(field: str, fields: dict, params) -> np.ndarray:
     """The [0, 1] quantity shown by --display-color."""
     if field == "amplitude":  # over about the fold law's height of cloth crushed flat
         gain = 1.0 if params.amplitude_gain is None else params.amplitude_gain
         full = np.maximum(params.amplitude_scale * gain * COARSENING_MAX * params.width / 4.0,
                           1e-30)
-        return np.minimum(fields.amplitude / full, 1.0)
+        return np.minimum(fields.drawn_amplitude / full, 1.0)
     return (1.0 - fields.compression) / (1.0 - MIN_RATIO)  # r in [MIN_RATIO, 1] -> [1, 0]
 
 
@@ -205,7 +211,7 @@ class LayerBaker:
                     primvars.update(SECOND_SYSTEM_PRIMVARS)
                 for name, (field, type_name) in primvars.items():
                     attr = self._attr(path, name, type_name, UsdGeom.Tokens.vertex)
-                    self._set(attr, frame, _array(getattr(fields, field), type_name))
+                    self._set(attr, frame, _array(_baked(fields, field), type_name))
                 if self.options.display_color:
                     colors = viridis(display_values(self.options.display_color, fields,
                                                     self.wrinkled[path].params))

@@ -5,7 +5,13 @@ import numpy as np
 
 from ..method.anchor import painted_phases
 from ..method.contract import ANCHOR_ALIGNED, FOLD_ROOM, MIN_RATIO
-from ..method.folds import area_excess, excess_length, material_wavelength, profile_slope
+from ..method.folds import (
+    area_excess,
+    drawn_excess,
+    excess_length,
+    material_wavelength,
+    profile_slope,
+)
 from ..scene.topology import Topology, rest_tangents, vertex_normals
 
 
@@ -123,6 +129,14 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     kl = np.linalg.norm(k2, axis=1)
     amplitude = np.where(folding, profile_slope(table, rho_area) / np.maximum(kl, 1e-30),
                          0.0)
+    # the share of it the surface draws: lowered where the mesh is stretched across d
+    # (crush.glsl: FIELD_NORMAL's w), within the same room
+    cap = room / max(amplitude_scale, 1e-30)
+    lowered = np.where(folding, profile_slope(table, drawn_excess(r, r_geo, across, slack))
+                       / np.maximum(kl, 1e-30), 0.0)
+    drawn = np.where(amplitude > 0, np.minimum(np.minimum(lowered, cap)
+                                               / np.maximum(np.minimum(amplitude, cap), 1e-300),
+                                               1.0), 1.0)
     capped = amplitude * amplitude_scale > room
     # how many times its room the law's fold would rise (benchmarks.physics.room)
     over_room = np.where(folding, amplitude * amplitude_scale / room, 0.0)
@@ -143,7 +157,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     phase = np.where(np.abs(along_paint) >= ANCHOR_ALIGNED,
                      np.where(along_paint < 0, -painted[:, 3], painted[:, 3]), phase)
     stretch = np.sqrt(np.linalg.eigvalsh(np.transpose(M_geo, (0, 2, 1)) @ M_geo)[:, 1])
-    return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "direction": d3,
+    return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "drawn": drawn,
+            "direction": d3,
             "compression": r, "phase": phase, "usable": usable,
             # the material wave vector (2 pi / L) d3 that relax's mobility compares
             "kappa": (2 * np.pi / wavelength)[:, None] * d3,
