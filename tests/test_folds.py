@@ -129,7 +129,7 @@ def test_painting_more_makes_bigger_folds_not_finer():
 
     amounts = np.array([0.2, 0.4, 0.6, 0.7, 0.8, 0.95, 1.0])
     heights, ks = fold_law(1 - amounts ** 2, 0.1, geometric=np.ones_like(amounts))
-    gathered = 1 / (1 - amounts ** 2) < PAINT_GATHER_MAX  # beyond, the gather is capped
+    gathered = (1 - amounts ** 2) * PAINT_GATHER_MAX > 1  # beyond, the gather is capped
     assert np.all(np.diff(heights[gathered]) > 0) and np.all(np.diff(heights) >= 0)
     assert np.all(np.diff(ks) <= 1e-12)
 

@@ -87,8 +87,12 @@ def excess_length(r, r_geo, slack: float) -> np.ndarray:
     gather (r_geo / r, at most PAINT_GATHER_MAX) adds its own."""
     r = np.asarray(r, np.float64)
     r_geo = np.asarray(r_geo, np.float64)
+    # r = 0 (a paint of amount 1 in numpy's hands; the shaders clamp r to MIN_RATIO):
+    # the gather's cap, without a division by zero
+    gather = np.divide(r_geo, r, out=np.full(np.broadcast(r_geo, r).shape, np.inf),
+                       where=r > 0)
     return np.maximum(1.0, restored(r_geo, slack) / r_geo) * \
-        np.minimum(r_geo / r, PAINT_GATHER_MAX)
+        np.minimum(gather, PAINT_GATHER_MAX)
 
 
 def area_excess(r, r_geo, across, slack: float) -> np.ndarray:
