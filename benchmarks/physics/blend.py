@@ -98,9 +98,10 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
     from usdwrinkle.reference.crush import crush
 
     record = engine.meshes[path]
-    fields = engine.read_fields(path).arrays()
+    computed = engine.read_fields(path)
+    fields = computed.arrays()
     # the amplitude as the surface draws it (lowered where the mesh is stretched across)
-    fields["amplitude"] = fields["amplitude"] * fields["drawn"]
+    fields["amplitude"] = computed.drawn_amplitude
     triangles = record.topology.triangles
     posed = fields["points"].astype(np.float64)
     law = crush(record.rest_points, posed, record.topology, record.params.q,
