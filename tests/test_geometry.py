@@ -344,3 +344,55 @@ def test_the_fine_mesh_repeats_what_the_coarse_mesh_authors(gl_context, tmp_path
     points = fine_points(layer, "/Sheet_wrinkled2", 1)
     # heat is the rest x, linear: the fine corners carry it exactly (posed x = 0.7 rest x)
     np.testing.assert_allclose(np.asarray(heat.Get()), points[corners, 0] / 0.7, atol=1e-5)
+
+
+def _crossing_pairs_one_by_one(points, faces):
+    """The oracle for self_intersections: every pair of triangles sharing no vertex, each
+    edge of one cut with the other's plane and the cut point tested by its barycentric
+    coordinates (trimesh), one pair at a time."""
+    from trimesh.triangles import points_to_barycentric
+
+    found = set()
+    for i in range(len(faces)):
+        for j in range(i + 1, len(faces)):
+            if set(faces[i]) & set(faces[j]):
+                continue
+            hit = False
+            for one, other in ((faces[i], faces[j]), (faces[j], faces[i])):
+                tri = points[other]
+                normal = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+                for k in range(3):
+                    start, end = points[one[k]], points[one[(k + 1) % 3]]
+                    denominator = normal @ (end - start)
+                    if abs(denominator) < 1e-12:
+                        continue
+                    t = normal @ (tri[0] - start) / denominator
+                    if not 0 < t < 1:
+                        continue
+                    bary = points_to_barycentric(tri[None], (start + t * (end - start))[None])
+                    hit |= bool(np.all(bary > 0))
+            if hit:
+                found.add((i, j))
+    return found
+
+
+def test_self_intersections_finds_the_pairs_that_cross():
+    """The crossing measure behind issue 55's "displaced geometry does not pass through
+    itself" (tests/test_folds.py, benchmarks/physics/area.py), against a pair-by-pair
+    oracle on a soup of random triangles that cross often, with shared corners, and with
+    several cell sizes (a pair met in many cells counts once)."""
+    from usdwrinkle.geometry.measure import self_intersections
+
+    rng = np.random.default_rng(55)
+    points = rng.random((150, 3))
+    faces = np.array([rng.choice(len(points), 3, replace=False) for _ in range(90)])
+    expected = _crossing_pairs_one_by_one(points, faces)
+    assert 20 < len(expected) < 0.5 * len(faces) * (len(faces) - 1) / 2
+    for cell in (None, 0.05, 0.3, 2.0):
+        got = {tuple(pair) for pair in self_intersections(points, faces, cell=cell).tolist()}
+        assert got == expected, cell
+    # two triangles through each other, then the same two sharing a corner (not counted)
+    cross = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0],
+                      [0.2, 0.2, -0.5], [0.3, 0.2, 0.5], [0.2, 0.3, 0.5]], np.float64)
+    assert self_intersections(cross, np.array([[0, 1, 2], [3, 4, 5]])).tolist() == [[0, 1]]
+    assert len(self_intersections(cross, np.array([[0, 1, 2], [0, 4, 5]]))) == 0

@@ -112,7 +112,17 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, cell: float | None
     if not pairs:
         return np.zeros((0, 2), np.int64)
     pairs = np.sort(np.concatenate(pairs), axis=1)
-    pairs = np.unique(pairs, axis=0)
+    # one pair met in several cells counts once: one int64 code per pair, sorted, the
+    # repeats dropped (np.unique(axis=0) sorts rows, and numpy's hashing unique was as
+    # slow: they took most of the time)
+    code = np.sort(pairs[:, 0] * len(f) + pairs[:, 1])
+    code = code[np.concatenate([[True], code[1:] != code[:-1]])]
+    pairs = np.stack([code // len(f), code % len(f)], 1)
+    # boxes that do not overlap cannot cross
+    box_lo, box_hi = corners.min(axis=1), corners.max(axis=1)
+    overlap = np.all((box_lo[pairs[:, 0]] <= box_hi[pairs[:, 1]])
+                     & (box_lo[pairs[:, 1]] <= box_hi[pairs[:, 0]]), axis=1)
+    pairs = pairs[overlap]
     shared = (f[pairs[:, 0], :, None] == f[pairs[:, 1], None, :]).any(axis=(1, 2))
     pairs = pairs[~shared]
     found = []
