@@ -161,11 +161,12 @@ def sweep_row(sim: Simulated) -> dict:
     amplitude-field correlation, the crest motion at the elbow, our area ratio."""
     from usdwrinkle.usd import schema
 
-    default = bake(sim.shot, sim, "default")
+    cloth = cloth_attributes(sim.shot)
+    default = bake(sim.shot, sim, "default", attributes=cloth)
     first = per_phase(sim, default)
     mean = float(np.exp(np.mean([np.log(w) for w, _ in first.values()])))
     width = default_width(sim.shot) / mean
-    matched = bake(sim.shot, sim, "matched", width=width)
+    matched = bake(sim.shot, sim, "matched", width=width, attributes=cloth)
     result = compare(sim, matched)
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
               if key.startswith("motion") and key.endswith(" sim")}
@@ -176,6 +177,22 @@ def sweep_row(sim: Simulated) -> dict:
             "default_width": default_width(sim.shot)}
 
 
+def fabric(shot) -> str:
+    """The shot's cloth preset (its name's last part: curtain-leather)."""
+    return shot.name.split("-")[-1]
+
+
+def cloth_attributes(shot) -> dict:
+    """The shot's preset as the stage's ``wrinkle:cloth`` (oracle.bake's attributes), so
+    that its default bake has the fallback W of its own cloth (without it every sweep shot
+    was baked with the fallback cloth's, cotton's, until 2026-12-02)."""
+    from pxr import Sdf
+
+    from usdwrinkle.usd import schema
+
+    return {schema.CLOTH: (Sdf.ValueTypeNames.Token, fabric(shot))}
+
+
 def default_width(shot) -> float:
     """The fallback W usdwrinkle gives the shot's coarse mesh (m; the median over its
     points): the cloth preset through the curvature law."""
@@ -183,8 +200,7 @@ def default_width(shot) -> float:
     from usdwrinkle.usd import schema
 
     from .__main__ import coarse_curvature
-    fabric = shot.name.split("-")[-1]
-    return float(np.median(curved_width(schema.CLOTH_WIDTHS_M[fabric],
+    return float(np.median(curved_width(schema.CLOTH_WIDTHS_M[fabric(shot)],
                                         coarse_curvature(shot))))
 
 
