@@ -100,3 +100,29 @@ def test_the_curvature_fit_recovers_a_power_law():
     np.testing.assert_allclose(curved_width(0.05, 1.0 / radii), wavelengths, rtol=1e-12)
 
 
+
+
+@pytest.mark.parametrize("name", ["curtain-leather", "sleeve10-silk", "shear-cotton"])
+def test_the_sweep_bakes_each_shot_with_its_own_cloth(tmp_path, name):
+    """The referee's sweep (benchmarks/physics/referee.py) compares usdwrinkle at the
+    default W of each shot's preset: the stage it bakes resolves, through usdwrinkle's own
+    parameter reading, to the W its table prints (until 2026-12-02 the stages named no
+    cloth, and silk and leather shots were baked at cotton's W)."""
+    from pxr import Usd, UsdGeom
+
+    from benchmarks.physics.referee import SPACING, SWEEP, cloth_attributes, default_width
+    from benchmarks.physics.stage import MESH, write_stage
+    from usdwrinkle.scene.params import read_params
+    from usdwrinkle.scene.topology import build_topology
+
+    shot = SWEEP[name](SPACING).shot
+    path = str(tmp_path / "shot.usda")
+    write_stage(path, shot, shot.rest[None].repeat(2, axis=0),
+                attributes=cloth_attributes(shot))
+    stage = Usd.Stage.Open(path)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath(MESH))
+    rest = np.asarray(mesh.GetPointsAttr().Get(0), np.float64)
+    topology = build_topology(np.asarray(mesh.GetFaceVertexCountsAttr().Get()),
+                              np.asarray(mesh.GetFaceVertexIndicesAttr().Get()), rest)
+    width = read_params(mesh.GetPrim(), rest, topology).width
+    assert float(np.median(width)) == pytest.approx(default_width(shot), rel=1e-3)
