@@ -126,3 +126,38 @@ def test_the_sweep_bakes_each_shot_with_its_own_cloth(tmp_path, name):
                               np.asarray(mesh.GetFaceVertexIndicesAttr().Get()), rest)
     width = read_params(mesh.GetPrim(), rest, topology).width
     assert float(np.median(width)) == pytest.approx(default_width(shot), rel=1e-3)
+
+
+@pytest.mark.parametrize("make", ["curtain", "sleeve5", "sleeve10", "shear"])
+def test_the_converged_referee_is_resampled_onto_the_sweep_grid(make):
+    """The 2 cm simulations (referee.CONVERGED) are baked on the 1 cm grid: sweep.resample
+    keeps the simulated points and puts one half-way between neighbours with the four-point
+    cubic, exact for cubics along a flat grid and within 30 µm of the 5 cm sleeve's circle.
+    A fold of 3 samples a wavelength comes out at the cubic's response, (9 cos(pi/3) -
+    cos(pi)) / 8 = 0.6875 of its height half-way: why the referee measures heights at the
+    simulation's own points (referee.bake_on), not on the resampled grid."""
+    from benchmarks.physics import sweep
+
+    maker = {"curtain": lambda h: sweep.curtain("cotton", h),
+             "sleeve5": lambda h: sweep.sleeve("cotton", h, 0.05),
+             "sleeve10": lambda h: sweep.sleeve("cotton", h, 0.10),
+             "shear": lambda h: sweep.shear("cotton", h)}[make]
+    coarse, fine = maker(0.02), maker(0.01)
+    out = sweep.resample(coarse.clean[None], coarse, fine)[0]
+    assert out.shape == fine.clean.shape
+    assert np.abs(out - fine.clean).max() < (3e-5 if make == "sleeve5" else 5e-6)
+    # a fold 6 cm long along the material's v (3 samples a wavelength at 2 cm), its
+    # crests at every third 2 cm row
+    v = coarse.shot.material[:, 1]
+    fold = 0.005 * np.cos(2 * np.pi / 0.06 * v)
+    moved = coarse.clean + fold[:, None] * np.array([0.0, 0.0, 1.0])
+    grid = sweep.resample(moved[None], coarse, fine)[0].reshape(fine.shot.rows,
+                                                                 fine.shot.cols, 3)
+    np.testing.assert_allclose(grid[::2, ::2],
+                               moved.reshape(coarse.shot.rows, coarse.shot.cols, 3), atol=1e-12)
+    rest = fine.clean.reshape(grid.shape)
+    truth = 0.005 * np.cos(2 * np.pi / 0.06 * fine.shot.material[:, 1]).reshape(grid.shape[:2])
+    half_way = (grid - rest)[1:-1:2, :, 2][2:-2]      # odd rows, away from the ends
+    np.testing.assert_allclose(half_way, 0.6875 * truth[1:-1:2][2:-2], atol=1e-9)
+    with pytest.raises(ValueError, match="half the spacing"):
+        sweep.resample(coarse.clean[None], coarse, maker(0.005))

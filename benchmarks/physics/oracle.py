@@ -34,6 +34,7 @@ class Baked:
     waves: dict = field(default_factory=dict)   # the coarse mesh's baked waves
     points: np.ndarray | None = None            # (frames, n, 3) the displaced fine points
     flat: np.ndarray | None = None              # the same with no wrinkles
+    normals: np.ndarray | None = None           # the undisplaced surface's normals
 
 
 def measured_frames(shot: Shot) -> list[int]:
@@ -98,8 +99,21 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
     (points, _), (flat, normals) = fields["wrinkled"], fields["flat"]
     baked = Baked(label, measure.our_height(shot, points, flat, normals), width)
     baked.waves = waves
-    baked.points, baked.flat = points, flat
+    baked.points, baked.flat, baked.normals = points, flat, normals
     return baked
+
+
+def on_coarser_grid(baked: Baked, fine: Shot, shot: Shot) -> Baked:
+    """A bake on ``fine``'s grid measured on ``shot``'s, the same shot at twice the spacing
+    (its points are every other grid line of ``fine``'s): the fold height band-passed on
+    that grid, as the simulation's is."""
+    grid = np.arange(fine.rows * fine.cols).reshape(fine.rows, fine.cols)[::2, ::2].ravel()
+    if len(grid) != shot.rows * shot.cols:
+        raise ValueError(f"{fine.name}'s grid is not {shot.name}'s at half the spacing")
+    points, flat, normals = (a[:, grid] for a in (baked.points, baked.flat, baked.normals))
+    out = Baked(baked.label, measure.our_height(shot, points, flat, normals), baked.width)
+    out.waves, out.points, out.flat, out.normals = baked.waves, points, flat, normals
+    return out
 
 
 def read_waves(layer_path: str, frames: int) -> dict:

@@ -204,3 +204,35 @@ def spec(sweep_shot: SweepShot, solver: dict | None = None) -> dict:
         out["capsules"] = caps   # (keys, capsules, 7)
     out.update({k: np.array(v) for k, v in (solver or {}).items()})
     return out
+
+
+def _midpoints(grid: np.ndarray, axis: int, periodic: bool) -> np.ndarray:
+    """``grid`` with a point half-way between each pair of neighbours along ``axis`` (the
+    four-point cubic (-1, 9, 9, -1) / 16, exact for cubics; an open border extended
+    linearly), the originals kept: n points become 2n - 1 (open) or 2n (periodic)."""
+    g = np.moveaxis(grid, axis, 0)
+    if periodic:
+        padded = np.concatenate([g[-1:], g, g[:2]])
+    else:
+        padded = np.concatenate([2 * g[:1] - g[1:2], g, 2 * g[-1:] - g[-2:-1]])
+    mid = (-padded[:-3] + 9 * padded[1:-2] + 9 * padded[2:-1] - padded[3:]) / 16
+    count = len(g)
+    out = np.empty((2 * count - (0 if periodic else 1), *g.shape[1:]), g.dtype)
+    out[0::2] = g
+    out[1::2] = mid
+    return np.moveaxis(out, 0, axis)
+
+
+def resample(points: np.ndarray, coarse: SweepShot, fine: SweepShot) -> np.ndarray:
+    """A simulation's points (frames, n, 3) on ``coarse``'s grid, on ``fine``'s grid of half
+    its spacing (the same shot): a smooth surface through the simulated points, so that
+    usdwrinkle's bake, whose fine mesh is the grid it is measured on, is not band-limited
+    by the simulation's grid (its displacement fades under 2-3 edges a wavelength)."""
+    a, b = coarse.shot, fine.shot
+    if not a.periodic and (b.rows, b.cols) != (2 * a.rows - 1, 2 * a.cols - 1) or \
+            a.periodic and (b.rows, b.cols) != (2 * a.rows - 1, 2 * a.cols):
+        raise ValueError(f"{b.name}'s grid {b.rows} x {b.cols} is not {a.rows} x {a.cols} "
+                         "at half the spacing")
+    grid = points.reshape(len(points), a.rows, a.cols, 3)
+    grid = _midpoints(_midpoints(grid, 2, a.periodic), 1, False)
+    return grid.reshape(len(points), -1, 3)
