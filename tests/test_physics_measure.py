@@ -85,19 +85,28 @@ def test_the_low_pass_keeps_a_rotated_end_at_its_border():
 
 
 def test_the_curvature_fit_recovers_a_power_law():
-    """Tubes folding as 0.05 (R / 0.23)^0.5 give back p = 0.5 and R_c = 0.23, and the
-    product's curved_width with the schema's constants (theory's 1/2 power through the
-    referee's sleeve, docs/physics.md) reproduces them."""
+    """Tubes folding as 0.05 (R / 0.23)^0.5 give back p = 0.5 and R_c = 0.23; the product's
+    curved_width with the schema's constants (theory's 1/2 power through the converged
+    referee's 10 cm sleeves, 6 cm, docs/physics.md) is min(flat, 0.060 (R / 0.10)^0.5),
+    whichever the cloth's flat width."""
     from benchmarks.physics.__main__ import curvature_fit
-    from usdwrinkle.scene.params import curved_width
+    from usdwrinkle.scene.params import curved_below, curved_width
     from usdwrinkle.usd import schema
 
     radii = np.array([0.06, 0.10, 0.15])
     wavelengths = 0.05 * (radii / 0.23) ** 0.5
     exponent, radius = curvature_fit(radii, wavelengths, 0.05)
     assert exponent == pytest.approx(0.5, abs=1e-9) and radius == pytest.approx(0.23, rel=1e-9)
-    assert (schema.CURVED_EXPONENT, schema.CURVED_RADIUS_M) == (0.5, 0.23)
-    np.testing.assert_allclose(curved_width(0.05, 1.0 / radii), wavelengths, rtol=1e-12)
+    assert (schema.CURVED_EXPONENT, schema.CURVED_WIDTH_M, schema.CURVED_RADIUS_M) == \
+        (0.5, 0.060, 0.10)
+    tube = 0.060 * (radii / 0.10) ** 0.5
+    for flat in (0.054, 0.084, 0.2):
+        np.testing.assert_allclose(curved_width(flat, 1.0 / radii), np.minimum(flat, tube),
+                                   rtol=1e-12)
+        below = curved_below(flat)
+        assert float(curved_width(flat, np.array([1.0 / below]))[0]) == pytest.approx(flat)
+    np.testing.assert_allclose(curved_width(0.084, np.array([0.0, 1.0, 100.0])),
+                               [0.084, 0.084, 0.060 * (0.02 / 0.10) ** 0.5], rtol=1e-12)
 
 
 

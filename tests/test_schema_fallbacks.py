@@ -43,6 +43,7 @@ def test_the_schema_files_hold_the_code_s_fallbacks(name):
     doc = " ".join((cloth.documentation or cloth.customData.get("userDocBrief", "")).split())
     for preset, metres in schema.CLOTH_WIDTHS_M.items():
         assert f"{preset} {100 * metres:.1f} cm" in doc, (name, preset, doc)
+    assert f"{100 * schema.CURVED_WIDTH_M:g} cm" in doc
     assert f"{100 * schema.CURVED_RADIUS_M:g} cm" in doc
     damping = api.properties[schema.CREST_DAMPING]
     text = " ".join((damping.documentation or

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from usdwrinkle.scene.params import curved_below, curved_width
 from usdwrinkle.usd import schema
 
 from . import measure
@@ -179,8 +180,6 @@ def default_width(shot) -> float:
     """The fallback W (m) usdwrinkle gives the shot's coarse mesh, the median over its
     points: cotton's flat width narrowed by the coarse rest mesh's own curvature, as
     scene/params.cloth_width computes it."""
-    from usdwrinkle.scene.params import curved_width
-
     cotton = schema.CLOTH_WIDTHS_M[schema.DEFAULT_CLOTH]
     return float(np.median(curved_width(cotton, coarse_curvature(shot))))
 
@@ -308,7 +307,7 @@ def report(results: dict, calibrated: dict, limited: dict, slacks: dict,
         "",
         "- **default**: usdwrinkle's fallbacks: `wrinkle:cloth` cotton, "
         f"W = {100 * cotton:g} cm on flat cloth, narrower where the rest surface curves "
-        f"tighter than {100 * schema.CURVED_RADIUS_M:g} cm (the sleeve: "
+        f"tighter than {100 * curved_below(cotton):.3g} cm (the sleeve: "
         f"{100 * default_width(results['sleeve'][0]):.1f} cm); "
         f"`wrinkle:slack` {schema.DEFAULT_SLACK:g}; "
         f"`wrinkle:crestDamping` {schema.DEFAULT_CREST_DAMPING:g} frames; held points "
@@ -437,8 +436,9 @@ def _summary(results: dict) -> list[str]:
         "",
         "- Wavelength at the default W within 1.3x: "
         + listing({n: _within(default[n]["wavelength_ratio"], 1.3) for n in names})
-        + " (the fallbacks are the Newton referee's widths, 0.4-0.6x Blender's: see "
-        "\"Where the cloth widths come from\").",
+        + " (the fallbacks are the Newton referee's widths at its solver's convergence, "
+        "and Blender's folds depend on its grid: see \"Where the cloth widths come "
+        "from\").",
         "- Amplitude at the default W within 1.5x: "
         + listing({n: _within(default[n]["amplitude_ratio"], 1.5) for n in names}) + ".",
         "- Amplitude at matched W within 1.2x: "
@@ -500,9 +500,9 @@ def _calibration_section(calibrated: dict, results: dict) -> list[str]:
     lines += [
         "",
         "These were the fallbacks until the Newton referee (above) replaced "
-        "them: the fallbacks are now the widths that Newton's 1 cm sweep supports, "
-        f"{min(ratios):.2f}-{max(ratios):.2f}x Blender's, whose folds are longer at the same "
-        "spacing and grow stiffer faster (leather).",
+        "them: the fallbacks are now the widths that Newton's curtains support at its "
+        f"solver's convergence (2 cm, 160 iterations), {min(ratios):.2f}-{max(ratios):.2f}x "
+        "Blender's, whose folds grow stiffer faster (leather).",
         "",
         f"**Blender's folds depend on its grid.** The cotton sheet at half the spacing "
         f"({100 * spacing:.1f} cm, {fine_seconds:.0f} s) folds at "
@@ -532,20 +532,19 @@ def _curvature_lines(calibrated: dict) -> list[str]:
         "deepens with the radius): a line through the log wavelengths gives the exponent "
         f"{exponent:.2f}, meeting its cotton's flat "
         f"{100 * calibrated['widths']['cotton']:.1f} cm at R = "
-        f"{100 * radius:.1f} cm. The fallback width keeps theory's power instead (the "
-        "referee's sleeves do not converge, above): W_cloth (R / "
-        f"{100 * schema.CURVED_RADIUS_M:g} cm)^{schema.CURVED_EXPONENT:g}, R the rest "
+        f"{100 * radius:.1f} cm. The fallback width keeps theory's power instead, through "
+        "the Newton referee's 10 cm sleeves at its solver's convergence (above): "
+        f"min(W_cloth, {100 * schema.CURVED_WIDTH_M:g} cm (R / "
+        f"{100 * schema.CURVED_RADIUS_M:g} cm)^{schema.CURVED_EXPONENT:g}), R the rest "
         "surface's smallest radius of curvature at each point (scene/topology.curvature: "
         "the inverse of max |(n_i - n_j) . e| / |e|^2 over its edges e, exact on a regular "
-        f"ring however coarse), held between {100 * schema.CURVED_RADIUS_MIN_M:g} cm and "
-        f"{100 * schema.CURVED_RADIUS_M:g} cm (flat beyond):",
+        f"ring however coarse), at least {100 * schema.CURVED_RADIUS_MIN_M:g} cm; cotton "
+        f"narrows under {100 * curved_below(cotton):.3g} cm:",
         "",
         "| sleeve radius | simulated in | simulated wavelength | the fallback | ratio | "
         "theory's sqrt(R), through the 10 cm sleeve |",
         "|---|---|---|---|---|---|",
     ]
-    from usdwrinkle.scene.params import curved_width
-
     for r, (wavelength, seconds) in calibrated["sleeves"].items():
         law = float(curved_width(cotton, np.array([1.0 / r]))[0])
         theory = ten * np.sqrt(r / 0.10)

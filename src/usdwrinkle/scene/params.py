@@ -168,7 +168,7 @@ def cloth_width(prim: Usd.Prim, cloth: str, kappa: np.ndarray | None,
     """The fallback width W per point, (n,) float32 in scene units, and how it was found:
     the fold wavelength on flat cloth of ``cloth`` (wrinkle:cloth, cotton unless authored)
     through the stage's metersPerUnit, narrowed where the rest surface curves tighter than
-    schema.CURVED_RADIUS_M (curved_width; ``kappa``: its largest curvature in 1/m); with
+    curved_below(it) (curved_width; ``kappa``: its largest curvature in 1/m); with
     wrinkle:cloth = "mesh", a multiple of the mean rest edge length."""
     n = len(rest_points)
     if cloth == schema.MESH_CLOTH:
@@ -184,24 +184,27 @@ def cloth_width(prim: Usd.Prim, cloth: str, kappa: np.ndarray | None,
     units = f"metersPerUnit {meters:g}" + ("" if authored else ", USD's fallback: unauthored")
     note = f"{cloth} {100 * metres:g} cm flat"
     if width.size and width.min() < metres / meters * (1 - 1e-6):
-        note += f", narrower where curved under {100 * schema.CURVED_RADIUS_M:g} cm"
+        note += f", narrower where curved under {100 * curved_below(metres):.3g} cm"
     return width.astype(np.float32), f"{note} ({units})"
 
 
 def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
     """The fold wavelength (m) of a cloth whose flat wavelength is ``flat`` (m) at points
-    whose largest rest curvature is ``kappa`` (1/m): flat * (R / R_c) ** p with R = 1 /
-    kappa held in [schema.CURVED_RADIUS_MIN_M, R_c = schema.CURVED_RADIUS_M], p =
-    schema.CURVED_EXPONENT (docs/method.md: the cloth's width)."""
-    radius = _curved_radius(kappa, schema.CURVED_RADIUS_MIN_M)
-    return flat * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
+    whose largest rest curvature is ``kappa`` (1/m): min(flat, W_c (R / R_c) ** p), R = 1 /
+    kappa (at least schema.CURVED_RADIUS_MIN_M), W_c = schema.CURVED_WIDTH_M at R_c =
+    schema.CURVED_RADIUS_M, p = schema.CURVED_EXPONENT: on a tube the folds are the
+    tube's, whatever the cloth (docs/method.md: the cloth's width)."""
+    radius = np.maximum(1.0 / np.maximum(np.asarray(kappa, np.float64), 1e-12),
+                        schema.CURVED_RADIUS_MIN_M)
+    tube = schema.CURVED_WIDTH_M * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
+    return np.minimum(flat, tube)
 
 
-def _curved_radius(kappa: np.ndarray, smallest: float) -> np.ndarray:
-    """The rest radius of curvature 1 / ``kappa`` (1/m) held in [``smallest``,
-    schema.CURVED_RADIUS_M], where the curvature law starts and stops."""
-    radius = 1.0 / np.maximum(np.asarray(kappa, np.float64), 1.0 / schema.CURVED_RADIUS_M)
-    return np.maximum(radius, smallest)
+def curved_below(flat: float) -> float:
+    """The rest radius of curvature (m) under which ``flat``'s width narrows (curved_width):
+    where the tube's width meets the flat one."""
+    return schema.CURVED_RADIUS_M * (flat / schema.CURVED_WIDTH_M) ** (
+        1.0 / schema.CURVED_EXPONENT)
 
 
 def held_weights(rest_points: np.ndarray, held: np.ndarray, width: np.ndarray) -> np.ndarray:

@@ -81,19 +81,21 @@ DEFAULT_TENSION_THRESHOLD = 0.02
 
 #: Fallback width: the cloth's (wrinkle:cloth) onset fold wavelength in metres on flat
 #: cloth (W: the posed wavelength folds keep while they coarsen, docs/method.md), from
-#: the cloth referee's curtains (Newton's VBD, benchmarks/physics/referee.py, 1 cm grid;
-#: docs/physics.md): 1.15 x the material wavelength at 8% compression of silk, cotton
-#: and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m); denim (4e-5 N m) between them by
-#: the curtains' own power law, wavelength ~ D^(1/6). Converted to scene units through
-#: the stage's metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.046, "cotton": 0.050, "denim": 0.063, "leather": 0.086}
-#: Where the rest surface curves tighter than CURVED_RADIUS_M (a sleeve, a trouser leg),
-#: the fallback width narrows as (R / CURVED_RADIUS_M) ** CURVED_EXPONENT, R the point's
-#: smallest radius of curvature (never taken below CURVED_RADIUS_MIN_M): shell buckling
-#: theory's 1/2 (an axially compressed cylinder's 3.5 sqrt(R t)), through the referee's
-#: 10 cm cotton sleeve (W 3.3 cm: its folds, 4.9 cm, are 1.5 W coarsened) and cotton's
-#: flat width at 23 cm (docs/physics.md)
-CURVED_RADIUS_M = 0.23
+#: the cloth referee's curtains at its solver's convergence (Newton's VBD at 2 cm and 160
+#: iterations, benchmarks/physics/referee.py CONVERGED; docs/physics.md): for silk, cotton
+#: and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m) the W whose wavelength ratios to the
+#: curtain's, over its phases from 8% to 48% compression, are centred (their worst case
+#: smallest); denim (4e-5 N m) between cotton and leather by their power law in D.
+#: Converted to scene units through the stage's metersPerUnit.
+CLOTH_WIDTHS_M = {"silk": 0.054, "cotton": 0.084, "denim": 0.101, "leather": 0.122}
+#: On curved cloth (a sleeve, a trouser leg) the fallback width is the tube's, whatever the
+#: cloth: CURVED_WIDTH_M at a rest radius of curvature of CURVED_RADIUS_M, as (R /
+#: CURVED_RADIUS_M) ** CURVED_EXPONENT (R the point's smallest radius of curvature, never
+#: taken below CURVED_RADIUS_MIN_M), and never wider than the cloth's flat width. Shell
+#: buckling theory's 1/2 (an axially compressed cylinder's 3.5 sqrt(R t)); W_c from the
+#: converged referee's 10 cm sleeves, whose cotton and silk fold alike (docs/physics.md)
+CURVED_WIDTH_M = 0.060
+CURVED_RADIUS_M = 0.10
 CURVED_EXPONENT = 0.5
 CURVED_RADIUS_MIN_M = 0.02
 DEFAULT_CLOTH = "cotton"
