@@ -2,13 +2,15 @@
 Newton's VBD cloth on the sweep's shots (sweep.py), its convergence with the grid and with
 its solver's iterations, and usdwrinkle against it over the whole sweep.
 
-    python -m benchmarks.physics.referee [--tables all|convergence|sweep]
+    python -m benchmarks.physics.referee [--tables all|convergence|sweep|converged]
                                           [--write docs/physics.md] [--cache .physics-cache]
                                           [--only NAME ...]
 
-Two blocks: ``referee`` (the simulator's convergence; usdwrinkle does not enter it) and
-``referee-sweep`` (usdwrinkle against the sweep: regenerate it whenever the law, the
-blend or the relaxation changes; ``--tables sweep``).
+Three blocks: ``referee`` (the simulator's convergence; usdwrinkle does not enter it),
+``referee-sweep`` (usdwrinkle against the sweep at 1 cm and 10 iterations) and
+``referee-converged`` (against it at CONVERGED, 2 cm and 160 iterations, which the widths
+are fitted to): regenerate the last two whenever the law, the blend or the relaxation
+changes (``--tables sweep``, ``--tables converged``).
 
 Needs a Python with ``newton`` (simulate.newton_python: .venv-newton); the simulations are
 cached in --cache by their arrays. Measured as the Blender oracle is (measure.py): the
@@ -358,8 +360,8 @@ def main(argv=None) -> int:
     parser.add_argument("--tables", choices=("all", *TABLES), default="all",
                         help="convergence: the referee's own (cached simulations only); "
                              "sweep: usdwrinkle against it (1 cm, 10 iterations); "
-                             "converged: against it at 2 cm and 160 iterations (about an "
-                             "hour of solver per shot on one core); all: the three")
+                             "converged: against it at 2 cm and 160 iterations (10-26 "
+                             "minutes of solver per shot on one core); all: the three")
     parser.add_argument("--write", type=Path, default=None,
                         help="replace the chosen blocks of this file (docs/physics.md)")
     args = parser.parse_args(argv)
