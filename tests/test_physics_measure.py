@@ -170,3 +170,42 @@ def test_the_converged_referee_is_resampled_onto_the_sweep_grid(make):
     np.testing.assert_allclose(half_way, 0.6875 * truth[1:-1:2][2:-2], atol=1e-9)
     with pytest.raises(ValueError, match="half the spacing"):
         sweep.resample(coarse.clean[None], coarse, maker(0.005))
+
+
+@pytest.mark.parametrize("wavelength", [0.08, 0.24])
+def test_the_referee_widens_its_window_for_long_folds(wavelength):
+    """referee.fold_window: the measure's Gaussian stays WINDOW (5 cm) for short folds and
+    widens for long ones to FOLD_WINDOW (0.43) times the wavelength it measures, where the
+    twiced low-pass keeps 2G - G^2 = 5% of the fold, G = exp(-2 pi^2 0.43^2). A 24 cm fold
+    keeps 1 - (1 - 0.42)^2 = 66% of its height in the 5 cm low-pass, which is how the
+    leather curtain's long folds were measured short."""
+    from benchmarks.physics import referee, sweep
+
+    made = sweep.curtain("cotton", 0.02)
+    shot = made.shot
+    u = shot.material[:, 0]
+    fold = 0.01 * np.cos(2 * np.pi / wavelength * u)
+    points = np.repeat((shot.rest + fold[:, None] * np.array([0.0, 1.0, 0.0]))[None],
+                       shot.frames, axis=0)
+    window = referee.fold_window(shot, points)
+    assert shot.window == window
+    def kept(sigma: float) -> float:
+        """The most of the fold the low-pass keeps, 3 sigma in from the sides (where it is
+        the plain Gaussian)."""
+        inner = (u > u.min() + 3 * sigma) & (u < u.max() - 3 * sigma)
+        low = lowpass(shot, points[:1], sigma)[0]
+        return float(np.abs(low - shot.rest)[inner, 1].max() / 0.01)
+
+    if wavelength < 0.1:
+        assert window == referee.WINDOW
+        assert kept(window) < 0.05
+    else:
+        assert window == pytest.approx(referee.FOLD_WINDOW * wavelength, rel=0.05)
+        assert kept(referee.WINDOW) == pytest.approx(0.66, abs=0.05)
+        # the twiced Gaussian's transfer at the window found (its wavelength is measured
+        # within 5%, so the share kept lies near 5%, not on it)
+        g = np.exp(-2 * np.pi ** 2 * (window / wavelength) ** 2)
+        assert kept(window) == pytest.approx(1 - (1 - g) ** 2, abs=0.005)
+        assert kept(window) < 0.08
+        assert referee.mean_wavelength(shot, measure.sim_height(shot, points)) == \
+            pytest.approx(wavelength, rel=0.05)

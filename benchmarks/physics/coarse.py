@@ -1,12 +1,13 @@
 """The coarse mesh an animator would have: the simulation low-pass filtered (a Gaussian of
-``SIGMA`` on the rest grid, twiced) and every ``Shot.stride``-th grid line kept."""
+``Shot.window``, SIGMA unless the referee widened it, on the rest grid, twiced) and every
+``Shot.stride``-th grid line kept."""
 from __future__ import annotations
 
 import numpy as np
 
-from .shots import Shot
+from .shots import WINDOW, Shot
 
-SIGMA = 0.05  # m
+SIGMA = WINDOW  # m
 
 
 def _kernel(sigma_samples: float) -> np.ndarray:
@@ -49,14 +50,14 @@ def _smooth_axis(values: np.ndarray, axis: int, sigma_samples: float, periodic: 
     return np.moveaxis((s2 * t0 - s1 * t1) / (s0 * s2 - s1 * s1), 0, axis)
 
 
-def lowpass(shot: Shot, points: np.ndarray, sigma: float = SIGMA) -> np.ndarray:
+def lowpass(shot: Shot, points: np.ndarray, sigma: float | None = None) -> np.ndarray:
     """The rest pose plus the Gaussian-filtered displacement from it, on the rest grid:
     (..., n, 3) -> same shape. Filtering the displacement rather than the positions keeps
     a curved rest shape as it is (positions filtered around the sleeve would shrink its
     ring by 18%, a compression that the cloth does not have)."""
     lead = points.shape[:-2]
     moved = (points - shot.rest).reshape(*lead, shot.rows, shot.cols, 3).astype(np.float64)
-    s = sigma / shot.spacing
+    s = (shot.window if sigma is None else sigma) / shot.spacing
 
     def gauss(values):
         values = _smooth_axis(values, values.ndim - 3, s, False, True)

@@ -4,7 +4,9 @@ displaced mesh, at the same material points (the simulation's rest grid).
 - height ``h``: the simulation's fine points minus their low-pass (coarse.lowpass), along
   the low-pass surface's normal; usdwrinkle's displaced fine points minus the undisplaced
   ones (a bake with wrinkle:amplitudeScale 0), along the undisplaced normal.
-- amplitude field: sqrt(2 G * h^2), G a Gaussian of 5 cm on the rest grid (the local
+- the Gaussians (the low-pass, the detail, the amplitude field, the phase demodulation):
+  the shot's window, Shot.window (5 cm; the referee widens it where the folds are long).
+- amplitude field: sqrt(2 G * h^2), G a Gaussian of the window on the rest grid (the local
   amplitude of a sine); "where" is the correlation of the two fields.
 - amplitude: the RMS of h over the cloth, ours over the simulation's.
 - wavelength: the material (rest-space) wavelength, 1 / the power-weighted mean spatial
@@ -22,7 +24,6 @@ import numpy as np
 from .coarse import _smooth_axis, lowpass
 from .shots import Shot
 
-WINDOW = 0.05     # m, the Gaussian of the amplitude field and the phase demodulation
 EDGE = 0.10       # m, "near a held edge"
 
 
@@ -52,16 +53,17 @@ def our_height(shot: Shot, points: np.ndarray, flat: np.ndarray,
 
 
 def detail(shot: Shot, h: np.ndarray) -> np.ndarray:
-    """h less its own Gaussian (WINDOW) average: the folds without what the low-pass
+    """h less its own Gaussian (the shot's window) average: the folds without what the low-pass
     leaves where the surface bends on the scale of the filter (the outer elbow), applied
     alike to both."""
     return h - smooth(shot, h)
 
 
-def smooth(shot: Shot, field: np.ndarray, sigma: float = WINDOW) -> np.ndarray:
-    """A Gaussian of ``sigma`` (m) on the rest grid, over the last axis (n,)."""
+def smooth(shot: Shot, field: np.ndarray, sigma: float | None = None) -> np.ndarray:
+    """A Gaussian of ``sigma`` (m; the shot's window) on the rest grid, over the last axis
+    (n,)."""
     g = field.reshape(*field.shape[:-1], shot.rows, shot.cols)
-    s = sigma / shot.spacing
+    s = (shot.window if sigma is None else sigma) / shot.spacing
     g = _smooth_axis(g, g.ndim - 2, s, False)
     g = _smooth_axis(g, g.ndim - 1, s, shot.periodic)
     return g.reshape(field.shape)

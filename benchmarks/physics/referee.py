@@ -28,6 +28,7 @@ import numpy as np
 
 from . import measure
 from .oracle import Simulated, bake, compare, measured_frames, on_coarser_grid, per_phase, zones
+from .shots import WINDOW
 from .simulate import simulate_newton
 from .sweep import FABRICS, SweepShot, curtain, resample, shear, sleeve
 
@@ -67,6 +68,11 @@ BARS = {"wavelength": 1.3, "amplitude_matched": 1.25, "correlation_flat": 0.85,
         "correlation_shear": 0.75, "motion": 1.5, "area": (0.95, 1.05)}
 
 
+#: the twiced Gaussian low-pass of sigma s keeps 2G - G^2 of a fold of wavelength L,
+#: G = exp(-2 pi^2 s^2 / L^2): 5% at s = 0.43 L
+FOLD_WINDOW = 0.43
+
+
 def solver_options(iterations: int | None) -> dict | None:
     """The solver arrays newton_client.py reads for ``iterations`` VBD iterations per
     substep; None (its default, DEFAULT_ITERATIONS) keeps the sweep's cache names."""
@@ -79,16 +85,50 @@ def simulated(sweep_shot: SweepShot, cache: Path, iterations: int | None = None,
     newton_client.py's default (DEFAULT_ITERATIONS); ``resampled_on``: the same shot at
     half the spacing, onto whose grid the simulation is resampled (sweep.resample)."""
     points, seconds, stretch = simulate_newton(sweep_shot, cache, solver_options(iterations))
+    window = fold_window(sweep_shot.shot, points)
     if resampled_on is not None:
         points = resample(points, sweep_shot, resampled_on)
         sweep_shot = resampled_on
     shot = sweep_shot.shot
+    shot.window = window
     sim = Simulated(shot, points, measure.sim_height(shot, points), seconds)
-    inner = zones(shot)["all"]
-    sim.wavelength = float(np.mean([measure.wavelength(shot, sim.h[f], inner)
-                                    for f in measured_frames(shot)]))
+    sim.wavelength = mean_wavelength(shot, sim.h)
     sim.stretch = stretch
     return sim
+
+
+def mean_wavelength(shot, h: np.ndarray) -> float:
+    """The material wavelength of the fold height ``h`` (frames, n), averaged over the
+    shot's measured frames, in its inner zone."""
+    inner = zones(shot)["all"]
+    return float(np.mean([measure.wavelength(shot, h[f], inner)
+                          for f in measured_frames(shot)]))
+
+
+def fold_window(shot, points: np.ndarray, rounds: int = 8) -> float:
+    """The measure's Gaussian for a simulation (sets ``shot.window``): WINDOW, or wider
+    where the shot's folds are long, so that the low-pass (the coarse mesh) keeps at most
+    5% of them: FOLD_WINDOW times the mean wavelength measured under it (the fixed point,
+    by the secant method; the leather curtain's 22 cm folds kept a third of their height
+    in the 5 cm low-pass, which measured them as 13 cm)."""
+
+    def gap(window: float) -> float:
+        shot.window = window
+        return FOLD_WINDOW * mean_wavelength(shot, measure.sim_height(shot, points)) - window
+
+    a, ga = WINDOW, gap(WINDOW)
+    if ga <= 0:
+        shot.window = WINDOW
+        return WINDOW
+    b = a + ga
+    gb = gap(b)
+    for _ in range(rounds):
+        if abs(gb) < 0.01 * b or gb == ga:
+            break
+        a, ga, b = b, gb, max(WINDOW, b - gb * (b - a) / (gb - ga))
+        gb = gap(b)
+    shot.window = b
+    return b
 
 
 def phase_table(sim: Simulated) -> dict:

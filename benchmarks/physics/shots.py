@@ -30,6 +30,7 @@ from usdwrinkle.authoring.builders import grid_faces
 
 STRIDE = 8          # every 8th grid line makes the coarse mesh
 NOISE = 3e-4        # m, the seeded out-of-plane noise
+WINDOW = 0.05       # m, the measure's Gaussian (Shot.window)
 SOLVER = {"quality": 10, "self_collision": True}
 
 
@@ -56,6 +57,9 @@ class Shot:
     # solver settings beyond the preset: steps a frame, and self-collision (without it
     # the elbow's folds pass through each other and crumple at the grid's scale)
     solver: dict = field(default_factory=lambda: dict(SOLVER))
+    # m: the measure's Gaussian (coarse.lowpass, measure.detail, the amplitude field and
+    # the phase demodulation); the referee widens it for long folds (referee.fold_window)
+    window: float = WINDOW
 
     @property
     def spacing(self) -> float:
