@@ -339,7 +339,9 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
              f"usdwrinkle against the converged referee ({100 * spacing:g} cm, "
              f"{iterations} iterations)")
     lines += [f"### {title}", "",
-              "Per shot: the fabric's bending D, the default W (the preset through the "
+              "Per shot: the fabric's bending D, the measure's window (the low-pass that "
+              "makes the coarse mesh: 5 cm, or 0.43 x the folds' wavelength where they are "
+              "longer, referee.fold_window), the default W (the preset through the "
               "curvature law) and the W matched to the simulation's mean wavelength; at the "
               "default W, the worst phase's wavelength ratio (ours / sim); at matched W, the "
               "worst phase's height ratio, the amplitude-field correlation, the crest motion "
@@ -347,9 +349,9 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
               "where the coarse surface is compressed beyond 3 x the slack. Bars (issue 55): "
               "wavelength and height within 1.3x and 1.25x, correlation >= 0.85 (0.75 shear), "
               "motion <= 1.5x, area in [0.95, 1.05].", "",
-              "| shot | D (N m) | W default, matched | wavelength (default W) | "
+              "| shot | D (N m) | window | W default, matched | wavelength (default W) | "
               "height (matched) | correlation | crest motion | area |",
-              "|---|---|---|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|---|---|---|"]
     rows = {}
     for name in names:
         sim = simulated(SWEEP[name](spacing), cache, iterations)
@@ -366,7 +368,8 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
         worst_w = max(waves, key=lambda w: max(w, 1 / w))
         worst_h = max(heights, key=lambda h: max(h, 1 / h))
         motion = ", ".join(f"{k} {v:.2f}x" for k, v in row["motion"].items()) or "-"
-        lines.append(f"| {name} | {FABRICS[fabric]:.1e} | {100 * row['default_width']:.1f}, "
+        lines.append(f"| {name} | {FABRICS[fabric]:.1e} | {100 * sim.shot.window:.1f} cm | "
+                     f"{100 * row['default_width']:.1f}, "
                      f"{100 * row['width']:.1f} cm | {worst_w:.2f}x | {worst_h:.2f}x | "
                      f"{row['correlation']:.2f} | {motion} | {row['area']:.3f} |")
     lines += ["", "Phase by phase (ours / sim at the default W: wavelength, height):", ""]

@@ -83,11 +83,12 @@ DEFAULT_TENSION_THRESHOLD = 0.02
 #: cloth (W: the posed wavelength folds keep while they coarsen, docs/method.md), from
 #: the cloth referee's curtains at its solver's convergence (Newton's VBD at 2 cm and 160
 #: iterations, benchmarks/physics/referee.py CONVERGED; docs/physics.md): for silk, cotton
-#: and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m) the W whose wavelength ratios to the
-#: curtain's, over its phases from 8% to 48% compression, are centred (their worst case
-#: smallest); denim (4e-5 N m) between cotton and leather by their power law in D.
+#: and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m) the W whose worst wavelength ratio
+#: over the cloth's flat shots (its curtain's phases from 8% to 48% compression and, for
+#: cotton and leather, its sheared panel's) is smallest; denim (4e-5 N m) between cotton
+#: and leather by their power law in D.
 #: Converted to scene units through the stage's metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.054, "cotton": 0.084, "denim": 0.101, "leather": 0.122}
+CLOTH_WIDTHS_M = {"silk": 0.054, "cotton": 0.103, "denim": 0.132, "leather": 0.168}
 #: On curved cloth (a sleeve, a trouser leg) the fallback width is the tube's, whatever the
 #: cloth: CURVED_WIDTH_M at a rest radius of curvature of CURVED_RADIUS_M, as (R /
 #: CURVED_RADIUS_M) ** CURVED_EXPONENT (R the point's smallest radius of curvature, never
