@@ -143,16 +143,16 @@ def tube_file(tmp_path, radius, meters):
 def test_the_fallback_width_narrows_on_curved_cloth(tmp_path, radius, meters):
     """A tube of radius R (metres) gets the tube's width, whatever the cloth, W = min(W_cloth,
     6 cm (R / 10 cm)^0.5) in scene units, R at least CURVED_RADIUS_MIN_M: a 6 cm sleeve
-    4.6 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (10.3 cm); cotton
-    narrows under 29.5 cm."""
+    4.6 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (10.2 cm); cotton
+    narrows under 28.9 cm."""
     path = tube_file(tmp_path, radius, meters)
     width, note = fallback_width(path)
-    expected = min(0.103, 0.060 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
+    expected = min(0.102, 0.060 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
     assert (schema.CLOTH_WIDTHS_M["cotton"], schema.CURVED_WIDTH_M, schema.CURVED_RADIUS_M,
-            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.103, 0.060, 0.10, 0.5,
+            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.102, 0.060, 0.10, 0.5,
                                                                    0.02)
     assert width == pytest.approx(expected, rel=1e-4)
-    assert ("narrower where curved under 29.5 cm" in note) == (radius < 0.295)
+    assert ("narrower where curved under 28.9 cm" in note) == (radius < 0.289)
     if radius == 0.06:
         assert width * meters == pytest.approx(0.0465, abs=1e-4)
 
@@ -228,7 +228,7 @@ def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_pa
            "0.01))" in out
     curved = tube_file(tmp_path, 0.06, 0.01)
     assert main(["check", str(curved), "--wrinkles-only"]) == 0
-    assert ("W = 4.648 scene units (cotton 10.3 cm flat, narrower where curved under 29.5 cm "
+    assert ("W = 4.648 scene units (cotton 10.2 cm flat, narrower where curved under 28.9 cm "
             "(metersPerUnit 0.01))") in capsys.readouterr().out
     assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
     widths = json.loads(capsys.readouterr().out)["widths"]

@@ -500,9 +500,9 @@ def _calibration_section(calibrated: dict, results: dict) -> list[str]:
     lines += [
         "",
         "These were the fallbacks until the Newton referee (above) replaced "
-        "them: the fallbacks are now the widths that Newton's curtains support at its "
-        f"solver's convergence (2 cm, 160 iterations), {min(ratios):.2f}-{max(ratios):.2f}x "
-        "Blender's, whose folds grow stiffer faster (leather).",
+        "them: the fallbacks are now the widths that Newton's curtains and sheared panels "
+        "support at its solver's convergence (160 iterations; 2 cm, 1 cm where the folds are "
+        f"under 7 cm), {min(ratios):.2f}-{max(ratios):.2f}x Blender's.",
         "",
         f"**Blender's folds depend on its grid.** The cotton sheet at half the spacing "
         f"({100 * spacing:.1f} cm, {fine_seconds:.0f} s) folds at "

@@ -18,7 +18,16 @@ import numpy as np
 
 from . import measure
 from .oracle import compare, per_phase, zones
-from .referee import CONVERGED, ROOT, SPACING, SWEEP, area_ratio, bake_on, simulated
+from .referee import (
+    CONVERGED,
+    CONVERGED_FINER,
+    ROOT,
+    SPACING,
+    SWEEP,
+    area_ratio,
+    bake_on,
+    simulated,
+)
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
@@ -78,14 +87,18 @@ def main(argv=None) -> int:
                         help="W as a share of the simulation's first phase's wavelength")
     parser.add_argument("--converged", action="store_true",
                         help="against the referee at its solver's convergence (referee."
-                             "CONVERGED: 2 cm, 160 iterations) instead of the sweep's")
+                             "CONVERGED: 2 cm, 160 iterations; 1 cm for CONVERGED_FINER) "
+                             "instead of the sweep's")
     args = parser.parse_args(argv)
     spacing, iterations = CONVERGED if args.converged else (SPACING, None)
-    sims = {name: simulated(SWEEP[name](spacing), args.cache, iterations)
-            for name in (args.only or list(SWEEP))}
-    fines = {name: None if spacing == SPACING else
-             simulated(SWEEP[name](spacing), args.cache, iterations, SWEEP[name](SPACING))
-            for name in (args.only or list(SWEEP))}
+    names = args.only or list(SWEEP)
+    grids = {name: CONVERGED_FINER.get(name, spacing) if args.converged else spacing
+             for name in names}
+    sims = {name: simulated(SWEEP[name](grids[name]), args.cache, iterations)
+            for name in names}
+    fines = {name: None if grids[name] == SPACING else
+             simulated(SWEEP[name](grids[name]), args.cache, iterations, SWEEP[name](SPACING))
+            for name in names}
     for exponent, most, slack, onset, profile, room in itertools.product(
             args.exponent, args.most, args.slack, args.onset, args.profile, args.room):
         set_law(exponent, most, room)

@@ -88,7 +88,7 @@ DEFAULT_TENSION_THRESHOLD = 0.02
 #: cotton and leather, its sheared panel's) is smallest; denim (4e-5 N m) between cotton
 #: and leather by their power law in D.
 #: Converted to scene units through the stage's metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.054, "cotton": 0.103, "denim": 0.132, "leather": 0.168}
+CLOTH_WIDTHS_M = {"silk": 0.072, "cotton": 0.102, "denim": 0.131, "leather": 0.168}
 #: On curved cloth (a sleeve, a trouser leg) the fallback width is the tube's, whatever the
 #: cloth: CURVED_WIDTH_M at a rest radius of curvature of CURVED_RADIUS_M, as (R /
 #: CURVED_RADIUS_M) ** CURVED_EXPONENT (R the point's smallest radius of curvature, never
@@ -113,7 +113,7 @@ DEFAULT_SLACK = 0.05
 #: the strain are followed (docs/method.md: crest damping)
 DEFAULT_CREST_DAMPING = 4.0
 #: wrinkle:held: waves reach full amplitude this many widths W away from a held point
-HELD_REACH = 3.0
+HELD_REACH = 2.0
 #: Samples of a height profile over one period (the default: profiles.default_profile).
 PROFILE_SAMPLES = 256
 DEFAULT_RELAX_ITERATIONS = 8
