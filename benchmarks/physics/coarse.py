@@ -1,13 +1,11 @@
 """The coarse mesh an animator would have: the simulation low-pass filtered (a Gaussian of
-``Shot.window``, SIGMA unless the referee widened it, on the rest grid, twiced) and every
-``Shot.stride``-th grid line kept."""
+``Shot.window``, shots.WINDOW = 5 cm unless the referee widened it, on the rest grid,
+twiced) and every ``Shot.stride``-th grid line kept."""
 from __future__ import annotations
 
 import numpy as np
 
-from .shots import WINDOW, Shot
-
-SIGMA = WINDOW  # m
+from .shots import Shot
 
 
 def _kernel(sigma_samples: float) -> np.ndarray:
