@@ -501,8 +501,8 @@ def _calibration_section(calibrated: dict, results: dict) -> list[str]:
         "",
         "These were the fallbacks until the Newton referee (above) replaced "
         "them: the fallbacks are now the widths that Newton's curtains and sheared panels "
-        "support at its solver's convergence (160 iterations; 2 cm, 1 cm where the folds are "
-        f"under 7 cm), {min(ratios):.2f}-{max(ratios):.2f}x Blender's.",
+        "support at its solver's convergence (160 iterations; 2 cm, 1 cm where a 1 cm run "
+        f"differs), {min(ratios):.2f}-{max(ratios):.2f}x Blender's.",
         "",
         f"**Blender's folds depend on its grid.** The cotton sheet at half the spacing "
         f"({100 * spacing:.1f} cm, {fine_seconds:.0f} s) folds at "
