@@ -18,16 +18,7 @@ import numpy as np
 
 from . import measure
 from .oracle import compare, per_phase, zones
-from .referee import (
-    CONVERGED,
-    CONVERGED_FINER,
-    ROOT,
-    SPACING,
-    SWEEP,
-    area_ratio,
-    bake_on,
-    simulated,
-)
+from .referee import CONVERGED, ROOT, SWEEP, area_ratio, bake_on, referee_grid, referee_pair
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
@@ -90,15 +81,12 @@ def main(argv=None) -> int:
                              "CONVERGED: 2 cm, 160 iterations; 1 cm for CONVERGED_FINER) "
                              "instead of the sweep's")
     args = parser.parse_args(argv)
-    spacing, iterations = CONVERGED if args.converged else (SPACING, None)
+    iterations = CONVERGED[1] if args.converged else None
     names = args.only or list(SWEEP)
-    grids = {name: CONVERGED_FINER.get(name, spacing) if args.converged else spacing
-             for name in names}
-    sims = {name: simulated(SWEEP[name](grids[name]), args.cache, iterations)
-            for name in names}
-    fines = {name: None if grids[name] == SPACING else
-             simulated(SWEEP[name](grids[name]), args.cache, iterations, SWEEP[name](SPACING))
-            for name in names}
+    pairs = {name: referee_pair(name, args.cache, referee_grid(name, args.converged),
+                                iterations) for name in names}
+    sims = {name: pair[0] for name, pair in pairs.items()}
+    fines = {name: pair[1] for name, pair in pairs.items()}
     for exponent, most, slack, onset, profile, room in itertools.product(
             args.exponent, args.most, args.slack, args.onset, args.profile, args.room):
         set_law(exponent, most, room)

@@ -85,22 +85,45 @@ def solver_options(iterations: int | None) -> dict | None:
     return None if iterations in (None, DEFAULT_ITERATIONS) else {"iterations": iterations}
 
 
-def simulated(sweep_shot: SweepShot, cache: Path, iterations: int | None = None,
-              resampled_on: SweepShot | None = None) -> Simulated:
+def simulated(sweep_shot: SweepShot, cache: Path, iterations: int | None = None) -> Simulated:
     """The shot simulated (cached): ``iterations`` VBD iterations per substep, None for
-    newton_client.py's default (DEFAULT_ITERATIONS); ``resampled_on``: the same shot at
-    half the spacing, onto whose grid the simulation is resampled (sweep.resample)."""
+    newton_client.py's default (DEFAULT_ITERATIONS); measured under its fold window."""
     points, seconds, stretch = simulate_newton(sweep_shot, cache, solver_options(iterations))
-    window = fold_window(sweep_shot.shot, points)
-    if resampled_on is not None:
-        points = resample(points, sweep_shot, resampled_on)
-        sweep_shot = resampled_on
-    shot = sweep_shot.shot
+    return _measured(sweep_shot.shot, points, seconds, stretch,
+                     fold_window(sweep_shot.shot, points))
+
+
+def resampled(sim: Simulated, sweep_shot: SweepShot, fine: SweepShot) -> Simulated:
+    """``sim`` (the simulation of ``sweep_shot``) resampled onto ``fine``'s grid, the same
+    shot at half the spacing (sweep.resample), measured under the simulation's window."""
+    return _measured(fine.shot, resample(sim.points, sweep_shot, fine), sim.seconds,
+                     sim.stretch, sim.shot.window)
+
+
+def _measured(shot, points: np.ndarray, seconds: float, stretch: float,
+              window: float) -> Simulated:
     shot.window = window
     sim = Simulated(shot, points, measure.sim_height(shot, points), seconds)
     sim.wavelength = mean_wavelength(shot, sim.h)
     sim.stretch = stretch
     return sim
+
+
+def referee_grid(name: str, converged: bool) -> float:
+    """The grid a sweep shot is judged on: SPACING for the sweep, CONVERGED's (or
+    CONVERGED_FINER's) for the converged referee."""
+    return CONVERGED_FINER.get(name, CONVERGED[0]) if converged else SPACING
+
+
+def referee_pair(name: str, cache: Path, grid: float,
+                 iterations: int | None) -> tuple[Simulated, Simulated | None]:
+    """The shot simulated on ``grid`` and, where that is coarser than SPACING, the same
+    simulation resampled onto SPACING's grid (bake_on's ``fine``; None where it is the
+    grid already). The simulation is loaded and its window found once."""
+    sim = simulated(SWEEP[name](grid), cache, iterations)
+    if grid == SPACING:
+        return sim, None
+    return sim, resampled(sim, SWEEP[name](grid), SWEEP[name](SPACING))
 
 
 def mean_wavelength(shot, h: np.ndarray) -> float:
@@ -364,14 +387,12 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
               "|---|---|---|---|---|---|---|---|---|---|"]
     rows = {}
     for name in names:
-        grid = CONVERGED_FINER.get(name, spacing) if tables == "converged" else spacing
-        sim = simulated(SWEEP[name](grid), cache, iterations)
+        grid = referee_grid(name, tables == "converged")
         # usdwrinkle's bake has the grid it is measured on as its fine mesh, whose
         # displacement fades under 2-3 edges a wavelength (4-6 cm on the 2 cm grid): it is
         # baked on the sweep's 1 cm grid (the simulation resampled, sweep.resample) and
         # measured at the simulation's own points (sweep_row)
-        fine = None if grid == SPACING else simulated(SWEEP[name](grid), cache,
-                                                      iterations, SWEEP[name](SPACING))
+        sim, fine = referee_pair(name, cache, grid, iterations)
         row = rows[name] = sweep_row(sim, fine)
         fabric = name.split("-")[-1]
         waves = [w for w, _ in row["default"].values()]
