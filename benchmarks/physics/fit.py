@@ -18,7 +18,7 @@ import numpy as np
 
 from . import measure
 from .oracle import compare, per_phase, zones
-from .referee import CONVERGED, ROOT, SWEEP, area_ratio, bake_on, referee_grid, referee_pair
+from .referee import CONVERGED, ROOT, SWEEP, bake_on, our_area, referee_grid, referee_pair
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
@@ -56,7 +56,7 @@ def evaluate(sim, width: float, slack: float, profile: str = "fold", fine=None) 
     ours, on_fine = bake_on(sim, fine, "fit", width, attributes)
     result = compare(sim, ours)
     result["phases"] = per_phase(sim, ours)
-    result["area"] = area_ratio(fine or sim, on_fine, slack)
+    result["area"] = our_area(sim, fine, width, attributes, slack, on_fine)
     return result
 
 
