@@ -242,7 +242,7 @@ def area_grid(width: float) -> float:
     fine edges at most W / DEFAULT_SAMPLES_PER_WAVELENGTH in the rest pose). A displaced
     mesh keeps only sinc(pi / n)^2 of its folds' extra length at n samples a wavelength;
     the sleeves' W (3.9-5.7 cm) took 3.9-5.7 samples on the 1 cm grid, which measured
-    their area 0.928-0.933 and 0.974-0.979 at 0.5 cm (2026-12-03)."""
+    their area 0.928-0.936 and 0.974-0.979 at 0.5 cm (2026-12-03)."""
     from usdwrinkle.geometry.options import DEFAULT_SAMPLES_PER_WAVELENGTH
 
     grid = SPACING
@@ -295,8 +295,7 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None) -> dict:
 
     default, _ = baked("default")
     first = per_phase(sim, default)
-    mean = float(np.exp(np.mean([np.log(w) for w, _ in first.values()])))
-    width = default_width(sim.shot) / mean
+    width = matched_width(sim.shot, first)
     matched, matched_fine = baked("matched", width)
     result = compare(sim, matched)
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
@@ -307,6 +306,13 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None) -> dict:
             "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK, matched_fine),
             "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK),
             "default_width": default_width(sim.shot)}
+
+
+def matched_width(shot, phases: dict) -> float:
+    """The W matched to the simulation's mean wavelength: the default W over the geometric
+    mean of the default bake's wavelength ratios per phase (``phases``: per_phase's)."""
+    mean = float(np.exp(np.mean([np.log(w) for w, _ in phases.values()])))
+    return default_width(shot) / mean
 
 
 def fabric(shot) -> str:

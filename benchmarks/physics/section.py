@@ -11,7 +11,7 @@ width matched to the simulation's mean wavelength (red), at the same scale. Prin
 phase, over the inner zone's lines: the simulated line's length over its low-pass's, the
 share of it that runs backwards (overhanging folds: a height field cannot draw them), and
 the RMS of each one's distance from the low-pass. Needs .venv-newton's cached simulation
-(referee.py); about a minute here (two bakes of the 1 cm curtain).
+(referee.py); about 10 s here (two bakes of the 1 cm curtain).
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ from .referee import (
     ROOT,
     SWEEP,
     cloth_attributes,
-    default_width,
+    matched_width,
     referee_grid,
     simulated,
 )
@@ -96,8 +96,7 @@ def main(argv=None) -> int:
     shot = sim.shot
     cloth = cloth_attributes(shot)
     default = bake(shot, sim, "default", attributes=cloth)
-    mean = float(np.exp(np.mean([np.log(w) for w, _ in per_phase(sim, default).values()])))
-    width = default_width(shot) / mean
+    width = matched_width(shot, per_phase(sim, default))
     ours = bake(shot, sim, "matched", width=width, attributes=cloth)
     inner = zones(shot)["all"].reshape(shot.rows, shot.cols)
     rows = np.flatnonzero(inner.any(axis=1))
