@@ -21,15 +21,16 @@ from pathlib import Path
 import numpy as np
 
 from .coarse import lowpass
-from .oracle import bake, per_phase, zones
+from .oracle import per_phase, zones
 from .referee import (
     CONVERGED,
     ROOT,
     SWEEP,
+    bake_on,
     cloth_attributes,
     matched_width,
     referee_grid,
-    simulated,
+    referee_pair,
 )
 
 #: the phases drawn, one band each
@@ -92,12 +93,14 @@ def main(argv=None) -> int:
     out = args.out or ROOT / "docs" / "images" / \
         f"physics_section_{args.shot.split('-')[-1]}.png"
     grid = referee_grid(args.shot, True)
-    sim = simulated(SWEEP[args.shot](grid), args.cache, CONVERGED[1])
+    # baked as the converged table bakes it (referee.sweep_row): on the 1 cm grid, read
+    # back at the simulation's own points
+    sim, fine = referee_pair(args.shot, args.cache, grid, CONVERGED[1])
     shot = sim.shot
     cloth = cloth_attributes(shot)
-    default = bake(shot, sim, "default", attributes=cloth)
+    default, _ = bake_on(sim, fine, "default", None, cloth)
     width = matched_width(shot, per_phase(sim, default))
-    ours = bake(shot, sim, "matched", width=width, attributes=cloth)
+    ours, _ = bake_on(sim, fine, "matched", width, cloth)
     inner = zones(shot)["all"].reshape(shot.rows, shot.cols)
     rows = np.flatnonzero(inner.any(axis=1))
     cols = np.flatnonzero(inner.any(axis=0))
