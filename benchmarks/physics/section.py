@@ -8,10 +8,14 @@ For the end of each phase from 16% on, one horizontal line of the curtain at mid
 seen from above (the push across, the curtain's normal up): the simulation (black), its
 low-pass, which is usdwrinkle's coarse mesh (blue), and usdwrinkle's displaced mesh at the
 width matched to the simulation's mean wavelength (red), at the same scale. Prints per
-phase, over the inner zone's lines: the simulated line's length over its low-pass's, the
-share of it that runs backwards (overhanging folds: a height field cannot draw them), and
-the RMS of each one's distance from the low-pass. Needs .venv-newton's cached simulation
-(referee.py); about 10 s here (two bakes of the 1 cm curtain).
+phase, over the inner zone's lines, for each: the length over the low-pass's, the share
+of it that runs backwards (overhanging folds: a height field cannot draw them), the RMS
+distance from the low-pass, the out-of-plane travel, the waves a metre, and how much of
+the length runs flat (within 30 degrees of the line) and steep (60-90), and the RMS over
+a zigzag's of the same length and waves a metre: how each holds its length
+(line_stats). Last, what overhanging folds would save (overhang_model). Needs
+.venv-newton's cached simulation (referee.py); about 10 s here (two bakes of the 1 cm
+curtain).
 """
 from __future__ import annotations
 
@@ -42,18 +46,71 @@ WIDTH, BAND = 960, 170
 
 
 def line_stats(sim_line: np.ndarray, low_line: np.ndarray, ours_line: np.ndarray) -> dict:
-    """One phase's lines (lines, points, 3): length over the low-pass's, the backward
-    share of the simulated length, the RMS distances from the low-pass."""
-    seg = np.diff(sim_line, axis=1)
+    """One phase's lines (lines, points, 3; y out of the curtain): for the simulation and
+    for ours (keys "sim ..." and "ours ..."), the length over the low-pass's, the share of
+    it that runs backwards along the low-pass (overhanging folds), the RMS distance from
+    the low-pass, the out-of-plane travel (the summed |change| of the offset's y, over
+    the low-pass's length), the waves per metre (half the offset's sign changes, over
+    the low-pass's length), the RMS over a zigzag's of the same length and waves a metre
+    ("shape"), and the shares of the length whose segments run within 30 degrees of the
+    low-pass line ("flat") and between 60 and 90 ("steep")."""
     tangent = np.diff(low_line, axis=1)
     low_length = np.linalg.norm(tangent, axis=-1)
     tangent /= low_length[..., None] + 1e-30
-    length = np.linalg.norm(seg, axis=-1)
-    back = (seg * tangent).sum(-1) < 0.0
-    return {"length": float(length.sum() / low_length.sum()),
-            "overhang": float(length[back].sum() / length.sum()),
-            "sim rms": float(np.sqrt(np.mean(np.sum((sim_line - low_line) ** 2, -1)))),
-            "ours rms": float(np.sqrt(np.mean(np.sum((ours_line - low_line) ** 2, -1))))}
+    out = {}
+    for name, line in (("sim", sim_line), ("ours", ours_line)):
+        seg = np.diff(line, axis=1)
+        length = np.linalg.norm(seg, axis=-1)
+        along = (seg * tangent).sum(-1) / np.maximum(length, 1e-30)
+        offset = (line - low_line)[..., 1]
+        centred = offset - offset.mean(axis=1, keepdims=True)
+        changes = np.count_nonzero(np.diff(np.sign(centred), axis=1))
+        out[f"{name} length"] = float(length.sum() / low_length.sum())
+        out[f"{name} overhang"] = float(length[along < 0.0].sum() / length.sum())
+        out[f"{name} rms"] = float(np.sqrt(np.mean(np.sum((line - low_line) ** 2, -1))))
+        out[f"{name} travel"] = float(np.abs(np.diff(offset, axis=1)).sum()
+                                      / low_length.sum())
+        out[f"{name} waves"] = float(0.5 * changes / low_length.sum())
+        # the RMS over a zigzag's of the same length and waves a metre (amplitude
+        # sqrt(length^2 - 1) / 4 of a wavelength, RMS the amplitude over sqrt 3)
+        zigzag = np.sqrt(max(out[f"{name} length"] ** 2 - 1.0, 0.0)) / 4.0 / np.sqrt(3.0) \
+            / max(out[f"{name} waves"], 1e-30)
+        out[f"{name} shape"] = out[f"{name} rms"] / max(zigzag, 1e-30)
+        out[f"{name} flat"] = float(length[along > np.cos(np.radians(30))].sum()
+                                    / length.sum())
+        out[f"{name} steep"] = float(length[(along >= 0.0)
+                                            & (along < np.cos(np.radians(60)))].sum()
+                                     / length.sum())
+    return out
+
+
+def overhang_model(length: float, lean: float, samples: int = 20000) -> tuple[float, float]:
+    """What overhanging folds save: the curve x = (theta - lean sin 2 theta) / 2 pi,
+    y = A sin theta (one wavelength; lean 0.5 stands its flanks upright, more tips them
+    over), its amplitude A chosen for ``length`` per wavelength. Returns its RMS height
+    (over its length) over the zigzag's of the same length, and the share of its length
+    that runs backwards."""
+    theta = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+
+    def curve(amplitude: float, lean_: float) -> tuple[float, float, float]:
+        x = (theta - lean_ * np.sin(2 * theta)) / (2 * np.pi)
+        y = amplitude * np.sin(theta)
+        dx = np.diff(np.append(x, x[0] + 1.0))
+        seg = np.hypot(dx, np.diff(np.append(y, y[0])))
+        return (float(seg.sum()), float(np.sqrt((y ** 2 * seg).sum() / seg.sum())),
+                float(seg[dx < 0].sum() / seg.sum()))
+
+    def solved(lean_: float) -> tuple[float, float, float]:
+        low, high = 0.0, 5.0
+        for _ in range(60):  # the length grows with the amplitude
+            middle = 0.5 * (low + high)
+            low, high = (low, middle) if curve(middle, lean_)[0] > length else (middle, high)
+        return curve(0.5 * (low + high), lean_)
+
+    # the zigzag of that length: amplitude sqrt(length^2 - 1) / 4, RMS amplitude / sqrt 3
+    zigzag = np.sqrt(length ** 2 - 1.0) / 4.0 / np.sqrt(3.0)
+    _, rms, back = solved(lean)
+    return rms / zigzag, back
 
 
 def draw(path: Path, bands: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]) -> None:
@@ -113,13 +170,25 @@ def main(argv=None) -> int:
             sim.points[frame], lowpass(shot, sim.points[frame:frame + 1])[0],
             ours.points[frame])]
         stats = line_stats(*grids)
-        print(f"  {phase}: length over the low-pass's {stats['length']:.2f}, overhanging "
-              f"{100 * stats['overhang']:.1f}%, RMS distance from the low-pass: sim "
-              f"{1000 * stats['sim rms']:.1f} mm, ours {1000 * stats['ours rms']:.1f} mm")
+        print(f"  {phase}:")
+        for name in ("sim", "ours"):
+            print(f"    {name:4s} length over the low-pass's {stats[name + ' length']:.2f}, "
+                  f"overhanging {100 * stats[name + ' overhang']:.1f}%, RMS distance "
+                  f"{1000 * stats[name + ' rms']:.1f} mm ({stats[name + ' shape']:.2f} x "
+                  f"the zigzag's), out-of-plane travel "
+                  f"{stats[name + ' travel']:.2f}, {stats[name + ' waves']:.1f} waves a "
+                  f"metre, flat {100 * stats[name + ' flat']:.0f}% and steep "
+                  f"{100 * stats[name + ' steep']:.0f}% of the length")
         at = int(np.flatnonzero(rows == line)[0])
         bands.append((phase, *(g[at] for g in grids)))
     draw(out, bands)
     print(f"wrote {out}")
+    print("What overhanging folds save (overhang_model): the RMS height of a fold that leans "
+          "over, over the zigzag's of the same length and wavelength")
+    for length in (1.46, 1.86):
+        cells = [f"lean {lean}: {ratio:.2f} ({100 * back:.0f}% backwards)"
+                 for lean in (0.5, 0.6, 0.7) for ratio, back in [overhang_model(length, lean)]]
+        print(f"  length {length}: " + ", ".join(cells))
     return 0
 
 
