@@ -35,14 +35,18 @@
 //             fields in place (each vertex only its own).
 //
 // Mobility (docs/method.md, "Mobility"; reference/relax.py's mobility): with history, a
-// vertex's relaxed phase moves from its seed by m = min(delta / MOBILITY_PHASE, 1) of the
-// way the steps take it, delta the largest change since the previous grid frame of the
-// phase difference its ring asks for along an edge, (kappa_now - kappa_before) . (X_j -
-// X_i) averaged over the edge's two ends, kappa = (2 pi / L) d3 the material wave vector
-// (rest space; crush keeps 2 pi / L in the state's damped table). Input that does not
-// change leaves the phases where they are: cloth whose pose stops keeps its folds, where
-// the relaxation went on creeping towards its far-off fixed point (the referee's held
-// sleeve: crests moving 8.6x the cloth's). A new wave, and a cold start, relax fully.
+// vertex's relaxed phase moves from its seed by m = min(delta / MOBILITY_PHASE + turn /
+// MOBILITY_TURN, 1) of the way the steps take it. The change since the previous grid
+// frame of the phase difference its ring asks for along an edge, (kappa_now -
+// kappa_before) . (X_j - X_i) averaged over the edge's two ends, kappa = (2 pi / L) d3 the
+// material wave vector (rest space; crush keeps 2 pi / L in the state's damped table), is
+// split into the wave number's part, (w_now - w_before) d3_now (delta: the largest over
+// the ring), and the direction's, w_before (d3_now - d3_before) (turn). Input that does
+// not change leaves the phases where they are: cloth whose pose stops keeps its folds,
+// where the relaxation went on creeping towards its far-off fixed point (the referee's
+// held sleeve: crests moving 8.6x the cloth's), and a direction that only turns a little
+// (crest damping's catch-up, a nearly isotropic strain's wander) hardly moves them. A
+// new wave, and a cold start, relax fully.
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
@@ -110,36 +114,39 @@ layout(rgba32f, binding = RELAX_MOBILITY_OUT) writeonly uniform image2D mobility
 
 uniform int u_has_history;
 
-// vertex v's material wave vector kappa = (2 pi / L) d3 (rest space), of this frame or of
-// the previous grid frame's state
-vec3 kappa_of(sampler2D table, sampler2D wave_numbers, int v) {
-    return fetch(wave_numbers, v).w * fetch(table, FIELD_DIRECTION(v)).xyz;
-}
-
-// how far kappa changed since the previous grid frame at v, its sign matched first
-// ((k, phi) and (-k, -phi) are one wave); ``now``: v's kappa of this frame
-vec3 kappa_change(int v, out vec3 now) {
-    now = kappa_of(fields, damped, v);
-    vec3 before = kappa_of(previous_fields, previous_damped, v);
-    return now - (dot(now, before) < 0.0 ? -before : before);
+// vertex v's material wave vector kappa = (2 pi / L) d3 (rest space) of this frame, and
+// its change since the previous grid frame's state split in two (the previous d3's sign
+// matched first: (k, phi) and (-k, -phi) are one wave): the wave number's, (w_now -
+// w_before) d3_now, and the direction's, w_before (d3_now - d3_before)
+vec3 kappa_change(int v, out vec3 wave_part, out vec3 turn_part) {
+    float w_now = fetch(damped, v).w;
+    float w_before = fetch(previous_damped, v).w;
+    vec3 d_now = fetch(fields, FIELD_DIRECTION(v)).xyz;
+    vec3 d_before = fetch(previous_fields, FIELD_DIRECTION(v)).xyz;
+    if (dot(d_now, d_before) < 0.0) d_before = -d_before;
+    wave_part = (w_now - w_before) * d_now;
+    turn_part = w_before * (d_now - d_before);
+    return w_now * d_now;
 }
 
 // The share of the relaxation's move a vertex takes this frame (the header: mobility)
 float mobility(int i, bool history, vec4 before0) {
     if (!history || !(wave_of(fields, i, 0).w > 0.0) || !(before0.w > 0.0)) return 1.0;
-    vec3 kappa_i;
-    vec3 change_i = kappa_change(i, kappa_i);
+    vec3 wave_i, turn_i;
+    vec3 kappa_i = kappa_change(i, wave_i, turn_i);
     vec3 X_i = fetch(rest_points, i).xyz;
     float delta = 0.0;
+    float turn = 0.0;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
-        vec3 kappa_j;
-        vec3 change_j = kappa_change(j, kappa_j);
-        if (dot(kappa_j, kappa_i) < 0.0) change_j = -change_j;
-        delta = max(delta, abs(dot(0.5 * (change_i + change_j),
-                                   fetch(rest_points, j).xyz - X_i)));
+        vec3 wave_j, turn_j;
+        vec3 kappa_j = kappa_change(j, wave_j, turn_j);
+        float sign_j = dot(kappa_j, kappa_i) < 0.0 ? -1.0 : 1.0;
+        vec3 edge = fetch(rest_points, j).xyz - X_i;
+        delta = max(delta, abs(dot(0.5 * (wave_i + sign_j * wave_j), edge)));
+        turn = max(turn, abs(dot(0.5 * (turn_i + sign_j * turn_j), edge)));
     }
-    return min(delta / MOBILITY_PHASE, 1.0);
+    return min(delta / MOBILITY_PHASE + turn / MOBILITY_TURN, 1.0);
 }
 
 void main() {

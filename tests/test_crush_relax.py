@@ -379,3 +379,52 @@ def test_the_fit_is_the_same_in_any_units(gl_context):
     assert np.percentile(rel / length, 99) < 1e-3, np.percentile(rel / length, 99)
     np.testing.assert_allclose(small["amplitude"][wrinkled] * 100, big["amplitude"][wrinkled],
                                rtol=1e-3)
+
+
+def test_mobility_counts_the_turn_less_than_the_wave_number():
+    """The turn counts less (docs/method.md): the change of the material wave vector is
+    split into the wave number's part and the direction's. On a flat grid whose waves
+    all change alike, an interior vertex's mobility is the largest ring edge's phase
+    change over MOBILITY_PHASE for a wave number that changes, over MOBILITY_TURN for a
+    direction that turns, and their sum for both, each computed by hand here."""
+    from usdwrinkle.authoring.builders import grid_sheet
+    from usdwrinkle.method.contract import MOBILITY_PHASE, MOBILITY_TURN
+    from usdwrinkle.reference.relax import mobility, ring_edges
+    from usdwrinkle.scene.topology import build_topology
+
+    points, counts, indices = grid_sheet(9, 9, 2.0)
+    points = np.asarray(points, np.float64)
+    topology = build_topology(counts, indices, points)
+    n = len(points)
+    ones = np.ones(n)
+    w, step, turn = 40.0, 0.1, np.radians(5.0)  # rad/m, rad/m, rad: a change of each
+    before = np.tile([w, 0.0, 0.0], (n, 1))
+    grown = np.tile([w + step, 0.0, 0.0], (n, 1))
+    turned = np.tile([w * np.cos(turn), w * np.sin(turn), 0.0], (n, 1))
+    both = np.tile([(w + step) * np.cos(turn), (w + step) * np.sin(turn), 0.0], (n, 1))
+    src, dst = ring_edges(topology)
+    edges = points[dst] - points[src]
+
+    def largest(change: np.ndarray) -> np.ndarray:
+        out = np.zeros(n)
+        np.maximum.at(out, src, np.abs(edges @ change))
+        return out
+
+    d_now = np.array([np.cos(turn), np.sin(turn), 0.0])
+    by_wave = largest(np.array([step, 0.0, 0.0])) / MOBILITY_PHASE
+    by_turn = largest(w * (d_now - [1.0, 0.0, 0.0])) / MOBILITY_TURN
+    by_both = largest(step * d_now) / MOBILITY_PHASE + by_turn
+    inner = np.flatnonzero((np.abs(points[:, 0]) < 0.9) & (np.abs(points[:, 1]) < 0.9))
+    assert len(inner) > 20
+    for now, expected in ((grown, by_wave), (turned, by_turn), (both, by_both)):
+        share = mobility(points, now, before, ones, ones, topology)
+        assert 0.02 < expected[inner].max() < 0.98  # partly mobile: the test can tell
+        np.testing.assert_allclose(share[inner], expected[inner], rtol=1e-9)
+    # the same change of an edge's phase difference moves the phases MOBILITY_TURN /
+    # MOBILITY_PHASE times more from the wave number than from the turn
+    assert MOBILITY_TURN / MOBILITY_PHASE >= 10
+    # no wave now, or none before: the vertex relaxes fully
+    gone = ones.copy()
+    gone[inner[0]] = 0.0
+    assert mobility(points, grown, before, gone, ones, topology)[inner[0]] == 1.0
+    assert mobility(points, grown, before, ones, gone, topology)[inner[0]] == 1.0

@@ -80,11 +80,17 @@ FIT_CONDITION = 0.01
 FIT_RANGE = 2.0
 FIT_ONSET = 1.05
 #: Mobility (relax.glsl, reference/relax.mobility): with phase history a vertex's relaxed
-#: phase moves from its seed by min(delta / MOBILITY_PHASE, 1) of the way the Jacobi
-#: steps take it, delta (radians) the largest change since the previous grid frame of the
-#: phase difference its ring's material waves ask for along an edge. Unchanged input
-#: keeps the phases; measured choice (docs/method.md, "Mobility").
+#: phase moves from its seed by min(delta / MOBILITY_PHASE + turn / MOBILITY_TURN, 1) of
+#: the way the Jacobi steps take it. delta and turn (radians) are the largest changes
+#: since the previous grid frame of the phase difference its ring's material waves ask
+#: for along an edge, split into the part the wave number's change asks (the folds
+#: coarsening: delta) and the part the direction's turn asks (turn). Unchanged input
+#: keeps the phases. A direction that turns a little (crest damping's catch-up after a
+#: pose stops, a nearly isotropic strain's wander) moves them 30x less than a wave
+#: number that changes as much: the referee's held sleeves crept 4.4x and 1.5x the
+#: cloth's when both counted alike, 1.2x and 0.6x now (docs/method.md, "Mobility").
 MOBILITY_PHASE = 0.1
+MOBILITY_TURN = 3.0
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -149,6 +155,7 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
     ("FIT_ONSET", FIT_ONSET), ("MOBILITY_PHASE", MOBILITY_PHASE),
+    ("MOBILITY_TURN", MOBILITY_TURN),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),

@@ -9,6 +9,7 @@ from ..method.contract import (
     FIT_ONSET,
     FIT_RANGE,
     MOBILITY_PHASE,
+    MOBILITY_TURN,
     WEIGHT_FLOOR,
 )
 from ..scene.topology import Topology
@@ -138,22 +139,36 @@ def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anch
 def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
              topology: Topology) -> np.ndarray:
     """relax.glsl's mobility: the share of the relaxation's move each vertex takes this
-    frame, min(delta / MOBILITY_PHASE, 1), delta the largest change over its ring edges
-    of (kappa_now - kappa_before) . (X_j - X_i), averaged over the edge's two ends (each
-    end's change sign-matched to its own previous kappa, j's to i's kappa). ``kappa``:
-    the material wave vectors (2 pi / L) d3 in rest space, (n, 3). 1 where the vertex has
-    no wave now or had none before (it relaxes fully)."""
+    frame, min(delta / MOBILITY_PHASE + turn / MOBILITY_TURN, 1). The change of kappa
+    (the previous one sign-matched to the current) is split into the wave number's part,
+    (|kappa_now| - |kappa_before|) d_now, and the direction's, |kappa_before| (d_now -
+    d_before) (d the unit direction); delta and turn are the largest over the vertex's
+    ring edges of each part . (X_j - X_i), averaged over the edge's two ends (j's parts
+    sign-matched to i's kappa). ``kappa``: the material wave vectors (2 pi / L) d3 in rest
+    space, (n, 3). 1 where the vertex has no wave now or had none before (it relaxes
+    fully)."""
     rest = np.asarray(rest_points, np.float64)
     now = np.asarray(kappa, np.float64)
     before = np.asarray(previous_kappa, np.float64)
-    change = now - np.where(np.sum(now * before, 1) < 0, -1.0, 1.0)[:, None] * before
+    before = np.where(np.sum(now * before, 1) < 0, -1.0, 1.0)[:, None] * before
+    w_now = np.linalg.norm(now, axis=1)
+    w_before = np.linalg.norm(before, axis=1)
+    d_now = now / np.maximum(w_now, 1e-300)[:, None]
+    d_before = before / np.maximum(w_before, 1e-300)[:, None]
+    wave_part = (w_now - w_before)[:, None] * d_now
+    turn_part = w_before[:, None] * (d_now - d_before)
     src, dst = ring_edges(topology)
     sign = np.where(np.sum(now[src] * now[dst], 1) < 0, -1.0, 1.0)
-    edge = np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
-                         * (rest[dst] - rest[src]), 1))
-    delta = np.zeros(len(rest))
-    np.maximum.at(delta, src, edge)
-    moving = np.minimum(delta / MOBILITY_PHASE, 1.0)
+
+    def largest(change: np.ndarray) -> np.ndarray:
+        edge = np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
+                             * (rest[dst] - rest[src]), 1))
+        out = np.zeros(len(rest))
+        np.maximum.at(out, src, edge)
+        return out
+
+    moving = np.minimum(largest(wave_part) / MOBILITY_PHASE
+                        + largest(turn_part) / MOBILITY_TURN, 1.0)
     waves = (np.asarray(amplitude) > 0) & (np.asarray(previous_amplitude) > 0)
     return np.where(waves, moving, 1.0)
 
