@@ -45,6 +45,12 @@ LINE = 0.5
 WIDTH, BAND = 960, 170
 
 
+def zigzag_rms(length: float) -> float:
+    """The RMS height, per wavelength, of the zigzag that is ``length`` times as long as
+    its wavelength: amplitude sqrt(length^2 - 1) / 4, RMS the amplitude over sqrt 3."""
+    return float(np.sqrt(max(length ** 2 - 1.0, 0.0)) / 4.0 / np.sqrt(3.0))
+
+
 def line_stats(sim_line: np.ndarray, low_line: np.ndarray, ours_line: np.ndarray) -> dict:
     """One phase's lines (lines, points, 3; y out of the curtain): for the simulation and
     for ours (keys "sim ..." and "ours ..."), the length over the low-pass's, the share of
@@ -71,10 +77,8 @@ def line_stats(sim_line: np.ndarray, low_line: np.ndarray, ours_line: np.ndarray
         out[f"{name} travel"] = float(np.abs(np.diff(offset, axis=1)).sum()
                                       / low_length.sum())
         out[f"{name} waves"] = float(0.5 * changes / low_length.sum())
-        # the RMS over a zigzag's of the same length and waves a metre (amplitude
-        # sqrt(length^2 - 1) / 4 of a wavelength, RMS the amplitude over sqrt 3)
-        zigzag = np.sqrt(max(out[f"{name} length"] ** 2 - 1.0, 0.0)) / 4.0 / np.sqrt(3.0) \
-            / max(out[f"{name} waves"], 1e-30)
+        # the RMS over a zigzag's of the same length and waves a metre
+        zigzag = zigzag_rms(out[f"{name} length"]) / max(out[f"{name} waves"], 1e-30)
         out[f"{name} shape"] = out[f"{name} rms"] / max(zigzag, 1e-30)
         out[f"{name} flat"] = float(length[along > np.cos(np.radians(30))].sum()
                                     / length.sum())
@@ -91,26 +95,21 @@ def overhang_model(length: float, lean: float, samples: int = 20000) -> tuple[fl
     (over its length) over the zigzag's of the same length, and the share of its length
     that runs backwards."""
     theta = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    x = (theta - lean * np.sin(2 * theta)) / (2 * np.pi)
+    dx = np.diff(np.append(x, x[0] + 1.0))
 
-    def curve(amplitude: float, lean_: float) -> tuple[float, float, float]:
-        x = (theta - lean_ * np.sin(2 * theta)) / (2 * np.pi)
+    def curve(amplitude: float) -> tuple[float, float, float]:
         y = amplitude * np.sin(theta)
-        dx = np.diff(np.append(x, x[0] + 1.0))
         seg = np.hypot(dx, np.diff(np.append(y, y[0])))
         return (float(seg.sum()), float(np.sqrt((y ** 2 * seg).sum() / seg.sum())),
                 float(seg[dx < 0].sum() / seg.sum()))
 
-    def solved(lean_: float) -> tuple[float, float, float]:
-        low, high = 0.0, 5.0
-        for _ in range(60):  # the length grows with the amplitude
-            middle = 0.5 * (low + high)
-            low, high = (low, middle) if curve(middle, lean_)[0] > length else (middle, high)
-        return curve(0.5 * (low + high), lean_)
-
-    # the zigzag of that length: amplitude sqrt(length^2 - 1) / 4, RMS amplitude / sqrt 3
-    zigzag = np.sqrt(length ** 2 - 1.0) / 4.0 / np.sqrt(3.0)
-    _, rms, back = solved(lean)
-    return rms / zigzag, back
+    low, high = 0.0, 5.0
+    for _ in range(60):  # the length grows with the amplitude
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if curve(middle)[0] > length else (middle, high)
+    _, rms, back = curve(0.5 * (low + high))
+    return rms / zigzag_rms(length), back
 
 
 def draw(path: Path, bands: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]) -> None:
