@@ -181,11 +181,12 @@ struct Fold {
 };
 
 // the slack c: the first of the compression is taken in-plane; the folds begin at a
-// compression of c (restoring all but c) and restore the whole rest length from 3c on (a
-// smooth onset, so that a compression that comes and goes near it does not make crests
-// appear and vanish). What the mesh's compression r_geo asks the folds to restore.
+// compression of c (restoring all but c) and restore the whole rest length from SLACK_RAMP c
+// on (a smooth onset, so that a compression that comes and goes near it does not make
+// crests appear and vanish). What the mesh's compression r_geo asks the folds to restore.
 float excess_of(float r_geo) {
-    float restored = 1.0 - u_slack * smoothstep(1.0 - 3.0 * u_slack, 1.0 - u_slack, r_geo);
+    float restored = 1.0 - u_slack * smoothstep(1.0 - SLACK_RAMP * u_slack, 1.0 - u_slack,
+                                              r_geo);
     return max(1.0, restored / r_geo);
 }
 

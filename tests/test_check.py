@@ -150,7 +150,7 @@ def test_a_scalar_width_is_read_but_flagged(gl_context, tmp_path, capsys):
     amplitude = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Cloth")).GetPrimvar(
         "wrinkle:amplitude").Get(2)
     # uniform compression by 0.6 with W = 0.3 and the fallback slack: the fold law
-    # (compressed beyond 3 x the slack: the whole length restored)
+    # (compressed beyond SLACK_RAMP x the slack: the whole length restored)
     expected, _ = fold_law(0.6, 0.3, slack=schema.DEFAULT_SLACK)
     np.testing.assert_allclose(amplitude, expected, rtol=1e-4)
     capsys.readouterr()

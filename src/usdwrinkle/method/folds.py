@@ -31,6 +31,7 @@ from .contract import (
     COARSENING_MAX,
     MIN_RATIO,
     PAINT_GATHER_MAX,
+    SLACK_RAMP,
     SLOPE_SAMPLES,
     SLOPE_STEP,
     STRETCH_ONSET,
@@ -126,13 +127,13 @@ def drawn_excess(r, r_geo, across, slack: float) -> np.ndarray:
 def restored(r_geo, slack: float) -> np.ndarray:
     """The share of the rest length that folds restore where the mesh is compressed to
     ``r_geo``: the cloth takes the first ``slack`` in-plane, so folds begin at r = 1 -
-    slack (restoring 1 - slack); from r = 1 - 3 slack on they restore all of it, a
-    smoothstep between. The wrinkled surface keeps at least 1 - slack of its rest area,
+    slack (restoring 1 - slack); from r = 1 - SLACK_RAMP slack on they restore all of
+    it, a smoothstep between. The wrinkled surface keeps at least 1 - slack of its rest area,
     all of it where the cloth is clearly compressed."""
     r_geo = np.asarray(r_geo, np.float64)
     if slack <= 0.0:
         return np.ones_like(r_geo)
-    t = np.clip((r_geo - (1.0 - 3.0 * slack)) / (2.0 * slack), 0.0, 1.0)
+    t = np.clip((r_geo - (1.0 - SLACK_RAMP * slack)) / ((SLACK_RAMP - 1.0) * slack), 0.0, 1.0)
     return 1.0 - slack * t * t * (3.0 - 2.0 * t)
 
 
