@@ -323,7 +323,7 @@ def test_slack_and_held_edges_match_the_numpy_reference(gl_context, seed):
 
 def test_slack_follows_its_law_on_the_analytic_sheet(gl_context, tmp_path):
     """Uniform compression by r with slack c: the fold law restores all but the slack where
-    folds begin (r = 1 - c) and the whole length from r = 1 - SLACK_RAMP c on (2.5 c;
+    folds begin (r = 1 - c) and the whole length from r = 1 - SLACK_RAMP c on (3 c;
     folds.restored), and there is no wave at all once r >= 1 - c."""
     rest, counts, indices = grid_sheet(21, 21, 2.0)
     inside = interior(rest, 0.2)

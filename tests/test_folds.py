@@ -212,9 +212,9 @@ def test_sample_stages_keep_their_area_and_never_pass_through_themselves(gl_cont
 
 def test_the_slack_restores_by_its_documented_ramp():
     """wrinkle:slack c = 0.05 (docs/method.md, the fold law): folds begin at r = 1 - c
-    restoring 1 - c and restore the whole length from r = 1 - 2.5 c on, a smoothstep
-    between; values worked by hand (at r = 0.9: t = 1/3, smoothstep 7/27)."""
-    r = np.array([1.0, 0.95, 0.9125, 0.9, 0.875, 0.8])
-    expected = np.array([0.95, 0.95, 0.975, 1.0 - 0.05 * 7.0 / 27.0, 1.0, 1.0])
+    restoring 1 - c and restore the whole length from r = 1 - 3 c on, a smoothstep
+    between; values worked by hand (at r = 0.875: t = 1/4, smoothstep 5/32)."""
+    r = np.array([1.0, 0.95, 0.9, 0.875, 0.85, 0.8])
+    expected = np.array([0.95, 0.95, 0.975, 1.0 - 0.05 * 5.0 / 32.0, 1.0, 1.0])
     np.testing.assert_allclose(restored(r, 0.05), expected, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(restored(r, 0.0), np.ones_like(r))
