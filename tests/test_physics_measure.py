@@ -240,3 +240,28 @@ def test_the_area_is_taken_where_w_is_sampled_six_times():
     assert area_grid(0.055) == SPACING / 2        # the 10 cm sleeves
     assert area_grid(0.039) == SPACING / 2        # the 5 cm sleeve: 7.8 at 0.5 cm
     assert area_grid(0.025) == SPACING / 4
+
+
+@pytest.mark.parametrize("length", [1.2, 1.46, 1.86])
+def test_a_profile_s_shape_against_the_zigzag_and_the_box(length):
+    """benchmarks.physics.section's profile_shape, by hand: the triangle is the zigzag (1);
+    a cosine holding length L has amplitude A with mean sqrt(1 + A^2 sin^2) = L, RMS
+    A / sqrt 2; the upright box (heads at +-A, length 1 + 4 A per wavelength) is
+    sqrt(3 (L - 1) / (L + 1)) the zigzag's, and steep tanh boxes approach it from above."""
+    from benchmarks.physics.section import box_shape, profile_shape, zigzag_rms
+
+    triangle = profile_shape(lambda t: (2 / np.pi) * np.arcsin(np.cos(t)), length)
+    assert triangle == pytest.approx(1.0, abs=1e-3)
+    # the cosine by its own quadrature: bisect A in sum sqrt(1 + A^2 sin^2 t) / n = L
+    t = np.linspace(0.0, 2 * np.pi, 200001)[:-1]
+    low, high = 0.0, 50.0
+    for _ in range(80):
+        a = 0.5 * (low + high)
+        low, high = (low, a) if np.mean(np.sqrt(1 + a * a * np.sin(t) ** 2)) > length \
+            else (a, high)
+    cosine = 0.5 * (low + high) / (2 * np.pi) / np.sqrt(2) / zigzag_rms(length)
+    assert profile_shape(np.cos, length) == pytest.approx(cosine, rel=1e-4)
+    upright = np.sqrt(3 * (length - 1) / (length + 1))
+    assert box_shape(length) == pytest.approx(upright, rel=1e-12)
+    steep = profile_shape(lambda t: np.tanh(100 * np.cos(t)) / np.tanh(100), length)
+    assert upright < steep < 1.1 * upright

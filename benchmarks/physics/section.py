@@ -13,7 +13,8 @@ of it that runs backwards (overhanging folds: a height field cannot draw them), 
 distance from the low-pass, the out-of-plane travel, the waves a metre, and how much of
 the length runs flat (within 30 degrees of the line) and steep (60-90), and the RMS over
 a zigzag's of the same length and waves a metre: how each holds its length
-(line_stats). Last, what overhanging folds would save (overhang_model). Needs
+(line_stats). Last, what overhanging folds would save (overhang_model) and what a height
+field's profile can reach at the lines' lengths (profile_shape, box_shape). Needs
 .venv-newton's cached simulation (referee.py); about 10 s here (two bakes of the 1 cm
 curtain).
 """
@@ -23,6 +24,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+
+from usdwrinkle.method.profiles import preset_at
 
 from .coarse import lowpass
 from .oracle import per_phase, zones
@@ -112,6 +115,39 @@ def overhang_model(length: float, lean: float, samples: int = 20000) -> tuple[fl
     return rms / zigzag_rms(length), back
 
 
+def profile_shape(height, length: float, samples: int = 65536) -> float:
+    """A height field's RMS over the zigzag's of the same length: the periodic profile
+    ``height`` (a function of the phase theta, one crest a period 2 pi) scaled to hold
+    ``length`` times its wavelength. The triangle gives 1; nothing drawn with upright
+    flanks gets below box_shape(length)."""
+    theta = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    values = np.asarray(height(theta), np.float64)
+    slope = np.gradient(values, theta)
+    low, high = 0.0, 100.0
+    for _ in range(100):  # the length grows with the amplitude
+        middle = 0.5 * (low + high)
+        grown = float(np.mean(np.hypot(1.0, middle * slope)))
+        low, high = (low, middle) if grown > length else (middle, high)
+    amplitude = 0.5 * (low + high) / (2 * np.pi)  # per wavelength, as zigzag_rms
+    return amplitude * float(np.sqrt(np.mean(values ** 2))) / zigzag_rms(length)
+
+
+def box_shape(length: float) -> float:
+    """The box with upright flanks (heads at +-A, length 1 + 4 A per wavelength) over the
+    zigzag of the same length: sqrt(3 (length - 1) / (length + 1))."""
+    return float(np.sqrt(3.0 * (length - 1.0) / (length + 1.0)))
+
+
+#: the profiles profile_shape compares: usdwrinkle's presets and steeper boxes
+SHAPES = {
+    "fold (the default)": lambda t: preset_at("fold", t),
+    "cosine": np.cos,
+    "tanh 6 cos (box preset)": lambda t: np.tanh(6 * np.cos(t)) / np.tanh(6),
+    "tanh 20 cos": lambda t: np.tanh(20 * np.cos(t)) / np.tanh(20),
+    "tanh 100 cos": lambda t: np.tanh(100 * np.cos(t)) / np.tanh(100),
+}
+
+
 def draw(path: Path, bands: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]) -> None:
     """Each band: the three lines (points, 3), x across and y out of the curtain."""
     import OpenImageIO as oiio
@@ -188,6 +224,13 @@ def main(argv=None) -> int:
         cells = [f"lean {lean}: {ratio:.2f} ({100 * back:.0f}% backwards)"
                  for lean in (0.5, 0.6, 0.7) for ratio, back in [overhang_model(length, lean)]]
         print(f"  length {length}: " + ", ".join(cells))
+    print("What a height field can reach (profile_shape): each profile scaled to hold the "
+          "length, its RMS over the zigzag's")
+    for length in (1.20, 1.46, 1.86):
+        cells = [f"{name} {profile_shape(height, length):.3f}"
+                 for name, height in SHAPES.items()]
+        print(f"  length {length}: " + ", ".join(cells)
+              + f", box with upright flanks {box_shape(length):.3f}")
     return 0
 
 
