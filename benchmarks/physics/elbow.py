@@ -2,6 +2,7 @@
 
     python -m benchmarks.physics.elbow [--out docs/images] [--fabric cotton]
                                        [--frames 12,18,24] [--cache .physics-cache]
+                                       [--no-figure]
 
 A fine sleeve of the shirt's own shape (sample_stages/shirt.usda: radius 0.38 and length 3
 units along x), scaled to a sleeve of radius 10 cm (SCALE m per unit: the sweep's sleeve,
@@ -13,7 +14,9 @@ sleeve's radius) follows the two bones, as the sweep's arm does. The simulated s
 scaled back into the shirt's units and given the shirt's plaid on its material
 coordinates, is rendered by usdwrinkle (no wrinkles: a plain mesh) through the shirt's
 camera beside usdwrinkle's own frames of the shirt. Writes OUT/elbow_sim.png (top row:
-usdwrinkle on the coarse shirt; bottom row: the simulated sleeve). About 3 minutes on this
+usdwrinkle on the coarse shirt; bottom row: the simulated sleeve). First it prints the
+simulated folds at the elbow frame by frame (fold_table): whether they coarsen as the
+elbow closes. About 3 minutes on this
 2-core machine (the simulation cached in --cache).
 """
 from __future__ import annotations
@@ -115,6 +118,44 @@ def shirt_sleeve(fabric: str = "cotton", spacing: float = SPACING,
     return SweepShot(shot, fabric, to_sim(clean), capsules), sim_frame
 
 
+#: the rows either side of the elbow that fold_table measures over (1 cm each)
+ELBOW_ROWS = 12
+
+
+def fold_table(shot: Shot, points: np.ndarray, sim_frame: dict, frames) -> list[dict]:
+    """The simulated folds at the elbow, per shirt frame: over the band of 2 ELBOW_ROWS + 1
+    rows around the elbow (the whole circumference) and over its inner third (the
+    columns whose low-passed surface is shortest along the sleeve at the elbow): the mean
+    and least axial stretch r of the low-pass (the coarse compression), the material
+    wavelength and the RMS fold height (measure.wavelength, measure.rms)."""
+    from .coarse import lowpass
+    from .measure import rms, sim_height, wavelength
+
+    index = [sim_frame[f] - 1 for f in frames]
+    heights = sim_height(shot, points[index])
+    low = lowpass(shot, points[index])
+    rows, cols = shot.rows, shot.cols
+    along = np.diff(shot.material.reshape(rows, cols, 2)[:, :, 1], axis=0)
+    mid = rows // 2
+    out = []
+    for i, frame in enumerate(frames):
+        grid = low[i].reshape(rows, cols, 3)
+        stretch = np.ones((rows, cols))
+        stretch[:-1] = np.linalg.norm(np.diff(grid, axis=0), axis=-1) / along
+        band = np.zeros((rows, cols), bool)
+        band[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1] = True
+        inner = np.zeros((rows, cols), bool)
+        shortest = np.argsort(stretch[mid - 5: mid + 6].mean(0))[: cols // 3]
+        inner[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1, shortest] = True
+        row = {"frame": frame}
+        for name, mask in (("band", band), ("inner", inner)):
+            flat = mask.ravel()
+            row[name] = (float(stretch[mask].mean()), float(stretch[mask].min()),
+                         wavelength(shot, heights[i], flat), rms(heights[i], flat))
+        out.append(row)
+    return out
+
+
 def sim_stage(path: Path, shot: Shot, points: np.ndarray, sim_frame: dict) -> None:
     """The shirt stage with its skinned sleeve deactivated and the simulated one beside
     it, in the shirt's units, with the shirt's plaid on its material coordinates."""
@@ -194,6 +235,8 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", default="12,18,24")
     parser.add_argument("--width", type=int, default=640)
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    parser.add_argument("--no-figure", action="store_true",
+                        help="print the elbow's folds (fold_table) only, draw no figure")
     args = parser.parse_args(argv)
     frames = [int(f) for f in args.frames.split(",")]
     sweep_shot, sim_frame = shirt_sleeve(args.fabric)
@@ -201,6 +244,14 @@ def main(argv=None) -> int:
                                                solver={"fps": FPS}, progress=True)
     print(f"simulated {sweep_shot.shot.name}: {points.shape[1]} points, {len(points)} frames, "
           f"{seconds:.0f} s, edge strain p99 {stretch:.3f}")
+    print("the simulated folds at the elbow (fold_table): the low-pass's axial stretch r "
+          "(mean, least), the material wavelength, the RMS fold height")
+    for row in fold_table(sweep_shot.shot, points, sim_frame, range(8, 25, 2)):
+        print(f"  frame {row['frame']}: " + "; ".join(
+            f"{name} r {r:.2f} (least {least:.2f}), {100 * wl:.1f} cm, {1000 * h:.1f} mm"
+            for name, (r, least, wl, h) in ((key, row[key]) for key in ("band", "inner"))))
+    if args.no_figure:
+        return 0
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-elbow-") as scratch:
         folder = Path(scratch)
         stage = folder / "shirt_sim.usda"
