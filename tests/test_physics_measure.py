@@ -265,3 +265,30 @@ def test_a_profile_s_shape_against_the_zigzag_and_the_box(length):
     assert box_shape(length) == pytest.approx(upright, rel=1e-12)
     steep = profile_shape(lambda t: np.tanh(100 * np.cos(t)) / np.tanh(100), length)
     assert upright < steep < 1.1 * upright
+
+
+@pytest.mark.parametrize("fold", [0.03, 0.06])
+def test_the_elbow_fold_table_reads_a_known_accordion(fold):
+    """benchmarks.physics.elbow.fold_table on the shirt's sleeve shot with folds put in by
+    hand: rings of a known material wavelength, 2 mm high, and the whole sleeve gathered
+    along its axis to r = 0.8; the table reads r = 0.8 and the wavelength back, over the
+    band and over its (tapered) inner third."""
+    from benchmarks.physics.elbow import fold_table, shirt_sleeve
+
+    sweep_shot, sim_frame = shirt_sleeve("cotton", shirt_frames=range(1, 3))
+    shot = sweep_shot.shot
+    clean = sweep_shot.clean            # the sleeve's smooth rest surface (m), x along it
+    axis = clean[:, 0] - clean[:, 0].min()
+    radial = clean.copy()
+    radial[:, 0] = 0.0
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    along = shot.material[:, 1]
+    points = clean + 0.002 * np.sin(2 * np.pi * along / fold)[:, None] * radial
+    points[:, 0] = clean[:, 0].min() + 0.8 * axis
+    frames = np.repeat(points[None], max(sim_frame.values()), axis=0)
+    for row in fold_table(shot, frames, sim_frame, [1, 2]):
+        for name in ("band", "inner"):
+            r, least, wavelength, height = row[name]
+            assert r == pytest.approx(0.8, abs=0.01) and least == pytest.approx(0.8, abs=0.01)
+            assert wavelength == pytest.approx(fold, rel=0.08)  # the measure: 5.6 cm at 6
+            assert height == pytest.approx(0.002 / np.sqrt(2), rel=0.1)

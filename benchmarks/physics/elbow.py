@@ -124,8 +124,9 @@ ELBOW_ROWS = 12
 
 def fold_table(shot: Shot, points: np.ndarray, sim_frame: dict, frames) -> list[dict]:
     """The simulated folds at the elbow, per shirt frame: over the band of 2 ELBOW_ROWS + 1
-    rows around the elbow (the whole circumference) and over its inner third (the
-    columns whose low-passed surface is shortest along the sleeve at the elbow): the mean
+    rows around the elbow (the whole circumference) and over its inner third (a third of
+    the circumference around the column whose low-passed surface is shortest along the
+    sleeve at the elbow): the mean
     and least axial stretch r of the low-pass (the coarse compression), the material
     wavelength and the RMS fold height (measure.wavelength, measure.rms)."""
     from .coarse import lowpass
@@ -144,14 +145,21 @@ def fold_table(shot: Shot, points: np.ndarray, sim_frame: dict, frames) -> list[
         stretch[:-1] = np.linalg.norm(np.diff(grid, axis=0), axis=-1) / along
         band = np.zeros((rows, cols), bool)
         band[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1] = True
+        # the inner third: a third of the circumference around the column shortest at the
+        # elbow, tapered (Hann) across for the wavelength: a hard-edged strip of columns
+        # read a 6 cm ring fold as 3.7 cm (the edges' leakage)
+        third = cols // 3
+        centre = int(np.argmin(stretch[mid - 5: mid + 6].mean(0)))
+        columns = (centre - third // 2 + np.arange(third)) % cols
         inner = np.zeros((rows, cols), bool)
-        shortest = np.argsort(stretch[mid - 5: mid + 6].mean(0))[: cols // 3]
-        inner[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1, shortest] = True
+        inner[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1, columns] = True
+        taper = np.zeros((rows, cols))
+        taper[mid - ELBOW_ROWS: mid + ELBOW_ROWS + 1, columns] = np.hanning(third + 2)[1:-1]
         row = {"frame": frame}
-        for name, mask in (("band", band), ("inner", inner)):
-            flat = mask.ravel()
+        for name, mask, weight in (("band", band, band), ("inner", inner, taper)):
             row[name] = (float(stretch[mask].mean()), float(stretch[mask].min()),
-                         wavelength(shot, heights[i], flat), rms(heights[i], flat))
+                         wavelength(shot, heights[i], weight.ravel()),
+                         rms(heights[i], mask.ravel()))
         out.append(row)
     return out
 
