@@ -16,8 +16,7 @@ coordinates, is rendered by usdwrinkle (no wrinkles: a plain mesh) through the s
 camera beside usdwrinkle's own frames of the shirt. Writes OUT/elbow_sim.png (top row:
 usdwrinkle on the coarse shirt; bottom row: the simulated sleeve). First it prints the
 simulated folds at the elbow frame by frame (fold_table): whether they coarsen as the
-elbow closes. About 3 minutes on this
-2-core machine (the simulation cached in --cache).
+elbow closes. About 3 minutes on this 2-core machine (the simulation cached in --cache).
 """
 from __future__ import annotations
 
@@ -126,9 +125,9 @@ def fold_table(shot: Shot, points: np.ndarray, sim_frame: dict, frames) -> list[
     """The simulated folds at the elbow, per shirt frame: over the band of 2 ELBOW_ROWS + 1
     rows around the elbow (the whole circumference) and over its inner third (a third of
     the circumference around the column whose low-passed surface is shortest along the
-    sleeve at the elbow): the mean
-    and least axial stretch r of the low-pass (the coarse compression), the material
-    wavelength and the RMS fold height (measure.wavelength, measure.rms)."""
+    sleeve at the elbow): the mean and least axial stretch r of the low-pass (the coarse
+    compression), the material wavelength and the RMS fold height (measure.wavelength,
+    measure.rms)."""
     from .coarse import lowpass
     from .measure import rms, sim_height, wavelength
 

@@ -128,8 +128,8 @@ def restored(r_geo, slack: float) -> np.ndarray:
     """The share of the rest length that folds restore where the mesh is compressed to
     ``r_geo``: the cloth takes the first ``slack`` in-plane, so folds begin at r = 1 -
     slack (restoring 1 - slack); from r = 1 - SLACK_RAMP slack on they restore all of
-    it, a smoothstep between. The wrinkled surface keeps at least 1 - slack of its rest area,
-    all of it where the cloth is clearly compressed."""
+    it, a smoothstep between. The wrinkled surface keeps at least 1 - slack of its rest
+    area, all of it where the cloth is clearly compressed."""
     r_geo = np.asarray(r_geo, np.float64)
     if slack <= 0.0:
         return np.ones_like(r_geo)
