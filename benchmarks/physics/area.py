@@ -39,6 +39,7 @@ def measure_stage(name: str, ctx, scratch: Path) -> list[dict]:
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.geometry.measure import self_intersections, triangle_areas
     from usdwrinkle.geometry.subdivide import fine_point_count, subdivide
+    from usdwrinkle.method.contract import SLACK_RAMP
     from usdwrinkle.reference.crush import crush
 
     stage_path = SAMPLES / f"{name}.usda"
@@ -68,7 +69,8 @@ def measure_stage(name: str, ctx, scratch: Path) -> list[dict]:
             new = int(np.sum(~spoiled[rest.face_triangle[pairs]].any(axis=1))) if len(pairs) \
                 else 0
             unpainted = np.linalg.norm(record.params.q, axis=1) == 0
-            compressed = (law["geometric"] < 1.0 - 3.0 * record.params.slack) & unpainted
+            compressed = ((law["geometric"] < 1.0 - SLACK_RAMP * record.params.slack)
+                          & unpainted)
             uniaxial = compressed & (np.abs(law["stretch"] - 1.0) < 0.1) & ~law["capped"]
             ours, rest_areas = triangle_areas(points, faces), triangle_areas(rest.points, faces)
             row = {"stage": name, "mesh": path, "crossings": new,

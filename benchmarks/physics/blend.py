@@ -95,6 +95,7 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
     """The compressed region of ``path`` (one system only) at the engine's current frame,
     subdivided ``levels`` times; None where it has fewer than 100 fine faces."""
     from usdwrinkle.geometry.subdivide import subdivide
+    from usdwrinkle.method.contract import SLACK_RAMP
     from usdwrinkle.reference.crush import crush
 
     record = engine.meshes[path]
@@ -109,7 +110,7 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
                 hold=record.params.hold, gain=record.params.amplitude_gain)
     law["amplitude"] = law["amplitude"] * law["drawn"]
     unpainted = np.linalg.norm(record.params.q, axis=1) == 0
-    compressed = (law["geometric"] < 1 - 3 * record.params.slack) & unpainted
+    compressed = (law["geometric"] < 1 - SLACK_RAMP * record.params.slack) & unpainted
     fine = subdivide(posed, triangles, levels)
     bary = np.clip(fine.corner_bary.astype(np.float64), 0, 1)
     bary /= bary.sum(-1, keepdims=True)  # blend_weights

@@ -221,6 +221,7 @@ def area_ratio(sim: Simulated, baked, slack: float) -> float:
     triangles where the coarse surface (the simulation low-passed) shrinks below 1 - 3
     slack of its rest area: where the folds should restore all of it."""
     from usdwrinkle.geometry.measure import triangle_areas
+    from usdwrinkle.method.contract import SLACK_RAMP
 
     from .coarse import lowpass
     from .newton_client import triangles
@@ -229,7 +230,7 @@ def area_ratio(sim: Simulated, baked, slack: float) -> float:
     rest = triangle_areas(shot.rest, tri)
     low = triangle_areas(lowpass(shot, sim.points[-1:])[0], tri)
     inner = zones(shot)["all"][tri].all(axis=1)
-    compressed = inner & (low < (1.0 - 3.0 * slack) * rest)
+    compressed = inner & (low < (1.0 - SLACK_RAMP * slack) * rest)
     if not compressed.any():
         return float("nan")
     return float(triangle_areas(baked.points[-1], tri)[compressed].sum()
