@@ -132,8 +132,8 @@ def fold_table(shot: Shot, points: np.ndarray, sim_frame: dict, frames) -> list[
     from .measure import rms, sim_height, wavelength
 
     index = [sim_frame[f] - 1 for f in frames]
-    heights = sim_height(shot, points[index])
     low = lowpass(shot, points[index])
+    heights = sim_height(shot, points[index], low)
     rows, cols = shot.rows, shot.cols
     along = np.diff(shot.material.reshape(rows, cols, 2)[:, :, 1], axis=0)
     mid = rows // 2

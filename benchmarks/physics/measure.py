@@ -40,9 +40,10 @@ def grid_normals(shot: Shot, points: np.ndarray) -> np.ndarray:
     return n.reshape(points.shape)
 
 
-def sim_height(shot: Shot, points: np.ndarray) -> np.ndarray:
-    """(frames, n): the simulated fold height over the low-passed surface, band-passed."""
-    low = lowpass(shot, points)
+def sim_height(shot: Shot, points: np.ndarray, low: np.ndarray | None = None) -> np.ndarray:
+    """(frames, n): the simulated fold height over the low-passed surface, band-passed
+    (``low``: lowpass(shot, points), where the caller has it already)."""
+    low = lowpass(shot, points) if low is None else low
     return detail(shot, ((points - low) * grid_normals(shot, low)).sum(-1))
 
 
