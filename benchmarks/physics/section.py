@@ -142,7 +142,7 @@ def box_shape(length: float) -> float:
 SHAPES = {
     "fold (the default)": lambda t: preset_at("fold", t),
     "cosine": np.cos,
-    "tanh 6 cos (box preset)": lambda t: np.tanh(6 * np.cos(t)) / np.tanh(6),
+    "tanh 6 cos (box preset)": lambda t: preset_at("box", t),
     "tanh 20 cos": lambda t: np.tanh(20 * np.cos(t)) / np.tanh(20),
     "tanh 100 cos": lambda t: np.tanh(100 * np.cos(t)) / np.tanh(100),
 }
