@@ -33,9 +33,9 @@ layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
 // held edges (wrinkle:held, scene/params.py held_weights): x the damping strength in
 // [0, 1], yzw the unit rest vector u from the holder to the point (0 on a held point)
 layout(binding = CRUSH_HOLD) uniform sampler2D hold;
-// x: what the rest surface's curvature multiplies the amplitude by (scene/params.py
-// curved_gain; 1 on flat cloth)
-layout(binding = CRUSH_GAIN) uniform sampler2D gain;
+// x: the most the mesh's compression coarsens the point's folds (method/folds.py
+// coarsening_cap: COARSENING_MAX on flat cloth, 1 where the rest surface curves)
+layout(binding = CRUSH_COARSENING) uniform sampler2D coarsening;
 // the painted waves' start phases (method/anchor.py): xyz the unit painted direction (rest
 // space; zero where nothing is painted), w the start phase along it
 layout(binding = CRUSH_ANCHOR) uniform sampler2D anchor;
@@ -191,7 +191,7 @@ float excess_of(float r_geo) {
 }
 
 Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretched,
-          float W, float room, float scale, vec3 t1, vec3 t2) {
+          float W, float cap, float room, float scale, vec3 t1, vec3 t2) {
     Fold f;
     f.drawn = 1.0;
     float gather = min(r_geo / r, PAINT_GATHER_MAX);
@@ -203,7 +203,9 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretche
         f.wavelength = W;
         return f;
     }
-    float L = W * min(pow(rho, COARSENING_EXPONENT), COARSENING_MAX);
+    // coarsening up to the point's cap (COARSENING_MAX on flat cloth, 1 where the rest
+    // surface curves one way: folds.coarsening_cap)
+    float L = W * min(pow(rho, COARSENING_EXPONENT), cap);
     f.k = wave_vector(M_geo, d, L, t1, t2);
     f.amplitude = profile_slope(rho_area) / max(length(f.k), 1e-30);
     // the fold that restores the area the stretched mesh lacks (its slope for the excess
@@ -321,7 +323,7 @@ void main() {
     vec4 holder = fetch(hold, i);
     float along = dot(normalize(d3), holder.yzw);
     float held = 1.0 - holder.x * (1.0 - along * along);
-    float local = held * fetch(gain, i).x;
+    float cap = fetch(coarsening, i).x;
     // room for a fold: FOLD_ROOM of the posed surface's radius of curvature
     float room = bend > 0.0 ? FOLD_ROOM / bend : 1e30;
     // the mesh's compression across d, which one wave restores with its own where the
@@ -332,10 +334,10 @@ void main() {
     // lies below it), up to ACROSS_MAX, which lowers only the drawn fold
     float stretched = usable ? clamp(length(M_geo * e) / STRETCH_ONSET, 1.0, ACROSS_MAX)
                              : 1.0;
-    Fold f1 = fold(M_geo, d, r, r_geo, across, stretched, W, room, u_amplitude_scale,
+    Fold f1 = fold(M_geo, d, r, r_geo, across, stretched, W, cap, room, u_amplitude_scale,
                    t1, t2);
     float drawn = f1.drawn;
-    float amplitude = local * u_amplitude_scale * f1.amplitude;
+    float amplitude = held * u_amplitude_scale * f1.amplitude;
     vec3 k = f1.k;
     float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
 
@@ -346,7 +348,7 @@ void main() {
     float strain = stretch - 1.0 - u_tension_threshold;
     if (u_tension > 0.0 && usable && strain > 0.0) {
         float tension_wavelength = W * pow(strain / TENSION_REFERENCE_STRAIN, -0.25);
-        float tension_amplitude = local * u_amplitude_scale * u_tension * TENSION_SLOPE
+        float tension_amplitude = held * u_amplitude_scale * u_tension * TENSION_SLOPE
             * sqrt(strain) * tension_wavelength;
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
@@ -359,9 +361,9 @@ void main() {
     // The second system: the other principal direction, where it is compressed too
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
     float r2_geo = any_wave ? clamp(length(M_geo * e), MIN_RATIO, 1.0) : 1.0;
-    Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, 1.0, W, room, u_amplitude_scale * u_biaxial,
-                   t1, t2);
-    float amplitude2 = u_biaxial > 0.0 ? local * u_biaxial * u_amplitude_scale * f2.amplitude
+    Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, 1.0, W, cap, room,
+                   u_amplitude_scale * u_biaxial, t1, t2);
+    float amplitude2 = u_biaxial > 0.0 ? held * u_biaxial * u_amplitude_scale * f2.amplitude
                                         : 0.0;
     vec3 k2 = f2.k;
 

@@ -8,7 +8,6 @@
 
 layout(binding = MAPS_UV) uniform sampler2D corner_uv;   // [3t + c].xy, the baked UV set
 layout(binding = MAPS_Q_WIDTH) uniform sampler2D q_width;  // .w: rest wavelength W
-layout(binding = MAPS_GAIN) uniform sampler2D gain;  // .x: the curved-cloth gain g
 // the draw pass's shading normals (normals pass) and each corner's entry: the maps are
 // relative to the normal every renderer shades with, which the bake layer authors
 layout(binding = MAPS_SHADING_NORMALS) uniform sampler2D shading_normals;
@@ -43,7 +42,7 @@ void main() {
     vec4 shading = fetch(shading_normals, fetch(normal_corners, corner).x);
     v_normal_local = shading.w > 0.0 ? shading.xyz : fetch(fields, FIELD_NORMAL(i)).xyz;
     v_bary = vec3(c == 0, c == 1, c == 2);
-    v_full = COARSENING_MAX * fetch(q_width, i).w * fetch(gain, i).x / 4.0;
+    v_full = COARSENING_MAX * fetch(q_width, i).w / 4.0;
 #if defined MIKKTSPACE
     v_tangent = fetch(corner_tangents, corner);
     v_frame_normal = fetch(corner_frame_normals, corner).xyz;

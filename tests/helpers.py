@@ -253,10 +253,11 @@ def find_window(display: str, name: str, pid: int | None = None,
                          f"(xdotool: {last.stderr.strip() if last else ''})")
 
 
-def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
+def fold_law(ratio, width, geometric=None, slack=0.0, height=None, cap=None):
     """(amplitude, |k|) of the fold law (usdwrinkle/method/folds.py, docs/method.md) on an
     analytic sheet: ``ratio`` the compression along the wave with the painted q,
-    ``geometric`` the mesh's alone (default: ``ratio``), on flat cloth (no room limit)."""
+    ``geometric`` the mesh's alone (default: ``ratio``), with no room limit; ``cap`` the
+    coarsening cap (flat cloth's COARSENING_MAX by default)."""
     from usdwrinkle.method.folds import (
         excess_length,
         material_wavelength,
@@ -267,7 +268,8 @@ def fold_law(ratio, width, geometric=None, slack=0.0, height=None):
 
     geometric = ratio if geometric is None else geometric
     rho = excess_length(ratio, geometric, slack)
-    wavelength = material_wavelength(width, rho)
+    wavelength = material_wavelength(width, rho) if cap is None else \
+        material_wavelength(width, rho, cap)
     k = 2 * np.pi / (np.maximum(geometric, 1e-30) * wavelength)
     table = slope_table(default_profile() if height is None else height)
     amplitude = np.where(rho > 1.0, profile_slope(table, rho) / k, 0.0)

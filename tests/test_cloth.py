@@ -142,19 +142,19 @@ def tube_file(tmp_path, radius, meters):
                                             (0.32, 1.0), (0.5, 1.0)])
 def test_the_fallback_width_narrows_on_curved_cloth(tmp_path, radius, meters):
     """A tube of radius R (metres) gets the tube's width, whatever the cloth, W = min(W_cloth,
-    6 cm (R / 10 cm)^0.5) in scene units, R at least CURVED_RADIUS_MIN_M: a 6 cm sleeve
-    4.6 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (10.2 cm); cotton
-    narrows under 28.9 cm."""
+    7.7 cm (R / 10 cm)^0.5) in scene units, R at least CURVED_RADIUS_MIN_M: a 6 cm sleeve
+    6.0 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (10.2 cm); cotton
+    narrows under 17.5 cm."""
     path = tube_file(tmp_path, radius, meters)
     width, note = fallback_width(path)
-    expected = min(0.102, 0.060 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
+    expected = min(0.102, 0.077 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
     assert (schema.CLOTH_WIDTHS_M["cotton"], schema.CURVED_WIDTH_M, schema.CURVED_RADIUS_M,
-            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.102, 0.060, 0.10, 0.5,
+            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.102, 0.077, 0.10, 0.5,
                                                                    0.02)
     assert width == pytest.approx(expected, rel=1e-4)
-    assert ("narrower where curved under 28.9 cm" in note) == (radius < 0.289)
+    assert ("narrower where curved under 17.5 cm" in note) == (radius < 0.175)
     if radius == 0.06:
-        assert width * meters == pytest.approx(0.0465, abs=1e-4)
+        assert width * meters == pytest.approx(0.0596, abs=1e-4)
 
 
 @pytest.mark.parametrize("radius, meters", [(0.06, 1.0), (0.10, 0.01), (0.5, 1.0)])
@@ -174,7 +174,11 @@ def test_curved_cloth_gets_no_gain(gl_context, tmp_path, radius, meters):
             prim.CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token).Set(cloth)
         fields, record = gpu_fields(gl_context, stage)
         amplitudes.append(fields["amplitude"])
-        assert record.params.amplitude_gain is None
+        # the tube's coarsening cap: W kappa = 5 cm / R through the smoothstep (exact:
+        # the ring's curvature is 1 / R however coarse)
+        t = np.clip((0.05 / radius - 0.2) / 0.2, 0.0, 1.0)
+        assert record.params.coarsening == pytest.approx(1.5 - 0.5 * t * t * (3 - 2 * t),
+                                                         abs=1e-3)
     curved, plain = amplitudes
     assert (plain > 0).sum() > len(plain) // 2
     np.testing.assert_array_equal(curved, plain)
@@ -183,7 +187,8 @@ def test_curved_cloth_gets_no_gain(gl_context, tmp_path, radius, meters):
 def test_the_amplitude_mask_and_ramp_read_the_fold_law(gl_context, tmp_path):
     """The maps' amplitude mask and the --display-color amplitude ramp divide by
     s 1.5 W / 4 (about the fold law's height of cloth crushed flat): a 10 cm tube squeezed
-    to 0.8 along its axis bakes the fold law's amplitude, and both read it over that."""
+    to 0.8 along its axis bakes the fold law's amplitude (at W: a tube holds its wavelength,
+    W kappa = 0.5, cap 1), and both read it over that."""
     from usdwrinkle.outputs.layers import viridis
 
     rows, cols, width = 9, 12, 0.05
@@ -206,7 +211,7 @@ def test_the_amplitude_mask_and_ramp_read_the_fold_law(gl_context, tmp_path):
     assert main(["bake", str(source), str(layer), "--quiet", "--maps", "amplitude",
                  "--map-size", "128", "--map-layout", "asset", "--display-color",
                  "amplitude"]) == 0
-    law, _ = fold_law(0.8, width)
+    law, _ = fold_law(0.8, width, cap=1.0)
     share = float(law / (COARSENING_MAX * width / 4))
     result = Usd.Stage.Open(str(layer))
     mesh = result.GetPrimAtPath("/Sheet")
@@ -228,12 +233,11 @@ def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_pa
            "0.01))" in out
     curved = tube_file(tmp_path, 0.06, 0.01)
     assert main(["check", str(curved), "--wrinkles-only"]) == 0
-    assert ("W = 4.648 scene units (cotton 10.2 cm flat, narrower where curved under 28.9 cm "
+    assert ("W = 5.964 scene units (cotton 10.2 cm flat, narrower where curved under 17.5 cm "
             "(metersPerUnit 0.01))") in capsys.readouterr().out
     assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
     widths = json.loads(capsys.readouterr().out)["widths"]
     assert widths[0]["prim"] == "/Sheet" and widths[0]["width"] == pytest.approx([cm, cm])
-    assert "amplitude_gain" not in widths[0]   # the curved-cloth gain is retired
     assert main(["bake", str(path), str(tmp_path / "baked.usda")]) == 0
     assert f"  /Sheet: W = {cm:.4g} scene units (cotton" in capsys.readouterr().err
 
@@ -314,10 +318,10 @@ def test_slack_and_held_edges_match_the_numpy_reference(gl_context, seed):
     hold = record.params.hold
     assert hold is not None and 0.0 < hold[:, 0].mean() < 1.0
     ref = crush_reference(rest, posed, record.topology, q, record.params.width, slack=0.1,
-                          hold=hold, gain=record.params.amplitude_gain)
+                          hold=hold, coarsening=record.params.coarsening)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
     plain = crush_reference(rest, posed, record.topology, q, record.params.width,
-                            gain=record.params.amplitude_gain)
+                            coarsening=record.params.coarsening)
     assert np.abs(ours["amplitude"] - plain["amplitude"]).max() > 1e-3   # it did something
 
 
@@ -523,3 +527,71 @@ def test_automatic_levels_fit_the_point_cap_with_a_warning(gl_context, tmp_path,
     layer = Usd.Stage.Open(str(out))
     fine = layer.GetPrimAtPath("/Sheet_wrinkled").GetAttribute("points").Get(1)
     assert 1681 < len(fine) <= 20_000
+
+
+def test_the_coarsening_cap_by_hand():
+    """folds.coarsening_cap: 1.5 - 0.5 smoothstep(0.2, 0.4, W kappa) smoothstep(0.5, 0.9,
+    one_way), worked by hand at the ramps' ends and middles."""
+    from usdwrinkle.method.contract import CURVED_COARSENING, ONE_WAY
+    from usdwrinkle.method.folds import coarsening_cap
+
+    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.2, 0.4), (0.5, 0.9), 1.5)
+    width = np.array([0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1])
+    kappa = np.array([0.0, 2.0, 3.0, 4.0, -5.0, 5.0, 5.0])  # W kappa 0, .2, .3, .4, .5
+    ways = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.5])
+    np.testing.assert_allclose(coarsening_cap(width, kappa, ways),
+                               [1.5, 1.5, 1.25, 1.0, 1.0, 1.25, 1.5], atol=1e-12)
+
+
+def test_one_way_tells_a_tube_and_a_dome_from_pleats():
+    """topology.one_way: 1 on a tube and on a sphere (their signed curvature keeps its
+    sign), 1 on a plane (nothing curves), and under 0.3 on a sheet pleated with a period
+    of the reach (its crests and troughs cancel), but over 0.9 where the pleats are ten
+    times the reach (locally, it curves one way)."""
+    import trimesh
+
+    from usdwrinkle.scene.topology import one_way, signed_curvature
+
+    points, counts, indices = tube(21, 48, 0.1)
+    topology = topology_of(points, counts, indices)
+    kappa = signed_curvature(points, topology)
+    assert np.all(np.abs(np.abs(kappa) - 10.0) < 0.1)
+    np.testing.assert_allclose(one_way(points, kappa, 0.2), 1.0)
+    sphere = trimesh.creation.icosphere(4, radius=0.5)
+    counts = np.full(len(sphere.faces), 3)
+    topology = topology_of(sphere.vertices, counts, sphere.faces.ravel())
+    kappa = signed_curvature(sphere.vertices, topology)
+    np.testing.assert_allclose(np.abs(kappa), 2.0, rtol=0.05)
+    assert np.all(np.sign(kappa) == np.sign(kappa[0]))
+    np.testing.assert_allclose(one_way(sphere.vertices, kappa, 0.3), 1.0)
+    rest, counts, indices = grid_sheet(81, 81, 2.0)
+    topology = topology_of(rest, counts, indices)
+    np.testing.assert_allclose(one_way(rest, signed_curvature(rest, topology), 0.2), 1.0)
+    for period, test in ((0.2, lambda o: np.percentile(o, 90) < 0.3),
+                         (2.0, lambda o: np.median(o) > 0.9)):
+        pleated = np.array(rest, np.float64)
+        pleated[:, 2] = 0.02 * period * np.sin(2 * np.pi * pleated[:, 0] / period)
+        kappa = signed_curvature(pleated, topology)
+        assert test(one_way(pleated, kappa, 0.2)), period
+
+
+@pytest.mark.parametrize("radius, cap", [(0.2, 1.0), (2.0, 1.5)])
+def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, cap):
+    """Issue 55: a tube compressed along its axis to 0.6 folds at W (the GPU's posed |k| =
+    2 pi / (0.6 W)) where W kappa >= 0.4 (radius 0.2 m, W 0.3), and coarsens as flat cloth
+    does (1.5 W, the cap) where W kappa <= 0.2 (radius 2 m): its height is the fold law's
+    at that wavelength (no room limit at these radii), as the numpy reference gives."""
+    points, counts, indices = tube(21, 96, radius, 1.0)
+    posed = points * np.array([1.0, 1.0, 0.6])
+    stage = point_cache_stage(points.astype(np.float32), {1: posed.astype(np.float32)},
+                              counts, indices, width=0.3)
+    fields, record = gpu_fields(gl_context, stage)
+    np.testing.assert_allclose(record.params.coarsening, cap, atol=1e-6)
+    inner = (points[:, 2] > 0.2) & (points[:, 2] < 0.8)
+    k = np.linalg.norm(fields["wave_vector"][inner], axis=1)
+    np.testing.assert_allclose(k, 2 * np.pi / (0.6 * 0.3 * cap), rtol=2e-3)
+    amplitude, _ = fold_law(np.array([0.6]), 0.3, cap=cap)
+    np.testing.assert_allclose(fields["amplitude"][inner], amplitude[0], rtol=2e-3)
+    law = crush_reference(record.rest_points, posed, record.topology, record.params.q,
+                          record.params.width, coarsening=record.params.coarsening)
+    np.testing.assert_allclose(law["amplitude"][inner], amplitude[0], rtol=2e-3)

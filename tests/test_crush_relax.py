@@ -29,7 +29,7 @@ def random_cloth_fields(ctx, seed: int, relax_iterations: int):
     ours, record = gpu_fields(ctx, stage)
     ref = crush_reference(rest, posed, record.topology, q, record.params.width,
                           slack=record.params.slack, hold=record.params.hold,
-                          gain=record.params.amplitude_gain)
+                          coarsening=record.params.coarsening)
     return posed, ours, record, ref
 
 
@@ -76,7 +76,7 @@ def test_relax_matches_numpy_reference(gl_context):
     finally:
         engine.release()
     starts = [crush_reference(rest, frames[f], record.topology, q, record.params.width,
-                              slack=record.params.slack, gain=record.params.amplitude_gain)
+                              slack=record.params.slack, coarsening=record.params.coarsening)
               for f in (1, 2, 3)]
     for fields, f in zip(starts, (1, 2, 3), strict=True):
         fields["points"], fields["rest_points"] = frames[f], rest
@@ -295,7 +295,7 @@ def test_a_point_of_huge_valence_reads_a_capped_ring(gl_context):
     ours, record = gpu_fields(gl_context, stage)
     ref = crush_reference(rest, posed, record.topology, np.zeros_like(rest),
                           record.params.width, slack=record.params.slack,
-                          hold=record.params.hold, gain=record.params.amplitude_gain)
+                          hold=record.params.hold, coarsening=record.params.coarsening)
     np.testing.assert_allclose(ours["normals"][0], ref["normals"][0], atol=1e-5)
     np.testing.assert_allclose(ours["compression"][0], ref["compression"][0], atol=1e-4)
     assert ref["compression"][0] == pytest.approx(0.6, abs=0.01)

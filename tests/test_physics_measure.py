@@ -87,8 +87,8 @@ def test_the_low_pass_keeps_a_rotated_end_at_its_border():
 def test_the_curvature_fit_recovers_a_power_law():
     """Tubes folding as 0.05 (R / 0.23)^0.5 give back p = 0.5 and R_c = 0.23; the product's
     curved_width with the schema's constants (theory's 1/2 power through the converged
-    referee's 10 cm sleeves, 6 cm, docs/physics.md) is min(flat, 0.060 (R / 0.10)^0.5),
-    whichever the cloth's flat width."""
+    referee's sleeves, whose folds do not coarsen: 7.7 cm at 10 cm, docs/physics.md) is
+    min(flat, 0.077 (R / 0.10)^0.5), whichever the cloth's flat width."""
     from benchmarks.physics.__main__ import curvature_fit
     from usdwrinkle.scene.params import curved_below, curved_width
     from usdwrinkle.usd import schema
@@ -98,15 +98,15 @@ def test_the_curvature_fit_recovers_a_power_law():
     exponent, radius = curvature_fit(radii, wavelengths, 0.05)
     assert exponent == pytest.approx(0.5, abs=1e-9) and radius == pytest.approx(0.23, rel=1e-9)
     assert (schema.CURVED_EXPONENT, schema.CURVED_WIDTH_M, schema.CURVED_RADIUS_M) == \
-        (0.5, 0.060, 0.10)
-    tube = 0.060 * (radii / 0.10) ** 0.5
+        (0.5, 0.077, 0.10)
+    tube = 0.077 * (radii / 0.10) ** 0.5
     for flat in (0.054, 0.084, 0.2):
         np.testing.assert_allclose(curved_width(flat, 1.0 / radii), np.minimum(flat, tube),
                                    rtol=1e-12)
         below = curved_below(flat)
         assert float(curved_width(flat, np.array([1.0 / below]))[0]) == pytest.approx(flat)
     np.testing.assert_allclose(curved_width(0.084, np.array([0.0, 1.0, 100.0])),
-                               [0.084, 0.084, 0.060 * (0.02 / 0.10) ** 0.5], rtol=1e-12)
+                               [0.084, 0.084, 0.077 * (0.02 / 0.10) ** 0.5], rtol=1e-12)
 
 
 
@@ -240,6 +240,10 @@ def test_the_area_is_taken_where_w_is_sampled_six_times():
     assert area_grid(0.055) == SPACING / 2        # the 10 cm sleeves
     assert area_grid(0.039) == SPACING / 2        # the 5 cm sleeve: 7.8 at 0.5 cm
     assert area_grid(0.025) == SPACING / 4
+    # where the folds do not coarsen (cap 1), W / 1.5 is sampled 6 times: 9 samples of W
+    assert area_grid(0.09, 1.0) == SPACING        # 0.06 / 6 = 1 cm
+    assert area_grid(0.0825, 1.0) == SPACING / 2  # the 10 cm sleeves at their matched W
+    assert area_grid(0.0825, 1.5) == area_grid(0.0825)
 
 
 @pytest.mark.parametrize("length", [1.2, 1.46, 1.86])

@@ -107,7 +107,7 @@ def compressed_region(engine, path: str, levels: int) -> Region | None:
     posed = fields["points"].astype(np.float64)
     law = crush(record.rest_points, posed, record.topology, record.params.q,
                 record.params.width, slack=record.params.slack,
-                hold=record.params.hold, gain=record.params.amplitude_gain)
+                hold=record.params.hold, coarsening=record.params.coarsening)
     law["amplitude"] = law["amplitude"] * law["drawn"]
     unpainted = np.linalg.norm(record.params.q, axis=1) == 0
     compressed = (law["geometric"] < 1 - SLACK_RAMP * record.params.slack) & unpainted

@@ -237,19 +237,35 @@ def area_ratio(sim: Simulated, baked, slack: float) -> float:
                  / rest[compressed].sum())
 
 
-def area_grid(width: float) -> float:
+def area_grid(width: float, cap: float | None = None) -> float:
     """The grid our area is taken on for a bake of width ``width``: SPACING, halved until
     it samples a wavelength at usdwrinkle's own geometry bake's rate (its level rule (a):
-    fine edges at most W / DEFAULT_SAMPLES_PER_WAVELENGTH in the rest pose). A displaced
+    fine edges at most W cap / (COARSENING_MAX DEFAULT_SAMPLES_PER_WAVELENGTH) in the
+    rest pose, cap the coarsening cap, folds.coarsening_cap: COARSENING_MAX on flat cloth
+    (None), 1 on the sleeves). A displaced
     mesh keeps only sinc(pi / n)^2 of its folds' extra length at n samples a wavelength;
     the sleeves' W (3.9-5.7 cm) took 3.9-5.7 samples on the 1 cm grid, which measured
     their area 0.928-0.936 and 0.974-0.979 at 0.5 cm (2026-12-03)."""
     from usdwrinkle.geometry.options import DEFAULT_SAMPLES_PER_WAVELENGTH
+    from usdwrinkle.method.contract import COARSENING_MAX
 
+    sampled = width * (COARSENING_MAX if cap is None else cap) / COARSENING_MAX
     grid = SPACING
-    while grid > width / DEFAULT_SAMPLES_PER_WAVELENGTH:
+    while grid > sampled / DEFAULT_SAMPLES_PER_WAVELENGTH:
         grid /= 2
     return grid
+
+
+def coarsening_of(shot, width: float) -> float | None:
+    """The coarsening cap usdwrinkle gives the shot's cloth at ``width`` (m):
+    folds.coarsening_cap at a sleeve's rest radius (its ring's curvature is 1 / R), None
+    (COARSENING_MAX) on flat cloth."""
+    from usdwrinkle.method.folds import coarsening_cap
+
+    if not shot.periodic:
+        return None
+    radius = float(np.mean(np.linalg.norm(shot.rest[:, :2], axis=1)))
+    return float(coarsening_cap(width, 1.0 / radius))
 
 
 def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: dict | None,
@@ -258,7 +274,7 @@ def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: d
     ``on_fine`` (the bake on SPACING's grid) where that is it, else a bake on the
     simulation resampled onto it (sweep.resample, halving from SPACING)."""
     base = fine or sim
-    grid, spacing = area_grid(width), SPACING
+    grid, spacing = area_grid(width, coarsening_of(sim.shot, width)), SPACING
     if grid == spacing:
         return area_ratio(base, on_fine, slack)
     name = sim.shot.name

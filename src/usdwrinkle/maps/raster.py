@@ -78,7 +78,7 @@ class MapRasterizer(DrawnPass):
     SHADER = "maps.glsl"
     #: the wave blend's units (include/wave.glsl) and its own
     UNITS = {**bindings.WAVE, "MAPS_UV": 7, "MAPS_Q_WIDTH": 9, "MAPS_SHADING_NORMALS": 10,
-             "MAPS_NORMAL_CORNERS": 11, "MAPS_TANGENTS": 12, "MAPS_GAIN": 13,
+             "MAPS_NORMAL_CORNERS": 11, "MAPS_TANGENTS": 12,
              "MAPS_FRAME_NORMALS": 14}
 
     def __init__(self, ctx, size: int, parallax: bool = False):
@@ -164,7 +164,7 @@ class MapRasterizer(DrawnPass):
             "u_amplitude_scale": float(res.record.params.amplitude_scale),
         })
         bind_wave(self.UNITS, res, variant.program)
-        self.bind(reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width, "MAPS_GAIN": res.gain,
+        self.bind(reads={"MAPS_UV": uv, "MAPS_Q_WIDTH": res.q_width,
                          "MAPS_SHADING_NORMALS": res.shading_normals,
                          "MAPS_NORMAL_CORNERS": res.normal_corners})
         if tangents is not None and not count:

@@ -47,23 +47,26 @@ SMOOTHING = 32
 SMOOTH = 0.866
 
 
-def painted_wavelength(q_length: np.ndarray, width: np.ndarray) -> np.ndarray:
+def painted_wavelength(q_length: np.ndarray, width: np.ndarray,
+                       cap=COARSENING_MAX) -> np.ndarray:
     """The material wavelength of a wave that the paint alone makes (crush.glsl's fold at
-    r_geo = 1): W min(gather ** COARSENING_EXPONENT, COARSENING_MAX), gather =
-    min(1 / r, PAINT_GATHER_MAX), r = clamp(1 - |q|^2, MIN_RATIO, 1) the compression along
-    q that the paint biases."""
+    r_geo = 1): W min(gather ** COARSENING_EXPONENT, cap), gather = min(1 / r,
+    PAINT_GATHER_MAX), r = clamp(1 - |q|^2, MIN_RATIO, 1) the compression along q that
+    the paint biases, ``cap`` the point's coarsening cap (folds.coarsening_cap: 1 where
+    the rest surface curves one way)."""
     r = np.clip(1.0 - np.asarray(q_length, np.float64) ** 2, MIN_RATIO, 1.0)
     gather = np.minimum(1.0 / r, PAINT_GATHER_MAX)
     return np.asarray(width, np.float64) * np.minimum(gather ** COARSENING_EXPONENT,
-                                                      COARSENING_MAX)
+                                                      np.asarray(cap, np.float64))
 
 
 def painted_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
                    neighbor_indices: np.ndarray, q: np.ndarray,
-                   width: np.ndarray) -> np.ndarray:
+                   width: np.ndarray, coarsening: np.ndarray | None = None) -> np.ndarray:
     """(n, 4) float32: xyz the unit painted direction (q in the rest tangent plane; zero
     where nothing is painted), w the start phase (radians) along it (module docstring).
-    ``neighbor_offsets``/``neighbor_indices``: each point's 1-ring (Topology)."""
+    ``neighbor_offsets``/``neighbor_indices``: each point's 1-ring (Topology);
+    ``coarsening``: each point's coarsening cap (COARSENING_MAX everywhere: None)."""
     rest = np.asarray(rest, np.float64)
     normals = np.asarray(rest_normals, np.float64)
     n = len(rest)
@@ -77,8 +80,11 @@ def painted_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets:
     direction = np.zeros_like(tangent)
     direction[painted] = tangent[painted] / length[painted, None]
     wavenumber = np.zeros(n)
+    cap = np.broadcast_to(np.asarray(COARSENING_MAX if coarsening is None else coarsening,
+                                     np.float64), (n,))
     wavenumber[painted] = 2.0 * np.pi / painted_wavelength(np.minimum(length[painted], 1.0),
-                                                          np.asarray(width)[painted])
+                                                          np.asarray(width)[painted],
+                                                          cap[painted])
 
     # the painted points' ring edges (i -> j, both painted)
     offsets = np.asarray(neighbor_offsets, np.int64)

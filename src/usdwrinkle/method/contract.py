@@ -20,7 +20,8 @@ MIN_RATIO = 0.05
 #: - coarsening: L = W * min(rho ** COARSENING_EXPONENT, COARSENING_MAX). The cloth
 #:   referee's folds widen about 1.8x by 32% compression; a steeper law (exponent 2, cap
 #:   1.7) matched that but moved the crests, so a = 1 keeps the posed wavelength uniform
-#:   and the cap 1.5 keeps the crests stable (docs/method.md, "The fold law");
+#:   and the cap 1.5 keeps the crests stable (docs/method.md, "The fold law"); the cap
+#:   falls to 1 where the rest surface curves one way (CURVED_COARSENING below);
 #: - room: a fold rises at most FOLD_ROOM over the rate at which the posed normals turn
 #:   (FOLD_ROOM of the posed surface's radius of curvature), so that the displaced
 #:   surface does not pass through itself.
@@ -44,6 +45,24 @@ MIN_RATIO = 0.05
 #:   (docs/physics.md, "The pillow").
 COARSENING_EXPONENT = 1.0
 COARSENING_MAX = 1.5
+#: Curved cloth holds its wavelength: where the rest surface curves one way (a sleeve, a
+#: trouser leg, a rounded cushion), the cap on the mesh's coarsening falls from
+#: COARSENING_MAX to 1 (folds.coarsening_cap) by the product of two smoothsteps: of W kappa
+#: (kappa: the point's largest rest normal curvature, scene/topology.curvature) from
+#: CURVED_COARSENING[0] to [1], and of how one way the surface curves within
+#: ONE_WAY_REACH W of the point (scene/topology.one_way: 1 on a tube or a dome, under 0.3
+#: on the pleated curtain sample, whose pleats are folds themselves) from ONE_WAY[0] to
+#: [1]. The converged referee's sleeves (5-10 cm, silk and cotton) and the simulated shirt
+#: elbow keep their material wavelength while the compression doubles (docs/physics.md,
+#: the elbow's fold table); coarsening them moved the bending 10 cm cotton sleeve's crests
+#: 2.09x the cloth's (bar 1.5x), 0.85x without. What a painted gather asks for coarsens
+#: everywhere (anchor.py): painting more makes bigger folds. Two gates that read the
+#: curvature along the crests instead (a tube's, not a pleat's) switched with the
+#: turning direction and moved the crests (bend 1.89x, held 3.4x), or, frozen where the
+#: fold formed, coarsened most of the sleeve (bend 2.12x): docs/physics.md
+CURVED_COARSENING = (0.2, 0.4)
+ONE_WAY = (0.5, 0.9)
+ONE_WAY_REACH = 2.0
 #: The slack's onset (crush.glsl excess_of, folds.restored): folds begin at a compression
 #: of c (wrinkle:slack) and restore the whole rest length from SLACK_RAMP c on, a
 #: smoothstep between. The referee's curtains buckle at once, and at their first phase
@@ -96,11 +115,13 @@ FIT_ONSET = 1.05
 #: for along an edge, split into the part the wave number's change asks (the folds
 #: coarsening: delta) and the part the direction's turn asks (turn). Unchanged input
 #: keeps the phases. A direction that turns a little (crest damping's catch-up after a
-#: pose stops, a nearly isotropic strain's wander) moves them 30x less than a wave
+#: pose stops, a nearly isotropic strain's wander) moves them 300x less than a wave
 #: number that changes as much: the referee's held sleeves crept 4.4x and 1.5x the
-#: cloth's when both counted alike, 1.2x and 0.6x now (docs/method.md, "Mobility").
+#: cloth's when both counted alike, 1.2x and 0.6x at 30x less (MOBILITY_TURN 3); since
+#: curved cloth does not coarsen (CURVED_COARSENING), 2.0x and 1.3x at 3 and 1.1x and
+#: 1.1x at 30 (docs/method.md, "The turn counts less").
 MOBILITY_PHASE = 0.1
-MOBILITY_TURN = 3.0
+MOBILITY_TURN = 30.0
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4

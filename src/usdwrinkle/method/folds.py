@@ -29,7 +29,9 @@ from .contract import (
     ACROSS_MIN,
     COARSENING_EXPONENT,
     COARSENING_MAX,
+    CURVED_COARSENING,
     MIN_RATIO,
+    ONE_WAY,
     PAINT_GATHER_MAX,
     SLACK_RAMP,
     SLOPE_SAMPLES,
@@ -137,11 +139,30 @@ def restored(r_geo, slack: float) -> np.ndarray:
     return 1.0 - slack * t * t * (3.0 - 2.0 * t)
 
 
-def material_wavelength(width, rho) -> np.ndarray:
-    """L = W min(rho^COARSENING_EXPONENT, COARSENING_MAX) (W where nothing folds)."""
+def _smoothstep(low: float, high: float, x) -> np.ndarray:
+    t = np.clip((np.asarray(x, np.float64) - low) / (high - low), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def coarsening_cap(width, kappa, one_way=1.0) -> np.ndarray:
+    """The most the mesh's compression coarsens a point's folds: COARSENING_MAX on flat
+    cloth, falling to 1 (none) by smoothstep(CURVED_COARSENING, ``width`` ``kappa``) times
+    smoothstep(ONE_WAY, ``one_way``): ``kappa`` the point's largest rest normal curvature
+    (in the inverse of width's units), ``one_way`` how one way the surface curves around
+    it (scene/topology.one_way). Cloth that curves one way holds its wavelength; pleats
+    coarsen as flat cloth does (contract.CURVED_COARSENING)."""
+    held = _smoothstep(*CURVED_COARSENING, np.asarray(width, np.float64)
+                       * np.abs(np.asarray(kappa, np.float64))) * _smoothstep(*ONE_WAY, one_way)
+    return COARSENING_MAX - (COARSENING_MAX - 1.0) * held
+
+
+def material_wavelength(width, rho, cap=COARSENING_MAX) -> np.ndarray:
+    """L = W min(rho^COARSENING_EXPONENT, cap) (W where nothing folds): the folds coarsen
+    with the length they restore, the mesh's and the paint's, up to ``cap``
+    (coarsening_cap: COARSENING_MAX on flat cloth, 1 where it curves one way)."""
     rho = np.maximum(np.asarray(rho, np.float64), 1.0)
     return np.asarray(width, np.float64) * np.minimum(rho ** COARSENING_EXPONENT,
-                                                      COARSENING_MAX)
+                                                      np.asarray(cap, np.float64))
 
 
 def height_bound(table: np.ndarray, slack: float = 0.0) -> float:

@@ -59,8 +59,7 @@ def _baked(fields, field: str) -> np.ndarray:
 def display_values(field: str, fields: dict, params) -> np.ndarray:
     """The [0, 1] quantity shown by --display-color."""
     if field == "amplitude":  # over about the fold law's height of cloth crushed flat
-        gain = 1.0 if params.amplitude_gain is None else params.amplitude_gain
-        full = np.maximum(params.amplitude_scale * gain * COARSENING_MAX * params.width / 4.0,
+        full = np.maximum(params.amplitude_scale * COARSENING_MAX * params.width / 4.0,
                           1e-30)
         return np.minimum(fields.drawn_amplitude / full, 1.0)
     return (1.0 - fields.compression) / (1.0 - MIN_RATIO)  # r in [MIN_RATIO, 1] -> [1, 0]

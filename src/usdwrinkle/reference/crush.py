@@ -4,7 +4,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..method.anchor import painted_phases
-from ..method.contract import ANCHOR_ALIGNED, FOLD_ROOM, MIN_RATIO
+from ..method.contract import (
+    ANCHOR_ALIGNED,
+    COARSENING_MAX,
+    FOLD_ROOM,
+    MIN_RATIO,
+)
 from ..method.folds import (
     area_excess,
     drawn_excess,
@@ -41,11 +46,12 @@ def wave_vector(M: np.ndarray, d: np.ndarray, wavelength) -> np.ndarray:
 
 def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray,
           width: np.ndarray, amplitude_scale: float = 1.0, slack: float = 0.0,
-          hold: np.ndarray | None = None, gain: np.ndarray | None = None,
+          hold: np.ndarray | None = None, coarsening: np.ndarray | None = None,
           slope: np.ndarray | None = None) -> dict:
     """Per-vertex wave fields, as crush.glsl computes them (``slack``: wrinkle:slack;
-    ``hold``: what held edges leave each point, scene.params.held_weights; ``gain``: a
-    per-point amplitude factor; ``slope``: the profile's slope table, folds.slope_table,
+    ``hold``: what held edges leave each point, scene.params.held_weights; ``coarsening``:
+    each point's cap on the mesh's coarsening, folds.coarsening_cap (COARSENING_MAX
+    everywhere by default); ``slope``: the profile's slope table, folds.slope_table,
     the default profile's by default).
 
     Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
@@ -124,7 +130,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     across = np.where(usable, np.linalg.norm(np.einsum("nij,nj->ni", M_geo, e), axis=1), 1.0)
     rho_area = area_excess(r, r_geo, across, slack)
     folding = rho > 1.0
-    wavelength = np.where(folding, material_wavelength(width, rho), width)
+    most = COARSENING_MAX if coarsening is None else np.asarray(coarsening, np.float64)
+    wavelength = np.where(folding, material_wavelength(width, rho, most), width)
     k2 = wave_vector(M_geo, d, wavelength)
     kl = np.linalg.norm(k2, axis=1)
     amplitude = np.where(folding, profile_slope(table, rho_area) / np.maximum(kl, 1e-30),
@@ -145,13 +152,11 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
         hold = np.asarray(hold, np.float64)
         along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
         amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
-    if gain is not None:
-        amplitude = amplitude * np.asarray(gain, np.float64)
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
     phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
     # where the wave runs along the paint, the paint's own start phase (method/anchor.py)
     painted = painted_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
-                             q, width).astype(np.float64)
+                             q, width, coarsening).astype(np.float64)
     along_paint = np.sum(d3 / np.maximum(np.linalg.norm(d3, axis=1, keepdims=True), 1e-300)
                          * painted[:, :3], 1)
     phase = np.where(np.abs(along_paint) >= ANCHOR_ALIGNED,

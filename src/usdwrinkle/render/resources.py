@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..method.anchor import painted_phases
-from ..method.contract import JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
+from ..method.contract import COARSENING_MAX, JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
 from ..process.errors import UsdWrinkleError
 from ..process.limits import MAX_POINTS
 from ..scene.records import MeshRecord
@@ -57,25 +57,29 @@ def _hold(params, n: int) -> np.ndarray:
     return np.asarray(params.hold, np.float32)
 
 
-def _gain(params, n: int) -> np.ndarray:
-    """What the rest curvature multiplies each point's amplitude by (ones: flat cloth)."""
-    if params.amplitude_gain is None:
-        return np.ones((n, 1), np.float32)
-    return np.asarray(params.amplitude_gain, np.float32).reshape(n, 1)
+def _coarsening(params, n: int) -> np.ndarray:
+    """The most the mesh's compression coarsens each point's folds (folds.coarsening_cap;
+    COARSENING_MAX everywhere where the record has none)."""
+    if params.coarsening is None:
+        return np.full((n, 1), COARSENING_MAX, np.float32)
+    return np.asarray(params.coarsening, np.float32).reshape(n, 1)
 
 
 def _anchor(record) -> np.ndarray:
     """The painted waves' start phases (method/anchor.py), (n, 4)."""
     topology = record.topology
     return painted_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
-                          topology.neighbor_indices, record.params.q, record.params.width)
+                          topology.neighbor_indices, record.params.q, record.params.width,
+                          record.params.coarsening)
 
 
 def _anchor_key(record) -> int:
-    """What the painted start phases depend on beyond the topology: the rest pose, q and
-    the width."""
+    """What the painted start phases depend on beyond the topology: the rest pose, q, the
+    width and the coarsening cap."""
+    cap = record.params.coarsening
     return hash(tuple(np.ascontiguousarray(array).tobytes() for array in (
-        record.rest_points, record.params.q, record.params.width)))
+        record.rest_points, record.params.q, record.params.width,
+        np.zeros(0) if cap is None else cap)))
 
 
 def _bytes(array: np.ndarray) -> bytes:
@@ -184,7 +188,7 @@ class MeshResources:
         self.rest_frame = self._table(2 * n, 4, data=frame)
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         self.hold = self._table(n, 4, data=_hold(record.params, n))
-        self.gain = self._table(n, 1, data=_gain(record.params, n))
+        self.coarsening = self._table(n, 1, data=_coarsening(record.params, n))
         #: the painted waves' start phases (method/anchor.py)
         self.anchor = self._table(n, 4, data=_anchor(record))
         self._anchor_key = _anchor_key(record)
@@ -272,7 +276,7 @@ class MeshResources:
         self.record = record
         self.q_width.write(vec4(record.params.q, record.params.width))
         self.hold.write(_hold(record.params, self.num_points))
-        self.gain.write(_gain(record.params, self.num_points))
+        self.coarsening.write(_coarsening(record.params, self.num_points))
         key = _anchor_key(record)
         if key != self._anchor_key:  # amplitude, profile... edits keep it
             self.anchor.write(_anchor(record))

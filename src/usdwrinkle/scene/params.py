@@ -12,7 +12,7 @@ from ..usd import schema
 from ..usd.validation import parameter_findings, refuse
 from ..usd.values import static_flattened, static_value
 from .records import WrinkleParams
-from .topology import Topology, curvature, mean_edge_length
+from .topology import Topology, mean_edge_length, one_way, signed_curvature
 
 _log = logging.getLogger(__name__)
 
@@ -102,9 +102,10 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
 
     cloth = _get(prim, schema.CLOTH)
     cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
-    # the rest surface's largest curvature (1/m), for a cloth's width and amplitude gain
-    kappa = None if cloth == schema.MESH_CLOTH else curvature(rest_points, topology) / \
-        stage_meters(prim.GetStage())
+    # the rest surface's largest curvature (1 / scene units): for a cloth's width (in
+    # 1/m) and the coarsening's cap
+    bent = signed_curvature(rest_points, topology)
+    kappa = None if cloth == schema.MESH_CLOTH else np.abs(bent) / stage_meters(prim.GetStage())
     value = _primvar(prim, "wrinkle:width")
     if value is not None:
         arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
@@ -142,11 +143,16 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
                            (schema.TENSION_THRESHOLD, schema.DEFAULT_TENSION_THRESHOLD)):
         value = _get(prim, name)
         controls.append(fallback if value is None else float(value))
-    from ..method.folds import slope_table
+    from ..method.contract import ONE_WAY_REACH
+    from ..method.folds import coarsening_cap, slope_table
+
+    # how one way the rest surface curves within ONE_WAY_REACH W (the mesh's median W)
+    ways = one_way(rest_points, bent, ONE_WAY_REACH * float(np.median(width))) if n else bent
 
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,
-                         crest_damping=damping, slope=slope_table(height))
+                         crest_damping=damping, slope=slope_table(height),
+                         coarsening=coarsening_cap(width, bent, ways).astype(np.float32))
 
 
 def width_summary(params: WrinkleParams) -> dict:

@@ -82,9 +82,9 @@ class WrinkleParams:
     width_note : str, where the width came from (check and the bake summary print it).
     crest_damping : float, the time constant in frames with which small changes of the
         strain are followed (wrinkle:crestDamping; 0: none).
-    amplitude_gain : (n,) float32 or None, what multiplies each point's amplitude (None:
-        1 everywhere; the curved-cloth gain that filled it is retired: it drew more length
-        than the cloth has).
+    coarsening : (n,) float32 or None, the most the mesh's compression coarsens each
+        point's folds (folds.coarsening_cap of W and the rest curvature: COARSENING_MAX on
+        flat cloth, 1 on curved; None: COARSENING_MAX everywhere).
     slope : (SLOPE_SAMPLES,) float32 or None, the height profile's inextensible slope
         table (folds.slope_table; None: derived from height_profile where it is read).
     """
@@ -102,7 +102,7 @@ class WrinkleParams:
     hold: np.ndarray | None = None
     width_note: str = ""
     crest_damping: float = 0.0
-    amplitude_gain: np.ndarray | None = None
+    coarsening: np.ndarray | None = None
     slope: np.ndarray | None = None
 
     def slope_table(self) -> np.ndarray:

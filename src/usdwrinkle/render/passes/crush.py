@@ -30,7 +30,7 @@ class CrushPass(WavePass):
     SHADER = "crush.glsl"
     UNITS = {"CRUSH_POSED_POINTS": 0, "CRUSH_REST_POINTS": 1, "TOPOLOGY_TABLE": 2,
              "CRUSH_REST_FRAME": 3, "CRUSH_Q_WIDTH": 4, "CRUSH_FACE_NORMALS": 5,
-             "CRUSH_TRIANGLES": 6, "CRUSH_BAKED": 7, "CRUSH_HOLD": 8, "CRUSH_GAIN": 9,
+             "CRUSH_TRIANGLES": 6, "CRUSH_BAKED": 7, "CRUSH_HOLD": 8, "CRUSH_COARSENING": 9,
              "CRUSH_DAMPED_IN": 10, "CRUSH_ANCHOR": 11,
              # image units
              "CRUSH_FIELDS": 0, "CRUSH_PHASE": 1, "CRUSH_FACE_NORMALS_OUT": 2,
@@ -74,7 +74,8 @@ class CrushPass(WavePass):
                       reads={"CRUSH_REST_POINTS": res.rest_points,
                              "CRUSH_REST_FRAME": res.rest_frame, "CRUSH_Q_WIDTH": res.q_width,
                              "CRUSH_FACE_NORMALS": res.face_normals, "CRUSH_HOLD": res.hold,
-                             "CRUSH_GAIN": res.gain, "CRUSH_DAMPED_IN": waves.history.damped,
+                             "CRUSH_COARSENING": res.coarsening,
+                             "CRUSH_DAMPED_IN": waves.history.damped,
                              "CRUSH_ANCHOR": res.anchor},
                       writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase,
                               "CRUSH_DAMPED": waves.written.damped})
