@@ -174,11 +174,9 @@ def test_curved_cloth_gets_no_gain(gl_context, tmp_path, radius, meters):
             prim.CreateAttribute(schema.CLOTH, Sdf.ValueTypeNames.Token).Set(cloth)
         fields, record = gpu_fields(gl_context, stage)
         amplitudes.append(fields["amplitude"])
-        # the tube's coarsening cap: W kappa = 5 cm / R through the smoothstep (exact:
-        # the ring's curvature is 1 / R however coarse)
-        t = np.clip((0.05 / radius - 0.2) / 0.2, 0.0, 1.0)
-        assert record.params.coarsening == pytest.approx(1.5 - 0.5 * t * t * (3 - 2 * t),
-                                                         abs=1e-3)
+        # the tube's coarsening cap: W over the tube's wavelength at R (the ring's
+        # curvature is 1 / R however coarse) through the smoothstep
+        assert record.params.coarsening == pytest.approx(tube_cap(0.05, radius), abs=1e-3)
     curved, plain = amplitudes
     assert (plain > 0).sum() > len(plain) // 2
     np.testing.assert_array_equal(curved, plain)
@@ -187,8 +185,7 @@ def test_curved_cloth_gets_no_gain(gl_context, tmp_path, radius, meters):
 def test_the_amplitude_mask_and_ramp_read_the_fold_law(gl_context, tmp_path):
     """The maps' amplitude mask and the --display-color amplitude ramp divide by
     s 1.5 W / 4 (about the fold law's height of cloth crushed flat): a 10 cm tube squeezed
-    to 0.8 along its axis bakes the fold law's amplitude (at W: a tube holds its wavelength,
-    W kappa = 0.5, cap 1), and both read it over that."""
+    to 0.8 along its axis bakes the fold law's amplitude, and both read it over that."""
     from usdwrinkle.outputs.layers import viridis
 
     rows, cols, width = 9, 12, 0.05
@@ -211,7 +208,8 @@ def test_the_amplitude_mask_and_ramp_read_the_fold_law(gl_context, tmp_path):
     assert main(["bake", str(source), str(layer), "--quiet", "--maps", "amplitude",
                  "--map-size", "128", "--map-layout", "asset", "--display-color",
                  "amplitude"]) == 0
-    law, _ = fold_law(0.8, width, cap=1.0)
+    assert tube_cap(width, 0.10) == 1.5  # W = 5 cm is short of the tube's 7.7 cm
+    law, _ = fold_law(0.8, width)
     share = float(law / (COARSENING_MAX * width / 4))
     result = Usd.Stage.Open(str(layer))
     mesh = result.GetPrimAtPath("/Sheet")
@@ -529,18 +527,32 @@ def test_automatic_levels_fit_the_point_cap_with_a_warning(gl_context, tmp_path,
     assert 1681 < len(fine) <= 20_000
 
 
+def tube_cap(width, radius):
+    """The coarsening cap of a tube of ``radius`` (m) at W = ``width`` (m), worked out: the
+    tube's wavelength 7.7 cm (R / 10 cm)^0.5, W over it through smoothstep(0.75, 0.9)."""
+    t = np.clip((width / (0.077 * (max(radius, 0.02) / 0.10) ** 0.5) - 0.75) / 0.15, 0, 1)
+    return 1.5 - 0.5 * t * t * (3 - 2 * t)
+
+
 def test_the_coarsening_cap_by_hand():
-    """folds.coarsening_cap: 1.5 - 0.5 smoothstep(0.2, 0.4, W kappa) smoothstep(0.5, 0.9,
-    one_way), worked by hand at the ramps' ends and middles."""
+    """folds.coarsening_cap: 1.5 - 0.5 smoothstep(0.75, 0.9, W / tube) smoothstep(0.5,
+    0.9, one_way), worked by hand at the ramps' ends and middles; params.tube_width is the
+    curvature law's wavelength at the rest radius (inf where nothing curves)."""
     from usdwrinkle.method.contract import CURVED_COARSENING, ONE_WAY
     from usdwrinkle.method.folds import coarsening_cap
+    from usdwrinkle.scene.params import tube_width
 
-    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.2, 0.4), (0.5, 0.9), 1.5)
-    width = np.array([0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1])
-    kappa = np.array([0.0, 2.0, 3.0, 4.0, -5.0, 5.0, 5.0])  # W kappa 0, .2, .3, .4, .5
+    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.75, 0.9), (0.5, 0.9), 1.5)
+    width = np.full(7, 0.1)
+    tube = np.array([np.inf, 0.1 / 0.75, 0.1 / 0.825, 0.1 / 0.9, 0.1, 0.1, 0.1])
     ways = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.5])
-    np.testing.assert_allclose(coarsening_cap(width, kappa, ways),
+    np.testing.assert_allclose(coarsening_cap(width, tube, ways),
                                [1.5, 1.5, 1.25, 1.0, 1.0, 1.25, 1.5], atol=1e-12)
+    np.testing.assert_allclose(tube_width(np.array([0.0, -10.0, 4.0, 100.0])),
+                               [np.inf, 0.077, 0.077 * 2.5 ** 0.5, 0.077 * 0.2 ** 0.5])
+    for radius in (0.05, 0.3, 1.0):
+        assert float(coarsening_cap(0.1, tube_width(np.array([1 / radius]))[0])) == \
+            pytest.approx(tube_cap(0.1, radius))
 
 
 def test_one_way_tells_a_tube_and_a_dome_from_pleats():
@@ -575,16 +587,18 @@ def test_one_way_tells_a_tube_and_a_dome_from_pleats():
         assert test(one_way(pleated, kappa, 0.2)), period
 
 
-@pytest.mark.parametrize("radius, cap", [(0.2, 1.0), (2.0, 1.5)])
+@pytest.mark.parametrize("radius, cap", [(0.2, 1.0), (5.0, 1.5)])
 def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, cap):
     """Issue 55: a tube compressed along its axis to 0.6 folds at W (the GPU's posed |k| =
-    2 pi / (0.6 W)) where W kappa >= 0.4 (radius 0.2 m, W 0.3), and coarsens as flat cloth
-    does (1.5 W, the cap) where W kappa <= 0.2 (radius 2 m): its height is the fold law's
-    at that wavelength (no room limit at these radii), as the numpy reference gives."""
+    2 pi / (0.6 W)) where W reaches the tube's own wavelength (radius 0.2 m: 10.9 cm, W
+    0.3), and coarsens as flat cloth does (1.5 W, the cap) where W is under 0.75 of it
+    (radius 5 m: 54 cm): its height is the fold law's at that wavelength (no room limit
+    at these radii), as the numpy reference gives."""
     points, counts, indices = tube(21, 96, radius, 1.0)
     posed = points * np.array([1.0, 1.0, 0.6])
     stage = point_cache_stage(points.astype(np.float32), {1: posed.astype(np.float32)},
                               counts, indices, width=0.3)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)  # the tube's wavelength is a length in metres
     fields, record = gpu_fields(gl_context, stage)
     np.testing.assert_allclose(record.params.coarsening, cap, atol=1e-6)
     inner = (points[:, 2] > 0.2) & (points[:, 2] < 0.8)

@@ -261,11 +261,12 @@ def coarsening_of(shot, width: float) -> float | None:
     folds.coarsening_cap at a sleeve's rest radius (its ring's curvature is 1 / R), None
     (COARSENING_MAX) on flat cloth."""
     from usdwrinkle.method.folds import coarsening_cap
+    from usdwrinkle.scene.params import tube_width
 
     if not shot.periodic:
         return None
     radius = float(np.mean(np.linalg.norm(shot.rest[:, :2], axis=1)))
-    return float(coarsening_cap(width, 1.0 / radius))
+    return float(coarsening_cap(width, tube_width(np.array([1.0 / radius]))[0]))
 
 
 def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: dict | None,

@@ -144,15 +144,17 @@ def _smoothstep(low: float, high: float, x) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
-def coarsening_cap(width, kappa, one_way=1.0) -> np.ndarray:
+def coarsening_cap(width, tube, one_way=1.0) -> np.ndarray:
     """The most the mesh's compression coarsens a point's folds: COARSENING_MAX on flat
-    cloth, falling to 1 (none) by smoothstep(CURVED_COARSENING, ``width`` ``kappa``) times
-    smoothstep(ONE_WAY, ``one_way``): ``kappa`` the point's largest rest normal curvature
-    (in the inverse of width's units), ``one_way`` how one way the surface curves around
-    it (scene/topology.one_way). Cloth that curves one way holds its wavelength; pleats
-    coarsen as flat cloth does (contract.CURVED_COARSENING)."""
-    held = _smoothstep(*CURVED_COARSENING, np.asarray(width, np.float64)
-                       * np.abs(np.asarray(kappa, np.float64))) * _smoothstep(*ONE_WAY, one_way)
+    cloth, falling to 1 (none) by smoothstep(CURVED_COARSENING, ``width`` / ``tube``)
+    times smoothstep(ONE_WAY, ``one_way``): ``tube`` the fold wavelength of a tube of the
+    point's rest radius of curvature (scene/params.tube_width, in width's units; inf on
+    flat cloth), ``one_way`` how one way the surface curves around it
+    (scene/topology.one_way). Where the cloth's W reaches the tube's own wavelength, the
+    curvature sets the folds and they do not coarsen; pleats coarsen as flat cloth does
+    (contract.CURVED_COARSENING)."""
+    ratio = np.asarray(width, np.float64) / np.maximum(np.asarray(tube, np.float64), 1e-300)
+    held = _smoothstep(*CURVED_COARSENING, ratio) * _smoothstep(*ONE_WAY, one_way)
     return COARSENING_MAX - (COARSENING_MAX - 1.0) * held
 
 

@@ -105,7 +105,8 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     # the rest surface's largest curvature (1 / scene units): for a cloth's width (in
     # 1/m) and the coarsening's cap
     bent = signed_curvature(rest_points, topology)
-    kappa = None if cloth == schema.MESH_CLOTH else np.abs(bent) / stage_meters(prim.GetStage())
+    meters = stage_meters(prim.GetStage())
+    kappa = None if cloth == schema.MESH_CLOTH else np.abs(bent) / meters
     value = _primvar(prim, "wrinkle:width")
     if value is not None:
         arr = np.atleast_1d(np.asarray(value, dtype=np.float32))
@@ -152,7 +153,8 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,
                          crest_damping=damping, slope=slope_table(height),
-                         coarsening=coarsening_cap(width, bent, ways).astype(np.float32))
+                         coarsening=coarsening_cap(
+                             width * meters, tube_width(bent / meters), ways).astype(np.float32))
 
 
 def width_summary(params: WrinkleParams) -> dict:
@@ -192,6 +194,16 @@ def cloth_width(prim: Usd.Prim, cloth: str, kappa: np.ndarray | None,
     if width.size and width.min() < metres / meters * (1 - 1e-6):
         note += f", narrower where curved under {100 * curved_below(metres):.3g} cm"
     return width.astype(np.float32), f"{note} ({units})"
+
+
+def tube_width(kappa: np.ndarray) -> np.ndarray:
+    """The fold wavelength (m) of a tube whose radius is 1 / ``kappa`` (1/m; at least
+    schema.CURVED_RADIUS_MIN_M): W_c (R / R_c) ** p (curved_width without the cloth's
+    flat width; inf where nothing curves)."""
+    kappa = np.abs(np.asarray(kappa, np.float64))
+    radius = np.maximum(1.0 / np.maximum(kappa, 1e-300), schema.CURVED_RADIUS_MIN_M)
+    tube = schema.CURVED_WIDTH_M * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
+    return np.where(kappa > 0, tube, np.inf)
 
 
 def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
