@@ -359,22 +359,6 @@ def rest_tangents(normals: np.ndarray) -> np.ndarray:
     return np.where(length > 1e-12, tangent / np.maximum(length, 1e-12), axis).astype(np.float32)
 
 
-def ring_spacing(points: np.ndarray, topology: Topology) -> np.ndarray:
-    """Each point's rest spacing, (n,) float64: sqrt(2 A), A the mean area of its
-    triangles (a quad grid's side, however its quads are split; 0.93 x the side of
-    equilateral triangles); 0 where a point has none."""
-    pts = np.asarray(points, dtype=np.float64)
-    n = topology.num_points
-    tri = topology.triangles
-    if not len(tri):
-        return np.zeros(n)
-    area = 0.5 * np.linalg.norm(np.cross(pts[tri[:, 1]] - pts[tri[:, 0]],
-                                         pts[tri[:, 2]] - pts[tri[:, 0]]), axis=1)
-    total = np.bincount(tri.ravel(), np.repeat(area, 3), n)
-    count = np.bincount(tri.ravel(), minlength=n)
-    return np.sqrt(2.0 * total / np.maximum(count, 1))
-
-
 def mean_edge_length(points: np.ndarray, topology: Topology) -> float:
     """Mean length of the unique edges; 0 for a mesh without edges."""
     edges = topology.edges
