@@ -94,7 +94,9 @@ CLOTH_WIDTHS_M = {"silk": 0.072, "cotton": 0.102, "denim": 0.131, "leather": 0.1
 #: CURVED_RADIUS_M) ** CURVED_EXPONENT (R the point's smallest radius of curvature, never
 #: taken below CURVED_RADIUS_MIN_M), and never wider than the cloth's flat width. Shell
 #: buckling theory's 1/2 (an axially compressed cylinder's 3.5 sqrt(R t)); W_c from the
-#: converged referee's 10 cm sleeves, whose cotton and silk fold alike (docs/physics.md)
+#: converged referee's sleeves, whose cotton and silk fold alike and whose folds do not
+#: coarsen (their matched W 7.0-7.8 cm at 10 cm; 6 cm while the law coarsened them;
+#: docs/physics.md)
 CURVED_WIDTH_M = 0.077
 CURVED_RADIUS_M = 0.10
 CURVED_EXPONENT = 0.5
