@@ -296,3 +296,18 @@ def test_the_elbow_fold_table_reads_a_known_accordion(fold):
             assert r == pytest.approx(0.8, abs=0.01) and least == pytest.approx(0.8, abs=0.01)
             assert wavelength == pytest.approx(fold, rel=0.08)  # the measure: 5.6 cm at 6
             assert height == pytest.approx(0.002 / np.sqrt(2), rel=0.1)
+
+
+def test_the_referee_s_sleeves_do_not_coarsen_and_its_curtains_do():
+    """referee.coarsening_of: the cap usdwrinkle gives a sweep shot's cloth, worked out
+    from the tube's wavelength at the sleeve's radius (7.7 cm at 10 cm, 5.4 cm at 5 cm):
+    1 at the matched widths (7-8 cm and 5 cm), 1.5 where W is under 0.75 of it, and None
+    (COARSENING_MAX) on flat cloth."""
+    from benchmarks.physics.referee import SWEEP, coarsening_of
+
+    sleeve10 = SWEEP["sleeve10-cotton"](0.02).shot
+    sleeve5 = SWEEP["sleeve5-cotton"](0.02).shot
+    assert coarsening_of(sleeve10, 0.076) == pytest.approx(1.0)
+    assert coarsening_of(sleeve5, 0.050) == pytest.approx(1.0)
+    assert coarsening_of(sleeve10, 0.05) == pytest.approx(1.5)
+    assert coarsening_of(SWEEP["curtain-cotton"](0.02).shot, 0.09) is None

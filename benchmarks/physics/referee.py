@@ -435,8 +435,9 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
               "worst phase's height ratio, the amplitude-field correlation, the crest motion at"
               " the elbow (ours / sim; sleeves) and our wrinkled area over the rest area, and "
               "the simulated cloth's, where the coarse surface is compressed beyond 3 x the "
-              "slack (ours on a grid that samples W at least 6 times, as usdwrinkle's geometry "
-              "bake does: 1 cm, halved where W is under 6 cm; referee.area_grid). Bars (issue 55): "
+              "slack (ours on a grid that samples W at least 6 times, 9 where the folds do not "
+              "coarsen, as usdwrinkle's geometry bake does: 1 cm, halved where W is under 6 "
+              "cm, 9 cm on the sleeves; referee.area_grid). Bars (issue 55): "
               "wavelength and height within 1.3x and 1.25x, correlation >= 0.85 (0.75 shear), "
               "motion <= 1.5x, area in [0.95, 1.05].", "",
               "| shot | D (N m) | grid | window | W default, matched | wavelength (default W) | "
