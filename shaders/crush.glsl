@@ -34,7 +34,8 @@ layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
 // [0, 1], yzw the unit rest vector u from the holder to the point (0 on a held point)
 layout(binding = CRUSH_HOLD) uniform sampler2D hold;
 // x: the most the mesh's compression coarsens the point's folds (method/folds.py
-// coarsening_cap: COARSENING_MAX on flat cloth, 1 where the rest surface curves)
+// coarsening_cap: COARSENING_MAX on flat cloth, 1 where the rest surface curves one way
+// at its tube's own wavelength or tighter)
 layout(binding = CRUSH_COARSENING) uniform sampler2D coarsening;
 // the painted waves' start phases (method/anchor.py): xyz the unit painted direction (rest
 // space; zero where nothing is painted), w the start phase along it

@@ -57,8 +57,8 @@ def rest_phase_step(record) -> float:
     rule (a) of the level count. On flat cloth w = W, whose folds coarsen up to 1.5 W, so
     that S samples of W are 1.5 S of the widest fold; on curved cloth (cap 1) the folds
     keep W, and w = W / 1.5 samples them as finely (6 samples of a fold keep only
-    sinc(pi / 6)^2 of its extra length: the referee's sleeves drew 0.93-0.94 of their
-    rest area, 0.97-1.00 at 9; docs/physics.md)."""
+    sinc(pi / 6)^2 of its extra length: the referee's uncoarsened sleeves drew 0.92-0.94
+    of their rest area at 6 samples, 0.95-0.98 at 9; docs/physics.md)."""
     triangles = record.topology.triangles
     if len(triangles) == 0:
         return 0.0
