@@ -654,7 +654,8 @@ def uniform_dome(stage, intensity: float = 1.0) -> None:
 
 def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT,
                   map_size: int = 2048, clients=("storm",), samples: int = 16,
-                  lighting: str = "stage", zoom: float = 1.0) -> TextureViews:
+                  lighting: str = "stage", zoom: float = 1.0,
+                  storm_timeout: float = 600) -> TextureViews:
     """The texture deformation through Storm, Cycles and/or EEVEE (``clients``): the
     shot's layers baked once (no camera in them), each seen through the shot's camera
     turned by each of ``turns``. Storm: storm_parallax, storm_normal, storm_points
@@ -666,7 +667,8 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
     without lights get usdview's head-light), or "dome" (uniform_dome()). ``zoom``: the
     frames are the shot's width divided by it, through a camera zoomed as much on the
     upper half of the posed meshes (upper_centre, zoomed_camera), so the texture's
-    pattern keeps its pixel size at a fraction of the cost."""
+    pattern keeps its pixel size at a fraction of the cost. ``storm_timeout``: seconds
+    Storm's process may take for all the views."""
     folder.mkdir(parents=True, exist_ok=True)
     framed, camera = shared_camera(shot.stage.resolve(), folder)
     lit = has_lights(shot.stage) or lighting == "dome"
@@ -735,7 +737,7 @@ def texture_views(folder: Path, turns=(0.0, 30.0), shot: BakeShot = TEXTURE_SHOT
                                     "world": (1.0, 1.0, 1.0) if lighting == "dome" else None,
                                     "addon": str(BLENDER_ADDON) if addon else None})
         images[degrees] = out
-    failed = {k: v for k, v in storm(jobs).items() if v != "ok"} if jobs else {}
+    failed = {k: v for k, v in storm(jobs, storm_timeout).items() if v != "ok"} if jobs else {}
     if cycles_jobs:
         failed.update({k: v for k, v in cycles(cycles_jobs).items() if v != "ok"})
     if failed:

@@ -94,8 +94,9 @@ def texture_figure(folder: Path, scratch: Path, demo: bool = False) -> None:
     from .compare import read_rgba8, side_by_side
 
     shot = DEMO_TEXTURE_SHOT if demo else TEXTURE_SHOT
+    # Storm's four 960-pixel views took over 10 minutes on llvmpipe (2 cores, 2026-12-03)
     views = texture_views(scratch, turns=(0.0,), shot=shot, clients=("storm", "cycles"),
-                          samples=64)
+                          samples=64, storm_timeout=2400)
     images = views.images[0.0]
     panels = []
     for label in ("ours", "storm_parallax", "cycles_parallax", "storm_normal"):
