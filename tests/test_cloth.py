@@ -529,25 +529,30 @@ def test_automatic_levels_fit_the_point_cap_with_a_warning(gl_context, tmp_path,
 
 def tube_cap(width, radius):
     """The coarsening cap of a tube of ``radius`` (m) at W = ``width`` (m), worked out: the
-    tube's wavelength 7.7 cm (R / 10 cm)^0.5, W over it through smoothstep(0.75, 0.9)."""
-    t = np.clip((width / (0.077 * (max(radius, 0.02) / 0.10) ** 0.5) - 0.75) / 0.15, 0, 1)
-    return 1.5 - 0.5 * t * t * (3 - 2 * t)
+    tube's wavelength 7.7 cm (R / 10 cm)^0.5, W over it through smoothstep(0.75, 0.9) -
+    smoothstep(1.2, 1.5)."""
+    ratio = width / (0.077 * (max(radius, 0.02) / 0.10) ** 0.5)
+    t, u = np.clip((ratio - 0.75) / 0.15, 0, 1), np.clip((ratio - 1.2) / 0.3, 0, 1)
+    return 1.5 - 0.5 * (t * t * (3 - 2 * t) - u * u * (3 - 2 * u))
 
 
 def test_the_coarsening_cap_by_hand():
-    """folds.coarsening_cap: 1.5 - 0.5 smoothstep(0.75, 0.9, W / tube) smoothstep(0.5,
-    0.9, one_way), worked by hand at the ramps' ends and middles; params.tube_width is the
-    curvature law's wavelength at the rest radius (inf where nothing curves)."""
+    """folds.coarsening_cap: 1.5 - 0.5 (smoothstep(0.75, 0.9, W / tube) - smoothstep(1.2,
+    1.5, W / tube)) smoothstep(0.5, 0.9, one_way), worked by hand at the ramps' ends and
+    middles; params.tube_width is the curvature law's wavelength at the rest radius (inf
+    where nothing curves)."""
     from usdwrinkle.method.contract import CURVED_COARSENING, ONE_WAY
     from usdwrinkle.method.folds import coarsening_cap
     from usdwrinkle.scene.params import tube_width
 
-    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.75, 0.9), (0.5, 0.9), 1.5)
-    width = np.full(7, 0.1)
-    tube = np.array([np.inf, 0.1 / 0.75, 0.1 / 0.825, 0.1 / 0.9, 0.1, 0.1, 0.1])
-    ways = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.5])
+    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.75, 0.9, 1.2, 1.5), (0.5, 0.9),
+                                                            1.5)
+    width = np.full(10, 0.1)
+    tube = 0.1 / np.array([0.0, 0.75, 0.825, 0.9, 1.0, 1.0, 1.0, 1.2, 1.35, 1.5])
+    ways = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.5, 1.0, 1.0, 1.0])
     np.testing.assert_allclose(coarsening_cap(width, tube, ways),
-                               [1.5, 1.5, 1.25, 1.0, 1.0, 1.25, 1.5], atol=1e-12)
+                               [1.5, 1.5, 1.25, 1.0, 1.0, 1.25, 1.5, 1.0, 1.25, 1.5],
+                               atol=1e-12)
     np.testing.assert_allclose(tube_width(np.array([0.0, -10.0, 4.0, 100.0])),
                                [np.inf, 0.077, 0.077 * 2.5 ** 0.5, 0.077 * 0.2 ** 0.5])
     for radius in (0.05, 0.3, 1.0):
@@ -587,24 +592,26 @@ def test_one_way_tells_a_tube_and_a_dome_from_pleats():
         assert test(one_way(pleated, kappa, 0.2)), period
 
 
-@pytest.mark.parametrize("radius, cap", [(0.2, 1.0), (5.0, 1.5)])
-def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, cap):
+@pytest.mark.parametrize("radius, width, cap", [(0.5, 0.2, 1.0), (5.0, 0.2, 1.5),
+                                                (0.15, 0.15, 1.5)])
+def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, width, cap):
     """Issue 55: a tube compressed along its axis to 0.6 folds at W (the GPU's posed |k| =
-    2 pi / (0.6 W)) where W reaches the tube's own wavelength (radius 0.2 m: 10.9 cm, W
-    0.3), and coarsens as flat cloth does (1.5 W, the cap) where W is under 0.75 of it
-    (radius 5 m: 54 cm): its height is the fold law's at that wavelength (no room limit
-    at these radii), as the numpy reference gives."""
+    2 pi / (0.6 W)) where W is about the tube's own wavelength (radius 0.5 m: 17 cm, W
+    0.2), and coarsens as flat cloth does (1.5 W, the cap) where W is under 0.75 of it
+    (radius 5 m: 54 cm) or beyond 1.5 of it (radius 15 cm: 9.4 cm, W 0.15): its height is the
+    fold law's at that wavelength (no room limit at these radii), as the numpy reference
+    gives."""
     points, counts, indices = tube(21, 96, radius, 1.0)
     posed = points * np.array([1.0, 1.0, 0.6])
     stage = point_cache_stage(points.astype(np.float32), {1: posed.astype(np.float32)},
-                              counts, indices, width=0.3)
+                              counts, indices, width=width)
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)  # the tube's wavelength is a length in metres
     fields, record = gpu_fields(gl_context, stage)
     np.testing.assert_allclose(record.params.coarsening, cap, atol=1e-6)
     inner = (points[:, 2] > 0.2) & (points[:, 2] < 0.8)
     k = np.linalg.norm(fields["wave_vector"][inner], axis=1)
-    np.testing.assert_allclose(k, 2 * np.pi / (0.6 * 0.3 * cap), rtol=2e-3)
-    amplitude, _ = fold_law(np.array([0.6]), 0.3, cap=cap)
+    np.testing.assert_allclose(k, 2 * np.pi / (0.6 * width * cap), rtol=2e-3)
+    amplitude, _ = fold_law(np.array([0.6]), width, cap=cap)
     np.testing.assert_allclose(fields["amplitude"][inner], amplitude[0], rtol=2e-3)
     law = crush_reference(record.rest_points, posed, record.topology, record.params.q,
                           record.params.width, coarsening=record.params.coarsening)

@@ -47,10 +47,11 @@ COARSENING_EXPONENT = 1.0
 COARSENING_MAX = 1.5
 #: Curved cloth holds its wavelength: where the rest surface curves one way (a sleeve, a
 #: trouser leg, a rounded cushion) tightly enough that its tube's fold wavelength (the
-#: curvature law's, scene/params.tube_width) is no longer than W, the cap on the mesh's
-#: coarsening falls from COARSENING_MAX to 1 (folds.coarsening_cap) by the product of two
-#: smoothsteps: of W over the tube's wavelength from CURVED_COARSENING[0] to [1] (1 where
-#: the curvature law narrows the fallback W), and of how one way the surface curves within
+#: curvature law's, scene/params.tube_width) is about W, the cap on the mesh's coarsening
+#: falls from COARSENING_MAX to 1 (folds.coarsening_cap) by the product of two terms: W
+#: over the tube's wavelength within the window CURVED_COARSENING (in from [0] to [1],
+#: out from [2] to [3], smoothsteps; 1 where the curvature law narrows the fallback W),
+#: and a smoothstep of how one way the surface curves within
 #: ONE_WAY_REACH W of the point (scene/topology.one_way: 1 on a tube or a dome, under 0.3
 #: on the pleated curtain sample, whose pleats are folds themselves) from ONE_WAY[0] to
 #: [1]. The converged referee's sleeves (5-10 cm, silk and cotton) and the simulated shirt
@@ -58,12 +59,15 @@ COARSENING_MAX = 1.5
 #: the elbow's fold table); coarsening them moved the bending 10 cm cotton sleeve's crests
 #: 2.09x the cloth's (bar 1.5x). The shirt sample's sleeve (radius 0.39 m, W 0.1, its
 #: tube's 0.15) keeps its coarsening: uncoarsened, its coarse elbow drew 1.13 of its rest
-#: area. Painting coarsens up to the same cap (anchor.painted_wavelength): a gather that
+#: area. W far beyond the tube's (an authored look; the shirt at W 0.28, 1.85x its tube's)
+#: is not the tube law's fold and coarsens: uncoarsened, that shirt's elbow folds were too
+#: fine for its 2048-texel maps, and Cycles decoded them 40 degrees off at p99 (bar 3).
+#: Painting coarsens up to the same cap (anchor.painted_wavelength): a gather that
 #: coarsened past it made the painted forearm's crests jump at the paint's edge. Two
 #: gates that read the curvature along the crests (a tube's, not a pleat's) switched
 #: with the turning direction and moved the crests (bend 1.89x, held 3.4x), or, frozen
 #: where the fold formed, coarsened most of the sleeve (bend 2.12x): docs/method.md
-CURVED_COARSENING = (0.75, 0.9)
+CURVED_COARSENING = (0.75, 0.9, 1.2, 1.5)
 ONE_WAY = (0.5, 0.9)
 ONE_WAY_REACH = 2.0
 #: The slack's onset (crush.glsl excess_of, folds.restored): folds begin at a compression

@@ -146,15 +146,17 @@ def _smoothstep(low: float, high: float, x) -> np.ndarray:
 
 def coarsening_cap(width, tube, one_way=1.0) -> np.ndarray:
     """The most the mesh's compression coarsens a point's folds: COARSENING_MAX on flat
-    cloth, falling to 1 (none) by smoothstep(CURVED_COARSENING, ``width`` / ``tube``)
-    times smoothstep(ONE_WAY, ``one_way``): ``tube`` the fold wavelength of a tube of the
-    point's rest radius of curvature (scene/params.tube_width, in width's units; inf on
-    flat cloth), ``one_way`` how one way the surface curves around it
-    (scene/topology.one_way). Where the cloth's W reaches the tube's own wavelength, the
-    curvature sets the folds and they do not coarsen; pleats coarsen as flat cloth does
-    (contract.CURVED_COARSENING)."""
+    cloth, falling to 1 (none) by (smoothstep(CURVED_COARSENING[:2], ``width`` / ``tube``)
+    - smoothstep(CURVED_COARSENING[2:], ``width`` / ``tube``)) times smoothstep(ONE_WAY,
+    ``one_way``): ``tube`` the fold wavelength of a tube of the point's rest radius of
+    curvature (scene/params.tube_width, in width's units; inf on flat cloth), ``one_way``
+    how one way the surface curves around it (scene/topology.one_way). Where W is about
+    the tube's own wavelength, the curvature sets the folds and they do not coarsen; pleats,
+    and W far from the tube's, coarsen as flat cloth does (contract.CURVED_COARSENING)."""
     ratio = np.asarray(width, np.float64) / np.maximum(np.asarray(tube, np.float64), 1e-300)
-    held = _smoothstep(*CURVED_COARSENING, ratio) * _smoothstep(*ONE_WAY, one_way)
+    low, high, fading, gone = CURVED_COARSENING
+    held = (_smoothstep(low, high, ratio) - _smoothstep(fading, gone, ratio)) \
+        * _smoothstep(*ONE_WAY, one_way)
     return COARSENING_MAX - (COARSENING_MAX - 1.0) * held
 
 
