@@ -212,10 +212,7 @@ def curved_width(flat: float, kappa: np.ndarray) -> np.ndarray:
     kappa (at least schema.CURVED_RADIUS_MIN_M), W_c = schema.CURVED_WIDTH_M at R_c =
     schema.CURVED_RADIUS_M, p = schema.CURVED_EXPONENT: on a tube the folds are the
     tube's, whatever the cloth (docs/method.md: the cloth's width)."""
-    radius = np.maximum(1.0 / np.maximum(np.asarray(kappa, np.float64), 1e-12),
-                        schema.CURVED_RADIUS_MIN_M)
-    tube = schema.CURVED_WIDTH_M * (radius / schema.CURVED_RADIUS_M) ** schema.CURVED_EXPONENT
-    return np.minimum(flat, tube)
+    return np.minimum(flat, tube_width(kappa))
 
 
 def curved_below(flat: float) -> float:
