@@ -66,8 +66,7 @@ def rest_phase_step(record) -> float:
     lengths = np.linalg.norm(rest[:, [1, 2, 0]] - rest, axis=2)        # edge c: c -> c + 1
     cap = COARSENING_MAX if record.params.coarsening is None else record.params.coarsening
     width = (np.asarray(record.params.width, np.float64)
-             * np.asarray(cap, np.float64) / COARSENING_MAX)
-    width = np.broadcast_to(width, np.shape(record.params.width))[triangles]
+             * np.asarray(cap, np.float64) / COARSENING_MAX)[triangles]
     ends = np.minimum(width, width[:, [1, 2, 0]])
     return float(2 * np.pi * np.max(lengths / np.maximum(ends, 1e-30)))
 

@@ -102,8 +102,8 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
 
     cloth = _get(prim, schema.CLOTH)
     cloth = schema.DEFAULT_CLOTH if cloth is None else str(cloth)
-    # the rest surface's largest curvature (1 / scene units): for a cloth's width (in
-    # 1/m) and the coarsening's cap
+    # the rest surface's largest curvature, signed (1 / scene units): its size for a
+    # cloth's width (in 1/m), with its sign for the coarsening's cap
     bent = signed_curvature(rest_points, topology)
     meters = stage_meters(prim.GetStage())
     kappa = None if cloth == schema.MESH_CLOTH else np.abs(bent) / meters

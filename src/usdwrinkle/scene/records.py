@@ -84,7 +84,8 @@ class WrinkleParams:
         strain are followed (wrinkle:crestDamping; 0: none).
     coarsening : (n,) float32 or None, the most the mesh's compression coarsens each
         point's folds (folds.coarsening_cap of W and the rest curvature: COARSENING_MAX on
-        flat cloth, 1 on curved; None: COARSENING_MAX everywhere).
+        flat cloth, 1 where the rest surface curves one way at about its tube's wavelength;
+        None: COARSENING_MAX everywhere).
     slope : (SLOPE_SAMPLES,) float32 or None, the height profile's inextensible slope
         table (folds.slope_table; None: derived from height_profile where it is read).
     """
