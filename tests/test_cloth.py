@@ -592,6 +592,24 @@ def test_one_way_tells_a_tube_and_a_dome_from_pleats():
         assert test(one_way(pleated, kappa, 0.2)), period
 
 
+def test_the_rest_curvature_is_remembered_per_rest_shape():
+    """params.rest_curvature (read_params reads it on every primvar edit, each paint
+    stroke): topology.signed_curvature's values, the same read-only array again for the
+    same rest shape, and the new shape's values for a new one (a scaled tube)."""
+    from usdwrinkle.scene.params import rest_curvature
+    from usdwrinkle.scene.topology import signed_curvature
+
+    points, counts, indices = tube(21, 48, 0.1)
+    topology = topology_of(points, counts, indices)
+    first = rest_curvature(points, topology)
+    np.testing.assert_array_equal(first, signed_curvature(points, topology))
+    assert rest_curvature(points.copy(), topology) is first
+    assert not first.flags.writeable
+    wider = rest_curvature(points * 2.0, topology)
+    np.testing.assert_allclose(np.abs(wider), 5.0, rtol=0.01)
+    np.testing.assert_allclose(np.abs(first), 10.0, rtol=0.01)
+
+
 @pytest.mark.parametrize("radius, width, cap", [(0.5, 0.2, 1.0), (5.0, 0.2, 1.5),
                                                 (0.15, 0.15, 1.5)])
 def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, width, cap):
