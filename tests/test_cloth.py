@@ -592,6 +592,34 @@ def test_one_way_tells_a_tube_and_a_dome_from_pleats():
         assert test(one_way(pleated, kappa, 0.2)), period
 
 
+def test_painting_more_on_a_sleeve_makes_deeper_folds_at_w(gl_context):
+    """Issue 55, painting on curved cloth: a tube painted along its axis (radius 0.5 m, W
+    0.2, about the tube's own wavelength, so its cap is 1) in its rest pose folds at W
+    whatever the amount (the GPU's |k| = 2 pi / W: not finer, and no wider, as the
+    referee's sleeves do not coarsen), and deeper as the amount grows: the fold law's
+    height at the painted gather with cap 1, as the numpy reference gives."""
+    points, counts, indices = tube(21, 96, 0.5, 1.0)
+    inner = (points[:, 2] > 0.2) & (points[:, 2] < 0.8)
+    heights = []
+    for amount in (0.5, 0.9):
+        q = np.tile([0.0, 0.0, amount], (len(points), 1)).astype(np.float32)
+        stage = point_cache_stage(points.astype(np.float32), {1: points.astype(np.float32)},
+                                  counts, indices, q=q, width=0.2)
+        UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+        fields, record = gpu_fields(gl_context, stage)
+        np.testing.assert_allclose(record.params.coarsening, 1.0, atol=1e-6)
+        k = np.linalg.norm(fields["wave_vector"][inner], axis=1)
+        np.testing.assert_allclose(k, 2 * np.pi / 0.2, rtol=2e-3)
+        amplitude, _ = fold_law(np.array([1 - amount ** 2]), 0.2, geometric=np.ones(1),
+                                cap=1.0)
+        np.testing.assert_allclose(fields["amplitude"][inner], amplitude[0], rtol=2e-3)
+        law = crush_reference(record.rest_points, points, record.topology, record.params.q,
+                              record.params.width, coarsening=record.params.coarsening)
+        np.testing.assert_allclose(law["amplitude"][inner], amplitude[0], rtol=2e-3)
+        heights.append(amplitude[0])
+    assert heights[1] > 1.2 * heights[0] > 0.0, heights  # 1.27x: 0.054 against 0.042
+
+
 def test_the_rest_curvature_is_remembered_per_rest_shape():
     """params.rest_curvature (read_params reads it on every primvar edit, each paint
     stroke): topology.signed_curvature's values, the same read-only array again for the
