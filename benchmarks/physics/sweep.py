@@ -8,7 +8,9 @@ spacing.
   rail pushed together from 0 to 48% (frames 10-90) and held (90-100): compression from
   before the onset to beyond 40%, the folds' wavelength read at every 8% of the push.
 - ``sleeve(fabric, spacing, radius)``: a sleeve 0.80 m long on an arm of 0.8 its radius
-  (capsules, in contact), its end rings pinned, the arm bent 90 degrees over 20 cm.
+  (capsules, in contact), its end rings pinned, the arm bent 90 degrees over 20 cm (over
+  twice the radius beyond 10 cm, so that the bent arm's inner side keeps the 10 cm
+  sleeve's proportions instead of passing through itself).
 - ``shear(fabric, spacing)``: a hanging square 0.64 m, its bottom edge slid 16 cm.
 
 Every shot is the same cloth at every spacing: the grid halves, D, the density and the
@@ -139,6 +141,15 @@ def shear(fabric: str = "cotton", spacing: float = 0.01) -> SweepShot:
 ELBOW = 0.20
 
 
+def elbow_length(radius: float) -> float:
+    """The length of arm that bends: ELBOW, or twice the radius on sleeves wider than
+    10 cm. A 90-degree bend over z bends the axis at the radius 2 z / pi, and the arm's
+    inner side (0.8 of the sleeve's radius) would pass through itself where that falls
+    under it; at 2 R every sleeve's bent axis lies 1.27 R from its centre, as the 10 cm
+    sleeve's does."""
+    return max(ELBOW, 2.0 * radius)
+
+
 def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
            ) -> SweepShot:
     length = 0.80
@@ -165,22 +176,24 @@ def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
     def angle(frame):
         return np.pi / 2 * _ramp(frame, 10, 50)
 
+    zone = elbow_length(radius)
     frames = [1] + [10 + 4 * k for k in range(11)] + [70]
-    keys = [(frame, bend(rest, angle(frame))) for frame in frames]
+    keys = [(frame, bend(rest, angle(frame), zone)) for frame in frames]
     arm = 0.8 * radius
     # the arm as capsules along its bent axis: 2 straight ones and 10 through the elbow
     capsules = []
     for frame in frames:
         a = angle(frame)
-        zs = np.concatenate([[-length / 2 - 0.04], np.linspace(-ELBOW / 2, ELBOW / 2, 11),
+        zs = np.concatenate([[-length / 2 - 0.04], np.linspace(-zone / 2, zone / 2, 11),
                              [length / 2 + 0.04]])
-        axis = bend(np.stack([np.zeros_like(zs), np.zeros_like(zs), zs], 1), a)
+        axis = bend(np.stack([np.zeros_like(zs), np.zeros_like(zs), zs], 1), a, zone)
         capsules.append([(axis[k], axis[k + 1], arm) for k in range(len(zs) - 1)])
     name = f"sleeve{round(100 * radius)}-{fabric}"
     shot = Shot(name, rows, cols, True, rest, material, pinned.ravel(), 70, False, keys,
                 {"bend": (10, 50), "held": (50, 70)},
                 f"a {fabric} sleeve of radius {100 * radius:.0f} cm on an arm of radius "
-                f"{80 * radius:.0f} cm, its end rings pinned, bent 90 degrees over 20 cm")
+                f"{80 * radius:.0f} cm, its end rings pinned, bent 90 degrees over "
+                f"{100 * zone:.0f} cm")
     # coarse lines 8 cm apart, as on the flat shots, but at least SLEEVE_AROUND of them
     # around the sleeve (4 around the 5 cm sleeve made its coarse mesh a square tube)
     shot.stride = max(1, int(round(0.08 / spacing)))
