@@ -206,6 +206,8 @@ layout(binding = RELAX_EDGES) uniform sampler2D edges;
 layout(binding = RELAX_Z_IN) uniform sampler2D z_in;  // the relaxed phasors
 layout(binding = RELAX_POSED_POINTS) uniform sampler2D posed_points;
 layout(rgba32f, binding = RELAX_FIELDS_OUT) writeonly uniform image2D fields_out;  // = fields
+// x: the point's coarsening cap (crush.glsl's; folds.coarsening_cap)
+layout(binding = RELAX_COARSENING) uniform sampler2D coarsening;
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
@@ -247,9 +249,12 @@ void main() {
         vec3 c = inverse(normal_equations) * rhs;
         float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);
         // only a wave the phases draw shorter (the history's twist), fully from FIT_ONSET
+        // ... and only where the folds coarsen: the twist is coarsening's (where the cap
+        // holds them at W, a ring that barely samples the wave switched the fit on and off)
         float trust = smoothstep(FIT_CONDITION, 2.0 * FIT_CONDITION, spread)
             * smoothstep(1.0, FIT_ONSET, change)
-            * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change));
+            * (1.0 - smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change))
+            * smoothstep(1.0, COARSENING_MAX, fetch(coarsening, i).x);
         vec3 k = wave.xyz + trust * c;
         // never a longer wave than crush's (a partly trusted c that turns k could shorten
         // it): k keeps at least crush's length

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pxr import UsdGeom
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.reference.crush import crush as crush_reference
@@ -20,12 +21,15 @@ from helpers import (
 )
 
 
-def random_cloth_fields(ctx, seed: int, relax_iterations: int):
+def random_cloth_fields(ctx, seed: int, relax_iterations: int, meters: float | None = None):
     """A random cloth's GPU fields at its posed frame and crush's numpy reference of it:
-    (posed points, the GPU's fields, its MeshRecord, the reference's fields)."""
+    (posed points, the GPU's fields, its MeshRecord, the reference's fields). ``meters``:
+    the stage's metersPerUnit (None: unauthored, USD's 0.01)."""
     rest, posed, faces, q = random_cloth(seed)
     stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
                               width=0.2, relax_iterations=relax_iterations)
+    if meters is not None:
+        UsdGeom.SetStageMetersPerUnit(stage, meters)
     ours, record = gpu_fields(ctx, stage)
     ref = crush_reference(rest, posed, record.topology, q, record.params.width,
                           slack=record.params.slack, hold=record.params.hold,
@@ -319,7 +323,8 @@ def test_the_fit_keeps_a_wave_that_its_phases_draw():
     """relax's fit (reference/relax.py, fit): phases that agree with k leave k and the
     amplitude as they are; phases that advance 1.3x as fast make k 1.3x as long and the
     amplitude 1/1.3, the same slope a|k| (the length the fold law restores); phases that
-    advance slower leave k (only shorter waves are fitted)."""
+    advance slower leave k (only shorter waves are fitted). Only where the folds coarsen:
+    times smoothstep(1, 1.5, the point's coarsening cap)."""
     from usdwrinkle.reference.relax import fit
 
     points, normals, k, a, phases, topology = _sheet_wave(1.0)
@@ -331,6 +336,14 @@ def test_the_fit_keeps_a_wave_that_its_phases_draw():
     np.testing.assert_allclose(fitted, 1.3 * k, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(amplitude * np.linalg.norm(fitted, axis=1), 0.02 * 20.0,
                                rtol=1e-9)
+    # where the folds do not coarsen (cap 1) there is no twist to follow: k stays; half
+    # way (cap 1.25, smoothstep(1, 1.5) = 0.5) half the fit
+    points, normals, k, a, phases, topology = _sheet_wave(1.3)
+    for cap, expected in ((1.0, 1.0), (1.25, 1.15), (1.5, 1.3)):
+        fitted, amplitude = fit(points, normals, k, a, phases, topology,
+                                np.full(len(points), cap))
+        np.testing.assert_allclose(fitted, expected * k, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(amplitude * expected, a, rtol=1e-9)
     # slower phases, and beyond FIT_RANGE (not taken as one wave): k and a stay
     for twist in (0.8, 2.5):
         points, normals, k, a, phases, topology = _sheet_wave(twist)
@@ -339,14 +352,20 @@ def test_the_fit_keeps_a_wave_that_its_phases_draw():
         np.testing.assert_allclose(amplitude, a, atol=1e-12)
 
 
-def test_the_fit_matches_numpy_reference(gl_context):
+@pytest.mark.parametrize("meters", [None, 0.8])
+def test_the_fit_matches_numpy_reference(gl_context, meters):
     """The GPU's fitted waves (relax.glsl's FIT) against reference/relax.fit fed the same
-    relaxed phases and crush's waves (the numpy reference)."""
+    relaxed phases and crush's waves (the numpy reference). At 0.8 m a unit the squashed
+    sphere's W (0.16 m) nears its tube's wavelength, its coarsening caps fall to 1.19-1.32,
+    and the fit, scaled by smoothstep(1, 1.5, cap), follows them as the reference does."""
     from usdwrinkle.reference.relax import fit
 
-    posed, ours, record, law = random_cloth_fields(gl_context, 3, relax_iterations=6)
+    posed, ours, record, law = random_cloth_fields(gl_context, 3, relax_iterations=6,
+                                                   meters=meters)
+    caps = record.params.coarsening
+    assert (1.1 < caps.min() and caps.max() < 1.4) if meters else caps.min() == 1.5
     k, a = fit(posed, ours["normals"], law["wave_vector"], law["amplitude"], ours["phase"],
-               record.topology)
+               record.topology, record.params.coarsening)
     wrinkled = law["amplitude"] > 1e-3
     assert wrinkled.sum() > 50
     length = np.linalg.norm(k, axis=1)

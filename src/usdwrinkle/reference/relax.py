@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..method.contract import (
+    COARSENING_MAX,
     COLD_START_FACTOR,
     FIT_CONDITION,
     FIT_ONSET,
@@ -42,7 +43,8 @@ def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations:
     return phi
 
 
-def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
+def fit(points, normals, wave_vector, amplitude, phase, topology: Topology,
+        coarsening=None):
     """The wave the phases draw (relax.glsl's FIT): per vertex with a wave, k + c, c the
     least-squares fit in the tangent plane of ``normals`` of c . (x_j - x_i) to each ring
     edge's residual wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)) (weights a_j, neighbours
@@ -50,7 +52,9 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
     and the amplitude times |k| / |k + t c|: the same slope. t fades the fit out where the
     ring's directions are too few (FIT_CONDITION) or |k| would grow by more than
     FIT_RANGE, and in from |k + c| = |k| to FIT_ONSET |k|: only shorter waves are fitted
-    (method/contract.py).
+    (method/contract.py); and only where the folds coarsen: times smoothstep(1,
+    COARSENING_MAX, cap), ``coarsening`` each point's cap (folds.coarsening_cap; None:
+    COARSENING_MAX everywhere).
     Returns (wave_vector (n, 3), amplitude (n,))."""
     points = np.asarray(points, np.float64)
     normals = np.asarray(normals, np.float64)
@@ -82,9 +86,11 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology):
         correction[ok] = np.linalg.solve(equations[ok], rhs[ok][..., None])[..., 0]
     length = np.maximum(np.linalg.norm(k, axis=1), 1e-30)
     change = np.linalg.norm(k + correction, axis=1) / length
+    coarsens = 1.0 if coarsening is None else \
+        _smoothstep(1.0, COARSENING_MAX, np.asarray(coarsening, np.float64).reshape(-1))
     trust = (_smoothstep(FIT_CONDITION, 2 * FIT_CONDITION, spread) *
              _smoothstep(1.0, FIT_ONSET, change) *
-             (1.0 - _smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change)))
+             (1.0 - _smoothstep(0.75 * FIT_RANGE, FIT_RANGE, change)) * coarsens)
     fitted = k + np.where(ok, trust, 0.0)[:, None] * correction
     # never a longer wave than crush's (a partly trusted c that turns k could shorten it)
     fitted *= np.maximum(1.0, length / np.maximum(np.linalg.norm(fitted, axis=1), 1e-30))[:, None]
@@ -180,7 +186,8 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
     ``fields``: the frame's points, wave_vector, amplitude and phase (crush's anchored
     phase); with ``kappa`` (the material wave vectors, :func:`mobility`) and
     ``rest_points``, and a state that holds its ``kappa``, the relaxed phases move from the
-    seed by each vertex's mobility (relax.glsl), else fully. ``state``: the wave state of
+    seed by each vertex's mobility (relax.glsl), else fully. With ``coarsening`` (each
+    point's cap), the fit follows it (:func:`fit`). ``state``: the wave state of
     the shot's previous grid frame (its wave_vector, amplitude, relaxed phase and kappa;
     the GPU's also holds crest damping's directions), or None for a cold start. Returns
     the relaxed phases and this frame's state (its wave_vector and amplitude are the
@@ -204,7 +211,7 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
     amplitude = np.array(fields["amplitude"], np.float64, copy=True)
     if count > 0:
         wave_vector, amplitude = fit(fields["points"], fields["normals"], wave_vector,
-                                     amplitude, phase, topology)
+                                     amplitude, phase, topology, fields.get("coarsening"))
     state = {"wave_vector": wave_vector, "amplitude": amplitude, "phase": phase}
     if "kappa" in fields:
         state["kappa"] = np.asarray(fields["kappa"], np.float64)

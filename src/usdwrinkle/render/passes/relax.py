@@ -24,7 +24,7 @@ class RelaxPass(WavePass):
     UNITS = {"RELAX_POSED_POINTS": 0, "TOPOLOGY_TABLE": 1, "RELAX_FIELDS": 2,
              "RELAX_PREVIOUS_FIELDS": 3, "RELAX_ANCHOR": 4, "RELAX_EDGES": 5, "RELAX_Z_IN": 6,
              "RELAX_PREVIOUS_PHASE": 7, "RELAX_REST_POINTS": 8, "RELAX_DAMPED": 9,
-             "RELAX_PREVIOUS_DAMPED": 10, "RELAX_MOBILITY": 11,
+             "RELAX_PREVIOUS_DAMPED": 10, "RELAX_MOBILITY": 11, "RELAX_COARSENING": 12,
              # image units
              "RELAX_PHASE": 0, "RELAX_Z_OUT": 1, "RELAX_EDGES_OUT": 2, "RELAX_FIELDS_OUT": 3,
              "RELAX_MOBILITY_OUT": 4}
@@ -72,5 +72,6 @@ class RelaxPass(WavePass):
             self.dispatch(count, {"u_write_phase": int(index == iterations - 1)},
                           reads={"RELAX_Z_IN": waves.phasors[src]},
                           writes={"RELAX_Z_OUT": waves.phasors[1 - src]}, TWO_SYSTEMS=two)
-        self.dispatch(count, uniforms, reads={"RELAX_Z_IN": waves.phasors[iterations % 2]},
+        self.dispatch(count, uniforms, reads={"RELAX_Z_IN": waves.phasors[iterations % 2],
+                                              "RELAX_COARSENING": res.coarsening},
                       writes={"RELAX_FIELDS_OUT": waves.current}, FIT=True, TWO_SYSTEMS=two)
