@@ -529,15 +529,15 @@ def test_automatic_levels_fit_the_point_cap_with_a_warning(gl_context, tmp_path,
 
 def tube_cap(width, radius):
     """The coarsening cap of a tube of ``radius`` (m) at W = ``width`` (m), worked out: the
-    tube's wavelength 7.7 cm (R / 10 cm)^0.5, W over it through smoothstep(0.75, 0.9) -
+    tube's wavelength 7.7 cm (R / 10 cm)^0.5, W over it through smoothstep(0.68, 0.8) -
     smoothstep(1.2, 1.5)."""
     ratio = width / (0.077 * (max(radius, 0.02) / 0.10) ** 0.5)
-    t, u = np.clip((ratio - 0.75) / 0.15, 0, 1), np.clip((ratio - 1.2) / 0.3, 0, 1)
+    t, u = np.clip((ratio - 0.68) / 0.12, 0, 1), np.clip((ratio - 1.2) / 0.3, 0, 1)
     return 1.5 - 0.5 * (t * t * (3 - 2 * t) - u * u * (3 - 2 * u))
 
 
 def test_the_coarsening_cap_by_hand():
-    """folds.coarsening_cap: 1.5 - 0.5 (smoothstep(0.75, 0.9, W / tube) - smoothstep(1.2,
+    """folds.coarsening_cap: 1.5 - 0.5 (smoothstep(0.68, 0.8, W / tube) - smoothstep(1.2,
     1.5, W / tube)) smoothstep(0.5, 0.9, one_way), worked by hand at the ramps' ends and
     middles; params.tube_width is the curvature law's wavelength at the rest radius (inf
     where nothing curves)."""
@@ -545,10 +545,10 @@ def test_the_coarsening_cap_by_hand():
     from usdwrinkle.method.folds import coarsening_cap
     from usdwrinkle.scene.params import tube_width
 
-    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.75, 0.9, 1.2, 1.5), (0.5, 0.9),
+    assert (CURVED_COARSENING, ONE_WAY, COARSENING_MAX) == ((0.68, 0.8, 1.2, 1.5), (0.5, 0.9),
                                                             1.5)
     width = np.full(10, 0.1)
-    tube = 0.1 / np.array([0.0, 0.75, 0.825, 0.9, 1.0, 1.0, 1.0, 1.2, 1.35, 1.5])
+    tube = 0.1 / np.array([0.0, 0.68, 0.74, 0.8, 1.0, 1.0, 1.0, 1.2, 1.35, 1.5])
     ways = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.5, 1.0, 1.0, 1.0])
     np.testing.assert_allclose(coarsening_cap(width, tube, ways),
                                [1.5, 1.5, 1.25, 1.0, 1.0, 1.25, 1.5, 1.0, 1.25, 1.5],
