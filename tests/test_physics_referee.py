@@ -31,6 +31,28 @@ def test_a_sweep_shot_is_the_same_cloth_at_half_the_spacing(make):
     assert spec(fine)["bending"] == FABRICS["cotton"]
 
 
+@pytest.mark.parametrize("radius, zone", [(0.05, 0.20), (0.10, 0.20), (0.25, 0.50)])
+def test_a_bent_sleeve_s_arm_does_not_pass_through_itself(radius, zone):
+    """The sweep's sleeves bend 90 degrees over 20 cm, over twice the radius beyond 10 cm
+    (sweep.elbow_length): at the full bend the arm's axis curves at the radius zone / (pi
+    / 2) (a circle through three axis points in the elbow, by hand), over the arm's own
+    0.8 R; 1.27 R on the 10 and 25 cm sleeves (at 20 cm the 25 cm sleeve's arm, 20 cm
+    thick, would fold into itself on an axis of radius 12.7 cm)."""
+    from benchmarks.physics.sweep import elbow_length
+
+    assert elbow_length(radius) == pytest.approx(zone)
+    shot = sleeve("cotton", 0.02, radius)
+    ends = [np.asarray(capsule[0]) for capsule in shot.capsules[-1]] + \
+        [np.asarray(shot.capsules[-1][-1][1])]
+    a, b, c = ends[3], ends[6], ends[9]  # inside the elbow's eleven points
+    # the circumradius of the triangle a b c
+    ab, bc, ca = (np.linalg.norm(u - v) for u, v in ((a, b), (b, c), (c, a)))
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a))
+    bent = ab * bc * ca / (4 * area)
+    assert bent == pytest.approx(zone / (np.pi / 2), rel=1e-6)
+    assert bent > shot.capsules[-1][0][2] == pytest.approx(0.8 * radius)
+
+
 def _ring_centres(points: np.ndarray, x: np.ndarray, at: float) -> np.ndarray:
     ring = np.abs(x - at) < 1e-6
     return points[ring].mean(axis=0)
