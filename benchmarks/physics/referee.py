@@ -370,9 +370,10 @@ def default_width(shot) -> float:
 
 #: the two blocks of docs/physics.md: the simulator's own convergence (no usdwrinkle in
 #: it: it changes only with the shots or the solver, and needs hours of simulation at half
-#: the spacing and 160 iterations) and usdwrinkle against the sweep (the eight shots at
-#: the referee's spacing, about 45 minutes of simulation here, cached: regenerate it
-#: whenever the law or the blend changes)
+#: the spacing and 160 iterations) and usdwrinkle against the sweep (its eight shots at
+#: the referee's spacing, about 45 minutes of simulation here; at the converged referee
+#: those and CONVERGED_ONLY's two, about 3 hours; cached: regenerate them whenever the law,
+#: the blend or the relaxation changes)
 TABLES = {"convergence": "referee", "sweep": "referee-sweep",
           "converged": "referee-converged"}
 
@@ -504,7 +505,7 @@ def main(argv=None) -> int:
                         help="convergence: the referee's own (cached simulations only); "
                              "sweep: usdwrinkle against it (1 cm, 10 iterations); "
                              "converged: against it at 160 iterations, 2 cm (1 cm for the "
-                             "shots in CONVERGED_FINER) (10-26 minutes of solver per shot "
+                             "shots in CONVERGED_FINER) (10-32 minutes of solver per shot "
                              "at 2 cm on one core, 25-80 at 1 cm); all: the three")
     parser.add_argument("--write", type=Path, default=None,
                         help="replace the chosen blocks of this file (docs/physics.md)")
