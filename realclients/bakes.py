@@ -336,27 +336,41 @@ def decoded_normals(images: dict) -> tuple[np.ndarray, np.ndarray]:
 def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
                  tangent_space: str | None = "triangle", slack: float | None = 0.0,
                  layout: str | None = "asset", map_format: str = "png",
-                 shade_samples: bool = True) -> dict:
+                 shade_samples: bool = True, memo: dict | None = None) -> dict:
     """{renderer: (normals, mask)} for usdwrinkle's render (``shade_samples`` False: render
     --no-shade-samples) and Storm's maps layer (its normal maps in ``tangent_space``,
     --map-layout ``layout`` (both None: the default bake, whose preview set Storm
-    shows) and --map-format ``map_format``), each decoded by photometric stereo."""
+    shows) and --map-format ``map_format``), each decoded by photometric stereo.
+    ``memo``: a dict that keeps each side's decoded normals by what they depend on
+    (usdwrinkle's on the shot, the slack and the shading; Storm's on the shot, the slack
+    and the bake's options), so that cases which share a side render it once (both
+    renderers draw the same input to the same pixels every time)."""
+    memo = {} if memo is None else memo
+    ours_key = ("usdwrinkle", shot, slack, shade_samples)
+    storm_key = ("storm", shot, slack, map_size, tangent_space, layout, map_format)
+    if ours_key in memo and storm_key in memo:
+        return {"usdwrinkle": memo[ours_key], "storm": memo[storm_key]}
     p = prepare(shot, folder, slack)
-    maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
-                  *map_set_flags(tangent_space, layout), "--map-format", map_format)
     shading = () if shade_samples else ("--no-shade-samples",)
-    ours, theirs, jobs = {}, {}, []
-    for axis in AXES:
-        tag = axis.replace("+", "p").replace("-", "m")
-        ours[axis] = p.render(lit_by(p.stage, axis, p.base(f"lit{tag}.usda")),
-                              p.base(f"ours_{tag}.exr"), *shading)
-        theirs[axis] = p.base(f"storm_{tag}.exr")
-        jobs.append({**p.storm_job(lit_by(maps, axis, p.base(f"maps_lit{tag}.usda")),
-                                   theirs[axis]), "camera_light": False})
-    failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
-    if failed:
-        raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
-    return {"usdwrinkle": decoded_normals(ours), "storm": decoded_normals(theirs)}
+    tags = {axis: axis.replace("+", "p").replace("-", "m") for axis in AXES}
+    if ours_key not in memo:
+        ours = {axis: p.render(lit_by(p.stage, axis, p.base(f"lit{tag}.usda")),
+                               p.base(f"ours_{tag}.exr"), *shading)
+                for axis, tag in tags.items()}
+        memo[ours_key] = decoded_normals(ours)
+    if storm_key not in memo:
+        maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
+                      *map_set_flags(tangent_space, layout), "--map-format", map_format)
+        theirs, jobs = {}, []
+        for axis, tag in tags.items():
+            theirs[axis] = p.base(f"storm_{tag}.exr")
+            jobs.append({**p.storm_job(lit_by(maps, axis, p.base(f"maps_lit{tag}.usda")),
+                                       theirs[axis]), "camera_light": False})
+        failed = {k: v for k, v in storm(jobs).items() if v != "ok"}
+        if failed:
+            raise RuntimeError(f"Storm could not render {shot.name}: {failed}")
+        memo[storm_key] = decoded_normals(theirs)
+    return {"usdwrinkle": memo[ours_key], "storm": memo[storm_key]}
 
 
 def angles(a, b) -> tuple[np.ndarray, np.ndarray]:
