@@ -78,7 +78,8 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, cell: float | None
     """Pairs (k, 2) of triangles that pass through each other and share no vertex: an
     edge of one crosses the other's interior. Candidate pairs come from a uniform grid of
     cells (default: twice the mean edge) that the triangles' boxes overlap, so the time
-    grows with the triangles, not their square."""
+    grows with the triangles, not their square; their boxes and planes prune them before
+    the segment test (on the shirt's 860k fine triangles, 15 s -> 9-11 s)."""
     p = np.asarray(points, np.float64)
     f = np.asarray(faces, np.int64)
     if not len(f):
@@ -111,18 +112,34 @@ def self_intersections(points: np.ndarray, faces: np.ndarray, cell: float | None
         pairs.append(np.stack([members[:, i].ravel(), members[:, j].ravel()], 1))
     if not pairs:
         return np.zeros((0, 2), np.int64)
-    pairs = np.sort(np.concatenate(pairs), axis=1)
+    pairs = np.concatenate(pairs)
     # one pair met in several cells counts once: one int64 code per pair, sorted, the
     # repeats dropped (np.unique(axis=0) sorts rows, and numpy's hashing unique was as
     # slow: they took most of the time)
-    code = np.sort(pairs[:, 0] * len(f) + pairs[:, 1])
+    code = np.sort(np.minimum(pairs[:, 0], pairs[:, 1]) * len(f)
+                   + np.maximum(pairs[:, 0], pairs[:, 1]))
     code = code[np.concatenate([[True], code[1:] != code[:-1]])]
-    pairs = np.stack([code // len(f), code % len(f)], 1)
+    first, second = code // len(f), code % len(f)
     # boxes that do not overlap cannot cross
     box_lo, box_hi = corners.min(axis=1), corners.max(axis=1)
-    overlap = np.all((box_lo[pairs[:, 0]] <= box_hi[pairs[:, 1]])
-                     & (box_lo[pairs[:, 1]] <= box_hi[pairs[:, 0]]), axis=1)
-    pairs = pairs[overlap]
+    overlap = np.ones(len(code), bool)
+    for axis in range(3):
+        overlap &= (box_lo[first, axis] <= box_hi[second, axis]) \
+            & (box_lo[second, axis] <= box_hi[first, axis])
+    first, second = first[overlap], second[overlap]
+    # two triangles that cross each straddle the other's plane: a pair with one wholly on
+    # one side of the other's plane (beyond a rounding margin, so that a pair the segment
+    # test would decide still reaches it) cannot cross
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    offset = np.einsum("ij,ij->i", normal, corners[:, 0])
+    margin = 1e-9 * np.linalg.norm(normal, axis=1) * (1.0 + float(np.abs(p).max()))
+    for _ in range(2):
+        side = np.einsum("ij,ikj->ik", normal[first], corners[second]) - offset[first][:, None]
+        bound = margin[first][:, None]
+        straddles = ~(np.all(side > bound, axis=1) | np.all(side < -bound, axis=1))
+        # the other way round on the next pass
+        first, second = second[straddles], first[straddles]
+    pairs = np.stack([first, second], 1)
     shared = (f[pairs[:, 0], :, None] == f[pairs[:, 1], None, :]).any(axis=(1, 2))
     pairs = pairs[~shared]
     found = []
