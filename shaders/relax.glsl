@@ -35,8 +35,10 @@
 //             fields in place (each vertex only its own).
 //
 // Mobility (docs/method.md, "Mobility"; reference/relax.py's mobility): with history, a
-// vertex's relaxed phase moves from its seed by m = min(delta / MOBILITY_PHASE + turn /
-// MOBILITY_TURN, 1) of the way the steps take it. The change since the previous grid
+// vertex's relaxed phase moves from its seed by m = min(max(x - MOBILITY_DEADBAND, 0) /
+// (1 - MOBILITY_DEADBAND), 1) of the way the steps take it, x = delta / MOBILITY_PHASE +
+// turn / MOBILITY_TURN (the dead band: a creep of a fraction of a millimetre a frame after
+// a pose stops moves no crest). The change since the previous grid
 // frame of the phase difference its ring asks for along an edge, (kappa_now -
 // kappa_before) . (X_j - X_i) averaged over the edge's two ends, kappa = (2 pi / L) d3 the
 // material wave vector (rest space; crush keeps 2 pi / L in the state's damped table), is
@@ -146,7 +148,8 @@ float mobility(int i, bool history, vec4 before0) {
         delta = max(delta, abs(dot(0.5 * (wave_i + sign_j * wave_j), edge)));
         turn = max(turn, abs(dot(0.5 * (turn_i + sign_j * turn_j), edge)));
     }
-    return min(delta / MOBILITY_PHASE + turn / MOBILITY_TURN, 1.0);
+    float moved = delta / MOBILITY_PHASE + turn / MOBILITY_TURN;
+    return min(max(moved - MOBILITY_DEADBAND, 0.0) / (1.0 - MOBILITY_DEADBAND), 1.0);
 }
 
 void main() {

@@ -405,9 +405,11 @@ def test_mobility_counts_the_turn_less_than_the_wave_number():
     split into the wave number's part and the direction's. On a flat grid whose waves
     all change alike, an interior vertex's mobility is the largest ring edge's phase
     change over MOBILITY_PHASE for a wave number that changes, over MOBILITY_TURN for a
-    direction that turns, and their sum for both, each computed by hand here."""
+    direction that turns, and their sum for both, less the dead band (MOBILITY_DEADBAND,
+    the share rescaled to reach 1 where it did), each computed by hand here; a change
+    within the dead band keeps the phases exactly."""
     from usdwrinkle.authoring.builders import grid_sheet
-    from usdwrinkle.method.contract import MOBILITY_PHASE, MOBILITY_TURN
+    from usdwrinkle.method.contract import MOBILITY_DEADBAND, MOBILITY_PHASE, MOBILITY_TURN
     from usdwrinkle.reference.relax import mobility, ring_edges
     from usdwrinkle.scene.topology import build_topology
 
@@ -435,10 +437,15 @@ def test_mobility_counts_the_turn_less_than_the_wave_number():
     by_both = largest(step * d_now) / MOBILITY_PHASE + by_turn
     inner = np.flatnonzero((np.abs(points[:, 0]) < 0.9) & (np.abs(points[:, 1]) < 0.9))
     assert len(inner) > 20
-    for now, expected in ((grown, by_wave), (turned, by_turn), (both, by_both)):
+    for now, moved in ((grown, by_wave), (turned, by_turn), (both, by_both)):
         share = mobility(points, now, before, ones, ones, topology)
-        assert 0.02 < expected[inner].max() < 0.98  # partly mobile: the test can tell
+        assert 0.1 < moved[inner].max() < 0.98  # partly mobile: the test can tell
+        expected = (moved - MOBILITY_DEADBAND) / (1.0 - MOBILITY_DEADBAND)
         np.testing.assert_allclose(share[inner], expected[inner], rtol=1e-9)
+    # within the dead band: a wave number that changes a tenth as much keeps the phases
+    assert MOBILITY_DEADBAND == 0.05 and 0.0 < 0.1 * by_wave[inner].max() < MOBILITY_DEADBAND
+    creep = np.tile([w + 0.1 * step, 0.0, 0.0], (n, 1))
+    assert np.all(mobility(points, creep, before, ones, ones, topology)[inner] == 0.0)
     # the same change of an edge's phase difference moves the phases MOBILITY_TURN /
     # MOBILITY_PHASE times more from the wave number than from the turn
     assert MOBILITY_TURN / MOBILITY_PHASE >= 10

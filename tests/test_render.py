@@ -106,10 +106,10 @@ def test_buffers_handed_out_are_never_overwritten(gl_context):
         engine.release()
     for name, pixels in kept.items():
         np.testing.assert_array_equal(first[name].pixels, pixels, err_msg=name)
-    # the frames differ, so an overwrite would have shown
+    # the later frames differ from the first, so an overwrite would have shown (the flag
+    # is static: its frames 12 and 24 may be the same picture once its phases settle)
     assert not np.array_equal(second["color"].pixels, kept["color"])
-    assert not np.array_equal(third["normal"].pixels, second["normal"].pixels) or \
-        not np.array_equal(third["color"].pixels, second["color"].pixels)
+    assert not np.array_equal(third["color"].pixels, kept["color"])
 
 
 def test_shade_samples_average_the_pixel(tmp_path):

@@ -135,6 +135,13 @@ FIT_ONSET = 1.05
 #: and 1.13x, the shirt's misfit 0.529 against 0.510).
 MOBILITY_PHASE = 0.1
 MOBILITY_TURN = 3.0
+#: ... less a dead band: m = min(max(x - MOBILITY_DEADBAND, 0) / (1 - MOBILITY_DEADBAND),
+#: 1) with x = delta / MOBILITY_PHASE + turn / MOBILITY_TURN, so a change of an edge's
+#: phase difference under 0.005 rad a frame (cloth that creeps by a fraction of a
+#: millimetre a frame after its pose stops) keeps the phases: the referee's 25 cm sleeve
+#: held still crept 1.90x the cloth's, 1.18x with it, and every held sleeve 0.13-0.98x
+#: (docs/method.md, "Mobility").
+MOBILITY_DEADBAND = 0.05
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -199,7 +206,7 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
     ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
     ("FIT_ONSET", FIT_ONSET), ("MOBILITY_PHASE", MOBILITY_PHASE),
-    ("MOBILITY_TURN", MOBILITY_TURN),
+    ("MOBILITY_TURN", MOBILITY_TURN), ("MOBILITY_DEADBAND", MOBILITY_DEADBAND),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),

@@ -9,6 +9,7 @@ from ..method.contract import (
     FIT_CONDITION,
     FIT_ONSET,
     FIT_RANGE,
+    MOBILITY_DEADBAND,
     MOBILITY_PHASE,
     MOBILITY_TURN,
     WEIGHT_FLOOR,
@@ -145,7 +146,8 @@ def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anch
 def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
              topology: Topology) -> np.ndarray:
     """relax.glsl's mobility: the share of the relaxation's move each vertex takes this
-    frame, min(delta / MOBILITY_PHASE + turn / MOBILITY_TURN, 1). The change of kappa
+    frame, min(max(x - MOBILITY_DEADBAND, 0) / (1 - MOBILITY_DEADBAND), 1) with x = delta /
+    MOBILITY_PHASE + turn / MOBILITY_TURN. The change of kappa
     (the previous one sign-matched to the current) is split into the wave number's part,
     (|kappa_now| - |kappa_before|) d_now, and the direction's, |kappa_before| (d_now -
     d_before) (d the unit direction); delta and turn are the largest over the vertex's
@@ -173,8 +175,9 @@ def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
         np.maximum.at(out, src, edge)
         return out
 
-    moving = np.minimum(largest(wave_part) / MOBILITY_PHASE
-                        + largest(turn_part) / MOBILITY_TURN, 1.0)
+    moved = largest(wave_part) / MOBILITY_PHASE + largest(turn_part) / MOBILITY_TURN
+    moving = np.minimum(np.maximum(moved - MOBILITY_DEADBAND, 0.0) / (1.0 - MOBILITY_DEADBAND),
+                        1.0)
     waves = (np.asarray(amplitude) > 0) & (np.asarray(previous_amplitude) > 0)
     return np.where(waves, moving, 1.0)
 
