@@ -183,6 +183,40 @@ def test_mobility_matches_the_reference(gl_context):
         assert np.percentile(np.abs(wrap(full - phase))[partly], 90) > 1e-2
 
 
+def test_a_creep_within_the_dead_band_keeps_the_phases(gl_context):
+    """A dead band (docs/method.md): frame 3 moves frame 2's points by a fraction of a
+    millimetre on a metre of cloth, as cloth creeps after its pose stops. Its waves change
+    (crush's wave vectors differ), but no edge's phase difference changes by more than
+    MOBILITY_DEADBAND's share, so every mobility is 0 and the phases stay exactly where
+    frame 2 left them; a creep 30 times larger moves some of them."""
+    from usdwrinkle.method.contract import MOBILITY_DEADBAND, MOBILITY_PHASE
+    from usdwrinkle.reference.relax import mobility
+
+    rest, posed, faces, q = random_cloth(4)
+    start = rest + 0.5 * (posed - rest)
+    for size, keeps in ((2e-5, True), (6e-4, False)):
+        frames = {1: start, 2: posed, 3: posed + size * np.sin(4 * rest[:, [2, 0, 1]])}
+        gpu, topology = _shot_fields(gl_context, rest, frames, faces, q, 8)
+        raw, _ = _shot_fields(gl_context, rest, frames, faces, q, 0)
+        wave = (gpu[2]["amplitude"] > 0) & (gpu[3]["amplitude"] > 0)
+        assert wave.sum() > 200
+        assert not np.array_equal(raw[3]["wave_vector"][wave], raw[2]["wave_vector"][wave])
+
+        def kappa(fields):
+            return fields["wavenumber"][:, None] * fields["direction"].astype(np.float64)
+
+        share = mobility(rest, kappa(raw[3]), kappa(gpu[2]), raw[3]["amplitude"],
+                         gpu[2]["amplitude"], topology)
+        moved = np.abs(wrap(gpu[3]["phase"] - gpu[2]["phase"]))[wave]
+        if keeps:
+            assert np.all(share[wave] == 0.0)
+            np.testing.assert_array_equal(gpu[3]["phase"][wave], gpu[2]["phase"][wave])
+            assert MOBILITY_DEADBAND * MOBILITY_PHASE == pytest.approx(0.005)
+        else:
+            assert np.mean(share[wave] > 0) > 0.1
+            assert np.percentile(moved, 99) > 1e-3
+
+
 @pytest.mark.parametrize("ratio", [0.5, 0.8, 0.95])
 def test_uniform_compression_is_analytic(gl_context, ratio):
     rest, counts, indices = grid_sheet(31, 31, 2.0)
