@@ -139,8 +139,8 @@ MOBILITY_TURN = 3.0
 #: 1) with x = delta / MOBILITY_PHASE + turn / MOBILITY_TURN, so a change of an edge's
 #: phase difference under 0.005 rad a frame (cloth that creeps by a fraction of a
 #: millimetre a frame after its pose stops) keeps the phases: the referee's 25 cm sleeve
-#: held still crept 1.90x the cloth's, 1.18x with it, and every held sleeve 0.13-0.98x
-#: (docs/method.md, "Mobility").
+#: held still crept 1.90x the cloth's, 1.18x with it, and the other held sleeves 0.13-0.98x
+#: (docs/method.md, "A dead band").
 MOBILITY_DEADBAND = 0.05
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
