@@ -115,6 +115,12 @@ def _shot_fields(ctx, rest, frames, faces, q, iterations):
     return out, topology
 
 
+def _kappa(fields):
+    """The material wave vectors (2 pi / L) d3 (rest space) of a frame's GPU fields, from
+    its wave numbers and rest directions: what relax's mobility compares."""
+    return fields["wavenumber"][:, None] * fields["direction"].astype(np.float64)
+
+
 def test_a_pose_that_stops_keeps_its_phases(gl_context):
     """Mobility (docs/method.md): frame 3 repeats frame 2's points, so nothing the waves
     are made of changed and the phases stay where frame 2 left them, exactly, as cloth
@@ -158,12 +164,9 @@ def test_mobility_matches_the_reference(gl_context):
     gpu, topology = _shot_fields(gl_context, rest, frames, faces, q, iterations)
     raw, _ = _shot_fields(gl_context, rest, frames, faces, q, 0)  # crush's own waves
 
-    def kappa(fields):
-        return fields["wavenumber"][:, None] * fields["direction"].astype(np.float64)
-
     for frame in (2, 3):
         before, crushed = gpu[frame - 1], raw[frame]
-        share = mobility(rest, kappa(crushed), kappa(before), crushed["amplitude"],
+        share = mobility(rest, _kappa(crushed), _kappa(before), crushed["amplitude"],
                          before["amplitude"], topology)
         wave = (crushed["amplitude"] > 0) & (before["amplitude"] > 0)
         partly = wave & (share > 0.05) & (share < 0.95)
@@ -171,9 +174,9 @@ def test_mobility_matches_the_reference(gl_context):
         fields = {"points": crushed["points"], "wave_vector": crushed["wave_vector"],
                   "amplitude": crushed["amplitude"], "phase": crushed["anchor_phase"],
                   "normals": crushed["normals"], "rest_points": rest,
-                  "kappa": kappa(crushed)}
+                  "kappa": _kappa(crushed)}
         state = {"wave_vector": before["wave_vector"], "amplitude": before["amplitude"],
-                 "phase": before["phase"], "kappa": kappa(before)}
+                 "phase": before["phase"], "kappa": _kappa(before)}
         phase, _ = relax_frame(fields, state, topology, iterations)
         diff = np.abs(wrap(gpu[frame]["phase"] - phase))[wave]
         assert np.percentile(diff, 99) < 1e-3, np.percentile(diff, [50, 99, 100])
@@ -202,10 +205,7 @@ def test_a_creep_within_the_dead_band_keeps_the_phases(gl_context):
         assert wave.sum() > 200
         assert not np.array_equal(raw[3]["wave_vector"][wave], raw[2]["wave_vector"][wave])
 
-        def kappa(fields):
-            return fields["wavenumber"][:, None] * fields["direction"].astype(np.float64)
-
-        share = mobility(rest, kappa(raw[3]), kappa(gpu[2]), raw[3]["amplitude"],
+        share = mobility(rest, _kappa(raw[3]), _kappa(gpu[2]), raw[3]["amplitude"],
                          gpu[2]["amplitude"], topology)
         moved = np.abs(wrap(gpu[3]["phase"] - gpu[2]["phase"]))[wave]
         if keeps:
