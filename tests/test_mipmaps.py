@@ -78,6 +78,13 @@ def textured(ctx, codes: np.ndarray, srgb: bool):
                        internal_format=GL_SRGB8_ALPHA8 if srgb else None)
 
 
+#: how far past a tie (in codes) a texel may round the other way. The shader's sRGB decode
+#: and encode are float32 pow, which GLSL lets be several ULP off (exp2 of y log2 x); over
+#: six seeds of these shapes and a 333x200 one the worst was 0.5029 codes on llvmpipe and
+#: 0.5030 on an NVIDIA H200 (driver 580, 2026-12-04), where 1e-3 had held for seed 7 alone
+NEAR_TIE = 0.01
+
+
 @pytest.mark.parametrize("shape,srgb", [((768, 512, 4), True), ((77, 300, 4), True),
                                         ((1, 5, 4), True), ((64, 64, 4), False),
                                         ((3, 96, 128, 4), False)],
@@ -85,7 +92,7 @@ def textured(ctx, codes: np.ndarray, srgb: bool):
                               "array of 3"])
 def test_each_level_is_the_exact_filter_of_the_one_above(gl_context, shape, srgb):
     """Every level, made from the level above it as the GL holds it, is numpy's float64
-    filter of that level rounded to the nearest code (ties either way)."""
+    filter of that level rounded to the nearest code (near-ties either way: NEAR_TIE)."""
     codes = np.random.default_rng(7).integers(0, 256, shape, dtype=np.uint8)
     texture = textured(gl_context, codes, srgb)
     try:
@@ -100,7 +107,7 @@ def test_each_level_is_the_exact_filter_of_the_one_above(gl_context, shape, srgb
             for layer in range(len(above)):
                 exact = exact_level(above[layer], srgb)
                 assert got[layer].shape == exact.shape
-                assert np.abs(got[layer] - exact).max() <= 0.5 + 1e-3, (level, layer)
+                assert np.abs(got[layer] - exact).max() <= 0.5 + NEAR_TIE, (level, layer)
             above = got
     finally:
         texture.release()
@@ -118,7 +125,9 @@ def read_float_level(ctx, texture, level: int, size: tuple[int, int]) -> np.ndar
 
 def test_a_float_texture_gets_the_same_filter_in_float(gl_context):
     """An environment or EXR texture (RGBA32F, high dynamic range): each level the exact
-    filter of the level above, to float32 rounding."""
+    filter of the level above, to float32 arithmetic: GLSL's division may be 2.5 ULP off
+    and the bilinear weights of odd sizes carry it (worst relative error over six seeds:
+    1.4e-5 on llvmpipe, 2.6e-5 on an NVIDIA H200, 2026-12-04)."""
     pixels = (np.random.default_rng(9).random((90, 200, 4)) ** 4 * 50).astype(np.float32)
     texture = gl_context.texture((200, 90), 4, pixels.tobytes(), dtype="f4")
     try:
@@ -127,16 +136,18 @@ def test_a_float_texture_gets_the_same_filter_in_float(gl_context):
         for level, size in enumerate(level_sizes(200, 90), 1):
             got = read_float_level(gl_context, texture, level, size)
             exact = exact_level(above * 255.0, False) / 255.0
-            np.testing.assert_allclose(got, exact, rtol=1e-5, atol=1e-6, err_msg=str(level))
+            np.testing.assert_allclose(got, exact, rtol=1e-4, atol=1e-6, err_msg=str(level))
             above = got.astype(np.float64)
     finally:
         texture.release()
 
 
 def test_the_levels_are_what_the_gls_own_generator_makes(gl_context):
-    """Against glGenerateMipmap on the same texture: the first level (both from the same
-    base) within one code, and on average far closer (the driver rounds its sRGB encode
-    its own way)."""
+    """Against glGenerateMipmap on the same texture: every level within two codes, and
+    almost every texel within one (the driver filters and rounds its sRGB encode its own
+    way). Measured over three seeds, levels 1-3: llvmpipe at most 1 code at level 1 and 2
+    at level 2 (one texel in 25,000), mean 0.11-0.19; an NVIDIA H200 (driver 580,
+    2026-12-04) at most 2 codes, mean 0.22-0.48, beyond one code 0.02-0.34% of texels."""
     rng = np.random.default_rng(11)
     codes = rng.integers(0, 256, (256, 384, 4), dtype=np.uint8)
     ours, theirs = textured(gl_context, codes, True), textured(gl_context, codes, True)
@@ -147,8 +158,9 @@ def test_the_levels_are_what_the_gls_own_generator_makes(gl_context):
             a = read_level(gl_context, ours, level, size, None).astype(int)
             b = read_level(gl_context, theirs, level, size, None).astype(int)
             difference = np.abs(a - b)
-            assert difference.max() <= (1 if level == 1 else 2), level
-            assert difference.mean() < 0.3, level
+            assert difference.max() <= 2, level
+            assert (difference > 1).mean() < 0.01, level
+            assert difference.mean() < 0.6, level
     finally:
         ours.release()
         theirs.release()

@@ -5,9 +5,10 @@ On llvmpipe the first glGenerateMipmap of each texture format in a process compi
 Mesa's blit shaders with LLVM, 150-200 ms a format (an sRGB colour texture, then a linear
 normal map, each again), in every process: Mesa's shader cache does not keep them, while
 it keeps ours. The pass works the same on every GL, so the levels a render samples are
-the same bytes on a GPU and on llvmpipe (glGenerateMipmap leaves the filter and the sRGB
+the same bytes on a GPU and on llvmpipe but for texels within 0.01 of a code's tie, which
+float32 pow may round either way (glGenerateMipmap leaves the filter and the sRGB
 rounding to the driver: llvmpipe's levels differ by one code from the exact filter in
-a tenth of the texels).
+a tenth of the texels, an NVIDIA H200's from ours by up to two).
 
 The base level's codes go into one storage buffer that holds the whole chain; each
 level is made from the one above it in one dispatch (the bilinear sample at the texel's
