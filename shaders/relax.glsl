@@ -242,14 +242,19 @@ void main() {
             rhs += weight * residual * dx;
             trace += weight * dot(dx, dx);
         }
-        // n n^T at the tangent block's scale pins c to the tangent plane (float32 keeps the
-        // block's digits whatever the scene's units); two independent tangent directions:
-        // the determinant, trace times the tangent block's, over trace^3 (at most 1/4)
-        normal_equations += trace * outerProduct(n, n);
-        float spread = trace > 0.0
-            ? determinant(normal_equations) / (trace * trace * trace) : 0.0;
+        if (!(trace > 0.0)) continue;
+        // the equations over their trace, so that float32 keeps their digits whatever the
+        // scene's units and the weights' size (CesiumMan: a ring of 2 cm edges whose one
+        // neighbour with a wave, 5e-6 m high, lay near the pi cutoff had a trace of 7e-14,
+        // whose cube, 3e-40, an NVIDIA GPU flushed to zero and took to NaN in c); n n^T
+        // at the tangent block's scale pins c to the tangent plane; two independent
+        // tangent directions: the determinant, the tangent block's over trace^2 (at most
+        // 1/4)
+        mat3 unit_equations = normal_equations / trace + outerProduct(n, n);
+        float spread = determinant(unit_equations);
         if (!(spread > FIT_CONDITION)) continue;
-        vec3 c = inverse(normal_equations) * rhs;
+        vec3 c = inverse(unit_equations) * (rhs / trace);
+        if (!(dot(c, c) < 1e30)) continue;  // never a non-finite wave (GLSL's NaN is the GL's)
         float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);
         // only a wave the phases draw shorter (the history's twist), fully from FIT_ONSET
         // ... and only where the folds coarsen: the twist is coarsening's (where the cap

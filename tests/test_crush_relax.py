@@ -44,12 +44,15 @@ def test_crush_matches_numpy_reference(gl_context, seed):
     np.testing.assert_allclose(ours["compression"], ref["compression"], atol=2e-4)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
     # the fold as drawn, lowered where the mesh is stretched across the wave (the squashed
-    # sphere is, at most of its folding points), to the amplitude's own tolerance (the
-    # share alone is steep where the lowered fold starts: sqrt(rho^2 - 1))
+    # sphere is, at most of its folding points), to 4x the amplitude's own tolerance: the
+    # lowered fold starts as a square root, sqrt(rho^2 - 1), so where it starts the last
+    # bit of float32 counts (worst over the three seeds: llvmpipe 2.8e-6; an NVIDIA H200
+    # 2.3e-5 on 2026-12-04, at points where its rho came out one ulp above 1 and numpy's
+    # at 1: the square root of 2^-22)
     folding = ref["amplitude"] > 1e-3
     assert np.mean(ref["drawn"][folding] < 0.99) > 0.2
     np.testing.assert_allclose(ours["amplitude"] * ours["drawn"],
-                               ref["amplitude"] * ref["drawn"], atol=2e-4 * 0.05)
+                               ref["amplitude"] * ref["drawn"], atol=4 * 2e-4 * 0.05)
     np.testing.assert_allclose(ours["normals"], ref["normals"], atol=1e-4)
     # directions and k are defined where the two eigenvalues differ
     lam = ref["compression"]
@@ -304,6 +307,52 @@ def test_degenerate_geometry_gives_no_wrinkle_and_no_nan(gl_context):
         assert np.all(np.isfinite(value)), name
     np.testing.assert_array_equal(ours["compression"], 1.0)
     np.testing.assert_array_equal(ours["amplitude"], 0.0)
+
+
+def test_every_wave_of_cesium_man_is_finite_cold_and_with_history(gl_context, corpus,
+                                                                    tmp_path):
+    """The fields after relax's fit, every frame 1..24 of CesiumMan (in metres, its faint
+    onset waves a few micrometres high), computed with the phase history and from a cold
+    start at each frame: finite, and no amplitude beyond the mesh's own size. On an NVIDIA
+    H200 (2026-12-04) the cold frame 23 drew a NaN wave of amplitude 7e26 at one point,
+    whose only wrinkled neighbour stood 5e-6 m high across an edge the wave barely
+    sampled: the fit divided its condition by the trace cubed, below float32's smallest
+    normal number (relax.glsl now divides the equations by their trace first)."""
+    from pxr import Usd
+
+    source = Usd.Stage.Open(str(corpus / "usd-wg" / "CesiumMan.usdz"))
+    stage = Usd.Stage.CreateNew(str(tmp_path / "cesium.usda"))
+    stage.GetRootLayer().subLayerPaths.append(str(corpus / "usd-wg" / "CesiumMan.usdz"))
+    UsdGeom.SetStageMetersPerUnit(stage, UsdGeom.GetStageMetersPerUnit(source))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.GetStageUpAxis(source))
+    stage.SetStartTimeCode(source.GetStartTimeCode())
+    stage.SetEndTimeCode(source.GetEndTimeCode())
+    stage.GetRootLayer().Save()
+    largest = 0.0
+    for cold in (False, True):
+        engine = None
+        try:
+            for frame in range(1, 25):
+                if engine is None or cold:
+                    if engine is not None:
+                        engine.release()
+                    engine = WrinkleEngine(stage.GetRootLayer().realPath, ctx=gl_context,
+                                           all_meshes=True,
+                                           history_start=float(frame) if cold else None)
+                engine.compute_frame(float(frame), 1.0)
+                for path in engine.meshes:
+                    res = engine.mesh_resources(path)
+                    fields = np.asarray(res.waves.current.read()).reshape(-1, 5, 4)
+                    points = np.asarray(res.posed_points.read())[:, :3]
+                    assert np.isfinite(fields).all(), (frame, cold, path)
+                    size = float(np.ptp(points, axis=0).max())
+                    amplitude = float(fields[:, [1, 3], 3].max())
+                    assert amplitude < 0.1 * size, (frame, cold, path, amplitude)
+                    largest = max(largest, amplitude)
+        finally:
+            if engine is not None:
+                engine.release()
+    assert largest > 1e-3  # the shot wrinkles (millimetres at least)
 
 
 def test_a_point_of_huge_valence_reads_a_capped_ring(gl_context):
