@@ -2,6 +2,8 @@
 
     python -m benchmarks.crests_across_gl --save gpu.npz       # on the GPU node
     python -m benchmarks.crests_across_gl --compare gpu.npz    # here, on llvmpipe
+    python -m benchmarks.crests_across_gl --save-tables t.npz [shirt] [cesium_man]
+    python -m benchmarks.crests_across_gl --compare-tables t.npz
 
 Each run renders the shirt and CesiumMan (``--all-meshes``, with its units) at the
 frames and size of benchmarks/stability.py from a cold engine, and keeps each frame's
@@ -71,44 +73,76 @@ def compare(path: str) -> str:
     return "\n".join(lines)
 
 
-def tables(cold: bool, ctx=None) -> dict:
-    """The shirt's per-vertex tables after each frame 1..24 (posed points, the wave fields,
-    the relaxed phases, crest damping's damped directions, crush's anchored phases), with
-    the phase history (``cold``: each frame a cold start)."""
+def _table_stage(name: str, folder: str) -> tuple[str, bool, str | None]:
+    """A stage of TABLE_STAGES: its path (made in ``folder``), whether all its meshes
+    wrinkle, and the mesh whose tables are kept (None: the first of the stage's)."""
+    if name == "shirt":
+        return str(SHIRT), False, SLEEVE
+    return (with_units(str(corpus_dir() / "usd-wg" / "CesiumMan.usdz"),
+                       f"{folder}/cesium.usda"), True, None)
+
+
+#: the stages whose per-vertex tables --save-tables keeps (each, with its history and
+#: cold, about 8 MB of compressed arrays)
+TABLE_STAGES = ("shirt", "cesium_man")
+
+
+def tables(cold: bool, ctx=None, stage: str = "shirt") -> dict:
+    """A stage's per-vertex tables (its wrinkled mesh's: the shirt's sleeve, CesiumMan's
+    first mesh) after each frame 1..24 (posed points, the wave fields, the relaxed phases,
+    crest damping's damped directions, crush's anchored phases), with the phase history
+    (``cold``: each frame a cold start)."""
     from usdwrinkle.engine import WrinkleEngine
 
     out = {}
     engine = None
-    try:
-        for frame in range(1, 25):
-            if engine is None or cold:
-                if engine is not None:
-                    engine.release()
-                engine = WrinkleEngine(str(SHIRT), ctx=ctx,
-                                       history_start=float(frame) if cold else None)
-            engine.compute_frame(float(frame), 1.0)
-            res = engine.mesh_resources(SLEEVE)
-            out[frame] = (np.asarray(res.posed_points.read()),
-                          np.asarray(res.waves.current.read()),
-                          np.asarray(res.waves.phase.read()),
-                          np.asarray(res.waves.written.damped.read()),
-                          np.asarray(res.waves.anchor_phase.read()))
-    finally:
-        if engine is not None:
-            engine.release()
+    with tempfile.TemporaryDirectory() as folder:
+        path, all_meshes, mesh = _table_stage(stage, folder)
+        try:
+            for frame in range(1, 25):
+                if engine is None or cold:
+                    if engine is not None:
+                        engine.release()
+                    engine = WrinkleEngine(path, ctx=ctx, all_meshes=all_meshes,
+                                           history_start=float(frame) if cold else None)
+                engine.compute_frame(float(frame), 1.0)
+                res = engine.mesh_resources(mesh or next(iter(engine.meshes)))
+                out[frame] = (np.asarray(res.posed_points.read()),
+                              np.asarray(res.waves.current.read()),
+                              np.asarray(res.waves.phase.read()),
+                              np.asarray(res.waves.written.damped.read()),
+                              np.asarray(res.waves.anchor_phase.read()))
+        finally:
+            if engine is not None:
+                engine.release()
     return out
 
 
-def save_tables(path: str) -> None:
-    np.savez_compressed(path, **{f"{mode}/{frame}/{index}": table
-                                 for mode in ("history", "cold")
-                                 for frame, planes in tables(mode == "cold").items()
-                                 for index, table in enumerate(planes)})
+def save_tables(path: str, stages=TABLE_STAGES) -> None:
+    arrays = {}
+    for stage in stages:
+        if stage != "shirt" and not (corpus_dir() / "usd-wg" / "CesiumMan.usdz").exists():
+            continue
+        prefix = "" if stage == "shirt" else f"{stage}:"  # the shirt's keys as before
+        for mode in ("history", "cold"):
+            for frame, planes in tables(mode == "cold", stage=stage).items():
+                for index, table in enumerate(planes):
+                    arrays[f"{prefix}{mode}/{frame}/{index}"] = table
+    np.savez_compressed(path, **arrays)
 
 
 def compare_tables(path: str) -> str:
     data = np.load(path)
-    lines = ["per frame, the largest difference of the shirt's tables (theirs - ours): posed "
+    parts = []
+    for stage in TABLE_STAGES:
+        prefix = "" if stage == "shirt" else f"{stage}:"
+        if any(key.startswith(prefix + "history/") for key in data.files):
+            parts.append(_compare_stage_tables(data, stage, prefix))
+    return "\n\n".join(parts)
+
+
+def _compare_stage_tables(data, stage: str, prefix: str) -> str:
+    lines = [f"per frame, the largest difference of {stage}'s tables (theirs - ours): posed "
              "points, wave fields, phases and anchored phases (radians, wrapped), damped "
              "directions (where both hold one: sin of the undirected angle between them)", "",
              "| mode | frame | points | fields | phase | vertices with phase off > 0.1 | "
@@ -119,10 +153,11 @@ def compare_tables(path: str) -> str:
         return np.abs(np.angle(np.exp(1j * (a.astype(np.float64) - b))))
 
     for mode in ("history", "cold"):
-        ours = tables(mode == "cold")
+        ours = tables(mode == "cold", stage=stage)
         for frame, (points, fields, phase, damped, anchor) in ours.items():
-            theirs = [data[f"{mode}/{frame}/{i}"] if f"{mode}/{frame}/{i}" in data.files
-                      else None for i in range(5)]
+            theirs = [data[f"{prefix}{mode}/{frame}/{i}"]
+                      if f"{prefix}{mode}/{frame}/{i}" in data.files else None
+                      for i in range(5)]
             dphase = wrapped(theirs[2], phase)
             extra = ["", ""]
             if theirs[3] is not None:  # a file saved before the damped tables were kept
@@ -141,8 +176,9 @@ def compare_tables(path: str) -> str:
 
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
-    if len(args) == 2 and args[0] == "--save-tables":
-        save_tables(args[1])
+    if len(args) >= 2 and args[0] == "--save-tables" and \
+            set(args[2:]) <= set(TABLE_STAGES):
+        save_tables(args[1], tuple(args[2:]) or TABLE_STAGES)
         return 0
     if len(args) == 2 and args[0] == "--compare-tables":
         print(compare_tables(args[1]))
@@ -153,7 +189,7 @@ def main(argv=None) -> int:
     if len(args) == 2 and args[0] == "--compare":
         print(compare(args[1]))
         return 0
-    print(__doc__.strip().splitlines()[2:4], file=sys.stderr)
+    print("\n".join(__doc__.strip().splitlines()[2:6]), file=sys.stderr)
     return 2
 
 

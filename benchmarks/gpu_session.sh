@@ -5,7 +5,7 @@
 #   .whl/    cp312 manylinux wheels of usd-core, moderngl, glcontext, OpenImageIO, OpenEXR,
 #            mapbox_earcut, trimesh, and `pip wheel --no-deps -w .whl .` (usdwrinkle)
 #   .gl/     the glvnd/EGL .debs (/work/.library/device/README.md)
-#   .corpus/ usd-wg/CesiumMan.usdz
+#   .corpus/ a copy of ../shared/corpus (3 MB: the tests' corpus fixture needs all of it)
 # then run `bash benchmarks/gpu_session.sh` there with carry [".whl", ".gl", ".corpus"].
 # Each step has its own time limit, so a slow one leaves the others' results in $OUT:
 #   log.txt                  everything printed
@@ -33,9 +33,10 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 nproc
 python3 -c "from usdwrinkle.render.context import renderer_info; print(renderer_info())" || exit 1
 
-step "tests: the GPU oracle, the resolve, the mip chains, multi-frame identity (EXR, PNG)"
+step "tests: the GPU oracle, the resolve, the mip chains, crush and relax against numpy, multi-frame identity"
 timeout ${TESTS_S:-120} python3 -m pytest -q -p no:cacheprovider -n 8 --dist loadfile \
     tests/test_gpu_oracle.py tests/test_resolve.py tests/test_mipmaps.py \
+    tests/test_crush_relax.py \
     "tests/test_whole_frames.py::test_every_file_is_the_frame_it_names"
 
 # the bench first, so that the extras below only get what time it leaves (EXTRAS=1)
