@@ -195,7 +195,11 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretche
           float W, float cap, float room, float scale, vec3 t1, vec3 t2) {
     Fold f;
     f.drawn = 1.0;
-    float gather = min(r_geo / r, PAINT_GATHER_MAX);
+    // r == r_geo where nothing is painted: exactly 1 there (a GPU's division, a * rcp(b),
+    // may give 1 + 1 ulp, and a fold of 1e-4 W at every point within the slack: an H200
+    // drew them at random points, whose waves switched on and off under a 0.01 degree
+    // change of a joint and moved the crests)
+    float gather = r == r_geo ? 1.0 : min(r_geo / r, PAINT_GATHER_MAX);
     float rho = excess_of(r_geo) * gather;
     float rho_area = max(rho, excess_of(r_geo * across) * gather);
     if (!(rho > 1.0)) {
