@@ -254,7 +254,7 @@ void main() {
         float spread = determinant(unit_equations);
         if (!(spread > FIT_CONDITION)) continue;
         vec3 c = inverse(unit_equations) * (rhs / trace);
-        if (!(dot(c, c) < 1e30)) continue;  // never a non-finite wave (GLSL's NaN is the GL's)
+        if (!(dot(c, c) < 1e30)) continue;  // never a non-finite wave (GLSL leaves NaN to the GL)
         float change = length(wave.xyz + c) / max(length(wave.xyz), 1e-30);
         // only a wave the phases draw shorter (the history's twist), fully from FIT_ONSET
         // ... and only where the folds coarsen: the twist is coarsening's (where the cap
