@@ -2,7 +2,8 @@
 every shot of the referee, and the worst case over the sweep of the phase-by-phase
 wavelength ratio, the amplitude ratio and the amplitude-field correlation.
 
-    python -m benchmarks.physics.fit [--only NAME ...] [--converged] [--exponent ...] ...
+    python -m benchmarks.physics.fit [--only NAME ...] [--converged] [--grid M] [--matched]
+                                     [--exponent ...] [--profile ...] ...
 
 The law's constants are #defines of the crush pass (method/contract.py): a candidate is compiled
 in, baked and measured in this process. Not a test: it chose the defaults that
@@ -18,7 +19,17 @@ import numpy as np
 
 from . import measure
 from .oracle import compare, per_phase, zones
-from .referee import CONVERGED, ROOT, SWEEP, bake_on, our_area, referee_grid, referee_pair
+from .referee import (
+    CONVERGED,
+    ROOT,
+    SWEEP,
+    bake_on,
+    cloth_attributes,
+    matched_width,
+    our_area,
+    referee_grid,
+    referee_pair,
+)
 
 
 def set_law(exponent: float, most: float, room: float | None = None) -> None:
@@ -80,13 +91,25 @@ def main(argv=None) -> int:
                         help="against the referee at its solver's convergence (referee."
                              "CONVERGED: 2 cm, 160 iterations; 1 cm for CONVERGED_FINER) "
                              "instead of the sweep's")
+    parser.add_argument("--grid", type=float, default=None, metavar="M",
+                        help="the simulations' spacing in metres instead of the referee's "
+                             "(e.g. 0.02 for a curtain judged at 1 cm: a proxy, 25 minutes "
+                             "of solver instead of 25-80)")
+    parser.add_argument("--matched", action="store_true",
+                        help="W matched to each simulation as the referee's table matches "
+                             "it (referee.matched_width of the default bake) instead of "
+                             "--onset")
     args = parser.parse_args(argv)
     iterations = CONVERGED[1] if args.converged else None
     names = args.only or list(SWEEP)
-    pairs = {name: referee_pair(name, args.cache, referee_grid(name, args.converged),
-                                iterations) for name in names}
+    pairs = {name: referee_pair(name, args.cache,
+                                args.grid or referee_grid(name, args.converged), iterations)
+             for name in names}
     sims = {name: pair[0] for name, pair in pairs.items()}
     fines = {name: pair[1] for name, pair in pairs.items()}
+    matched = {name: matched_width(sim.shot, per_phase(sim, bake_on(
+                   sim, fines[name], "default", None, cloth_attributes(sim.shot))[0]))
+               for name, sim in sims.items()} if args.matched else {}
     for exponent, most, slack, onset, profile, room in itertools.product(
             args.exponent, args.most, args.slack, args.onset, args.profile, args.room):
         set_law(exponent, most, room)
@@ -96,7 +119,8 @@ def main(argv=None) -> int:
         for name, sim in sims.items():
             first = min(sim.shot.phases.values())[1] - 1
             inner = zones(sim.shot)["all"]
-            width = onset * measure.wavelength(sim.shot, sim.h[first], inner)
+            width = matched.get(name) or \
+                onset * measure.wavelength(sim.shot, sim.h[first], inner)
             result = evaluate(sim, width, slack, profile, fines[name])
             phases = result["phases"]
             text = " ".join(f"{w:.2f}/{a:.2f}" for w, a in phases.values())
