@@ -308,8 +308,7 @@ def test_degenerate_geometry_gives_no_wrinkle_and_no_nan(gl_context):
     np.testing.assert_array_equal(ours["amplitude"], 0.0)
 
 
-def test_every_wave_of_cesium_man_is_finite_cold_and_with_history(gl_context, corpus,
-                                                                    tmp_path):
+def test_every_wave_of_cesium_man_is_finite_cold_and_with_history(gl_context, corpus):
     """The fields after relax's fit, every frame 1..24 of CesiumMan (in metres, its faint
     onset waves a few micrometres high), computed with the phase history and from a cold
     start at each frame: finite, and no amplitude beyond the mesh's own size. On an NVIDIA
@@ -318,32 +317,18 @@ def test_every_wave_of_cesium_man_is_finite_cold_and_with_history(gl_context, co
     sampled (a fold the GPU's division drew where nothing folds: crush.glsl's gather): the
     fit divided its condition by the trace cubed, below float32's smallest normal number
     (relax.glsl now divides the equations by their trace first)."""
-    from benchmarks.stability import with_units
+    from benchmarks.crests_across_gl import tables
 
-    path = with_units(str(corpus / "usd-wg" / "CesiumMan.usdz"), str(tmp_path / "cesium.usda"))
     largest = 0.0
     for cold in (False, True):
-        engine = None
-        try:
-            for frame in range(1, 25):
-                if engine is None or cold:
-                    if engine is not None:
-                        engine.release()
-                    engine = WrinkleEngine(path, ctx=gl_context, all_meshes=True,
-                                           history_start=float(frame) if cold else None)
-                engine.compute_frame(float(frame), 1.0)
-                for mesh in engine.meshes:
-                    res = engine.mesh_resources(mesh)
-                    fields = np.asarray(res.waves.current.read()).reshape(-1, 5, 4)
-                    points = np.asarray(res.posed_points.read())[:, :3]
-                    assert np.isfinite(fields).all(), (frame, cold, mesh)
-                    size = float(np.ptp(points, axis=0).max())
-                    amplitude = float(fields[:, [1, 3], 3].max())
-                    assert amplitude < 0.1 * size, (frame, cold, mesh, amplitude)
-                    largest = max(largest, amplitude)
-        finally:
-            if engine is not None:
-                engine.release()
+        # CesiumMan's one mesh, in metres (crests_across_gl's stage), frame by frame
+        for frame, (points, fields, *_) in tables(cold, gl_context, "cesium_man").items():
+            fields = fields.reshape(-1, 5, 4)
+            assert np.isfinite(fields).all(), (frame, cold)
+            size = float(np.ptp(points[:, :3], axis=0).max())
+            amplitude = float(fields[:, [1, 3], 3].max())
+            assert amplitude < 0.1 * size, (frame, cold, amplitude)
+            largest = max(largest, amplitude)
     assert largest > 1e-3  # the shot wrinkles (millimetres at least)
 
 
