@@ -87,6 +87,11 @@ def _table_stage(name: str, folder: str) -> tuple[str, bool, str | None]:
 TABLE_STAGES = ("shirt", "cesium_man")
 
 
+def _key_prefix(stage: str) -> str:
+    """The prefix of a stage's keys in a --save-tables file (the shirt's as before)."""
+    return "" if stage == "shirt" else f"{stage}:"
+
+
 def tables(cold: bool, ctx=None, stage: str = "shirt") -> dict:
     """A stage's per-vertex tables (its wrinkled mesh's: the shirt's sleeve, CesiumMan's
     first mesh) after each frame 1..24 (posed points, the wave fields, the relaxed phases,
@@ -123,7 +128,7 @@ def save_tables(path: str, stages=TABLE_STAGES) -> None:
     for stage in stages:
         if stage != "shirt" and not (corpus_dir() / "usd-wg" / "CesiumMan.usdz").exists():
             continue
-        prefix = "" if stage == "shirt" else f"{stage}:"  # the shirt's keys as before
+        prefix = _key_prefix(stage)
         for mode in ("history", "cold"):
             for frame, planes in tables(mode == "cold", stage=stage).items():
                 for index, table in enumerate(planes):
@@ -135,7 +140,7 @@ def compare_tables(path: str) -> str:
     data = np.load(path)
     parts = []
     for stage in TABLE_STAGES:
-        prefix = "" if stage == "shirt" else f"{stage}:"
+        prefix = _key_prefix(stage)
         if any(key.startswith(prefix + "history/") for key in data.files):
             parts.append(_compare_stage_tables(data, stage, prefix))
     return "\n\n".join(parts)
