@@ -12,9 +12,11 @@
 // RG.
 //
 // Entry points, selected by the loader's defines:
-//   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, or the
-//             material-anchored phases on a shot's first frame) and, per outgoing edge and
-//             system, the rotation e^{-i d_ij}, the flip, the neighbour's weight and system.
+//   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, where
+//             the wave was there last frame; for a new wave, the phase its ring's kept
+//             waves ask for; else, and on a shot's first frame, the material-anchored
+//             phases) and, per outgoing edge and system, the rotation e^{-i d_ij}, the
+//             flip, the neighbour's weight and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi,
 //             moved from the seed by only the vertex's mobility m of the way (below).
 //   FIT       per vertex and system, after the last step: the wave the relaxed phases
@@ -38,7 +40,9 @@
 // vertex's relaxed phase moves from its seed by m = min(max(x - MOBILITY_DEADBAND, 0) /
 // (1 - MOBILITY_DEADBAND), 1) of the way the steps take it, x = delta / MOBILITY_PHASE +
 // turn / MOBILITY_TURN (the dead band: a creep of a fraction of a millimetre a frame after
-// a pose stops moves no crest). The change since the previous grid
+// a pose stops moves no crest). Each ring edge counts by smoothstep(0, MOBILITY_RING,
+// a_j / a_i): a neighbour without a wave, whose direction is its strain's noise, not at
+// all (contract.py). The change since the previous grid
 // frame of the phase difference its ring asks for along an edge, (kappa_now -
 // kappa_before) . (X_j - X_i) averaged over the edge's two ends, kappa = (2 pi / L) d3 the
 // material wave vector (rest space; crush keeps 2 pi / L in the state's damped table), is
@@ -74,8 +78,8 @@ uniform int u_systems;
 
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
-// z = flip * a_j (the partner's weight, negative where its wave is flipped; a_j > 0
-// thanks to the floor), w = j as a float (exact below 2^24 points), -(j + 1) when the
+// z = flip * (a_j aligned(k_i, k_j) + WEIGHT_FLOOR) (the partner's pull, negative where
+// its wave is flipped; nonzero thanks to the floor), w = j as a float (exact below 2^24 points), -(j + 1) when the
 // partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
@@ -85,6 +89,17 @@ layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x); }
 
 vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(i, s)); }
+
+// How much a neighbour's wave pulls a vertex's phase beside its amplitude (contract.py's
+// RELAX_ALIGNED): fully within 60 degrees, not at all across (no phase to agree on, and
+// a coin toss for the sign test). An edge that aliases the wave still pulls: the phases
+// agree modulo 2 pi, which is what the draw's blend of the corner waves needs (fading
+// the pull beyond pi to 2 pi doubled the shirt's misfit, 0.555 to 1.22, at its cuff,
+// whose painted waves advance 7-12 rad an edge; docs/method.md, "Sensitivity")
+float aligned(vec3 k_i, vec3 k_j) {
+    return smoothstep(0.0, RELAX_ALIGNED,
+                      abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
+}
 
 // The neighbour an edge texel names (EDGE(e, s), below), and its phasor of the partner
 // system, conjugated where the partner's wave is flipped: z~_j.
@@ -139,17 +154,47 @@ float mobility(int i, bool history, vec4 before0) {
     vec3 X_i = fetch(rest_points, i).xyz;
     float delta = 0.0;
     float turn = 0.0;
+    float a_i = max(wave_of(fields, i, 0).w, 1e-30);
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
+        // a neighbour without a wave has its strain's noise for a direction: it counts
+        // from none to fully over MOBILITY_RING of the vertex's amplitude
+        float a_j = min(wave_of(fields, j, 0).w, wave_of(previous_fields, j, 0).w);
+        float counts = smoothstep(0.0, MOBILITY_RING, a_j / a_i);
+        if (!(counts > 0.0)) continue;
         vec3 wave_j, turn_j;
         vec3 kappa_j = kappa_change(j, wave_j, turn_j);
+        counts *= aligned(kappa_i, kappa_j);
         float sign_j = dot(kappa_j, kappa_i) < 0.0 ? -1.0 : 1.0;
         vec3 edge = fetch(rest_points, j).xyz - X_i;
-        delta = max(delta, abs(dot(0.5 * (wave_i + sign_j * wave_j), edge)));
-        turn = max(turn, abs(dot(0.5 * (turn_i + sign_j * turn_j), edge)));
+        delta = max(delta, counts * abs(dot(0.5 * (wave_i + sign_j * wave_j), edge)));
+        turn = max(turn, counts * abs(dot(0.5 * (turn_i + sign_j * turn_j), edge)));
     }
     float moved = delta / MOBILITY_PHASE + turn / MOBILITY_TURN;
     return min(max(moved - MOBILITY_DEADBAND, 0.0) / (1.0 - MOBILITY_DEADBAND), 1.0);
+}
+
+// Where vertex v's system s (its wave (k, w) now) keeps last frame's phase: it has a
+// wave now and had one last frame (its partner system then), flipped where k flipped.
+// Returns false where it does not: a point without a wave starts again from its
+// material-anchored phase (the flip test decided the sign of such a point's meaningless
+// k by rounding, and a wrinkle that grew there later inherited it; docs/method.md:
+// stability), and so does a wave that is new, unless its ring asks for a phase (main).
+bool kept_phase(int v, int s, vec4 wave, out float kept) {
+    kept = 0.0;
+    if (u_has_history == 0 || !(wave.w > 0.0)) return false;
+    vec4 before0 = wave_of(previous_fields, v, 0);
+#if defined TWO_SYSTEMS
+    vec4 before1 = wave_of(previous_fields, v, 1);
+    int was = partner_system(wave.xyz, s, before0, before1);
+    vec4 wave_before = was == 0 ? before0 : before1;
+#else
+    int was = 0;
+    vec4 wave_before = before0;
+#endif
+    if (!(wave_before.w > 0.0)) return false;
+    kept = (dot(wave.xyz, wave_before.xyz) < 0.0 ? -1.0 : 1.0) * fetch(previous_phase, v)[was];
+    return true;
 }
 
 void main() {
@@ -157,35 +202,20 @@ void main() {
     if (i >= u_num_points) return;
     vec2 anchor = fetch(anchor_phase, i).xy;
     bool history = u_has_history != 0;
-    vec2 previous = history ? fetch(previous_phase, i).xy : vec2(0.0);
     vec4 before0 = history ? wave_of(previous_fields, i, 0) : vec4(0.0);
-#if defined TWO_SYSTEMS
-    vec4 before1 = history ? wave_of(previous_fields, i, 1) : vec4(0.0);
-#endif
     vec2 start = anchor;
     vec4 z = vec4(0.0);
     vec3 x_i = fetch(posed_points, i).xyz;  // posed, local space
     for (int s = 0; s < SYSTEMS; ++s) {
         vec4 wave_i = wave_of(fields, i, s);
         vec3 k_i = wave_i.xyz;
-        // a point with a wave keeps last frame's phase; one without (amplitude 0) starts
-        // again from its material-anchored phase: the flip test below decided the sign of
-        // such a point's meaningless k by rounding, and a wrinkle that grew there later
-        // inherited it (docs/method.md: stability)
-        if (history && wave_i.w > 0.0) {
-            // keep last frame's phase of the partner system; flip it where k flipped
-#if defined TWO_SYSTEMS
-            int was = partner_system(k_i, s, before0, before1);
-            vec3 k_before = was == 0 ? before0.xyz : before1.xyz;
-#else
-            int was = 0;
-            vec3 k_before = before0.xyz;
-#endif
-            float flip = dot(k_i, k_before) < 0.0 ? -1.0 : 1.0;
-            start[s] = flip * previous[was];
-        }
-        z[2 * s] = cos(start[s]);
-        z[2 * s + 1] = sin(start[s]);
+        float kept;
+        bool keeps = kept_phase(i, s, wave_i, kept);
+        // a new wave starts from the phase its ring's kept waves ask for (their weights
+        // a_j, as a Jacobi step would), where it has such neighbours: its anchored phase
+        // lies anywhere against their history, and on the shirt a 0.01 degree change
+        // moved where the relaxation then settled by up to 3.6 rad
+        vec2 ask = vec2(0.0);
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             int j = NEIGHBOR(e);
             int partner = PARTNER(k_i, s, j);
@@ -193,10 +223,20 @@ void main() {
             float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
             vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
             float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
+            float pull = wave_j.w * aligned(k_i, wave_j.xyz);
             STORE(edges, EDGE(e, s), vec4(cos(drift), -sin(drift),
-                                         flip * (wave_j.w + WEIGHT_FLOOR),
+                                         flip * (pull + WEIGHT_FLOOR),
                                          partner == 0 ? float(j) : -float(j) - 1.0));
+            float kept_j;
+            if (!keeps && history && wave_i.w > 0.0 && kept_phase(j, partner, wave_j, kept_j)) {
+                float asked = flip * kept_j - drift;
+                ask += pull * vec2(cos(asked), sin(asked));
+            }
         }
+        if (keeps) start[s] = kept;
+        else if (dot(ask, ask) > 0.0) start[s] = atan(ask.y, ask.x);
+        z[2 * s] = cos(start[s]);
+        z[2 * s + 1] = sin(start[s]);
     }
     STORE(mobility_out, i, vec4(mobility(i, history, before0), start, 0.0));
     STORE(phase, i, vec4(start, 0.0, 0.0));

@@ -514,3 +514,54 @@ def test_mobility_counts_the_turn_less_than_the_wave_number():
     gone[inner[0]] = 0.0
     assert mobility(points, grown, before, gone, ones, topology)[inner[0]] == 1.0
     assert mobility(points, grown, before, ones, gone, topology)[inner[0]] == 1.0
+
+
+def test_a_ring_neighbour_pulls_only_with_a_wave_along_the_vertex_s():
+    """relax (and its seed and fit) weigh a neighbour by its amplitude times
+    smoothstep(0, RELAX_ALIGNED, |cos|) of the angle between the wave vectors; the
+    mobility counts a ring edge by smoothstep(0, MOBILITY_RING, a_j / a_i) times the same
+    alignment (docs/method.md, "Sensitivity": a neighbour at right angles, or one without
+    a wave, has nothing to say about the vertex's phase). On a flat grid of waves along x:
+    a vertex whose wave runs along y keeps its phase, one at 45 degrees is pulled to its
+    neighbours'; a neighbour with no wave whose direction turns moves no mobility, one
+    with a wave does."""
+    from usdwrinkle.authoring.builders import grid_sheet
+    from usdwrinkle.method.contract import MOBILITY_RING, RELAX_ALIGNED, WEIGHT_FLOOR
+    from usdwrinkle.reference.relax import aligned, mobility, relax, ring_edges
+    from usdwrinkle.scene.topology import build_topology
+
+    points, counts, indices = grid_sheet(9, 9, 2.0)
+    points = np.asarray(points, np.float64)
+    topology = build_topology(counts, indices, points)
+    n = len(points)
+    centre = int(np.argmin(np.linalg.norm(points, axis=1)))
+    w = 40.0
+    k = np.tile([w, 0.0, 0.0], (n, 1))
+    amplitude = np.full(n, 0.01)
+    phase = w * points[:, 0]  # the plane wave the ring asks for
+    src, dst = ring_edges(topology)
+    assert RELAX_ALIGNED == 0.5 and MOBILITY_RING == 0.25
+    for turn, pulled in ((90.0, False), (45.0, True)):
+        turned = k.copy()
+        turned[centre] = w * np.array([np.cos(np.radians(turn)), np.sin(np.radians(turn)), 0])
+        np.testing.assert_allclose(aligned(turned, src, dst)[src == centre],
+                                   0.0 if not pulled else 1.0, atol=1e-12)
+        start = phase.copy()
+        start[centre] += 2.0  # off the ring's phase by 2 rad
+        out = relax(points, turned, amplitude, start, topology, 20)
+        off = abs(wrap(out[centre] - start[centre]))
+        # at right angles only WEIGHT_FLOOR pulls: 20 steps of 6 floors over its own 0.01
+        floors = 20 * 6 * WEIGHT_FLOOR / 0.01 * 2.0
+        assert (off > 1.0) if pulled else (off < floors), (turn, off, floors)
+    # the mobility: nothing changes but a neighbour's direction, turned by 30 degrees
+    turned = k.copy()
+    neighbour = int(dst[src == centre][0])
+    turned[neighbour] = w * np.array([np.cos(np.radians(30)), np.sin(np.radians(30)), 0.0])
+    ones = np.ones(n)
+    moved = mobility(points, turned, k, ones, ones, topology)[centre]
+    assert moved > 0.5  # the turn reaches the vertex through its ring
+    for gone in ("now", "before"):
+        without = ones.copy()
+        without[neighbour] = 0.0
+        a_now, a_before = (without, ones) if gone == "now" else (ones, without)
+        assert mobility(points, turned, k, a_now, a_before, topology)[centre] == 0.0

@@ -107,6 +107,14 @@ SLOPE_SAMPLES = 64
 SLOPE_STEP = 0.3125
 #: A tiny floor on the relax weights keeps arg() defined where no vertex is wrinkled.
 WEIGHT_FLOOR = 1e-7
+#: A ring neighbour's wave pulls a vertex's phase (relax's steps, its seed, its fit) by
+#: its amplitude times smoothstep(0, RELAX_ALIGNED, |cos|) of the angle between their
+#: wave vectors: fully within 60 degrees, not at all across. Crests that cross at right
+#: angles have no phase to agree on, and the sign test that pairs (k, phi) with (-k,
+#: -phi) is a coin toss there: on the shirt a 0.01 degree joint change flipped it for a
+#: new wave beside a strong one at 88 degrees, and the relaxation settled 2-3 rad apart
+#: (docs/method.md, "Sensitivity").
+RELAX_ALIGNED = 0.5
 #: The fit of the wave to the relaxed phases (relax.glsl's FIT, reference/relax.fit)
 #: needs two independent tangent directions in a vertex's wrinkled ring: the tangent
 #: normal equations' determinant over their trace squared (at most 1/4, a ring as wide as
@@ -142,6 +150,15 @@ MOBILITY_TURN = 3.0
 #: held still crept 1.90x the cloth's, 1.18x with it, and the other held sleeves 0.13-0.98x
 #: (docs/method.md, "A dead band").
 MOBILITY_DEADBAND = 0.05
+#: ... over the ring edges to neighbours with a wave: an edge counts by smoothstep(0,
+#: MOBILITY_RING, a_j / a_i), a_j the smaller of the neighbour's amplitudes now and the
+#: frame before, a_i the vertex's. A neighbour without a wave has the direction of its
+#: strain's noise (a 0.01 degree joint change turned the shirt's uncompressed points
+#: beside its painted cuff by up to 90 degrees, and took its painted waves' mobility from
+#: 0 to 1 and back: the crests moved on 2.2% of the wrinkled pixels on an H200, where
+#: the bar is 2%; docs/method.md, "Sensitivity"); the relaxation barely feels it
+#: (WEIGHT_FLOOR), so neither may the mobility.
+MOBILITY_RING = 0.25
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
@@ -203,10 +220,12 @@ def glsl_literal(value) -> str:
 
 #: What every shader gets as #defines.
 SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
-    ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR), ("MAX_LIGHTS", MAX_LIGHTS),
+    ("MIN_RATIO", MIN_RATIO), ("WEIGHT_FLOOR", WEIGHT_FLOOR),
+    ("RELAX_ALIGNED", RELAX_ALIGNED), ("MAX_LIGHTS", MAX_LIGHTS),
     ("FIT_CONDITION", FIT_CONDITION), ("FIT_RANGE", FIT_RANGE),
     ("FIT_ONSET", FIT_ONSET), ("MOBILITY_PHASE", MOBILITY_PHASE),
     ("MOBILITY_TURN", MOBILITY_TURN), ("MOBILITY_DEADBAND", MOBILITY_DEADBAND),
+    ("MOBILITY_RING", MOBILITY_RING),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),

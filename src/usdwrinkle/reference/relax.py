@@ -10,6 +10,8 @@ from ..method.contract import (
     FIT_ONSET,
     FIT_RANGE,
     MOBILITY_DEADBAND,
+    MOBILITY_RING,
+    RELAX_ALIGNED,
     MOBILITY_PHASE,
     MOBILITY_TURN,
     WEIGHT_FLOOR,
@@ -23,23 +25,45 @@ def ring_edges(topology: Topology) -> tuple[np.ndarray, np.ndarray]:
     return np.repeat(np.arange(len(ring_offsets) - 1), np.diff(ring_offsets)), dst
 
 
+def aligned(k, src, dst) -> np.ndarray:
+    """Per ring edge, how much j's wave pulls i's phase beside its amplitude:
+    smoothstep(0, RELAX_ALIGNED, |cos|) of the angle between their wave vectors
+    (relax.glsl's aligned)."""
+    k = np.asarray(k, np.float64)
+    length = np.linalg.norm(k, axis=1)
+    cos = np.abs(np.sum(k[src] * k[dst], 1)) / np.maximum(length[src] * length[dst], 1e-30)
+    return _smoothstep(0.0, RELAX_ALIGNED, cos)
+
+
+def pulls(points, k, amplitude, src, dst) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per ring edge: the sign that pairs j's wave with i's, the drift kbar_ij . (x_j -
+    x_i), and j's pull on i, a_j :func:`aligned` (relax.glsl's SEED)."""
+    points = np.asarray(points, np.float64)
+    k = np.asarray(k, np.float64)
+    sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
+    drift = np.sum(0.5 * (k[src] + sign[:, None] * k[dst]) * (points[dst] - points[src]), 1)
+    pull = np.asarray(amplitude, np.float64)[dst] * aligned(k, src, dst)
+    return sign, drift, pull
+
+
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
-    """``iterations`` Jacobi steps; returns the new phases (n,)."""
+    """``iterations`` Jacobi steps; returns the new phases (n,). A neighbour pulls by its
+    amplitude times :func:`aligned`, a vertex itself by its own (both plus
+    WEIGHT_FLOOR)."""
     points = np.asarray(points, np.float64)
     k = np.asarray(wave_vector, np.float64)
-    weight = np.asarray(amplitude, np.float64) + WEIGHT_FLOOR
+    a = np.asarray(amplitude, np.float64)
+    weight = a + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
     src, dst = ring_edges(topology)
-    sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
-    k_j = k[dst] * sign[:, None]
-    k_bar = 0.5 * (k[src] + k_j)
-    drift = np.sum(k_bar * (points[dst] - points[src]), 1)
+    sign, drift, pull = pulls(points, k, a, src, dst)
+    pull = pull + WEIGHT_FLOOR
     for _ in range(iterations):
         predicted = phi[dst] * sign - drift
         re = weight * np.cos(phi)
         im = weight * np.sin(phi)
-        np.add.at(re, src, weight[dst] * np.cos(predicted))
-        np.add.at(im, src, weight[dst] * np.sin(predicted))
+        np.add.at(re, src, pull * np.cos(predicted))
+        np.add.at(im, src, pull * np.sin(predicted))
         phi = np.where(re * re + im * im > 0, np.arctan2(im, re), phi)
     return phi
 
@@ -64,13 +88,12 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology,
     phi = np.asarray(phase, np.float64)
     n = len(points)
     src, dst = ring_edges(topology)
-    sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
-    k_bar = 0.5 * (k[src] + k[dst] * sign[:, None])
+    sign, drift, pull = pulls(points, k, np.maximum(a, 0.0), src, dst)
     dx = points[dst] - points[src]
-    residual = wrap(sign * phi[dst] - phi[src] - np.sum(k_bar * dx, 1))
+    residual = wrap(sign * phi[dst] - phi[src] - drift)
     sampled = 1.0 - _smoothstep(0.5 * np.pi, np.pi, np.abs(np.sum(k[src] * dx, 1)))
     dx = dx - np.sum(dx * normals[src], 1)[:, None] * normals[src]
-    weight = np.where(a[dst] > 0, a[dst], 0.0) * sampled
+    weight = pull * sampled
     equations = np.zeros((n, 3, 3))
     np.add.at(equations, src, weight[:, None, None] * dx[:, :, None] * dx[:, None, :])
     rhs = np.zeros((n, 3))
@@ -129,18 +152,40 @@ def phase_misfit(points, wave_vector, phase, topology: Topology, mask=None) -> f
     return float(np.sqrt(np.mean(residual ** 2)))
 
 
-def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anchor=None):
+def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anchor=None,
+         previous_amplitude=None, points=None, topology: Topology | None = None):
     """The warm start of a frame: previous phases, flipped where k flipped; with
     ``amplitude`` and ``anchor`` (crush's material-anchored phase), a point without a wave
     (amplitude 0) starts from its anchor instead (issue 46: the flip test on the
     meaningless k of such a point decided its sign by rounding, and a wrinkle that grew
-    there later inherited it, so a 0.01 degree change of a joint moved crests)."""
-    flip = np.sum(np.asarray(wave_vector, np.float64)
-                  * np.asarray(previous_wave_vector, np.float64), 1) < 0
+    there later inherited it, so a 0.01 degree change of a joint moved crests). With
+    ``previous_amplitude`` too, so does a wave that is new (none there last frame: its
+    phase then was what the relaxation's floor weights made of its neighbours', which a
+    0.01 degree change moved by 1.8 rad on the shirt), and with ``points`` and
+    ``topology`` such a wave starts from the phase its ring's kept waves ask for (weights
+    a_j, as a Jacobi step), where it has any (relax.glsl's SEED; docs/method.md,
+    "Sensitivity")."""
+    k = np.asarray(wave_vector, np.float64)
+    flip = np.sum(k * np.asarray(previous_wave_vector, np.float64), 1) < 0
     start = np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
-    if amplitude is not None:
-        start = np.where(np.asarray(amplitude) > 0, start, np.asarray(anchor, np.float64))
-    return start
+    if amplitude is None:
+        return start
+    a = np.asarray(amplitude, np.float64)
+    kept = a > 0
+    if previous_amplitude is not None:
+        kept &= np.asarray(previous_amplitude) > 0
+    out = np.where(kept, start, np.asarray(anchor, np.float64))
+    if previous_amplitude is None or points is None or topology is None:
+        return out
+    src, dst = ring_edges(topology)
+    sign, drift, pull = pulls(points, k, a, src, dst)
+    asked = sign * start[dst] - drift
+    counts = np.where(kept[dst], pull, 0.0)
+    re, im = np.zeros(len(a)), np.zeros(len(a))
+    np.add.at(re, src, counts * np.cos(asked))
+    np.add.at(im, src, counts * np.sin(asked))
+    new = (a > 0) & ~kept & (re * re + im * im > 0)
+    return np.where(new, np.arctan2(im, re), out)
 
 
 def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
@@ -152,7 +197,9 @@ def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
     (|kappa_now| - |kappa_before|) d_now, and the direction's, |kappa_before| (d_now -
     d_before) (d the unit direction); delta and turn are the largest over the vertex's
     ring edges of each part . (X_j - X_i), averaged over the edge's two ends (j's parts
-    sign-matched to i's kappa). ``kappa``: the material wave vectors (2 pi / L) d3 in rest
+    sign-matched to i's kappa), each edge times smoothstep(0, MOBILITY_RING, a_j / a_i)
+    (a_j: the smaller of j's amplitudes now and before; a neighbour without a wave does
+    not count). ``kappa``: the material wave vectors (2 pi / L) d3 in rest
     space, (n, 3). 1 where the vertex has no wave now or had none before (it relaxes
     fully)."""
     rest = np.asarray(rest_points, np.float64)
@@ -167,10 +214,14 @@ def mobility(rest_points, kappa, previous_kappa, amplitude, previous_amplitude,
     turn_part = w_before[:, None] * (d_now - d_before)
     src, dst = ring_edges(topology)
     sign = np.where(np.sum(now[src] * now[dst], 1) < 0, -1.0, 1.0)
+    a_now = np.asarray(amplitude, np.float64)
+    neighbour = np.minimum(a_now[dst], np.asarray(previous_amplitude, np.float64)[dst])
+    counts = _smoothstep(0.0, MOBILITY_RING, neighbour / np.maximum(a_now[src], 1e-30)) \
+        * aligned(now, src, dst)
 
     def largest(change: np.ndarray) -> np.ndarray:
-        edge = np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
-                             * (rest[dst] - rest[src]), 1))
+        edge = counts * np.abs(np.sum(0.5 * (change[src] + sign[:, None] * change[dst])
+                                      * (rest[dst] - rest[src]), 1))
         out = np.zeros(len(rest))
         np.maximum.at(out, src, edge)
         return out
@@ -202,7 +253,8 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
         start, count = fields["phase"], iterations * cold_start_factor
     else:
         start = seed(fields["wave_vector"], state["wave_vector"], state["phase"],
-                     fields["amplitude"], fields["phase"])
+                     fields["amplitude"], fields["phase"], state.get("amplitude"),
+                     fields["points"], topology)
         count = iterations
     phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
                   topology, count)
