@@ -10,10 +10,10 @@ from ..method.contract import (
     FIT_ONSET,
     FIT_RANGE,
     MOBILITY_DEADBAND,
-    MOBILITY_RING,
-    RELAX_ALIGNED,
     MOBILITY_PHASE,
+    MOBILITY_RING,
     MOBILITY_TURN,
+    RELAX_ALIGNED,
     WEIGHT_FLOOR,
 )
 from ..scene.topology import Topology
