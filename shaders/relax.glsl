@@ -14,8 +14,8 @@
 // Entry points, selected by the loader's defines:
 //   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, where
 //             the wave was there last frame; for a new wave, the phase its ring's kept
-//             waves ask for; else, and on a shot's first frame, the material-anchored
-//             phases) and, per outgoing edge and system, the rotation e^{-i d_ij}, the
+//             waves ask for, or with none its previous phase; where there is no wave, and
+//             on a shot's first frame, the material-anchored phases) and, per outgoing edge and system, the rotation e^{-i d_ij}, the
 //             flip, the neighbour's weight and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi,
 //             moved from the seed by only the vertex's mobility m of the way (below).
@@ -78,9 +78,9 @@ uniform int u_systems;
 
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
-// z = flip * (a_j aligned(k_i, k_j) + WEIGHT_FLOOR) (the partner's pull, negative where
-// its wave is flipped; nonzero thanks to the floor), w = j as a float (exact below 2^24 points), -(j + 1) when the
-// partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
+// z = flip * (a_j + WEIGHT_FLOOR) aligned(k_i, k_j) (the partner's pull, negative where
+// its wave is flipped; 0 only at right angles), w = j as a float (exact below 2^24
+// points), -(j + 1) when the partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
 // WEIGHT_FLOOR (contract.py): a tiny floor on the weights keeps arg() defined where no
@@ -174,12 +174,13 @@ float mobility(int i, bool history, vec4 before0) {
     return min(max(moved - MOBILITY_DEADBAND, 0.0) / (1.0 - MOBILITY_DEADBAND), 1.0);
 }
 
-// Where vertex v's system s (its wave (k, w) now) keeps last frame's phase: it has a
-// wave now and had one last frame (its partner system then), flipped where k flipped.
-// Returns false where it does not: a point without a wave starts again from its
-// material-anchored phase (the flip test decided the sign of such a point's meaningless
-// k by rounding, and a wrinkle that grew there later inherited it; docs/method.md:
-// stability), and so does a wave that is new, unless its ring asks for a phase (main).
+// Whether vertex v's system s (its wave (k, w) now) keeps last frame's phase: it has a
+// wave now and had one last frame (its partner system then). ``kept``: last frame's
+// phase, flipped where k flipped (where v has a wave now, whether or not it had one). A
+// point without a wave starts again from its material-anchored phase (the flip test
+// decided the sign of such a point's meaningless k by rounding, and a wrinkle that grew
+// there later inherited it; docs/method.md: stability); a wave that is new starts from
+// the phase its ring's kept waves ask for, and with none beside it from ``kept`` (main).
 bool kept_phase(int v, int s, vec4 wave, out float kept) {
     kept = 0.0;
     if (u_has_history == 0 || !(wave.w > 0.0)) return false;
@@ -192,9 +193,8 @@ bool kept_phase(int v, int s, vec4 wave, out float kept) {
     int was = 0;
     vec4 wave_before = before0;
 #endif
-    if (!(wave_before.w > 0.0)) return false;
     kept = (dot(wave.xyz, wave_before.xyz) < 0.0 ? -1.0 : 1.0) * fetch(previous_phase, v)[was];
-    return true;
+    return wave_before.w > 0.0;
 }
 
 void main() {
@@ -211,10 +211,13 @@ void main() {
         vec3 k_i = wave_i.xyz;
         float kept;
         bool keeps = kept_phase(i, s, wave_i, kept);
-        // a new wave starts from the phase its ring's kept waves ask for (their weights
-        // a_j, as a Jacobi step would), where it has such neighbours: its anchored phase
-        // lies anywhere against their history, and on the shirt a 0.01 degree change
-        // moved where the relaxation then settled by up to 3.6 rad
+        // a new wave starts from the phase its ring's kept waves ask for (their pulls,
+        // as a Jacobi step would), where it has such neighbours: its own last phase was
+        // what the floor weights made of them along its meaningless k, which a 0.01
+        // degree change moved by 1.6-3.1 rad at the shirt's elbow. With none beside it,
+        // it keeps that phase (its region's onset): its anchor lies anywhere against
+        // the waves around (the pull's misfit 0.39 -> 0.51; the referee's held 25 cm
+        // sleeve's crests 1.18x -> 1.78x the cloth's motion)
         vec2 ask = vec2(0.0);
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             int j = NEIGHBOR(e);
@@ -223,9 +226,10 @@ void main() {
             float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
             vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
             float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
-            float pull = wave_j.w * aligned(k_i, wave_j.xyz);
+            float align = aligned(k_i, wave_j.xyz);
+            float pull = wave_j.w * align;
             STORE(edges, EDGE(e, s), vec4(cos(drift), -sin(drift),
-                                         flip * (pull + WEIGHT_FLOOR),
+                                         flip * (wave_j.w + WEIGHT_FLOOR) * align,
                                          partner == 0 ? float(j) : -float(j) - 1.0));
             float kept_j;
             if (!keeps && history && wave_i.w > 0.0 && kept_phase(j, partner, wave_j, kept_j)) {
@@ -235,6 +239,7 @@ void main() {
         }
         if (keeps) start[s] = kept;
         else if (dot(ask, ask) > 0.0) start[s] = atan(ask.y, ask.x);
+        else if (history && wave_i.w > 0.0) start[s] = kept;
         z[2 * s] = cos(start[s]);
         z[2 * s + 1] = sin(start[s]);
     }

@@ -46,18 +46,25 @@ def pulls(points, k, amplitude, src, dst) -> tuple[np.ndarray, np.ndarray, np.nd
     return sign, drift, pull
 
 
+def _pulls_with_floor(points, k, amplitude, src, dst):
+    """:func:`pulls` with the floor: (a_j + WEIGHT_FLOOR) :func:`aligned` (relax.glsl's
+    edge weights, which the steps read)."""
+    sign, drift, _ = pulls(points, k, amplitude, src, dst)
+    floor = (np.asarray(amplitude, np.float64)[dst] + WEIGHT_FLOOR) * aligned(k, src, dst)
+    return sign, drift, floor
+
+
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
     """``iterations`` Jacobi steps; returns the new phases (n,). A neighbour pulls by its
-    amplitude times :func:`aligned`, a vertex itself by its own (both plus
-    WEIGHT_FLOOR)."""
+    amplitude plus WEIGHT_FLOOR times :func:`aligned`, a vertex itself by its own plus
+    WEIGHT_FLOOR."""
     points = np.asarray(points, np.float64)
     k = np.asarray(wave_vector, np.float64)
     a = np.asarray(amplitude, np.float64)
     weight = a + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
     src, dst = ring_edges(topology)
-    sign, drift, pull = pulls(points, k, a, src, dst)
-    pull = pull + WEIGHT_FLOOR
+    sign, drift, pull = _pulls_with_floor(points, k, a, src, dst)
     for _ in range(iterations):
         predicted = phi[dst] * sign - drift
         re = weight * np.cos(phi)
@@ -159,24 +166,22 @@ def seed(wave_vector, previous_wave_vector, previous_phase, amplitude=None, anch
     (amplitude 0) starts from its anchor instead (issue 46: the flip test on the
     meaningless k of such a point decided its sign by rounding, and a wrinkle that grew
     there later inherited it, so a 0.01 degree change of a joint moved crests). With
-    ``previous_amplitude`` too, so does a wave that is new (none there last frame: its
-    phase then was what the relaxation's floor weights made of its neighbours', which a
-    0.01 degree change moved by 1.8 rad on the shirt), and with ``points`` and
-    ``topology`` such a wave starts from the phase its ring's kept waves ask for (weights
-    a_j, as a Jacobi step), where it has any (relax.glsl's SEED; docs/method.md,
-    "Sensitivity")."""
+    ``previous_amplitude``, ``points`` and ``topology`` too, a wave that is new (none
+    there last frame: its phase then was what the relaxation's floor weights made of its
+    neighbours' along its meaningless k, which a 0.01 degree change moved by 1.6-3.1 rad
+    at the shirt's elbow) starts from the phase its ring's kept waves ask for (their
+    pulls, as a Jacobi step), where it has any; with none beside it, from its previous
+    phase (relax.glsl's SEED; docs/method.md, "Sensitivity")."""
     k = np.asarray(wave_vector, np.float64)
     flip = np.sum(k * np.asarray(previous_wave_vector, np.float64), 1) < 0
     start = np.where(flip, -1.0, 1.0) * np.asarray(previous_phase, np.float64)
     if amplitude is None:
         return start
     a = np.asarray(amplitude, np.float64)
-    kept = a > 0
-    if previous_amplitude is not None:
-        kept &= np.asarray(previous_amplitude) > 0
-    out = np.where(kept, start, np.asarray(anchor, np.float64))
+    out = np.where(a > 0, start, np.asarray(anchor, np.float64))
     if previous_amplitude is None or points is None or topology is None:
         return out
+    kept = (a > 0) & (np.asarray(previous_amplitude) > 0)
     src, dst = ring_edges(topology)
     sign, drift, pull = pulls(points, k, a, src, dst)
     asked = sign * start[dst] - drift
