@@ -109,9 +109,9 @@ SLOPE_STEP = 0.3125
 WEIGHT_FLOOR = 1e-7
 #: A ring neighbour's wave pulls a vertex's phase (relax's steps, its seed, its fit) by
 #: its amplitude (plus WEIGHT_FLOOR) times smoothstep(0, RELAX_ALIGNED, |cos|) of the
-#: angle between their wave vectors: fully within 60 degrees, not at all across. Crests that cross at right
-#: angles have no phase to agree on, and the sign test that pairs (k, phi) with (-k,
-#: -phi) is a coin toss there: on the shirt a 0.01 degree joint change flipped it for a
+#: angle between their wave vectors: fully within 60 degrees, not at all across. Crests
+#: that cross at right angles have no phase to agree on, and the sign test that pairs (k,
+#: phi) with (-k, -phi) is a coin toss there: on the shirt a 0.01 degree joint change flipped it for a
 #: new wave beside a strong one at 88 degrees, and the relaxation settled 2-3 rad apart
 #: (docs/method.md, "Sensitivity").
 RELAX_ALIGNED = 0.5
