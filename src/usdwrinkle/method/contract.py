@@ -111,9 +111,9 @@ WEIGHT_FLOOR = 1e-7
 #: its amplitude (plus WEIGHT_FLOOR) times smoothstep(0, RELAX_ALIGNED, |cos|) of the
 #: angle between their wave vectors: fully within 60 degrees, not at all across. Crests
 #: that cross at right angles have no phase to agree on, and the sign test that pairs (k,
-#: phi) with (-k, -phi) is a coin toss there: on the shirt a 0.01 degree joint change flipped it for a
-#: new wave beside a strong one at 88 degrees, and the relaxation settled 2-3 rad apart
-#: (docs/method.md, "Sensitivity").
+#: phi) with (-k, -phi) is a coin toss there: on the shirt a 0.01 degree joint change
+#: flipped it for a new wave beside a strong one at 88 degrees, and the relaxation settled
+#: 2-3 rad apart (docs/method.md, "Sensitivity").
 RELAX_ALIGNED = 0.5
 #: The fit of the wave to the relaxed phases (relax.glsl's FIT, reference/relax.fit)
 #: needs two independent tangent directions in a vertex's wrinkled ring: the tangent
