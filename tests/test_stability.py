@@ -39,19 +39,18 @@ def test_a_tiny_joint_change_moves_no_crest_of_a_loop_painted_around_the_arm(gl_
     assert all(shares[0.1][f] <= 0.05 for f in stability.FRAMES), shares
 
 
-#: the painted loop turned about x: 4.3% at frame 16 (0.8% before 2026-12-04), where a
-#: new wave with no kept wave beside it keeps its floor-relaxed phase (docs/method.md,
-#: "Three couplings"); starting it from its anchor held it (0.0%) but took the referee's
-#: held 25 cm sleeve past its crest-motion bar (1.78x, bar 1.5x). A known failure of the
-#: bar, kept visible: strict, so that a fix shows.
-LOOP_ABOUT_X = pytest.mark.xfail(strict=True, reason="the painted loop about x: 4.3% at "
-                                 "frame 16 (bar 2%); docs/method.md, 'Three couplings'")
+#: (stage, axis) over the bar on llvmpipe, as measured: the painted loop turned about x,
+#: 4.3% at frame 16 (0.8% before 2026-12-04), where a new wave with no kept wave beside
+#: it keeps its floor-relaxed phase (docs/method.md, "Three couplings"); starting it from
+#: its anchor held it (0.0%) but took the referee's held 25 cm sleeve past its
+#: crest-motion bar (1.78x, bar 1.5x). A known failure of the bar, kept visible: the test
+#: asserts it still fails there (so that a fix shows) and reports it as an expected
+#: failure; on any other GL it asserts the bar.
+OVER_THE_BAR_ON_LLVMPIPE = {("loop", "x")}
 
 
-@pytest.mark.parametrize("stage, axis", [
-    *(("shirt", axis) for axis in stability.OTHER_AXES),
-    *(pytest.param("loop", axis, marks=LOOP_ABOUT_X) if axis == "x" else ("loop", axis)
-      for axis in stability.OTHER_AXES)])
+@pytest.mark.parametrize("axis", stability.OTHER_AXES)
+@pytest.mark.parametrize("stage", ["shirt", "loop"])
 def test_a_tiny_joint_change_about_another_axis_moves_no_crest(gl_context, tmp_path, stage,
                                                                axis):
     """One axis is one draw of where rounding lands. Before 2026-12-04 (relax: a new wave
@@ -63,6 +62,11 @@ def test_a_tiny_joint_change_about_another_axis_moves_no_crest(gl_context, tmp_p
     path = str(stability.SHIRT) if stage == "shirt" else stability.painted_loop(str(tmp_path))
     shares = stability.perturbation(path, str(tmp_path), degrees=(0.01,), ctx=gl_context,
                                      axis=axis)[0.01]
+    if (stage, axis) in OVER_THE_BAR_ON_LLVMPIPE and \
+            "llvmpipe" in gl_context.info.get("GL_RENDERER", ""):
+        assert max(shares.values()) > 0.02, ("now under the bar: take it out of "
+                                             "OVER_THE_BAR_ON_LLVMPIPE", shares)
+        pytest.xfail(f"over the bar (2%) on llvmpipe, as docs/method.md says: {shares}")
     assert all(shares[f] <= 0.02 for f in stability.FRAMES), shares
 
 
