@@ -35,23 +35,17 @@ def aligned(k, src, dst) -> np.ndarray:
     return _smoothstep(0.0, RELAX_ALIGNED, cos)
 
 
-def pulls(points, k, amplitude, src, dst) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def pulls(points, k, amplitude, src, dst, floor: float = 0.0
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per ring edge: the sign that pairs j's wave with i's, the drift kbar_ij . (x_j -
-    x_i), and j's pull on i, a_j :func:`aligned` (relax.glsl's SEED)."""
+    x_i), and j's pull on i, (a_j + ``floor``) :func:`aligned` (relax.glsl's SEED: its
+    steps read the pulls with WEIGHT_FLOOR, its seed and fit without)."""
     points = np.asarray(points, np.float64)
     k = np.asarray(k, np.float64)
     sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
     drift = np.sum(0.5 * (k[src] + sign[:, None] * k[dst]) * (points[dst] - points[src]), 1)
-    pull = np.asarray(amplitude, np.float64)[dst] * aligned(k, src, dst)
+    pull = (np.asarray(amplitude, np.float64)[dst] + floor) * aligned(k, src, dst)
     return sign, drift, pull
-
-
-def _pulls_with_floor(points, k, amplitude, src, dst):
-    """:func:`pulls` with the floor: (a_j + WEIGHT_FLOOR) :func:`aligned` (relax.glsl's
-    edge weights, which the steps read)."""
-    sign, drift, _ = pulls(points, k, amplitude, src, dst)
-    floor = (np.asarray(amplitude, np.float64)[dst] + WEIGHT_FLOOR) * aligned(k, src, dst)
-    return sign, drift, floor
 
 
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
@@ -64,7 +58,7 @@ def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations:
     weight = a + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
     src, dst = ring_edges(topology)
-    sign, drift, pull = _pulls_with_floor(points, k, a, src, dst)
+    sign, drift, pull = pulls(points, k, a, src, dst, WEIGHT_FLOOR)
     for _ in range(iterations):
         predicted = phi[dst] * sign - drift
         re = weight * np.cos(phi)
@@ -79,8 +73,9 @@ def fit(points, normals, wave_vector, amplitude, phase, topology: Topology,
         coarsening=None):
     """The wave the phases draw (relax.glsl's FIT): per vertex with a wave, k + c, c the
     least-squares fit in the tangent plane of ``normals`` of c . (x_j - x_i) to each ring
-    edge's residual wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)) (weights a_j, neighbours
-    with a wave only, weighted down as k_i advances from pi / 2 to pi along the edge),
+    edge's residual wrap(phi~_j - phi_i - kbar_ij . (x_j - x_i)) (weights a_j times
+    :func:`aligned`, neighbours with a wave only, weighted down as k_i advances from pi / 2
+    to pi along the edge),
     and the amplitude times |k| / |k + t c|: the same slope. t fades the fit out where the
     ring's directions are too few (FIT_CONDITION) or |k| would grow by more than
     FIT_RANGE, and in from |k + c| = |k| to FIT_ONSET |k|: only shorter waves are fitted
