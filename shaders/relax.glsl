@@ -91,8 +91,8 @@ vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y 
 vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(i, s)); }
 
 // How much a neighbour's wave pulls a vertex's phase beside its amplitude (contract.py's
-// RELAX_ALIGNED): fully within 60 degrees, not at all across (no phase to agree on, and
-// a coin toss for the sign test). An edge that aliases the wave still pulls: the phases
+// RELAX_ALIGNED): fully within 78 degrees, not at all at right angles (no phase to agree
+// on, and a coin toss for the sign test). An edge that aliases the wave still pulls: the phases
 // agree modulo 2 pi, which is what the draw's blend of the corner waves needs (fading
 // the pull beyond pi to 2 pi doubled the shirt's misfit, 0.555 to 1.22, at its cuff,
 // whose painted waves advance 7-12 rad an edge; docs/method.md, "Sensitivity")

@@ -540,7 +540,7 @@ def test_a_ring_neighbour_pulls_only_with_a_wave_along_the_vertex_s():
     amplitude = np.full(n, 0.01)
     phase = w * points[:, 0]  # the plane wave the ring asks for
     src, dst = ring_edges(topology)
-    assert RELAX_ALIGNED == 0.5 and MOBILITY_RING == 0.25
+    assert RELAX_ALIGNED == 0.2 and MOBILITY_RING == 0.25
     for turn, pulled in ((90.0, False), (45.0, True)):
         turned = k.copy()
         turned[centre] = w * np.array([np.cos(np.radians(turn)), np.sin(np.radians(turn)), 0])

@@ -109,12 +109,15 @@ SLOPE_STEP = 0.3125
 WEIGHT_FLOOR = 1e-7
 #: A ring neighbour's wave pulls a vertex's phase (relax's steps, its seed, its fit) by
 #: its amplitude (plus WEIGHT_FLOOR) times smoothstep(0, RELAX_ALIGNED, |cos|) of the
-#: angle between their wave vectors: fully within 60 degrees, not at all across. Crests
-#: that cross at right angles have no phase to agree on, and the sign test that pairs (k,
-#: phi) with (-k, -phi) is a coin toss there: on the shirt a 0.01 degree joint change
-#: flipped it for a new wave beside a strong one at 88 degrees, and the relaxation settled
-#: 2-3 rad apart (docs/method.md, "Sensitivity").
-RELAX_ALIGNED = 0.5
+#: angle between their wave vectors: fully within 78 degrees, not at all at right angles.
+#: Crests that cross at right angles have no phase to agree on, and the sign test that
+#: pairs (k, phi) with (-k, -phi) is a coin toss there: on the shirt a 0.01 degree joint
+#: change flipped it for a new wave beside a strong one at 88 degrees, and the relaxation
+#: settled 2-3 rad apart (docs/method.md, "Sensitivity"). At 0.5 (fully within 60
+#: degrees) the shirt's displaced geometry drew 1.138 of its rest area where uniaxially
+#: compressed (bar 1.05; 1.036 at 0.2): its blend, divided by the corners' coherence,
+#: grew where they no longer agreed.
+RELAX_ALIGNED = 0.2
 #: The fit of the wave to the relaxed phases (relax.glsl's FIT, reference/relax.fit)
 #: needs two independent tangent directions in a vertex's wrinkled ring: the tangent
 #: normal equations' determinant over their trace squared (at most 1/4, a ring as wide as
