@@ -15,8 +15,9 @@
 //   SEED      per vertex: the start phasors (previous frame's phases, sign-aligned, where
 //             the wave was there last frame; for a new wave, the phase its ring's kept
 //             waves ask for, or with none its previous phase; where there is no wave, and
-//             on a shot's first frame, the material-anchored phases) and, per outgoing edge and system, the rotation e^{-i d_ij}, the
-//             flip, the neighbour's weight and system.
+//             on a shot's first frame, the material-anchored phases) and, per outgoing
+//             edge and system, the rotation e^{-i d_ij}, the flip, the neighbour's pull
+//             and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi,
 //             moved from the seed by only the vertex's mobility m of the way (below).
 //   FIT       per vertex and system, after the last step: the wave the relaxed phases
@@ -80,7 +81,8 @@ layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
 // z = flip * (a_j + WEIGHT_FLOOR) aligned(k_i, k_j) (the partner's pull, negative where
 // its wave is flipped; 0 only at right angles), w = j as a float (exact below 2^24
-// points), -(j + 1) when the partner is j's system 2. One fetch per edge: the step needs no topology lookup for j.
+// points), -(j + 1) when the partner is j's system 2. One fetch per edge: the step needs
+// no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
 // WEIGHT_FLOOR (contract.py): a tiny floor on the weights keeps arg() defined where no
@@ -92,10 +94,11 @@ vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(
 
 // How much a neighbour's wave pulls a vertex's phase beside its amplitude (contract.py's
 // RELAX_ALIGNED): fully within 78 degrees, not at all at right angles (no phase to agree
-// on, and a coin toss for the sign test). An edge that aliases the wave still pulls: the phases
-// agree modulo 2 pi, which is what the draw's blend of the corner waves needs (fading
-// the pull beyond pi to 2 pi doubled the shirt's misfit, 0.555 to 1.22, at its cuff,
-// whose painted waves advance 7-12 rad an edge; docs/method.md, "Sensitivity")
+// on, and a coin toss for the sign test). An edge that aliases the wave still pulls: the
+// phases agree modulo 2 pi, which is what the draw's blend of the corner waves needs
+// (fading the pull beyond pi to 2 pi doubled the shirt's misfit, 0.555 to 1.22, at its
+// cuff, whose painted waves advance 7-12 rad an edge; docs/method.md, "Three couplings
+// that rounding could throw")
 float aligned(vec3 k_i, vec3 k_j) {
     return smoothstep(0.0, RELAX_ALIGNED,
                       abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
