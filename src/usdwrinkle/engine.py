@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .images.aovs import ImageLayout
+from .method.contract import WrinkleFields
 from .method.history import WaveHistory, cache_capacity, on_grid, reads_index
 from .process.errors import UsdWrinkleError
 from .process.limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
@@ -430,8 +431,9 @@ class WrinkleEngine:
                 if mesh.resources is not None and mesh.frame is not None and
                 mesh.frame.visible and mesh.resources.num_triangles]
 
-    def read_fields(self, path: str) -> dict:
-        """Per-vertex fields of ``path`` as computed for the last frame (numpy)."""
+    def read_fields(self, path: str) -> WrinkleFields:
+        """Per-vertex fields of ``path`` as computed for the last frame (numpy arrays;
+        ``.arrays()`` gives them by name)."""
         return self.mesh_resources(path).read_fields()
 
     def read_shading_normals(self, path: str):
