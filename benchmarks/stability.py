@@ -140,10 +140,11 @@ def moved_share(base: dict, other: dict) -> dict:
 
 
 def perturbation(path: str, folder: str, all_meshes: bool = False, degrees=(0.01, 0.1),
-                 ctx=None, axis: str = "z") -> dict:
+                 ctx=None, axis: str = "z", base: dict | None = None) -> dict:
     """degrees -> frame -> moved share, against the unperturbed stage (joints turned
-    about ``axis``)."""
-    base = heights(path, all_meshes, ctx=ctx)
+    about ``axis``); ``base``: the unperturbed stage's heights, where already rendered."""
+    if base is None:
+        base = heights(path, all_meshes, ctx=ctx)
     # named by the stage too: one folder serves several stages, and a layer of the same
     # name may still be open in USD's registry
     stem = Path(path).stem
@@ -155,11 +156,12 @@ def perturbation(path: str, folder: str, all_meshes: bool = False, degrees=(0.01
 def around(path: str, folder: str, all_meshes: bool = False, ctx=None) -> dict:
     """The joint changes the measure reports: "0.01 degrees" and "0.1 degrees" about z,
     and "0.01 degrees about A" for each of OTHER_AXES -> frame -> moved share."""
-    out = {f"{deg:g} degrees": shares
-           for deg, shares in perturbation(path, folder, all_meshes, ctx=ctx).items()}
+    base = heights(path, all_meshes, ctx=ctx)  # rendered once for every change
+    out = {f"{deg:g} degrees": shares for deg, shares in
+           perturbation(path, folder, all_meshes, ctx=ctx, base=base).items()}
     for axis in OTHER_AXES:
         out[f"0.01 degrees about {axis}"] = perturbation(path, folder, all_meshes, (0.01,),
-                                                         ctx, axis)[0.01]
+                                                         ctx, axis, base)[0.01]
     return out
 
 

@@ -35,15 +35,22 @@ def aligned(k, src, dst) -> np.ndarray:
     return _smoothstep(0.0, RELAX_ALIGNED, cos)
 
 
-def pulls(points, k, amplitude, src, dst, floor: float = 0.0
-          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per ring edge: the sign that pairs j's wave with i's, the drift kbar_ij . (x_j -
-    x_i), and j's pull on i, (a_j + ``floor``) :func:`aligned` (relax.glsl's SEED: its
-    steps read the pulls with WEIGHT_FLOOR, its seed and fit without)."""
+def pairing(points, k, src, dst) -> tuple[np.ndarray, np.ndarray]:
+    """Per edge (src, dst): the sign that pairs j's wave with i's ((k, phi) and (-k,
+    -phi) are one wave) and the drift kbar_ij . (x_j - x_i)."""
     points = np.asarray(points, np.float64)
     k = np.asarray(k, np.float64)
     sign = np.where(np.sum(k[src] * k[dst], 1) < 0, -1.0, 1.0)
     drift = np.sum(0.5 * (k[src] + sign[:, None] * k[dst]) * (points[dst] - points[src]), 1)
+    return sign, drift
+
+
+def pulls(points, k, amplitude, src, dst, floor: float = 0.0
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per ring edge: :func:`pairing`'s sign and drift, and j's pull on i, (a_j +
+    ``floor``) :func:`aligned` (relax.glsl's SEED: its steps read the pulls with
+    WEIGHT_FLOOR, its seed and fit without)."""
+    sign, drift = pairing(points, k, src, dst)
     pull = (np.asarray(amplitude, np.float64)[dst] + floor) * aligned(k, src, dst)
     return sign, drift, pull
 
@@ -148,9 +155,8 @@ def phase_misfit(points, wave_vector, phase, topology: Topology, mask=None) -> f
         i, j = i[keep], j[keep]
     if not len(i):
         return 0.0
-    sign = np.where(np.sum(k[i] * k[j], 1) < 0, -1.0, 1.0)
-    k_bar = 0.5 * (k[i] + sign[:, None] * k[j])
-    residual = wrap(sign * phi[j] - phi[i] - np.sum(k_bar * (points[j] - points[i]), 1))
+    sign, drift = pairing(points, k, i, j)
+    residual = wrap(sign * phi[j] - phi[i] - drift)
     return float(np.sqrt(np.mean(residual ** 2)))
 
 
