@@ -1,6 +1,6 @@
 """Stable crests (issue 46): how far the crest pattern moves under a tiny change of input.
 
-    python -m benchmarks.stability [--write docs/method.md]
+    python -m benchmarks.stability [--write docs/method.md | --draws N]
 
 Two measurements, on the shirt and on CesiumMan (``--all-meshes``, its metres authored in a
 wrapper layer):
@@ -25,6 +25,12 @@ wrapper layer):
   whichever is farther.
 
 ``--write`` replaces the block between the stability markers of the given file.
+
+``--draws N`` measures instead the distribution over N axes drawn at random (uniform on the
+sphere, numpy's default_rng(DRAWS_SEED)), 0.01 degrees each, for the shirt and the painted
+loop: per draw the worst frame's moved share, and how many draws are over the bar. One
+axis is one draw of where rounding lands; a rule judged on four axes can pass by luck
+(docs/method.md, "Three couplings"). Two processes, about 30 s for 16 draws on llvmpipe.
 """
 from __future__ import annotations
 
@@ -86,18 +92,30 @@ AXES = {"z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0), "x": (1.0, 0.0, 0.0),
         "y": (0.0, 1.0, 0.0)}
 #: the axes measured at 0.01 degrees beside z
 OTHER_AXES = ("-z", "x", "y")
+#: the seed of --draws' random axes
+DRAWS_SEED = 7
+#: the bar of a 0.01 degree change (tests/test_stability.py)
+BAR = 0.02
 
 
-def perturbed(path: str, degrees: float, out: str, axis: str = "z") -> str:
+def random_axes(count: int, seed: int = DRAWS_SEED) -> list[tuple[float, float, float]]:
+    """``count`` unit axes drawn uniformly on the sphere (normalised normal draws)."""
+    draws = np.random.default_rng(seed).normal(size=(count, 3))
+    return [tuple(float(c) for c in v / np.linalg.norm(v)) for v in draws]
+
+
+def perturbed(path: str, degrees: float, out: str, axis="z") -> str:
     """A layer over ``path`` whose SkelAnimations' joint rotations are each multiplied by
-    a rotation of ``degrees`` about ``axis`` (AXES), at every time sample."""
+    a rotation of ``degrees`` about ``axis`` (a name in AXES, or a unit vector), at every
+    time sample."""
     from pxr import Gf, Sdf, Usd, Vt
 
     source = Usd.Stage.Open(path)
     stage = Usd.Stage.CreateNew(out)
     stage.GetRootLayer().subLayerPaths.append(path)
     _copy_stage_info(source, stage)
-    turn = Gf.Quatf(Gf.Rotation(Gf.Vec3d(*AXES[axis]), degrees).GetQuat())
+    vector = AXES[axis] if isinstance(axis, str) else axis
+    turn = Gf.Quatf(Gf.Rotation(Gf.Vec3d(*vector), degrees).GetQuat())
     for prim in source.Traverse():
         if prim.GetTypeName() != "SkelAnimation":
             continue
@@ -302,8 +320,50 @@ def table(result: dict) -> str:
     return "\n".join(lines)
 
 
+def _draws_of(job: tuple) -> tuple[str, list]:
+    """One process of ``draws``: (stage, [(index, axis)]) -> (stage, [(index, share)])."""
+    stage, axes = job
+    with tempfile.TemporaryDirectory() as folder:
+        path = str(SHIRT) if stage == "shirt" else painted_loop(folder)
+        base = heights(path)
+        return stage, [(index, max(moved_share(base, heights(perturbed(
+            path, 0.01, f"{folder}/draw{index}.usda", axis))).values()))
+            for index, axis in axes]
+
+
+def draws(count: int, processes: int = 2) -> dict:
+    """stage ("shirt", "loop") -> the worst frame's moved share under 0.01 degrees about
+    each of ``count`` random axes (random_axes), in their order."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    axes = list(enumerate(random_axes(count)))
+    jobs = [(stage, axes[part::processes]) for stage in ("shirt", "loop")
+            for part in range(processes)]
+    out: dict = {"shirt": {}, "loop": {}}
+    with ProcessPoolExecutor(processes) as pool:
+        for stage, shares in pool.map(_draws_of, jobs):
+            out[stage].update(shares)
+    return {stage: [shares[i] for i in range(count)] for stage, shares in out.items()}
+
+
+def draws_table(result: dict) -> str:
+    lines = [f"0.01 degrees about {len(next(iter(result.values())))} random axes "
+             f"(seed {DRAWS_SEED}): per draw, the worst frame's moved share; bar "
+             f"{100 * BAR:g}%.", "", "| stage | over the bar | median | largest | draws |",
+             "|---|---|---|---|---|"]
+    for stage, shares in result.items():
+        v = 100 * np.asarray(shares)
+        lines.append(f"| {stage} | {int((v > 100 * BAR).sum())} of {len(v)} | "
+                     f"{np.median(v):.2f}% | {v.max():.2f}% | "
+                     + ", ".join(f"{x:.2f}" for x in v) + " |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
+    if args[:1] == ["--draws"]:
+        print(draws_table(draws(int(args[1]))))
+        return 0
     text = table(measure())
     emit(args, "stability", text)
     return 0
