@@ -112,7 +112,7 @@ CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
 #: law a slack c leaves the wrinkled surface 1 - c of its rest area
 DEFAULT_SLACK = 0.05
 #: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
-#: the strain are followed (docs/method.md: crest damping)
+#: the strain are followed where the cloth folds (docs/method.md: crest damping)
 DEFAULT_CREST_DAMPING = 4.0
 #: wrinkle:held: waves reach full amplitude this many widths W away from a held point
 HELD_REACH = 2.0
