@@ -1,6 +1,6 @@
 """Stable crests (issue 46): how far the crest pattern moves under a tiny change of input.
 
-    python -m benchmarks.stability [--write docs/method.md | --draws N]
+    python -m benchmarks.stability [--write docs/method.md | --draws N [--degrees D]]
 
 Two measurements, on the shirt and on CesiumMan (``--all-meshes``, its metres authored in a
 wrapper layer):
@@ -27,10 +27,11 @@ wrapper layer):
 ``--write`` replaces the block between the stability markers of the given file.
 
 ``--draws N`` measures instead the distribution over N axes drawn at random (uniform on the
-sphere, numpy's default_rng(DRAWS_SEED)), 0.01 degrees each, for the shirt and the painted
-loop: per draw the worst frame's moved share, and how many draws are over the bar. One
-axis is one draw of where rounding lands; a rule judged on four axes can pass by luck
-(docs/method.md, "Three couplings"). Two processes, about 30 s for 16 draws on llvmpipe.
+sphere, numpy's default_rng(DRAWS_SEED)), 0.01 degrees each (``--degrees D``: D), for the
+shirt, the painted loop and CesiumMan: per draw the worst frame's moved share, and how
+many draws are over the bar. One axis is one draw of where rounding lands; a rule judged
+on four axes can pass by luck (docs/method.md, "Three couplings"). Two processes, about
+1.5 minutes for 64 draws on llvmpipe.
 """
 from __future__ import annotations
 
@@ -158,16 +159,18 @@ def moved_share(base: dict, other: dict) -> dict:
 
 
 def perturbation(path: str, folder: str, all_meshes: bool = False, degrees=(0.01, 0.1),
-                 ctx=None, axis: str = "z", base: dict | None = None) -> dict:
+                 ctx=None, axis="z", base: dict | None = None) -> dict:
     """degrees -> frame -> moved share, against the unperturbed stage (joints turned
-    about ``axis``); ``base``: the unperturbed stage's heights, where already rendered."""
+    about ``axis``: a name in AXES or a unit vector); ``base``: the unperturbed stage's
+    heights, where already rendered."""
     if base is None:
         base = heights(path, all_meshes, ctx=ctx)
     # named by the stage too: one folder serves several stages, and a layer of the same
     # name may still be open in USD's registry
     stem = Path(path).stem
+    label = axis if isinstance(axis, str) else "_".join(f"{c:+.5f}" for c in axis)
     return {deg: moved_share(base, heights(
-        perturbed(path, deg, f"{folder}/{stem}-p{deg}{axis}.usda", axis), all_meshes,
+        perturbed(path, deg, f"{folder}/{stem}-p{deg}{label}.usda", axis), all_meshes,
         ctx=ctx)) for deg in degrees}
 
 
@@ -320,40 +323,58 @@ def table(result: dict) -> str:
     return "\n".join(lines)
 
 
+#: the bars by the change's size (tests/test_stability.py)
+BARS = {0.01: BAR, 0.1: 0.05}
+#: the stages --draws measures
+DRAW_STAGES = ("shirt", "loop", "cesium_man")
+
+
 def _draws_of(job: tuple) -> tuple[str, list]:
-    """One process of ``draws``: (stage, [(index, axis)]) -> (stage, [(index, share)])."""
-    stage, axes = job
+    """One process of ``draws``: (stage, degrees, [(index, axis)]) -> (stage, [(index,
+    share)])."""
+    stage, degrees, axes = job
     with tempfile.TemporaryDirectory() as folder:
-        path = str(SHIRT) if stage == "shirt" else painted_loop(folder)
-        base = heights(path)
+        all_meshes = stage == "cesium_man"
+        if stage == "shirt":
+            path = str(SHIRT)
+        elif stage == "loop":
+            path = painted_loop(folder)
+        else:
+            path = with_units(str(corpus_dir() / "usd-wg" / "CesiumMan.usdz"),
+                              f"{folder}/cesium.usda")
+        base = heights(path, all_meshes)
         return stage, [(index, max(moved_share(base, heights(perturbed(
-            path, 0.01, f"{folder}/draw{index}.usda", axis))).values()))
+            path, degrees, f"{folder}/draw{index}.usda", axis), all_meshes)).values()))
             for index, axis in axes]
 
 
-def draws(count: int, processes: int = 2) -> dict:
-    """stage ("shirt", "loop") -> the worst frame's moved share under 0.01 degrees about
-    each of ``count`` random axes (random_axes), in their order."""
+def draws(count: int, degrees: float = 0.01, processes: int = 2,
+          stages=DRAW_STAGES) -> dict:
+    """stage -> the worst frame's moved share under ``degrees`` about each of ``count``
+    random axes (random_axes), in their order (CesiumMan where the corpus is there)."""
     from concurrent.futures import ProcessPoolExecutor
 
+    if not (corpus_dir() / "usd-wg" / "CesiumMan.usdz").exists():
+        stages = tuple(s for s in stages if s != "cesium_man")
     axes = list(enumerate(random_axes(count)))
-    jobs = [(stage, axes[part::processes]) for stage in ("shirt", "loop")
+    jobs = [(stage, degrees, axes[part::processes]) for stage in stages
             for part in range(processes)]
-    out: dict = {"shirt": {}, "loop": {}}
+    out: dict = {stage: {} for stage in stages}
     with ProcessPoolExecutor(processes) as pool:
         for stage, shares in pool.map(_draws_of, jobs):
             out[stage].update(shares)
     return {stage: [shares[i] for i in range(count)] for stage, shares in out.items()}
 
 
-def draws_table(result: dict) -> str:
-    lines = [f"0.01 degrees about {len(next(iter(result.values())))} random axes "
+def draws_table(result: dict, degrees: float = 0.01) -> str:
+    bar = BARS.get(degrees, BAR)
+    lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
              f"(seed {DRAWS_SEED}): per draw, the worst frame's moved share; bar "
-             f"{100 * BAR:g}%.", "", "| stage | over the bar | median | largest | draws |",
+             f"{100 * bar:g}%.", "", "| stage | over the bar | median | largest | draws |",
              "|---|---|---|---|---|"]
     for stage, shares in result.items():
         v = 100 * np.asarray(shares)
-        lines.append(f"| {stage} | {int((v > 100 * BAR).sum())} of {len(v)} | "
+        lines.append(f"| {stage} | {int((v > 100 * bar).sum())} of {len(v)} | "
                      f"{np.median(v):.2f}% | {v.max():.2f}% | "
                      + ", ".join(f"{x:.2f}" for x in v) + " |")
     return "\n".join(lines)
@@ -362,7 +383,8 @@ def draws_table(result: dict) -> str:
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if args[:1] == ["--draws"]:
-        print(draws_table(draws(int(args[1]))))
+        degrees = float(args[3]) if args[2:3] == ["--degrees"] else 0.01
+        print(draws_table(draws(int(args[1]), degrees), degrees))
         return 0
     text = table(measure())
     emit(args, "stability", text)

@@ -80,7 +80,7 @@ uniform int u_systems;
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
 // z = flip * (a_j + WEIGHT_FLOOR) aligned(k_i, k_j) (the partner's pull, negative where
-// its wave is flipped; 0 only at right angles), w = j as a float (exact below 2^24
+// its wave is flipped; 0 only at right angles; floor_aligned where i has no wave), w = j as a float (exact below 2^24
 // points), -(j + 1) when the partner is j's system 2. One fetch per edge: the step needs
 // no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
@@ -101,6 +101,15 @@ vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(
 // that rounding could throw")
 float aligned(vec3 k_i, vec3 k_j) {
     return smoothstep(0.0, RELAX_ALIGNED,
+                      abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
+}
+
+// ... and on a point without a wave (contract.py's FLOOR_ALIGNED): only along its own
+// direction, fully within 18 degrees, not at all beyond 46 (waves at 84-88 degrees
+// pulled the bare points beside the painted loop a million times harder than the floor,
+// and the first waves that grew in there inherited a drift that means nothing)
+float floor_aligned(vec3 k_i, vec3 k_j) {
+    return smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED,
                       abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
 }
 
@@ -229,7 +238,8 @@ void main() {
             float flip = dot(k_i, wave_j.xyz) < 0.0 ? -1.0 : 1.0;
             vec3 k_bar = 0.5 * (k_i + flip * wave_j.xyz);
             float drift = dot(k_bar, fetch(posed_points, j).xyz - x_i);
-            float align = aligned(k_i, wave_j.xyz);
+            float align = wave_i.w > 0.0 ? aligned(k_i, wave_j.xyz)
+                                         : floor_aligned(k_i, wave_j.xyz);
             float pull = wave_j.w * align;
             STORE(edges, EDGE(e, s), vec4(cos(drift), -sin(drift),
                                          flip * (wave_j.w + WEIGHT_FLOOR) * align,

@@ -565,3 +565,45 @@ def test_a_ring_neighbour_pulls_only_with_a_wave_along_the_vertex_s():
         without[neighbour] = 0.0
         a_now, a_before = (without, ones) if gone == "now" else (ones, without)
         assert mobility(points, turned, k, a_now, a_before, topology)[centre] == 0.0
+
+
+def test_a_point_without_a_wave_is_pulled_only_along_its_own_direction():
+    """A point without a wave has a phase only as the start of a wave that may grow in
+    there; a neighbour's wave pulls it by smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED,
+    |cos|) (fully within 18 degrees, not at all beyond 46), where a point with a wave is
+    pulled fully within 78. Beside the painted loop, waves at 84-88 degrees pulled such
+    points a million times harder than the floor, and the elbow's first waves inherited a
+    drift that means nothing at right angles (docs/method.md, "Three couplings"). On a flat
+    grid of waves along x, a bare centre turned 60 degrees keeps its phase, one turned 10
+    degrees is pulled to its neighbours'; with a wave, the 60-degree one is pulled too."""
+    from usdwrinkle.authoring.builders import grid_sheet
+    from usdwrinkle.method.contract import FLOOR_ALIGNED, FLOOR_ALIGNED_FROM
+    from usdwrinkle.reference.relax import aligned, relax, ring_edges
+    from usdwrinkle.scene.topology import build_topology
+
+    assert (FLOOR_ALIGNED_FROM, FLOOR_ALIGNED) == (0.7, 0.95)
+    points, counts, indices = grid_sheet(9, 9, 2.0)
+    points = np.asarray(points, np.float64)
+    topology = build_topology(counts, indices, points)
+    n = len(points)
+    centre = int(np.argmin(np.linalg.norm(points, axis=1)))
+    w = 40.0
+    k = np.tile([w, 0.0, 0.0], (n, 1))
+    phase = w * points[:, 0]
+    src, dst = ring_edges(topology)
+    for turn, own, pulled in ((60.0, 0.0, False), (10.0, 0.0, True), (60.0, 0.01, True)):
+        turned = k.copy()
+        turned[centre] = w * np.array([np.cos(np.radians(turn)), np.sin(np.radians(turn)), 0])
+        amplitude = np.full(n, 0.01)
+        amplitude[centre] = own
+        bare = ~(amplitude > 0)
+        cos = abs(np.cos(np.radians(turn)))
+        t = np.clip((cos - FLOOR_ALIGNED_FROM) / (FLOOR_ALIGNED - FLOOR_ALIGNED_FROM), 0, 1)
+        expected = t * t * (3 - 2 * t) if own == 0 else 1.0
+        np.testing.assert_allclose(aligned(turned, src, dst, bare)[src == centre], expected,
+                                   atol=1e-12)
+        start = phase.copy()
+        start[centre] += 2.0
+        out = relax(points, turned, amplitude, start, topology, 20)
+        off = abs(wrap(out[centre] - start[centre]))
+        assert (off > 1.0) if pulled else (off < 1e-9), (turn, own, off)

@@ -39,14 +39,6 @@ def test_a_tiny_joint_change_moves_no_crest_of_a_loop_painted_around_the_arm(gl_
     assert all(shares[0.1][f] <= 0.05 for f in stability.FRAMES), shares
 
 
-#: (stage, axis) over the bar on llvmpipe, as measured: the painted loop turned about x,
-#: 2.4% at frame 16 (0.8% before 2026-12-04), where a new wave with no kept wave beside
-#: it keeps its floor-relaxed phase (docs/method.md, "Three couplings"); starting it from
-#: its anchor held it (0.0%) but took the referee's held 25 cm sleeve past its
-#: crest-motion bar (1.78x, bar 1.5x). A known failure of the bar, kept visible: the test
-#: asserts it still fails there (so that a fix shows) and reports it as an expected
-#: failure; on any other GL it asserts the bar.
-OVER_THE_BAR_ON_LLVMPIPE = {("loop", "x")}
 
 
 @pytest.mark.parametrize("axis", stability.OTHER_AXES)
@@ -58,16 +50,51 @@ def test_a_tiny_joint_change_about_another_axis_moves_no_crest(gl_context, tmp_p
     waves, a neighbour at right angles pulled with a coin toss's sign, and a neighbour
     without a wave turned the mobility; docs/method.md, "Three couplings"), 0.01 degrees
     about x moved 7.4-18.8% of the shirt's wrinkled pixels at frames 12-24 on llvmpipe
-    (about z 0.2%), and an H200 moved 2.2% of them about z."""
+    (about z 0.2%), and an H200 moved 2.2% of them about z. Until the crest damping's
+    gate and the bare points' alignment (the same evening), the painted loop about x moved
+    2.4% at frame 16 on llvmpipe."""
     path = str(stability.SHIRT) if stage == "shirt" else stability.painted_loop(str(tmp_path))
     shares = stability.perturbation(path, str(tmp_path), degrees=(0.01,), ctx=gl_context,
                                      axis=axis)[0.01]
-    if (stage, axis) in OVER_THE_BAR_ON_LLVMPIPE and \
-            "llvmpipe" in gl_context.info.get("GL_RENDERER", ""):
-        assert max(shares.values()) > 0.02, ("now under the bar: take it out of "
-                                             "OVER_THE_BAR_ON_LLVMPIPE", shares)
-        pytest.xfail(f"over the bar (2%) on llvmpipe, as docs/method.md says: {shares}")
     assert all(shares[f] <= 0.02 for f in stability.FRAMES), shares
+
+
+#: the random axis (benchmarks.stability.random_axes(64)) about which 0.01 degrees moved
+#: the most of the shirt's crests, 18.2% at frame 24, before crush's damping was gated by
+#: the slack and a point without a wave was pulled only along its own direction
+#: (2026-12-04; docs/method.md, "Three couplings"); over 64 axes the worst is 0.3% since
+WORST_SHIRT_AXIS = 36
+
+
+def test_a_tiny_joint_change_about_the_worst_random_axis_moves_no_crest(gl_context,
+                                                                       tmp_path):
+    """The shirt's elbow grew its first waves at frame 4 along directions 2 degrees apart
+    between the two runs: the crest damping had carried the direction of the frames
+    before, when the strain there compressed nothing and had no direction of its own.
+    Their phases then relaxed 0.3-0.6 rad apart, and the region's crests with them."""
+    axis = stability.random_axes(64)[WORST_SHIRT_AXIS]
+    shares = stability.perturbation(str(stability.SHIRT), str(tmp_path), degrees=(0.01,),
+                                     ctx=gl_context, axis=axis)[0.01]
+    assert all(shares[f] <= 0.02 for f in stability.FRAMES), shares
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stage", ["shirt", "loop"])
+def test_a_small_joint_change_about_random_axes_moves_few_crests(gl_context, tmp_path,
+                                                                 stage):
+    """0.1 degrees about each of 8 random axes (benchmarks.stability.random_axes), bar 5%:
+    the worst case over draws, not one draw. Before the damping's gate and the bare points'
+    alignment (2026-12-04), 12 of 32 such axes moved more than 5% of the shirt's crests
+    (up to 18.4%) and 5 of 32 the loop's (up to 9.2%); among these 8, the shirt's moved
+    6.3% and 18.4%, the loop's 5.5% and 7.0%."""
+    path = str(stability.SHIRT) if stage == "shirt" else stability.painted_loop(str(tmp_path))
+    base = stability.heights(path, ctx=gl_context)
+    worst = {}
+    for index, axis in enumerate(stability.random_axes(8)):
+        shares = stability.perturbation(path, str(tmp_path), degrees=(0.1,), ctx=gl_context,
+                                         axis=axis, base=base)[0.1]
+        worst[index] = max(shares.values())
+    assert max(worst.values()) <= 0.05, worst
 
 
 def test_a_tiny_joint_change_moves_no_crest_on_cesium_man(gl_context, corpus, tmp_path):
@@ -141,7 +168,9 @@ def test_waves_that_grow_in_start_as_the_reference_does(gl_context):
         beside = np.zeros(len(grown), bool)
         beside[src[(now["amplitude"] > 0)[dst] & (before["amplitude"] > 0)[dst]]] = True
         assert (grown & beside).sum() == 0 if frame == 2 else (grown & beside).sum() > 20
-        np.testing.assert_allclose(wrap(now["phase"] - phase), 0.0, atol=1e-4)
+        # float32 against float64: 1.2e-4 at one of 642 points since a point without a
+        # wave is pulled only along its own direction (2026-12-04)
+        np.testing.assert_allclose(wrap(now["phase"] - phase), 0.0, atol=2e-4)
         # the seed without the ring (history wherever there is a wave) is another frame
         # 3: the test can tell them apart
         old = seed(crushed["wave_vector"], before["wave_vector"], before["phase"],

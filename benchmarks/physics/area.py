@@ -32,7 +32,9 @@ def _near(triangles: np.ndarray, chosen: np.ndarray) -> np.ndarray:
     return np.isin(triangles, points).any(axis=1)
 
 
-def measure_stage(name: str, ctx, scratch: Path) -> list[dict]:
+def measure_stage(name: str, ctx, scratch: Path, path: Path | None = None) -> list[dict]:
+    """The area rows of sample stage ``name`` at its measured frame (``path``: a layer
+    over it to measure instead, such as benchmarks.stability.perturbed's)."""
     from pxr import Usd, UsdGeom
 
     from usdwrinkle import api
@@ -42,7 +44,7 @@ def measure_stage(name: str, ctx, scratch: Path) -> list[dict]:
     from usdwrinkle.method.contract import SLACK_RAMP
     from usdwrinkle.reference.crush import crush
 
-    stage_path = SAMPLES / f"{name}.usda"
+    stage_path = path or SAMPLES / f"{name}.usda"
     frame = 1 if name == "flag" else 24
     layer = api.bake(stage_path, scratch / f"{name}_geo.usdc", frames=[frame], geometry=True)
     baked = Usd.Stage.Open(layer)

@@ -9,6 +9,8 @@ from ..method.contract import (
     FIT_CONDITION,
     FIT_ONSET,
     FIT_RANGE,
+    FLOOR_ALIGNED,
+    FLOOR_ALIGNED_FROM,
     MOBILITY_DEADBAND,
     MOBILITY_PHASE,
     MOBILITY_RING,
@@ -25,14 +27,19 @@ def ring_edges(topology: Topology) -> tuple[np.ndarray, np.ndarray]:
     return np.repeat(np.arange(len(ring_offsets) - 1), np.diff(ring_offsets)), dst
 
 
-def aligned(k, src, dst) -> np.ndarray:
+def aligned(k, src, dst, bare=None) -> np.ndarray:
     """Per ring edge, how much j's wave pulls i's phase beside its amplitude:
     smoothstep(0, RELAX_ALIGNED, |cos|) of the angle between their wave vectors
-    (relax.glsl's aligned)."""
+    (relax.glsl's aligned); where ``bare`` (per point: no wave there) holds for i,
+    smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED, |cos|) (relax.glsl's floor_aligned)."""
     k = np.asarray(k, np.float64)
     length = np.linalg.norm(k, axis=1)
     cos = np.abs(np.sum(k[src] * k[dst], 1)) / np.maximum(length[src] * length[dst], 1e-30)
-    return _smoothstep(0.0, RELAX_ALIGNED, cos)
+    out = _smoothstep(0.0, RELAX_ALIGNED, cos)
+    if bare is None:
+        return out
+    return np.where(np.asarray(bare)[src], _smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED, cos),
+                    out)
 
 
 def pairing(points, k, src, dst) -> tuple[np.ndarray, np.ndarray]:
@@ -48,10 +55,11 @@ def pairing(points, k, src, dst) -> tuple[np.ndarray, np.ndarray]:
 def pulls(points, k, amplitude, src, dst, floor: float = 0.0
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per ring edge: :func:`pairing`'s sign and drift, and j's pull on i, (a_j +
-    ``floor``) :func:`aligned` (relax.glsl's SEED: its steps read the pulls with
-    WEIGHT_FLOOR, its seed and fit without)."""
+    ``floor``) :func:`aligned`, along i's own direction only where i has no wave (relax.glsl's
+    SEED: its steps read the pulls with WEIGHT_FLOOR, its seed and fit without)."""
     sign, drift = pairing(points, k, src, dst)
-    pull = (np.asarray(amplitude, np.float64)[dst] + floor) * aligned(k, src, dst)
+    a = np.asarray(amplitude, np.float64)
+    pull = (a[dst] + floor) * aligned(k, src, dst, ~(a > 0))
     return sign, drift, pull
 
 
