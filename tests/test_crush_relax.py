@@ -516,6 +516,23 @@ def test_mobility_counts_the_turn_less_than_the_wave_number():
     assert mobility(points, grown, before, ones, gone, topology)[inner[0]] == 1.0
 
 
+def plane_wave_grid():
+    """A flat 9 x 9 grid with a plane wave along x (40 rad per unit) and the phase it asks
+    for: (points, topology, the centre vertex, w, k, phase, ring edges' src, dst)."""
+    from usdwrinkle.authoring.builders import grid_sheet
+    from usdwrinkle.reference.relax import ring_edges
+    from usdwrinkle.scene.topology import build_topology
+
+    points, counts, indices = grid_sheet(9, 9, 2.0)
+    points = np.asarray(points, np.float64)
+    topology = build_topology(counts, indices, points)
+    centre = int(np.argmin(np.linalg.norm(points, axis=1)))
+    w = 40.0
+    k = np.tile([w, 0.0, 0.0], (len(points), 1))
+    src, dst = ring_edges(topology)
+    return points, topology, centre, w, k, w * points[:, 0], src, dst
+
+
 def test_a_ring_neighbour_pulls_only_with_a_wave_along_the_vertex_s():
     """relax (and its seed and fit) weigh a neighbour by its amplitude times
     smoothstep(0, RELAX_ALIGNED, |cos|) of the angle between the wave vectors; the
@@ -525,21 +542,12 @@ def test_a_ring_neighbour_pulls_only_with_a_wave_along_the_vertex_s():
     a vertex whose wave runs along y keeps its phase, one at 45 degrees is pulled to its
     neighbours'; a neighbour with no wave whose direction turns moves no mobility, one
     with a wave does."""
-    from usdwrinkle.authoring.builders import grid_sheet
     from usdwrinkle.method.contract import MOBILITY_RING, RELAX_ALIGNED, WEIGHT_FLOOR
-    from usdwrinkle.reference.relax import aligned, mobility, relax, ring_edges
-    from usdwrinkle.scene.topology import build_topology
+    from usdwrinkle.reference.relax import aligned, mobility, relax
 
-    points, counts, indices = grid_sheet(9, 9, 2.0)
-    points = np.asarray(points, np.float64)
-    topology = build_topology(counts, indices, points)
+    points, topology, centre, w, k, phase, src, dst = plane_wave_grid()
     n = len(points)
-    centre = int(np.argmin(np.linalg.norm(points, axis=1)))
-    w = 40.0
-    k = np.tile([w, 0.0, 0.0], (n, 1))
     amplitude = np.full(n, 0.01)
-    phase = w * points[:, 0]  # the plane wave the ring asks for
-    src, dst = ring_edges(topology)
     assert RELAX_ALIGNED == 0.2 and MOBILITY_RING == 0.25
     for turn, pulled in ((90.0, False), (45.0, True)):
         turned = k.copy()
@@ -576,21 +584,12 @@ def test_a_point_without_a_wave_is_pulled_only_along_its_own_direction():
     drift that means nothing at right angles (docs/method.md, "Three couplings"). On a flat
     grid of waves along x, a bare centre turned 60 degrees keeps its phase, one turned 10
     degrees is pulled to its neighbours'; with a wave, the 60-degree one is pulled too."""
-    from usdwrinkle.authoring.builders import grid_sheet
     from usdwrinkle.method.contract import FLOOR_ALIGNED, FLOOR_ALIGNED_FROM
-    from usdwrinkle.reference.relax import aligned, relax, ring_edges
-    from usdwrinkle.scene.topology import build_topology
+    from usdwrinkle.reference.relax import aligned, relax
 
     assert (FLOOR_ALIGNED_FROM, FLOOR_ALIGNED) == (0.7, 0.95)
-    points, counts, indices = grid_sheet(9, 9, 2.0)
-    points = np.asarray(points, np.float64)
-    topology = build_topology(counts, indices, points)
+    points, topology, centre, w, k, phase, src, dst = plane_wave_grid()
     n = len(points)
-    centre = int(np.argmin(np.linalg.norm(points, axis=1)))
-    w = 40.0
-    k = np.tile([w, 0.0, 0.0], (n, 1))
-    phase = w * points[:, 0]
-    src, dst = ring_edges(topology)
     for turn, own, pulled in ((60.0, 0.0, False), (10.0, 0.0, True), (60.0, 0.01, True)):
         turned = k.copy()
         turned[centre] = w * np.array([np.cos(np.radians(turn)), np.sin(np.radians(turn)), 0])
