@@ -95,8 +95,10 @@ AXES = {"z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0), "x": (1.0, 0.0, 0.0),
 OTHER_AXES = ("-z", "x", "y")
 #: the seed of --draws' random axes
 DRAWS_SEED = 7
-#: the bar of a 0.01 degree change (tests/test_stability.py)
-BAR = 0.02
+#: the bars by the change's size in degrees (tests/test_stability.py)
+BARS = {0.01: 0.02, 0.1: 0.05}
+#: the stages --draws measures
+DRAW_STAGES = ("shirt", "loop", "cesium_man")
 
 
 def random_axes(count: int, seed: int = DRAWS_SEED) -> list[tuple[float, float, float]]:
@@ -323,12 +325,6 @@ def table(result: dict) -> str:
     return "\n".join(lines)
 
 
-#: the bars by the change's size (tests/test_stability.py)
-BARS = {0.01: BAR, 0.1: 0.05}
-#: the stages --draws measures
-DRAW_STAGES = ("shirt", "loop", "cesium_man")
-
-
 def _draws_of(job: tuple) -> tuple[str, list]:
     """One process of ``draws``: (stage, degrees, [(index, axis)]) -> (stage, [(index,
     share)])."""
@@ -367,7 +363,7 @@ def draws(count: int, degrees: float = 0.01, processes: int = 2,
 
 
 def draws_table(result: dict, degrees: float = 0.01) -> str:
-    bar = BARS.get(degrees, BAR)
+    bar = BARS.get(degrees, BARS[0.01])
     lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
              f"(seed {DRAWS_SEED}): per draw, the worst frame's moved share; bar "
              f"{100 * bar:g}%.", "", "| stage | over the bar | median | largest | draws |",

@@ -80,9 +80,9 @@ uniform int u_systems;
 layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 // Per directed edge e (CSR order) and system s, texel EDGE(e, s): xy = e^{-i d_ij},
 // z = flip * (a_j + WEIGHT_FLOOR) aligned(k_i, k_j) (the partner's pull, negative where
-// its wave is flipped; 0 only at right angles; floor_aligned where i has no wave), w = j as a float (exact below 2^24
-// points), -(j + 1) when the partner is j's system 2. One fetch per edge: the step needs
-// no topology lookup for j.
+// its wave is flipped; 0 only at right angles; floor_aligned where i has no wave), w = j
+// as a float (exact below 2^24 points), -(j + 1) when the partner is j's system 2. One
+// fetch per edge: the step needs no topology lookup for j.
 // SEED writes them (image), the steps read them (texture).
 
 // WEIGHT_FLOOR (contract.py): a tiny floor on the weights keeps arg() defined where no

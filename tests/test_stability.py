@@ -39,8 +39,6 @@ def test_a_tiny_joint_change_moves_no_crest_of_a_loop_painted_around_the_arm(gl_
     assert all(shares[0.1][f] <= 0.05 for f in stability.FRAMES), shares
 
 
-
-
 @pytest.mark.parametrize("axis", stability.OTHER_AXES)
 @pytest.mark.parametrize("stage", ["shirt", "loop"])
 def test_a_tiny_joint_change_about_another_axis_moves_no_crest(gl_context, tmp_path, stage,
