@@ -14,6 +14,9 @@
 #   crests.npz, tables.npz   with EXTRAS=1 EXTRAS_S=240: benchmarks.crests_across_gl
 #                            --save, --save-tables (compare them here: --compare,
 #                            --compare-tables), and two files-written variants
+#   draws (in log.txt)       with DRAWS=N (before the bench): benchmarks.stability --draws
+#                            N at 0.01 and 0.1 degrees on this GL (docs/method.md, "Two
+#                            more, found over random axes"; about 40 s for 32 on 16 cores)
 set -u
 # the bench gets what is left of TOTAL seconds (the call's limit, less a margin)
 deadline=$((SECONDS + ${TOTAL:-570}))
@@ -43,6 +46,12 @@ timeout ${TESTS_S:-150} python3 -m pytest -q -p no:cacheprovider -W ignore -n 16
     --deselect tests/test_wheel.py::test_wheel_ships_its_data_and_runs \
     --deselect tests/test_layers.py::test_the_api_and_the_application_layer_are_typed \
     --deselect tests/test_omissions_said.py::test_a_refusal_with_stderr_closed_still_exits_2
+
+if [ "${DRAWS:-0}" -gt 0 ]; then
+  step "stability over $DRAWS random axes on this GL"
+  timeout 120 python3 -c "from benchmarks import stability as s
+for d in (0.01, 0.1): print(s.draws_table(s.draws($DRAWS, d, processes=16), d))"
+fi
 
 # the bench first, so that the extras below only get what time it leaves (EXTRAS=1)
 step "the bench"
