@@ -76,7 +76,6 @@ def test_a_tiny_joint_change_about_the_worst_random_axis_moves_no_crest(gl_conte
     assert all(shares[f] <= 0.02 for f in stability.FRAMES), shares
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("stage", ["shirt", "loop"])
 def test_a_small_joint_change_about_random_axes_moves_few_crests(gl_context, tmp_path,
                                                                  stage):
