@@ -1,6 +1,6 @@
 """Stable crests (issue 46): how far the crest pattern moves under a tiny change of input.
 
-    python -m benchmarks.stability [--write docs/method.md | --draws N [--degrees D]]
+    python -m benchmarks.stability [--write docs/method.md | --draws N [--degrees D] [--phases]]
 
 Two measurements, on the shirt and on CesiumMan (``--all-meshes``, its metres authored in a
 wrapper layer):
@@ -31,7 +31,10 @@ sphere, numpy's default_rng(DRAWS_SEED)), 0.01 degrees each (``--degrees D``: D)
 shirt, the painted loop and CesiumMan: per draw the worst frame's moved share, and how
 many draws are over the bar. One axis is one draw of where rounding lands; a rule judged
 on four axes can pass by luck (docs/method.md, "Three couplings"). Two processes, about
-1.5 minutes for 64 draws on llvmpipe.
+1.5 minutes for 64 draws on llvmpipe. ``--phases``: per draw instead, the most of the
+sleeve's waves whose phase moved by more than 0.5 rad (the shirt and the loop), which sees
+what the frames' band limit fades (the elbow's pinch; docs/method.md, "What the image
+does not see").
 """
 from __future__ import annotations
 
@@ -250,8 +253,6 @@ def painted_loop(folder: str, amount: float = LOOP_AMOUNT) -> str:
 def locality(folder: str, ctx=None) -> dict:
     """The shirt with q painted on its cuff: per frame, how many points' crests moved and
     the farthest of them from the cuff, in W (module docstring)."""
-    from usdwrinkle.reference.relax import wrap
-
     source, mesh, rest, q, axis = _sleeve()
     width = float(mesh.GetAttribute("primvars:wrinkle:width").Get()[0])
     cuff = np.flatnonzero(rest[:, axis] > rest[:, axis].max() - 0.6 * width)
@@ -261,15 +262,23 @@ def locality(folder: str, ctx=None) -> dict:
     hops = _hops(mesh, rest, cuff)
     rows = {}
     for frame in FRAMES:
-        a, b = base[frame], other[frame]
-        largest = max(float(a["amplitude"].max()), float(b["amplitude"].max()), 1e-12)
-        both = (a["amplitude"] > 0.05 * largest) & (b["amplitude"] > 0.05 * largest)
-        sign = np.where(np.sum(a["wave_vector"] * b["wave_vector"], axis=1) < 0, -1.0, 1.0)
-        moved = both & (np.abs(wrap(a["phase"] - sign * b["phase"])) > 0.5)
+        moved = moved_waves(base[frame], other[frame])
         rows[frame] = (int(moved.sum()),
                        float(distance[moved].max() / width) if moved.any() else 0.0,
                        int(hops[moved].max()) if moved.any() else 0)
     return rows
+
+
+def moved_waves(a: dict, b: dict, radians: float = 0.5) -> np.ndarray:
+    """Per point of two runs' fields (read_fields(...).arrays()), whether it has a wave
+    above 5% of the largest amplitude in both and its phase (sign-aligned) moved by more
+    than ``radians``."""
+    from usdwrinkle.reference.relax import wrap
+
+    largest = max(float(a["amplitude"].max()), float(b["amplitude"].max()), 1e-12)
+    both = (a["amplitude"] > 0.05 * largest) & (b["amplitude"] > 0.05 * largest)
+    sign = np.where(np.sum(a["wave_vector"] * b["wave_vector"], axis=1) < 0, -1.0, 1.0)
+    return both & (np.abs(wrap(a["phase"] - sign * b["phase"])) > radians)
 
 
 def _hops(mesh, rest: np.ndarray, start: np.ndarray) -> np.ndarray:
@@ -326,9 +335,10 @@ def table(result: dict) -> str:
 
 
 def _draws_of(job: tuple) -> tuple[str, list]:
-    """One process of ``draws``: (stage, degrees, [(index, axis)]) -> (stage, [(index,
-    share)])."""
-    stage, degrees, axes = job
+    """One process of ``draws``: (stage, degrees, [(index, axis)], phases) -> (stage,
+    [(index, share)]); with ``phases`` the share is the most waves moved by more than 0.5
+    rad at any of FRAMES (moved_waves), the sleeve's, instead of the pixels'."""
+    stage, degrees, axes, phases = job
     with tempfile.TemporaryDirectory() as folder:
         all_meshes = stage == "cesium_man"
         if stage == "shirt":
@@ -338,6 +348,14 @@ def _draws_of(job: tuple) -> tuple[str, list]:
         else:
             path = with_units(str(corpus_dir() / "usd-wg" / "CesiumMan.usdz"),
                               f"{folder}/cesium.usda")
+        if phases:
+            base, counts = _phases(path, FRAMES), []
+            for index, axis in axes:
+                other = _phases(perturbed(path, degrees, f"{folder}/draw{index}.usda", axis),
+                                FRAMES)
+                counts.append((index, max(int(moved_waves(base[f], other[f]).sum())
+                                          for f in FRAMES)))
+            return stage, counts
         base = heights(path, all_meshes)
         return stage, [(index, max(moved_share(base, heights(perturbed(
             path, degrees, f"{folder}/draw{index}.usda", axis), all_meshes)).values()))
@@ -345,21 +363,38 @@ def _draws_of(job: tuple) -> tuple[str, list]:
 
 
 def draws(count: int, degrees: float = 0.01, processes: int = 2,
-          stages=DRAW_STAGES) -> dict:
+          stages=DRAW_STAGES, phases: bool = False) -> dict:
     """stage -> the worst frame's moved share under ``degrees`` about each of ``count``
-    random axes (random_axes), in their order (CesiumMan where the corpus is there)."""
+    random axes (random_axes), in their order (CesiumMan where the corpus is there); with
+    ``phases``, the sleeve's moved waves instead (the shirt and the loop; _draws_of)."""
     from concurrent.futures import ProcessPoolExecutor
 
+    if phases:
+        stages = tuple(s for s in stages if s != "cesium_man")
     if not (corpus_dir() / "usd-wg" / "CesiumMan.usdz").exists():
         stages = tuple(s for s in stages if s != "cesium_man")
     axes = list(enumerate(random_axes(count)))
-    jobs = [(stage, degrees, axes[part::processes]) for stage in stages
+    jobs = [(stage, degrees, axes[part::processes], phases) for stage in stages
             for part in range(processes)]
     out: dict = {stage: {} for stage in stages}
     with ProcessPoolExecutor(processes) as pool:
         for stage, shares in pool.map(_draws_of, jobs):
             out[stage].update(shares)
     return {stage: [shares[i] for i in range(count)] for stage, shares in out.items()}
+
+
+def phase_draws_table(result: dict, degrees: float = 0.01) -> str:
+    lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
+             f"(seed {DRAWS_SEED}): per draw, the most of the sleeve's waves (above 5% of "
+             "the largest amplitude) whose phase moved by more than 0.5 rad at frames "
+             + ", ".join(map(str, FRAMES)) + " (what the band limit may hide from the "
+             "frames).", "", "| stage | draws with a wave moved | median | largest | draws |",
+             "|---|---|---|---|---|"]
+    for stage, counts in result.items():
+        v = np.asarray(counts)
+        lines.append(f"| {stage} | {int((v > 0).sum())} of {len(v)} | {np.median(v):g} | "
+                     f"{v.max()} | " + ", ".join(map(str, v)) + " |")
+    return "\n".join(lines)
 
 
 def draws_table(result: dict, degrees: float = 0.01) -> str:
@@ -379,8 +414,11 @@ def draws_table(result: dict, degrees: float = 0.01) -> str:
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if args[:1] == ["--draws"]:
-        degrees = float(args[3]) if args[2:3] == ["--degrees"] else 0.01
-        print(draws_table(draws(int(args[1]), degrees), degrees))
+        degrees = float(args[args.index("--degrees") + 1]) if "--degrees" in args else 0.01
+        if "--phases" in args:
+            print(phase_draws_table(draws(int(args[1]), degrees, phases=True), degrees))
+        else:
+            print(draws_table(draws(int(args[1]), degrees), degrees))
         return 0
     text = table(measure())
     emit(args, "stability", text)
