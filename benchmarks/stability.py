@@ -76,6 +76,11 @@ def _copy_stage_info(source, stage) -> None:
     stage.SetFramesPerSecond(source.GetFramesPerSecond())
 
 
+def cesium_man() -> Path:
+    """The corpus's CesiumMan (usd-wg), which may be missing."""
+    return corpus_dir() / "usd-wg" / "CesiumMan.usdz"
+
+
 def with_units(path: str, out: str) -> str:
     """A layer over ``path`` that authors the units the stage's own root layer reads
     (CesiumMan's .usdz is in metres; a shot layer without them would be centimetres)."""
@@ -301,9 +306,8 @@ def _hops(mesh, rest: np.ndarray, start: np.ndarray) -> np.ndarray:
 def measure(ctx=None) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         shirt = around(str(SHIRT), folder, ctx=ctx)
-        cesium_man = corpus_dir() / "usd-wg" / "CesiumMan.usdz"
-        cesium = around(with_units(str(cesium_man), f"{folder}/cesium.usda"), folder,
-                        all_meshes=True, ctx=ctx) if cesium_man.exists() else None
+        cesium = around(with_units(str(cesium_man()), f"{folder}/cesium.usda"), folder,
+                        all_meshes=True, ctx=ctx) if cesium_man().exists() else None
         loop = around(painted_loop(folder), folder, ctx=ctx)
         local = locality(folder, ctx)
     return {"shirt": shirt, "cesium_man": cesium, "loop": loop, "locality": local}
@@ -346,8 +350,7 @@ def _draws_of(job: tuple) -> tuple[str, list]:
         elif stage == "loop":
             path = painted_loop(folder)
         else:
-            path = with_units(str(corpus_dir() / "usd-wg" / "CesiumMan.usdz"),
-                              f"{folder}/cesium.usda")
+            path = with_units(str(cesium_man()), f"{folder}/cesium.usda")
         if phases:
             base, counts = _phases(path, FRAMES), []
             for index, axis in axes:
@@ -369,9 +372,7 @@ def draws(count: int, degrees: float = 0.01, processes: int = 2,
     ``phases``, the sleeve's moved waves instead (the shirt and the loop; _draws_of)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    if phases:
-        stages = tuple(s for s in stages if s != "cesium_man")
-    if not (corpus_dir() / "usd-wg" / "CesiumMan.usdz").exists():
+    if phases or not cesium_man().exists():
         stages = tuple(s for s in stages if s != "cesium_man")
     axes = list(enumerate(random_axes(count)))
     jobs = [(stage, degrees, axes[part::processes], phases) for stage in stages

@@ -99,18 +99,16 @@ vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(
 // (fading the pull beyond pi to 2 pi doubled the shirt's misfit, 0.555 to 1.22, at its
 // cuff, whose painted waves advance 7-12 rad an edge; docs/method.md, "Three couplings
 // that rounding could throw")
-float aligned(vec3 k_i, vec3 k_j) {
-    return smoothstep(0.0, RELAX_ALIGNED,
-                      abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
-}
+float abs_cos(vec3 a, vec3 b) { return abs(dot(a, b)) / max(length(a) * length(b), 1e-30); }
+
+float aligned(vec3 k_i, vec3 k_j) { return smoothstep(0.0, RELAX_ALIGNED, abs_cos(k_i, k_j)); }
 
 // ... and on a point without a wave (contract.py's FLOOR_ALIGNED): only along its own
 // direction, fully within 18 degrees, not at all beyond 46 (waves at 84-88 degrees
 // pulled the bare points beside the painted loop a million times harder than the floor,
 // and the first waves that grew in there inherited a drift that means nothing)
 float floor_aligned(vec3 k_i, vec3 k_j) {
-    return smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED,
-                      abs(dot(k_i, k_j)) / max(length(k_i) * length(k_j), 1e-30));
+    return smoothstep(FLOOR_ALIGNED_FROM, FLOOR_ALIGNED, abs_cos(k_i, k_j));
 }
 
 // The neighbour an edge texel names (EDGE(e, s), below), and its phasor of the partner
