@@ -9,8 +9,10 @@ Runs in a Python that has Blender's ``bpy`` wheel; realclients/__init__.py start
 JOBS.json: a list of {"stage": a USD file, "out": a .json to write with {object name:
 {"materials": [material names], "normal_images": [file names of the images that feed a
 Normal Map node], "base_colours": [the Principled BSDFs' Base Color, RGBA],
-"image_sequences": [file names of the image sequences its nodes read]}}, "addon":
-optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT: reason" per job.
+"image_sequences": [file names of the image sequences its nodes read], "preserve_volume":
+[each Armature modifier's Preserve Volume], "points": {frame: the evaluated mesh's world
+points in Blender's axes and units}, for the frames of the job's optional "points_at"}},
+"addon": optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT: reason" per job.
 """
 from __future__ import annotations
 
@@ -57,7 +59,19 @@ def imported(job: dict) -> None:
                            for upstream in _upstream(node) if upstream.type == "TEX_IMAGE"
                            and upstream.image is not None]
         found[obj.name] = {"materials": materials, "normal_images": images,
-                           "base_colours": colours, "image_sequences": sorted(sequences)}
+                           "base_colours": colours, "image_sequences": sorted(sequences),
+                           "preserve_volume": [m.use_deform_preserve_volume
+                                               for m in obj.modifiers if m.type == "ARMATURE"],
+                           "points": {}}
+    for frame in job.get("points_at") or ():
+        bpy.context.scene.frame_set(int(frame))
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        for obj in bpy.data.objects:
+            if obj.type == "MESH":
+                evaluated = obj.evaluated_get(depsgraph)
+                found[obj.name]["points"][str(frame)] = [
+                    list(evaluated.matrix_world @ vertex.co)
+                    for vertex in evaluated.data.vertices]
     with open(job["out"], "w", encoding="utf-8") as handle:
         json.dump(found, handle)
 

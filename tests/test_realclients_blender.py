@@ -159,3 +159,71 @@ def test_a_network_the_addon_cannot_build_is_imported_as_its_preview_surface(shi
     imported = _imported(broken, folder, True, "broken")
     assert imported["normal_images"] == ["Sleeve.normal.0024.png"]
     assert imported["image_sequences"] == []
+
+
+#: the frames of Pixar's skinning stages the Blender import is compared at (1: the rest
+#: pose; 10-30: the joints turned, up to 0.05 units apart between the two methods)
+SKIN_FRAMES = (1, 10, 15, 20, 30)
+
+
+def _usdskel_points(baseline, frame):
+    """{mesh name: the baseline's world points at ``frame`` in Blender's axes and units}:
+    the importer turns a Y-up stage to Z-up ((x, y, z) -> (x, -z, y)) and scales it by
+    its metersPerUnit."""
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(baseline))
+    scale = UsdGeom.GetStageMetersPerUnit(stage)
+    y_up = UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y
+    found = {}
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.Mesh):
+            continue
+        local = np.asarray(UsdGeom.Mesh(prim).GetPointsAttr().Get(frame), np.float64)
+        matrix = np.asarray(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(frame))
+        world = np.c_[local, np.ones(len(local))] @ matrix
+        if y_up:
+            world = np.stack([world[:, 0], -world[:, 2], world[:, 1]], axis=1)
+        found[prim.GetName()] = scale * world[:, :3]
+    return found
+
+
+@pytest.mark.parametrize("name,preserve", [("dqs", True), ("lbs", False)])
+def test_blender_skins_usdskel_meshes_as_usdskel_does_with_the_addon(realclient, corpus,
+                                                                       tmp_path, name,
+                                                                       preserve):
+    """Blender's importer skins every UsdSkel mesh by linear blending, whatever its
+    ``skel:skinningMethod`` (bpy 5.0.1): Pixar's dual-quaternion test stage bends
+    differently in Cycles than in usdview. With the add-on, its meshes get Preserve Volume
+    (Blender's dual quaternions), and Blender's posed points are UsdSkel's own baseline
+    points (Pixar's ``dqs.baked.usda``, written by UsdSkel's baking) to float precision;
+    the linear stage stays linear."""
+    from realclients import blender_import
+    from realclients.bakes import BLENDER_ADDON
+
+    folder = corpus / "openusd-usdskel"
+    imported = {}
+    for addon in (False, True):
+        out = tmp_path / f"{name}_{addon}.json"
+        results = blender_import([{"stage": str(folder / f"{name}.usda"), "out": str(out),
+                                   "addon": str(BLENDER_ADDON) if addon else None,
+                                   "points_at": list(SKIN_FRAMES)}])
+        assert results[str(out)] == "ok", results
+        imported[addon] = json.loads(out.read_text())
+    skinned = sorted(obj for obj, found in imported[True].items() if found["preserve_volume"])
+    assert skinned == ["Mesh", "MeshWithFaceVaryingNormals", "MeshWithNormals"], skinned
+    gaps = {True: [], False: []}
+    for frame in SKIN_FRAMES:
+        expected = _usdskel_points(folder / "baseline" / f"{name}.baked.usda", frame)
+        for addon in (False, True):
+            for obj in skinned:
+                assert imported[addon][obj]["preserve_volume"] == [preserve and addon]
+                points = np.asarray(imported[addon][obj]["points"][str(frame)])
+                gaps[addon].append(np.abs(points - expected[obj]).max())
+    # Blender's metres: the stage's units are centimetres, the arm 3 units (0.03 m) long
+    assert max(gaps[True]) < 1e-6, gaps[True]
+    if preserve:
+        # without the add-on the joints' turns bend it by linear blending: up to 0.05 units
+        assert max(gaps[False]) > 3e-4, gaps[False]
+    else:
+        assert max(gaps[False]) < 1e-6, gaps[False]

@@ -22,6 +22,15 @@ Vector Math, Math, Geometry, Tangent, Principled BSDF):
 - the UsdPreviewSurface's inputs go to the Principled BSDF as Blender's importer maps
   them; its tangent-space normal is decoded with the same tangent frame.
 
+**Dual-quaternion skinning.** Blender's importer gives every UsdSkel-skinned mesh an
+Armature modifier with linear blending, whatever the mesh's ``skel:skinningMethod``
+(bpy 5.0.1). A mesh that UsdSkel skins by dual quaternions (an elbow rigged to keep its
+volume) then bends differently in Cycles than in usdview and usdwrinkle, and the baked
+maps, which follow usdwrinkle's posed surface, land on another shape. After the import
+this hook turns on the modifier's Preserve Volume for those meshes: Blender's dual
+quaternions, which give UsdSkel's own baseline points (Pixar's ``dqs.baked.usda``) to
+float precision (tests/test_realclients_blender.py).
+
 A material the hook cannot build (a node it does not know, a file sequence whose frame
 numbers are not its time codes) is left to the importer, which imports its
 UsdPreviewSurface, and the reason is printed.
@@ -48,7 +57,7 @@ import bpy
 if hasattr(bpy.utils, "expose_bundled_modules"):  # bpy as a module (Blender 4.4+)
     bpy.utils.expose_bundled_modules()
 
-from pxr import UsdGeom, UsdShade  # noqa: E402  (after Blender exposes its pxr)
+from pxr import Usd, UsdGeom, UsdShade, UsdSkel  # noqa: E402  (after Blender exposes its pxr)
 
 bl_info = {
     "name": "usdwrinkle: wrinkle materials",
@@ -57,7 +66,8 @@ bl_info = {
     "blender": (4, 2, 0),
     "location": "File > Import > Universal Scene Description",
     "description": "Imports usdwrinkle's MaterialX wrinkle network (bent normals and the "
-                   "texture moved with the folds) as Blender shader nodes",
+                   "texture moved with the folds) as Blender shader nodes, and skins "
+                   "UsdSkel's dual-quaternion meshes as UsdSkel does",
     "category": "Import-Export",
 }
 
@@ -473,13 +483,53 @@ def _check(usd_material) -> None:
         bpy.data.materials.remove(scratch)
 
 
+def skinning_methods(stage) -> dict:
+    """{mesh path: UsdSkel's skinning method} for every mesh a skeleton binding skins
+    (the method as UsdSkel resolves it: ``primvars:skel:skinningMethod``, inherited)."""
+    cache = UsdSkel.Cache()
+    methods = {}
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
+        if not prim.IsA(UsdSkel.Root):
+            continue
+        root = UsdSkel.Root(prim)
+        cache.Populate(root, Usd.TraverseInstanceProxies())
+        for binding in cache.ComputeSkelBindings(root, Usd.TraverseInstanceProxies()):
+            for target in binding.GetSkinningTargets():
+                methods[target.GetPrim().GetPath()] = str(target.GetSkinningMethod() or
+                                                          "classicLinear")
+    return methods
+
+
+def preserve_volume(import_context) -> list[str]:
+    """Turns on Preserve Volume (Blender's dual quaternions) on the Armature modifiers of
+    the imported objects whose mesh UsdSkel skins by dual quaternions; returns their
+    names."""
+    methods = skinning_methods(import_context.get_stage())
+    turned = []
+    for path, imported in import_context.get_prim_map().items():
+        if methods.get(path) != "dualQuaternion":
+            continue
+        for owner in imported:
+            if not isinstance(owner, bpy.types.Object):
+                continue
+            for modifier in owner.modifiers:
+                if modifier.type == "ARMATURE" and not modifier.use_deform_preserve_volume:
+                    modifier.use_deform_preserve_volume = True
+                    turned.append(owner.name)
+    if turned:
+        print(f"usdwrinkle: dual-quaternion skinning (Preserve Volume) on "
+              f"{', '.join(sorted(set(turned)))}")
+    return turned
+
+
 class USDWrinkleHook(bpy.types.USDHook):
-    """Imports usdwrinkle's MaterialX wrinkle networks as Blender shader nodes."""
+    """Imports usdwrinkle's MaterialX wrinkle networks as Blender shader nodes, and skins
+    UsdSkel's dual-quaternion meshes by Blender's dual quaternions."""
 
     bl_idname = "usdwrinkle_materials"
     bl_label = "usdwrinkle wrinkle materials"
     bl_description = "usdwrinkle's bent normals and texture deformation (MaterialX) " \
-                     "as Blender shader nodes"
+                     "as Blender shader nodes; UsdSkel's dual-quaternion skinning"
 
     @staticmethod
     def material_import_poll(import_context, usd_material):
@@ -497,6 +547,11 @@ class USDWrinkleHook(bpy.types.USDHook):
     def on_material_import(import_context, bl_material, usd_material):
         return build(import_context, bl_material, usd_material)
 
+    @staticmethod
+    def on_import(import_context):
+        preserve_volume(import_context)
+        return True
+
 
 def register():
     bpy.utils.register_class(USDWrinkleHook)
@@ -506,4 +561,5 @@ def unregister():
     bpy.utils.unregister_class(USDWrinkleHook)
 
 
-__all__ = ["USDWrinkleHook", "Unsupported", "build", "register", "unregister"]
+__all__ = ["USDWrinkleHook", "Unsupported", "build", "preserve_volume", "register",
+           "skinning_methods", "unregister"]

@@ -9,7 +9,9 @@ def add_parser(subparsers) -> None:
         description="usdwrinkle's Blender add-on imports the MaterialX wrinkle network of "
                     "'bake --maps normal,parallax' as Blender shader nodes, so that Cycles "
                     "and EEVEE bend the normals and move the textures with the folds, as "
-                    "Storm does (README: 'The texture deformation in Blender'). Without "
+                    "Storm does, and skins UsdSkel's dual-quaternion meshes by Blender's "
+                    "dual quaternions (Preserve Volume), which Blender's importer does not "
+                    "(README: 'The texture deformation in Blender'). Without "
                     "options this prints the add-on's file, for Blender's Edit > "
                     "Preferences > Add-ons > Install from Disk. It needs Blender 4.2 or "
                     "later (tested with bpy 5.0.1).")
