@@ -1,6 +1,7 @@
-"""What Blender's USD importer makes of a stage's materials: for each mesh object, the
-materials it gets and the image files that feed its Normal Map nodes. The oracle for
-which material binding Blender resolves (bake --maps binds a map set per purpose).
+"""What Blender's USD importer makes of a stage's materials (and, on request, of its
+skinning): for each mesh object, the materials it gets and the image files that feed its
+Normal Map nodes. The oracle for which material binding Blender resolves (bake --maps
+binds a map set per purpose).
 
 Runs in a Python that has Blender's ``bpy`` wheel; realclients/__init__.py starts it:
 
@@ -9,9 +10,10 @@ Runs in a Python that has Blender's ``bpy`` wheel; realclients/__init__.py start
 JOBS.json: a list of {"stage": a USD file, "out": a .json to write with {object name:
 {"materials": [material names], "normal_images": [file names of the images that feed a
 Normal Map node], "base_colours": [the Principled BSDFs' Base Color, RGBA],
-"image_sequences": [file names of the image sequences its nodes read], "preserve_volume":
-[each Armature modifier's Preserve Volume], "points": {frame: the evaluated mesh's world
-points in Blender's axes and units}, for the frames of the job's optional "points_at"}},
+"image_sequences": [file names of the image sequences its nodes read], and where the job
+lists frames in "points_at": "preserve_volume": [each Armature modifier's Preserve
+Volume], "points": {frame: the evaluated mesh's world points in Blender's axes and
+units}}},
 "addon": optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT: reason" per job.
 """
 from __future__ import annotations
@@ -59,10 +61,11 @@ def imported(job: dict) -> None:
                            for upstream in _upstream(node) if upstream.type == "TEX_IMAGE"
                            and upstream.image is not None]
         found[obj.name] = {"materials": materials, "normal_images": images,
-                           "base_colours": colours, "image_sequences": sorted(sequences),
-                           "preserve_volume": [m.use_deform_preserve_volume
-                                               for m in obj.modifiers if m.type == "ARMATURE"],
-                           "points": {}}
+                           "base_colours": colours, "image_sequences": sorted(sequences)}
+        if job.get("points_at"):
+            found[obj.name].update(
+                preserve_volume=[m.use_deform_preserve_volume
+                                 for m in obj.modifiers if m.type == "ARMATURE"], points={})
     for frame in job.get("points_at") or ():
         bpy.context.scene.frame_set(int(frame))
         depsgraph = bpy.context.evaluated_depsgraph_get()
