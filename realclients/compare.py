@@ -25,8 +25,10 @@ def read_rgba8(path) -> np.ndarray:
     import OpenImageIO as oiio
 
     buf = oiio.ImageBuf(str(path))
-    pixels = buf.get_pixels(oiio.UINT8)
-    if pixels is None:
+    # a file that cannot be read leaves the buffer uninitialised: OIIO 3's get_pixels
+    # then returns an empty array, not None
+    pixels = buf.get_pixels(oiio.UINT8) if buf.read() else None
+    if pixels is None or pixels.size == 0:
         raise OSError(f"cannot read {path}: {buf.geterror()}")
     if pixels.shape[2] == 3:
         pixels = np.concatenate([pixels, np.full(pixels.shape[:2] + (1,), 255, np.uint8)], 2)

@@ -104,6 +104,16 @@ def test_the_exceptions_are_what_they_say(realclient, tmp_path):
                                                            comparison.match)
 
 
+def test_a_missing_frame_is_an_error_that_names_it(tmp_path):
+    """A renderer that wrote no frame: the comparison says which file, instead of
+    comparing an empty image (OIIO 3 returns one for a file it cannot open)."""
+    from realclients.compare import read_rgba8
+
+    missing = tmp_path / "nothing.png"
+    with pytest.raises(OSError, match="nothing.png"):
+        read_rgba8(missing)
+
+
 def test_usdview_defaults_show_the_samples_lit(plain, tmp_path):
     """usdview's defaults add its camera light to a stage's lights: the samples are lit
     (they rendered black before), 1.2-1.4x brighter than usdwrinkle's frames."""
