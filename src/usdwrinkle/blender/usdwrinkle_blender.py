@@ -505,6 +505,11 @@ def preserve_volume(import_context) -> list[str]:
     the imported objects whose mesh UsdSkel skins by dual quaternions; returns their
     names."""
     methods = skinning_methods(import_context.get_stage())
+    duals = sorted(str(path) for path, method in methods.items() if method == "dualQuaternion")
+    if duals and not hasattr(import_context, "get_prim_map"):
+        print(f"usdwrinkle: this Blender gives import hooks no prim map; {', '.join(duals)} "
+              f"stay skinned linearly (tick Preserve Volume on their Armature modifiers)")
+        return []
     turned = []
     for path, imported in import_context.get_prim_map().items():
         if methods.get(path) != "dualQuaternion":
