@@ -194,7 +194,12 @@ def shirt(outdir):
     material = add_material(stage, "Plaid", texture="./textures/plaid.png")
     UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
     elbow = 1.5
-    w_fore = np.clip((points[:, 0] - (elbow - 0.35)) / 0.7, 0, 1)
+    # the forearm's weight rises from 0.8 to 2.1 along the sleeve (1.3 units, 3.4 radii):
+    # over 0.35 either side of the elbow the 105 degree bend creased the coarse sleeve's
+    # inner side into a V that passed through itself (38 crossing coarse triangles at
+    # frame 24), where no height field over the coarse faces holds the cloth's length
+    # (docs/physics.md, "the shirt's rig", has the widths tried)
+    w_fore = np.clip((points[:, 0] - 0.8) / 1.3, 0, 1)
     w_fore = w_fore * w_fore * (3 - 2 * w_fore)
     indices_j = np.stack([np.zeros(len(points)), np.ones(len(points))], 1)
     weights_j = np.stack([1 - w_fore, w_fore], 1)
@@ -216,6 +221,12 @@ def shirt(outdir):
             anim.GetScalesAttr().Set(Vt.Vec3hArray([Gf.Vec3h(1, 1, 1)] * 2), f)
 
     rig(stage, "/World/Arm", mesh, joints, bind, indices_j, weights_j, 2, animate)
+    # dual quaternions, as a rigger skins an elbow: linear blending collapses the inner
+    # elbow, and the folds crowded into one knot of streaks whose phases settled into one
+    # of two layouts under a 0.01 degree change of a joint; skinned so, the sleeve stays
+    # round and its folds fan out as separate creases (issue 55; docs/physics.md)
+    UsdSkel.BindingAPI(mesh.GetPrim()).CreateSkinningMethodAttr().Set(
+        UsdSkel.Tokens.dualQuaternion)
     # painted region: the cuff gathers along the sleeve axis
     q = np.zeros_like(points)
     cuff = np.clip((points[:, 0] - (length - 0.7)) / 0.5, 0, 1)
