@@ -8,7 +8,9 @@ llvmpipe made of the same bake. It runs on every GL: on llvmpipe it is a golden,
 it is the oracle. Measured on an NVIDIA H200 (driver 580): p99 1.2/255 with one sample
 per pixel, 4.9 with the default 4 on 2026-11-27; on 2026-12-04, with the folds that keep
 the cloth's length (steeper, so the samples' placement weighs more), p99 0.38 with one
-sample, and with 4 p99 6.66 but 0.98 outside the envelope (ENVELOPE_P99).
+sample, and with 4 p99 6.66 but 0.98 outside the envelope (ENVELOPE_P99). The bake was made
+again on 2026-12-04 (night), when the shirt's rig changed (dual quaternions; its points are
+skinned from the stage); the H200's figures are the old bake's.
 """
 from __future__ import annotations
 
