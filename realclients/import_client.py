@@ -13,8 +13,8 @@ Normal Map node], "base_colours": [the Principled BSDFs' Base Color, RGBA],
 "image_sequences": [file names of the image sequences its nodes read], and where the job
 lists frames in "points_at": "preserve_volume": [each Armature modifier's Preserve
 Volume], "points": {frame: the evaluated mesh's world points in Blender's axes and
-units}}},
-"addon": optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT: reason" per job.
+units}}}, "addon": optional, as in cycles_client.py}. One line "ok OUT" or "failed OUT:
+reason" per job.
 """
 from __future__ import annotations
 
