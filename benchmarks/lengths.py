@@ -136,14 +136,22 @@ def table(rows: list[dict], shirt: dict) -> str:
 
 
 def main(argv=None) -> int:
+    import argparse
+
     from usdwrinkle.method.profiles import PRESETS
 
-    args = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.lengths",
+        description="Each profile's length on a baked sheet, and the shirt's inner elbow "
+                    "line (the module's docstring says how).")
+    parser.add_argument("--write", metavar="PATH",
+                        help="replace the lengths block of PATH (docs/method.md)")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     with tempfile.TemporaryDirectory() as folder:
         rows = [sheet_lengths(preset, ratio, folder) for preset in PRESETS for ratio in RATIOS]
         shirt = elbow(folder)
     text = table(rows, shirt)
-    emit(args, "lengths", text)
+    emit(["--write", args.write] if args.write else [], "lengths", text)
     return 0
 
 

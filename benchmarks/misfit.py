@@ -130,19 +130,31 @@ def table(now: dict, before: dict | None, before_label: str) -> str:
 
 
 def main(argv=None) -> int:
-    args = list(sys.argv[1:] if argv is None else argv)
-    if args == ["--json"]:
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.misfit",
+        description="The misfit and the swim of the six sample stages, as a distribution "
+                    "over tiny joint changes (the module's docstring says how).")
+    parser.add_argument("--before", metavar="SRC",
+                        help="also measure another checkout's src folder, beside this one")
+    parser.add_argument("--write", metavar="PATH",
+                        help="replace the misfit block of PATH (docs/method.md)")
+    parser.add_argument("--json", action="store_true",
+                        help="print this checkout's measurement as JSON (what --before "
+                             "runs in the other checkout)")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if args.json:
         print(json.dumps(measure()))
         return 0
     before, label = None, ""
-    if args[:1] == ["--before"]:
-        src = args[1]
-        args = args[2:]
-        before = measure_in(src)
-        head = subprocess.run(["git", "-C", src, "log", "-1", "--format=%h"],
+    if args.before:
+        before = measure_in(args.before)
+        head = subprocess.run(["git", "-C", args.before, "log", "-1", "--format=%h"],
                               capture_output=True, text=True, check=False).stdout.strip()
-        label = f"the code at commit {head}" if head else src
-    emit(args, "misfit", table(measure(), before, label))
+        label = f"the code at commit {head}" if head else args.before
+    emit(["--write", args.write] if args.write else [], "misfit",
+         table(measure(), before, label))
     return 0
 
 

@@ -413,16 +413,35 @@ def draws_table(result: dict, degrees: float = 0.01) -> str:
 
 
 def main(argv=None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if args[:1] == ["--draws"]:
-        degrees = float(args[args.index("--degrees") + 1]) if "--degrees" in args else 0.01
-        if "--phases" in args:
-            print(phase_draws_table(draws(int(args[1]), degrees, phases=True), degrees))
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.stability",
+        description="How far the crests move under a tiny change of the joints (the "
+                    "module's docstring says how). Without options: the named axes, the "
+                    "painted loop and the cuff's locality, printed.")
+    parser.add_argument("--write", metavar="PATH",
+                        help="replace the stability block of PATH (docs/method.md)")
+    parser.add_argument("--draws", type=int, metavar="N",
+                        help=f"instead, N axes drawn at random (seed {DRAWS_SEED})")
+    parser.add_argument("--degrees", type=float, default=0.01,
+                        help="the turn about each drawn axis (default 0.01)")
+    parser.add_argument("--phases", action="store_true",
+                        help="per draw the most waves whose phase moved by over 0.5 rad, "
+                             "instead of the moved share of the frames")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if args.draws is None and (args.phases or args.degrees != 0.01):
+        parser.error("--degrees and --phases go with --draws N")
+    if args.draws is not None:
+        if args.write:
+            parser.error("--write writes the named-axis block; --draws prints its table")
+        if args.phases:
+            print(phase_draws_table(draws(args.draws, args.degrees, phases=True),
+                                    args.degrees))
         else:
-            print(draws_table(draws(int(args[1]), degrees), degrees))
+            print(draws_table(draws(args.draws, args.degrees), args.degrees))
         return 0
-    text = table(measure())
-    emit(args, "stability", text)
+    emit(["--write", args.write] if args.write else [], "stability", table(measure()))
     return 0
 
 
