@@ -18,13 +18,19 @@ def stage_block_head(name: str, seconds: float) -> list[str]:
             f"docs/physics.md` ({seconds:.0f} s here).", ""]
 
 
-def emit(args: list[str], name: str, text: str) -> None:
-    """``--write PATH``: replace the block ``name`` of PATH with ``text`` (which holds the
-    markers); otherwise print ``text``."""
-    if args[:1] != ["--write"]:
+def add_write_option(parser, name: str, doc: str) -> None:
+    """The ``--write PATH`` option of a block's command (``args.write``, a Path or None)."""
+    parser.add_argument("--write", type=Path, default=None, metavar="PATH",
+                        help=f"replace the {name} block of PATH ({doc})")
+
+
+def emit(write: str | Path | None, name: str, text: str) -> None:
+    """``write``: replace the block ``name`` of that file with ``text`` (which holds the
+    markers); None: print ``text``."""
+    if write is None:
         print(text)
         return
-    path = Path(args[1])
+    path = Path(write)
     begin, end = markers(name)
     doc = path.read_text()
     pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.S)
@@ -47,13 +53,12 @@ def stage_block_main(argv, name: str, stages: Sequence[str],
     import moderngl
 
     parser = argparse.ArgumentParser(prog=f"python -m benchmarks.physics.{name}")
-    parser.add_argument("--write", type=Path, default=None,
-                        help=f"replace the {name} block of this file (docs/physics.md)")
+    add_write_option(parser, name, "docs/physics.md")
     parser.add_argument("--only", nargs="*", default=None)
     args = parser.parse_args(argv)
     started = time.perf_counter()
     ctx = moderngl.create_standalone_context(backend="egl", require=430)
     rows = [row for stage in args.only or stages for row in measure(stage, ctx)]
-    emit(["--write", str(args.write)] if args.write else [], name,
+    emit(args.write, name,
          report(rows, time.perf_counter() - started))
     return 0

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .blocks import emit, markers
+from .blocks import add_write_option, emit, markers
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
@@ -144,14 +144,13 @@ def main(argv=None) -> int:
         prog="python -m benchmarks.lengths",
         description="Each profile's length on a baked sheet, and the shirt's inner elbow "
                     "line (the module's docstring says how).")
-    parser.add_argument("--write", metavar="PATH",
-                        help="replace the lengths block of PATH (docs/method.md)")
+    add_write_option(parser, "lengths", "docs/method.md")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     with tempfile.TemporaryDirectory() as folder:
         rows = [sheet_lengths(preset, ratio, folder) for preset in PRESETS for ratio in RATIOS]
         shirt = elbow(folder)
     text = table(rows, shirt)
-    emit(["--write", args.write] if args.write else [], "lengths", text)
+    emit(args.write, "lengths", text)
     return 0
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .blocks import emit, markers
+from .blocks import add_write_option, emit, markers
 
 ROOT = Path(__file__).resolve().parents[1]
 STAGES = ("shirt", "zeppelin", "curtain", "pillow", "pull", "flag")
@@ -138,8 +138,7 @@ def main(argv=None) -> int:
                     "over tiny joint changes (the module's docstring says how).")
     parser.add_argument("--before", metavar="SRC",
                         help="also measure another checkout's src folder, beside this one")
-    parser.add_argument("--write", metavar="PATH",
-                        help="replace the misfit block of PATH (docs/method.md)")
+    add_write_option(parser, "misfit", "docs/method.md")
     parser.add_argument("--json", action="store_true",
                         help="print this checkout's measurement as JSON (what --before "
                              "runs in the other checkout)")
@@ -153,7 +152,7 @@ def main(argv=None) -> int:
         head = subprocess.run(["git", "-C", args.before, "log", "-1", "--format=%h"],
                               capture_output=True, text=True, check=False).stdout.strip()
         label = f"the code at commit {head}" if head else args.before
-    emit(["--write", args.write] if args.write else [], "misfit",
+    emit(args.write, "misfit",
          table(measure(), before, label))
     return 0
 

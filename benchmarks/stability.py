@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .blocks import emit, markers
+from .blocks import add_write_option, emit, markers
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
@@ -420,8 +420,7 @@ def main(argv=None) -> int:
         description="How far the crests move under a tiny change of the joints (the "
                     "module's docstring says how). Without options: the named axes, the "
                     "painted loop and the cuff's locality, printed.")
-    parser.add_argument("--write", metavar="PATH",
-                        help="replace the stability block of PATH (docs/method.md)")
+    add_write_option(parser, "stability", "docs/method.md")
     parser.add_argument("--draws", type=int, metavar="N",
                         help=f"instead, N axes drawn at random (seed {DRAWS_SEED})")
     parser.add_argument("--degrees", type=float, default=0.01,
@@ -441,7 +440,7 @@ def main(argv=None) -> int:
         else:
             print(draws_table(draws(args.draws, args.degrees), args.degrees))
         return 0
-    emit(["--write", args.write] if args.write else [], "stability", table(measure()))
+    emit(args.write, "stability", table(measure()))
     return 0
 
 

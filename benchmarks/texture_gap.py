@@ -247,7 +247,7 @@ def main(argv=None) -> int:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
         rows = measure(Path(folder))
-    emit(["--write", str(args.write)] if args.write else [], "texture_gap",
+    emit(args.write, "texture_gap",
          report(rows, time.perf_counter() - started))
     return 0
 

@@ -257,7 +257,7 @@ def main(argv=None) -> int:
 
     begin, end = markers("blender")
     text = report(results, calibrated, limited, slacks, seconds, simulated_now)
-    emit(["--write", str(out)], "blender", f"{begin}\n\n{text}\n{end}")
+    emit(out, "blender", f"{begin}\n\n{text}\n{end}")
     print(f"({seconds:.0f} s)")
     return 0
 

@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.simulate:
         simulate_missing(args.cache)
-    emit(["--write", str(args.write)] if args.write else [], "iterations", report(args.cache))
+    emit(args.write, "iterations", report(args.cache))
     return 0
 
 

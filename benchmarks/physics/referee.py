@@ -520,7 +520,7 @@ def main(argv=None) -> int:
                               if tables == "converged" or name not in CONVERGED_ONLY]
         text = convergence_report(args.cache) if tables == "convergence" else \
             sweep_report(names, args.cache, tables)
-        emit(["--write", str(args.write)] if args.write else [], block, text)
+        emit(args.write, block, text)
     print(f"{time.perf_counter() - started:.0f} s")
     return 0
 
