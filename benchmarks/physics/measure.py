@@ -108,6 +108,18 @@ def wavelength(shot: Shot, h: np.ndarray, mask=None) -> float:
     return float(1.0 / ((power * f)[keep].sum() / power[keep].sum()))
 
 
+def spectral_spread(shot: Shot, h: np.ndarray, mask=None) -> float:
+    """sqrt(<f^2>) / <f> of h's power spectrum (power-weighted; the frequencies
+    ``wavelength`` reads): 1 for one plane wave. At small slopes a fold pattern holds
+    extra length (1/2)<|grad h|^2> = 2 pi^2 <f^2> <h^2>: for the same length, one of
+    unequal waves stands 1 / spread as high as a single wave of its mean wavelength."""
+    power, fu, fv = _spectrum(shot, h, mask)
+    f = np.hypot(fu, fv)
+    keep = f > 2.5
+    weights = power[keep] / power[keep].sum()
+    return float(np.sqrt((weights * f[keep] ** 2).sum()) / (weights * f[keep]).sum())
+
+
 def structure_direction(shot: Shot, h: np.ndarray, mask=None) -> np.ndarray:
     """The dominant wave direction (unit, material (u, v)): across the crests."""
     g = h.reshape(shot.rows, shot.cols)
