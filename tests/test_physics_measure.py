@@ -31,6 +31,21 @@ def test_a_plane_wave_s_wavelength_and_direction(wavelength, angle):
     np.testing.assert_allclose(inner, 0.01, rtol=0.05)   # a sine's local amplitude
 
 
+@pytest.mark.parametrize("second", [None, 0.10, 0.14])
+def test_the_spectral_spread_of_one_wave_and_of_two(second):
+    """measure.spectral_spread: sqrt(<f^2>) / <f> of the power spectrum, 1 for one plane
+    wave and sqrt((f1^2 + f2^2) / 2) / ((f1 + f2) / 2) for two of equal power."""
+    shot = flat_shot()
+    x = shot.material[:, 0]
+    h = np.cos(2 * np.pi / 0.05 * x)
+    f1, f2 = 1 / 0.05, 1 / 0.05
+    if second is not None:
+        h = h + np.cos(2 * np.pi / second * x)
+        f2 = 1 / second
+    expected = np.sqrt((f1 ** 2 + f2 ** 2) / 2) / ((f1 + f2) / 2)
+    assert measure.spectral_spread(shot, h) == pytest.approx(expected, abs=0.003)
+
+
 def test_crest_motion_is_the_phase_change_a_frame():
     shot = flat_shot()
     k = 2 * np.pi / 0.07 * np.array([1.0, 0.0])
@@ -311,3 +326,38 @@ def test_the_referee_s_sleeves_do_not_coarsen_and_its_curtains_do():
     assert coarsening_of(sleeve5, 0.050) == pytest.approx(1.0)
     assert coarsening_of(sleeve10, 0.05) == pytest.approx(1.5)
     assert coarsening_of(SWEEP["curtain-cotton"](0.02).shot, 0.09) is None
+
+
+@pytest.mark.parametrize("along", [0.0, 0.008])
+def test_the_height_field_scale_of_a_fold_that_leans(along):
+    """benchmarks.physics.heightfield on a sheet pushed to 0.75 of its width into a
+    trochoid, (x + b cos kx, a sin kx): the cloth's area, its low-pass's and the scale s
+    at which its offsets along the low-pass's normals alone (a plain sine) hold the
+    trochoid's length, against the curves' arc lengths integrated in 1D. Upright (b = 0)
+    the cloth is its own height field (s = 1); leaning (b k = 0.84), its offsets along
+    the surface hold length that the sine must stand 1.094 times as tall for."""
+    from benchmarks.physics.heightfield import phase_row
+
+    shot = flat_shot(rows=33, cols=129, spacing=0.005)
+    shot.pinned[shot.material[:, 0] == 0.0] = True   # the pushed edge
+    push, height, k = 0.75, 0.008, 2 * np.pi / 0.06
+    u, v = shot.material[:, 0], shot.material[:, 1]
+    theta = k * push * u
+    points = np.stack([push * u + along * np.cos(theta), height * np.sin(theta), -v], -1)
+    row = phase_row(shot, points, 0.05)
+
+    t = np.linspace(0.0, 2 * np.pi, 4096, endpoint=False)
+    cloth = np.hypot(1 - along * k * np.sin(t), height * k * np.cos(t)).mean()
+
+    def sine(scale):
+        return np.hypot(1.0, scale * height * k * np.cos(t)).mean()
+
+    low, high = 0.5, 4.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if sine(middle) < cloth else (low, middle)
+    assert row["low"] == pytest.approx(push, rel=0.01)
+    assert row["cloth"] == pytest.approx(push * cloth, rel=0.01)
+    assert row["offsets"] == pytest.approx(push * sine(1.0), rel=0.01)
+    assert row["s"] == pytest.approx(low, abs=0.015)   # 1.0 upright, 1.094 leaning
+    assert row["beyond"] == 0.0

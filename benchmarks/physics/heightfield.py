@@ -1,0 +1,210 @@
+"""The converged referee's cloth as a height field over its own coarse surface (issue 55:
+can a height field meet the height bar and the area bar at once?).
+
+    python -m benchmarks.physics.heightfield [--write docs/physics.md] [--only SHOT ...]
+                                             [--grid M] [--cache .physics-cache]
+
+usdwrinkle displaces its fine mesh along the coarse surface's normals: a height field over
+the coarse surface. The referee's coarse surface is its simulation low-passed
+(coarse.lowpass, the shot's fold window), and the referee's fold height is the cloth's
+offset from it along the low-pass's normals (measure.sim_height). Per shot, at the end
+of each phase, over the triangles where the low-pass is compressed beyond SLACK_RAMP x
+the slack (where referee.area_ratio takes the area bar), this prints:
+
+- the cloth's area over its rest area, the low-pass's, and the area of the cloth's normal
+  offsets alone (low + h n: the cloth drawn as a height field, its offsets along the
+  surface dropped);
+- ``s``: the scale of those offsets at which that height field holds the cloth's own area
+  (scale_to_hold). A height field with the cloth's own folds that meets the area bar
+  stands s times the cloth's fold height: where s is over the height bar (1.25x), the two
+  bars ask that field for two things. Folds of another shape hold more or less length per
+  height (docs/physics.md, "What a height field can reach"), so s is the cloth's shape's
+  number, not a bound on every profile;
+- the share of points where an offset towards the low-pass's centre of curvature reaches
+  its radius (h k >= 1 along a grid line; beyond it the height field would pass through
+  itself): 0 says the cloth is such a height field; the largest h k towards the centre;
+  and the share of points whose |h k| exceeds usdwrinkle's room (FOLD_ROOM, which
+  limits a fold's height both ways, since a wave's crests and troughs take turns);
+- the spectral spread sqrt(<f^2>) / <f> of the cloth's fold height and of usdwrinkle's
+  (measure.spectral_spread): at the same small-slope length, folds of spread c stand 1 / c
+  as high as one wave of their mean wavelength;
+- usdwrinkle's fold height over the cloth's at the W matched to the simulation (baked as
+  the referee bakes it: referee.bake_on, matched_width), beside s.
+
+Needs the cached simulations (referee.py; at the converged referee's 160 iterations), on
+one grid for every shot (``--grid``, 2 cm; the converged table takes three shots at 1 cm);
+about 20 s a shot here (two bakes).
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..blocks import add_write_option, emit, markers
+from . import measure
+from .coarse import lowpass
+from .oracle import per_phase, zones
+from .referee import (
+    CONVERGED,
+    ROOT,
+    SWEEP,
+    bake_on,
+    cloth_attributes,
+    matched_width,
+    referee_pair,
+)
+
+NAME = "referee-heightfield"
+
+
+def scale_to_hold(area_of, target: float, low: float = 0.0, high: float = 4.0,
+                  steps: int = 48) -> float:
+    """The scale s in [low, high] at which ``area_of(s)`` (increasing in s) equals
+    ``target``, by bisection; ``high`` where even that holds less."""
+    if area_of(high) < target:
+        return high
+    for _ in range(steps):
+        middle = 0.5 * (low + high)
+        if area_of(middle) < target:
+            low = middle
+        else:
+            high = middle
+    return 0.5 * (low + high)
+
+
+def grid_curvatures(shot, surface: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(2, n): the surface's normal curvature along its two grid lines, signed towards
+    +normals (a centre of curvature on the normals' side is positive)."""
+    g = surface.reshape(shot.rows, shot.cols, 3)
+    nn = normals.reshape(shot.rows, shot.cols, 3)
+    out = []
+    for axis, periodic in ((1, shot.periodic), (0, False)):
+        if periodic:
+            first = 0.5 * (np.roll(g, -1, axis) - np.roll(g, 1, axis))
+            second = np.roll(g, -1, axis) - 2 * g + np.roll(g, 1, axis)
+        else:
+            first = np.gradient(g, axis=axis)
+            second = np.gradient(first, axis=axis)
+        out.append(((second * nn).sum(-1) / np.maximum((first * first).sum(-1), 1e-30))
+                   .ravel())
+    return np.stack(out)
+
+
+def phase_row(shot, points: np.ndarray, slack: float) -> dict | None:
+    """One phase's end (points: (n, 3)): the areas, s and the share beyond the reach; None
+    where the low-pass is compressed nowhere beyond the slack's ramp."""
+    from usdwrinkle.geometry.measure import triangle_areas
+    from usdwrinkle.method.contract import FOLD_ROOM, SLACK_RAMP
+
+    from .newton_client import triangles
+
+    tri = triangles(shot.quads())
+    rest = triangle_areas(shot.rest, tri)
+    low = lowpass(shot, points[None])[0]
+    normals = measure.grid_normals(shot, low[None])[0]
+    h = ((points - low) * normals).sum(-1)
+    inside = zones(shot)["all"]
+    compressed = (inside[tri].all(axis=1)
+                  & (triangle_areas(low, tri) < (1.0 - SLACK_RAMP * slack) * rest))
+    if compressed.sum() < 10:
+        return None
+
+    def area(surface):
+        return float(triangle_areas(surface, tri)[compressed].sum() / rest[compressed].sum())
+
+    cloth = area(points)
+    bent = (h[None] * grid_curvatures(shot, low, normals))[:, inside]
+    return {"cloth": cloth, "low": area(low), "offsets": area(low + h[:, None] * normals),
+            "s": scale_to_hold(lambda s: area(low + s * h[:, None] * normals), cloth),
+            "beyond": float((bent >= 1.0).any(axis=0).mean()),
+            "toward": float(bent.max()),
+            "past room": float((np.abs(bent) > FOLD_ROOM).any(axis=0).mean())}
+
+
+def shot_rows(name: str, cache: Path, grid: float) -> dict:
+    """Per phase (its name: phase_row, with the cloth's spectral spread) for the shot
+    simulated on ``grid`` at the converged referee's iterations; and usdwrinkle baked on
+    it at the W matched to it (as the referee bakes: referee.bake_on), with its height
+    ratio and spectral spread per phase."""
+    from usdwrinkle.usd import schema
+
+    sim, fine = referee_pair(name, cache, grid, CONVERGED[1])
+    cloth = cloth_attributes(sim.shot)
+    default, _ = bake_on(sim, fine, "default", None, cloth)
+    width = matched_width(sim.shot, per_phase(sim, default))
+    ours, _ = bake_on(sim, fine, "matched", width, cloth)
+    heights = per_phase(sim, ours)
+    inside = zones(sim.shot)["all"]
+    phases = {}
+    for phase, (_, end) in sim.shot.phases.items():
+        row = phase_row(sim.shot, sim.points[end - 1], schema.DEFAULT_SLACK)
+        if row is not None:
+            row["spread"] = measure.spectral_spread(sim.shot, sim.h[end - 1], inside)
+            row["our spread"] = measure.spectral_spread(sim.shot, ours.h[end - 1], inside)
+            row["wavelength"], row["height"] = heights[phase]
+        phases[phase] = row
+    return {"grid": grid, "window": sim.shot.window, "width": width, "phases": phases}
+
+
+def report(rows: dict, seconds: float, grid: float) -> str:
+    begin, end = markers(NAME)
+    lines = [begin, "", f"Made by `python -m benchmarks.physics.heightfield --write "
+             f"docs/physics.md` ({seconds:.0f} s here; the simulations at {100 * grid:g} cm "
+             f"and {CONVERGED[1]} iterations, cached in .physics-cache).", "",
+             "At the last phase: the cloth's area over its rest area, its low-pass's, its "
+             "normal offsets' alone; s; the cloth's spectral spread; usdwrinkle's at the "
+             "matched W, and its height there (ours / sim); the share of the cloth's points "
+             "whose offset |h k| exceeds usdwrinkle's room (FOLD_ROOM). Then, over every "
+             "phase, the worst s, the largest h k towards the centre of curvature and the "
+             "share of offsets beyond the reach (h k >= 1).", "",
+             "| shot | window | matched W | cloth's area | its low-pass's | its normal "
+             "offsets' | s | spread: cloth, ours | height (matched) | past the room "
+             "| s, worst phase | h k towards the centre | beyond the reach |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    detail = []
+    for name, row in rows.items():
+        phases = {p: r for p, r in row["phases"].items() if r is not None}
+        last = list(phases.values())[-1]
+        worst_phase, worst = max(phases.items(), key=lambda item: item[1]["s"])
+        beyond = max(r["beyond"] for r in phases.values())
+        toward = max(r["toward"] for r in phases.values())
+        lines.append(f"| {name} | {100 * row['window']:.1f} cm | {100 * row['width']:.1f} cm "
+                     f"| {last['cloth']:.3f} | {last['low']:.3f} | {last['offsets']:.3f} | "
+                     f"{last['s']:.2f} | {last['spread']:.3f}, {last['our spread']:.3f} | "
+                     f"{last['height']:.2f}x | {100 * last['past room']:.1f}% | "
+                     f"{worst['s']:.2f} ({worst_phase}) | {toward:.2f} | "
+                     f"{100 * beyond:.1f}% |")
+        detail.append(f"- {name}: " + "; ".join(
+            f"{p} {r['s']:.2f}, {r['wavelength']:.2f}x, {r['height']:.2f}x"
+            for p, r in phases.items()))
+    lines += ["", "Phase by phase (s; our wavelength and height at matched W over the "
+              "cloth's):", ""] \
+        + detail + ["", end]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.heightfield",
+                                     description=__doc__.split("\n\n")[0])
+    add_write_option(parser, NAME, "docs/physics.md")
+    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
+                        help=f"these shots (default: all of {', '.join(SWEEP)})")
+    parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
+                        help="the simulations' grid spacing in metres (default "
+                             f"{CONVERGED[0]}: the converged referee's)")
+    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    args = parser.parse_args(argv)
+    unknown = sorted(set(args.only or ()) - set(SWEEP))
+    if unknown:
+        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
+    started = time.perf_counter()
+    rows = {name: shot_rows(name, args.cache, args.grid) for name in args.only or SWEEP}
+    emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
