@@ -44,18 +44,10 @@ from pathlib import Path
 import numpy as np
 
 from ..blocks import add_write_option, emit, markers
-from . import measure
+from . import measure, referee
 from .coarse import lowpass
 from .oracle import per_phase, zones
-from .referee import (
-    CONVERGED,
-    ROOT,
-    SWEEP,
-    bake_on,
-    cloth_attributes,
-    matched_width,
-    referee_pair,
-)
+from .referee import CONVERGED, SWEEP
 
 NAME = "referee-heightfield"
 
@@ -131,11 +123,11 @@ def shot_rows(name: str, cache: Path, grid: float) -> dict:
     ratio and spectral spread per phase."""
     from usdwrinkle.usd import schema
 
-    sim, fine = referee_pair(name, cache, grid, CONVERGED[1])
-    cloth = cloth_attributes(sim.shot)
-    default, _ = bake_on(sim, fine, "default", None, cloth)
-    width = matched_width(sim.shot, per_phase(sim, default))
-    ours, _ = bake_on(sim, fine, "matched", width, cloth)
+    sim, fine = referee.referee_pair(name, cache, grid, CONVERGED[1])
+    cloth = referee.cloth_attributes(sim.shot)
+    default, _ = referee.bake_on(sim, fine, "default", None, cloth)
+    width = referee.matched_width(sim.shot, per_phase(sim, default))
+    ours, _ = referee.bake_on(sim, fine, "matched", width, cloth)
     heights = per_phase(sim, ours)
     inside = zones(sim.shot)["all"]
     phases = {}
@@ -195,7 +187,7 @@ def main(argv=None) -> int:
     parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
                         help="the simulations' grid spacing in metres (default "
                              f"{CONVERGED[0]}: the converged referee's)")
-    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+    parser.add_argument("--cache", type=Path, default=referee.ROOT / ".physics-cache")
     args = parser.parse_args(argv)
     unknown = sorted(set(args.only or ()) - set(SWEEP))
     if unknown:
