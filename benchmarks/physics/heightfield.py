@@ -38,6 +38,7 @@ about 20 s a shot here (two bakes).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -193,7 +194,12 @@ def main(argv=None) -> int:
     if unknown:
         parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
     started = time.perf_counter()
-    rows = {name: shot_rows(name, args.cache, args.grid) for name in args.only or SWEEP}
+    names = args.only or list(SWEEP)
+    rows = {}
+    for number, name in enumerate(names, start=1):
+        # a shot not in the cache is simulated first: minutes to an hour on one core
+        print(f"heightfield: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
+        rows[name] = shot_rows(name, args.cache, args.grid)
     emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
     return 0
 
