@@ -99,13 +99,20 @@ def _spectrum(shot: Shot, h: np.ndarray, mask=None):
     return power, fu, fv
 
 
-def wavelength(shot: Shot, h: np.ndarray, mask=None) -> float:
-    """Material wavelength (m): 1 / the power-weighted mean spatial frequency. Frequencies
-    below 1 / 0.4 m (the low-pass's own range) are left out."""
+def _folds_spectrum(shot: Shot, h: np.ndarray, mask=None):
+    """The folds' part of _spectrum: (power weights summing to 1, spatial frequency
+    (cycles/m)), frequencies below 1 / 0.4 m (the low-pass's own range) left out."""
     power, fu, fv = _spectrum(shot, h, mask)
     f = np.hypot(fu, fv)
     keep = f > 2.5
-    return float(1.0 / ((power * f)[keep].sum() / power[keep].sum()))
+    return power[keep] / power[keep].sum(), f[keep]
+
+
+def wavelength(shot: Shot, h: np.ndarray, mask=None) -> float:
+    """Material wavelength (m): 1 / the power-weighted mean spatial frequency
+    (_folds_spectrum)."""
+    weights, f = _folds_spectrum(shot, h, mask)
+    return float(1.0 / (weights * f).sum())
 
 
 def spectral_spread(shot: Shot, h: np.ndarray, mask=None) -> float:
@@ -113,11 +120,8 @@ def spectral_spread(shot: Shot, h: np.ndarray, mask=None) -> float:
     ``wavelength`` reads): 1 for one plane wave. At small slopes a fold pattern holds
     extra length (1/2)<|grad h|^2> = 2 pi^2 <f^2> <h^2>: for the same length, one of
     unequal waves stands 1 / spread as high as a single wave of its mean wavelength."""
-    power, fu, fv = _spectrum(shot, h, mask)
-    f = np.hypot(fu, fv)
-    keep = f > 2.5
-    weights = power[keep] / power[keep].sum()
-    return float(np.sqrt((weights * f[keep] ** 2).sum()) / (weights * f[keep]).sum())
+    weights, f = _folds_spectrum(shot, h, mask)
+    return float(np.sqrt((weights * f ** 2).sum()) / (weights * f).sum())
 
 
 def structure_direction(shot: Shot, h: np.ndarray, mask=None) -> np.ndarray:
