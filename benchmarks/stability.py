@@ -196,7 +196,9 @@ def around(path: str, folder: str, all_meshes: bool = False, ctx=None) -> dict:
     return out
 
 
-def _phases(path: str, frames, ctx=None) -> dict:
+def sleeve_fields(path: str, frames, ctx=None) -> dict:
+    """The shirt's sleeve's wrinkle fields at ``frames`` (frame -> read_fields(...).arrays()),
+    the stage at ``path`` played from frame 1: what moved_waves compares."""
     from usdwrinkle.engine import WrinkleEngine
 
     engine = WrinkleEngine(path, ctx=ctx)
@@ -262,7 +264,7 @@ def locality(folder: str, ctx=None) -> dict:
     width = float(mesh.GetAttribute("primvars:wrinkle:width").Get()[0])
     cuff = np.flatnonzero(rest[:, axis] > rest[:, axis].max() - 0.6 * width)
     out = _painted_layer(source, rest, q, axis, cuff, 0.6, f"{folder}/cuff.usda")
-    base, other = _phases(str(SHIRT), FRAMES, ctx), _phases(out, FRAMES, ctx)
+    base, other = sleeve_fields(str(SHIRT), FRAMES, ctx), sleeve_fields(out, FRAMES, ctx)
     distance = np.min(np.linalg.norm(rest[:, None] - rest[cuff][None], axis=2), axis=1)
     hops = _hops(mesh, rest, cuff)
     rows = {}
@@ -352,10 +354,10 @@ def _draws_of(job: tuple) -> tuple[str, list]:
         else:
             path = with_units(str(cesium_man()), f"{folder}/cesium.usda")
         if phases:
-            base, counts = _phases(path, FRAMES), []
+            base, counts = sleeve_fields(path, FRAMES), []
             for index, axis in axes:
-                other = _phases(perturbed(path, degrees, f"{folder}/draw{index}.usda", axis),
-                                FRAMES)
+                other = sleeve_fields(
+                    perturbed(path, degrees, f"{folder}/draw{index}.usda", axis), FRAMES)
                 counts.append((index, max(int(moved_waves(base[f], other[f]).sum())
                                           for f in FRAMES)))
             return stage, counts
