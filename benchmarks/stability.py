@@ -276,6 +276,19 @@ def locality(folder: str, ctx=None) -> dict:
     return rows
 
 
+def moved_wave_counts(path: str, axes, degrees: float, folder: str,
+                      ctx=None) -> list[tuple[int, int]]:
+    """For each (index, axis) of ``axes``: (index, the most of the sleeve's waves that
+    ``degrees`` about the axis moves by more than 0.5 rad at any of FRAMES)."""
+    base, counts = sleeve_fields(path, FRAMES, ctx), []
+    for index, axis in axes:
+        other = sleeve_fields(perturbed(path, degrees, f"{folder}/draw{index}.usda", axis),
+                              FRAMES, ctx)
+        counts.append((index, max(int(moved_waves(base[f], other[f]).sum())
+                                  for f in FRAMES)))
+    return counts
+
+
 def moved_waves(a: dict, b: dict, radians: float = 0.5) -> np.ndarray:
     """Per point of two runs' fields (read_fields(...).arrays()), whether it has a wave
     above 5% of the largest amplitude in both and its phase (sign-aligned) moved by more
@@ -354,13 +367,7 @@ def _draws_of(job: tuple) -> tuple[str, list]:
         else:
             path = with_units(str(cesium_man()), f"{folder}/cesium.usda")
         if phases:
-            base, counts = sleeve_fields(path, FRAMES), []
-            for index, axis in axes:
-                other = sleeve_fields(
-                    perturbed(path, degrees, f"{folder}/draw{index}.usda", axis), FRAMES)
-                counts.append((index, max(int(moved_waves(base[f], other[f]).sum())
-                                          for f in FRAMES)))
-            return stage, counts
+            return stage, moved_wave_counts(path, axes, degrees, folder)
         base = heights(path, all_meshes)
         return stage, [(index, max(moved_share(base, heights(perturbed(
             path, degrees, f"{folder}/draw{index}.usda", axis), all_meshes)).values()))
