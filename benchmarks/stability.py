@@ -276,11 +276,14 @@ def locality(folder: str, ctx=None) -> dict:
     return rows
 
 
-def moved_wave_counts(path: str, axes, degrees: float, folder: str,
-                      ctx=None) -> list[tuple[int, int]]:
+def moved_wave_counts(path: str, axes, degrees: float, folder: str, ctx=None,
+                      base: dict | None = None) -> list[tuple[int, int]]:
     """For each (index, axis) of ``axes``: (index, the most of the sleeve's waves that
-    ``degrees`` about the axis moves by more than 0.5 rad at any of FRAMES)."""
-    base, counts = sleeve_fields(path, FRAMES, ctx), []
+    ``degrees`` about the axis moves by more than 0.5 rad at any of FRAMES); ``base``:
+    the unperturbed stage's sleeve_fields at FRAMES, where already played."""
+    if base is None:
+        base = sleeve_fields(path, FRAMES, ctx)
+    counts = []
     for index, axis in axes:
         other = sleeve_fields(perturbed(path, degrees, f"{folder}/draw{index}.usda", axis),
                               FRAMES, ctx)
