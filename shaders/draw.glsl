@@ -67,6 +67,9 @@ INTERPOLATED out vec3 v_color;
 flat out vec4 v_wave[WAVE_SLOTS];
 flat out vec3 v_phase[SYSTEMS_MAX];
 flat out vec3 v_corner[3];
+#if defined IRREGULAR
+flat out vec3 v_rest[3];
+#endif
 #if defined TEXTURED
 // the texture deformation's map from a local-space offset to an st offset: the rows of
 // inverse(gram) [dP/ds; dP/dt] (zero where the triangle's st are degenerate)
@@ -104,6 +107,9 @@ void main() {
     v_wave = cw.wave;
     v_phase = cw.phase;
     v_corner = cw.corner;
+#if defined IRREGULAR
+    for (int k = 0; k < 3; ++k) v_rest[k] = u_wrinkles != 0 ? cw.rest[k] : vec3(0.0);
+#endif
 #if defined TEXTURED
     v_st_from_local[0] = v_st_from_local[1] = vec3(0.0);
     vec3 dp_du, dp_dv;  // dP/dUV, local space
@@ -137,6 +143,12 @@ INTERPOLATED in vec3 v_color;
 flat in vec4 v_wave[WAVE_SLOTS];
 flat in vec3 v_phase[SYSTEMS_MAX];
 flat in vec3 v_corner[3];
+#if defined IRREGULAR
+flat in vec3 v_rest[3];
+#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS, v_rest)
+#else
+#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS)
+#endif
 #if defined TEXTURED
 flat in vec3 v_st_from_local[2];
 #endif
@@ -262,8 +274,7 @@ Bent bend(int t, vec3 n, vec3 bary, vec3 local, Footprint pixel, bool mapped,
           vec3 n_tangent) {
     Wave wave = Wave(0.0, vec3(0.0), 0.0);
     if (u_wrinkles != 0) {
-        wave = blend_corner_waves(CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS), bary,
-                                  local, n, false, pixel);
+        wave = blend_corner_waves(DRAWN_CORNER_WAVES, bary, local, n, false, pixel);
     }
     vec3 shading_local = safe_normalize(n - wave.gradient, n);
 #if defined NORMAL_MAP

@@ -67,15 +67,27 @@ def blend(gl_context):
         textures.append(texture)
     shader = compute_shader(ctx, "blend_probe.glsl", {**COMMON, **WAVE}, root=SHADERS)
     shader["u_profile_samples"] = float(len(height))
+    rough = compute_shader(ctx, "blend_probe.glsl", {**COMMON, **WAVE, "IRREGULAR": 1},
+                           root=SHADERS)
+    rough["u_profile_samples"] = float(len(height))
 
-    def run(items):
-        data = np.zeros((len(items), 9, 4), np.float32)
+    def run(items, irregular=None):
+        """``irregular``: (the rest corners per case, beta, 1 / Lambda), run on the
+        IRREGULAR variant."""
+        program = shader
+        data = np.zeros((len(items), 12, 4), np.float32)
         for i, (waves, phases, corners, bary, p) in enumerate(items):
             data[i, :3] = waves
             data[i, 3, :3] = phases
             data[i, 4:7, :3] = corners
             data[i, 7, :3] = bary
             data[i, 8, :3] = p
+        if irregular is not None:
+            program = rough
+            rests, beta, scale = irregular
+            data[:, 9:12, :3] = rests
+            program["u_irregularity"] = float(beta)
+            program["u_irregularity_scale"] = float(scale)
         source = ctx.buffer(data.tobytes())
         target = ctx.buffer(reserve=len(items) * 2 * 16)
         try:
@@ -84,7 +96,7 @@ def blend(gl_context):
                 tex.use(location=unit)
             source.bind_to_storage_buffer(0)
             target.bind_to_storage_buffer(1)
-            shader.run(len(items))
+            program.run(len(items))
             ctx.finish()
             return np.frombuffer(target.read(), np.float32).reshape(len(items), 2, 4)
         finally:
@@ -155,6 +167,101 @@ def test_the_exact_gradient_is_the_gradient_of_the_height():
                                        gradient)[0])
             else:
                 slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
+                assert abs((values[0] - values[1]) / (2 * step) - g[axis]) <= 1e-3 * slope
+                checked += 1
+    assert checked > 100
+
+
+def rest_corners(items, seed: int) -> np.ndarray:
+    """Rest corners for ``items``: each posed triangle stretched back out of a random
+    compression (1-3x along a random direction in its plane, as crushed cloth) and moved
+    far from the origin, where the irregularity field's phases are large."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _, _, corners, _, _ in items:
+        angle = rng.uniform(0, np.pi)
+        d = np.array([np.cos(angle), np.sin(angle), 0.0])
+        stretch = np.eye(3) + (rng.uniform(1, 3) - 1) * np.outer(d, d)
+        out.append(corners @ stretch.T + np.array([3.0, -2.0, 1.5]))
+    return np.array(out)
+
+
+#: the irregularity the cases run at (beta = IRREGULARITY_GAIN x it) and their field's
+#: 1 / Lambda: Lambda 1.5 units, over the cases' 0.2-1.5 unit waves, so that the factor
+#: |k| / |k'| reaches its clamps on some corners
+IRREGULARITY = 0.3
+SCALE = 1 / 1.5
+
+
+def test_the_irregular_blend_and_its_gradient_match_numpy(blend):
+    """The IRREGULAR variant (wrinkle:irregularity) against blend_at's: heights and exact
+    gradients as the regular variant's test bounds them, over triangles whose rest
+    corners lie 4 units from the origin; and the field is not nothing there (the heights
+    differ from the regular blend's)."""
+    from usdwrinkle.method.contract import IRREGULARITY_GAIN
+
+    run, height, gradient = blend
+    items = cases(5, False)
+    rests = rest_corners(items, 6)
+    beta = IRREGULARITY_GAIN * IRREGULARITY
+    gpu = run(items, (rests, beta, SCALE))
+    moved = []
+    for (waves, phases, corners, bary, p), rest, got in zip(items, rests, gpu, strict=True):
+        h, g, _ = blend_at(waves, phases, corners, bary, p, height, gradient,
+                           (rest, beta, SCALE))
+        regular = blend_at(waves, phases, corners, bary, p, height, gradient)[0]
+        scale = waves[:, 3].max() * 2  # the factor raises an amplitude at most 2x
+        slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1)) * 2
+        assert abs(got[0, 0] - h) <= 2e-3 * scale, (got[0], h)
+        assert np.abs(got[0, 1:] - g).max() <= 1e-2 * slope + 1e-5, (got[0], g)
+        moved.append(abs(h - regular) / waves[:, 3].max())
+    assert np.median(moved) > 0.1
+    # a wave's sign is arbitrary: (-k, -phi) at every corner draws the same folds (the
+    # default profile is even), as the regular blend does; a field added to the phase
+    # alike whatever the sign drew other folds after a flip (2026-12-05: a held sleeve's
+    # crests jumped when a triangle's first corner changed its sign)
+    flipped = [(np.concatenate([-waves[:, :3], waves[:, 3:]], 1), -phases, corners, bary, p)
+               for waves, phases, corners, bary, p in items]
+    again = run(flipped, (rests, beta, SCALE))
+    scale = np.array([w[:, 3].max() for w, *_ in items])
+    assert np.all(np.abs(again[:, 0, 0] - gpu[:, 0, 0]) <= 2e-3 * scale)
+
+
+def test_the_irregular_exact_gradient_is_the_gradient_of_the_height():
+    """numpy alone, as the regular test: the IRREGULAR exact gradient (the field's
+    second derivatives in the amplitude factor's) against central differences."""
+    from usdwrinkle.method.contract import IRREGULARITY_GAIN
+
+    samples = 4096
+    theta = 2 * np.pi * np.arange(samples) / samples
+    height, gradient = np.cos(theta), -np.sin(theta)
+    step = 1e-6
+    beta = IRREGULARITY_GAIN * IRREGULARITY
+    items = cases(13, False)
+    checked = 0
+    for (waves, phases, corners, bary, p), rest in zip(items, rest_corners(items, 14),
+                                                       strict=True):
+        irregular = (rest, beta, SCALE)
+        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient, irregular)
+        if not 1.0 < keep < 0.95 / BLEND_COHERENCE_FLOOR or abs(h) >= 0.99 * np.sum(
+                bary * waves[:, 3]):
+            continue
+        inverse = np.linalg.inv(np.stack([corners[1] - corners[0],
+                                          corners[2] - corners[0]], 1)[:2])
+        for axis in range(2):
+            move = np.zeros(3)
+            move[axis] = step
+            values = []
+            for sign in (1, -1):
+                q = p + sign * move
+                uv = inverse @ (q - corners[0])[:2]
+                weights = np.array([1 - uv.sum(), uv[0], uv[1]])
+                if weights.min() < 0:
+                    break
+                values.append(blend_at(waves, phases, corners, weights, q, height,
+                                       gradient, irregular)[0])
+            else:
+                slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1)) * 2
                 assert abs((values[0] - values[1]) / (2 * step) - g[axis]) <= 1e-3 * slope
                 checked += 1
     assert checked > 100

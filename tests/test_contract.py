@@ -24,6 +24,8 @@ LOCAL = re.compile(r"\b(?:float|int|uint|bool|[iu]?vec[234]|mat[234](?:x[234])?)
 GLSL = {"GL_ARB_shader_draw_parameters"}
 STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
                   "STEP", "FIT", "TWO_SYSTEMS", "NORMAL_MAP",
+                  # the wave blend's (render/passes/__init__.py, irregular)
+                  "IRREGULAR",
                   # the normals pass's (render/passes/normals.py)
                   "SMOOTH", "FACETED", "SKINNED",
                   # the draw pass's (render/passes/draw.py)

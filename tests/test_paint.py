@@ -275,6 +275,30 @@ def test_live_controls_preview_then_author(sheet_session):
     assert prim.GetAttribute("wrinkle:cloth").Get() == "denim"
 
 
+def test_the_irregularity_control_previews_authors_and_undoes(sheet_session):
+    """wrinkle:irregularity is a live control: dragged, the frame changes and nothing is
+    authored; released, it is authored (one undo step); undone, the frame is the first
+    again; out of [0, 0.5] it is refused. On the sheet flooded with painted folds."""
+    session, _, _ = sheet_session
+    prim = session.stage.GetPrimAtPath(session.active)
+    session.render(320, 180, FULL)
+    session.flood()  # painted folds over the whole sheet
+    first = session.render(320, 180, FULL).pixels
+    assert session.control("irregularity") == 0.0
+    session.set_control("irregularity", 0.3, live=True)
+    assert not prim.GetAttribute("wrinkle:irregularity").HasAuthoredValue()
+    moved = session.render(320, 180, FULL).pixels
+    assert np.abs(moved.astype(np.float64) - first).max() > 0.1 * np.abs(first).max()
+    edit = session.set_control("irregularity", 0.3)
+    assert (edit.before, edit.after) == (0.0, pytest.approx(0.3))
+    assert prim.GetAttribute("wrinkle:irregularity").Get() == pytest.approx(0.3)
+    session.undo()
+    assert prim.GetAttribute("wrinkle:irregularity").Get() == 0.0
+    np.testing.assert_array_equal(session.render(320, 180, FULL).pixels, first)
+    with pytest.raises(UsdWrinkleError, match="irregularity 0.8 must be in"):
+        session.set_control("irregularity", 0.8)
+
+
 def test_a_live_preview_keeps_the_history_and_the_edit_restarts_it(sheet_session,
                                                                    gl_context, tmp_path):
     """A stroke previews the current frame from the kept state; once authored, the frame

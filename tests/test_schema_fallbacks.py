@@ -17,6 +17,7 @@ SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 FALLBACKS = {
     schema.SLACK: schema.DEFAULT_SLACK,
     schema.CREST_DAMPING: schema.DEFAULT_CREST_DAMPING,
+    schema.IRREGULARITY: schema.DEFAULT_IRREGULARITY,
     schema.CLOTH: schema.DEFAULT_CLOTH,
     schema.BIAXIAL: schema.DEFAULT_BIAXIAL,
     schema.TENSION: schema.DEFAULT_TENSION,

@@ -4,8 +4,9 @@
 // of UV space) and the displaced geometry (per fine vertex).
 //
 // The including shader defines the units WAVE_POSED_POINTS, WAVE_FIELDS, WAVE_PHASE,
-// WAVE_TRIANGLES, WAVE_HEIGHT_PROFILE and WAVE_GRADIENT_PROFILE (render/bindings.py:
-// WAVE) and sets u_profile_samples.
+// WAVE_TRIANGLES, WAVE_HEIGHT_PROFILE, WAVE_GRADIENT_PROFILE and WAVE_REST_POINTS
+// (render/bindings.py: WAVE) and sets u_profile_samples; the variant with IRREGULAR
+// defined (wrinkle:irregularity > 0) also sets u_irregularity and u_irregularity_scale.
 #ifndef USDWRINKLE_WAVE_GLSL
 #define USDWRINKLE_WAVE_GLSL
 
@@ -17,6 +18,13 @@ layout(binding = WAVE_TRIANGLES) uniform highp isampler2D triangles;  // corners
 layout(binding = WAVE_HEIGHT_PROFILE) uniform sampler2D u_height_profile;  // H, one period
 layout(binding = WAVE_GRADIENT_PROFILE) uniform sampler2D u_gradient_profile;  // dH/dtheta
 uniform float u_profile_samples;
+#if defined IRREGULAR
+layout(binding = WAVE_REST_POINTS) uniform sampler2D wave_rest_points;  // local space
+// Irregular folds (wrinkle:irregularity; method/contract.py, docs/method.md): beta, the
+// radians of the field N added to every corner's phase, and 1 / Lambda, its length scale
+uniform float u_irregularity;
+uniform float u_irregularity_scale;
+#endif
 // Wave systems per vertex: the program variant with TWO_SYSTEMS defined (wrinkle:biaxial,
 // or a bake of it) loops over u_systems; the default variant is the paper's one system,
 // compiled without the second system's code (the general loop costs draw time even with
@@ -73,6 +81,9 @@ struct CornerWaves {
     // each corner's compression r along its wave (crush's FIELD_DIRECTION w): the rest
     // (material) wavelength is 2 pi / (|k| r), what the displaced mesh's band limit reads
     vec3 ratio[SYSTEMS_MAX];
+#if defined IRREGULAR
+    vec3 rest[3];  // the rest corners (local space), where the irregularity field lives
+#endif
 };
 #if defined TWO_SYSTEMS
 #define NO_RATIOS vec3[2](vec3(1.0), vec3(1.0))
@@ -90,6 +101,9 @@ CornerWaves corner_waves(int t) {
     CornerWaves cw;
     ivec3 corners = fetch(triangles, t).xyz;
     for (int c = 0; c < 3; ++c) cw.corner[c] = fetch(posed_points, corners[c]).xyz;
+#if defined IRREGULAR
+    for (int c = 0; c < 3; ++c) cw.rest[c] = fetch(wave_rest_points, corners[c]).xyz;
+#endif
     vec3 reference0 = fetch(fields, FIELD_WAVE(corners.x)).xyz;
 #if defined TWO_SYSTEMS
     vec3 reference1 = fetch(fields, FIELD_WAVE_OF(corners.x, 1)).xyz;
@@ -183,10 +197,131 @@ vec3 blend_weights(vec3 bary) {
     return bary / max(bary.x + bary.y + bary.z, 1e-20);
 }
 
+#if defined IRREGULAR
+// The irregularity fields at the point of weights bary (docs/method.md, "Irregular
+// folds"): three fields N_i over the rest surface at X = sum b_c R_c (terms j of field
+// j / IRREGULARITY_TERMS_PER_FIELD), each with its gradient over the posed triangle (X is
+// affine in the posed point: grad_p N = sum_c (R_c . grad_X N) grad b_c); and per term its
+// posed wave vector q_j and sin(phi_j), from which the exact gradient takes the fields'
+// second derivatives (grad_p grad_p N_i = -c sum_j sin(phi_j) q_j q_j^T). A system's
+// phases shift by beta u . N (system_shift).
+struct Irregular {
+    float field[IRREGULARITY_FIELDS];
+    vec3 gradient[IRREGULARITY_FIELDS];
+    vec3 q[IRREGULARITY_COUNT];
+    float s[IRREGULARITY_COUNT];
+    vec3 rest_db[3];  // the gradients of the weights over the rest triangle
+};
+const float IRREGULARITY_NORM = sqrt(2.0 / float(IRREGULARITY_TERMS_PER_FIELD));
+
+Irregular irregular_field(CornerWaves cw, vec3 bary) {
+    Irregular field;
+    for (int i = 0; i < IRREGULARITY_FIELDS; ++i) {
+        field.field[i] = 0.0;
+        field.gradient[i] = vec3(0.0);
+    }
+    vec3 X = bary.x * cw.rest[0] + bary.y * cw.rest[1] + bary.z * cw.rest[2];
+    vec3 db[3];
+    for (int c = 0; c < 3; ++c) {
+        db[c] = weight_gradient(c, cw.corner[0], cw.corner[1], cw.corner[2]);
+        field.rest_db[c] = weight_gradient(c, cw.rest[0], cw.rest[1], cw.rest[2]);
+    }
+    vec4 terms[IRREGULARITY_COUNT] = IRREGULARITY_TERMS;
+    for (int j = 0; j < IRREGULARITY_COUNT; ++j) {
+        int i = j / IRREGULARITY_TERMS_PER_FIELD;
+        vec3 omega = terms[j].xyz * u_irregularity_scale;  // rest space, radians a unit
+        float phi = dot(omega, X) + terms[j].w;
+        // posed: the rest corners' phases differ by omega . (R_c - R_0)
+        vec3 q = dot(omega, cw.rest[1] - cw.rest[0]) * db[1]
+               + dot(omega, cw.rest[2] - cw.rest[0]) * db[2];
+        field.q[j] = q;
+        field.s[j] = sin(phi);
+        field.field[i] += IRREGULARITY_NORM * field.s[j];
+        field.gradient[i] += IRREGULARITY_NORM * cos(phi) * q;
+    }
+    return field;
+}
+
+// the rest-space unit direction of posed wave vector k over the triangle (its material
+// wave vector (dp/dX)^T k, dp/dX = sum_c P_c grad_X b_c), zero where the rest triangle
+// is degenerate
+vec3 rest_direction_of(CornerWaves cw, Irregular field, vec3 k) {
+    return normalize_or_zero(dot(cw.corner[1] - cw.corner[0], k) * field.rest_db[1]
+                             + dot(cw.corner[2] - cw.corner[0], k) * field.rest_db[2]);
+}
+
+// One wave system's shift of the phase at the point, the same for its three corners:
+// m = beta u . N, u = v / |v| the direction of v = sum_c b_c a_c u_c (u_c: corner c's
+// rest direction, sign-aligned as the corners are). A wave's sign flips u with its
+// phase, so (k, phi) and (-k, -phi) draw the same folds; u is continuous across the
+// coarse edges (there only the edge's corners weigh). Its posed gradient:
+// grad m = beta (sum_i u_i grad N_i + (grad u)^T N), grad u = (I - u u^T) V / |v|,
+// V = sum_c a_c u_c grad b_c^T.
+struct Shift {
+    float m;
+    vec3 gradient;
+    vec3 u;
+    mat3 V;
+    float rho;  // |v|; 0: no shift (no wave, or directions that cancel)
+};
+
+Shift system_shift(CornerWaves cw, Irregular field, vec3 bary, int s, float beta) {
+    Shift shift = Shift(0.0, vec3(0.0), vec3(0.0), mat3(0.0), 0.0);
+    vec3 v = vec3(0.0);
+    float total = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        vec4 wave = cw.wave[3 * s + c];
+        vec3 u_c = wave.w * rest_direction_of(cw, field, wave.xyz);
+        v += bary[c] * u_c;
+        shift.V += outerProduct(u_c, weight_gradient(c, cw.corner[0], cw.corner[1],
+                                                     cw.corner[2]));
+        total += bary[c] * wave.w;
+    }
+    float rho = length(v);
+    if (!(rho > 1e-6 * total) || total <= 0.0) return shift;
+    shift.rho = rho;
+    shift.u = v / rho;
+    vec3 N = vec3(field.field[0], field.field[1], field.field[2]);
+    shift.m = beta * dot(shift.u, N);
+    shift.gradient = beta * (shift.u.x * field.gradient[0] + shift.u.y * field.gradient[1]
+                             + shift.u.z * field.gradient[2]
+                             + transpose(shift.V) * (N - shift.u * dot(shift.u, N)) / rho);
+    return shift;
+}
+
+// the shift's second derivatives applied to a vector: (grad grad m) w, for the exact
+// gradient of the amplitude factor |k| / |k + grad m|
+vec3 shift_hessian(Shift shift, Irregular field, float beta, vec3 w) {
+    if (shift.rho <= 0.0) return vec3(0.0);
+    vec3 u = shift.u;
+    vec3 N = vec3(field.field[0], field.field[1], field.field[2]);
+    vec3 out_ = vec3(0.0);
+    // sum_i u_i H_i w, H_i = -c sum_j sin(phi_j) q_j q_j^T over field i's terms
+    for (int j = 0; j < IRREGULARITY_COUNT; ++j) {
+        out_ -= IRREGULARITY_NORM * u[j / IRREGULARITY_TERMS_PER_FIELD] * field.s[j]
+              * dot(field.q[j], w) * field.q[j];
+    }
+    vec3 du = (shift.V * w - u * dot(u, shift.V * w)) / shift.rho;  // (grad u) w
+    vec3 jn = vec3(dot(field.gradient[0], w), dot(field.gradient[1], w),
+                   dot(field.gradient[2], w));                         // (grad N) w
+    out_ += du.x * field.gradient[0] + du.y * field.gradient[1] + du.z * field.gradient[2];
+    out_ += transpose(shift.V) * (jn - u * dot(u, jn)) / shift.rho;
+    // N . u(p), N held: d/dw of V^T (N - u (u . N)) / rho
+    float uN = dot(u, N);
+    out_ += transpose(shift.V) * (-du * uN - u * dot(du, N)) / shift.rho
+          - transpose(shift.V) * (N - u * uN) * dot(u, shift.V * w) / (shift.rho * shift.rho);
+    return beta * out_;
+}
+#endif
+
 Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gradient,
                         Footprint footprint) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     bary = blend_weights(bary);
+#if defined IRREGULAR
+    Irregular field = irregular_field(cw, bary);
+    float beta = u_irregularity;
+#endif
     for (int s = 0; s < SYSTEMS; ++s) {
         float height = 0.0;      // this system's blend, before its coherence
         vec3 gradient = vec3(0.0);
@@ -195,6 +330,9 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
         vec3 d_total = vec3(0.0);  // their gradients (exact_gradient)
         vec3 d_cos = vec3(0.0);
         vec3 d_sin = vec3(0.0);
+#if defined IRREGULAR
+        Shift shift = system_shift(cw, field, bary, s, beta);
+#endif
         for (int c = 0; c < 3; ++c) {
             vec4 wave = cw.wave[3 * s + c];
             vec3 k = wave.xyz;
@@ -202,9 +340,34 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
             // the amplitude field (the AOV, the maps' mask) is the cloth's, before the
             // band limit: it says how wrinkled the cloth is, not what this pixel resolves
             w.amplitude += b * wave.w;
-            float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
-            if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
+#if defined IRREGULAR
+            // irregular folds: every corner's phase moves by the system's shift m, so
+            // the local wave is k + grad m; the amplitude by |k| / |k'| keeps the law's
+            // slope
+            float k_length = length(k);
+            theta += shift.m;
+            k += shift.gradient;
+            float k_local = length(k);
+            float f = k_length > 0.0
+                ? clamp(k_length / max(k_local, 1e-30), IRREGULARITY_FACTOR_MIN,
+                        IRREGULARITY_FACTOR_MAX)
+                : 1.0;
+            float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
+            // the factor's gradient (exact_gradient): -|k| / |k'|^3 (grad_p k')^T k',
+            // grad_p k' = grad_p grad_p m; none where the factor is clamped
+            vec3 d_factor = vec3(0.0);
+            if (exact_gradient && k_length > 0.0 && f > IRREGULARITY_FACTOR_MIN
+                    && f < IRREGULARITY_FACTOR_MAX) {
+                d_factor = -k_length / (k_local * k_local * k_local)
+                         * shift_hessian(shift, field, beta, k);
+            }
+            vec3 d_a = a * d_factor;  // the gradient of a f
+            a *= f;
+#else
+            float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
+#endif
+            if (a == 0.0) continue;  // no wave here: skip the profile lookups
             float h = profile(u_height_profile, theta);
             height += b * a * h;
             gradient += b * a * profile(u_gradient_profile, theta) * k;
@@ -216,6 +379,13 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
                 d_total += a * db;
                 d_cos += a * (cos(theta) * db - b * sin(theta) * k);
                 d_sin += a * (sin(theta) * db + b * cos(theta) * k);
+#if defined IRREGULAR
+                // and the amplitude's own gradient
+                gradient += b * h * d_a;
+                d_total += b * d_a;
+                d_cos += b * cos(theta) * d_a;
+                d_sin += b * sin(theta) * d_a;
+#endif
             }
         }
         // coherence: corner waves that drift out of phase inside the triangle cancel in

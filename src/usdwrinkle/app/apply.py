@@ -115,6 +115,7 @@ class MeshEdit:
     cloth: str | None = None
     slack: float | None = None
     crest_damping: float | None = None
+    irregularity: float | None = None
     held: np.ndarray | None = None
 
 
@@ -225,6 +226,7 @@ def plan_edits(args: ApplyOptions, meshes: list[Any], q_spec: Any = None,
         check_cloth,
         check_crest_damping,
         check_held,
+        check_irregularity,
         check_q,
         check_slack,
         check_tension,
@@ -243,7 +245,8 @@ def plan_edits(args: ApplyOptions, meshes: list[Any], q_spec: Any = None,
                         amplitude_scale=args.amplitude_scale, profile=profile,
                         biaxial=args.biaxial, tension=args.tension,
                         tension_threshold=args.tension_threshold, cloth=args.cloth,
-                        slack=args.slack, crest_damping=args.crest_damping)
+                        slack=args.slack, crest_damping=args.crest_damping,
+                        irregularity=args.irregularity)
         if args.held_from_primvar:
             plan.held = held_from_primvar(prim, args.held_from_primvar)
         if q_spec is not None:
@@ -271,6 +274,7 @@ def plan_edits(args: ApplyOptions, meshes: list[Any], q_spec: Any = None,
         findings += check_cloth(plan.cloth, path)
         findings += check_slack(plan.slack, path)
         findings += check_crest_damping(plan.crest_damping, path)
+        findings += check_irregularity(plan.irregularity, path)
         findings += check_held(plan.held, count, path)
         refuse(findings)
         from pxr import UsdGeom
@@ -310,7 +314,8 @@ _AUTHORED = (("amplitude_scale", "CreateAmplitudeScaleAttr"), ("biaxial", "Creat
              ("tension", "CreateTensionAttr"),
              ("tension_threshold", "CreateTensionThresholdAttr"),
              ("cloth", "CreateClothAttr"), ("slack", "CreateSlackAttr"),
-             ("crest_damping", "CreateCrestDampingAttr"), ("held", "CreateHeldPrimvar"))
+             ("crest_damping", "CreateCrestDampingAttr"),
+             ("irregularity", "CreateIrregularityAttr"), ("held", "CreateHeldPrimvar"))
 
 
 def held_from_primvar(prim: Any, name: str) -> np.ndarray:

@@ -284,6 +284,7 @@ class ApplyOptions:
     cloth: str | None = None
     slack: float | None = None
     crest_damping: float | None = None
+    irregularity: float | None = None
     held_from_primvar: str | None = None
     amplitude_scale: float | None = None
     biaxial: float | None = None

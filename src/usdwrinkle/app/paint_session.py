@@ -20,6 +20,7 @@ from pxr import Sdf, Usd, UsdGeom
 from ..brush.stamp import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from ..brush.view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 from ..layerinfo import copy_stage_info
+from ..method.contract import IRREGULARITY_MAX
 from ..process.errors import UsdWrinkleError
 from ..usd import schema
 
@@ -64,7 +65,8 @@ def display_colors(mesh: PaintMesh, display: str, reference_width: float) -> np.
 #: the live controls: WrinkleParams field -> (schema attribute, lowest, highest)
 CONTROLS = {"width": (schema.WIDTH, 1e-4, None),
             "amplitude_scale": (schema.AMPLITUDE_SCALE, 0.0, 10.0),
-            "slack": (schema.SLACK, 0.0, 0.95)}
+            "slack": (schema.SLACK, 0.0, 0.95),
+            "irregularity": (schema.IRREGULARITY, 0.0, IRREGULARITY_MAX)}
 CLOTH_PRESETS = (*schema.CLOTH_WIDTHS_M, schema.MESH_CLOTH)
 
 
@@ -654,6 +656,8 @@ class PaintSession:
                 api.CreateAmplitudeScaleAttr(float(value))
             elif name == "slack":
                 api.CreateSlackAttr(float(value))
+            elif name == "irregularity":
+                api.CreateIrregularityAttr(float(value))
         if name == "cloth":
             self.reload()  # the width follows the preset
         self._live = None

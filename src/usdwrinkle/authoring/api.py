@@ -23,6 +23,7 @@ from ..usd.validation import (
     check_cloth,
     check_crest_damping,
     check_held,
+    check_irregularity,
     check_profile,
     check_q,
     check_relax_iterations,
@@ -174,6 +175,13 @@ class WrinkleAPI:
     def CreateCrestDampingAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
         return self._create(schema.CREST_DAMPING, Sdf.ValueTypeNames.Float, default_value,
                             lambda v: check_crest_damping(v, self._path()))
+
+    def GetIrregularityAttr(self) -> Usd.Attribute:  # noqa: N802
+        return self._attr(schema.IRREGULARITY)
+
+    def CreateIrregularityAttr(self, default_value=None) -> Usd.Attribute:  # noqa: N802
+        return self._create(schema.IRREGULARITY, Sdf.ValueTypeNames.Float, default_value,
+                            lambda v: check_irregularity(v, self._path()))
 
     def GetHeldPrimvar(self) -> UsdGeom.Primvar:  # noqa: N802
         return self._primvars().GetPrimvar("wrinkle:held")

@@ -38,6 +38,11 @@ def add_parser(subparsers) -> None:
                    help="wrinkle:crestDamping, the time constant in frames with which the "
                         "compression direction follows slight turns (default "
                         f"{schema.DEFAULT_CREST_DAMPING:g}; 0: none)")
+    p.add_argument("--irregularity", type=float, metavar="SPREAD",
+                   help="wrinkle:irregularity in [0, 0.5]: how unequal the folds are (the "
+                        "coefficient of variation of their width; their crests meander and "
+                        "the wider ones stand taller; about 0.3 in the cloth referee's "
+                        "folds). Default 0: the paper's regular waves")
     p.add_argument("--held-from-primvar", metavar="NAME",
                    help="author primvars:wrinkle:held from this float primvar of the mesh "
                         "(a painted pin or seam weight in [0, 1], vertex interpolation)")
@@ -80,7 +85,8 @@ def run(args) -> int:
     options = ApplyOptions(
         stage=args.stage, prim_paths=tuple(args.prim_paths), output=args.output,
         width=args.width, cloth=args.cloth, slack=args.slack,
-        crest_damping=args.crest_damping, held_from_primvar=args.held_from_primvar,
+        crest_damping=args.crest_damping, irregularity=args.irregularity,
+        held_from_primvar=args.held_from_primvar,
         amplitude_scale=args.amplitude_scale, biaxial=args.biaxial, tension=args.tension,
         tension_threshold=args.tension_threshold, profile=args.profile, q=args.q,
         q_from_texture=args.q_from_texture, uv=args.uv, amount_channel=args.amount_channel,

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..render import bindings
-from ..render.passes import bind_wave
+from ..render.passes import bind_wave, irregular
 from ..render.passes.base import Pass
 from ..render.resources import MeshResources, Table
 from .subdivide import FineMesh
@@ -69,7 +69,8 @@ class GeometryEvaluator(Pass):
         """The fine mesh at the frame ``res`` holds (synced and computed)."""
         ranges, entries, points, normals = self._tables(res, fine)
         two = res.waves.systems > 1
-        bind_wave(self.UNITS, res, self.variants(TWO_SYSTEMS=two))
+        rough = irregular(res)
+        bind_wave(self.UNITS, res, self.variants(TWO_SYSTEMS=two, IRREGULAR=rough))
         self.dispatch(len(fine.points), {
             "u_count": len(fine.points), "u_wrinkles": int(wrinkles),
             "u_min_wavelength": float(BAND_LIMIT_EDGES * fine.edge_length),
@@ -77,7 +78,8 @@ class GeometryEvaluator(Pass):
             reads={"GEOMETRY_RANGES": ranges, "GEOMETRY_ENTRIES": entries,
                    "GEOMETRY_SHADING_NORMALS": res.shading_normals,
                    "GEOMETRY_NORMAL_CORNERS": res.normal_corners},
-            writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals}, TWO_SYSTEMS=two)
+            writes={"GEOMETRY_POINTS": points, "GEOMETRY_NORMALS": normals}, TWO_SYSTEMS=two,
+            IRREGULAR=rough)
         out_points = points.read()
         out_normals = normals.read()
         return FineFrame(np.ascontiguousarray(out_points[:, :3]),

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..render import bindings
-from ..render.passes import bind_wave, set_uniforms
+from ..render.passes import bind_wave, irregular, set_uniforms
 from ..render.passes.base import DrawnPass
 from ..render.resources import MeshResources, Table
 
@@ -156,6 +156,7 @@ class MapRasterizer(DrawnPass):
         else:
             self.ctx.disable(moderngl.BLEND)
         variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
+                                IRREGULAR=irregular(res),
                                 MIKKTSPACE=tangents is not None and not count,
                                 PARALLAX=self.parallax)
         set_uniforms(variant.program, {

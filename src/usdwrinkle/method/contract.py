@@ -96,6 +96,42 @@ STRETCH_ONSET = 1.1
 #: corners cancel). Measured choice (docs/method.md, "Coherence"): the referee's cotton
 #: sleeve kept 0.834 of its rest area where compressed without it, 0.887 with it.
 BLEND_COHERENCE_FLOOR = 0.5
+#: Irregularity (wrinkle:irregularity, docs/method.md "Irregular folds"; beyond the
+#: paper): three smooth fields N = (N_x, N_y, N_z) over the rest surface. A corner whose
+#: wave runs along the rest-space unit direction u has its phase moved by beta u . N:
+#: neighbouring corners, whose directions agree, move alike, so the blend loses nothing,
+#: and a wave's arbitrary sign ((k, phi) or (-k, -phi), u or -u) draws the same folds.
+#: The gradient changes the local wave vector k' = k + beta grad (u . N): folds of
+#: unequal width whose crests meander, each corner's amplitude scaled by |k| / |k'|
+#: (within IRREGULARITY_FACTOR_MIN..MAX) so that the slope, and with it the length the
+#: fold law restores, stays the law's: the wider folds stand taller.
+#: Each N_i = sqrt(2 / m) sum_j sin(s_ij u_j . X / Lambda * 2 pi + psi_ij) over the m = 6
+#: axes u_j of the icosahedron (a spherical 5-design: the directional derivative's variance
+#: is the same along every direction), at relative scales s_ij (root mean square 1; each
+#: field takes them in another order) and phases psi_ij; Lambda = IRREGULARITY_SCALE x the
+#: mesh's mean width W. The derivative of u . N along a direction then has the root mean
+#: square 2 pi / (sqrt(3) Lambda), so beta = IRREGULARITY_GAIN x the irregularity gives
+#: the local wave number a coefficient of variation equal to the irregularity where the
+#: material wavelength is W.
+IRREGULARITY_SCALE = 3.0
+IRREGULARITY_GAIN = 3.0 * 3.0 ** 0.5
+IRREGULARITY_MAX = 0.5
+IRREGULARITY_FACTOR_MIN = 0.5
+IRREGULARITY_FACTOR_MAX = 2.0
+IRREGULARITY_FIELDS = 3
+_GOLDEN = (1.0 + 5.0 ** 0.5) / 2.0
+_AXES = ((0.0, 1.0, _GOLDEN), (0.0, -1.0, _GOLDEN), (1.0, _GOLDEN, 0.0),
+         (-1.0, _GOLDEN, 0.0), (_GOLDEN, 0.0, 1.0), (-_GOLDEN, 0.0, 1.0))
+IRREGULARITY_TERMS_PER_FIELD = len(_AXES)
+_SCALES = (1.0, 0.8, 1.25, 0.9, 1.12, 0.78)
+_RMS = (sum(s * s for s in _SCALES) / len(_SCALES)) ** 0.5
+_PHASES = ((0.3, 2.1, 4.4, 1.2, 5.6, 3.3), (5.1, 0.7, 2.9, 4.0, 1.8, 6.0),
+           (2.4, 4.9, 0.1, 3.7, 1.1, 5.3))
+#: the fields' terms, field by field: (s_ij u_j, psi_ij), s_ij u_j in cycles per Lambda
+IRREGULARITY_TERMS = tuple(
+    (tuple(_SCALES[(j + 2 * i) % len(_SCALES)] / _RMS * c / (1.0 + _GOLDEN ** 2) ** 0.5
+           for c in axis), _PHASES[i][j])
+    for i in range(IRREGULARITY_FIELDS) for j, axis in enumerate(_AXES))
 #: the most a painted gather adds: |q| = 1 gathers the cloth to half its length (the
 #: paper's r = 1 - |q|^2 would reach 1 / r_min = 20 times it, folds 7 W tall)
 PAINT_GATHER_MAX = 1.5
@@ -254,7 +290,18 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("ANCHOR_ALIGNED", ANCHOR_ALIGNED),
     ("ACROSS_MIN", ACROSS_MIN), ("ACROSS_MAX", ACROSS_MAX), ("STRETCH_ONSET", STRETCH_ONSET),
     ("BLEND_COHERENCE_FLOOR", BLEND_COHERENCE_FLOOR),
-    ("SLOPE_SAMPLES", SLOPE_SAMPLES), ("SLOPE_STEP", SLOPE_STEP))}
+    ("SLOPE_SAMPLES", SLOPE_SAMPLES), ("SLOPE_STEP", SLOPE_STEP),
+    ("IRREGULARITY_FACTOR_MIN", IRREGULARITY_FACTOR_MIN),
+    ("IRREGULARITY_FACTOR_MAX", IRREGULARITY_FACTOR_MAX),
+    ("IRREGULARITY_COUNT", len(IRREGULARITY_TERMS)),
+    ("IRREGULARITY_FIELDS", IRREGULARITY_FIELDS),
+    ("IRREGULARITY_TERMS_PER_FIELD", IRREGULARITY_TERMS_PER_FIELD))}
+#: the irregularity field's terms as a GLSL array: (2 pi s_j u_j, psi_j)
+SHADER_DEFINES["IRREGULARITY_TERMS"] = "vec4[{}]({})".format(
+    len(IRREGULARITY_TERMS), ", ".join(
+        "vec4({})".format(", ".join(glsl_literal(2.0 * 3.141592653589793 * c)
+                                    for c in (*axis, psi / (2.0 * 3.141592653589793))))
+        for axis, psi in IRREGULARITY_TERMS))
 
 
 @dataclass(frozen=True)

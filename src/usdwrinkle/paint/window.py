@@ -27,7 +27,7 @@ except ImportError as exc:  # the optional extra
     raise UsdWrinkleError("the paint window needs PySide6: pip install 'usdwrinkle[paint]' "
                           f"({exc})") from None
 
-from ..app.paint_session import CLOTH_PRESETS, FULL, PREVIEW, PaintSession
+from ..app.paint_session import CLOTH_PRESETS, CONTROLS, FULL, PREVIEW, PaintSession
 from ..brush.stamp import FALLOFFS, MIRROR_AXES, MODES
 from ..brush.view import project
 from ..process.timecode import format_frame
@@ -91,6 +91,9 @@ TIPS = {
              "width mode paints this value",
     "amplitude": "wrinkle:amplitudeScale: scales every fold's height (1 is the fold law's)",
     "slack": "wrinkle:slack: the compression the cloth takes in-plane before it folds",
+    "irregularity": "wrinkle:irregularity: how unequal the folds are (0: regular waves; "
+                    "about 0.3 in simulated cloth): their crests meander and the wider "
+                    "ones stand taller",
     "cloth": "Set W from a cloth preset's fold width through the stage's metersPerUnit",
     "view": "Orbit with the mouse, or look through the stage's camera",
     "play": "Play the timeline (Space)",
@@ -726,6 +729,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.width_slider = _Slider("W", 1e-3, 10.0, 0.1, log=True)
         self.amplitude = _Slider("amplitude", 0.0, 4.0, 1.0)
         self.slack = _Slider("slack", 0.0, 0.9, 0.06)
+        self.irregularity = _Slider("irregularity", 0.0, CONTROLS["irregularity"][2], 0.0)
         self.cloth = QtWidgets.QComboBox()
         self.cloth.addItems(["(as authored)", *CLOTH_PRESETS])
         self.view_mode = QtWidgets.QComboBox()
@@ -751,7 +755,7 @@ class PaintWindow(QtWidgets.QMainWindow):
                        self.front_only, self.flood_button, self.show_q):
             form.addWidget(widget)
         form.addWidget(QtWidgets.QLabel("<b>Wrinkles</b>"))
-        for widget in (self.width_slider, self.amplitude, self.slack):
+        for widget in (self.width_slider, self.amplitude, self.slack, self.irregularity):
             form.addWidget(widget)
         for label, widget in (("cloth", self.cloth), ("view", self.view_mode)):
             row = QtWidgets.QHBoxLayout()
@@ -795,13 +799,14 @@ class PaintWindow(QtWidgets.QMainWindow):
                 "geodesic": self.geodesic, "front_only": self.front_only,
                 "flood": self.flood_button, "show_q": self.show_q,
                 "width": self.width_slider, "amplitude": self.amplitude,
-                "slack": self.slack, "cloth": self.cloth, "view": self.view_mode,
+                "slack": self.slack, "irregularity": self.irregularity,
+                "cloth": self.cloth, "view": self.view_mode,
                 "preset": self.preset, "save_preset": self.save_preset_button,
                 "delete_preset": self.delete_preset_button}
 
     def _controls(self) -> dict:
         return {"width": self.width_slider, "amplitude_scale": self.amplitude,
-                "slack": self.slack}
+                "slack": self.slack, "irregularity": self.irregularity}
 
     def _build_timeline(self) -> None:
         bar = QtWidgets.QToolBar("Timeline", self)

@@ -7,7 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..method.contract import BLEND_COHERENCE_FLOOR
+from ..method.contract import (
+    BLEND_COHERENCE_FLOOR,
+    IRREGULARITY_FACTOR_MAX,
+    IRREGULARITY_FACTOR_MIN,
+    IRREGULARITY_FIELDS,
+    IRREGULARITY_TERMS,
+    IRREGULARITY_TERMS_PER_FIELD,
+)
 
 
 def profile(table: np.ndarray, theta) -> np.ndarray:
@@ -50,34 +57,134 @@ def weight_gradients(corners: np.ndarray) -> np.ndarray:
     return np.array([np.cross(normal, e) for e in opposite]) / normal.dot(normal)
 
 
+def irregularity_field(points, scale: float):
+    """The three irregularity fields over the rest surface (method/contract.py,
+    IRREGULARITY_TERMS): N_i = sqrt(2 / m) sum_j sin(omega_ij . X + psi_ij), omega_ij =
+    2 pi s_ij u_j ``scale`` (``scale`` = 1 / Lambda), at rest points ``points`` (..., 3);
+    returns (N (..., 3), their rest-space gradients (..., 3 fields, 3))."""
+    terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
+    omega = 2 * np.pi * terms[:, :3] * scale
+    phi = np.asarray(points, np.float64) @ omega.T + terms[:, 3]
+    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
+    shape = (*phi.shape[:-1], IRREGULARITY_FIELDS, IRREGULARITY_TERMS_PER_FIELD)
+    field = norm * np.sin(phi).reshape(shape).sum(-1)
+    cosines = np.cos(phi).reshape(shape)
+    gradient = norm * np.einsum("...ij,ijk->...ik", cosines,
+                                omega.reshape(IRREGULARITY_FIELDS, -1, 3))
+    return field, gradient
+
+
+def irregular_field(rest: np.ndarray, corners: np.ndarray, b: np.ndarray,
+                    scale: float):
+    """wave.glsl's ``irregular_field``: the fields N at the point of weights ``b`` of a
+    triangle with rest corners ``rest`` and posed ``corners`` (3, 3), at 1 / Lambda =
+    ``scale``; returns (N (3,), their posed gradients (3, 3), the terms' posed wave
+    vectors q (m, 3) and sin(phi) (m,))."""
+    terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
+    omega = 2 * np.pi * terms[:, :3] * scale
+    phi = omega @ (b @ rest) + terms[:, 3]
+    db = weight_gradients(corners)
+    q = np.outer(omega @ (rest[1] - rest[0]), db[1]) \
+        + np.outer(omega @ (rest[2] - rest[0]), db[2])
+    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
+    fields = (-1, IRREGULARITY_TERMS_PER_FIELD)
+    field = norm * np.sin(phi).reshape(fields).sum(-1)
+    gradient = norm * np.einsum("ij,ijk->ik", np.cos(phi).reshape(fields),
+                                q.reshape(IRREGULARITY_FIELDS, -1, 3))
+    return field, gradient, q, np.sin(phi)
+
+
+def rest_direction_of(rest: np.ndarray, corners: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """wave.glsl's ``rest_direction_of``: the rest-space unit direction of posed wave
+    vector ``k`` over the triangle, (dp/dX)^T k normalised (zero where degenerate)."""
+    rest_db = weight_gradients(rest)
+    v = (corners[1] - corners[0]) @ k * rest_db[1] + (corners[2] - corners[0]) @ k * rest_db[2]
+    length = np.linalg.norm(v)
+    return v / length if length > 1e-30 else np.zeros(3)
+
+
+def system_shift(rest, corners, waves, b, field, field_gradient, q, sines, beta):
+    """wave.glsl's ``system_shift`` and ``shift_hessian``: the phase shift m = beta u . N
+    that every corner of the system takes at the point, u the direction of sum_c b_c a_c
+    u_c (u_c the corners' rest directions, sign-aligned); returns (m, its posed gradient,
+    its posed Hessian (3, 3)); zeros where no corner has a wave."""
+    u_c = np.array([waves[c, 3] * rest_direction_of(rest, corners, waves[c, :3])
+                    for c in range(3)])
+    db = weight_gradients(corners)
+    v = b @ u_c
+    V = np.einsum("ci,cj->ij", u_c, db)  # grad v
+    rho, total = np.linalg.norm(v), float(b @ waves[:, 3])
+    if not (rho > 1e-6 * total) or total <= 0:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    u = v / rho
+    projector = np.eye(3) - np.outer(u, u)
+    grad_u = projector @ V / rho                      # (3 components, 3 directions)
+    m = beta * u @ field
+    gradient = beta * (u @ field_gradient + grad_u.T @ field)
+    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
+    weights = np.repeat(u, IRREGULARITY_TERMS_PER_FIELD) * sines
+    hessian = -norm * np.einsum("j,ja,jb->ab", weights, q, q)      # sum_i u_i H_i
+    hessian = hessian + field_gradient.T @ grad_u + grad_u.T @ field_gradient
+    # N . u(p) with N held: the derivative of V^T (I - u u^T) N / rho along each direction
+    uN = u @ field
+    for w in range(3):
+        du = grad_u[:, w]
+        hessian[:, w] += V.T @ (-du * uN - u * (du @ field)) / rho \
+            - V.T @ (field - u * uN) * (u @ V[:, w]) / rho ** 2
+    return m, gradient, beta * hessian
+
+
 def blend_at(waves: np.ndarray, phases: np.ndarray, corners: np.ndarray, bary: np.ndarray,
-             p: np.ndarray, height: np.ndarray, gradient: np.ndarray):
+             p: np.ndarray, height: np.ndarray, gradient: np.ndarray,
+             irregular: tuple | None = None):
     """One point's blend with its exact gradient (``exact_gradient`` in wave.glsl):
     ``waves`` (3, 4) the corners' (k, a), sign-aligned; ``phases`` (3,); ``corners``
-    (3, 3) posed; ``bary`` its barycentrics; ``p`` the point. Returns (h, gradient,
-    the coherence's factor)."""
+    (3, 3) posed; ``bary`` its barycentrics; ``p`` the point. ``irregular``: (the rest
+    corners (3, 3), beta, 1 / Lambda) for the IRREGULAR variant (wrinkle:irregularity;
+    docs/method.md, "Irregular folds"). Returns (h, gradient, the coherence's factor)."""
     b = np.clip(bary, 0, 1)
     b = b / b.sum()
     k, a = waves[:, :3], waves[:, 3]
     theta = phases + np.einsum("cj,cj->c", k, p - corners)
-    H, G = profile(height, theta), profile(gradient, theta)
     db = weight_gradients(corners)
+    d_a = np.zeros((3, 3))  # each corner amplitude's own gradient
+    if irregular is not None:
+        rest, beta, scale = irregular
+        rest = np.asarray(rest, np.float64)
+        field, field_gradient, q, sines = irregular_field(rest, corners, b, scale)
+        m, m_gradient, hessian = system_shift(rest, corners, waves, b, field,
+                                              field_gradient, q, sines, beta)
+        length = np.linalg.norm(k, axis=1)
+        theta = theta + m
+        k = k + m_gradient
+        local = np.linalg.norm(k, axis=1)
+        ratio = np.where(length > 0, length / np.maximum(local, 1e-30), 1.0)
+        factor = np.where(length > 0, np.clip(ratio, IRREGULARITY_FACTOR_MIN,
+                                              IRREGULARITY_FACTOR_MAX), 1.0)
+        for c in range(3):
+            if length[c] > 0 and IRREGULARITY_FACTOR_MIN < factor[c] < IRREGULARITY_FACTOR_MAX:
+                d_a[c] = a[c] * (-length[c] / local[c] ** 3 * hessian @ k[c])
+        a = a * factor
+    H, G = profile(height, theta), profile(gradient, theta)
     h = np.sum(b * a * H)
-    g = np.einsum("c,cj->j", b * a * G, k) + np.einsum("c,cj->j", a * H, db)
+    g = np.einsum("c,cj->j", b * a * G, k) + np.einsum("c,cj->j", a * H, db) \
+        + np.einsum("c,cj->j", b * H, d_a)
     total = np.sum(b * a)
     phasor = np.array([np.sum(b * a * np.cos(theta)), np.sum(b * a * np.sin(theta))])
     magnitude = float(np.linalg.norm(phasor))
     keep = float(coherence_keep(total, magnitude))
     if keep == 1.0:
         return h, g, keep
-    d_total = np.einsum("c,cj->j", a, db)
+    d_total = np.einsum("c,cj->j", a, db) + np.einsum("c,cj->j", b, d_a)
     if abs(h) * keep >= total:  # the crest held at the interpolated amplitude
         return np.sign(h) * total, np.sign(h) * d_total, keep
     if magnitude > BLEND_COHERENCE_FLOOR * total:
         d_cos = np.einsum("c,cj->j", a * np.cos(theta), db) \
-            - np.einsum("c,cj->j", b * a * np.sin(theta), k)
+            - np.einsum("c,cj->j", b * a * np.sin(theta), k) \
+            + np.einsum("c,cj->j", b * np.cos(theta), d_a)
         d_sin = np.einsum("c,cj->j", a * np.sin(theta), db) \
-            + np.einsum("c,cj->j", b * a * np.cos(theta), k)
+            + np.einsum("c,cj->j", b * a * np.cos(theta), k) \
+            + np.einsum("c,cj->j", b * np.sin(theta), d_a)
         d_magnitude = (phasor[0] * d_cos + phasor[1] * d_sin) / magnitude
         g = keep * g + h * (d_total - keep * d_magnitude) / magnitude
     else:

@@ -27,7 +27,7 @@ COMMON = {"LOCAL_SIZE": LOCAL_SIZE, "TABLE_WIDTH": TABLE_WIDTH,
 
 #: the wave blend (include/wave.glsl): the same units in every pass that includes it
 WAVE = {"WAVE_HEIGHT_PROFILE": 0, "WAVE_GRADIENT_PROFILE": 1, "WAVE_POSED_POINTS": 3,
-        "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_TRIANGLES": 8}
+        "WAVE_FIELDS": 4, "WAVE_PHASE": 5, "WAVE_REST_POINTS": 6, "WAVE_TRIANGLES": 8}
 #: the resolve pass (render/resolve.py): the three colour attachments (texture units) and
 #: the output words and the count of non-finite values (storage buffers)
 #: the resolve pass's sizes from the image contract (images/aovs.py)

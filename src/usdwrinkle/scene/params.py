@@ -148,6 +148,9 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     slack = schema.DEFAULT_SLACK if slack is None else float(slack)
     damping = _get(prim, schema.CREST_DAMPING)
     damping = schema.DEFAULT_CREST_DAMPING if damping is None else float(damping)
+    irregularity = _get(prim, schema.IRREGULARITY)
+    irregularity = schema.DEFAULT_IRREGULARITY if irregularity is None \
+        else float(irregularity)
     held = _primvar(prim, "wrinkle:held")
     hold = None if held is None else held_weights(rest_points, np.asarray(held, np.float32),
                                                   width)
@@ -182,6 +185,7 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     return WrinkleParams(q, width, scale, height, gradient, iterations, *controls,
                          slack=slack, hold=hold, width_note=width_note,
                          crest_damping=damping, slope=slope_table(height),
+                         irregularity=irregularity,
                          coarsening=coarsening_cap(
                              width * meters, tube_width(bent / meters), ways).astype(np.float32))
 

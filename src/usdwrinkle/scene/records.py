@@ -88,6 +88,8 @@ class WrinkleParams:
         None: COARSENING_MAX everywhere).
     slope : (SLOPE_SAMPLES,) float32 or None, the height profile's inextensible slope
         table (folds.slope_table; None: derived from height_profile where it is read).
+    irregularity : float, the folds' spread of width (wrinkle:irregularity; 0: the
+        paper's regular waves).
     """
 
     q: np.ndarray
@@ -105,6 +107,7 @@ class WrinkleParams:
     crest_damping: float = 0.0
     coarsening: np.ndarray | None = None
     slope: np.ndarray | None = None
+    irregularity: float = 0.0
 
     def slope_table(self) -> np.ndarray:
         """folds.slope_table of the height profile (``slope`` when given)."""

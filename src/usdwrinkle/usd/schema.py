@@ -28,6 +28,7 @@ CLOTH = "wrinkle:cloth"
 SLACK = "wrinkle:slack"
 HELD = "primvars:wrinkle:held"
 CREST_DAMPING = "wrinkle:crestDamping"
+IRREGULARITY = "wrinkle:irregularity"
 #: the Material interface inputs that ``bake --maps`` writes: map kind -> input name
 #: the baked wave fields on disk (bake writes them, a render reads them back): primvar ->
 #: (WrinkleFields/BakedFields attribute, components), vertex interpolation, one time
@@ -114,6 +115,9 @@ DEFAULT_SLACK = 0.05
 #: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
 #: the strain are followed where the cloth folds (docs/method.md: crest damping)
 DEFAULT_CREST_DAMPING = 4.0
+#: wrinkle:irregularity fallback: the paper's regular waves (method/contract.py,
+#: IRREGULARITY_*; docs/method.md, "Irregular folds")
+DEFAULT_IRREGULARITY = 0.0
 #: wrinkle:held: waves reach full amplitude this many widths W away from a held point
 HELD_REACH = 2.0
 #: Samples of a height profile over one period (the default: profiles.default_profile).
@@ -162,7 +166,7 @@ def require_schema() -> None:
 #: wrinkled), in the order check reports their findings
 CONTROL_ATTRIBUTES = (Q, WIDTH, HEIGHT_PROFILE, GRADIENT_PROFILE, AMPLITUDE_SCALE,
                       RELAX_ITERATIONS, BIAXIAL, TENSION, TENSION_THRESHOLD, CLOTH, SLACK,
-                      HELD, CREST_DAMPING)
+                      HELD, CREST_DAMPING, IRREGULARITY)
 
 
 def unapplied_controls(stage: Usd.Stage) -> list[str]:

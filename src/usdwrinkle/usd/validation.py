@@ -70,6 +70,7 @@ EXPECTED_TYPES = {
     schema.CLOTH: ({"token", "string"}, (False,), "a token"),
     schema.SLACK: (_NUMBERS, (False,), "a float"),
     schema.CREST_DAMPING: (_NUMBERS, (False,), "a float"),
+    schema.IRREGULARITY: (_NUMBERS, (False,), "a float"),
     schema.HELD: (_NUMBERS, (True, False), "a float[] array or a float"),
 }
 
@@ -212,6 +213,14 @@ def check_crest_damping(value, path: str) -> list[Finding]:
     return _in_range(value, schema.CREST_DAMPING, "crest damping", 0.0, 1000.0, path)
 
 
+def check_irregularity(value, path: str) -> list[Finding]:
+    """wrinkle:irregularity: the folds' spread of width, in [0, IRREGULARITY_MAX]."""
+    from ..method.contract import IRREGULARITY_MAX
+
+    return _in_range(value, schema.IRREGULARITY, "irregularity", 0.0, IRREGULARITY_MAX,
+                     path)
+
+
 def check_held(values, point_count: int | None, path: str) -> list[Finding]:
     """primvars:wrinkle:held: one weight in [0, 1], or one per point."""
     if values is None:
@@ -242,6 +251,7 @@ def _value_check(name: str, path: str, count: int | None):
         schema.CLOTH: lambda attr, time: check_cloth(attr.Get(time), path),
         schema.SLACK: lambda attr, time: check_slack(attr.Get(time), path),
         schema.CREST_DAMPING: lambda attr, time: check_crest_damping(attr.Get(time), path),
+        schema.IRREGULARITY: lambda attr, time: check_irregularity(attr.Get(time), path),
         schema.HELD: lambda attr, time: check_held(primvar_value(attr, time), count, path),
         schema.TENSION_THRESHOLD: lambda attr, time: check_tension_threshold(attr.Get(time),
                                                                              path),

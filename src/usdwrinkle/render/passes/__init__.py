@@ -55,11 +55,30 @@ def bind(units: dict, reads: dict | None = None, writes: dict | None = None,
         buffer.bind_to_storage_buffer(units[name])
 
 
+def irregular(res) -> bool:
+    """Whether the mesh's blend runs the IRREGULAR variant (wrinkle:irregularity > 0)."""
+    return res.record.params.irregularity > 0.0
+
+
+def irregularity_uniforms(params) -> dict:
+    """The IRREGULAR variant's uniforms (method/contract.py, IRREGULARITY_*): beta, the
+    radians of the field added to the phases, and 1 / Lambda, Lambda IRREGULARITY_SCALE
+    times the mesh's mean width."""
+    from ...method.contract import IRREGULARITY_GAIN, IRREGULARITY_SCALE
+
+    width = float(np.mean(params.width)) if len(params.width) else 0.0
+    return {"u_irregularity": float(IRREGULARITY_GAIN * params.irregularity),
+            "u_irregularity_scale": 1.0 / (IRREGULARITY_SCALE * width) if width > 0 else 0.0}
+
+
 def bind_wave(units: dict, res, program) -> None:
     """Bind what the wave blend reads (include/wave.glsl; the WAVE units of bindings.py)
     and set its uniforms on ``program``."""
     set_uniforms(program, {"u_profile_samples": float(len(res.record.params.height_profile)),
                            "u_systems": res.waves.systems})
+    if irregular(res):
+        set_uniforms(program, irregularity_uniforms(res.record.params))
+        bind(units, reads={"WAVE_REST_POINTS": res.rest_points})
     res.profiles[0].use(location=units["WAVE_HEIGHT_PROFILE"])
     res.profiles[1].use(location=units["WAVE_GRADIENT_PROFILE"])
     bind(units, reads={"WAVE_POSED_POINTS": res.posed_points,

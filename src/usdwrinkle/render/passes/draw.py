@@ -10,7 +10,7 @@ from .. import bindings
 from ..bounds import EyeBound, culled_side
 from ..mipmaps import build_mipmaps
 from ..resources import MeshResources
-from . import bind_wave, gl_matrix, inverse, normal_matrix, set_uniforms
+from . import bind_wave, gl_matrix, inverse, irregular, normal_matrix, set_uniforms
 from .base import DrawnPass
 
 #: the turn of the bent normal across one pixel (radians) above which a pixel shades each
@@ -169,6 +169,7 @@ class DrawPass(DrawnPass):
         display = res.display_colors is not None
         colors = res.display_colors if display else res.corner_colors
         variant = self.variants(TWO_SYSTEMS=res.waves.systems > 1,
+                                IRREGULAR=irregular(res),
                                 NORMAL_MAP=res.normal_map is not None,
                                 FALLBACK_SURFACE=material.surface is None,
                                 TEXTURED=res.texture is not None and not display,
