@@ -12,6 +12,9 @@
   ``wrinkle:biaxial = 1`` next to the paper's one system, and of the pulled sheet with
   ``wrinkle:tension = 1`` next to tension off (the features switched in the stage's
   session layer, as benchmarks/beyond.py does).
+- ``irregularity.png``: the shirt's sleeve at frame 24 with ``wrinkle:irregularity`` 0
+  (the paper's regular waves), 0.15 and 0.3, authored in the stage's session layer: the
+  cuff's painted gathers and the elbow's folds.
 """
 from __future__ import annotations
 
@@ -125,6 +128,24 @@ def beyond_figures(outdir: Path) -> list[Path]:
     return paths
 
 
+def irregularity_figure(outdir: Path) -> Path:
+    from pxr import Sdf, Usd
+
+    from usdwrinkle.usd import schema
+
+    images = []
+    for value in (0.0, 0.15, 0.3):
+        stage = Usd.Stage.Open(str(SHIRT))
+        stage.SetEditTarget(stage.GetSessionLayer())
+        stage.OverridePrim("/World/Arm/Sleeve").CreateAttribute(
+            schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(value)
+        images.append(_render_stage(stage, 900, 600)[120:560, 330:600])
+    gap = np.ones((images[0].shape[0], 16, 3), np.float32)
+    path = outdir / "irregularity.png"
+    _write(path, np.concatenate([images[0], gap, images[1], gap, images[2]], axis=1))
+    return path
+
+
 def main(argv=None) -> int:
     args = sys.argv[1:] if argv is None else argv
     outdir = Path(args[0]) if args else ROOT / "docs" / "images"
@@ -133,6 +154,7 @@ def main(argv=None) -> int:
     print(geometry_figure(outdir))
     for path in beyond_figures(outdir):
         print(path)
+    print(irregularity_figure(outdir))
     return 0
 
 

@@ -86,8 +86,8 @@ def test_the_geometry_and_the_maps_follow_the_irregular_law(gl_context, tmp_path
     """bake --geometry and bake --maps of the analytic sheet at irregularity 0.3: every
     fine vertex's and every texel's height is the law's, within 2% of the regular
     amplitude, away from the free border; the field moves the folds (the regular wave
-    misses the irregular heights by a third of a on average), and the factor spans
-    0.6-1.6 there."""
+    misses the irregular heights by a third of a on average), and the factor reaches both
+    its bounds there (0.5 and 2)."""
     regular, _ = fine_heights(tmp_path, None, "regular")
     inner = (np.abs(regular[:, 0]) < 0.75 * RATIO) & (np.abs(regular[:, 1]) < 0.75)
     phase = fitted_phase(regular[inner, 0], regular[inner, 1], regular[inner, 2])
@@ -96,7 +96,7 @@ def test_the_geometry_and_the_maps_follow_the_irregular_law(gl_context, tmp_path
     expected, a, factor = law(x, y, IRREGULARITY, phase)
     assert np.abs(z - expected).max() <= 0.02 * a
     assert np.abs(z - regular[inner, 2]).mean() > 0.3 * a
-    assert factor.min() < 0.75 and factor.max() > 1.4
+    assert factor.min() == IRREGULARITY_FACTOR_MIN and factor.max() == IRREGULARITY_FACTOR_MAX
 
     layer = tmp_path / "maps.usda"
     assert bake_maps(irregular_sheet(tmp_path, IRREGULARITY, "maps_sheet.usda"), layer) == 0
