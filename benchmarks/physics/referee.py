@@ -306,15 +306,18 @@ def bake_on(sim: Simulated, fine: Simulated | None, label: str, width: float | N
     return on_coarser_grid(out, fine.shot, sim.shot), out
 
 
-def sweep_row(sim: Simulated, fine: Simulated | None = None) -> dict:
+def sweep_row(sim: Simulated, fine: Simulated | None = None,
+              attributes: dict | None = None) -> dict:
     """usdwrinkle at the default width and at the width matched to the simulation's mean
     wavelength, against the simulation: per phase (ours / sim) wavelength and height, the
     amplitude-field correlation, the crest motion at the elbow, our area ratio. ``fine``:
     the simulation resampled at half its spacing, which usdwrinkle is baked on (its area
-    taken there) and measured from at the simulation's points (oracle.on_coarser_grid)."""
+    taken there) and measured from at the simulation's points (oracle.on_coarser_grid).
+    ``attributes``: more WrinkleAPI values to author beside the cloth's (name -> (type,
+    value), as oracle.bake takes them)."""
     from usdwrinkle.usd import schema
 
-    cloth = cloth_attributes(sim.shot)
+    cloth = {**cloth_attributes(sim.shot), **(attributes or {})}
 
     def baked(label: str, width: float | None = None):
         return bake_on(sim, fine, label, width, cloth)
