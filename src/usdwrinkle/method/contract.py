@@ -109,7 +109,7 @@ BLEND_COHERENCE_FLOOR = 0.5
 #: axes u_j of the icosahedron (a spherical 5-design: the directional derivative's variance
 #: is the same along every direction), at relative scales s_ij (root mean square 1; each
 #: field takes them in another order) and phases psi_ij; Lambda = IRREGULARITY_SCALE x the
-#: mesh's mean width W. The derivative of u . N along a direction then has the root mean
+#: mesh's median width W. The derivative of u . N along a direction then has the root mean
 #: square 2 pi / (sqrt(3) Lambda), so beta = IRREGULARITY_GAIN x the irregularity gives
 #: the local wave number a coefficient of variation equal to the irregularity where the
 #: material wavelength is W.

@@ -63,10 +63,11 @@ def irregular(res) -> bool:
 def irregularity_uniforms(params) -> dict:
     """The IRREGULAR variant's uniforms (method/contract.py, IRREGULARITY_*): beta, the
     radians of the field added to the phases, and 1 / Lambda, Lambda IRREGULARITY_SCALE
-    times the mesh's mean width."""
+    times the mesh's median width (painting W on a small region leaves the field where
+    it is)."""
     from ...method.contract import IRREGULARITY_GAIN, IRREGULARITY_SCALE
 
-    width = float(np.mean(params.width)) if len(params.width) else 0.0
+    width = float(np.median(params.width)) if len(params.width) else 0.0
     return {"u_irregularity": float(IRREGULARITY_GAIN * params.irregularity),
             "u_irregularity_scale": 1.0 / (IRREGULARITY_SCALE * width) if width > 0 else 0.0}
 
