@@ -136,23 +136,26 @@ def test_the_blend_and_its_gradient_match_numpy(blend, agree):
         assert np.mean(keeps > 1.2) > 0.2 and np.any(keeps == 1 / BLEND_COHERENCE_FLOOR)
 
 
-def test_the_exact_gradient_is_the_gradient_of_the_height():
-    """numpy alone: the exact gradient (with the coherence's own, and the weights')
-    against central differences of the height in the triangle's plane, for a cosine
-    profile (smooth, so that the difference quotient converges), away from the kinks
-    where the coherence meets its floor or the height its bound."""
+def differences_checked(items, irregular_of=None, gain: float = 1.0) -> int:
+    """numpy alone: blend_at's exact gradient against central differences of its height
+    in the triangle's plane, for a cosine profile (smooth, so that the difference quotient
+    converges), away from the kinks where the coherence meets its floor or the height its
+    bound; ``irregular_of(i)``: case i's irregular arguments; ``gain``: the most the
+    amplitudes grow (the irregular factor's 2). Returns how many differences it checked."""
     samples = 4096
     theta = 2 * np.pi * np.arange(samples) / samples
     height, gradient = np.cos(theta), -np.sin(theta)
     step = 1e-6
     checked = 0
-    for waves, phases, corners, bary, p in cases(11, False):
-        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient)
+    for index, (waves, phases, corners, bary, p) in enumerate(items):
+        irregular = None if irregular_of is None else irregular_of(index)
+        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient, irregular)
         if not 1.0 < keep < 0.95 / BLEND_COHERENCE_FLOOR or abs(h) >= 0.99 * np.sum(
                 bary * waves[:, 3]):
             continue
         inverse = np.linalg.inv(np.stack([corners[1] - corners[0],
                                           corners[2] - corners[0]], 1)[:2])
+        slope = gain * np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
         for axis in range(2):
             move = np.zeros(3)
             move[axis] = step
@@ -164,12 +167,17 @@ def test_the_exact_gradient_is_the_gradient_of_the_height():
                 if weights.min() < 0:
                     break
                 values.append(blend_at(waves, phases, corners, weights, q, height,
-                                       gradient)[0])
+                                       gradient, irregular)[0])
             else:
-                slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
                 assert abs((values[0] - values[1]) / (2 * step) - g[axis]) <= 1e-3 * slope
                 checked += 1
-    assert checked > 100
+    return checked
+
+
+def test_the_exact_gradient_is_the_gradient_of_the_height():
+    """The exact gradient (with the coherence's own, and the weights') against central
+    differences (differences_checked)."""
+    assert differences_checked(cases(11, False)) > 100
 
 
 def rest_corners(items, seed: int) -> np.ndarray:
@@ -228,40 +236,12 @@ def test_the_irregular_blend_and_its_gradient_match_numpy(blend):
 
 
 def test_the_irregular_exact_gradient_is_the_gradient_of_the_height():
-    """numpy alone, as the regular test: the IRREGULAR exact gradient (the field's
-    second derivatives in the amplitude factor's) against central differences."""
-    from usdwrinkle.method.contract import IRREGULARITY_GAIN
+    """As the regular test: the IRREGULAR exact gradient (the shift's second derivatives
+    in the amplitude factor's) against central differences."""
+    from usdwrinkle.method.contract import IRREGULARITY_FACTOR_MAX, IRREGULARITY_GAIN
 
-    samples = 4096
-    theta = 2 * np.pi * np.arange(samples) / samples
-    height, gradient = np.cos(theta), -np.sin(theta)
-    step = 1e-6
     beta = IRREGULARITY_GAIN * IRREGULARITY
     items = cases(13, False)
-    checked = 0
-    for (waves, phases, corners, bary, p), rest in zip(items, rest_corners(items, 14),
-                                                       strict=True):
-        irregular = (rest, beta, SCALE)
-        h, g, keep = blend_at(waves, phases, corners, bary, p, height, gradient, irregular)
-        if not 1.0 < keep < 0.95 / BLEND_COHERENCE_FLOOR or abs(h) >= 0.99 * np.sum(
-                bary * waves[:, 3]):
-            continue
-        inverse = np.linalg.inv(np.stack([corners[1] - corners[0],
-                                          corners[2] - corners[0]], 1)[:2])
-        for axis in range(2):
-            move = np.zeros(3)
-            move[axis] = step
-            values = []
-            for sign in (1, -1):
-                q = p + sign * move
-                uv = inverse @ (q - corners[0])[:2]
-                weights = np.array([1 - uv.sum(), uv[0], uv[1]])
-                if weights.min() < 0:
-                    break
-                values.append(blend_at(waves, phases, corners, weights, q, height,
-                                       gradient, irregular)[0])
-            else:
-                slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1)) * 2
-                assert abs((values[0] - values[1]) / (2 * step) - g[axis]) <= 1e-3 * slope
-                checked += 1
-    assert checked > 100
+    rests = rest_corners(items, 14)
+    assert differences_checked(items, lambda i: (rests[i], beta, SCALE),
+                               IRREGULARITY_FACTOR_MAX) > 100

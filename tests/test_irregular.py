@@ -1,10 +1,11 @@
 """Irregular folds (wrinkle:irregularity; docs/method.md, "Irregular folds"): three smooth
 fields N over the rest surface shift each corner's phase by beta u . N (u its wave's rest
 direction), the local wave is k + beta grad (u . N), and each amplitude is scaled by
-|k| / |k'| so that the slope stays the fold law's. On the analytic sheet (uniform compression, one wave) the displaced geometry
-and the maps follow that law point by point (numpy: usdwrinkle/reference/blend.py); the
-wrinkled sheet keeps the regular folds' length; the draw pass draws the taller folds; and
-the control is checked and authored like the others. tests/test_blend.py checks the
+|k| / |k'| so that the slope stays the fold law's. On the analytic sheet (uniform
+compression, one wave) the displaced geometry and the maps follow that law point by point
+(numpy: usdwrinkle/reference/blend.py); the wrinkled sheet keeps the regular folds'
+length; the draw pass draws the taller folds; and the control is checked and authored
+like the others. tests/test_blend.py checks the
 shader's blend against its numpy reference on random triangles."""
 from __future__ import annotations
 
@@ -172,9 +173,8 @@ def test_irregular_folds_ride_with_the_cloth_under_rigid_motion(gl_context, tmp_
     """The field lives on the rest surface: the analytic sheet posed, then turned and
     moved rigidly, bakes the same irregular fine mesh turned and moved (within 1e-5 of
     the sheet's size, as the regular folds: tests/test_geometry.py)."""
-    from helpers import point_cache_stage, rotation_matrix
-
     from conftest import grid_sheet
+    from helpers import point_cache_stage, rotation_matrix
 
     rest, counts, indices = grid_sheet(21, 21, 2.0)
     posed = rest * np.array([RATIO, 1, 1], np.float32)

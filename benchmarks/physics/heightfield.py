@@ -48,7 +48,7 @@ from ..blocks import add_write_option, emit, markers
 from . import measure, referee
 from .coarse import lowpass
 from .oracle import per_phase, zones
-from .referee import CONVERGED, SWEEP
+from .referee import CONVERGED
 
 NAME = "referee-heightfield"
 
@@ -183,18 +183,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.heightfield",
                                      description=__doc__.split("\n\n")[0])
     add_write_option(parser, NAME, "docs/physics.md")
-    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
-                        help=f"these shots (default: all of {', '.join(SWEEP)})")
-    parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
-                        help="the simulations' grid spacing in metres (default "
-                             f"{CONVERGED[0]}: the converged referee's)")
-    parser.add_argument("--cache", type=Path, default=referee.ROOT / ".physics-cache")
+    referee.add_shot_options(parser)
     args = parser.parse_args(argv)
-    unknown = sorted(set(args.only or ()) - set(SWEEP))
-    if unknown:
-        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
+    names = referee.chosen_shots(parser, args)
     started = time.perf_counter()
-    names = args.only or list(SWEEP)
     rows = {}
     for number, name in enumerate(names, start=1):
         # a shot not in the cache is simulated first: minutes to an hour on one core

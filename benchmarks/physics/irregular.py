@@ -25,7 +25,7 @@ from pathlib import Path
 from ..blocks import add_write_option, emit, markers
 from . import measure, referee
 from .oracle import zones
-from .referee import CONVERGED, SWEEP
+from .referee import CONVERGED
 
 NAME = "referee-irregular"
 VALUES = (0.0, 0.15, 0.3)
@@ -89,25 +89,17 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.irregular",
                                      description=__doc__.split("\n\n")[0])
     add_write_option(parser, NAME, "docs/physics.md")
-    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
-                        help=f"these shots (default: all of {', '.join(SWEEP)})")
+    referee.add_shot_options(parser)
     parser.add_argument("--values", nargs="*", type=float, default=list(VALUES),
                         metavar="U", help="the irregularities (default "
                                           f"{' '.join(f'{v:g}' for v in VALUES)})")
-    parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
-                        help="the simulations' grid spacing in metres (default "
-                             f"{CONVERGED[0]}: the converged referee's)")
-    parser.add_argument("--cache", type=Path, default=referee.ROOT / ".physics-cache")
     args = parser.parse_args(argv)
-    unknown = sorted(set(args.only or ()) - set(SWEEP))
-    if unknown:
-        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
+    names = referee.chosen_shots(parser, args)
     from usdwrinkle.method.contract import IRREGULARITY_MAX
 
     if any(not 0.0 <= v <= IRREGULARITY_MAX for v in args.values):
         parser.error(f"irregularities must be in [0, {IRREGULARITY_MAX:g}]")
     started = time.perf_counter()
-    names = args.only or list(SWEEP)
     rows = {}
     for number, name in enumerate(names, start=1):
         # a shot not in the cache is simulated first: minutes to an hour on one core

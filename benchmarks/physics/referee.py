@@ -499,6 +499,26 @@ def _newton_version() -> str:
         return "?"
 
 
+def add_shot_options(parser) -> None:
+    """The options of a command measured per shot of the converged sweep (heightfield.py,
+    irregular.py): --only, --grid, --cache; chosen_shots reads them."""
+    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
+                        help=f"these shots (default: all of {', '.join(SWEEP)})")
+    parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
+                        help="the simulations' grid spacing in metres (default "
+                             f"{CONVERGED[0]}: the converged referee's)")
+    parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
+
+
+def chosen_shots(parser, args) -> list[str]:
+    """The shots of add_shot_options' --only (every shot of the sweep by default); an
+    unknown one is a usage error."""
+    unknown = sorted(set(args.only or ()) - set(SWEEP))
+    if unknown:
+        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
+    return args.only or list(SWEEP)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.referee")
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
