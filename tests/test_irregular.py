@@ -218,3 +218,31 @@ def test_irregular_folds_keep_the_crests_stable_under_a_joint_change(gl_context,
     shares = stability.perturbation(path, str(tmp_path), ctx=gl_context)
     assert all(v <= 0.02 for v in shares[0.01].values()), shares
     assert all(v <= 0.05 for v in shares[0.1].values()), shares
+
+
+def test_the_second_wave_system_runs_irregular_too(gl_context):
+    """The pillow sample (wrinkle:biaxial, the TWO_SYSTEMS variant) at irregularity 0.3:
+    both systems take their shift; the frame's heights move, stay finite, and stay within
+    IRREGULARITY_FACTOR_MAX times the regular frame's tallest (each corner's amplitude is
+    scaled by at most that)."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    heights = []
+    for value in (None, IRREGULARITY):
+        stage = Usd.Stage.Open(str(root / "sample_stages" / "pillow.usda"))
+        stage.SetEditTarget(stage.GetSessionLayer())
+        if value is not None:
+            stage.OverridePrim("/World/Pillow").CreateAttribute(
+                schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(value)
+        engine = WrinkleEngine(stage, ctx=gl_context)
+        try:
+            assert engine.meshes["/World/Pillow"].params.biaxial > 0
+            heights.append(engine.render_frame(24.0, 160, 120)["wrinkle.height"].pixels[..., 0]
+                           .copy())
+        finally:
+            engine.release()
+    regular, irregular = heights
+    assert np.all(np.isfinite(irregular))
+    assert np.abs(irregular - regular).mean() > 0.2 * np.abs(regular).mean()
+    assert np.abs(irregular).max() <= IRREGULARITY_FACTOR_MAX * np.abs(regular).max() * 1.001
