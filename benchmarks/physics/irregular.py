@@ -95,7 +95,7 @@ def main(argv=None) -> int:
                                           f"{' '.join(f'{v:g}' for v in VALUES)})")
     args = parser.parse_args(argv)
     names = referee.chosen_shots(parser, args)
-    from usdwrinkle.method.contract import IRREGULARITY_MAX
+    from usdwrinkle.usd.schema import IRREGULARITY_MAX
 
     if any(not 0.0 <= v <= IRREGULARITY_MAX for v in args.values):
         parser.error(f"irregularities must be in [0, {IRREGULARITY_MAX:g}]")

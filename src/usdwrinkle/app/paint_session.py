@@ -20,7 +20,6 @@ from pxr import Sdf, Usd, UsdGeom
 from ..brush.stamp import DIRECTED, BrushSettings, Hit, PaintMesh, Stroke, clamp_unit, flood
 from ..brush.view import OrbitCamera, pixel_ray, ray_triangles, vertex_normals
 from ..layerinfo import copy_stage_info
-from ..method.contract import IRREGULARITY_MAX
 from ..process.errors import UsdWrinkleError
 from ..usd import schema
 
@@ -66,7 +65,7 @@ def display_colors(mesh: PaintMesh, display: str, reference_width: float) -> np.
 CONTROLS = {"width": (schema.WIDTH, 1e-4, None),
             "amplitude_scale": (schema.AMPLITUDE_SCALE, 0.0, 10.0),
             "slack": (schema.SLACK, 0.0, 0.95),
-            "irregularity": (schema.IRREGULARITY, 0.0, IRREGULARITY_MAX)}
+            "irregularity": (schema.IRREGULARITY, 0.0, schema.IRREGULARITY_MAX)}
 CLOTH_PRESETS = (*schema.CLOTH_WIDTHS_M, schema.MESH_CLOTH)
 
 

@@ -118,6 +118,9 @@ DEFAULT_CREST_DAMPING = 4.0
 #: wrinkle:irregularity fallback: the paper's regular waves (method/contract.py,
 #: IRREGULARITY_*; docs/method.md, "Irregular folds")
 DEFAULT_IRREGULARITY = 0.0
+#: and its largest value (check refuses more): at 0.5 the local wave number's variation
+#: is half its mean, and its wave sometimes turns back
+IRREGULARITY_MAX = 0.5
 #: wrinkle:held: waves reach full amplitude this many widths W away from a held point
 HELD_REACH = 2.0
 #: Samples of a height profile over one period (the default: profiles.default_profile).

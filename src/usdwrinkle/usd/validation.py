@@ -215,10 +215,8 @@ def check_crest_damping(value, path: str) -> list[Finding]:
 
 def check_irregularity(value, path: str) -> list[Finding]:
     """wrinkle:irregularity: the folds' spread of width, in [0, IRREGULARITY_MAX]."""
-    from ..method.contract import IRREGULARITY_MAX
-
-    return _in_range(value, schema.IRREGULARITY, "irregularity", 0.0, IRREGULARITY_MAX,
-                     path)
+    return _in_range(value, schema.IRREGULARITY, "irregularity", 0.0,
+                     schema.IRREGULARITY_MAX, path)
 
 
 def check_held(values, point_count: int | None, path: str) -> list[Finding]:
