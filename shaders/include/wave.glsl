@@ -253,8 +253,10 @@ vec3 rest_direction_of(CornerWaves cw, Irregular field, vec3 k) {
 // One wave system's shift of the phase at the point, the same for its three corners:
 // m = beta u . N, u = v / |v| the direction of v = sum_c b_c a_c u_c (u_c: corner c's
 // rest direction, sign-aligned as the corners are). A wave's sign flips u with its
-// phase, so (k, phi) and (-k, -phi) draw the same folds; u is continuous across the
-// coarse edges (there only the edge's corners weigh). Its posed gradient:
+// phase, so (k, phi) and (-k, -phi) draw the same folds. u_c is taken through this
+// triangle's own map, so across a coarse edge between triangles crushed unlike u (and
+// the shift) jumps (docs/physics.md, "Irregular folds against the referee"). Its posed
+// gradient:
 // grad m = beta (sum_i u_i grad N_i + (grad u)^T N), grad u = (I - u u^T) V / |v|,
 // V = sum_c a_c u_c grad b_c^T.
 struct Shift {
