@@ -210,7 +210,8 @@ struct Irregular {
     vec3 gradient[IRREGULARITY_FIELDS];
     vec3 q[IRREGULARITY_COUNT];
     float s[IRREGULARITY_COUNT];
-    vec3 rest_db[3];  // the gradients of the weights over the rest triangle
+    vec3 db[3];       // the gradients of the weights over the posed triangle
+    vec3 rest_db[3];  // and over the rest triangle
 };
 const float IRREGULARITY_NORM = sqrt(2.0 / float(IRREGULARITY_TERMS_PER_FIELD));
 
@@ -221,9 +222,8 @@ Irregular irregular_field(CornerWaves cw, vec3 bary) {
         field.gradient[i] = vec3(0.0);
     }
     vec3 X = bary.x * cw.rest[0] + bary.y * cw.rest[1] + bary.z * cw.rest[2];
-    vec3 db[3];
     for (int c = 0; c < 3; ++c) {
-        db[c] = weight_gradient(c, cw.corner[0], cw.corner[1], cw.corner[2]);
+        field.db[c] = weight_gradient(c, cw.corner[0], cw.corner[1], cw.corner[2]);
         field.rest_db[c] = weight_gradient(c, cw.rest[0], cw.rest[1], cw.rest[2]);
     }
     vec4 terms[IRREGULARITY_COUNT] = IRREGULARITY_TERMS;
@@ -232,8 +232,8 @@ Irregular irregular_field(CornerWaves cw, vec3 bary) {
         vec3 omega = terms[j].xyz * u_irregularity_scale;  // rest space, radians a unit
         float phi = dot(omega, X) + terms[j].w;
         // posed: the rest corners' phases differ by omega . (R_c - R_0)
-        vec3 q = dot(omega, cw.rest[1] - cw.rest[0]) * db[1]
-               + dot(omega, cw.rest[2] - cw.rest[0]) * db[2];
+        vec3 q = dot(omega, cw.rest[1] - cw.rest[0]) * field.db[1]
+               + dot(omega, cw.rest[2] - cw.rest[0]) * field.db[2];
         field.q[j] = q;
         field.s[j] = sin(phi);
         field.field[i] += IRREGULARITY_NORM * field.s[j];
@@ -275,8 +275,7 @@ Shift system_shift(CornerWaves cw, Irregular field, vec3 bary, int s, float beta
         vec4 wave = cw.wave[3 * s + c];
         vec3 u_c = wave.w * rest_direction_of(cw, field, wave.xyz);
         v += bary[c] * u_c;
-        shift.V += outerProduct(u_c, weight_gradient(c, cw.corner[0], cw.corner[1],
-                                                     cw.corner[2]));
+        shift.V += outerProduct(u_c, field.db[c]);
         total += bary[c] * wave.w;
     }
     float rho = length(v);

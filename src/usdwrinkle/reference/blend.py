@@ -74,16 +74,14 @@ def irregularity_field(points, scale: float):
     return field, gradient
 
 
-def irregular_field(rest: np.ndarray, corners: np.ndarray, b: np.ndarray,
-                    scale: float):
+def irregular_field(rest: np.ndarray, db: np.ndarray, b: np.ndarray, scale: float):
     """wave.glsl's ``irregular_field``: the fields N at the point of weights ``b`` of a
-    triangle with rest corners ``rest`` and posed ``corners`` (3, 3), at 1 / Lambda =
-    ``scale``; returns (N (3,), their posed gradients (3, 3), the terms' posed wave
-    vectors q (m, 3) and sin(phi) (m,))."""
+    triangle with rest corners ``rest`` (3, 3) and weight gradients ``db`` over its posed
+    corners (weight_gradients), at 1 / Lambda = ``scale``; returns (N (3,), their posed
+    gradients (3, 3), the terms' posed wave vectors q (m, 3) and sin(phi) (m,))."""
     terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
     omega = 2 * np.pi * terms[:, :3] * scale
     phi = omega @ (b @ rest) + terms[:, 3]
-    db = weight_gradients(corners)
     q = np.outer(omega @ (rest[1] - rest[0]), db[1]) \
         + np.outer(omega @ (rest[2] - rest[0]), db[2])
     norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
@@ -103,14 +101,14 @@ def rest_direction_of(rest: np.ndarray, corners: np.ndarray, k: np.ndarray) -> n
     return v / length if length > 1e-30 else np.zeros(3)
 
 
-def system_shift(rest, corners, waves, b, field, field_gradient, q, sines, beta):
+def system_shift(rest, corners, db, waves, b, field, field_gradient, q, sines, beta):
     """wave.glsl's ``system_shift`` and ``shift_hessian``: the phase shift m = beta u . N
     that every corner of the system takes at the point, u the direction of sum_c b_c a_c
-    u_c (u_c the corners' rest directions, sign-aligned); returns (m, its posed gradient,
-    its posed Hessian (3, 3)); zeros where no corner has a wave."""
+    u_c (u_c the corners' rest directions, sign-aligned; ``db`` the weights' gradients
+    over the posed corners); returns (m, its posed gradient, its posed Hessian (3, 3));
+    zeros where no corner has a wave."""
     u_c = np.array([waves[c, 3] * rest_direction_of(rest, corners, waves[c, :3])
                     for c in range(3)])
-    db = weight_gradients(corners)
     v = b @ u_c
     V = np.einsum("ci,cj->ij", u_c, db)  # grad v
     rho, total = np.linalg.norm(v), float(b @ waves[:, 3])
@@ -151,8 +149,8 @@ def blend_at(waves: np.ndarray, phases: np.ndarray, corners: np.ndarray, bary: n
     if irregular is not None:
         rest, beta, scale = irregular
         rest = np.asarray(rest, np.float64)
-        field, field_gradient, q, sines = irregular_field(rest, corners, b, scale)
-        m, m_gradient, hessian = system_shift(rest, corners, waves, b, field,
+        field, field_gradient, q, sines = irregular_field(rest, db, b, scale)
+        m, m_gradient, hessian = system_shift(rest, corners, db, waves, b, field,
                                               field_gradient, q, sines, beta)
         length = np.linalg.norm(k, axis=1)
         theta = theta + m
