@@ -41,12 +41,11 @@ def shot_row(name: str, cache: Path, grid: float, value: float) -> dict:
     sim, fine = referee.referee_pair(name, cache, grid, CONVERGED[1])
     extra = {schema.IRREGULARITY: (Sdf.ValueTypeNames.Float, value)} if value else {}
     row = referee.sweep_row(sim, fine, extra)
-    ours, _ = referee.bake_on(sim, fine, "matched", row["width"],
-                              {**referee.cloth_attributes(sim.shot), **extra})
     inside = zones(sim.shot)["all"]
     _, end = list(sim.shot.phases.values())[-1]
     row["spread"] = (measure.spectral_spread(sim.shot, sim.h[end - 1], inside),
-                     measure.spectral_spread(sim.shot, ours.h[end - 1], inside))
+                     measure.spectral_spread(sim.shot, row["matched bake"].h[end - 1],
+                                             inside))
     return row
 
 

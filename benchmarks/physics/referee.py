@@ -314,7 +314,8 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
     the simulation resampled at half its spacing, which usdwrinkle is baked on (its area
     taken there) and measured from at the simulation's points (oracle.on_coarser_grid).
     ``attributes``: more WrinkleAPI values to author beside the cloth's (name -> (type,
-    value), as oracle.bake takes them)."""
+    value), as oracle.bake takes them). ``matched bake``: the bake at the matched W,
+    measured at the simulation's points."""
     from usdwrinkle.usd import schema
 
     cloth = {**cloth_attributes(sim.shot), **(attributes or {})}
@@ -330,7 +331,7 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
               if key.startswith("motion") and key.endswith(" sim")}
     return {"default": first, "matched": per_phase(sim, matched), "width": width,
-            "compared": result,
+            "matched bake": matched, "compared": result,
             "correlation": result["correlation"], "motion": motion,
             "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK, matched_fine),
             "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK),
