@@ -69,6 +69,7 @@ flat out vec3 v_phase[SYSTEMS_MAX];
 flat out vec3 v_corner[3];
 #if defined IRREGULAR
 flat out vec3 v_rest[3];
+flat out vec3 v_u[WAVE_SLOTS];
 #endif
 #if defined TEXTURED
 // the texture deformation's map from a local-space offset to an st offset: the rows of
@@ -109,6 +110,7 @@ void main() {
     v_corner = cw.corner;
 #if defined IRREGULAR
     for (int k = 0; k < 3; ++k) v_rest[k] = u_wrinkles != 0 ? cw.rest[k] : vec3(0.0);
+    for (int k = 0; k < WAVE_SLOTS; ++k) v_u[k] = u_wrinkles != 0 ? cw.u[k] : vec3(0.0);
 #endif
 #if defined TEXTURED
     v_st_from_local[0] = v_st_from_local[1] = vec3(0.0);
@@ -145,7 +147,8 @@ flat in vec3 v_phase[SYSTEMS_MAX];
 flat in vec3 v_corner[3];
 #if defined IRREGULAR
 flat in vec3 v_rest[3];
-#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS, v_rest)
+flat in vec3 v_u[WAVE_SLOTS];
+#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS, v_rest, v_u)
 #else
 #define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS)
 #endif

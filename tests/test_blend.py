@@ -72,10 +72,10 @@ def blend(gl_context):
     rough["u_profile_samples"] = float(len(height))
 
     def run(items, irregular=None):
-        """``irregular``: (the rest corners per case, beta, 1 / Lambda), run on the
-        IRREGULAR variant."""
+        """``irregular``: (the rest corners per case, their rest directions per case,
+        beta, 1 / Lambda), run on the IRREGULAR variant."""
         program = shader
-        data = np.zeros((len(items), 12, 4), np.float32)
+        data = np.zeros((len(items), 15, 4), np.float32)
         for i, (waves, phases, corners, bary, p) in enumerate(items):
             data[i, :3] = waves
             data[i, 3, :3] = phases
@@ -84,8 +84,9 @@ def blend(gl_context):
             data[i, 8, :3] = p
         if irregular is not None:
             program = rough
-            rests, beta, scale = irregular
+            rests, directions, beta, scale = irregular
             data[:, 9:12, :3] = rests
+            data[:, 12:15, :3] = directions
             program["u_irregularity"] = float(beta)
             program["u_irregularity_scale"] = float(scale)
         source = ctx.buffer(data.tobytes())
@@ -194,6 +195,31 @@ def rest_corners(items, seed: int) -> np.ndarray:
     return np.array(out)
 
 
+def rest_directions(items, rests, seed: int) -> np.ndarray:
+    """Per case, the corners' unit rest directions as the crush pass hands them over
+    (FIELD_DIRECTION, per vertex): each corner wave's direction through the rest
+    triangle's map, turned by up to 25 degrees in the rest plane (a vertex's own map is
+    not its triangle's), with the wave's sign."""
+    from usdwrinkle.reference.blend import weight_gradients
+
+    rng = np.random.default_rng(seed)
+    out = []
+    for (waves, _, corners, _, _), rest in zip(items, rests, strict=True):
+        rest_db = weight_gradients(rest)
+        normal = np.cross(rest[1] - rest[0], rest[2] - rest[0])
+        normal /= np.linalg.norm(normal)
+        directions = np.zeros((3, 3))
+        for c in range(3):
+            k = waves[c, :3]
+            v = (corners[1] - corners[0]) @ k * rest_db[1] \
+                + (corners[2] - corners[0]) @ k * rest_db[2]
+            angle = rng.uniform(-25, 25) * np.pi / 180
+            turned = v * np.cos(angle) + np.cross(normal, v) * np.sin(angle)
+            directions[c] = turned / np.linalg.norm(turned)
+        out.append(directions)
+    return np.array(out)
+
+
 #: the irregularity the cases run at (beta = IRREGULARITY_GAIN x it) and their field's
 #: 1 / Lambda: Lambda 1.5 units, over the cases' 0.2-1.5 unit waves, so that the factor
 #: |k| / |k'| reaches its clamps on some corners
@@ -211,12 +237,14 @@ def test_the_irregular_blend_and_its_gradient_match_numpy(blend):
     run, height, gradient = blend
     items = cases(5, False)
     rests = rest_corners(items, 6)
+    directions = rest_directions(items, rests, 8)
     beta = IRREGULARITY_GAIN * IRREGULARITY
-    gpu = run(items, (rests, beta, SCALE))
+    gpu = run(items, (rests, directions, beta, SCALE))
     moved = []
-    for (waves, phases, corners, bary, p), rest, got in zip(items, rests, gpu, strict=True):
+    for (waves, phases, corners, bary, p), rest, u, got in zip(items, rests, directions, gpu,
+                                                              strict=True):
         h, g, _ = blend_at(waves, phases, corners, bary, p, height, gradient,
-                           (rest, beta, SCALE))
+                           (rest, u, beta, SCALE))
         regular = blend_at(waves, phases, corners, bary, p, height, gradient)[0]
         scale = waves[:, 3].max() * 2  # the factor raises an amplitude at most 2x
         slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1)) * 2
@@ -224,13 +252,14 @@ def test_the_irregular_blend_and_its_gradient_match_numpy(blend):
         assert np.abs(got[0, 1:] - g).max() <= 1e-2 * slope + 1e-5, (got[0], g)
         moved.append(abs(h - regular) / waves[:, 3].max())
     assert np.median(moved) > 0.1
-    # a wave's sign is arbitrary: (-k, -phi) at every corner draws the same folds (the
-    # default profile is even), as the regular blend does; a field added to the phase
-    # alike whatever the sign drew other folds after a flip (2026-12-05: a held sleeve's
-    # crests jumped when a triangle's first corner changed its sign)
+    # a wave's sign is arbitrary: (-k, -phi) at every corner (and its rest direction
+    # with it, as corner_waves flips them) draws the same folds (the default profile is
+    # even), as the regular blend does; a field added to the phase alike whatever the sign
+    # drew other folds after a flip (2026-12-05: a held sleeve's crests jumped when a
+    # triangle's first corner changed its sign)
     flipped = [(np.concatenate([-waves[:, :3], waves[:, 3:]], 1), -phases, corners, bary, p)
                for waves, phases, corners, bary, p in items]
-    again = run(flipped, (rests, beta, SCALE))
+    again = run(flipped, (rests, -directions, beta, SCALE))
     scale = np.array([w[:, 3].max() for w, *_ in items])
     assert np.all(np.abs(again[:, 0, 0] - gpu[:, 0, 0]) <= 2e-3 * scale)
 
@@ -243,5 +272,6 @@ def test_the_irregular_exact_gradient_is_the_gradient_of_the_height():
     beta = IRREGULARITY_GAIN * IRREGULARITY
     items = cases(13, False)
     rests = rest_corners(items, 14)
-    assert differences_checked(items, lambda i: (rests[i], beta, SCALE),
+    directions = rest_directions(items, rests, 15)
+    assert differences_checked(items, lambda i: (rests[i], directions[i], beta, SCALE),
                                IRREGULARITY_FACTOR_MAX) > 100

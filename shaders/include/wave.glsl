@@ -83,6 +83,9 @@ struct CornerWaves {
     vec3 ratio[SYSTEMS_MAX];
 #if defined IRREGULAR
     vec3 rest[3];  // the rest corners (local space), where the irregularity field lives
+    // each corner wave's unit rest direction (crush's FIELD_DIRECTION xyz, along which
+    // its k is the material wave), its sign flipped with the wave's
+    vec3 u[WAVE_SLOTS];
 #endif
 };
 #if defined TWO_SYSTEMS
@@ -131,15 +134,26 @@ CornerWaves corner_waves(int t) {
             vec4 wave = s < SYSTEMS ? fetch(fields, FIELD_WAVE_OF(i, system)) : vec4(0.0);
             if (system == 0) wave.w *= drawn_share(i);
             float phi = fetch(phase, i)[system];
-            cw.ratio[s][c] = fetch(fields, FIELD_TEXELS * i + (system == 0
-                ? FIELD_DIRECTION_TEXEL : FIELD_DIRECTION2_TEXEL)).w;
+            vec4 direction = fetch(fields, FIELD_TEXELS * i + (system == 0
+                ? FIELD_DIRECTION_TEXEL : FIELD_DIRECTION2_TEXEL));
+            cw.ratio[s][c] = direction.w;
 #else
             vec4 wave = fetch(fields, FIELD_WAVE(i));
             wave.w *= drawn_share(i);
             float phi = fetch(phase, i).x;
-            cw.ratio[s][c] = fetch(fields, FIELD_DIRECTION(i)).w;
+            vec4 direction = fetch(fields, FIELD_DIRECTION(i));
+            cw.ratio[s][c] = direction.w;
 #endif
-            if (c > 0 && dot(wave.xyz, k0) < 0.0) { wave.xyz = -wave.xyz; phi = -phi; }
+#if defined IRREGULAR
+            cw.u[3 * s + c] = normalize_or_zero(direction.xyz);
+#endif
+            if (c > 0 && dot(wave.xyz, k0) < 0.0) {
+                wave.xyz = -wave.xyz;
+                phi = -phi;
+#if defined IRREGULAR
+                cw.u[3 * s + c] = -cw.u[3 * s + c];
+#endif
+            }
             cw.wave[3 * s + c] = wave;
             cw.phase[s][c] = phi;
         }
@@ -210,8 +224,7 @@ struct Irregular {
     vec3 gradient[IRREGULARITY_FIELDS];
     vec3 q[IRREGULARITY_COUNT];
     float s[IRREGULARITY_COUNT];
-    vec3 db[3];       // the gradients of the weights over the posed triangle
-    vec3 rest_db[3];  // and over the rest triangle
+    vec3 db[3];  // the gradients of the weights over the posed triangle
 };
 const float IRREGULARITY_NORM = sqrt(2.0 / float(IRREGULARITY_TERMS_PER_FIELD));
 
@@ -224,7 +237,6 @@ Irregular irregular_field(CornerWaves cw, vec3 bary) {
     vec3 X = bary.x * cw.rest[0] + bary.y * cw.rest[1] + bary.z * cw.rest[2];
     for (int c = 0; c < 3; ++c) {
         field.db[c] = weight_gradient(c, cw.corner[0], cw.corner[1], cw.corner[2]);
-        field.rest_db[c] = weight_gradient(c, cw.rest[0], cw.rest[1], cw.rest[2]);
     }
     vec4 terms[IRREGULARITY_COUNT] = IRREGULARITY_TERMS;
     for (int j = 0; j < IRREGULARITY_COUNT; ++j) {
@@ -242,21 +254,15 @@ Irregular irregular_field(CornerWaves cw, vec3 bary) {
     return field;
 }
 
-// the rest-space unit direction of posed wave vector k over the triangle (its material
-// wave vector (dp/dX)^T k, dp/dX = sum_c P_c grad_X b_c), zero where the rest triangle
-// is degenerate
-vec3 rest_direction_of(CornerWaves cw, Irregular field, vec3 k) {
-    return normalize_or_zero(dot(cw.corner[1] - cw.corner[0], k) * field.rest_db[1]
-                             + dot(cw.corner[2] - cw.corner[0], k) * field.rest_db[2]);
-}
-
 // One wave system's shift of the phase at the point, the same for its three corners:
 // m = beta u . N, u = v / |v| the direction of v = sum_c b_c a_c u_c (u_c: corner c's
-// rest direction, sign-aligned as the corners are). A wave's sign flips u with its
-// phase, so (k, phi) and (-k, -phi) draw the same folds. u_c is taken through this
-// triangle's own map, so across a coarse edge between triangles crushed unlike u (and
-// the shift) jumps (docs/physics.md, "Irregular folds against the referee"). Its posed
-// gradient:
+// rest direction, the crush pass's per vertex, sign-aligned as the corners are:
+// CornerWaves.u). A wave's sign flips u with its phase, so (k, phi) and (-k, -phi) draw
+// the same folds. Per vertex, u_c is the same in every triangle around the vertex, so
+// the shift is continuous across the coarse edges; taken through each triangle's own
+// map (until 2026-12-05) it jumped across those between triangles crushed unlike, and
+// the bent 10 cm sleeve drew 1.105 of its rest area at irregularity 0.3 (docs/physics.md,
+// "Irregular folds against the referee"). Its posed gradient:
 // grad m = beta (sum_i u_i grad N_i + (grad u)^T N), grad u = (I - u u^T) V / |v|,
 // V = sum_c a_c u_c grad b_c^T.
 struct Shift {
@@ -273,7 +279,7 @@ Shift system_shift(CornerWaves cw, Irregular field, vec3 bary, int s, float beta
     float total = 0.0;
     for (int c = 0; c < 3; ++c) {
         vec4 wave = cw.wave[3 * s + c];
-        vec3 u_c = wave.w * rest_direction_of(cw, field, wave.xyz);
+        vec3 u_c = wave.w * cw.u[3 * s + c];
         v += bary[c] * u_c;
         shift.V += outerProduct(u_c, field.db[c]);
         total += bary[c] * wave.w;

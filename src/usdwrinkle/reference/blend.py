@@ -92,23 +92,14 @@ def irregular_field(rest: np.ndarray, db: np.ndarray, b: np.ndarray, scale: floa
     return field, gradient, q, np.sin(phi)
 
 
-def rest_direction_of(rest: np.ndarray, corners: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """wave.glsl's ``rest_direction_of``: the rest-space unit direction of posed wave
-    vector ``k`` over the triangle, (dp/dX)^T k normalised (zero where degenerate)."""
-    rest_db = weight_gradients(rest)
-    v = (corners[1] - corners[0]) @ k * rest_db[1] + (corners[2] - corners[0]) @ k * rest_db[2]
-    length = np.linalg.norm(v)
-    return v / length if length > 1e-30 else np.zeros(3)
-
-
-def system_shift(rest, corners, db, waves, b, field, field_gradient, q, sines, beta):
+def system_shift(directions, db, waves, b, field, field_gradient, q, sines, beta):
     """wave.glsl's ``system_shift`` and ``shift_hessian``: the phase shift m = beta u . N
     that every corner of the system takes at the point, u the direction of sum_c b_c a_c
-    u_c (u_c the corners' rest directions, sign-aligned; ``db`` the weights' gradients
-    over the posed corners); returns (m, its posed gradient, its posed Hessian (3, 3));
-    zeros where no corner has a wave."""
-    u_c = np.array([waves[c, 3] * rest_direction_of(rest, corners, waves[c, :3])
-                    for c in range(3)])
+    u_c (``directions`` (3, 3): the corners' unit rest directions u_c, sign-aligned with
+    their waves, wave.glsl's CornerWaves.u; ``db`` the weights' gradients over the posed
+    corners); returns (m, its posed gradient, its posed Hessian (3, 3)); zeros where no
+    corner has a wave."""
+    u_c = waves[:, 3:4] * np.asarray(directions, np.float64)
     v = b @ u_c
     V = np.einsum("ci,cj->ij", u_c, db)  # grad v
     rho, total = np.linalg.norm(v), float(b @ waves[:, 3])
@@ -138,7 +129,8 @@ def blend_at(waves: np.ndarray, phases: np.ndarray, corners: np.ndarray, bary: n
     """One point's blend with its exact gradient (``exact_gradient`` in wave.glsl):
     ``waves`` (3, 4) the corners' (k, a), sign-aligned; ``phases`` (3,); ``corners``
     (3, 3) posed; ``bary`` its barycentrics; ``p`` the point. ``irregular``: (the rest
-    corners (3, 3), beta, 1 / Lambda) for the IRREGULAR variant (wrinkle:irregularity;
+    corners (3, 3), the corners' unit rest directions (3, 3; sign-aligned with their
+    waves), beta, 1 / Lambda) for the IRREGULAR variant (wrinkle:irregularity;
     docs/method.md, "Irregular folds"). Returns (h, gradient, the coherence's factor)."""
     b = np.clip(bary, 0, 1)
     b = b / b.sum()
@@ -147,10 +139,10 @@ def blend_at(waves: np.ndarray, phases: np.ndarray, corners: np.ndarray, bary: n
     db = weight_gradients(corners)
     d_a = np.zeros((3, 3))  # each corner amplitude's own gradient
     if irregular is not None:
-        rest, beta, scale = irregular
+        rest, directions, beta, scale = irregular
         rest = np.asarray(rest, np.float64)
         field, field_gradient, q, sines = irregular_field(rest, db, b, scale)
-        m, m_gradient, hessian = system_shift(rest, corners, db, waves, b, field,
+        m, m_gradient, hessian = system_shift(directions, db, waves, b, field,
                                               field_gradient, q, sines, beta)
         length = np.linalg.norm(k, axis=1)
         theta = theta + m
