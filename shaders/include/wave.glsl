@@ -346,7 +346,10 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
             float b = bary[c];
             // the amplitude field (the AOV, the maps' mask) is the cloth's, before the
             // band limit: it says how wrinkled the cloth is, not what this pixel resolves
+            // (irregular folds: with their factor |k| / |k'|, below)
+#if !defined IRREGULAR
             w.amplitude += b * wave.w;
+#endif
             float theta = cw.phase[s][c] + dot(k, p - cw.corner[c]);  // local space
 #if defined IRREGULAR
             // irregular folds: every corner's phase moves by the system's shift m, so
@@ -371,6 +374,7 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
             }
             vec3 d_a = a * d_factor;  // the gradient of a f
             a *= f;
+            w.amplitude += b * wave.w * f;
 #else
             float a = wave.w * band_limit(k, cw.ratio[s][c], footprint);
 #endif
