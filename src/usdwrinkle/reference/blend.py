@@ -57,20 +57,29 @@ def weight_gradients(corners: np.ndarray) -> np.ndarray:
     return np.array([np.cross(normal, e) for e in opposite]) / normal.dot(normal)
 
 
+#: each irregularity field's normalisation, sqrt(2 / m) over its m terms
+_FIELD_NORM = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
+
+
+def _field_terms(scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """The fields' terms at 1 / Lambda = ``scale``: (omega (m, 3) rest-space radians a
+    unit, psi (m,)), field by field (method/contract.py, IRREGULARITY_TERMS)."""
+    terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
+    return 2 * np.pi * terms[:, :3] * scale, terms[:, 3]
+
+
 def irregularity_field(points, scale: float):
     """The three irregularity fields over the rest surface (method/contract.py,
     IRREGULARITY_TERMS): N_i = sqrt(2 / m) sum_j sin(omega_ij . X + psi_ij), omega_ij =
     2 pi s_ij u_j ``scale`` (``scale`` = 1 / Lambda), at rest points ``points`` (..., 3);
     returns (N (..., 3), their rest-space gradients (..., 3 fields, 3))."""
-    terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
-    omega = 2 * np.pi * terms[:, :3] * scale
-    phi = np.asarray(points, np.float64) @ omega.T + terms[:, 3]
-    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
+    omega, psi = _field_terms(scale)
+    phi = np.asarray(points, np.float64) @ omega.T + psi
     shape = (*phi.shape[:-1], IRREGULARITY_FIELDS, IRREGULARITY_TERMS_PER_FIELD)
-    field = norm * np.sin(phi).reshape(shape).sum(-1)
+    field = _FIELD_NORM * np.sin(phi).reshape(shape).sum(-1)
     cosines = np.cos(phi).reshape(shape)
-    gradient = norm * np.einsum("...ij,ijk->...ik", cosines,
-                                omega.reshape(IRREGULARITY_FIELDS, -1, 3))
+    gradient = _FIELD_NORM * np.einsum("...ij,ijk->...ik", cosines,
+                                       omega.reshape(IRREGULARITY_FIELDS, -1, 3))
     return field, gradient
 
 
@@ -79,15 +88,13 @@ def irregular_field(rest: np.ndarray, db: np.ndarray, b: np.ndarray, scale: floa
     triangle with rest corners ``rest`` (3, 3) and weight gradients ``db`` over its posed
     corners (weight_gradients), at 1 / Lambda = ``scale``; returns (N (3,), their posed
     gradients (3, 3), the terms' posed wave vectors q (m, 3) and sin(phi) (m,))."""
-    terms = np.array([(*axis, psi) for axis, psi in IRREGULARITY_TERMS], np.float64)
-    omega = 2 * np.pi * terms[:, :3] * scale
-    phi = omega @ (b @ rest) + terms[:, 3]
+    omega, psi = _field_terms(scale)
+    phi = omega @ (b @ rest) + psi
     q = np.outer(omega @ (rest[1] - rest[0]), db[1]) \
         + np.outer(omega @ (rest[2] - rest[0]), db[2])
-    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
     fields = (-1, IRREGULARITY_TERMS_PER_FIELD)
-    field = norm * np.sin(phi).reshape(fields).sum(-1)
-    gradient = norm * np.einsum("ij,ijk->ik", np.cos(phi).reshape(fields),
+    field = _FIELD_NORM * np.sin(phi).reshape(fields).sum(-1)
+    gradient = _FIELD_NORM * np.einsum("ij,ijk->ik", np.cos(phi).reshape(fields),
                                 q.reshape(IRREGULARITY_FIELDS, -1, 3))
     return field, gradient, q, np.sin(phi)
 
@@ -110,9 +117,8 @@ def system_shift(directions, db, waves, b, field, field_gradient, q, sines, beta
     grad_u = projector @ V / rho                      # (3 components, 3 directions)
     m = beta * u @ field
     gradient = beta * (u @ field_gradient + grad_u.T @ field)
-    norm = np.sqrt(2.0 / IRREGULARITY_TERMS_PER_FIELD)
     weights = np.repeat(u, IRREGULARITY_TERMS_PER_FIELD) * sines
-    hessian = -norm * np.einsum("j,ja,jb->ab", weights, q, q)      # sum_i u_i H_i
+    hessian = -_FIELD_NORM * np.einsum("j,ja,jb->ab", weights, q, q)      # sum_i u_i H_i
     hessian = hessian + field_gradient.T @ grad_u + grad_u.T @ field_gradient
     # N . u(p) with N held: the derivative of V^T (I - u u^T) N / rho along each direction
     uN = u @ field
