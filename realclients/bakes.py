@@ -414,11 +414,46 @@ def _unit(n: np.ndarray) -> np.ndarray:
     return n / np.maximum(np.linalg.norm(n, axis=2), 1e-12)[..., None]
 
 
-def front_angles(a, b) -> tuple[np.ndarray, np.ndarray]:
-    """angles() over the pixels where the two normals face the same way: renderers write
-    a back face's normal (the inside of a sleeve) each its own way."""
+def blender_backfacing(path) -> np.ndarray:
+    """The share of each pixel's samples that hit a back face, from Blender's multilayer
+    EXR (its "Backfacing" AOV: cycles_client's ``backfacing`` job key)."""
+    import OpenEXR
+
+    parts = {part.name(): part for part in OpenEXR.File(str(path)).parts}
+    channels = parts["ViewLayer.Backfacing"].channels
+    return np.asarray(channels["ViewLayer.Backfacing.X"].pixels, np.float64)
+
+
+def front_angles(a, b, *backfacing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """angles() over the pixels whose every sample hit a front face in each of the
+    ``backfacing`` shares (blender_backfacing; a pixel on a silhouette between front and
+    back faces is in neither): renderers write a back face's normal-mapped normal (the
+    inside of a sleeve) each its own way (cycles_back_face)."""
+    if not backfacing:
+        raise ValueError("front_angles needs a renderer's backfacing share")
     degrees, mask = angles(a, b)
-    return degrees, mask & (np.nan_to_num(degrees) < 90.0)
+    for share in backfacing:
+        mask = mask & (share <= 0.001)
+    return degrees, mask
+
+
+def back_angles(a, b, backfacing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """angles() over the pixels whose every sample hit a back face."""
+    degrees, mask = angles(a, b)
+    return degrees, mask & (backfacing >= 0.999)
+
+
+def cycles_back_face(n: np.ndarray, facing: np.ndarray) -> np.ndarray:
+    """What Cycles shades a back face with, from usdwrinkle's normal ``n`` there and the
+    unwrinkled normal ``facing`` (both turned toward the viewer). Storm's preview surface
+    (ComputeTBNMatrix) and usdwrinkle build a double-sided back face's frame from its
+    tangent, its bitangent and the turned normal, so a normal map's tilt reads the same
+    from both sides; Cycles' normal-map node decodes in the front face's frame and
+    negates the result whole (svm_node_normal_map), which turns the tilt by 180 degrees
+    about the normal: measured on the shirt's cuff, where the sleeve's inside shows,
+    Cycles' decoded normal is ours so turned within 0.02 degrees at the median."""
+    z = np.sum(n * facing, axis=-1, keepdims=True)
+    return _unit(2.0 * z * facing - n)
 
 
 def view_directions(stage_path: Path, camera: str, frame: float, shape) -> np.ndarray:
@@ -470,8 +505,10 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     layer (against usdwrinkle's render of that layer), from each renderer's world-space
     normal AOV; also "decoded": Cycles' decoded map normal (its Normal Map nodes' output)
     against usdwrinkle's, "decoded_per_pixel": the same against usdwrinkle's render
-    --no-shade-samples, "plain": usdwrinkle's unwrinkled normals and "view": the directions
-    toward the camera (for cycles_reflection_clamp). Cycles imports the layers through
+    --no-shade-samples, "plain": usdwrinkle's unwrinkled normals, "backfacing": {output:
+    the share of each pixel's samples on a back face in Cycles' render of it}
+    (front_angles) and "view": the directions toward the camera (for
+    cycles_reflection_clamp). Cycles imports the layers through
     Blender's USD importer (coarse meshes: no subdivision, as usdview's default
     complexity), the render purpose on for the geometry layer."""
     from pxr import Usd, UsdGeom
@@ -489,7 +526,7 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     jobs = [{"stage": str(layers[k]), "camera": p.camera, "frame": shot.frame,
              "width": shot.width, "height": height, "out": str(p.base(f"cycles_{k}.exr")),
              "purposes": ["default", "render"] if k == "geometry" else None,
-             "decoded": k == "maps"}
+             "decoded": k == "maps", "backfacing": True}
             for k in layers]
     failed = {k: v for k, v in cycles(jobs).items() if v != "ok"}
     if failed:
@@ -501,6 +538,7 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
     views["decoded_per_pixel"] = (our_normals(p.render(p.stage, p.base("ours_per_pixel.exr"),
                                                        "--no-shade-samples")), decoded)
     views["plain"] = plain
+    views["backfacing"] = {k: blender_backfacing(p.base(f"cycles_{k}.exr")) for k in layers}
     views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     return views
 

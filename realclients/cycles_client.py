@@ -22,7 +22,11 @@ installed and enabled for the job as a user does: realclients/addon.py; default 
 the geometry layer's render mesh), "decoded" (default false: with an .exr, a shader AOV
 "Decoded" holds the world-space output of every Normal Map node, the normal decoded from
 the map before the BSDF's ensure_valid_specular_reflection tilts it: Cycles' decoded
-normal itself, where the Normal pass shows what the BSDF shades with)}. One line "ok OUT"
+normal itself, where the Normal pass shows what the BSDF shades with), "backfacing"
+(default false: with an .exr, a shader AOV "Backfacing" holds the share of the pixel's
+samples that hit a back face, the Geometry node's Backfacing output in every material:
+Cycles negates a back face's normal-map normal whole, where Storm and usdwrinkle keep its
+tangent and bitangent and turn only the normal, so the two are compared apart)}. One line "ok OUT"
 or "failed OUT: reason" per job on stdout, and "seconds S OUT": the time the render took.
 
 The importer converts a Y-up stage to Blender's Z-up by rotating the root objects; the
@@ -100,6 +104,8 @@ def _import_and_render(job: dict) -> None:
     exr = job["out"].endswith(".exr")
     if exr and job.get("decoded"):
         decoded_aov(scene)
+    if exr and job.get("backfacing"):
+        backfacing_aov(scene)
     if exr:
         scene.view_layers[0].use_pass_normal = True
         scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
@@ -155,18 +161,36 @@ def uniform_world(world, colour) -> None:
     background.inputs["Strength"].default_value = 1.0
 
 
+def _materials(scene) -> set:
+    return {slot.material for o in scene.objects for slot in o.material_slots
+            if slot.material is not None and slot.material.node_tree is not None}
+
+
 def decoded_aov(scene) -> None:
     """A shader AOV "Decoded" fed by each material's Normal Map node (the importer makes
     one per UsdPreviewSurface whose normal input reads a texture)."""
     aov = scene.view_layers[0].aovs.add()
     aov.name, aov.type = "Decoded", "COLOR"
-    for material in {slot.material for o in scene.objects for slot in o.material_slots
-                     if slot.material is not None and slot.material.node_tree is not None}:
+    for material in _materials(scene):
         tree = material.node_tree
         for node in [n for n in tree.nodes if n.type == "NORMAL_MAP"]:
             out = tree.nodes.new("ShaderNodeOutputAOV")
             out.aov_name = "Decoded"
             tree.links.new(node.outputs["Normal"], out.inputs["Color"])
+
+
+def backfacing_aov(scene) -> None:
+    """A shader AOV "Backfacing" fed by a Geometry node's Backfacing output in every
+    material: averaged over the pixel's samples, the share that hit a back face (a mesh
+    without a material writes 0)."""
+    aov = scene.view_layers[0].aovs.add()
+    aov.name, aov.type = "Backfacing", "VALUE"
+    for material in _materials(scene):
+        tree = material.node_tree
+        geometry = tree.nodes.new("ShaderNodeNewGeometry")
+        out = tree.nodes.new("ShaderNodeOutputAOV")
+        out.aov_name = "Backfacing"
+        tree.links.new(geometry.outputs["Backfacing"], out.inputs["Value"])
 
 
 def main(jobs_path: str) -> None:
