@@ -171,3 +171,65 @@ def test_api_warnings_carry_the_prefix_in_a_fresh_process(tmp_path):
     assert len(lines) == 2, result.stderr
     assert lines[0].startswith("usdwrinkle: warning: 1 of the 1 frame(s) lie outside")
     assert lines[1].startswith("HOST usdwrinkle.app.render 1 of the 1 frame(s)")
+
+
+def _fine_points(layer: str) -> np.ndarray:
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(layer)
+    fine = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Arm/Sleeve_wrinkled"))
+    return np.asarray(fine.GetPointsAttr().Get(24), np.float64)
+
+
+def test_another_context_made_current_changes_nothing(gl_context, tmp_path):
+    """GL calls go to the thread's current context. A script that made a second context
+    current (its own moderngl work, an engine on a context of its own) got a geometry bake
+    whose every fine point was (0, 0, 0), silently. Every door and engine call now makes
+    usdwrinkle's context current for its work (render/context.current) and gives the
+    thread its context back after: the frames, the fields and the baked points are the
+    same, and the script's context still draws into its own framebuffer."""
+    import ctypes
+
+    import moderngl
+
+    from usdwrinkle.engine import WrinkleEngine
+
+    egl = ctypes.CDLL("libEGL.so.1")
+    egl.eglGetCurrentContext.restype = ctypes.c_void_p
+
+    def everything(tag):
+        frame = api.render(SHIRT, tmp_path / tag / "s.####.png", frames=[24], width=96)[0]
+        layer = api.bake(SHIRT, tmp_path / tag / "geo.usdc", frames=[24], geometry=True,
+                         levels=2)
+        engine = WrinkleEngine(SHIRT)
+        try:
+            engine.compute_frame(24)
+            amplitude = engine.read_fields("/World/Arm/Sleeve").amplitude.copy()
+        finally:
+            engine.release()
+        return pixels(frame), _fine_points(layer), amplitude
+
+    ours = egl.eglGetCurrentContext()
+    before = everything("before")
+    assert np.ptp(before[1], axis=0).min() > 0.1 and before[2].max() > 0
+    host = moderngl.create_standalone_context(backend="egl", require=430)
+    try:
+        mine = egl.eglGetCurrentContext()
+        assert mine and mine != ours
+        fbo = host.simple_framebuffer((4, 4))
+        after = everything("after")
+        assert egl.eglGetCurrentContext() == mine  # the script's context is current again
+        fbo.use()
+        host.clear(0.25, 0.5, 0.75, 1.0)
+        np.testing.assert_array_equal(np.frombuffer(fbo.read(components=4), np.uint8)[:4],
+                                      [64, 128, 191, 255])
+    finally:
+        host.release()
+        from usdwrinkle.render.context import current
+
+        with current(gl_context):  # none current now: ours is made current and stays
+            pass
+    assert egl.eglGetCurrentContext() == ours
+    np.testing.assert_array_equal(after[0], before[0])
+    np.testing.assert_array_equal(after[1], before[1])
+    np.testing.assert_array_equal(after[2], before[2])

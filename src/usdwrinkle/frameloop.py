@@ -7,12 +7,14 @@ farm is made by exactly the code that renders it serially.
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from .process.errors import UsdWrinkleError
 from .process.timecode import format_frame
+from .render.context import current
 from .usd import schema
 
 _log = logging.getLogger(__name__)
@@ -41,6 +43,17 @@ def at_frame(frame: float | None):
         raise
 
 
+def on_engine_gl(loop):
+    """A loop whose GL calls (the engine's, and its outputs': maps, geometry, readbacks)
+    go to the engine's context (render/context.current)."""
+    @functools.wraps(loop)
+    def run(engine, *args, **kwargs):
+        with current(engine.ctx):
+            return loop(engine, *args, **kwargs)
+    return run
+
+
+@on_engine_gl
 def render_frames(engine, request, writing, frames: list[float | None], paths: list[str],
                   skip: Callable[[str], bool] = lambda path: False,
                   progress: Callable = lambda items: items,
@@ -168,6 +181,7 @@ class BakeRequest:
     geometry: object | None = None
 
 
+@on_engine_gl
 def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: items,
                survey_progress: Callable | None = None) -> int:
     """Compute every frame of ``request`` in order (the phase history is sequential in
