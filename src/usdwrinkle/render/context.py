@@ -5,8 +5,8 @@ the vendor's EGL gives the same API, so the same code runs on both.
 """
 from __future__ import annotations
 
-import os
 import ctypes
+import os
 from contextlib import contextmanager, nullcontext
 
 from ..process.errors import GLContextError
