@@ -277,15 +277,16 @@ def _deepened_layer(stage_path: str, layer: str, frame: int, cap: float) -> None
     baked.GetRootLayer().Save()
 
 
-def figure(out: Path, cap: float = FIGURE_CAP, frame: int = 24) -> None:
-    """The curtain sample as built and deepened, side by side (module docstring)."""
+def figure(out: Path, cap: float = FIGURE_CAP, frame: int = 24, name: str = "curtain") -> None:
+    """A sample stage (the curtain) as built and deepened, side by side (module
+    docstring)."""
     import tempfile
 
     import OpenImageIO as oiio
 
     from usdwrinkle import api
 
-    stage = str(ROOT / "sample_stages" / "curtain.usda")
+    stage = str(ROOT / "sample_stages" / f"{name}.usda")
     halves = []
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-deepen-") as scratch:
         for side in (0.0, cap):
