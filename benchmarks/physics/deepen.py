@@ -173,55 +173,34 @@ def _offsets(stage_path: str, frames: int, cap: float) -> tuple:
 
 def deepened_bake(cap: float):
     """oracle.bake with the offset added to the wrinkled geometry (module docstring)."""
-    import os
-    import tempfile
+    import functools
 
-    from usdwrinkle import api
     from usdwrinkle.geometry.subdivide import subdivide
-    from usdwrinkle.process.log import collect
 
-    from . import measure
-    from .oracle import Baked, read_waves
-    from .stage import grid_order, levels, read_fine, write_stage
+    from .oracle import bake
+    from .stage import grid_order, levels
 
-    def bake(shot, sim, label, width=None, attributes=None):
-        with tempfile.TemporaryDirectory(prefix="usdwrinkle-deepen-") as scratch:
-            fields = {}
-            for name, scale in (("wrinkled", None), ("flat", 0.0)):
-                stage = os.path.join(scratch, f"{name}.usda")
-                layer = os.path.join(scratch, f"{name}_geometry.usdc")
-                write_stage(stage, shot, sim.points, width=width, amplitude_scale=scale,
-                            attributes=attributes)
-                with collect():  # frame 0 (the rest pose) lies before the shot
-                    api.bake(stage, layer, frames=f"0:{shot.frames}", geometry=True,
-                             levels=levels(shot))
-                fields[name] = read_fine(layer, shot, shot.frames)
-                if name == "wrinkled":
-                    waves = read_waves(layer, shot.frames)
-                    offsets, rest, triangles = _offsets(stage, shot.frames, cap)
-        (points, _), (flat, normals) = fields["wrinkled"], fields["flat"]
+    def adjust(shot, stage, points, normals):
+        offsets, rest, triangles = _offsets(stage, shot.frames, cap)
         fine = subdivide(rest, triangles, levels(shot))
         corners = triangles[fine.vertex_triangle]
         order = grid_order(shot, fine.points.astype(np.float64))
         on_fine = np.einsum("vc,fvc->fv", fine.vertex_bary.astype(np.float64),
                             offsets[:, corners])[:, order]
-        points = points + on_fine[..., None] * normals
-        baked = Baked(label, measure.our_height(shot, points, flat, normals), width)
-        baked.waves, baked.points, baked.flat, baked.normals = waves, points, flat, normals
-        return baked
-    return bake
+        return points + on_fine[..., None] * normals
+    return functools.partial(bake, adjust=adjust)
 
 
 def referee_rows(cache: Path, cap: float) -> list[str]:
     """The converged referee's table rows with the offset at ``cap``."""
-    from . import oracle, referee
+    from . import referee
 
     plain = referee.bake
-    referee.bake = oracle.bake = deepened_bake(cap)
+    referee.bake = deepened_bake(cap)  # sweep_row's and our_area's bakes
     try:
         text = referee.sweep_report(list(referee.SWEEP), cache, "converged")
     finally:
-        referee.bake = oracle.bake = plain
+        referee.bake = plain
     return [line for line in text.splitlines() if line.startswith("| ") and
             not line.startswith("| shot")]
 
