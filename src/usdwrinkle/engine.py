@@ -5,7 +5,6 @@ rendering then draws, baking reads back what the GPU computed.
 """
 from __future__ import annotations
 
-import functools
 import math
 import time
 from dataclasses import dataclass
@@ -19,7 +18,7 @@ from .method.history import WaveHistory, cache_capacity, on_grid, reads_index
 from .process.errors import UsdWrinkleError
 from .process.limits import MAX_HISTORY_FRAMES, MAX_RELAX_WORK
 from .render.buffers import AOVS
-from .render.context import create_context, current
+from .render.context import create_context, current, in_own_context
 from .render.delegate import RenderDelegate, RenderPass
 from .render.fields import STATE_BYTES_PER_POINT
 from .render.request import FrameRequest
@@ -29,17 +28,6 @@ from .scene.stage import StageSceneDelegate
 AOV_NAMES = tuple(AOVS)
 #: the image aspect of the automatic framing (a stage without a camera)
 FRAMING_ASPECT = 16.0 / 9.0
-
-
-def on_gl(method):
-    """A method whose GL calls go to the engine's context: the process's own context is
-    made current for the call (render/context.current), whatever context a host or a
-    script made current since."""
-    @functools.wraps(method)
-    def call(self, *args, **kwargs):
-        with current(self.render_delegate.ctx):
-            return method(self, *args, **kwargs)
-    return call
 
 
 @dataclass(frozen=True)
@@ -198,7 +186,7 @@ class WrinkleEngine:
         outputs (maps, geometry) that run on the same tables."""
         return self.render_delegate.rprims[path].resources
 
-    @on_gl
+    @in_own_context
     def set_display_colors(self, path: str, colors) -> None:
         """Draw ``path`` in ``colors`` per point ((n, 3) linear RGB) instead of its
         material's colour (the paint window's display modes), or as its material again
@@ -299,7 +287,7 @@ class WrinkleEngine:
         self._sync(self.scene.sample_meshes(frame, with_baked=False))
         self.render_pass.compute(wrinkles, None, write, read, skip=frozenset(self.scene.baked))
 
-    @on_gl
+    @in_own_context
     def pull_changes(self) -> None:
         """Turn the stage's edits since the last frame into dirty bits (scene/changes.py):
         rprims for meshes that appeared or went, and the parts of each mesh to sync. An
@@ -325,7 +313,7 @@ class WrinkleEngine:
             self._dirty[path] = mesh.sync(self.scene, self._dirty[path] | DirtyBits.FRAME,
                                           meshes.get(path))
 
-    @on_gl
+    @in_own_context
     def compute_frame(self, frame: float | None, aspect: float | None = None,
                       wrinkles: bool = True):
         """Sync every rprim to ``frame`` and run skin, crush and relax. Returns the FrameRecord.
@@ -373,7 +361,7 @@ class WrinkleEngine:
             self.advance(int(frame - start), write)
         return record
 
-    @on_gl
+    @in_own_context
     def advance(self, index: int, slot: int) -> None:
         """Keep the wave state just computed into ``slot`` as grid frame ``index``'s (the
         chain advances to it): the explicit step after computing a grid frame."""
@@ -383,7 +371,7 @@ class WrinkleEngine:
             if mesh.resources is not None and mesh.resources.waves.slots > keep:
                 mesh.resources.waves.release_slots(keep)
 
-    @on_gl
+    @in_own_context
     def render(self, frame: float | None, request: FrameRequest):
         """Compute and draw ``frame`` as ``request`` says (render/request.py); returns what
         its layout reads back: {aov name: RenderBuffer}, the frame as an image file stores
@@ -397,7 +385,7 @@ class WrinkleEngine:
         self.last_timings.update(timings)
         return result
 
-    @on_gl
+    @in_own_context
     def render_frame(self, frame: float | None, width: int, height: int, wrinkles: bool = True,
                      samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):
         """``render`` at ``width`` x ``height``, read back as float AOVs: returns
@@ -405,7 +393,7 @@ class WrinkleEngine:
         return self.render(frame, FrameRequest(width, height, samples, wrinkles, shade_samples,
                                                ImageLayout("aovs", tuple(aovs))))
 
-    @on_gl
+    @in_own_context
     def preview_params(self, path: str, **changes) -> None:
         """Draw ``path`` with some wrinkle parameters changed (WrinkleParams fields: q,
         width, amplitude_scale, slack) without an edit of the stage, and without dropping
@@ -440,7 +428,7 @@ class WrinkleEngine:
         USD's row vectors)."""
         return np.asarray(self.render_delegate.rprims[path].frame.local_to_world, np.float64)
 
-    @on_gl
+    @in_own_context
     def posed_points(self, path: str) -> np.ndarray:
         """``path``'s posed points at the last computed frame, world space, (n, 3)
         float64 (a viewer's picking)."""
@@ -454,20 +442,20 @@ class WrinkleEngine:
                 if mesh.resources is not None and mesh.frame is not None and
                 mesh.frame.visible and mesh.resources.num_triangles]
 
-    @on_gl
+    @in_own_context
     def read_fields(self, path: str) -> WrinkleFields:
         """Per-vertex fields of ``path`` as computed for the last frame (numpy arrays;
         ``.arrays()`` gives them by name)."""
         return self.mesh_resources(path).read_fields()
 
-    @on_gl
+    @in_own_context
     def read_shading_normals(self, path: str):
         """The shading normals of ``path`` at the last frame: (NormalPlan, (entries, 3)
         float32 local normals) (scene/normals.py)."""
         res = self.mesh_resources(path)
         return res.normal_plan, res.read_shading_normals()
 
-    @on_gl
+    @in_own_context
     def release(self) -> None:
         self.scene.tracker.revoke()
         self.render_delegate.release()

@@ -7,14 +7,13 @@ farm is made by exactly the code that renders it serially.
 from __future__ import annotations
 
 import contextlib
-import functools
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from .process.errors import UsdWrinkleError
 from .process.timecode import format_frame
-from .render.context import current
+from .render.context import in_own_context
 from .usd import schema
 
 _log = logging.getLogger(__name__)
@@ -43,17 +42,7 @@ def at_frame(frame: float | None):
         raise
 
 
-def on_engine_gl(loop):
-    """A loop whose GL calls (the engine's, and its outputs': maps, geometry, readbacks)
-    go to the engine's context (render/context.current)."""
-    @functools.wraps(loop)
-    def run(engine, *args, **kwargs):
-        with current(engine.ctx):
-            return loop(engine, *args, **kwargs)
-    return run
-
-
-@on_engine_gl
+@in_own_context  # the engine's GL calls and its outputs' (maps, geometry, readbacks)
 def render_frames(engine, request, writing, frames: list[float | None], paths: list[str],
                   skip: Callable[[str], bool] = lambda path: False,
                   progress: Callable = lambda items: items,
@@ -181,7 +170,7 @@ class BakeRequest:
     geometry: object | None = None
 
 
-@on_engine_gl
+@in_own_context  # the engine's GL calls and its outputs' (maps, geometry, readbacks)
 def bake_layer(engine, request: BakeRequest, progress: Callable = lambda items: items,
                survey_progress: Callable | None = None) -> int:
     """Compute every frame of ``request`` in order (the phase history is sequential in

@@ -6,6 +6,7 @@ the vendor's EGL gives the same API, so the same code runs on both.
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 from contextlib import contextmanager, nullcontext
 
@@ -84,6 +85,16 @@ def current(ctx):
     if ctx is None or ctx is not _context or _egl is None:
         return nullcontext()
     return _made_current(ctx)
+
+
+def in_own_context(function):
+    """A function or method whose first argument holds the context its GL calls go to
+    (``.ctx``: an engine): it runs inside current(first.ctx)."""
+    @functools.wraps(function)
+    def call(first, *args, **kwargs):
+        with current(first.ctx):
+            return function(first, *args, **kwargs)
+    return call
 
 
 @contextmanager
