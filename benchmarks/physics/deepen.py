@@ -289,9 +289,13 @@ def figure(out: Path, cap: float = FIGURE_CAP, frame: int = 24, name: str = "cur
 
 
 def report(rows: list[dict], referee: dict, caps, seconds: float) -> str:
-    from ..blocks import markers, stage_block_head
+    from ..blocks import markers
 
-    lines = stage_block_head("deepen", seconds) + [
+    referee_caps = "".join(f" {cap:g}" for cap in referee)
+    command = "python -m benchmarks.physics.deepen" + (
+        f" --referee{referee_caps}" if referee else "") + " --write docs/physics.md"
+    lines = [
+        markers("deepen")[0], "", f"Made by `{command}` ({seconds:.0f} s here).", "",
         "Sample stages at frame 24, the compressed region: the share of its points whose fold "
         "the room lowers; then per cap (0: the law as built) the area over the rest area, "
         "the pairs of fine triangles that pass through each other and the 90th percentile "
