@@ -192,7 +192,8 @@ def deepened_bake(cap: float):
 
 
 def referee_rows(cache: Path, cap: float) -> list[str]:
-    """The converged referee's table rows with the offset at ``cap``."""
+    """The converged referee's table rows with the offset at ``cap``, then its phase by
+    phase lines."""
     from . import referee
 
     plain = referee.bake
@@ -201,8 +202,9 @@ def referee_rows(cache: Path, cap: float) -> list[str]:
         text = referee.sweep_report(list(referee.SWEEP), cache, "converged")
     finally:
         referee.bake = plain
-    return [line for line in text.splitlines() if line.startswith("| ") and
-            not line.startswith("| shot")]
+    lines = text.splitlines()
+    return ([line for line in lines if line.startswith("| ") and not line.startswith("| shot")]
+            + [""] + [line for line in lines if line.startswith("- ")])
 
 
 def _deepened_layer(stage_path: str, layer: str, frame: int, cap: float) -> None:
@@ -308,7 +310,8 @@ def report(rows: list[dict], referee: dict, caps, seconds: float) -> str:
             + " |")
     for cap, table in referee.items():
         lines += ["", f"The converged referee with the offset at cap {cap:g} (columns as in "
-                  "its table above):", "",
+                  "its table above; then phase by phase, ours / sim at the default W: "
+                  "wavelength, height):", "",
                   "| shot | D (N m) | grid | window | W default, matched | wavelength "
                   "(default W) | height (matched) | correlation | crest motion | area: ours, "
                   "sim |", "|---|---|---|---|---|---|---|---|---|---|", *table]
