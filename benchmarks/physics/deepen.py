@@ -142,11 +142,36 @@ def measure_stage(name: str, caps=CAPS) -> list[dict]:
     return rows
 
 
+def _offset_now(engine, path: str, cap: float) -> tuple[np.ndarray, np.ndarray]:
+    """The offset of ``path``'s coarse points at the engine's computed frame (the numpy
+    reference's crush on its posed points), and their posed normals."""
+    from usdwrinkle.reference.crush import crush
+
+    record = engine.meshes[path]
+    computed = engine.read_fields(path)
+    fields = computed.arrays()
+    posed = fields["points"].astype(np.float64)
+    normals = fields["normals"][:, :3].astype(np.float64)
+    law = crush(record.rest_points, posed, record.topology, record.params.q,
+                record.params.width, slack=record.params.slack, hold=record.params.hold,
+                coarsening=record.params.coarsening)
+    return deepening(posed, normals, record.topology, law, computed.drawn_amplitude,
+                     fields["wave_vector"], record.params.height_profile, cap), normals
+
+
+def _fine_weights(rest: np.ndarray, triangles: np.ndarray, levels: int):
+    """(coarse corners, barycentrics) of each fine vertex of the geometry bake's
+    subdivision (geometry.subdivide), and the fine mesh."""
+    from usdwrinkle.geometry.subdivide import subdivide
+
+    fine = subdivide(rest, triangles, levels)
+    return triangles[fine.vertex_triangle], fine.vertex_bary.astype(np.float64), fine
+
+
 def _offsets(stage_path: str, frames: int, cap: float) -> tuple:
     """(frames, coarse points) offsets of the stage's one wrinkled mesh over its shot,
     with its rest points and triangles."""
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.reference.crush import crush
 
     engine = WrinkleEngine(stage_path)
     try:
@@ -154,16 +179,7 @@ def _offsets(stage_path: str, frames: int, cap: float) -> tuple:
         out = []
         for frame in range(1, frames + 1):
             engine.compute_frame(frame)
-            record = engine.meshes[path]
-            computed = engine.read_fields(path)
-            fields = computed.arrays()
-            posed = fields["points"].astype(np.float64)
-            law = crush(record.rest_points, posed, record.topology, record.params.q,
-                        record.params.width, slack=record.params.slack,
-                        hold=record.params.hold, coarsening=record.params.coarsening)
-            out.append(deepening(posed, fields["normals"][:, :3].astype(np.float64),
-                                 record.topology, law, computed.drawn_amplitude,
-                                 fields["wave_vector"], record.params.height_profile, cap))
+            out.append(_offset_now(engine, path, cap)[0])
         record = engine.meshes[path]
         return (np.array(out), record.rest_points.astype(np.float64),
                 np.asarray(record.topology.triangles, np.int64))
@@ -175,18 +191,14 @@ def deepened_bake(cap: float):
     """oracle.bake with the offset added to the wrinkled geometry (module docstring)."""
     import functools
 
-    from usdwrinkle.geometry.subdivide import subdivide
-
     from .oracle import bake
     from .stage import grid_order, levels
 
     def adjust(shot, stage, points, normals):
         offsets, rest, triangles = _offsets(stage, shot.frames, cap)
-        fine = subdivide(rest, triangles, levels(shot))
-        corners = triangles[fine.vertex_triangle]
+        corners, bary, fine = _fine_weights(rest, triangles, levels(shot))
         order = grid_order(shot, fine.points.astype(np.float64))
-        on_fine = np.einsum("vc,fvc->fv", fine.vertex_bary.astype(np.float64),
-                            offsets[:, corners])[:, order]
+        on_fine = np.einsum("vc,fvc->fv", bary, offsets[:, corners])[:, order]
         return points + on_fine[..., None] * normals
     return functools.partial(bake, adjust=adjust)
 
@@ -213,8 +225,8 @@ def _deepened_layer(stage_path: str, layer: str, frame: int, cap: float) -> None
     from pxr import Usd, UsdGeom, Vt
 
     from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.geometry.subdivide import fine_point_count, subdivide
-    from usdwrinkle.reference.crush import crush
+    from usdwrinkle.geometry.subdivide import fine_point_count
+    from usdwrinkle.scene.topology import build_topology, vertex_normals
 
     baked = Usd.Stage.Open(layer)
     engine = WrinkleEngine(stage_path)
@@ -222,37 +234,21 @@ def _deepened_layer(stage_path: str, layer: str, frame: int, cap: float) -> None
         engine.compute_frame(frame)
         for path in engine.wrinkled_paths:
             record = engine.meshes[path]
-            computed = engine.read_fields(path)
-            fields = computed.arrays()
-            posed = fields["points"].astype(np.float64)
-            normals = fields["normals"][:, :3].astype(np.float64)
-            law = crush(record.rest_points, posed, record.topology, record.params.q,
-                        record.params.width, slack=record.params.slack,
-                        hold=record.params.hold, coarsening=record.params.coarsening)
-            offset = deepening(posed, normals, record.topology, law, computed.drawn_amplitude,
-                               fields["wave_vector"], record.params.height_profile, cap)
+            offset, normals = _offset_now(engine, path, cap)
             mesh = UsdGeom.Mesh(baked.GetPrimAtPath(path + "_wrinkled"))
             points = np.asarray(mesh.GetPointsAttr().Get(frame), np.float64)
-            faces = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64).reshape(-1, 3)
+            faces = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64)
             triangles = np.asarray(record.topology.triangles, np.int64)
             levels = next(level for level in range(11) if fine_point_count(
                 len(record.rest_points), triangles, level) == len(points))
-            fine = subdivide(record.rest_points, triangles, levels)
-            corners = triangles[fine.vertex_triangle]
-            bary = fine.vertex_bary.astype(np.float64)
+            corners, bary, _ = _fine_weights(record.rest_points, triangles, levels)
             along = np.einsum("vc,vcj->vj", bary, normals[corners])
             along /= np.linalg.norm(along, axis=1, keepdims=True)
             points += np.einsum("vc,vc->v", bary, offset[corners])[:, None] * along
             mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(points.astype(np.float32)), frame)
-            corners_at = points[faces]
-            area_normal = np.cross(corners_at[:, 1] - corners_at[:, 0],
-                                   corners_at[:, 2] - corners_at[:, 0])
-            shaded = np.zeros_like(points)
-            for k in range(3):  # area-weighted, as the coarse normals are
-                np.add.at(shaded, faces[:, k], area_normal)
-            shaded /= np.maximum(np.linalg.norm(shaded, axis=1, keepdims=True), 1e-30)
-            mesh.GetNormalsAttr().Set(Vt.Vec3fArray.FromNumpy(shaded.astype(np.float32)),
-                                      frame)
+            shaded = vertex_normals(points, build_topology(np.full(len(faces) // 3, 3), faces,
+                                                           points))
+            mesh.GetNormalsAttr().Set(Vt.Vec3fArray.FromNumpy(shaded), frame)
     finally:
         engine.release()
     baked.GetRootLayer().Save()
