@@ -17,9 +17,14 @@ layout(binding = CRUSH_REST_POINTS) uniform sampler2D rest_points;    // local s
 layout(binding = CRUSH_TRIANGLES) uniform highp isampler2D triangles;  // corners of each
 // area-weighted face normal of each triangle (posed, local space)
 layout(rgba32f, binding = CRUSH_FACE_NORMALS_OUT) writeonly uniform image2D face_normals;
+#elif defined DEEPEN_GRADIENT
+// the fields crush wrote: each point's deepening offset (FIELD_DEEPEN x) is read over its
+// ring and its gradient written beside it (yzw); x is written back unchanged, so a
+// neighbour reads the same offset before and after
+layout(rgba32f, binding = CRUSH_FIELDS) uniform image2D fields;
 #elif defined FROM_BAKE
-// Baked wave fields (scene/baked.py): [4i] = (k, amplitude), [4i+1] = (direction, r),
-// [4i+2], [4i+3]: the same for the second system.
+// Baked wave fields (scene/baked.py): [5i] = (k, amplitude), [5i+1] = (direction, r),
+// [5i+2], [5i+3]: the same for the second system, [5i+4] x: the deepening offset.
 layout(binding = CRUSH_BAKED) uniform sampler2D baked;
 layout(binding = CRUSH_REST_FRAME) uniform sampler2D rest_frame;
 layout(binding = CRUSH_FACE_NORMALS) uniform sampler2D face_normals;
@@ -79,6 +84,41 @@ void main() {
     STORE(face_normals, t, vec4(cross(p1 - p0, p2 - p0), 0.0));
 }
 
+#elif defined DEEPEN_GRADIENT
+
+#define FIELD_DEEPEN(i) TABLE_TEXEL(FIELD_TEXELS * (i) + FIELD_DEEPEN_TEXEL)
+
+// The gradient of the deepening offset over the posed surface (method/deepen.py
+// offset_gradient): least squares of o_j - o_i against the ring's edges in the tangent
+// plane of n_i, so that the blend interpolates a smooth normal tilt (a per-triangle
+// gradient would show the coarse facets).
+void main() {
+    int i = int(gl_GlobalInvocationID.x);
+    if (i >= u_num_points) return;
+    vec4 own = imageLoad(fields, FIELD_DEEPEN(i));
+    vec3 n = imageLoad(fields, TABLE_TEXEL(FIELD_NORMAL(i))).xyz;
+    vec3 x_i = fetch(posed_points, i).xyz;
+    mat3 ete = mat3(0.0);
+    vec3 etb = vec3(0.0);
+    bool any = own.x != 0.0;
+    for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
+        int j = NEIGHBOR(e);
+        float o_j = imageLoad(fields, FIELD_DEEPEN(j)).x;
+        vec3 edge = fetch(posed_points, j).xyz - x_i;
+        edge -= dot(edge, n) * n;
+        ete += outerProduct(edge, edge);
+        etb += edge * (o_j - own.x);
+        any = any || o_j != 0.0;
+    }
+    float scale = ete[0][0] + ete[1][1] + ete[2][2];
+    mat3 system = ete + scale * outerProduct(n, n);
+    vec3 gradient = vec3(0.0);
+    if (any && scale > 0.0 && abs(determinant(system)) > 1e-6 * scale * scale * scale) {
+        gradient = inverse(system) * etb;
+    }
+    imageStore(fields, FIELD_DEEPEN(i), vec4(own.x, gradient));
+}
+
 #else
 
 // Posed normal of vertex i: the area-weighted sum of its triangles' normals (local
@@ -104,10 +144,13 @@ void main() {
     vec3 n = posed_normal(i, fetch(rest_frame, 2 * i).xyz, usable);
     // a bake holds the drawn amplitude: all of it is drawn
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 2.0 : 0.0));
-    STORE(fields, FIELD_WAVE(i), fetch(baked, 4 * i));
-    STORE(fields, FIELD_DIRECTION(i), fetch(baked, 4 * i + 1));
-    STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, fetch(baked, 4 * i + 2));
-    STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 4 * i + 3));
+    STORE(fields, FIELD_WAVE(i), fetch(baked, 5 * i));
+    STORE(fields, FIELD_DIRECTION(i), fetch(baked, 5 * i + 1));
+    STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, fetch(baked, 5 * i + 2));
+    STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 5 * i + 3));
+    // the offset as baked; its gradient, from the posed points, by DEEPEN_GRADIENT
+    STORE(fields, FIELD_TEXELS * i + FIELD_DEEPEN_TEXEL,
+          vec4(fetch(baked, 5 * i + 4).x, 0.0, 0.0, 0.0));
 }
 
 #else
@@ -160,6 +203,19 @@ float profile_slope(float rho) {
     return mix(u_slope[i], u_slope[i + 1], u - float(i));
 }
 
+// The length per posed length of the profile's wave at slope s = a|k|: sqrt(1 + u^2) at
+// the u where u_slope reaches s (its inverse, linear between samples and along the last
+// segment beyond them; method/deepen.py length_at)
+float profile_length(float s) {
+    int i = 0;
+    for (int j = 1; j < SLOPE_SAMPLES - 1; ++j) {
+        if (u_slope[j] <= s) i = j;
+    }
+    float low = u_slope[i], high = u_slope[i + 1];
+    float u = (float(i) + (s - low) / max(high - low, 1e-30)) * SLOPE_STEP;
+    return sqrt(1.0 + u * u);
+}
+
 // The fold law (docs/method.md, "Folds that read as cloth"). r is the compression along
 // d with the painted q, r_geo the mesh's alone, across the mesh's along the other
 // principal direction (1 where it is not compressed, at least ACROSS_MIN). rho is the
@@ -174,6 +230,7 @@ float profile_slope(float rho) {
 struct Fold {
     vec3 k;
     float amplitude;   // before the amplitude scale and the held edges
+    float full;        // the same before the room lowered it (the deepening's)
     float wavelength;  // material (rest space): what the anchored phase counts
     // the share of the amplitude the surface draws: below 1 where the mesh is stretched
     // across d (it holds that share of the cloth's area already); the relaxation weighs
@@ -205,6 +262,7 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretche
     if (!(rho > 1.0)) {
         f.k = wave_vector(M_geo, d, W, t1, t2);
         f.amplitude = 0.0;
+        f.full = 0.0;
         f.wavelength = W;
         return f;
     }
@@ -217,6 +275,7 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretche
     // with r_geo * across * stretched in place of r_geo), within the same room
     float lowered = profile_slope(excess_of(r_geo * across * stretched) * gather)
                     / max(length(f.k), 1e-30);
+    f.full = f.amplitude;
     f.amplitude = min(f.amplitude, room / max(scale, 1e-30));
     lowered = min(lowered, room / max(scale, 1e-30));
     f.drawn = f.amplitude > 0.0 ? min(lowered / f.amplitude, 1.0) : 1.0;
@@ -248,6 +307,11 @@ void main() {
     mat2 BA = mat2(0.0);
     int count = 0;
     float bend = 0.0;  // the posed surface's largest normal curvature over the ring
+    // the second fundamental form's fit (method/deepen.py fit_form): normal equations of
+    // kappa_e = 2 (e.n) / |e|^2 against (x^2, 2xy, y^2) of each edge's unit direction
+    mat3 form_aa = mat3(0.0);
+    vec3 form_ab = vec3(0.0);
+    int form_count = 0;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
         vec3 rest_edge = fetch(rest_points, j).xyz - X_i;     // rest, local space
@@ -262,6 +326,14 @@ void main() {
         // converge there); and the circle through both points tangent to the plane of n
         // (2 |e.n| / |e|^2), which a coarse ring of a cylinder gives exactly
         float e2 = dot(posed_edge, posed_edge);
+        float tangent_length = length(b);
+        if (e2 > 0.0 && tangent_length > 0.0) {
+            vec2 u = b / tangent_length;
+            vec3 row = vec3(u.x * u.x, 2.0 * u.x * u.y, u.y * u.y);
+            form_aa += outerProduct(row, row);
+            form_ab += row * (2.0 * dot(posed_edge, n) / e2);
+            ++form_count;
+        }
         if (e2 > 0.0) {
             bool usable_j;
             vec3 n_j = posed_normal(j, fetch(rest_frame, 2 * j).xyz, usable_j);
@@ -356,6 +428,7 @@ void main() {
     float amplitude = held * u_amplitude_scale * f1.amplitude;
     vec3 k = f1.k;
     float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
+    bool compression_wave = true;      // false where the tension wave takes its place
 
     // Tension (docs/method.md): across the largest stretch s1 = sqrt(lambda2) beyond the
     // onset, crests along the pull. It shares the direction d (the other principal
@@ -371,6 +444,37 @@ void main() {
             drawn = 1.0;
             wavelength = tension_wavelength;
             k = wave_vector(M_geo, d, wavelength, t1, t2);
+            compression_wave = false;
+        }
+    }
+
+    // Deepened pleats (method/deepen.py): where the room lowered the fold, the length it
+    // does not draw goes into an offset along n, away from the centre of curvature along
+    // the wave, at most DEEPEN_CAP of the full fold and fading where the surface is flat
+    float offset = 0.0;
+    float drawn_amplitude = amplitude * drawn;
+    float full = room < 1e30 ? drawn_amplitude * max(f1.full * u_amplitude_scale / room, 1.0)
+                             : drawn_amplitude;
+    float form_scale = form_aa[0][0] + form_aa[1][1] + form_aa[2][2];
+    if (compression_wave && usable && full > drawn_amplitude && drawn_amplitude > 0.0
+            && form_count >= 3
+            && abs(determinant(form_aa)) > 1e-6 * form_scale * form_scale * form_scale) {
+        vec3 form = inverse(form_aa) * form_ab;
+        vec2 along = vec2(dot(k, t1), dot(k, t2));
+        float along_length = length(along);
+        float kappa = 0.0;
+        if (along_length > 0.0) {
+            along /= along_length;
+            kappa = form.x * along.x * along.x + 2.0 * form.y * along.x * along.y
+                  + form.z * along.y * along.y;
+        }
+        float curve = abs(kappa);
+        if (curve > 0.0) {
+            float kl = length(k);
+            float gain = profile_length(full * kl) / profile_length(drawn_amplitude * kl);
+            float c = min(min((gain - 1.0) / curve, DEEPEN_CAP * full),
+                          full * curve * full / FOLD_ROOM);
+            offset = -sign(kappa) * max(c, 0.0);
         }
     }
 
@@ -388,6 +492,8 @@ void main() {
     STORE(fields, FIELD_DIRECTION(i), vec4(d3, r));
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
+    // its gradient: DEEPEN_GRADIENT, once every point's offset is written
+    STORE(fields, FIELD_TEXELS * i + FIELD_DEEPEN_TEXEL, vec4(offset, 0.0, 0.0, 0.0));
     // material-anchored start: crests ride with the cloth, frames stay independent.
     // Where the wave runs along the paint (within 45 degrees), the paint's own stripe
     // pattern in rest space (method/anchor.py), its sign d's

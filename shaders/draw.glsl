@@ -67,6 +67,7 @@ INTERPOLATED out vec3 v_color;
 flat out vec4 v_wave[WAVE_SLOTS];
 flat out vec3 v_phase[SYSTEMS_MAX];
 flat out vec3 v_corner[3];
+flat out vec4 v_deepen[3];
 #if defined IRREGULAR
 flat out vec3 v_rest[3];
 flat out vec3 v_u[WAVE_SLOTS];
@@ -104,10 +105,12 @@ void main() {
     for (int k = 0; k < WAVE_SLOTS; ++k) cw.wave[k] = vec4(0.0);
     for (int k = 0; k < SYSTEMS_MAX; ++k) cw.phase[k] = vec3(0.0);
     for (int k = 0; k < 3; ++k) cw.corner[k] = vec3(0.0);
+    for (int k = 0; k < 3; ++k) cw.deepen[k] = vec4(0.0);
     if (u_wrinkles != 0) cw = corner_waves(t);
     v_wave = cw.wave;
     v_phase = cw.phase;
     v_corner = cw.corner;
+    v_deepen = cw.deepen;
 #if defined IRREGULAR
     for (int k = 0; k < 3; ++k) v_rest[k] = u_wrinkles != 0 ? cw.rest[k] : vec3(0.0);
     for (int k = 0; k < WAVE_SLOTS; ++k) v_u[k] = u_wrinkles != 0 ? cw.u[k] : vec3(0.0);
@@ -145,12 +148,13 @@ INTERPOLATED in vec3 v_color;
 flat in vec4 v_wave[WAVE_SLOTS];
 flat in vec3 v_phase[SYSTEMS_MAX];
 flat in vec3 v_corner[3];
+flat in vec4 v_deepen[3];
 #if defined IRREGULAR
 flat in vec3 v_rest[3];
 flat in vec3 v_u[WAVE_SLOTS];
-#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS, v_rest, v_u)
+#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, v_deepen, NO_RATIOS, v_rest, v_u)
 #else
-#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, NO_RATIOS)
+#define DRAWN_CORNER_WAVES CornerWaves(v_wave, v_phase, v_corner, v_deepen, NO_RATIOS)
 #endif
 #if defined TEXTURED
 flat in vec3 v_st_from_local[2];

@@ -71,11 +71,14 @@ def blend(gl_context):
                            root=SHADERS)
     rough["u_profile_samples"] = float(len(height))
 
-    def run(items, irregular=None):
+    def run(items, irregular=None, deepen=None):
         """``irregular``: (the rest corners per case, their rest directions per case,
-        beta, 1 / Lambda), run on the IRREGULAR variant."""
+        beta, 1 / Lambda), run on the IRREGULAR variant; ``deepen``: each case's three
+        corners' (offset, gradient) (FIELD_DEEPEN; zero by default)."""
         program = shader
-        data = np.zeros((len(items), 15, 4), np.float32)
+        data = np.zeros((len(items), 18, 4), np.float32)
+        if deepen is not None:
+            data[:, 15:18] = deepen
         for i, (waves, phases, corners, bary, p) in enumerate(items):
             data[i, :3] = waves
             data[i, 3, :3] = phases
@@ -275,3 +278,30 @@ def test_the_irregular_exact_gradient_is_the_gradient_of_the_height():
     directions = rest_directions(items, rests, 15)
     assert differences_checked(items, lambda i: (rests[i], directions[i], beta, SCALE),
                                IRREGULARITY_FACTOR_MAX) > 100
+
+
+def test_the_deepening_adds_its_interpolated_offset_and_gradient(blend):
+    """The deepened pleats (method/deepen.py): the blend adds the corners' offsets o_c
+    and their gradients g_c, interpolated by the barycentric weights, to h and to its
+    gradient (the exact one as it is, the tangent-plane one projected into the plane)."""
+    run, height, gradient = blend
+    items = cases(11, False)
+    rng = np.random.default_rng(12)
+    deepen = np.zeros((len(items), 3, 4), np.float32)
+    deepen[:, :, 0] = rng.uniform(-0.1, 0.1, (len(items), 3))
+    deepen[:, :, 1:] = rng.uniform(-0.5, 0.5, (len(items), 3, 3))
+    plain, deepened = run(items), run(items, deepen=deepen)
+    for (waves, phases, corners, bary, p), off, got, base in zip(items, deepen, deepened,
+                                                                 plain, strict=True):
+        h, g, _ = blend_at(waves, phases, corners, bary, p, height, gradient)
+        o = bary @ off[:, 0].astype(np.float64)
+        go = bary @ off[:, 1:].astype(np.float64)
+        scale = waves[:, 3].max()
+        slope = np.max(waves[:, 3] * np.linalg.norm(waves[:, :3], axis=1))
+        assert abs(got[0, 0] - (h + o)) <= 2e-3 * scale, (got[0], h, o)
+        assert np.abs(got[0, 1:] - (g + go)).max() <= 1e-2 * slope + 1e-5, (got[0], g, go)
+        n = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+        n /= np.linalg.norm(n)
+        tangent = (base[1, 1:] + go) - np.dot(base[1, 1:] + go, n) * n
+        np.testing.assert_allclose(got[1, 1:], tangent, atol=1e-5)
+        assert abs(got[1, 0] - got[0, 0]) <= 1e-6 * scale + 1e-6

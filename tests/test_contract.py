@@ -22,7 +22,8 @@ LOCAL = re.compile(r"\b(?:float|int|uint|bool|[iu]?vec[234]|mat[234](?:x[234])?)
 #: what the shaders use without defining: GLSL's own names and the stage switches
 #: that render/shaders.py and the passes add per program
 GLSL = {"GL_ARB_shader_draw_parameters"}
-STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE", "SEED",
+STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE",
+                  "DEEPEN_GRADIENT", "SEED",
                   "STEP", "FIT", "TWO_SYSTEMS", "NORMAL_MAP",
                   # the wave blend's (render/passes/__init__.py, irregular)
                   "IRREGULAR",
@@ -107,7 +108,11 @@ def test_fields_follow_the_layout():
     assert list(fields.arrays()) == ["points", "normals", "usable", "wave_vector", "amplitude",
                                      "drawn", "direction", "compression", "phase", "anchor_phase",
                                      "wave_vector2", "amplitude2", "direction2",
-                                     "compression2", "phase2", "anchor_phase2", "wavenumber"]
+                                     "compression2", "phase2", "anchor_phase2", "wavenumber",
+                                     "offset", "offset_gradient"]
+    np.testing.assert_array_equal(fields.offset, texel[:, contract.FIELD_DEEPEN_TEXEL, 0])
+    np.testing.assert_array_equal(fields.offset_gradient,
+                                  texel[:, contract.FIELD_DEEPEN_TEXEL, 1:])
     np.testing.assert_array_equal(fields.wavenumber, 0.0)  # no damped table given
     # the normal texel's w: 0 where the ring is not usable (all drawn), else 1 + the share
     # drawn (in [0, 1])

@@ -6,6 +6,7 @@ import pytest
 from pxr import UsdGeom
 
 from usdwrinkle.engine import WrinkleEngine
+from usdwrinkle.method.contract import FIELD_TEXELS
 from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.reference.relax import phase_misfit, relax_shot, wrap
 from usdwrinkle.render.delegate import COLD_START_FACTOR
@@ -323,7 +324,7 @@ def test_every_wave_of_cesium_man_is_finite_cold_and_with_history(gl_context, co
     for cold in (False, True):
         # CesiumMan's one mesh, in metres (crests_across_gl's stage), frame by frame
         for frame, (points, fields, *_) in tables(cold, gl_context, "cesium_man").items():
-            fields = fields.reshape(-1, 5, 4)
+            fields = fields.reshape(-1, FIELD_TEXELS, 4)
             assert np.isfinite(fields).all(), (frame, cold)
             size = float(np.ptp(points[:, :3], axis=0).max())
             amplitude = float(fields[:, [1, 3], 3].max())

@@ -51,7 +51,8 @@ vec3 normalize_or_zero(vec3 v) {
 struct Wave {
     float height;     // h, along the coarse normal (scene units)
     vec3 gradient;    // dh/dx in the tangent plane of n (local space)
-    float amplitude;  // the blended amplitude sum(b_c a_c), before the band limit
+    float amplitude;  // the blended amplitude sum(b_c a_c), before the band limit, plus
+                      // the deepening's offset |sum(b_c o_c)|: a bound of |h|
 };
 
 // The gradient of barycentric weight c over triangle (p0, p1, p2): constant, pointing from
@@ -78,6 +79,9 @@ struct CornerWaves {
     vec4 wave[WAVE_SLOTS];
     vec3 phase[SYSTEMS_MAX];
     vec3 corner[3];
+    // each corner's deepening (crush's FIELD_DEEPEN): x the offset along the normal, yzw
+    // its gradient (method/deepen.py)
+    vec4 deepen[3];
     // each corner's compression r along its wave (crush's FIELD_DIRECTION w): the rest
     // (material) wavelength is 2 pi / (|k| r), what the displaced mesh's band limit reads
     vec3 ratio[SYSTEMS_MAX];
@@ -103,7 +107,10 @@ float drawn_share(int i) {
 CornerWaves corner_waves(int t) {
     CornerWaves cw;
     ivec3 corners = fetch(triangles, t).xyz;
-    for (int c = 0; c < 3; ++c) cw.corner[c] = fetch(posed_points, corners[c]).xyz;
+    for (int c = 0; c < 3; ++c) {
+        cw.corner[c] = fetch(posed_points, corners[c]).xyz;
+        cw.deepen[c] = fetch(fields, FIELD_TEXELS * corners[c] + FIELD_DEEPEN_TEXEL);
+    }
 #if defined IRREGULAR
     for (int c = 0; c < 3; ++c) cw.rest[c] = fetch(wave_rest_points, corners[c]).xyz;
 #endif
@@ -325,6 +332,14 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
                         Footprint footprint) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     bary = blend_weights(bary);
+    // the deepened pleats (method/deepen.py): the corners' offsets and their gradients,
+    // interpolated over the triangle as the surface is; the amplitude, the bound of |h|,
+    // holds the offset's size too
+    for (int c = 0; c < 3; ++c) {
+        w.height += bary[c] * cw.deepen[c].x;
+        w.gradient += bary[c] * cw.deepen[c].yzw;
+    }
+    w.amplitude = abs(w.height);
 #if defined IRREGULAR
     Irregular field = irregular_field(cw, bary);
     float beta = u_irregularity;

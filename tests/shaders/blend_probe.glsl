@@ -5,11 +5,12 @@
 #include "include/wave.glsl"
 
 layout(local_size_x = 1) in;
-const int CASE = 15;  // vec4 per case
+const int CASE = 18;  // vec4 per case
 
 // per case, 15 vec4: the 3 corner waves (k, a), the phases (xyz), the 3 corners (xyz),
 // the barycentrics (xyz), the point p (xyz), the 3 rest corners (xyz) and the 3 corners'
-// rest directions (xyz; the IRREGULAR variant's)
+// rest directions (xyz; the IRREGULAR variant's), the 3 corners' deepening (offset,
+// gradient)
 layout(std430, binding = 0) readonly buffer Cases { vec4 cases[]; };
 // per case, 2 vec4: (h, exact gradient), (h, the tangent-plane gradient)
 layout(std430, binding = 1) writeonly buffer Results { vec4 results[]; };
@@ -20,6 +21,7 @@ void main() {
     for (int c = 0; c < 3; ++c) {
         cw.wave[c] = cases[CASE * i + c];
         cw.corner[c] = cases[CASE * i + 4 + c].xyz;
+        cw.deepen[c] = cases[CASE * i + 15 + c];
 #if defined IRREGULAR
         cw.rest[c] = cases[CASE * i + 9 + c].xyz;
         cw.u[c] = cases[CASE * i + 12 + c].xyz;

@@ -10,6 +10,7 @@ from ..method.contract import (
     FOLD_ROOM,
     MIN_RATIO,
 )
+from ..method.deepen import curvature_along, fit_form, offset, offset_gradient
 from ..method.folds import (
     area_excess,
     drawn_excess,
@@ -55,7 +56,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     the default profile's by default).
 
     Returns a dict of arrays: normals (n,3), wave_vector (n,3), amplitude (n,),
-    direction (n,3), compression (n,), phase (n,), usable (n,) bool.
+    direction (n,3), compression (n,), phase (n,), usable (n,) bool, offset (n,) and
+    offset_gradient (n,3) (method/deepen.py).
     """
     rest = np.asarray(rest, np.float64)
     posed = np.asarray(posed, np.float64)
@@ -153,6 +155,13 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
         along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
         amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
+    # the deepened pleats (method/deepen.py): the offset where the room lowered the fold,
+    # from the form fitted over the ring in the posed tangent coordinates b
+    form, fitted = fit_form(b, np.sum(posed_edge * nrm[src], 1), src, n)
+    drawn_amplitude = amplitude * drawn
+    deepen = offset(curvature_along(form, k2), drawn_amplitude,
+                    drawn_amplitude * np.maximum(over_room, 1.0), kl, table)
+    deepen = np.where(usable & fitted, deepen, 0.0)
     phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
     # where the wave runs along the paint, the paint's own start phase (method/anchor.py)
     painted = painted_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
@@ -170,7 +179,10 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
             # beyond crush.glsl's outputs: the mesh's own compression along d and largest
             # stretch, and where the room limited the fold (the area tests read them)
             "geometric": r_geo, "stretch": stretch, "capped": capped & folding,
-            "over_room": over_room}
+            "over_room": over_room,
+            # the deepening's offset along the normal and its gradient (FIELD_DEEPEN)
+            "offset": deepen,
+            "offset_gradient": offset_gradient(posed, nrm, src, dst, deepen)}
 
 
 def default_slope() -> np.ndarray:

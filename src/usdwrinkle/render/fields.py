@@ -78,7 +78,7 @@ class WaveFields:
         """The wave state in ``slot`` (made, zeroed, on first use)."""
         n = self.num_points
         while len(self._states) <= slot:
-            # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2
+            # FIELD_TEXELS per vertex: normal, wave, direction, wave2, direction2, deepen
             # (method/contract.py); phases RG (systems 1, 2); damped: xy the damped direction
             # (T1, T2 coordinates), z 1 once written
             self._states.append(WaveState(
@@ -145,17 +145,19 @@ class WaveFields:
 
     def write_baked(self, baked) -> None:
         """Upload one frame's baked fields (scene.baked.BakedFields): waves into the baked
-        table ([4i] = (k, amplitude), [4i + 1] = (direction, r), [4i + 2], [4i + 3]: the
-        second system's), phases into the phase table that draw reads. The baked table is
-        made on first use."""
+        table ([5i] = (k, amplitude), [5i + 1] = (direction, r), [5i + 2], [5i + 3]: the
+        second system's, [5i + 4] x: the deepening offset), phases into the phase table
+        that draw reads. The baked table is made on first use."""
         n = self.num_points
         if self.baked_waves is None:
-            self.baked_waves = self._table(4 * n, 4)
-        block = np.zeros((n, 4, 4), np.float32)
+            self.baked_waves = self._table(5 * n, 4)
+        block = np.zeros((n, 5, 4), np.float32)
         block[:, 0, :3] = baked.wave_vector
         block[:, 0, 3] = baked.amplitude
         block[:, 1, :3] = baked.direction
         block[:, 1, 3] = baked.compression
+        if baked.offset is not None:
+            block[:, 4, 0] = baked.offset
         phases = np.zeros((n, WAVE_SYSTEMS), np.float32)
         phases[:, 0] = baked.phase
         self.set_systems(2 if baked.amplitude2 is not None else 1)

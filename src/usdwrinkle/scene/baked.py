@@ -49,6 +49,9 @@ class BakedFields:
         r (ones when not baked).
     amplitude2, wave_vector2, phase2 : the second wave system, or None (one system).
     direction2, compression2 : zeros and ones (not baked; nothing draws them).
+    offset : (n,) float32 or None
+        The deepened pleats' offset along the normal (method/deepen.py); None: a bake
+        that has none (made before it was drawn), drawn without it.
     """
 
     amplitude: np.ndarray
@@ -61,6 +64,7 @@ class BakedFields:
     phase2: np.ndarray | None = None
     direction2: np.ndarray | None = None
     compression2: np.ndarray | None = None
+    offset: np.ndarray | None = None
 
 
 class BakedSource:

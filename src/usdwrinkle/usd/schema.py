@@ -39,6 +39,9 @@ BAKED_PRIMVARS = {
     "primvars:wrinkle:waveVector": ("wave_vector", 3),
     "primvars:wrinkle:phase": ("phase", 1),
     "primvars:wrinkle:direction": ("direction", 3),
+    # the deepened pleats' offset along the normal (method/deepen.py); optional: a bake
+    # made before it was drawn has none, and draws none
+    "primvars:wrinkle:offset": ("offset", 1),
     # the second wave system (wrinkle:biaxial): all three, or none
     "primvars:wrinkle:amplitude2": ("amplitude2", 1),
     "primvars:wrinkle:waveVector2": ("wave_vector2", 3),

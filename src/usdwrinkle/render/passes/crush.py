@@ -79,6 +79,16 @@ class CrushPass(WavePass):
                              "CRUSH_ANCHOR": res.anchor},
                       writes={"CRUSH_FIELDS": waves.current, "CRUSH_PHASE": waves.anchor_phase,
                               "CRUSH_DAMPED": waves.written.damped})
+        self._deepen_gradient(res)
+
+    def _deepen_gradient(self, res: MeshResources) -> None:
+        """Each point's deepening offset's gradient over its ring (crush.glsl
+        DEEPEN_GRADIENT), once crush has written every point's offset."""
+        self.dispatch(res.num_points, {"u_num_points": res.num_points,
+                                       **res.topology_uniforms},
+                      reads={"CRUSH_POSED_POINTS": res.posed_points,
+                             "TOPOLOGY_TABLE": res.topology},
+                      read_writes={"CRUSH_FIELDS": res.waves.current}, DEEPEN_GRADIENT=True)
 
     def run_baked(self, res: MeshResources, baked) -> None:
         """Fields of a frame drawn from a bake: posed normals computed, waves and phases
@@ -91,3 +101,4 @@ class CrushPass(WavePass):
                              "CRUSH_FACE_NORMALS": res.face_normals,
                              "CRUSH_BAKED": res.waves.baked_waves},
                       writes={"CRUSH_FIELDS": res.waves.current}, FROM_BAKE=True)
+        self._deepen_gradient(res)

@@ -1,0 +1,179 @@
+"""Deepened pleats (method/deepen.py, docs/method.md "deepened pleats"): where the room
+lowers a fold on curved cloth, the surface is offset away from its centre of curvature
+along the wave by the length the room denies. The law is checked on a cuff (a tube
+gathered around itself), where every quantity of it is known: its curvature along the
+wave is -1/R (outward normals), its room 0.5 R. The passes against the numpy reference on
+the cuff and the curtain sample; the area on the sample stages: tests/test_folds.py."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pxr import Usd
+
+from usdwrinkle.authoring.builders import grid_faces, point_cache_stage
+from usdwrinkle.method.contract import DEEPEN_CAP, FOLD_ROOM
+from usdwrinkle.method.deepen import length_at, offset
+from usdwrinkle.reference.crush import crush, default_slope
+from usdwrinkle.scene.topology import build_topology
+
+RADIUS, LENGTH, WIDTH, RATIO = 0.1, 0.3, 0.15, 0.6
+ALONG, AROUND = 11, 96
+
+
+def cuff(ratio: float = 1.0):
+    """(points, counts, indices, interior mask): a tube of RADIUS about the y axis (a
+    cuff), its radius scaled by ``ratio`` (gathered around itself: its circumference
+    compressed to ``ratio``, its length kept); normals outward."""
+    y, t = np.meshgrid(np.linspace(0, LENGTH, ALONG),
+                       np.arange(AROUND) * 2 * np.pi / AROUND, indexing="ij")
+    theta = t.ravel()
+    radius = RADIUS * ratio
+    points = np.stack([radius * np.sin(theta), y.ravel(), radius * np.cos(theta)], 1)
+    counts, indices = grid_faces(ALONG, AROUND, wrap_cols=True)
+    inner = (y.ravel() > 0.05) & (y.ravel() < 0.25)
+    return points, counts, indices, inner
+
+
+def outward(points, normals):
+    radial = points * [1.0, 0.0, 1.0]
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    return np.sum(normals * radial, 1)
+
+
+def test_a_gathered_cuff_is_offset_outward_by_the_law():
+    """The numpy reference on the cuff gathered to 0.6 of its circumference (posed radius
+    R = 6 cm): the ring's fitted curvature along the wave is the circle's (its chords give
+    2 (e.n) / |e|^2 = 1/R exactly), so the offset is the law's closed form at kappa =
+    -1/R, away from the axis; the room binds (the full fold stands 1.46x its room 0.5 R),
+    and the first bound sets the offset, (D - 1) R: 1.35 cm."""
+    rest, counts, indices, inner = cuff()
+    posed = cuff(RATIO)[0]
+    radius = RADIUS * RATIO
+    topology = build_topology(counts, indices, rest)
+    law = crush(rest, posed, topology, np.zeros_like(rest), np.full(len(rest), WIDTH))
+    out = outward(posed, law["normals"])
+    assert np.all(out[inner] > 0.999)
+    drawn = law["amplitude"] * law["drawn"]
+    full = drawn * np.maximum(law["over_room"], 1.0)
+    k = np.linalg.norm(law["wave_vector"], axis=1)
+    np.testing.assert_allclose(drawn[inner], FOLD_ROOM * radius, rtol=1e-6)
+    assert np.all(law["over_room"][inner] > 1.4)
+    table = default_slope()
+    expected = offset(-1.0 / radius, drawn, full, k, table)
+    np.testing.assert_allclose(law["offset"][inner], expected[inner], rtol=1e-9)
+    gain = length_at(table, full * k) / length_at(table, drawn * k)
+    first = (gain - 1.0) * radius
+    assert np.all(first[inner] < DEEPEN_CAP * full[inner])
+    np.testing.assert_allclose(law["offset"][inner], first[inner], rtol=1e-9)
+    np.testing.assert_allclose(law["offset"][inner], 0.0135, atol=5e-5)
+    assert np.all(law["offset"][inner] > 0)  # along the outward normal: away from the axis
+    # uniform around and along: its gradient is nothing
+    assert np.abs(law["offset_gradient"][inner]).max() < 1e-5
+
+
+def test_a_tube_compressed_along_its_axis_is_not_offset():
+    """A 2 cm tube pushed to 0.6 of its length: the room binds (it is curved around), but
+    the wave runs along the axis, where the tube is straight, so the offset fades to
+    nothing there (its last bound, a |kappa| a / FOLD_ROOM)."""
+    around, along, length, radius = 96, 21, 1.0, 0.02
+    theta = np.arange(around) * 2 * np.pi / around
+    x, t = np.meshgrid(np.linspace(0, length, along), theta, indexing="ij")
+    rest = np.stack([x.ravel(), radius * np.cos(t).ravel(), radius * np.sin(t).ravel()], 1)
+    counts, indices = grid_faces(along, around, wrap_cols=True)
+    topology = build_topology(counts, indices, rest)
+    law = crush(rest, rest * [0.6, 1.0, 1.0], topology, np.zeros_like(rest),
+                np.full(len(rest), 0.3))
+    inner = (x.ravel() > 0.2) & (x.ravel() < 0.8)
+    assert np.all(law["over_room"][inner] > 1.0)
+    assert np.abs(law["offset"][inner]).max() < 1e-6 * law["amplitude"][inner].max()
+
+
+@pytest.fixture(scope="module")
+def cuff_stage(tmp_path_factory):
+    rest, counts, indices, inner = cuff()
+    stage = point_cache_stage(rest, {1: cuff(RATIO)[0]}, counts, indices, width=WIDTH)
+    path = tmp_path_factory.mktemp("cuff") / "cuff.usda"
+    stage.GetRootLayer().Export(str(path))
+    return path
+
+
+def test_the_passes_deepen_as_the_numpy_reference(gl_context, cuff_stage):
+    """crush.glsl's offset and its DEEPEN_GRADIENT step equal the reference, on the cuff
+    and on the curtain sample at frame 24 (its pleats, where the room lowers every fold;
+    the offset reaches 5.7 cm there)."""
+    from pathlib import Path
+
+    from usdwrinkle.engine import WrinkleEngine
+
+    curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    for stage_path, frame, least in ((cuff_stage, 1, 0.02), (curtain, 24, 0.05)):
+        engine = WrinkleEngine(str(stage_path))
+        try:
+            for f in range(1, frame + 1):
+                engine.compute_frame(f)
+            (path,) = engine.wrinkled_paths
+            record = engine.meshes[path]
+            fields = engine.read_fields(path)
+            p = record.params
+            law = crush(record.rest_points, fields.points.astype(np.float64),
+                        record.topology, p.q, p.width, amplitude_scale=p.amplitude_scale,
+                        slack=p.slack, hold=p.hold, coarsening=p.coarsening)
+        finally:
+            engine.release()
+        size = np.abs(law["offset"]).max()
+        assert size > least, (stage_path, size)
+        np.testing.assert_allclose(fields.offset, law["offset"], rtol=0, atol=1e-4 * size)
+        slope = np.abs(law["offset_gradient"]).max()
+        np.testing.assert_allclose(fields.offset_gradient, law["offset_gradient"], rtol=0,
+                                   atol=1e-3 * max(slope, 1e-3))
+
+
+def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path):
+    """The curtain sample at frame 24: the bake writes primvars:wrinkle:offset as the
+    passes computed it; a render from that bake (the gradient fitted again from the baked
+    offset and the posed points) equals the render that computed it; and a bake without
+    the offset (made before it existed) is drawn without it: its heights differ from the
+    computed frame's by at most the largest offset, and do differ."""
+    from pathlib import Path
+
+    from pxr import Sdf
+
+    from usdwrinkle.cli.main import main
+    from usdwrinkle.engine import WrinkleEngine
+
+    from helpers import read_exr
+
+    curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    engine = WrinkleEngine(str(curtain))
+    try:
+        for frame in range(1, 25):
+            engine.compute_frame(frame)
+        (path,) = engine.wrinkled_paths
+        computed = engine.read_fields(path).offset
+    finally:
+        engine.release()
+    layer = tmp_path / "fields.usda"
+    assert main(["bake", str(curtain), str(layer), "--frames", "24", "--quiet"]) == 0
+    bake = Usd.Stage.Open(str(layer))
+    baked = np.asarray(bake.GetPrimAtPath(path).GetAttribute("primvars:wrinkle:offset").Get(24))
+    np.testing.assert_array_equal(baked, computed)
+    assert np.abs(baked).max() > 0.05
+    old = tmp_path / "old.usda"
+    copy = Sdf.Layer.FindOrOpen(str(layer))
+    copy.Export(str(old))
+    stripped = Sdf.Layer.FindOrOpen(str(old))
+    spec = stripped.GetPrimAtPath(path)
+    del spec.properties["primvars:wrinkle:offset"]
+    stripped.Save()
+    for source, name in ((curtain, "direct"), (layer, "baked"), (old, "old")):
+        assert main(["render", str(source), str(tmp_path / f"{name}.####.exr"), "--frames",
+                     "24", "--width", "128", "--quiet"]) == 0
+    direct, from_bake, old_bake = (read_exr(tmp_path / f"{name}.0024.exr")
+                                   for name in ("direct", "baked", "old"))
+    for channel in direct:
+        both = np.isinf(direct[channel]) & np.isinf(from_bake[channel])
+        with np.errstate(invalid="ignore"):
+            assert np.all(both | (np.abs(direct[channel] - from_bake[channel]) <= 1e-5)), \
+                channel
+    change = np.abs(old_bake["wrinkle.height"] - direct["wrinkle.height"])
+    assert 1e-3 < change.max() <= np.abs(computed).max() * (1 + 1e-4)
