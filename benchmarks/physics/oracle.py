@@ -74,12 +74,9 @@ def simulated(shot: Shot, cache: Path, preset: str = "Cotton") -> Simulated:
 
 
 def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
-         attributes: dict | None = None, adjust=None) -> Baked:
+         attributes: dict | None = None) -> Baked:
     """Bake the coarse shot with --geometry (and once with wrinkle:amplitudeScale 0 for
-    the undisplaced surface) and read back the fold height on the grid. ``adjust(shot,
-    stage, points, normals)``: a probe's change of the wrinkled grid points (frames, n, 3),
-    given the path of the wrinkled stage while it exists and the undisplaced normals
-    (benchmarks.physics.deepen)."""
+    the undisplaced surface) and read back the fold height on the grid."""
     from usdwrinkle import api
     from usdwrinkle.process.log import collect
 
@@ -99,10 +96,6 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
             fields[name] = read_fine(layer, shot, shot.frames)
             if name == "wrinkled":
                 waves = read_waves(layer, shot.frames)
-        if adjust is not None:
-            fields["wrinkled"] = (adjust(shot, os.path.join(scratch, "wrinkled.usda"),
-                                         fields["wrinkled"][0], fields["flat"][1]),
-                                  fields["wrinkled"][1])
     (points, _), (flat, normals) = fields["wrinkled"], fields["flat"]
     baked = Baked(label, measure.our_height(shot, points, flat, normals), width)
     baked.waves = waves
