@@ -177,3 +177,39 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
                 channel
     change = np.abs(old_bake["wrinkle.height"] - direct["wrinkle.height"])
     assert 1e-3 < change.max() <= np.abs(computed).max() * (1 + 1e-4)
+
+
+@pytest.mark.parametrize("radius", [0.05, 0.2])
+def test_the_fitted_form_gives_the_normal_curvature_of_a_tube(radius):
+    """method/deepen.py fit_form and curvature_along: on a tube of radius R with outward
+    normals, the normal curvature around it is -1/R (the surface bends away from its
+    normal), along its axis 0, and at 45 degrees -1/(2R) (Euler: k1 cos^2 + k2 sin^2)."""
+    from usdwrinkle.method.deepen import curvature_along, fit_form
+
+    around, rows = 48, 12
+    angle = np.arange(around) * 2 * np.pi / around
+    z = np.arange(rows) * 2 * np.pi * radius / around
+    A, Z = np.meshgrid(angle, z)
+    points = np.stack([radius * np.cos(A), radius * np.sin(A), Z], -1).reshape(-1, 3)
+    counts, indices = grid_faces(rows, around, wrap_cols=True)
+    topology = build_topology(counts, indices, points)
+    normals = points * np.array([1.0, 1.0, 0.0]) / radius
+    tangent = np.stack([-np.sin(A), np.cos(A), 0 * A], -1).reshape(-1, 3)
+    axis = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    offsets, neighbours = topology.neighbor_offsets, topology.neighbor_indices
+    owner = np.repeat(np.arange(len(points)), np.diff(offsets))
+    edges = points[neighbours] - points[owner]
+    # tangent coordinates: (around, along) at each point
+    coords = np.stack([np.sum(edges * tangent[owner], 1), np.sum(edges * axis[owner], 1)], 1)
+    form, fitted = fit_form(coords, np.sum(edges * normals[owner], 1), owner, len(points))
+    inner = np.zeros((rows, around), bool)
+    inner[2:-2] = True
+    inner = inner.ravel()
+    assert fitted[inner].all()
+    ones = np.ones(len(points))
+    around_curvature = curvature_along(form, np.stack([ones, 0 * ones], 1))
+    along_curvature = curvature_along(form, np.stack([0 * ones, ones], 1))
+    diagonal = curvature_along(form, np.stack([ones, ones], 1))
+    assert around_curvature[inner] == pytest.approx(-1 / radius, rel=0.01)
+    assert np.abs(along_curvature[inner]).max() < 0.01 / radius
+    assert diagonal[inner] == pytest.approx(-0.5 / radius, rel=0.01)

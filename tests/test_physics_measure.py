@@ -361,34 +361,3 @@ def test_the_height_field_scale_of_a_fold_that_leans(along):
     assert row["offsets"] == pytest.approx(push * sine(1.0), rel=0.01)
     assert row["s"] == pytest.approx(low, abs=0.015)   # 1.0 upright, 1.094 leaning
     assert row["beyond"] == 0.0
-
-
-@pytest.mark.parametrize("radius", [0.05, 0.2])
-def test_the_curvature_along_a_direction_on_a_tube(radius):
-    """benchmarks.physics.deepen.curvature_along: on a tube of radius R with outward
-    normals, the normal curvature around it is -1/R (the surface bends away from its
-    normal), along its axis 0, and at 45 degrees -1/(2R) (Euler: k1 cos^2 + k2 sin^2)."""
-    from benchmarks.physics.deepen import curvature_along
-    from usdwrinkle.scene.topology import build_topology
-
-    around, rows = 48, 12
-    angle = np.arange(around) * 2 * np.pi / around
-    z = np.arange(rows) * 2 * np.pi * radius / around
-    A, Z = np.meshgrid(angle, z)
-    points = np.stack([radius * np.cos(A), radius * np.sin(A), Z], -1).reshape(-1, 3)
-    quads = [(r * around + k, r * around + (k + 1) % around,
-              (r + 1) * around + (k + 1) % around, (r + 1) * around + k)
-             for r in range(rows - 1) for k in range(around)]
-    topology = build_topology(np.full(len(quads), 4), np.ravel(quads), points)
-    normals = points * np.array([1.0, 1.0, 0.0]) / radius
-    tangent = np.stack([-np.sin(A), np.cos(A), 0 * A], -1).reshape(-1, 3)
-    axis = np.tile([0.0, 0.0, 1.0], (len(points), 1))
-    inner = np.zeros((rows, around), bool)
-    inner[2:-2] = True
-    inner = inner.ravel()
-    assert curvature_along(points, normals, topology, tangent)[inner] == \
-        pytest.approx(-1 / radius, rel=0.01)
-    assert np.abs(curvature_along(points, normals, topology, axis)[inner]).max() < \
-        0.01 / radius
-    assert curvature_along(points, normals, topology, (tangent + axis) / np.sqrt(2))[
-        inner] == pytest.approx(-0.5 / radius, rel=0.01)
