@@ -132,8 +132,8 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
     """The curtain sample at frame 24: the bake writes primvars:wrinkle:offset as the
     passes computed it; a render from that bake (the gradient fitted again from the baked
     offset and the posed points) equals the render that computed it; and a bake without
-    the offset (made before it existed) is drawn without it: its heights differ from the
-    computed frame's by at most the largest offset, and do differ."""
+    the offset (made before it existed) is drawn without it: its heights stay within the
+    tallest fold, where the computed frame's pass it."""
     from pathlib import Path
 
     from pxr import Sdf
@@ -149,7 +149,8 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
         for frame in range(1, 25):
             engine.compute_frame(frame)
         (path,) = engine.wrinkled_paths
-        computed = engine.read_fields(path).offset
+        fields = engine.read_fields(path)
+        computed, tallest = fields.offset, float(fields.drawn_amplitude.max())
     finally:
         engine.release()
     layer = tmp_path / "fields.usda"
@@ -175,8 +176,9 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
         with np.errstate(invalid="ignore"):
             assert np.all(both | (np.abs(direct[channel] - from_bake[channel]) <= 1e-5)), \
                 channel
-    change = np.abs(old_bake["wrinkle.height"] - direct["wrinkle.height"])
-    assert 1e-3 < change.max() <= np.abs(computed).max() * (1 + 1e-4)
+    # without the offset no height passes the tallest fold; with it they do
+    assert np.abs(old_bake["wrinkle.height"]).max() <= tallest * (1 + 1e-4)
+    assert np.abs(direct["wrinkle.height"]).max() > 1.2 * tallest
 
 
 @pytest.mark.parametrize("radius", [0.05, 0.2])

@@ -193,7 +193,7 @@ def test_sample_stages_keep_their_area_and_never_pass_through_themselves(gl_cont
         assert row["crossings"] == 0, row
         # everywhere compressed too, where the stage has such a region. The room lowers
         # the curtain's folds: it kept 0.627 of its rest area until the length the room
-        # denies went into its deepened pleats (method/deepen.py), 0.953 with them. The
+        # denies went into its deepened pleats (method/deepen.py), 0.990 with them. The
         # pillow drew 1.082 there before its drawn folds counted the stretch across
         # beyond STRETCH_ONSET (its bulging sides), 1.026 with it
         if np.isfinite(row["compressed"]):

@@ -332,14 +332,23 @@ Wave blend_corner_waves(CornerWaves cw, vec3 bary, vec3 p, vec3 n, bool exact_gr
                         Footprint footprint) {
     Wave w = Wave(0.0, vec3(0.0), 0.0);
     bary = blend_weights(bary);
-    // the deepened pleats (method/deepen.py): the corners' offsets and their gradients,
-    // interpolated over the triangle as the surface is; the amplitude, the bound of |h|,
-    // holds the offset's size too
-    for (int c = 0; c < 3; ++c) {
-        w.height += bary[c] * cw.deepen[c].x;
-        w.gradient += bary[c] * cw.deepen[c].yzw;
+    // the deepened pleats (method/deepen.py): each corner's offset carried to p along its
+    // gradient, o_c + g_c.(p - P_c), blended by the weights, as the corner waves' phases
+    // are (so the offset surface meets each corner's slope, with no kinks along the coarse
+    // edges); its gradient the blended g_c, and with exact_gradient the weights' part too.
+    // The amplitude, the bound of |h|, holds the offset's size
+    if (cw.deepen[0] != vec4(0.0) || cw.deepen[1] != vec4(0.0) || cw.deepen[2] != vec4(0.0)) {
+        for (int c = 0; c < 3; ++c) {
+            float carried = cw.deepen[c].x + dot(cw.deepen[c].yzw, p - cw.corner[c]);
+            w.height += bary[c] * carried;
+            w.gradient += bary[c] * cw.deepen[c].yzw;
+            if (exact_gradient) {
+                w.gradient += carried * weight_gradient(c, cw.corner[0], cw.corner[1],
+                                                        cw.corner[2]);
+            }
+        }
+        w.amplitude = abs(w.height);
     }
-    w.amplitude = abs(w.height);
 #if defined IRREGULAR
     Irregular field = irregular_field(cw, bary);
     float beta = u_irregularity;
