@@ -11,6 +11,8 @@ shaders' DEEPEN_CAP in this process (render/bindings.COMMON) before each engine 
   geometry bake per cap, the wrinkled area over the rest area where the coarse surface is
   compressed and the pairs of fine triangles that pass through each other, and the 90th
   percentile of |offset| there.
+- Pleated sheets (PLEATS): a flat sheet pushed together and folded into pleats, the
+  geometry bake's area per cap where the room lowers the folds on the pleats' crests.
 - ``--referee CAP``: the converged referee's rows (referee.sweep_report, its simulations
   cached; ``--only`` its shots) with the cap set.
 - ``--figure``: the curtain sample's frame 24 rendered from its geometry bake (usdwrinkle
@@ -79,6 +81,71 @@ def measure_stage(name: str, ctx, scratch: Path, caps=CAPS) -> list[dict]:
     return list(rows.values())
 
 
+#: the pleated sheets: (W, the sheet's compression along x, the pleats' amplitude and
+#: period, m), pleats of a 1 m x 0.4 m cotton sheet (81 x 17 points) pushed together
+PLEATS = ((0.1, 0.5, 0.03, 0.2), (0.1, 0.6, 0.03, 0.25), (0.15, 0.6, 0.03, 0.25),
+          (0.15, 0.5, 0.03, 0.2))
+
+
+def pleated_sheet(compression: float, amplitude: float, period: float):
+    """(rest, posed, counts, indices): a flat 1 m x 0.4 m sheet (81 x 17 points) pushed to
+    ``compression`` of its length along x and folded into pleats z = amplitude cos(2 pi x /
+    period) (its coarse mesh compressed 0.5-0.75 along x, the pleats' crests curving at up
+    to amplitude (2 pi / period)^2)."""
+    from usdwrinkle.authoring.builders import grid_faces
+
+    x, y = np.meshgrid(np.linspace(-0.5, 0.5, 81), np.linspace(-0.2, 0.2, 17), indexing="ij")
+    rest = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    posed_x = compression * x.ravel()
+    posed = np.stack([posed_x, y.ravel(), amplitude * np.cos(2 * np.pi * posed_x / period)], 1)
+    counts, indices = grid_faces(81, 17)
+    return rest, posed, counts, indices
+
+
+def pleated_rows(scratch: Path, caps) -> list[dict]:
+    """Per PLEATS sheet and cap: the geometry bake's area over the rest area on the
+    sheet's middle (|x| < 0.35, |y| < 0.12 at rest) and its crossings; and the share of its
+    middle points whose fold the room lowers (the numpy reference)."""
+    from pxr import Usd, UsdGeom
+
+    from usdwrinkle import api
+    from usdwrinkle.authoring.builders import point_cache_stage
+    from usdwrinkle.geometry.measure import self_intersections, triangle_areas
+    from usdwrinkle.geometry.subdivide import subdivide
+    from usdwrinkle.reference.crush import crush
+    from usdwrinkle.scene.topology import build_topology
+
+    rows = []
+    for width, compression, amplitude, period in PLEATS:
+        rest, posed, counts, indices = pleated_sheet(compression, amplitude, period)
+        stage_path = scratch / f"pleats_{width:g}_{compression:g}_{period:g}.usda"
+        stage = point_cache_stage(rest, {1: posed}, counts, indices, width=width)
+        stage.GetRootLayer().Export(str(stage_path))
+        law = crush(rest, posed, build_topology(counts, indices, rest), np.zeros_like(rest),
+                    np.full(len(rest), width))
+        middle = (np.abs(rest[:, 0]) < 0.35) & (np.abs(rest[:, 1]) < 0.12)
+        row = {"sheet": (width, compression, amplitude, period),
+               "lowered": float(np.mean(law["over_room"][middle] > 1.0)), "caps": []}
+        quads = np.asarray(indices).reshape(-1, 4)
+        triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+        fine_rest = subdivide(rest, triangles, 3).points
+        for cap in caps:
+            with deepen_cap(cap):
+                layer = api.bake(stage_path, scratch / f"{stage_path.stem}_{cap:g}.usdc",
+                                 frames=[1], geometry=True, levels=3)
+            baked = Usd.Stage.Open(str(layer))
+            mesh = UsdGeom.Mesh(baked.GetPrimAtPath("/Sheet_wrinkled"))
+            points = np.asarray(mesh.GetPointsAttr().Get(1), np.float64)
+            faces = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64).reshape(-1, 3)
+            centre = fine_rest[faces].mean(axis=1)
+            inside = (np.abs(centre[:, 0]) < 0.35) & (np.abs(centre[:, 1]) < 0.12)
+            area = triangle_areas(points, faces)[inside].sum() / \
+                triangle_areas(fine_rest, faces)[inside].sum()
+            row["caps"].append((cap, float(area), len(self_intersections(points, faces))))
+        rows.append(row)
+    return rows
+
+
 def referee_rows(cache: Path, cap: float, shots) -> list[str]:
     """The converged referee's table rows with the cap set, then its phase by phase
     lines."""
@@ -125,7 +192,8 @@ def figure(out: Path, cap: float | None = None, frame: int = 24,
     print(f"wrote {out}")
 
 
-def report(rows: list[dict], referee: dict, caps, shots, seconds: float) -> str:
+def report(rows: list[dict], pleats: list[dict], referee: dict, caps, shots,
+           seconds: float) -> str:
     from usdwrinkle.method.contract import DEEPEN_CAP
 
     from ..blocks import markers
@@ -148,6 +216,20 @@ def report(rows: list[dict], referee: dict, caps, shots, seconds: float) -> str:
         lines.append(f"| {row['stage']} | {row['mesh']} | " + " | ".join(
             f"{area:.3f}, {crossings}, {p90:.3f}" for _, area, crossings, p90 in row["caps"])
             + " |")
+    lines += ["", "Pleated sheets (benchmarks.physics.deepen PLEATS: a flat cotton sheet "
+              "pushed together along x and folded into pleats of the given amplitude and "
+              "period, as a gathered curtain's coarse mesh is; the geometry bake at 3 "
+              "levels): the share of the middle's points whose fold the room lowers, then "
+              "per cap the area over the rest area on the middle and the crossings.", "",
+              "| W | compression | pleats: amplitude, period | lowered | "
+              + " | ".join(f"cap {cap:g}" for cap in caps) + " |",
+              "|---|---|---|---|" + "---|" * len(caps)]
+    for row in pleats:
+        width, compression, amplitude, period = row["sheet"]
+        lines.append(f"| {width:g} m | {compression:g} | {amplitude:g}, {period:g} m | "
+                     f"{row['lowered']:.0%} | " + " | ".join(
+                         f"{area:.3f}, {crossings}" for _, area, crossings in row["caps"])
+                     + " |")
     for cap, table in referee.items():
         lines += ["", f"The converged referee at cap {cap:g} (columns as in its table above; "
                   "then phase by phase, ours / sim at the default W: wavelength, height):",
@@ -185,8 +267,9 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="usdwrinkle-deepen-") as scratch:
         rows = [row for stage in STAGES
                 for row in measure_stage(stage, ctx, Path(scratch), args.caps)]
+        pleats = pleated_rows(Path(scratch), args.caps)
     referee = {cap: referee_rows(args.cache, cap, args.only) for cap in args.referee}
-    emit(args.write, "deepen", report(rows, referee, args.caps, args.only,
+    emit(args.write, "deepen", report(rows, pleats, referee, args.caps, args.only,
                                       time.perf_counter() - started))
     return 0
 
