@@ -20,7 +20,9 @@ measured where every corner is compressed beyond 3 x the slack, unpainted
   agree at the triangle's centroid (their amplitude-weighted circular mean). This is not
   a surface (h jumps at the coarse edges); it is what the blend would draw with no phase
   misfit inside the triangles.
-One system only (a stage with wrinkle:biaxial is skipped). A few seconds here.
+One system only (a stage with wrinkle:biaxial is skipped), and the folds alone: the
+deepened pleats' offset (method/deepen.py), which the geometry bake adds where the room
+binds, is left out (benchmarks.physics.deepen measures it). A few seconds here.
 """
 from __future__ import annotations
 

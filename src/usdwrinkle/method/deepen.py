@@ -19,9 +19,12 @@ the pleats where the room is short"). So each point is offset along its normal b
 - the last bound fades it where the surface turns flat along the wave, so it has no step
   where kappa changes sign.
 
-The offset is interpolated over each coarse triangle as the amplitude is and added to
-the wrinkle height; its gradient per point (least squares over the ring, in the tangent
-plane) is interpolated too and bends the normal, so the coarse facets do not show.
+Its gradient per point (offset_gradient: least squares over the ring, in the tangent
+plane) comes from a second step. The blend (include/wave.glsl) carries each corner's
+offset to the point along that gradient, o_c + g_c.(p - P_c), blends those by the
+barycentric weights as it blends the corner waves' phases, and adds the result to the
+wrinkle height, so the offset surface meets every corner's slope and shows no kinks
+along the coarse edges.
 """
 from __future__ import annotations
 
