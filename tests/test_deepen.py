@@ -100,13 +100,13 @@ def cuff_stage(tmp_path_factory):
 def test_the_passes_deepen_as_the_numpy_reference(gl_context, cuff_stage):
     """crush.glsl's offset and its DEEPEN_GRADIENT step equal the reference, on the cuff
     and on the curtain sample at frame 24 (its pleats, where the room lowers every fold;
-    the offset reaches 5.7 cm there)."""
+    the offset reaches 4.5 cm there)."""
     from pathlib import Path
 
     from usdwrinkle.engine import WrinkleEngine
 
     curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
-    for stage_path, frame, least in ((cuff_stage, 1, 0.02), (curtain, 24, 0.05)):
+    for stage_path, frame, least in ((cuff_stage, 1, 0.01), (curtain, 24, 0.04)):
         engine = WrinkleEngine(str(stage_path))
         try:
             for f in range(1, frame + 1):
@@ -158,7 +158,7 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
     bake = Usd.Stage.Open(str(layer))
     baked = np.asarray(bake.GetPrimAtPath(path).GetAttribute("primvars:wrinkle:offset").Get(24))
     np.testing.assert_array_equal(baked, computed)
-    assert np.abs(baked).max() > 0.05
+    assert np.abs(baked).max() > 0.03
     old = tmp_path / "old.usda"
     copy = Sdf.Layer.FindOrOpen(str(layer))
     copy.Export(str(old))
