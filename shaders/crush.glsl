@@ -86,16 +86,13 @@ void main() {
 
 #elif defined DEEPEN_GRADIENT
 
-#define FIELD_DEEPEN(i) TABLE_TEXEL(FIELD_TEXELS * (i) + FIELD_DEEPEN_TEXEL)
-
 // The gradient of the deepening offset over the posed surface (method/deepen.py
 // offset_gradient): least squares of o_j - o_i against the ring's edges in the tangent
-// plane of n_i, so that the blend interpolates a smooth normal tilt (a per-triangle
-// gradient would show the coarse facets).
+// plane of n_i, along which the blend carries each corner's offset (include/wave.glsl).
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
-    vec4 own = imageLoad(fields, FIELD_DEEPEN(i));
+    vec4 own = imageLoad(fields, TABLE_TEXEL(FIELD_DEEPEN(i)));
     vec3 n = imageLoad(fields, TABLE_TEXEL(FIELD_NORMAL(i))).xyz;
     vec3 x_i = fetch(posed_points, i).xyz;
     mat3 ete = mat3(0.0);
@@ -103,7 +100,7 @@ void main() {
     bool any = own.x != 0.0;
     for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
         int j = NEIGHBOR(e);
-        float o_j = imageLoad(fields, FIELD_DEEPEN(j)).x;
+        float o_j = imageLoad(fields, TABLE_TEXEL(FIELD_DEEPEN(j))).x;
         vec3 edge = fetch(posed_points, j).xyz - x_i;
         edge -= dot(edge, n) * n;
         ete += outerProduct(edge, edge);
@@ -116,7 +113,7 @@ void main() {
     if (any && scale > 0.0 && abs(determinant(system)) > 1e-6 * scale * scale * scale) {
         gradient = inverse(system) * etb;
     }
-    imageStore(fields, FIELD_DEEPEN(i), vec4(own.x, gradient));
+    STORE(fields, FIELD_DEEPEN(i), vec4(own.x, gradient));
 }
 
 #else
@@ -149,8 +146,7 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, fetch(baked, 5 * i + 2));
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 5 * i + 3));
     // the offset as baked; its gradient, from the posed points, by DEEPEN_GRADIENT
-    STORE(fields, FIELD_TEXELS * i + FIELD_DEEPEN_TEXEL,
-          vec4(fetch(baked, 5 * i + 4).x, 0.0, 0.0, 0.0));
+    STORE(fields, FIELD_DEEPEN(i), vec4(fetch(baked, 5 * i + 4).x, 0.0, 0.0, 0.0));
 }
 
 #else
@@ -493,7 +489,7 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_WAVE2_TEXEL, vec4(k2, amplitude2));
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
     // its gradient: DEEPEN_GRADIENT, once every point's offset is written
-    STORE(fields, FIELD_TEXELS * i + FIELD_DEEPEN_TEXEL, vec4(offset, 0.0, 0.0, 0.0));
+    STORE(fields, FIELD_DEEPEN(i), vec4(offset, 0.0, 0.0, 0.0));
     // material-anchored start: crests ride with the cloth, frames stay independent.
     // Where the wave runs along the paint (within 45 degrees), the paint's own stripe
     // pattern in rest space (method/anchor.py), its sign d's

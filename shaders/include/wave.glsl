@@ -52,7 +52,7 @@ struct Wave {
     float height;     // h, along the coarse normal (scene units)
     vec3 gradient;    // dh/dx in the tangent plane of n (local space)
     float amplitude;  // the blended amplitude sum(b_c a_c), before the band limit, plus
-                      // the deepening's offset |sum(b_c o_c)|: a bound of |h|
+                      // the size of the deepening's carried offset: a bound of |h|
 };
 
 // The gradient of barycentric weight c over triangle (p0, p1, p2): constant, pointing from
@@ -109,7 +109,7 @@ CornerWaves corner_waves(int t) {
     ivec3 corners = fetch(triangles, t).xyz;
     for (int c = 0; c < 3; ++c) {
         cw.corner[c] = fetch(posed_points, corners[c]).xyz;
-        cw.deepen[c] = fetch(fields, FIELD_TEXELS * corners[c] + FIELD_DEEPEN_TEXEL);
+        cw.deepen[c] = fetch(fields, FIELD_DEEPEN(corners[c]));
     }
 #if defined IRREGULAR
     for (int c = 0; c < 3; ++c) cw.rest[c] = fetch(wave_rest_points, corners[c]).xyz;
