@@ -31,7 +31,7 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   "SMOOTH", "FACETED", "SKINNED",
                   # the draw pass's (render/passes/draw.py)
                   "FALLBACK_SURFACE", "TEXTURED", "DOME", "MASKED", "VERTEX_COLOR",
-                  "SHADE_SAMPLES",
+                  "SHADE_SAMPLES", "RELIEF",
                   # the resolve pass's (render/resolve.py)
                   "SAMPLES", "NEED_FIELDS", "NEED_NORMAL", "OUTPUT_AOVS", "OUTPUT_EXR",
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK",

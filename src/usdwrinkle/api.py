@@ -68,7 +68,8 @@ def _shot(stage: Path, all_meshes: bool, relax_iterations: int | None,
 
 def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = True,
            camera: str | None = None, width: int = 960, height: int | None = None,
-           samples: int = 4, shade_samples: bool = True, write_threads: int | None = None,
+           samples: int = 4, shade_samples: bool = True, relief: bool = False,
+           write_threads: int | None = None,
            readback_buffers: int | None = None, exr_half: bool = True, exr_compression: str = "zip",
            aovs: str | Sequence[str] | None = None,
            no_wrinkles: bool = False, skip_existing: bool = False, recompute: bool = False,
@@ -87,7 +88,8 @@ def render(stage: Path, output: Path, frames: Frames = None, *, quiet: bool = Tr
     ``dask`` ("local" or a scheduler's address),
     ``workers`` and ``chunk`` render on a Dask cluster, as ``render --dask``."""
     options = RenderOptions(camera=camera, width=width, height=height, samples=samples,
-                            shade_samples=shade_samples, write_threads=write_threads,
+                            shade_samples=shade_samples, relief=relief,
+                            write_threads=write_threads,
                             readback_buffers=readback_buffers, exr_half=exr_half,
                             exr_compression=exr_compression,
                             aovs=None if aovs is None else

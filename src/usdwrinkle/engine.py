@@ -387,11 +387,12 @@ class WrinkleEngine:
 
     @in_own_context
     def render_frame(self, frame: float | None, width: int, height: int, wrinkles: bool = True,
-                     samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True):
+                     samples: int = 4, aovs: tuple = AOV_NAMES, shade_samples: bool = True,
+                     relief: bool = False):
         """``render`` at ``width`` x ``height``, read back as float AOVs: returns
         {aov name: RenderBuffer} of ``aovs`` (the tests' and benchmarks' shorthand)."""
         return self.render(frame, FrameRequest(width, height, samples, wrinkles, shade_samples,
-                                               ImageLayout("aovs", tuple(aovs))))
+                                               relief, ImageLayout("aovs", tuple(aovs))))
 
     @in_own_context
     def preview_params(self, path: str, **changes) -> None:

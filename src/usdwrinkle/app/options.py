@@ -159,6 +159,9 @@ class RenderOptions(_Checked):
     #: where folds turn within a pixel, shade each multisample where it lies (False:
     #: every pixel once, at its centroid)
     shade_samples: bool = True
+    #: draw the folds where the view ray meets them (flanks that face away hide behind
+    #: the crests, as on the displaced geometry), not where it meets the coarse surface
+    relief: bool = False
     #: threads that encode and write frames while the next ones render, 0..64 (None: every
     #: core but one; 0: each frame is written before the next renders)
     write_threads: int | None = None
@@ -230,7 +233,7 @@ class RenderOptions(_Checked):
         from ..render.request import FrameRequest
 
         return FrameRequest(width, height, self.samples, not self.no_wrinkles,
-                            self.shade_samples,
+                            self.shade_samples, self.relief,
                             layout_for(path, self.exr_half, self.chosen_aovs(path)),
                             self.readback_buffers)
 

@@ -37,6 +37,13 @@ def add_parser(subparsers) -> None:
                         "a baked map; other pixels are shaded once. --no-shade-samples "
                         "shades every pixel once, at its centroid (1.06x faster on "
                         "llvmpipe, jagged fold crests; README: render options)")
+    p.add_argument("--relief", action="store_true",
+                   help="draw the folds where the view ray meets them, as the displaced "
+                        "geometry stands, not where it meets the coarse surface: the flanks "
+                        "that face away hide behind the crests instead of standing as dark "
+                        "bands, and the texture is seen where the ray lands. Costs up to "
+                        "32 blend lookups a pixel where steep folds are seen at a slant "
+                        "(README: render options). Renderers reading the maps do not do this")
     p.add_argument("--write-threads", type=int, metavar="N",
                    help="threads that encode and write frames while the next ones render, "
                         "0..64 (default: every CPU core but one, at least 1; for EXR those "
@@ -119,7 +126,7 @@ def render_job(args, reporter: Reporter | None = None):
 
     options = RenderOptions(
         camera=args.camera, width=args.width, height=args.height, samples=args.samples,
-        shade_samples=args.shade_samples, write_threads=args.write_threads,
+        shade_samples=args.shade_samples, relief=args.relief, write_threads=args.write_threads,
         readback_buffers=args.readback_buffers,
         exr_half=args.exr_half, exr_compression=args.exr_compression, aovs=args.aovs,
         no_wrinkles=args.no_wrinkles, skip_existing=args.skip_existing,

@@ -225,6 +225,23 @@ MOBILITY_RING = 0.25
 #: A frame with no phase history starts from the material-anchored phase and relaxes
 #: this many times longer (render/delegate.py, reference/relax.py).
 COLD_START_FACTOR = 4
+#: Relief (render --relief, draw.glsl's RELIEF): the view ray is marched down through the
+#: folds in steps no longer than the height it stands above them over the bound of their
+#: slope, and no shorter than 1 / RELIEF_MAX_STEPS of the height range; the first crossing
+#: is refined by RELIEF_SECANT secant steps. A ray at a grazing angle is taken at
+#: RELIEF_MIN_COSINE, and the relief fades out from there to RELIEF_FADE (towards the
+#: silhouette, where the ray would run far), so its march stays bounded. The heights
+#: and slopes are bounded over the fragment's triangle times RELIEF_BOUND_MARGIN (for its
+#: neighbours' folds); the ray walks at most RELIEF_HOPS triangles a step. Where the seen
+#: point jumps from fold to fold, the texture's footprint is held within RELIEF_FOOTPRINT
+#: times the coarse surface's
+RELIEF_MAX_STEPS = 32.0
+RELIEF_SECANT = 2
+RELIEF_MIN_COSINE = 0.5
+RELIEF_FADE = 0.2
+RELIEF_FOOTPRINT = 4.0
+RELIEF_HOPS = 3
+RELIEF_BOUND_MARGIN = 1.25
 #: Lights the draw pass sums (more are ignored, with a warning).
 MAX_LIGHTS = 8
 #: Anisotropic filtering of textures: Hydra's GL samplers ask for 16 (hgiGL/sampler.cpp),
@@ -294,6 +311,10 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("MOBILITY_TURN", MOBILITY_TURN), ("MOBILITY_DEADBAND", MOBILITY_DEADBAND),
     ("MOBILITY_RING", MOBILITY_RING),
     ("TEXTURE_ANISOTROPY", TEXTURE_ANISOTROPY),
+    ("RELIEF_MAX_STEPS", RELIEF_MAX_STEPS),
+    ("RELIEF_SECANT", RELIEF_SECANT), ("RELIEF_MIN_COSINE", RELIEF_MIN_COSINE),
+    ("RELIEF_FADE", RELIEF_FADE), ("RELIEF_FOOTPRINT", RELIEF_FOOTPRINT),
+    ("RELIEF_HOPS", RELIEF_HOPS), ("RELIEF_BOUND_MARGIN", RELIEF_BOUND_MARGIN),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),

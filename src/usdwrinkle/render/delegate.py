@@ -276,6 +276,7 @@ class RenderPass:
             ctx.enable(ctx.DEPTH_TEST)
             ctx.disable(ctx.CULL_FACE)
             d.draw.shade_samples = request.shade_samples and request.samples > 1
+            d.draw.relief = request.relief
             d.draw.begin(camera, lights, request.wrinkles)
             translucent = [mesh for mesh in drawn if mesh.resources.record.material.translucent]
             for mesh in drawn:

@@ -25,6 +25,9 @@ class FrameRequest:
     #: where folds turn within a pixel, shade each multisample where it lies, not the
     #: pixel once (render --no-shade-samples turns it off)
     shade_samples: bool = True
+    #: draw the folds where the view ray meets them (draw.glsl: RELIEF; render --relief),
+    #: not where it meets the coarse surface: flanks that face away hide behind crests
+    relief: bool = False
     #: what is read back: ImageLayout("aovs", names) returns {name: RenderBuffer}; an
     #: "exr" or "8bit" layout the frame as that file stores it (render/resolve.py)
     layout: ImageLayout = ImageLayout("aovs")

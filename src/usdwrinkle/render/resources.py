@@ -240,6 +240,9 @@ class MeshResources:
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
         self.profile_curvature = profile_curvature(record.params.gradient_profile)
+        #: max |H'| (the relief's bound of the folds' slope: draw.glsl, relief_slope)
+        self.profile_steepest = float(np.max(np.abs(record.params.gradient_profile),
+                                             initial=0.0))
 
     def _create_shading_normals(self, record: MeshRecord) -> None:
         """The shading normals (scene/normals.py): a table of ``entries`` normals made per
@@ -291,6 +294,9 @@ class MeshResources:
             self.textures.remove(old)
             old.release()
         self.profile_curvature = profile_curvature(record.params.gradient_profile)
+        #: max |H'| (the relief's bound of the folds' slope: draw.glsl, relief_slope)
+        self.profile_steepest = float(np.max(np.abs(record.params.gradient_profile),
+                                             initial=0.0))
 
     def _corner_table(self, table: Table | None, colors) -> Table | None:
         """A table of colours per triangle corner ((m, 3, 3), linear) with ``colors``
@@ -396,6 +402,21 @@ class MeshResources:
     def _table(self, count: int, components: int, dtype: str = "f4", data=None) -> Table:
         table = Table(self.ctx, count, components, dtype, data, path=self.record.path)
         self.tables.append(table)
+        return table
+
+    @property
+    def triangle_neighbors(self) -> Table:
+        """Per triangle, the triangle across the edge opposite each corner, -1 where none
+        (ivec4, w unused; scene/topology.triangle_neighbors): made on first use, by the
+        draw pass's relief (draw.glsl: RELIEF), which walks it."""
+        table = self.owned.get("triangle_neighbors")
+        if table is None:
+            from ..scene.topology import triangle_neighbors
+
+            data = np.full((self.num_triangles, 4), -1, np.int32)
+            data[:, :3] = triangle_neighbors(self.record.topology.triangles)
+            table = self.owned["triangle_neighbors"] = self._table(self.num_triangles, 4,
+                                                                    "i4", data)
         return table
 
     def owned_table(self, key: str, spec) -> Table:

@@ -65,6 +65,32 @@ class Topology:
         return np.stack([src[keep], self.neighbor_indices[keep]], axis=1)
 
 
+def triangle_neighbors(triangles: np.ndarray) -> np.ndarray:
+    """(m, 3) int32: per triangle, the triangle across the edge opposite each corner (the
+    edge from corner c + 1 to c + 2), -1 where none (a border). Where more than two
+    triangles share an edge, each takes the next of them in index order, round."""
+    tri = np.asarray(triangles, np.int64).reshape(-1, 3)
+    m = len(tri)
+    out = np.full((m, 3), -1, np.int32)
+    if m == 0:
+        return out
+    a = np.stack([tri[:, 1], tri[:, 2], tri[:, 0]], 1).ravel()
+    b = np.stack([tri[:, 2], tri[:, 0], tri[:, 1]], 1).ravel()
+    key = np.minimum(a, b) * (int(tri.max()) + 1) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    start = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1]])
+    size = np.diff(np.r_[start, len(key)])
+    group_start = np.repeat(start, size)
+    group_size = np.repeat(size, size)
+    rank = np.arange(len(key)) - group_start
+    partner = order[group_start + (rank + 1) % group_size]
+    shared = group_size > 1
+    flat = out.ravel()
+    flat[order[shared]] = (partner[shared] // 3).astype(np.int32)
+    return flat.reshape(m, 3)
+
+
 def validate_faces(counts: np.ndarray, indices: np.ndarray, num_points: int,
                    prim_path: str | None = None) -> None:
     """Refuse face data that cannot describe a mesh."""

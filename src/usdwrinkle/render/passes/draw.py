@@ -89,7 +89,8 @@ class DrawPass(DrawnPass):
     #: the wave blend's units (include/wave.glsl) and its own
     UNITS = {**bindings.WAVE, "DRAW_DIFFUSE_TEXTURE": 2, "DRAW_CORNER_ST": 7,
              "DRAW_NORMAL_ST": 9, "DRAW_NORMAL_TEXTURE": 10, "DRAW_SHADING_NORMALS": 11,
-             "DRAW_NORMAL_CORNERS": 12, "DRAW_DOME_TEXTURE": 13, "DRAW_CORNER_COLORS": 14}
+             "DRAW_NORMAL_CORNERS": 12, "DRAW_DOME_TEXTURE": 13, "DRAW_CORNER_COLORS": 14,
+             "DRAW_TRIANGLE_NEIGHBORS": 15}
 
     def __init__(self, ctx):
         import moderngl
@@ -100,6 +101,8 @@ class DrawPass(DrawnPass):
         #: where folds turn within a pixel, shade each multisample where it lies (the
         #: default; render --no-shade-samples turns it off; draw.glsl: SHADE_SAMPLES)
         self.shade_samples = False
+        #: draw the folds where the view ray meets them (render --relief; draw.glsl: RELIEF)
+        self.relief = False
         self.frame_uniforms: dict = {}
         self.dome_lit = False
         #: a textured dome's environment, uploaded once per file: (key, texture, levels)
@@ -176,6 +179,7 @@ class DrawPass(DrawnPass):
                                 DOME=self.dome_lit,
                                 VERTEX_COLOR=colors is not None,
                                 SHADE_SAMPLES=self.shade_samples,
+                                RELIEF=self.relief,
                                 MASKED=material.surface is not None and
                                 material.surface.opacity_threshold > 0.0)
         if variant.frame_uniforms is not self.frame_uniforms:  # a variant made this frame
@@ -194,6 +198,7 @@ class DrawPass(DrawnPass):
             "u_texture_bias": tuple(float(v) for v in material.texture_bias[:4]),
             **normal_map_uniforms(res),
             "u_profile_curvature": res.profile_curvature,
+            "u_profile_steepest": res.profile_steepest,
             "u_sample_turn": SAMPLE_TURN,
         })
         # Storm culls nothing; a side no camera can see is left out (render/bounds.py)
@@ -218,5 +223,7 @@ class DrawPass(DrawnPass):
             self.bind(reads={"DRAW_NORMAL_ST": res.normal_st})
         if colors is not None:
             self.bind(reads={"DRAW_CORNER_COLORS": colors})
+        if self.relief:
+            self.bind(reads={"DRAW_TRIANGLE_NEIGHBORS": res.triangle_neighbors})
         variant.vao.render(mode=self.mode, vertices=3 * res.num_triangles)
 
