@@ -400,7 +400,8 @@ def scenario_undo_and_escape(out: Path, stage: str) -> dict:
 
 def scenario_render_equal(out: Path, stage: str) -> dict:
     """Paint, save with Ctrl+S, and keep the widget's full-quality frames through the
-    stage's camera at two frames (the test renders the saved layer and compares)."""
+    stage's camera at two frames, and at frame 24 with View > Relief (the test renders
+    the saved layer and compares)."""
     layer = out / "equal.usda"
     window = open_window(stage, str(layer), size=(1000, 640))
     points, _ = upper_arm_stroke(window)
@@ -414,10 +415,17 @@ def scenario_render_equal(out: Path, stage: str) -> dict:
         pixels = window.view.last_frame
         np.save(out / f"widget.{frame}.npy", pixels.pixels)
         frames[frame] = [pixels.width, pixels.height]
+    window.timeline.setValue(24)
+    window.actions_by_name["Relief"].trigger()
+    settle(window)
+    np.save(out / "widget.relief.24.npy", window.view.last_frame.pixels)
+    screenshot(window, out / "relief.png")
+    relief = {"checked": window.actions_by_name["Relief"].isChecked(),
+              "size": [window.view.last_frame.width, window.view.last_frame.height]}
     q = window.session.mesh.q.copy()
     np.save(out / "q.npy", q)
     result = {"sizes": frames, "saved": layer.exists(), "dirty": window.session.dirty,
-              "errors": list(window.errors)}
+              "relief": relief, "errors": list(window.errors)}
     window.close()
     # reopen the saved layer, as the artist does the next day
     window = open_window(stage, str(layer), size=(600, 400))

@@ -368,6 +368,15 @@ def test_the_saved_layer_renders_as_the_window_drew_it(display, tmp_path):
                      "--width", str(width), "--height", str(height), "--quiet"]) == 0
         widget = np.load(tmp_path / f"widget.{frame}.npy")
         assert np.array_equal(widget, png_codes(out)), frame
+    # View > Relief draws as render --relief
+    assert result["relief"]["checked"]
+    width, height = result["relief"]["size"]
+    out = tmp_path / "render.relief.0024.png"
+    assert main(["render", str(tmp_path / "equal.usda"), str(out), "--frames", "24",
+                 "--width", str(width), "--height", str(height), "--relief", "--quiet"]) == 0
+    widget = np.load(tmp_path / "widget.relief.24.npy")
+    assert np.array_equal(widget, png_codes(out))
+    assert not np.array_equal(widget, np.load(tmp_path / "widget.24.npy"))
 
 
 def test_an_artist_paints_and_saves(display, tmp_path):

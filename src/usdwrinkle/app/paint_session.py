@@ -249,6 +249,8 @@ class PaintSession:
         #: the orbit moves with the meshes from frame to frame (View > Follow the mesh):
         #: its centre by as much as their box's centre moved
         self.follow = False
+        #: draw the folds where the view ray meets them (View > Relief; render --relief)
+        self.relief = False
         self._followed: tuple[float, np.ndarray] | None = None
         self.undo_stack: list[Edit] = []
         self.redo_stack: list[Edit] = []
@@ -335,6 +337,11 @@ class PaintSession:
             self.engine.set_display_colors(
                 path, display_colors(self.meshes[path], self.display, reference))
 
+    def set_relief(self, on: bool) -> None:
+        """Draw the folds where the view ray meets them, as ``render --relief`` does (the
+        flanks that face away hide behind the crests), or on the coarse surface."""
+        self.relief = bool(on)
+
     def set_follow(self, on: bool) -> None:
         """Follow the meshes from now on: the next frame frames them (as F does) and the
         view then moves with them; or stop (the view stays where it is)."""
@@ -374,8 +381,8 @@ class PaintSession:
         camera = self.camera_record(w, h)
         self._apply_display()
         image = self.engine.render(self.frame, FrameRequest(
-            w, h, quality.samples, shade_samples=quality.samples > 1, layout=self._layout,
-            camera=camera))
+            w, h, quality.samples, shade_samples=quality.samples > 1, relief=self.relief,
+            layout=self._layout, camera=camera))
         pixels = np.array(image.planes["RGBA"], copy=True)
         image.release()
         self._camera = (camera, w, h)

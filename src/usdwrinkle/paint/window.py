@@ -877,6 +877,14 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.recent_menu = QtWidgets.QMenu("Open &Recent", self)
         menu.insertMenu(self.actions_by_name["Save"], self.recent_menu)
         self.recent_menu.aboutToShow.connect(self._fill_recent)
+        relief = QtGui.QAction("&Relief", self)
+        relief.setCheckable(True)
+        relief.setToolTip("Draw the folds where the view ray meets them, as the displaced "
+                          "geometry stands (render --relief): the flanks that face away "
+                          "hide behind the crests. Slower on a CPU renderer")
+        relief.toggled.connect(self._relief)
+        view.addAction(relief)
+        self.actions_by_name["Relief"] = relief
         follow = QtGui.QAction("Follow the &mesh", self)
         follow.setCheckable(True)
         follow.setToolTip("While the timeline plays or scrubs, the view moves with the "
@@ -966,6 +974,7 @@ class PaintWindow(QtWidgets.QMainWindow):
         else:
             self.timeline.setEnabled(False)
             self.play_button.setEnabled(False)
+        session.set_relief(self.actions_by_name["Relief"].isChecked())
         self.sync_view_mode()
         self._update_title()
         self._update_frame_label()
@@ -1165,6 +1174,11 @@ class PaintWindow(QtWidgets.QMainWindow):
         self.view.update()
 
     @guarded
+    def _relief(self, on: bool) -> None:
+        if self.session is not None:
+            self.session.set_relief(on)
+            self.view.update()
+
     def _follow(self, on: bool) -> None:
         self.session.set_follow(on)
         self.sync_view_mode()
