@@ -1,6 +1,8 @@
 """The README's figures of the other-renderer outputs, made by the commands they show.
 
-    python -m benchmarks.figures [OUTDIR]      (default docs/images)
+    python -m benchmarks.figures [OUTDIR] [--only NAME...]   (default docs/images; NAME:
+                                                             maps geometry beyond
+                                                             irregularity relief)
 
 - ``maps_shirt.png``: frame 24 of the shirt drawn with wrinkles, next to the full set's
   normal map that ``bake --maps`` wrote for that frame (MikkTSpace, in the sleeve's UVs:
@@ -15,6 +17,9 @@
 - ``irregularity.png``: the shirt's sleeve at frame 24 with ``wrinkle:irregularity`` 0
   (the paper's regular waves), 0.15 and 0.3, authored in the stage's session layer: the
   cuff's painted gathers and the elbow's folds.
+- ``relief.png``: the shirt's sleeve at frame 24 drawn on the coarse surface (``render``),
+  with ``render --relief``, and the displaced render mesh of ``bake --geometry``
+  (``render --no-wrinkles --sublayer LAYER``), through the shot's camera.
 """
 from __future__ import annotations
 
@@ -146,15 +151,40 @@ def irregularity_figure(outdir: Path) -> Path:
     return path
 
 
+def relief_figure(outdir: Path) -> Path:
+    with tempfile.TemporaryDirectory() as folder:
+        layer = os.path.join(folder, "shirt_geometry.usdc")
+        _cli("bake", str(SHIRT), layer, "--geometry", "--frames", "24")
+        images = []
+        for extra in ([], ["--relief"], ["--no-wrinkles", "--sublayer", layer]):
+            out = os.path.join(folder, f"frame{len(images)}.png")
+            _cli("render", str(SHIRT), out, "--frames", "24", "--width", "1080", "--height",
+                 "720", *extra)
+            image = _read(out)
+            alpha = image[..., 3:4]
+            images.append((image[..., :3] * alpha + (1 - alpha))[70:640, 250:790])
+    gap = np.ones((images[0].shape[0], 16, 3), np.float32)
+    path = outdir / "relief.png"
+    _write(path, np.concatenate([images[0], gap, images[1], gap, images[2]], axis=1))
+    return path
+
+
+FIGURES = {"maps": maps_figure, "geometry": geometry_figure, "beyond": beyond_figures,
+           "irregularity": irregularity_figure, "relief": relief_figure}
+
+
 def main(argv=None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    outdir = Path(args[0]) if args else ROOT / "docs" / "images"
-    outdir.mkdir(parents=True, exist_ok=True)
-    print(maps_figure(outdir))
-    print(geometry_figure(outdir))
-    for path in beyond_figures(outdir):
-        print(path)
-    print(irregularity_figure(outdir))
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.figures")
+    parser.add_argument("outdir", nargs="?", type=Path, default=ROOT / "docs" / "images")
+    parser.add_argument("--only", nargs="+", choices=sorted(FIGURES), default=list(FIGURES))
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    for name in args.only:
+        made = FIGURES[name](args.outdir)
+        for path in made if isinstance(made, list) else [made]:
+            print(path)
     return 0
 
 

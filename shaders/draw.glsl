@@ -306,8 +306,10 @@ Bent bend(int t, CornerWaves cw, vec3 n, vec3 bary, vec3 local, Footprint pixel,
 // and the first crossing refined by RELIEF_SECANT secant steps.
 // Where the ray leaves the triangle, it walks on into the neighbour across the edge it
 // crossed (triangle_neighbors), whose own corner waves give h there, as that triangle's
-// fragments blend them: no seam along the coarse edges. A back face seen from behind is
-// not lifted.
+// fragments blend them: no seam along the coarse edges. A double-sided mesh's back face
+// is lifted along its flipped normal, as bend() bends its normal (the folds stand towards
+// the eye from either side, as a normal map's tilt does in Storm); a single-sided one's
+// is not lifted.
 layout(binding = DRAW_TRIANGLE_NEIGHBORS) uniform isampler2D triangle_neighbors;
 
 // where the relief's walk stands: a triangle, its corner waves and the gradients of its
@@ -374,11 +376,10 @@ vec3 relief_weights(ReliefCursor at, vec3 q) {
                 dot(q - at.cw.corner[0], at.grads[2]));
 }
 
-// the blend's height along n (sign: -1 on a flipped back face) at q, walking the cursor
+// the blend's height along n at q, walking the cursor
 // into the triangle q lies over (at most RELIEF_HOPS edges; a border keeps the triangle,
 // whose weights blend_weights then holds at the edge); ``bary``: q's weights there
-float relief_height(inout ReliefCursor at, vec3 q, vec3 n, float sign_, Footprint pixel,
-                    out vec3 bary) {
+float relief_height(inout ReliefCursor at, vec3 q, vec3 n, Footprint pixel, out vec3 bary) {
     bary = relief_weights(at, q);
     for (int hop = 0; hop < RELIEF_HOPS; ++hop) {
         float least = min(bary.x, min(bary.y, bary.z));
@@ -389,14 +390,14 @@ float relief_height(inout ReliefCursor at, vec3 q, vec3 n, float sign_, Footprin
         at = relief_cursor(next, corner_waves(next));
         bary = relief_weights(at, q);
     }
-    return sign_ * blend_corner_waves(at.cw, bary, q, n, false, pixel).height;
+    return blend_corner_waves(at.cw, bary, q, n, false, pixel).height;
 }
 
 // The step dp in the tangent plane from p to where the ray meets the folds; ``at``: the
 // fragment's triangle, then the one the seen point lies over; ``bary``: the fragment's
-// weights, then the seen point's. ``n``: the fragment's coarse normal (flipped on a back
-// face: ``sign_``)
-vec3 relief_step(vec3 p, vec3 n, float sign_, Footprint pixel, inout ReliefCursor at,
+// weights, then the seen point's. ``n``: the fragment's coarse normal (flipped on a
+// double-sided mesh's back face: the folds stand along it, as its shading bends them)
+vec3 relief_step(vec3 p, vec3 n, Footprint pixel, inout ReliefCursor at,
                  inout vec3 bary, out float height) {
     vec3 v = safe_normalize(u_eye_local - p, n);
     float bound = relief_bound();
@@ -415,14 +416,14 @@ vec3 relief_step(vec3 p, vec3 n, float sign_, Footprint pixel, inout ReliefCurso
     ReliefCursor above = at;
     vec3 b;
     float z0 = bound;
-    float f0 = z0 - relief_height(above, p + z0 * s, n, sign_, pixel, b);
+    float f0 = z0 - relief_height(above, p + z0 * s, n, pixel, b);
     ReliefCursor below = above;
     float z1 = -bound, f1 = -1.0;
     if (f0 > 0.0) {
         for (int i = 0; i < int(RELIEF_MAX_STEPS); ++i) {
             float z = max(z0 - max(f0 / lipschitz, least), -bound);
             ReliefCursor next = above;
-            float f = z - relief_height(next, p + z * s, n, sign_, pixel, b);
+            float f = z - relief_height(next, p + z * s, n, pixel, b);
             if (f <= 0.0) {
                 below = next;
                 z1 = z;
@@ -437,7 +438,7 @@ vec3 relief_step(vec3 p, vec3 n, float sign_, Footprint pixel, inout ReliefCurso
         for (int i = 0; i < RELIEF_SECANT; ++i) {
             float z = f0 - f1 > 1e-30 ? z0 - f0 * (z0 - z1) / (f0 - f1) : z1;
             ReliefCursor next = above;
-            float f = z - relief_height(next, p + z * s, n, sign_, pixel, b);
+            float f = z - relief_height(next, p + z * s, n, pixel, b);
             if (f > 0.0) {
                 above = next;
                 z0 = z;
@@ -454,7 +455,7 @@ vec3 relief_step(vec3 p, vec3 n, float sign_, Footprint pixel, inout ReliefCurso
     }
     float z = f0 - f1 > 1e-30 ? z0 - f0 * (z0 - z1) / (f0 - f1) : z1;
     at = above;
-    relief_height(at, p + z * s, n, sign_, pixel, bary);
+    relief_height(at, p + z * s, n, pixel, bary);
     height = z;
     return z * s;
 }
@@ -518,12 +519,11 @@ void main() {
 #if defined RELIEF
     // the folds where the view ray meets them (relief_step); the texture moves with the
     // seen point, and the material's own shift -n' h as in the texture deformation below
-    float side = !gl_FrontFacing && u_double_sided != 0 ? -1.0 : 1.0;
     ReliefCursor seen_at = relief_cursor(t, DRAWN_CORNER_WAVES);
     vec3 seen_bary = v_bary;
     float seen_height = 0.0;  // z where the ray meets the folds
     vec3 seen = u_wrinkles != 0
-        ? relief_step(v_local, n, side, pixel, seen_at, seen_bary, seen_height) : vec3(0.0);
+        ? relief_step(v_local, n, pixel, seen_at, seen_bary, seen_height) : vec3(0.0);
     Bent centre = bend(t, seen_at.cw, n, seen_bary, v_local + seen, pixel, mapped, n_tangent);
 #else
     Bent centre = bend(t, DRAWN_CORNER_WAVES, n, v_bary, v_local, pixel, mapped, n_tangent);
@@ -609,7 +609,7 @@ void main() {
             // degrees)
             ReliefCursor at = relief_cursor(t, DRAWN_CORNER_WAVES);
             float z;
-            ps += relief_step(ps, ns, side, pixel, at, bs, z);
+            ps += relief_step(ps, ns, pixel, at, bs, z);
             Bent b = bend(t, at.cw, ns, bs, ps, pixel, mapped, n_tangent);
 #else
             Bent b = bend(t, DRAWN_CORNER_WAVES, ns, bs, ps, pixel, mapped, n_tangent);
