@@ -96,3 +96,85 @@ def test_crush_starts_a_painted_loop_from_its_stripe_pattern(gl_context):
         phase = (along_q * ours["phase"])[ring * AROUND:(ring + 1) * AROUND]
         winding = wrap(np.roll(phase, -1) - phase).sum() / (2 * np.pi)
         assert winding == pytest.approx(round(2 * np.pi * RADIUS / length), abs=1e-3)
+
+
+def curved_of(rest, quads, width=WIDTH):
+    from usdwrinkle.method.anchor import curved_phases
+
+    topology = build_topology(np.full(len(quads), 4), quads.ravel(), rest)
+    return curved_phases(rest, vertex_normals(rest, topology), topology.neighbor_offsets,
+                         topology.neighbor_indices, np.full(len(rest), width))
+
+
+def test_a_tube_nobody_painted_starts_from_a_stripe_around_itself():
+    """method/anchor.curved_phases: on the band of a cylinder the direction is the one it
+    curves along (around it), and the phase winds round(C / W) times around each ring,
+    advancing 2 pi / W times the edge; on a flat sheet (nothing curves) and on random
+    cloth there is none."""
+    width = 0.27  # 7 waves around (6.98), 1.1 rad an edge: each step is unambiguous
+    rest, quads, q = sleeve_band()
+    out = curved_of(rest, quads, width)
+    inner = slice(AROUND, (RINGS - 1) * AROUND)
+    around = q[inner] / AMOUNT
+    np.testing.assert_allclose(np.abs(np.sum(out[inner, :3] * around, 1)), 1.0, atol=1e-4)
+    turns = 2 * np.pi * RADIUS / width
+    chord = 2 * RADIUS * np.sin(np.pi / AROUND)
+    sign = np.sign(np.sum(out[:, :3] * np.tile(around[:AROUND], (RINGS, 1)), 1))
+    for ring in range(1, RINGS - 1):
+        part = slice(ring * AROUND, (ring + 1) * AROUND)
+        phase = (sign[part] * out[part, 3]).astype(np.float64)  # along "around" throughout
+        step = wrap(np.roll(phase, -1) - phase)
+        assert step.sum() / (2 * np.pi) == pytest.approx(round(turns), abs=1e-3)
+        assert np.median(step) == pytest.approx(chord * 2 * np.pi / width, rel=0.01)
+    flat = np.array([[x, y, 0.0] for y in range(6) for x in range(8)], np.float64) * 0.05
+    quads_flat = np.array([[r * 8 + c, r * 8 + c + 1, (r + 1) * 8 + c + 1, (r + 1) * 8 + c]
+                           for r in range(5) for c in range(7)])
+    assert not np.any(curved_of(flat, quads_flat))
+
+
+def gathered_cuff_ring(tmp_path, shift: float) -> np.ndarray:
+    """A cuff (tests/test_deepen.py's) gathered to 0.6 of its circumference from the shot's
+    first frame (a garment whose rest shape is the ungathered one: a cold start), its axis
+    ``shift`` from the mesh's origin; baked with --geometry: the displaced mesh's radius
+    around its middle ring, sorted by angle, less its mean."""
+    from pxr import Usd, UsdGeom
+    from test_deepen import cuff
+
+    from usdwrinkle.cli.main import main
+
+    rest, counts, indices, _ = cuff()
+    move = np.array([shift, 0.0, 0.0])
+    posed = (cuff(0.6)[0] + move).astype(np.float32)
+    stage = point_cache_stage((rest + move).astype(np.float32), {1: posed, 2: posed}, counts,
+                              indices, width=0.15)
+    source = tmp_path / f"cuff{shift}.usda"
+    stage.GetRootLayer().Export(str(source))
+    layer = tmp_path / f"cuff{shift}_geometry.usdc"
+    assert main(["bake", str(source), str(layer), "--geometry", "--frames", "2",
+                 "--quiet"]) == 0
+    baked = Usd.Stage.Open(str(layer))
+    fine = baked.GetPrimAtPath("/Sheet_wrinkled")
+    points = np.asarray(UsdGeom.Mesh(fine).GetPointsAttr().Get(2), np.float64) - move
+    middle = np.abs(points[:, 1] - 0.15) < 0.004
+    angle = np.arctan2(points[middle, 0], points[middle, 2])
+    radius = np.hypot(points[middle, 0], points[middle, 2])[np.argsort(angle)]
+    return radius - radius.mean()
+
+
+def test_a_cuff_gathered_about_its_own_axis_folds_wherever_its_origin_is(gl_context,
+                                                                          tmp_path):
+    """Section "Gathered tubes" of docs/method.md: the cuff's material-anchored start was 0
+    all around with its axis through the mesh's origin, and the relaxation kept it: the
+    displaced cuff stood as a smooth tube 1 cm proud (its radius's spread 0.1 mm, measured
+    2026-12-06 before the curved start), and with the axis 0.3 away its folds were a mix
+    (the strongest harmonic 6 of the ring, 34% of the spectrum). With the curved start
+    both fold round(C / W) = 4 times (the rest circumference 0.63 over W 0.15), 57% of
+    the spectrum, alike: the start no longer depends on where the origin lies."""
+    rings = [gathered_cuff_ring(tmp_path, shift) for shift in (0.0, 0.3)]
+    for ring in rings:
+        assert ring.std() > 0.01  # folds 2 cm deep, not a smooth tube
+        spectrum = np.abs(np.fft.rfft(ring))
+        assert int(np.argmax(spectrum)) == 4
+        assert spectrum[4] / spectrum.sum() > 0.4
+    # alike to within float rounding of the moved points (0.2 mm of 2 cm folds)
+    np.testing.assert_allclose(rings[0], rings[1], atol=5e-4)

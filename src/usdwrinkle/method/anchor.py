@@ -39,6 +39,9 @@ import numpy as np
 
 from .contract import COARSENING_EXPONENT, COARSENING_MAX, MIN_RATIO, PAINT_GATHER_MAX
 
+#: curved_phases: the rest surface curves at least this many times more one way than the
+#: other (a tube: without end; a sphere: 1)
+CURVED_ONE_WAY = 2.0
 #: phasor smoothing steps after the breadth-first integration
 SMOOTHING = 32
 #: a painted region is smooth where its neighbouring directions agree this well (|cos|,
@@ -85,6 +88,24 @@ def painted_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets:
     wavenumber[painted] = 2.0 * np.pi / painted_wavelength(np.minimum(length[painted], 1.0),
                                                           np.asarray(width)[painted],
                                                           cap[painted])
+    return integrated_phases(rest, direction, wavenumber, neighbor_offsets, neighbor_indices)
+
+
+def integrated_phases(rest: np.ndarray, direction: np.ndarray, wavenumber: np.ndarray,
+                      neighbor_offsets: np.ndarray, neighbor_indices: np.ndarray) -> np.ndarray:
+    """(n, 4) float32: the start phases of a direction field (xyz: ``direction``, unit in
+    the rest tangent plane, zero where there is none; w: the phase along it, at
+    ``wavenumber`` radians per unit), integrated breadth first over each region of the
+    field and smoothed, where the region winds and its directions are smooth (module
+    docstring); zero elsewhere."""
+    rest = np.asarray(rest, np.float64)
+    direction = np.asarray(direction, np.float64)
+    wavenumber = np.asarray(wavenumber, np.float64)
+    n = len(rest)
+    out = np.zeros((n, 4), np.float32)
+    painted = np.linalg.norm(direction, axis=1) > 0.0
+    if not painted.any():
+        return out
 
     # the painted points' ring edges (i -> j, both painted)
     offsets = np.asarray(neighbor_offsets, np.int64)
@@ -155,3 +176,75 @@ def painted_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets:
     out[used, :3] = direction[used]
     out[used, 3] = np.angle(z[used])
     return out
+
+
+def _tangent_frame(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit tangents per unit normal (any orthonormal pair: the form is fitted in it)."""
+    axis = np.where((np.abs(normals[:, 0]) < 0.9)[:, None], [[1.0, 0.0, 0.0]],
+                    [[0.0, 1.0, 0.0]])
+    first = np.cross(normals, axis)
+    first /= np.maximum(np.linalg.norm(first, axis=1, keepdims=True), 1e-300)
+    return first, np.cross(normals, first)
+
+
+def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
+                  neighbor_indices: np.ndarray, width: np.ndarray,
+                  use: np.ndarray | None = None) -> np.ndarray:
+    """(n, 4) float32, as painted_phases: the start phases around the rest surface's
+    curvature, for waves that nobody painted (``use``: the points that may have one; all
+    by default). Where the rest surface curves at least CURVED_ONE_WAY times more one way
+    than the other (a tube), the stripe pattern of W (the folds' wavelength at their
+    onset) along the curvature's direction, integrated as the paint's is, winds around a
+    tube as often as W goes into its circumference. The material-anchored phase (2pi/L)
+    d.X does not: around a tube d.X is about constant (exactly 0 about an axis through the
+    mesh's origin), and the relaxation cannot make a winding from nothing (docs/method.md,
+    "Gathered tubes"). The direction is the fitted second fundamental form's (deepen.
+    fit_form) of larger magnitude; zero where the region does not wind or its directions
+    are not smooth (integrated_phases)."""
+    from .deepen import fit_form
+
+    rest = np.asarray(rest, np.float64)
+    normals = np.asarray(rest_normals, np.float64)
+    n = len(rest)
+    out = np.zeros((n, 4), np.float32)
+    held = np.ones(n, bool) if use is None else np.asarray(use, bool)
+    if not held.any():
+        return out
+    first, second = _tangent_frame(normals)
+    offsets = np.asarray(neighbor_offsets, np.int64)
+    target = np.asarray(neighbor_indices, np.int64)
+    source = np.repeat(np.arange(n), np.diff(offsets))
+    edge = rest[target] - rest[source]
+    tangent = np.stack([np.sum(edge * first[source], 1), np.sum(edge * second[source], 1)], 1)
+    form, fitted = fit_form(tangent, np.sum(edge * normals[source], 1), source, n)
+    ll, mm, nn = form[:, 0], form[:, 1], form[:, 2]
+    mean, spread = 0.5 * (ll + nn), np.hypot(0.5 * (ll - nn), mm)
+    angle = 0.5 * np.arctan2(2.0 * mm, ll - nn)  # the direction of eigenvalue mean + spread
+    larger, smaller = mean + spread, mean - spread
+    swap = np.abs(smaller) > np.abs(larger)
+    angle = np.where(swap, angle + 0.5 * np.pi, angle)
+    most, least = np.where(swap, smaller, larger), np.where(swap, larger, smaller)
+    one_way = (np.abs(most) > 0.0) & (np.abs(most) >= CURVED_ONE_WAY * np.abs(least))
+    usable = held & fitted & one_way & np.all(np.isfinite(normals), axis=1)
+    direction = np.zeros((n, 3))
+    direction[usable] = (np.cos(angle)[:, None] * first + np.sin(angle)[:, None] * second)[usable]
+    wavenumber = np.where(usable, 2.0 * np.pi / np.maximum(np.asarray(width, np.float64),
+                                                           1e-300), 0.0)
+    return integrated_phases(rest, direction, wavenumber, offsets, target)
+
+
+def start_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
+                 neighbor_indices: np.ndarray, q: np.ndarray, width: np.ndarray,
+                 coarsening: np.ndarray | None = None) -> np.ndarray:
+    """The table crush starts waves from (n, 4): the paint's (painted_phases) where q is
+    painted, else the curvature's (curved_phases) on the unpainted points."""
+    painted = painted_phases(rest, rest_normals, neighbor_offsets, neighbor_indices, q, width,
+                             coarsening)
+    q = np.asarray(q, np.float64)
+    normals = np.asarray(rest_normals, np.float64)
+    unpainted = np.linalg.norm(q - np.sum(q * normals, axis=1, keepdims=True) * normals,
+                               axis=1) == 0.0
+    if not unpainted.any():
+        return painted
+    curved = curved_phases(rest, normals, neighbor_offsets, neighbor_indices, width, unpainted)
+    return np.where(np.any(painted[:, :3] != 0, axis=1, keepdims=True), painted, curved)

@@ -880,8 +880,8 @@ class PaintWindow(QtWidgets.QMainWindow):
         relief = QtGui.QAction("&Relief", self)
         relief.setCheckable(True)
         relief.setToolTip("Draw the folds where the view ray meets them, as the displaced "
-                          "geometry stands (render --relief): the flanks that face away "
-                          "hide behind the crests. Slower on a CPU renderer")
+                          "geometry stands: the flanks that face away hide behind the "
+                          "crests. Slower on a CPU renderer")
         relief.toggled.connect(self._relief)
         view.addAction(relief)
         self.actions_by_name["Relief"] = relief

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..method.anchor import painted_phases
+from ..method.anchor import start_phases
 from ..method.contract import (
     ANCHOR_ALIGNED,
     COARSENING_MAX,
@@ -164,7 +164,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     deepen = np.where(usable & fitted, deepen, 0.0)
     phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
     # where the wave runs along the paint, the paint's own start phase (method/anchor.py)
-    painted = painted_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
+    painted = start_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
                              q, width, coarsening).astype(np.float64)
     along_paint = np.sum(d3 / np.maximum(np.linalg.norm(d3, axis=1, keepdims=True), 1e-300)
                          * painted[:, :3], 1)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..method.anchor import painted_phases
+from ..method.anchor import start_phases
 from ..method.contract import COARSENING_MAX, JOINT_TEXELS, UDIM_REPEAT, UDIM_TILES, WrinkleFields
 from ..process.errors import UsdWrinkleError
 from ..process.limits import MAX_POINTS
@@ -66,16 +66,16 @@ def _coarsening(params, n: int) -> np.ndarray:
 
 
 def _anchor(record) -> np.ndarray:
-    """The painted waves' start phases (method/anchor.py), (n, 4)."""
+    """The waves' start phases (method/anchor.py: the paint's, else the curvature's), (n, 4)."""
     topology = record.topology
-    return painted_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
+    return start_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
                           topology.neighbor_indices, record.params.q, record.params.width,
                           record.params.coarsening)
 
 
 def _anchor_key(record) -> int:
-    """What the painted start phases depend on beyond the topology: the rest pose, q, the
-    width and the coarsening cap."""
+    """What the start phases depend on beyond the topology: the rest pose, q, the width
+    and the coarsening cap."""
     cap = record.params.coarsening
     return hash(tuple(np.ascontiguousarray(array).tobytes() for array in (
         record.rest_points, record.params.q, record.params.width,
