@@ -1,4 +1,6 @@
-"""The painted waves' start phases: a stripe pattern of the painted q, in rest space.
+"""The waves' start phases: a stripe pattern of the painted q, in rest space; and, for
+waves nobody painted on a surface that curves one way (a tube gathered around itself),
+one of the direction it curves along (curved_phases; docs/method.md, "Gathered tubes").
 
 Crush starts each wave from its material-anchored phase ``(2pi/L) d.X`` (docs/method.md,
 "Stability"): exact where d is constant, but where the painted direction turns, its
