@@ -42,8 +42,9 @@ layout(binding = CRUSH_HOLD) uniform sampler2D hold;
 // coarsening_cap: COARSENING_MAX on flat cloth, 1 where the rest surface curves one way
 // at its tube's own wavelength or tighter)
 layout(binding = CRUSH_COARSENING) uniform sampler2D coarsening;
-// the painted waves' start phases (method/anchor.py): xyz the unit painted direction (rest
-// space; zero where nothing is painted), w the start phase along it
+// the waves' start phases (method/anchor.py): xyz the unit direction of the stripe pattern
+// (rest space; the painted q's, else where nothing is painted the direction a surface
+// that curves one way curves along; zero where there is none), w the start phase along it
 layout(binding = CRUSH_ANCHOR) uniform sampler2D anchor;
 // xy: the damped rest direction d (T1, T2 coordinates), z: 1 once written. Read from the
 // wave state of the shot's previous grid frame, written into this frame's state
@@ -491,8 +492,9 @@ void main() {
     // its gradient: DEEPEN_GRADIENT, once every point's offset is written
     STORE(fields, FIELD_DEEPEN(i), vec4(offset, 0.0, 0.0, 0.0));
     // material-anchored start: crests ride with the cloth, frames stay independent.
-    // Where the wave runs along the paint (within 45 degrees), the paint's own stripe
-    // pattern in rest space (method/anchor.py), its sign d's
+    // Where the wave runs along the anchor table's direction (within 45 degrees: the
+    // paint's, or a gathered tube's curvature), that stripe pattern in rest space
+    // (method/anchor.py), its sign d's
     // the state's damped direction, and the material wave number its mobility reads
     imageStore(damped, TABLE_TEXEL(i), vec4(d, 1.0, TWO_PI / wavelength));
     float start = (TWO_PI / wavelength) * dot(d3, X_i);

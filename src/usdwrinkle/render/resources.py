@@ -189,7 +189,7 @@ class MeshResources:
         self.q_width = self._table(n, 4, data=vec4(record.params.q, record.params.width))
         self.hold = self._table(n, 4, data=_hold(record.params, n))
         self.coarsening = self._table(n, 1, data=_coarsening(record.params, n))
-        #: the painted waves' start phases (method/anchor.py)
+        #: the waves' start phases (method/anchor.py: painted loops, gathered tubes)
         self.anchor = self._table(n, 4, data=_anchor(record))
         self._anchor_key = _anchor_key(record)
         #: the wave fields' ping-pong, phases and relax tables (render/fields.py)
