@@ -397,12 +397,21 @@ float relief_height(inout ReliefCursor at, vec3 q, vec3 n, Footprint pixel, out 
 // fragment's triangle, then the one the seen point lies over; ``bary``: the fragment's
 // weights, then the seen point's. ``n``: the fragment's coarse normal (flipped on a
 // double-sided mesh's back face: the folds stand along it, as its shading bends them)
-vec3 relief_step(vec3 p, vec3 n, Footprint pixel, inout ReliefCursor at,
-                 inout vec3 bary, out float height) {
+//
+// ``start``: the height the march starts from (at most the bound). With ``tolerance`` >=
+// 0, ``safe`` is the lowest height the march passed with every ray within ``tolerance``
+// of this one's f (f moves by at most the slope bound times the rays' distance) still
+// above the folds down to it, and ``safe_at`` its cursor: a multisample's ray, within a
+// pixel of this one, starts its own march there instead of at the bound.
+vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
+                 inout ReliefCursor at, inout vec3 bary, out float height, out float safe,
+                 out ReliefCursor safe_at) {
     vec3 v = safe_normalize(u_eye_local - p, n);
     float bound = relief_bound();
     float vn = dot(v, n);
     height = 0.0;
+    safe = bound;
+    safe_at = at;
     if (vn <= RELIEF_FADE || bound <= 0.0) return vec3(0.0);
     vec3 s = (v - vn * n) / max(vn, RELIEF_MIN_COSINE) * smoothstep(RELIEF_FADE,
                                                                     RELIEF_MIN_COSINE, vn);
@@ -415,8 +424,11 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, inout ReliefCursor at,
     float least = 2.0 * bound / RELIEF_MAX_STEPS;
     ReliefCursor above = at;
     vec3 b;
-    float z0 = bound;
+    float z0 = min(start, bound);
     float f0 = z0 - relief_height(above, p + z0 * s, n, pixel, b);
+    safe = z0;
+    safe_at = above;
+    bool tracking = tolerance >= 0.0 && f0 > tolerance;
     ReliefCursor below = above;
     float z1 = -bound, f1 = -1.0;
     if (f0 > 0.0) {
@@ -429,6 +441,14 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, inout ReliefCursor at,
                 z1 = z;
                 f1 = f;
                 break;
+            }
+            // between the two samples f is at least (f0 + f - lipschitz dz) / 2
+            if (tracking && 0.5 * (f0 + f - lipschitz * (z0 - z)) > tolerance
+                    && f > tolerance) {
+                safe = z;
+                safe_at = next;
+            } else {
+                tracking = false;
             }
             above = next;
             z0 = z;
@@ -522,8 +542,14 @@ void main() {
     ReliefCursor seen_at = relief_cursor(t, DRAWN_CORNER_WAVES);
     vec3 seen_bary = v_bary;
     float seen_height = 0.0;  // z where the ray meets the folds
+    // the multisamples' rays lie within half the pixel's diagonal of the centre's
+    float within = 0.5 * (length(pixel.dx) + length(pixel.dy));
+    float safe_height = 0.0;
+    ReliefCursor safe_at = seen_at;
     vec3 seen = u_wrinkles != 0
-        ? relief_step(v_local, n, pixel, seen_at, seen_bary, seen_height) : vec3(0.0);
+        ? relief_step(v_local, n, pixel, 1e30, RELIEF_SAMPLE_REACH * relief_slope() * within,
+                      seen_at, seen_bary, seen_height, safe_height, safe_at)
+        : vec3(0.0);
     Bent centre = bend(t, seen_at.cw, n, seen_bary, v_local + seen, pixel, mapped, n_tangent);
 #else
     Bent centre = bend(t, DRAWN_CORNER_WAVES, n, v_bary, v_local, pixel, mapped, n_tangent);
@@ -606,10 +632,13 @@ void main() {
             // its samples see different folds (the centre's step for every sample, tried,
             // saw through the crests' outlines: on the analytic sheet at 55 degrees the
             // normals' 90th percentile against the displaced mesh's went 5.3 -> 7.8
-            // degrees)
-            ReliefCursor at = relief_cursor(t, DRAWN_CORNER_WAVES);
-            float z;
-            ps += relief_step(ps, ns, pixel, at, bs, z);
+            // degrees). It starts where the centre's march knew no ray within the pixel
+            // meets the folds above (relief_step's ``safe``)
+            ReliefCursor at = safe_at;
+            float z, unused_height;
+            ReliefCursor unused_at;
+            ps += relief_step(ps, ns, pixel, safe_height, -1.0, at, bs, z, unused_height,
+                              unused_at);
             Bent b = bend(t, at.cw, ns, bs, ps, pixel, mapped, n_tangent);
 #else
             Bent b = bend(t, DRAWN_CORNER_WAVES, ns, bs, ps, pixel, mapped, n_tangent);

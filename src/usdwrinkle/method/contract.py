@@ -234,7 +234,8 @@ COLD_START_FACTOR = 4
 #: and slopes are bounded over the fragment's triangle times RELIEF_BOUND_MARGIN (for its
 #: neighbours' folds); the ray walks at most RELIEF_HOPS triangles a step. Where the seen
 #: point jumps from fold to fold, the texture's footprint is held within RELIEF_FOOTPRINT
-#: times the coarse surface's
+#: times the coarse surface's. A multisample's march starts where the centre's knew that
+#: no ray within RELIEF_SAMPLE_REACH half pixel diagonals of it meets the folds above
 RELIEF_MAX_STEPS = 32.0
 RELIEF_SECANT = 2
 RELIEF_MIN_COSINE = 0.5
@@ -242,6 +243,7 @@ RELIEF_FADE = 0.2
 RELIEF_FOOTPRINT = 4.0
 RELIEF_HOPS = 3
 RELIEF_BOUND_MARGIN = 1.25
+RELIEF_SAMPLE_REACH = 1.5
 #: Lights the draw pass sums (more are ignored, with a warning).
 MAX_LIGHTS = 8
 #: Anisotropic filtering of textures: Hydra's GL samplers ask for 16 (hgiGL/sampler.cpp),
@@ -315,6 +317,7 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("RELIEF_SECANT", RELIEF_SECANT), ("RELIEF_MIN_COSINE", RELIEF_MIN_COSINE),
     ("RELIEF_FADE", RELIEF_FADE), ("RELIEF_FOOTPRINT", RELIEF_FOOTPRINT),
     ("RELIEF_HOPS", RELIEF_HOPS), ("RELIEF_BOUND_MARGIN", RELIEF_BOUND_MARGIN),
+    ("RELIEF_SAMPLE_REACH", RELIEF_SAMPLE_REACH),
     ("JOINT_TEXELS", JOINT_TEXELS), ("UDIM_TILES", UDIM_TILES), ("UDIM_REPEAT", UDIM_REPEAT),
     ("FIELD_TEXELS", FIELD_TEXELS),
     ("FIELD_NORMAL_TEXEL", FIELD_NORMAL_TEXEL), ("FIELD_WAVE_TEXEL", FIELD_WAVE_TEXEL),
