@@ -313,3 +313,21 @@ def bake_maps(source, layer, *args, kinds="normal,height,amplitude", size=MAPS_S
     layout = () if "--map-layout" in args else ("--map-layout", "asset")
     return main(["bake", str(source), str(layer), "--quiet", "--maps", kinds,
                  "--map-size", str(size), *layout, *args])
+
+
+def gathered_cuff(ratio: float = 1.0, radius: float = 0.1, length: float = 0.3,
+                  along: int = 11, around: int = 96):
+    """(points, counts, indices, interior mask): a tube of ``radius`` about the y axis (a
+    cuff) ``length`` long, ``along`` rings of ``around`` points, its radius scaled by
+    ``ratio`` (gathered around itself: its circumference compressed to ``ratio``, its
+    length kept); normals outward; the interior 5 cm in from both ends."""
+    from usdwrinkle.authoring.builders import grid_faces
+
+    y, t = np.meshgrid(np.linspace(0, length, along),
+                       np.arange(around) * 2 * np.pi / around, indexing="ij")
+    theta = t.ravel()
+    scaled = radius * ratio
+    points = np.stack([scaled * np.sin(theta), y.ravel(), scaled * np.cos(theta)], 1)
+    counts, indices = grid_faces(along, around, wrap_cols=True)
+    inner = (y.ravel() > 0.05) & (y.ravel() < length - 0.05)
+    return points, counts, indices, inner

@@ -16,22 +16,15 @@ from usdwrinkle.method.deepen import length_at, offset
 from usdwrinkle.reference.crush import crush, default_slope
 from usdwrinkle.scene.topology import build_topology
 
+from helpers import gathered_cuff
+
 RADIUS, LENGTH, WIDTH, RATIO = 0.1, 0.3, 0.15, 0.6
 ALONG, AROUND = 11, 96
 
 
 def cuff(ratio: float = 1.0):
-    """(points, counts, indices, interior mask): a tube of RADIUS about the y axis (a
-    cuff), its radius scaled by ``ratio`` (gathered around itself: its circumference
-    compressed to ``ratio``, its length kept); normals outward."""
-    y, t = np.meshgrid(np.linspace(0, LENGTH, ALONG),
-                       np.arange(AROUND) * 2 * np.pi / AROUND, indexing="ij")
-    theta = t.ravel()
-    radius = RADIUS * ratio
-    points = np.stack([radius * np.sin(theta), y.ravel(), radius * np.cos(theta)], 1)
-    counts, indices = grid_faces(ALONG, AROUND, wrap_cols=True)
-    inner = (y.ravel() > 0.05) & (y.ravel() < 0.25)
-    return points, counts, indices, inner
+    """helpers.gathered_cuff at this module's size: (points, counts, indices, interior)."""
+    return gathered_cuff(ratio, RADIUS, LENGTH, ALONG, AROUND)
 
 
 def outward(points, normals):

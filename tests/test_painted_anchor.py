@@ -11,7 +11,7 @@ from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.reference.relax import wrap
 from usdwrinkle.scene.topology import build_topology, vertex_normals
 
-from helpers import gpu_fields, point_cache_stage, random_cloth
+from helpers import gathered_cuff, gpu_fields, point_cache_stage, random_cloth
 
 RADIUS, RINGS, AROUND, AMOUNT, WIDTH = 0.3, 6, 40, 0.6, 0.1
 
@@ -133,18 +133,18 @@ def test_a_tube_nobody_painted_starts_from_a_stripe_around_itself():
 
 
 def gathered_cuff_ring(tmp_path, shift: float) -> np.ndarray:
-    """A cuff (tests/test_deepen.py's) gathered to 0.6 of its circumference from the shot's
-    first frame (a garment whose rest shape is the ungathered one: a cold start), its axis
+    """A cuff (helpers.gathered_cuff, as tests/test_deepen.py's) gathered to 0.6 of its
+    circumference from the shot's first frame (a garment whose rest shape is the
+    ungathered one: a cold start), its axis
     ``shift`` from the mesh's origin; baked with --geometry: the displaced mesh's radius
     around its middle ring, sorted by angle, less its mean."""
     from pxr import Usd, UsdGeom
-    from test_deepen import cuff
 
     from usdwrinkle.cli.main import main
 
-    rest, counts, indices, _ = cuff()
+    rest, counts, indices, _ = gathered_cuff()
     move = np.array([shift, 0.0, 0.0])
-    posed = (cuff(0.6)[0] + move).astype(np.float32)
+    posed = (gathered_cuff(0.6)[0] + move).astype(np.float32)
     stage = point_cache_stage((rest + move).astype(np.float32), {1: posed, 2: posed}, counts,
                               indices, width=0.15)
     source = tmp_path / f"cuff{shift}.usda"
