@@ -86,18 +86,25 @@ def maps_figure(outdir: Path) -> Path:
     return path
 
 
+def _frame_24(stage: str, out: str, size: tuple[int, int], extra: list[str],
+              crop: tuple[slice, slice]) -> np.ndarray:
+    """``usdwrinkle render STAGE OUT --frames 24`` at ``size`` with ``extra``, over white,
+    cropped."""
+    _cli("render", stage, out, "--frames", "24", "--width", str(size[0]), "--height",
+         str(size[1]), *extra)
+    image = _read(out)
+    alpha = image[..., 3:4]
+    return (image[..., :3] * alpha + (1 - alpha))[crop]
+
+
 def geometry_figure(outdir: Path) -> Path:
     with tempfile.TemporaryDirectory() as folder:
         layer = os.path.join(folder, "shirt_geometry.usdc")
         _cli("bake", str(SHIRT), layer, "--geometry")
-        images = []
-        for stage, extra in ((str(SHIRT), []), (layer, ["--no-wrinkles"])):
-            out = os.path.join(folder, f"frame{len(images)}.png")
-            _cli("render", stage, out, "--frames", "24", "--width", "1280", "--height",
-                 "960", *extra)
-            image = _read(out)
-            alpha = image[..., 3:4]
-            images.append((image[..., :3] * alpha + (1 - alpha))[380:900, 360:880])
+        images = [_frame_24(stage, os.path.join(folder, f"frame{i}.png"), (1280, 960), extra,
+                            (slice(380, 900), slice(360, 880)))
+                  for i, (stage, extra) in enumerate(((str(SHIRT), []),
+                                                      (layer, ["--no-wrinkles"])))]
     gap = np.ones((images[0].shape[0], 16, 3), np.float32)
     path = outdir / "geometry_elbow.png"
     _write(path, np.concatenate([images[0], gap, images[1]], axis=1))
@@ -155,14 +162,10 @@ def relief_figure(outdir: Path) -> Path:
     with tempfile.TemporaryDirectory() as folder:
         layer = os.path.join(folder, "shirt_geometry.usdc")
         _cli("bake", str(SHIRT), layer, "--geometry", "--frames", "24")
-        images = []
-        for extra in ([], ["--relief"], ["--no-wrinkles", "--sublayer", layer]):
-            out = os.path.join(folder, f"frame{len(images)}.png")
-            _cli("render", str(SHIRT), out, "--frames", "24", "--width", "1080", "--height",
-                 "720", *extra)
-            image = _read(out)
-            alpha = image[..., 3:4]
-            images.append((image[..., :3] * alpha + (1 - alpha))[70:640, 250:790])
+        images = [_frame_24(str(SHIRT), os.path.join(folder, f"frame{i}.png"), (1080, 720),
+                            extra, (slice(70, 640), slice(250, 790)))
+                  for i, extra in enumerate(([], ["--relief"],
+                                             ["--no-wrinkles", "--sublayer", layer]))]
     gap = np.ones((images[0].shape[0], 16, 3), np.float32)
     path = outdir / "relief.png"
     _write(path, np.concatenate([images[0], gap, images[1], gap, images[2]], axis=1))
