@@ -404,12 +404,11 @@ float relief_height(inout ReliefCursor at, vec3 q, vec3 n, Footprint pixel, out 
 // above the folds down to it, and ``safe_at`` its cursor: a multisample's ray, within a
 // pixel of this one, starts its own march there instead of at the bound.
 vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
-                 inout ReliefCursor at, inout vec3 bary, out float height, out float safe,
+                 inout ReliefCursor at, inout vec3 bary, out float safe,
                  out ReliefCursor safe_at) {
     vec3 v = safe_normalize(u_eye_local - p, n);
     float bound = relief_bound();
     float vn = dot(v, n);
-    height = 0.0;
     safe = bound;
     safe_at = at;
     if (vn <= RELIEF_FADE || bound <= 0.0) return vec3(0.0);
@@ -476,7 +475,6 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
     float z = f0 - f1 > 1e-30 ? z0 - f0 * (z0 - z1) / (f0 - f1) : z1;
     at = above;
     relief_height(at, p + z * s, n, pixel, bary);
-    height = z;
     return z * s;
 }
 #endif
@@ -541,14 +539,13 @@ void main() {
     // seen point, and the material's own shift -n' h as in the texture deformation below
     ReliefCursor seen_at = relief_cursor(t, DRAWN_CORNER_WAVES);
     vec3 seen_bary = v_bary;
-    float seen_height = 0.0;  // z where the ray meets the folds
     // the multisamples' rays lie within half the pixel's diagonal of the centre's
     float within = 0.5 * (length(pixel.dx) + length(pixel.dy));
     float safe_height = 0.0;
     ReliefCursor safe_at = seen_at;
     vec3 seen = u_wrinkles != 0
         ? relief_step(v_local, n, pixel, 1e30, RELIEF_SAMPLE_REACH * relief_slope() * within,
-                      seen_at, seen_bary, seen_height, safe_height, safe_at)
+                      seen_at, seen_bary, safe_height, safe_at)
         : vec3(0.0);
     Bent centre = bend(t, seen_at.cw, n, seen_bary, v_local + seen, pixel, mapped, n_tangent);
 #else
@@ -635,9 +632,9 @@ void main() {
             // degrees). It starts where the centre's march knew no ray within the pixel
             // meets the folds above (relief_step's ``safe``)
             ReliefCursor at = safe_at;
-            float z, unused_height;
+            float unused_height;
             ReliefCursor unused_at;
-            ps += relief_step(ps, ns, pixel, safe_height, -1.0, at, bs, z, unused_height,
+            ps += relief_step(ps, ns, pixel, safe_height, -1.0, at, bs, unused_height,
                               unused_at);
             Bent b = bend(t, at.cw, ns, bs, ps, pixel, mapped, n_tangent);
 #else
