@@ -100,9 +100,11 @@ def test_crush_starts_a_painted_loop_from_its_stripe_pattern(gl_context):
 
 def curved_of(rest, quads, width=WIDTH):
     from usdwrinkle.method.anchor import curved_phases
+    from usdwrinkle.scene.topology import rest_tangents
 
     topology = build_topology(np.full(len(quads), 4), quads.ravel(), rest)
-    return curved_phases(rest, vertex_normals(rest, topology), topology.neighbor_offsets,
+    normals = vertex_normals(rest, topology)
+    return curved_phases(rest, normals, rest_tangents(normals), topology.neighbor_offsets,
                          topology.neighbor_indices, np.full(len(rest), width))
 
 

@@ -180,18 +180,9 @@ def integrated_phases(rest: np.ndarray, direction: np.ndarray, wavenumber: np.nd
     return out
 
 
-def _tangent_frame(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit tangents per unit normal (any orthonormal pair: the form is fitted in it)."""
-    axis = np.where((np.abs(normals[:, 0]) < 0.9)[:, None], [[1.0, 0.0, 0.0]],
-                    [[0.0, 1.0, 0.0]])
-    first = np.cross(normals, axis)
-    first /= np.maximum(np.linalg.norm(first, axis=1, keepdims=True), 1e-300)
-    return first, np.cross(normals, first)
-
-
-def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
-                  neighbor_indices: np.ndarray, width: np.ndarray,
-                  use: np.ndarray | None = None) -> np.ndarray:
+def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, rest_tangents: np.ndarray,
+                  neighbor_offsets: np.ndarray, neighbor_indices: np.ndarray,
+                  width: np.ndarray, use: np.ndarray | None = None) -> np.ndarray:
     """(n, 4) float32, as painted_phases: the start phases around the rest surface's
     curvature, for waves that nobody painted (``use``: the points that may have one; all
     by default). Where the rest surface curves at least CURVED_ONE_WAY times more one way
@@ -202,17 +193,19 @@ def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: 
     mesh's origin), and the relaxation cannot make a winding from nothing (docs/method.md,
     "Gathered tubes"). The direction is the fitted second fundamental form's (deepen.
     fit_form) of larger magnitude; zero where the region does not wind or its directions
-    are not smooth (integrated_phases)."""
+    are not smooth (integrated_phases). ``rest_tangents``: a unit tangent per point
+    (scene/topology.rest_tangents), the form's first axis."""
     from .deepen import fit_form
 
     rest = np.asarray(rest, np.float64)
     normals = np.asarray(rest_normals, np.float64)
     n = len(rest)
     out = np.zeros((n, 4), np.float32)
-    held = np.ones(n, bool) if use is None else np.asarray(use, bool)
-    if not held.any():
+    allowed = np.ones(n, bool) if use is None else np.asarray(use, bool)
+    if not allowed.any():
         return out
-    first, second = _tangent_frame(normals)
+    first = np.asarray(rest_tangents, np.float64)
+    second = np.cross(normals, first)
     offsets = np.asarray(neighbor_offsets, np.int64)
     target = np.asarray(neighbor_indices, np.int64)
     source = np.repeat(np.arange(n), np.diff(offsets))
@@ -227,7 +220,7 @@ def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: 
     angle = np.where(swap, angle + 0.5 * np.pi, angle)
     most, least = np.where(swap, smaller, larger), np.where(swap, larger, smaller)
     one_way = (np.abs(most) > 0.0) & (np.abs(most) >= CURVED_ONE_WAY * np.abs(least))
-    usable = held & fitted & one_way & np.all(np.isfinite(normals), axis=1)
+    usable = allowed & fitted & one_way & np.all(np.isfinite(normals), axis=1)
     direction = np.zeros((n, 3))
     direction[usable] = (np.cos(angle)[:, None] * first + np.sin(angle)[:, None] * second)[usable]
     wavenumber = np.where(usable, 2.0 * np.pi / np.maximum(np.asarray(width, np.float64),
@@ -235,9 +228,9 @@ def curved_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: 
     return integrated_phases(rest, direction, wavenumber, offsets, target)
 
 
-def start_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: np.ndarray,
-                 neighbor_indices: np.ndarray, q: np.ndarray, width: np.ndarray,
-                 coarsening: np.ndarray | None = None) -> np.ndarray:
+def start_phases(rest: np.ndarray, rest_normals: np.ndarray, rest_tangents: np.ndarray,
+                 neighbor_offsets: np.ndarray, neighbor_indices: np.ndarray, q: np.ndarray,
+                 width: np.ndarray, coarsening: np.ndarray | None = None) -> np.ndarray:
     """The table crush starts waves from (n, 4): the paint's (painted_phases) where q is
     painted, else the curvature's (curved_phases) on the unpainted points."""
     painted = painted_phases(rest, rest_normals, neighbor_offsets, neighbor_indices, q, width,
@@ -248,5 +241,6 @@ def start_phases(rest: np.ndarray, rest_normals: np.ndarray, neighbor_offsets: n
                                axis=1) == 0.0
     if not unpainted.any():
         return painted
-    curved = curved_phases(rest, normals, neighbor_offsets, neighbor_indices, width, unpainted)
+    curved = curved_phases(rest, normals, rest_tangents, neighbor_offsets, neighbor_indices,
+                           width, unpainted)
     return np.where(np.any(painted[:, :3] != 0, axis=1, keepdims=True), painted, curved)

@@ -164,8 +164,8 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     deepen = np.where(usable & fitted, deepen, 0.0)
     phase = (2 * np.pi / wavelength) * np.sum(d3 * rest, 1)
     # where the wave runs along the paint, the paint's own start phase (method/anchor.py)
-    painted = start_phases(rest, N0, topology.neighbor_offsets, topology.neighbor_indices,
-                             q, width, coarsening).astype(np.float64)
+    painted = start_phases(rest, N0, T1, topology.neighbor_offsets,
+                           topology.neighbor_indices, q, width, coarsening).astype(np.float64)
     along_paint = np.sum(d3 / np.maximum(np.linalg.norm(d3, axis=1, keepdims=True), 1e-300)
                          * painted[:, :3], 1)
     phase = np.where(np.abs(along_paint) >= ANCHOR_ALIGNED,

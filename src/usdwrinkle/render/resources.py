@@ -68,9 +68,10 @@ def _coarsening(params, n: int) -> np.ndarray:
 def _anchor(record) -> np.ndarray:
     """The waves' start phases (method/anchor.py: the paint's, else the curvature's), (n, 4)."""
     topology = record.topology
-    return start_phases(record.rest_points, record.rest_normals, topology.neighbor_offsets,
-                          topology.neighbor_indices, record.params.q, record.params.width,
-                          record.params.coarsening)
+    return start_phases(record.rest_points, record.rest_normals,
+                        rest_tangents(record.rest_normals), topology.neighbor_offsets,
+                        topology.neighbor_indices, record.params.q, record.params.width,
+                        record.params.coarsening)
 
 
 def _anchor_key(record) -> int:
