@@ -417,8 +417,8 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
     // f(z) = z - h(p + z s): >= 0 at the bound, <= 0 at -bound, and it falls at most
     // lipschitz per unit of z, so a step of f / lipschitz cannot pass a crossing (none is
     // shorter than 2 bound / RELIEF_MAX_STEPS: a crossing within that of the ray is
-    // bracketed, not missed). The bracket's ends keep their cursors, so the refinement
-    // starts from the triangle it lies over
+    // bracketed, not missed). The upper end keeps its cursor, so each refinement step
+    // walks from the triangle it lies over
     float lipschitz = 1.0 + relief_slope() * length(s);
     float least = 2.0 * bound / RELIEF_MAX_STEPS;
     ReliefCursor above = at;
@@ -428,7 +428,6 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
     safe = z0;
     safe_at = above;
     bool tracking = tolerance >= 0.0 && f0 > tolerance;
-    ReliefCursor below = above;
     float z1 = -bound, f1 = -1.0;
     if (f0 > 0.0) {
         for (int i = 0; i < int(RELIEF_MAX_STEPS); ++i) {
@@ -436,7 +435,6 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
             ReliefCursor next = above;
             float f = z - relief_height(next, p + z * s, n, pixel, b);
             if (f <= 0.0) {
-                below = next;
                 z1 = z;
                 f1 = f;
                 break;
@@ -463,7 +461,6 @@ vec3 relief_step(vec3 p, vec3 n, Footprint pixel, float start, float tolerance,
                 z0 = z;
                 f0 = f;
             } else {
-                below = next;
                 z1 = z;
                 f1 = f;
             }
