@@ -19,7 +19,7 @@ from ..method.contract import COARSENING_MAX, JOINT_TEXELS, UDIM_REPEAT, UDIM_TI
 from ..process.errors import UsdWrinkleError
 from ..process.limits import MAX_POINTS
 from ..scene.records import MeshRecord
-from ..scene.topology import rest_tangents
+from ..scene.topology import rest_tangents, triangle_neighbors
 from .bindings import TABLE_WIDTH
 from .fields import WaveFields
 from .mipmaps import build_mipmaps
@@ -240,10 +240,7 @@ class MeshResources:
         self.set_normal_map(record.material.normal_map)
         self.profiles = [self._profile_texture(table) for table in
                          (record.params.height_profile, record.params.gradient_profile)]
-        self.profile_curvature = profile_curvature(record.params.gradient_profile)
-        #: max |H'| (the relief's bound of the folds' slope: draw.glsl, relief_slope)
-        self.profile_steepest = float(np.max(np.abs(record.params.gradient_profile),
-                                             initial=0.0))
+        self._profile_bounds(record.params.gradient_profile)
 
     def _create_shading_normals(self, record: MeshRecord) -> None:
         """The shading normals (scene/normals.py): a table of ``entries`` normals made per
@@ -294,10 +291,7 @@ class MeshResources:
             self.profiles[index] = self._profile_texture(table)
             self.textures.remove(old)
             old.release()
-        self.profile_curvature = profile_curvature(record.params.gradient_profile)
-        #: max |H'| (the relief's bound of the folds' slope: draw.glsl, relief_slope)
-        self.profile_steepest = float(np.max(np.abs(record.params.gradient_profile),
-                                             initial=0.0))
+        self._profile_bounds(record.params.gradient_profile)
 
     def _corner_table(self, table: Table | None, colors) -> Table | None:
         """A table of colours per triangle corner ((m, 3, 3), linear) with ``colors``
@@ -405,6 +399,12 @@ class MeshResources:
         self.tables.append(table)
         return table
 
+    def _profile_bounds(self, gradient_profile: np.ndarray) -> None:
+        """What the draw pass reads of the profile: max |H''| (turn_across_pixel) and max
+        |H'| (the relief's bound of the folds' slope: draw.glsl, relief_slope)."""
+        self.profile_curvature = profile_curvature(gradient_profile)
+        self.profile_steepest = float(np.max(np.abs(gradient_profile), initial=0.0))
+
     @property
     def triangle_neighbors(self) -> Table:
         """Per triangle, the triangle across the edge opposite each corner, -1 where none
@@ -412,8 +412,6 @@ class MeshResources:
         draw pass's relief (draw.glsl: RELIEF), which walks it."""
         table = self.owned.get("triangle_neighbors")
         if table is None:
-            from ..scene.topology import triangle_neighbors
-
             data = np.full((self.num_triangles, 4), -1, np.int32)
             data[:, :3] = triangle_neighbors(self.record.topology.triangles)
             table = self.owned["triangle_neighbors"] = self._table(self.num_triangles, 4,
