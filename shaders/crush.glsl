@@ -61,10 +61,11 @@ uniform float u_biaxial;            // wrinkle:biaxial, the second system's weig
 uniform float u_tension;            // wrinkle:tension, the tension wave's factor (0: off)
 uniform float u_tension_threshold;  // wrinkle:tensionThreshold, the onset strain
 uniform float u_slack;              // wrinkle:slack, compression taken in-plane
-// crest damping (wrinkle:crestDamping, docs/method.md): d turns towards the strain's by
-// u_damping_alpha = 1 - exp(-1 / tau) a frame where it turns by less than
-// u_damping_deadband radians, at once where by twice that; 1: off
-uniform float u_damping_alpha;
+// crest damping (wrinkle:crestDamping, docs/method.md): d turns towards the strain's
+// only by as much as the two lie more than u_damping_band radians apart (a play: it
+// holds while the strain turns within the band), at once where by twice
+// u_damping_deadband; 0: off
+uniform float u_damping_band;
 uniform float u_damping_deadband;
 uniform int u_has_history;          // damped_in holds the previous grid frame's directions
 // the mesh's profile's length-exact slope a|k| at u = sqrt(rho^2 - 1) = i * SLOPE_STEP
@@ -369,14 +370,23 @@ void main() {
     } else {
         d = sa <= sc ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
     }
-    // Crest damping (docs/method.md): the rest direction turns towards the strain's by
-    // the share u_damping_alpha a frame while it turns by less than u_damping_deadband
-    // radians a frame, at once when by twice that; r is then the compression along it
+    // Crest damping (docs/method.md): the rest direction turns towards the strain's only
+    // by as much as the two lie more than u_damping_band radians apart, so it holds while
+    // the strain trembles within the band, follows a steady turn with a lag of the band,
+    // and stops the frame the strain stops (an exponential lag, as before 2026-12-06,
+    // caught up over the frames after a pose stopped: the referee's held 25 cm sleeve's
+    // crests moved 3.9x the cloth's in its first held frame; docs/method.md); at once
+    // when they lie u_damping_deadband apart or more, fully from twice that; r is then
+    // the compression along it
     vec4 before = u_has_history != 0 ? fetch(damped_in, i) : vec4(0.0);
-    if (u_has_history != 0 && u_damping_alpha < 1.0 && before.z > 0.5) {
+    if (u_has_history != 0 && u_damping_band > 0.0 && before.z > 0.5) {
         vec2 d_before = dot(before.xy, d) < 0.0 ? -before.xy : before.xy;
         float turn = acos(clamp(dot(d_before, d), 0.0, 1.0));
-        float follow = mix(u_damping_alpha, 1.0,
+        // the share of the turn that rotates d_before by turn - band (slerp's weight)
+        float played = max(turn - u_damping_band, 0.0);
+        float share = played <= 0.0 ? 0.0
+                    : sin(played) / (sin(played) + sin(turn - played));
+        float follow = mix(share, 1.0,
                            smoothstep(u_damping_deadband, 2.0 * u_damping_deadband, turn));
         // ... where there are crests to damp: where the strain compresses the cloth no
         // further than the slack (no fold), d follows it at once, from none to fully

@@ -310,7 +310,7 @@ def report(results: dict, calibrated: dict, limited: dict, slacks: dict,
         f"tighter than {100 * curved_below(cotton):.3g} cm (the sleeve: "
         f"{100 * default_width(results['sleeve'][0]):.1f} cm); "
         f"`wrinkle:slack` {schema.DEFAULT_SLACK:g}; "
-        f"`wrinkle:crestDamping` {schema.DEFAULT_CREST_DAMPING:g} frames; held points "
+        f"`wrinkle:crestDamping` {schema.DEFAULT_CREST_DAMPING:g} degrees; held points "
         f"damp crossing waves over {schema.HELD_REACH:g} W.",
         "- **matched W**: `primvars:wrinkle:width` = the simulation's own material "
         "wavelength.",

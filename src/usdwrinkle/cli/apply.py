@@ -34,10 +34,10 @@ def add_parser(subparsers) -> None:
                    help="wrinkle:slack in [0, 0.9], the compression the cloth takes in-plane "
                         f"before it buckles (default {schema.DEFAULT_SLACK:g}; 0: the "
                         "paper's law)")
-    p.add_argument("--crest-damping", type=float, metavar="FRAMES",
-                   help="wrinkle:crestDamping, the time constant in frames with which the "
-                        "compression direction follows slight turns (default "
-                        f"{schema.DEFAULT_CREST_DAMPING:g}; 0: none)")
+    p.add_argument("--crest-damping", type=float, metavar="DEGREES",
+                   help="wrinkle:crestDamping in [0, 45], the band in degrees within which "
+                        "the compression direction holds while the strain turns, followed "
+                        f"beyond it (default {schema.DEFAULT_CREST_DAMPING:g}; 0: none)")
     p.add_argument("--irregularity", type=float, metavar="SPREAD",
                    help="wrinkle:irregularity in [0, 0.5]: how unequal the folds are (the "
                         "coefficient of variation of their width; their crests meander and "

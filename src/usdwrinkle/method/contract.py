@@ -96,11 +96,13 @@ FOLD_ROOM = 0.5
 #: a / FOLD_ROOM of it, so that it fades where the surface turns flat along the wave.
 #: Measured (docs/physics.md, "Deepening the pleats where the room is short"; cap: held
 #: 25 cm sleeve's crest motion over the cloth's, leather curtain's correlation and area,
-#: curtain sample's area): 0: 1.36x, 0.74, 0.728, 0.627; 0.6: 1.26x, 0.91, 0.998, 0.911;
-#: 0.65: 1.36x, 0.91, 1.010, 0.941; from 0.7 on: 1.54x (bar 1.5x), 0.91, 1.019, 0.967
-#: (0.990 at 0.75). So 0.6: every bar that held holds, at the cost of the curtain
-#: sample's area (bar 0.95).
-DEEPEN_CAP = 0.6
+#: curtain sample's area): 0: 1.01x, 0.74, 0.728, 0.627; 0.6: 0.99x, 0.91, 0.998, 0.911;
+#: 0.75: 0.99x, 0.91, 1.02, 0.990; 1: 0.99x, 1.026 (the curtain sample). So 0.75: the
+#: curtain sample keeps its area (bar 0.95) and no other bar moves. Until the crest
+#: damping became a play (2026-12-06) the held sleeve's crests moved 1.35-1.54x the
+#: cloth's from cap 0.7 on, in one frame's catch-up after the arm stopped, and the cap
+#: was 0.6.
+DEEPEN_CAP = 0.75
 ACROSS_MIN = 0.7
 ACROSS_MAX = 1.0 / ACROSS_MIN
 STRETCH_ONSET = 1.1
@@ -198,12 +200,13 @@ FIT_ONSET = 1.05
 #: since the previous grid frame of the phase difference its ring's material waves ask
 #: for along an edge, split into the part the wave number's change asks (the folds
 #: coarsening: delta) and the part the direction's turn asks (turn). Unchanged input
-#: keeps the phases. A direction that turns a little (crest damping's catch-up after a
-#: pose stops, a nearly isotropic strain's wander) moves them 30x less than a wave
-#: number that changes as much: the referee's held sleeves crept 4.4x and 1.5x the
-#: cloth's when both counted alike, 1.2x and 0.6x now (docs/method.md, "Mobility"); since
-#: curved cloth holds its wavelength (CURVED_COARSENING), 1.09x and 1.06x (at 30: 1.08x
-#: and 1.13x, the shirt's misfit 0.529 against 0.510).
+#: keeps the phases. A direction that turns a little (a nearly isotropic strain's
+#: wander; crest damping's catch-up after a pose stopped, before it became a play) moves
+#: them 30x less than a wave number that changes as much: the referee's held sleeves
+#: crept 4.4x and 1.5x the cloth's when both counted alike, 1.2x and 0.6x now
+#: (docs/method.md, "Mobility"); since curved cloth holds its wavelength
+#: (CURVED_COARSENING), 1.09x and 1.06x (at 30: 1.08x and 1.13x, the shirt's misfit 0.529
+#: against 0.510).
 MOBILITY_PHASE = 0.1
 MOBILITY_TURN = 3.0
 #: ... less a dead band: m = min(max(x - MOBILITY_DEADBAND, 0) / (1 - MOBILITY_DEADBAND),

@@ -80,8 +80,8 @@ class WrinkleParams:
         params.held_weights): damping strength, and the unit rest vector from the holder;
         None: nothing held.
     width_note : str, where the width came from (check and the bake summary print it).
-    crest_damping : float, the time constant in frames with which small changes of the
-        strain are followed (wrinkle:crestDamping; 0: none).
+    crest_damping : float, the band in degrees within which the compression direction
+        holds, followed beyond it (wrinkle:crestDamping; 0: none).
     coarsening : (n,) float32 or None, the most the mesh's compression coarsens each
         point's folds (folds.coarsening_cap of W and the rest curvature: COARSENING_MAX on
         flat cloth, 1 where the rest surface curves one way at about its tube's wavelength;

@@ -115,9 +115,11 @@ CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
 #: Newton referee's cloth keeps its area (docs/physics.md), and with the inextensible
 #: law a slack c leaves the wrinkled surface 1 - c of its rest area
 DEFAULT_SLACK = 0.05
-#: wrinkle:crestDamping fallback: the time constant (frames) with which slight changes of
-#: the strain are followed where the cloth folds (docs/method.md: crest damping)
-DEFAULT_CREST_DAMPING = 4.0
+#: wrinkle:crestDamping fallback: the band (degrees) within which the compression
+#: direction holds where the cloth folds, followed beyond it (docs/method.md: crest
+#: damping). 0.5-3 degrees hold the converged referee's held sleeves' crests alike
+#: (docs/physics.md); within 1 degree a trembling input's turn comes through
+DEFAULT_CREST_DAMPING = 1.5
 #: wrinkle:irregularity fallback: the paper's regular waves (method/contract.py,
 #: IRREGULARITY_*; docs/method.md, "Irregular folds")
 DEFAULT_IRREGULARITY = 0.0

@@ -209,8 +209,8 @@ def check_slack(value, path: str) -> list[Finding]:
 
 
 def check_crest_damping(value, path: str) -> list[Finding]:
-    """wrinkle:crestDamping: a time constant in frames, in [0, 1000]."""
-    return _in_range(value, schema.CREST_DAMPING, "crest damping", 0.0, 1000.0, path)
+    """wrinkle:crestDamping: a band in degrees, in [0, 45]."""
+    return _in_range(value, schema.CREST_DAMPING, "crest damping", 0.0, 45.0, path)
 
 
 def check_irregularity(value, path: str) -> list[Finding]:

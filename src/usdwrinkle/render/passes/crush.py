@@ -8,18 +8,18 @@ from __future__ import annotations
 from ..resources import MeshResources
 from .base import Step, WavePass, wave_pass
 
-#: crest damping: a turn of the compression direction by less than this a frame (radians,
-#: 5 degrees) is followed with the time constant wrinkle:crestDamping; by twice this and
-#: more, at once
+#: crest damping: a compression direction that lies less than this from the damped one
+#: (radians, 5 degrees) is followed beyond the band wrinkle:crestDamping; from twice this
+#: on, at once
 DAMPING_DEADBAND = 0.0873
 
 
-def damping_alpha(tau: float) -> float:
-    """The share of the change that the damped strain follows a frame: 1 - exp(-1/tau)
-    for a time constant of ``tau`` frames (0: no damping, 1)."""
+def damping_band(degrees: float) -> float:
+    """wrinkle:crestDamping's band in radians: the damped direction turns towards the
+    strain's only by as much as the two lie further apart (0: no damping)."""
     import math
 
-    return 1.0 if tau <= 0 else 1.0 - math.exp(-1.0 / tau)
+    return math.radians(max(float(degrees), 0.0))
 
 
 @wave_pass
@@ -64,7 +64,7 @@ class CrushPass(WavePass):
                     "u_tension": float(params.tension),
                     "u_tension_threshold": float(params.tension_threshold),
                     "u_slack": float(params.slack),
-                    "u_damping_alpha": damping_alpha(params.crest_damping),
+                    "u_damping_band": damping_band(params.crest_damping),
                     "u_damping_deadband": DAMPING_DEADBAND,
                     "u_has_history": int(step.history),
                     "u_slope": params.slope_table(),
