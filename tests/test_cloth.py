@@ -506,6 +506,25 @@ def test_crest_damping_holds_within_its_band_and_stops_with_the_strain(gl_contex
     np.testing.assert_allclose(undamped, [0.0, 1.0, 2.0, 3.0, 4.0], atol=0.05)
 
 
+def test_crest_damping_holds_a_trembling_strain_still(gl_context, tmp_path):
+    """What the damping is for: a coarse mesh that trembles turns its strain's direction by
+    about a degree a frame (docs/method.md, "Crest damping"). A strain that trembles within
+    +-1 degree of 10 degrees (random, seeded) leaves the damped direction where its first
+    frame put it, as the recurrence by hand says; one that trembles by +-3 degrees moves it
+    only where the strain leaves the band, and by less than the strain moves."""
+    rng = np.random.default_rng(7)
+    band = 1.5
+    still = [10.0 + float(x) for x in rng.uniform(-1.0, 1.0, 10)]
+    angles = direction_angles(tmp_path, still, band)
+    np.testing.assert_allclose(angles, damped_angles(band, still), atol=0.05)
+    np.testing.assert_allclose(angles, angles[0], atol=0.02)
+    assert np.std(np.diff(still)) > 0.5
+    wide = [10.0 + float(x) for x in rng.uniform(-3.0, 3.0, 10)]
+    angles = direction_angles(tmp_path, wide, band)
+    np.testing.assert_allclose(angles, damped_angles(band, wide), atol=0.05)
+    assert np.abs(np.diff(angles)).sum() < 0.5 * np.abs(np.diff(wide)).sum()  # 0.29 here
+
+
 def test_crest_damping_holds_only_where_the_cloth_folds(gl_context, tmp_path):
     """Where the strain compresses the cloth no further than the slack (0.05), there is no
     fold to damp: a direction turning by 1 degree a frame is followed at once. Over the
