@@ -86,3 +86,29 @@ def test_the_simulated_sleeve_rides_on_the_shirt_s_joints(frame):
         radius = np.linalg.norm(elbow.from_sim(keyed[ring]) - ours, axis=1)
         coarse = np.linalg.norm(posed[np.abs(rest[:, 0] - end) < 1e-6] - theirs, axis=1)
         assert np.median(radius) == pytest.approx(np.median(coarse), rel=0.01)
+
+
+def test_the_converged_table_keeps_the_rows_of_shots_not_simulated_here(tmp_path):
+    """referee --keep-uncached: a shot whose simulation is not in the cache keeps its row
+    and its phase-by-phase line from the block being replaced, marked as kept (once, however
+    often the block is made again), instead of being simulated for hours; a shot with no
+    row to keep is refused."""
+    from benchmarks.blocks import markers
+    from benchmarks.physics import referee
+
+    begin, end = markers(referee.TABLES["converged"])
+    row = "| curtain-silk | 2.5e-06 | 1 cm | 5.0 cm | 7.2, 7.6 cm | 1.15x | 1.30x | 0.95 | - |"
+    phases = "- curtain-silk: push to 8% 1.15, 0.75; held at 48% 0.90, 1.23"
+    doc = f"text\n{begin}\n\n| shot | D |\n|---|---|\n{row}\n\n{phases}\n\n{end}\nmore\n"
+    assert referee.kept_rows(doc, "converged", "curtain-silk") == (row, phases)
+    assert referee.kept_rows(doc, "converged", "curtain-cotton") is None
+    empty = tmp_path / "cache"
+    text = referee.sweep_report(["curtain-silk"], empty, "converged", keep=doc)
+    assert text.startswith(begin) and text.endswith(end)
+    kept = row.replace("| curtain-silk |", "| curtain-silk *kept* |")
+    assert kept in text.splitlines() and phases in text.splitlines()
+    assert "--keep-uncached" in text and "kept from the table before" in text
+    again = referee.sweep_report(["curtain-silk"], empty, "converged", keep=text)
+    assert kept in again.splitlines() and "*kept* *kept*" not in again
+    with pytest.raises(SystemExit, match="curtain-cotton is not simulated"):
+        referee.sweep_report(["curtain-cotton"], empty, "converged", keep=doc)

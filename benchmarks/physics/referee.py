@@ -4,13 +4,15 @@ its solver's iterations, and usdwrinkle against it over the whole sweep.
 
     python -m benchmarks.physics.referee [--tables all|convergence|sweep|converged]
                                           [--write docs/physics.md] [--cache .physics-cache]
-                                          [--only NAME ...]
+                                          [--only NAME ...] [--keep-uncached]
 
 Three blocks: ``referee`` (the simulator's convergence; usdwrinkle does not enter it),
 ``referee-sweep`` (usdwrinkle against the sweep at 1 cm and 10 iterations) and
 ``referee-converged`` (against it at CONVERGED, 2 cm and 160 iterations, which the widths
 are fitted to): regenerate the last two whenever the law, the blend or the relaxation
-changes (``--tables sweep``, ``--tables converged``).
+changes (``--tables sweep``, ``--tables converged``). With ``--keep-uncached`` a shot
+whose simulation is not in the cache keeps its row of the block being replaced, marked
+*kept*, instead of being simulated (the 1 cm curtains take 3-4 hours each here).
 
 Needs a Python with ``newton`` (simulate.newton_python: .venv-newton); the simulations are
 cached in --cache by their arrays. Measured as the Blender oracle is (measure.py): the
@@ -427,15 +429,50 @@ def convergence_report(cache: Path) -> str:
     return "\n".join(lines)
 
 
-def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
+def kept_rows(doc: str, tables: str, name: str) -> tuple[str, str] | None:
+    """The table row and the phase-by-phase line of shot ``name`` in the ``tables`` block
+    of ``doc`` (docs/physics.md's text), or None where it has none."""
+    from ..blocks import markers
+
+    begin, end = markers(TABLES[tables])
+    if begin not in doc or end not in doc:
+        return None
+    block = doc[doc.index(begin):doc.index(end)]
+    row = [line for line in block.splitlines()
+           if line.startswith((f"| {name} |", f"| {name} *kept* |"))]
+    phases = [line for line in block.splitlines() if line.startswith(f"- {name}:")]
+    return (row[0], phases[0]) if row and phases else None
+
+
+def sweep_report(names: list[str], cache: Path, tables: str = "sweep",
+                 keep: str | None = None) -> str:
     """usdwrinkle against the referee over the sweep, for docs/physics.md (simulates the
     shots that are not cached): ``tables`` "sweep" at SPACING and the solver's default
-    iterations, "converged" at CONVERGED."""
+    iterations, "converged" at CONVERGED. ``keep``: the text of the file the block is
+    written to; a shot whose simulation is not cached keeps its row from that file's
+    block (marked as kept), instead of being simulated."""
     from ..blocks import markers
+    from .simulate import cached_newton
 
     spacing, iterations = (SPACING, None) if tables == "sweep" else CONVERGED
     begin, end = markers(TABLES[tables])
-    lines = [begin, "", _made_by(tables), ""]
+    kept = {}
+    if keep is not None:
+        for name in names:
+            grid = referee_grid(name, tables == "converged")
+            if not cached_newton(SWEEP[name](grid), cache, solver_options(iterations)):
+                old = kept_rows(keep, tables, name)
+                if old is None:
+                    raise SystemExit(f"{name} is not simulated in {cache} and the block has "
+                                     "no row of it to keep")
+                kept[name] = old
+    made_by = _made_by(tables)
+    if kept:
+        made_by = made_by.replace(f"--tables {tables} ", f"--tables {tables} --keep-uncached ")
+        made_by += (" Not simulated in the checkout that made it, so kept from the table "
+                    "before (measured with the code of that time, marked *kept*): "
+                    + ", ".join(kept) + ".")
+    lines = [begin, "", made_by, ""]
     title = ("usdwrinkle against the referee, over the sweep" if tables == "sweep" else
              f"usdwrinkle against the converged referee ({iterations} iterations; "
              f"{100 * spacing:g} cm, 1 cm where a 1 cm run differs)")
@@ -456,8 +493,15 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
               "| shot | D (N m) | grid | window | W default, matched | wavelength (default W) | "
               "height (matched) | correlation | crest motion | area: ours, sim |",
               "|---|---|---|---|---|---|---|---|---|---|"]
-    rows = {}
+    rows, phase_lines = {}, {}
     for name in names:
+        if name in kept:
+            row_line, phase_line = kept[name]
+            marked = row_line if "*kept*" in row_line else \
+                row_line.replace(f"| {name} |", f"| {name} *kept* |", 1)
+            lines.append(marked)
+            phase_lines[name] = phase_line
+            continue
         grid = referee_grid(name, tables == "converged")
         # usdwrinkle's bake has the grid it is measured on as its fine mesh, whose
         # displacement fades under 2-3 edges a wavelength (4-6 cm on the 2 cm grid): it is
@@ -477,10 +521,10 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep") -> str:
                      f"{100 * row['width']:.1f} cm | {worst_w:.2f}x | {worst_h:.2f}x | "
                      f"{row['correlation']:.2f} | {motion} | {row['area']:.3f}, "
                      f"{row['sim_area']:.3f} |")
+        phase_lines[name] = f"- {name}: " + "; ".join(
+            f"{phase} {w:.2f}, {h:.2f}" for phase, (w, h) in row["default"].items())
     lines += ["", "Phase by phase (ours / sim at the default W: wavelength, height):", ""]
-    for name, row in rows.items():
-        lines.append(f"- {name}: " + "; ".join(
-            f"{phase} {w:.2f}, {h:.2f}" for phase, (w, h) in row["default"].items()))
+    lines += [phase_lines[name] for name in names]
     lines += ["", end]
     return "\n".join(lines)
 
@@ -533,7 +577,13 @@ def main(argv=None) -> int:
                              "at 2 cm on one core, 25-80 at 1 cm); all: the three")
     parser.add_argument("--write", type=Path, default=None,
                         help="replace the chosen blocks of this file (docs/physics.md)")
+    parser.add_argument("--keep-uncached", action="store_true",
+                        help="with --write: a shot whose simulation is not in the cache keeps "
+                             "its row from the file's block, marked as kept, instead of being "
+                             "simulated (hours at 1 cm)")
     args = parser.parse_args(argv)
+    if args.keep_uncached and args.write is None:
+        parser.error("--keep-uncached needs --write (the rows it keeps are the file's)")
     started = time.perf_counter()
     from ..blocks import emit
 
@@ -542,8 +592,9 @@ def main(argv=None) -> int:
             continue
         names = args.only or [name for name in SWEEP
                               if tables == "converged" or name not in CONVERGED_ONLY]
+        keep = args.write.read_text() if args.keep_uncached else None
         text = convergence_report(args.cache) if tables == "convergence" else \
-            sweep_report(names, args.cache, tables)
+            sweep_report(names, args.cache, tables, keep)
         emit(args.write, block, text)
     print(f"{time.perf_counter() - started:.0f} s")
     return 0
