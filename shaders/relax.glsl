@@ -52,8 +52,8 @@
 // not change leaves the phases where they are: cloth whose pose stops keeps its folds,
 // where the relaxation went on creeping towards its far-off fixed point (the referee's
 // held sleeve: crests moving 8.6x the cloth's), and a direction that only turns a little
-// (a nearly isotropic strain's wander) hardly moves them. A
-// new wave, and a cold start, relax fully.
+// (a nearly isotropic strain's wander) hardly moves them. A new wave, and a cold start,
+// relax fully.
 #include "include/common.glsl"
 #include "include/topology.glsl"
 
