@@ -65,11 +65,14 @@ def _coarsening(params, n: int) -> np.ndarray:
     return np.asarray(params.coarsening, np.float32).reshape(n, 1)
 
 
-def _anchor(record) -> np.ndarray:
-    """The waves' start phases (method/anchor.py: the paint's, else the curvature's), (n, 4)."""
+def _anchor(record, tangents: np.ndarray | None = None) -> np.ndarray:
+    """The waves' start phases (method/anchor.py: the paint's, else the curvature's), (n, 4).
+    ``tangents``: the record's rest tangents where the caller has them already."""
     topology = record.topology
-    return start_phases(record.rest_points, record.rest_normals,
-                        rest_tangents(record.rest_normals), topology.neighbor_offsets,
+    if tangents is None:
+        tangents = rest_tangents(record.rest_normals)
+    return start_phases(record.rest_points, record.rest_normals, tangents,
+                        topology.neighbor_offsets,
                         topology.neighbor_indices, record.params.q, record.params.width,
                         record.params.coarsening)
 
@@ -183,7 +186,8 @@ class MeshResources:
         frame = np.empty((n, 2, 4), np.float32)
         frame[:, 0, :3] = record.rest_normals
         frame[:, 0, 3] = 0.0
-        frame[:, 1, :3] = rest_tangents(record.rest_normals)
+        tangents = rest_tangents(record.rest_normals)
+        frame[:, 1, :3] = tangents
         frame[:, 1, 3] = 0.0
         # [2i] = rest normal, [2i + 1] = rest tangent
         self.rest_frame = self._table(2 * n, 4, data=frame)
@@ -191,7 +195,7 @@ class MeshResources:
         self.hold = self._table(n, 4, data=_hold(record.params, n))
         self.coarsening = self._table(n, 1, data=_coarsening(record.params, n))
         #: the waves' start phases (method/anchor.py: painted loops, gathered tubes)
-        self.anchor = self._table(n, 4, data=_anchor(record))
+        self.anchor = self._table(n, 4, data=_anchor(record, tangents))
         self._anchor_key = _anchor_key(record)
         #: the wave fields' ping-pong, phases and relax tables (render/fields.py)
         self.waves = WaveFields(n, self.num_edges, self._table, self._drop)
