@@ -211,6 +211,14 @@ class BakeViews:
         i = self.images
         return contribution(i["ours"], i["ours_plain"], i["storm_maps"], i["storm_points"])
 
+    def horizon_turned(self) -> np.ndarray:
+        """horizon_turned() of usdwrinkle's shading normals (its ours_aovs.exr, which
+        bake_views(display_color=True) renders) through the shot's camera."""
+        normals, covered = our_normals(self.images["ours_aovs"])
+        p = self.prepared
+        return horizon_turned(normals, covered,
+                              view_directions(p.stage, p.camera, p.shot.frame, normals.shape))
+
 
 def map_set_flags(tangent_space: str | None, layout: str | None = None) -> tuple:
     """bake's flags for one map set in ``tangent_space`` and ``layout``; with neither, none
@@ -357,7 +365,10 @@ def normal_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         ours = {axis: p.render(lit_by(p.stage, axis, p.base(f"lit{tag}.usda")),
                                p.base(f"ours_{tag}.exr"), *shading)
                 for axis, tag in tags.items()}
-        memo[ours_key] = decoded_normals(ours)
+        # where the draw turned a normal to its horizon, which the maps cannot, left out
+        normals = decoded_normals(ours)
+        memo[ours_key] = without_turned(normals, view_directions(
+            p.stage, p.camera, shot.frame, normals[0].shape))
     if storm_key not in memo:
         maps = p.bake(p.base("maps.usda"), "--maps", "normal", "--map-size", map_size,
                       *map_set_flags(tangent_space, layout), "--map-format", map_format)
@@ -456,6 +467,29 @@ def cycles_back_face(n: np.ndarray, facing: np.ndarray) -> np.ndarray:
     return _unit(2.0 * z * facing - n)
 
 
+def horizon_turned(normals: np.ndarray, covered: np.ndarray,
+                   towards_eye: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the covered pixels where usdwrinkle's draw turned a bent normal back
+    to its horizon (contract.HORIZON_COSINE: a seen point faces the eye), grown by a pixel
+    for the antialiasing. A normal map is the same for every view and cannot: there Storm
+    shades the normal that faces away, and Cycles decodes it (then clamps its reflection:
+    cycles_reflection_clamp)."""
+    from usdwrinkle.method.contract import HORIZON_COSINE
+
+    turned = covered & (np.sum(normals * towards_eye, axis=-1) < HORIZON_COSINE + 0.02)
+    grown = turned.copy()
+    for axis in (0, 1):
+        for step in (1, -1):
+            grown |= np.roll(turned, step, axis)
+    return grown
+
+
+def without_turned(normals: tuple, towards_eye: np.ndarray) -> tuple:
+    """(normals, mask) from our_normals with the pixels horizon_turned() left out."""
+    n, mask = normals
+    return n, mask & ~horizon_turned(n, mask, towards_eye)
+
+
 def view_directions(stage_path: Path, camera: str, frame: float, shape) -> np.ndarray:
     """(h, w, 3) unit world-space directions from each pixel's surface toward the camera
     (row 0 at the top), through ``camera`` of ``stage_path`` at ``frame``."""
@@ -533,13 +567,15 @@ def cycles_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         raise RuntimeError(f"Cycles could not render {shot.name}: {failed}")
     views = {k: (our_normals(ours[k]), blender_normals(p.base(f"cycles_{k}.exr"), up_axis))
              for k in layers}
+    towards_eye = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
     decoded = blender_normals(p.base("cycles_maps.exr"), up_axis, "Decoded")
-    views["decoded"] = (views["maps"][0], decoded)
-    views["decoded_per_pixel"] = (our_normals(p.render(p.stage, p.base("ours_per_pixel.exr"),
-                                                       "--no-shade-samples")), decoded)
+    # the decoded map against our normals where the draw did not turn them to the horizon
+    views["decoded"] = (without_turned(views["maps"][0], towards_eye), decoded)
+    views["decoded_per_pixel"] = (without_turned(our_normals(p.render(
+        p.stage, p.base("ours_per_pixel.exr"), "--no-shade-samples")), towards_eye), decoded)
     views["plain"] = plain
     views["backfacing"] = {k: blender_backfacing(p.base(f"cycles_{k}.exr")) for k in layers}
-    views["view"] = view_directions(p.stage, p.camera, shot.frame, plain[0].shape)
+    views["view"] = towards_eye
     return views
 
 

@@ -285,6 +285,15 @@ Bent bend(int t, CornerWaves cw, vec3 n, vec3 bary, vec3 local, Footprint pixel,
         wave = blend_corner_waves(cw, bary, local, n, false, pixel);
     }
     vec3 shading_local = safe_normalize(n - wave.gradient, n);
+    // the horizon: a seen point faces the eye, so a normal the folds bent away from it is
+    // turned back until its cosine with v is HORIZON_COSINE (contract.py), or the coarse
+    // normal's where that is less; a normal the folds did not bend is left as it is
+    if (u_wrinkles != 0 && wave.amplitude > 0.0) {
+        vec3 v = safe_normalize(u_eye_local - local, n);
+        float least = min(HORIZON_COSINE, dot(v, n));
+        float vn = dot(v, shading_local);
+        if (vn < least) shading_local = safe_normalize(shading_local + (least - vn) * v, n);
+    }
 #if defined NORMAL_MAP
     if (mapped) {
         // the map's frame about the (wrinkled) shading normal: maps and wrinkles compose

@@ -248,8 +248,18 @@ def bake_views(realclient, tmp_path_factory):
 @pytest.mark.parametrize("name", ["shirt", "pull", "CesiumMan"])
 def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
     """Issue 23: usdview's Storm shows the maps layer's wrinkles as usdwrinkle draws them,
-    everywhere they show (was 0.58 at the shirt's elbow and 0.82 for CesiumMan)."""
-    contribution = bake_views[name].maps()
+    everywhere they show (was 0.58 at the shirt's elbow and 0.82 for CesiumMan), but
+    where usdwrinkle's draw turns a bent normal back to its horizon (a seen point faces
+    the eye; contract.HORIZON_COSINE), which a normal map, the same in every view,
+    cannot: those pixels (measured 2026-12-06, grown by a pixel: shirt 2.9%, pull 1.9%,
+    CesiumMan 2.7% of the compared ones) are left out, and are few. With them the
+    correlations were 0.995, 0.994 and 0.934, the least tiles 0.966, 0.982 and 0.921
+    (CesiumMan's hips and thigh); without them 0.996, 0.998 and 0.991, tiles from 0.967."""
+    views = bake_views[name]
+    contribution = views.maps()
+    turned = views.horizon_turned() & contribution.mask
+    assert turned.sum() <= 0.05 * contribution.mask.sum(), turned.mean()
+    contribution.mask &= ~turned
     tiles = contribution.tiles()
     assert len(tiles) >= 8, tiles  # the wrinkles show over most of the mesh
     low = {k: v for k, v in tiles.items() if v[0] < MIN_MAPS_CORRELATION}

@@ -18,6 +18,11 @@ Its shading normal is n' too, expressed in the renderer's own tangent frame
 (``tangent``, ``bitangent``, ``normal``, world space), which UsdPreviewSurface's
 ``normalmap`` turns back into n': no tangent frame has to agree with the bake's.
 
+Where n' faces away from the eye (or nearly), the network turns it back to the horizon as
+the draw pass does (contract.HORIZON_COSINE; docs/method.md, "The horizon"), and uses the
+turned normal for the offset and the shading, which the normal map, the same for every
+view, cannot.
+
 Storm (usdview) takes ``outputs:mtlx:surface`` over the universal ``outputs:surface``;
 a renderer without MaterialX keeps the UsdPreviewSurface, unchanged. Node ids are
 MaterialX's standard library's (MaterialX 1.38+), as UsdShade ``info:id``.
@@ -28,6 +33,7 @@ import os
 
 from pxr import Sdf
 
+from ..method.contract import HORIZON_COSINE
 from ..outputs.layers import attribute_spec, define_prim
 from ..usd.schema import MAP_INPUTS, PREVIEW_SURFACE_TYPES
 from .files import relative_asset
@@ -111,10 +117,35 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
                        ("parallaxT", "SlopeT")):
         file_input = material.AppendProperty(f"inputs:{MAP_INPUTS[kind]}")
         read[kind] = _image(graph, name, "vector3", file_input, maps_st, (wrap, wrap))
-    bent = read["parallaxN"]
+    read_bent = read["parallaxN"]
     # x' = v/(v.n') - n' with v toward the eye; MaterialX's view direction d points away
     # from it (d/|d.n'| + n' = -x' where the surface faces the eye)
     view = graph.node("View", "ND_viewdirection_vector3", space=("string", "world"))
+    # the renderer's own frame, world space (its normal is the coarse surface's)
+    frame = [graph.node(axis, f"ND_{axis.lower()}_vector3", space=("string", "world"))
+             for axis in ("Tangent", "Bitangent", "Normal")]
+    coarse = graph.node("NormalUnit", "ND_normalize_vector3", **{"in": ("vector3", frame[2])})
+    coarse_side = graph.node("CoarseSide", "ND_dotproduct_vector3", "float",
+                             in1=("vector3", view), in2=("vector3", coarse))
+    # the horizon (draw.glsl's bend, contract.HORIZON_COSINE): n' turned back towards the
+    # eye, n' - (c' + d.n') d normalised, where its cosine with the eye's direction is
+    # under c' = min(HORIZON_COSINE, the coarse normal's)
+    coarse_facing = graph.node("CoarseFacing", "ND_multiply_float", "float",
+                               in1=("float", coarse_side), in2=("float", -1.0))
+    least = graph.node("HorizonLeast", "ND_min_float", "float",
+                       in1=("float", HORIZON_COSINE), in2=("float", coarse_facing))
+    bent_side = graph.node("BentSide", "ND_dotproduct_vector3", "float",
+                           in1=("vector3", view), in2=("vector3", read_bent))
+    deficit = graph.node("HorizonDeficit", "ND_add_float", "float", in1=("float", least),
+                         in2=("float", bent_side))
+    push = graph.node("HorizonPush", "ND_multiply_vector3FA", in1=("vector3", view),
+                      in2=("float", deficit))
+    turned = graph.node("HorizonTurned", "ND_subtract_vector3", in1=("vector3", read_bent),
+                        in2=("vector3", push))
+    turned = graph.node("HorizonUnit", "ND_normalize_vector3", **{"in": ("vector3", turned)})
+    bent = graph.node("Horizon", "ND_ifgreatereq_vector3", value1=("float", 0.0),
+                      value2=("float", deficit), in1=("vector3", read_bent),
+                      in2=("vector3", turned))
     facing = graph.node("ViewFacing", "ND_dotproduct_vector3", "float",
                         in1=("vector3", view), in2=("vector3", bent))
     facing = graph.node("ViewFacingAbs", "ND_absval_float", "float",
@@ -131,10 +162,10 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
     offset = graph.node("Offset", "ND_combine2_vector2", "vector2", in1=("float", ds),
                         in2=("float", dt))
     # the bent normal in the renderer's tangent frame, which normalmap decodes back. Seen
-    # from behind (a sleeve's inside) the renderer's own normal: Storm shades the bent
-    # one there unlit (measured: black, where its own is lit)
-    frame = [graph.node(axis, f"ND_{axis.lower()}_vector3", space=("string", "world"))
-             for axis in ("Tangent", "Bitangent", "Normal")]
+    # from behind (a sleeve's inside: the renderer's normal faces away from the eye, or,
+    # where the renderer turns it to the eye on a back face, away from the bent one) the
+    # renderer's own normal: Storm shades the bent one there unlit (measured: black, where
+    # its own is lit)
     # c with T c.x + B c.y + N c.z = n' (the frame need not be orthonormal: Storm's
     # bitangent measured a constant (0, 1, 0))
     basis = graph.node("Frame", "ND_creatematrix_vector3_matrix33", "matrix33",
@@ -143,10 +174,13 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
                          **{"in": ("matrix33", basis)})
     bent_tangent = graph.node("NormalTangent", "ND_transformmatrix_vector3",
                               **{"in": ("vector3", bent), "mat": ("matrix33", inverse)})
-    side = graph.node("Side", "ND_dotproduct_vector3", "float", in1=("vector3", view),
-                      in2=("vector3", bent))
-    normal = graph.node("NormalFront", "ND_ifgreatereq_vector3", value1=("float", 0.0),
-                        value2=("float", side), in1=("vector3", bent_tangent),
+    front = graph.node("CoarseFront", "ND_ifgreatereq_vector3", value1=("float", 0.0),
+                       value2=("float", coarse_side), in1=("vector3", bent_tangent),
+                       in2=("vector3", (0.0, 0.0, 1.0)))
+    agree = graph.node("BentAgrees", "ND_dotproduct_vector3", "float",
+                       in1=("vector3", coarse), in2=("vector3", read_bent))
+    normal = graph.node("NormalFront", "ND_ifgreatereq_vector3", value1=("float", agree),
+                        value2=("float", 0.0), in1=("vector3", front),
                         in2=("vector3", (0.0, 0.0, 1.0)))
     surface_inputs = {"normal": ("vector3", normal)}
     deformed = {}
