@@ -75,7 +75,11 @@ def bake_figure(folder: Path, width: int, scratch: Path) -> None:
                   images["storm_display"], *(job["out"] for job in jobs)]
         target = folder / f"{shot.name}.png"
         side_by_side(panels, target)
-        worst = min(c for c, _ in views.maps().tiles().values())
+        # as the real-client test compares them: without the pixels the draw turned to the
+        # horizon, which a normal map cannot
+        maps = views.maps()
+        maps.mask &= ~views.horizon_turned()
+        worst = min(c for c, _ in maps.tiles().values())
         geometry = compare(images["ours_geometry"], images["storm_geometry"]).correlation
         print(f"| {shot.name} | ![{shot.name}]({target}) | {worst:.3f} | "
               f"{np.round(geometry, 3):.3f} |")
