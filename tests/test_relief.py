@@ -160,21 +160,26 @@ def test_no_bent_normal_faces_away_from_the_eye(slanted, tmp_path):
     assert np.mean(cosine["plain"] < HORIZON_COSINE + 0.02) > 0.3  # the case is exercised
 
 
+def beside_displaced(stage: Path, tmp_path: Path, width: int, *draws) -> dict:
+    """A sample stage's frame 24 rendered for each (name, render options) in ``draws``,
+    and "displaced": its displaced geometry (bake --geometry) through the same camera."""
+    geometry = str(tmp_path / "geometry.usdc")
+    assert main(["bake", str(stage), geometry, "--quiet", "--geometry", "--frames", "24"]) == 0
+    frames = {}
+    for name, args in (*draws, ("displaced", ("--no-wrinkles", "--sublayer", geometry))):
+        out = tmp_path / f"{name}.exr"
+        assert main(["render", str(stage), str(out), "--frames", "24", "--width", str(width),
+                     "--quiet", *args]) == 0
+        frames[name] = read_exr(out)
+    return frames
+
+
 def test_the_pillows_plain_draw_nearer_its_displaced_geometry(gl_context, tmp_path):
     """The squeezed pillow's front at frame 24, drawn on the coarse surface: with the
     horizon its look is nearer the displaced geometry's (luminance correlation over the
     pixels both cover; measured 2026-12-06 at 360 px: 0.641, against 0.554 before; 8% of
     its pixels had normals facing away from the eye)."""
-    pillow = str(SAMPLES / "pillow.usda")
-    assert main(["bake", pillow, str(tmp_path / "geometry.usdc"), "--quiet", "--geometry",
-                 "--frames", "24"]) == 0
-    frames = {}
-    for name, args in (("plain", ()), ("displaced", ("--no-wrinkles", "--sublayer",
-                                                     str(tmp_path / "geometry.usdc")))):
-        out = tmp_path / f"{name}.exr"
-        assert main(["render", pillow, str(out), "--frames", "24", "--width", "360",
-                     "--quiet", *args]) == 0
-        frames[name] = read_exr(out)
+    frames = beside_displaced(SAMPLES / "pillow.usda", tmp_path, 360, ("plain", ()))
     mask = covered(*frames.values())
     assert mask.sum() > 15000
     plain = np.corrcoef(luminance(frames["plain"])[mask],
@@ -206,17 +211,8 @@ def test_the_shirts_relief_looks_like_its_displaced_geometry(gl_context, tmp_pat
     geometry's look than without it (luminance correlation over the pixels all three
     cover; measured 2026-12-06 at 540 px: 0.895 with it, 0.845 without; 0.904 and
     0.851 at 1080 px)."""
-    shirt = str(SAMPLES / "shirt.usda")
-    assert main(["bake", shirt, str(tmp_path / "geometry.usdc"), "--quiet", "--geometry",
-                 "--frames", "24"]) == 0
-    frames = {}
-    for name, args in (("plain", ()), ("relief", ("--relief",)),
-                       ("displaced", ("--no-wrinkles", "--sublayer",
-                                      str(tmp_path / "geometry.usdc")))):
-        out = tmp_path / f"{name}.exr"
-        assert main(["render", shirt, str(out), "--frames", "24", "--width", "540",
-                     "--quiet", *args]) == 0
-        frames[name] = read_exr(out)
+    frames = beside_displaced(SAMPLES / "shirt.usda", tmp_path, 540, ("plain", ()),
+                              ("relief", ("--relief",)))
     mask = covered(*frames.values())
     look = luminance(frames["displaced"])[mask]
     relief = np.corrcoef(luminance(frames["relief"])[mask], look)[0, 1]
