@@ -269,13 +269,15 @@ vec3 coarse_normal(vec3 interpolated) {
     return n;
 }
 
-// What the wrinkles do at one point of the pixel: the wave's height and amplitude, and
-// the shading normal they bend (local space; composed with the normal map's tangent
-// normal n_tangent where ``mapped``).
+// What the wrinkles do at one point of the pixel: the wave's height and amplitude, the
+// normal they bend (local space; composed with the normal map's tangent normal n_tangent
+// where ``mapped``), which moves the texture, and the shading normal: that one turned to
+// the horizon.
 struct Bent {
     float height;
     float amplitude;
     vec3 shading_local;
+    vec3 bent_local;
 };
 
 Bent bend(int t, CornerWaves cw, vec3 n, vec3 bary, vec3 local, Footprint pixel,
@@ -284,24 +286,26 @@ Bent bend(int t, CornerWaves cw, vec3 n, vec3 bary, vec3 local, Footprint pixel,
     if (u_wrinkles != 0) {
         wave = blend_corner_waves(cw, bary, local, n, false, pixel);
     }
-    vec3 shading_local = safe_normalize(n - wave.gradient, n);
-    // the horizon: a seen point faces the eye, so a normal the folds bent away from it is
-    // turned back until its cosine with v is HORIZON_COSINE (contract.py), or the coarse
-    // normal's where that is less; a normal the folds did not bend is left as it is
-    if (u_wrinkles != 0 && wave.amplitude > 0.0) {
-        vec3 v = safe_normalize(u_eye_local - local, n);
-        float least = min(HORIZON_COSINE, dot(v, n));
-        float vn = dot(v, shading_local);
-        if (vn < least) shading_local = safe_normalize(shading_local + (least - vn) * v, n);
-    }
+    vec3 bent_local = safe_normalize(n - wave.gradient, n);
 #if defined NORMAL_MAP
     if (mapped) {
         // the map's frame about the (wrinkled) shading normal: maps and wrinkles compose
-        mat3 frame = tangent_frame(t, normal_st, shading_local);
-        shading_local = safe_normalize(frame * n_tangent, shading_local);
+        mat3 frame = tangent_frame(t, normal_st, bent_local);
+        bent_local = safe_normalize(frame * n_tangent, bent_local);
     }
 #endif
-    return Bent(wave.height, wave.amplitude, shading_local);
+    // the horizon: a seen point faces the eye, so a normal the folds bent away from it is
+    // shaded turned back until its cosine with v is HORIZON_COSINE (contract.py), or the
+    // coarse normal's where that is less; a normal the folds did not bend is left as it
+    // is, and the texture moves with the bent normal as it was
+    vec3 shading_local = bent_local;
+    if (u_wrinkles != 0 && wave.amplitude > 0.0) {
+        vec3 v = safe_normalize(u_eye_local - local, n);
+        float least = min(HORIZON_COSINE, dot(v, n));
+        float vn = dot(v, bent_local);
+        if (vn < least) shading_local = safe_normalize(bent_local + (least - vn) * v, n);
+    }
+    return Bent(wave.height, wave.amplitude, shading_local, bent_local);
 }
 
 #if defined RELIEF
@@ -563,11 +567,11 @@ void main() {
 #if defined TEXTURED
     if (u_wrinkles != 0 && h != 0.0) {
 #if defined RELIEF
-        vec3 dx = seen - centre.shading_local * h;
+        vec3 dx = seen - centre.bent_local * h;
 #else
         vec3 v = safe_normalize(u_eye_local - v_local, n);
-        float vn = max(abs(dot(v, centre.shading_local)), 0.25);
-        vec3 dx = (v / vn - centre.shading_local) * h;
+        float vn = max(abs(dot(v, centre.bent_local)), 0.25);
+        vec3 dx = (v / vn - centre.bent_local) * h;
 #endif
         st += vec2(dot(v_st_from_local[0], dx), dot(v_st_from_local[1], dx));
     }

@@ -175,11 +175,11 @@ def shirt_parallax(tmp_path_factory):
 def test_the_network_computes_the_draw_passes_offset(shirt_parallax):
     """For random texel values, views and (non-orthonormal) renderer frames, the network's
     st is draw.glsl's st + (S.dx, T.dx), dx = (v/max(|v.n'|, 1/4) - n') h with v toward
-    the eye and n' turned to the horizon as the draw pass turns it (draw.glsl's bend:
-    where its cosine with v is under c = min(HORIZON_COSINE, the renderer's normal's), n'
-    + (c - v.n') v normalised), and its normal input decodes (normalmap: T x + B y + N z)
-    to that n' where the renderer's normal faces the eye and agrees with the map's, else
-    to the renderer's own normal (seen from behind)."""
+    the eye, and its normal input decodes (normalmap: T x + B y + N z) to n' turned to the
+    horizon as the draw pass shades it (draw.glsl's bend: where its cosine with v is under
+    c = min(HORIZON_COSINE, the renderer's normal's), n' + (c - v.n') v normalised) where
+    the renderer's normal faces the eye and agrees with the map's, else to the renderer's
+    own normal (seen from behind)."""
     stage = Usd.Stage.Open(str(shirt_parallax))
     nodes, surface = network(stage, "/World/WrinkleMaterials/Sleeve")
     _, surface_inputs = nodes[surface]
@@ -208,7 +208,7 @@ def test_the_network_computes_the_draw_passes_offset(shirt_parallax):
         seen = n if v @ n >= least else \
             (n + (least - v @ n) * v) / np.linalg.norm(n + (least - v @ n) * v)
         turned += v @ n < least
-        dx = v / max(abs(v @ seen), MIN_FACING) - seen  # times h: the maps hold h S, h T
+        dx = v / max(abs(v @ n), MIN_FACING) - n  # times h: the maps hold h S and h T
         np.testing.assert_allclose(moved, st + np.array([hs @ dx, ht @ dx]), atol=1e-12)
         coefficients = evaluate(nodes, surface, context, cache)["normal"]
         decoded = frame.T @ coefficients

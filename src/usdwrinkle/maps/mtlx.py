@@ -18,10 +18,9 @@ Its shading normal is n' too, expressed in the renderer's own tangent frame
 (``tangent``, ``bitangent``, ``normal``, world space), which UsdPreviewSurface's
 ``normalmap`` turns back into n': no tangent frame has to agree with the bake's.
 
-Where n' faces away from the eye (or nearly), the network turns it back to the horizon as
-the draw pass does (contract.HORIZON_COSINE; docs/method.md, "The horizon"), and uses the
-turned normal for the offset and the shading, which the normal map, the same for every
-view, cannot.
+Where n' faces away from the eye (or nearly), the network shades it turned back to the
+horizon as the draw pass does (contract.HORIZON_COSINE; docs/method.md, "The horizon"),
+which the normal map, the same for every view, cannot; the offset keeps n' as it is.
 
 Storm (usdview) takes ``outputs:mtlx:surface`` over the universal ``outputs:surface``;
 a renderer without MaterialX keeps the UsdPreviewSurface, unchanged. Node ids are
@@ -147,14 +146,15 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
                       value2=("float", deficit), in1=("vector3", read_bent),
                       in2=("vector3", turned))
     facing = graph.node("ViewFacing", "ND_dotproduct_vector3", "float",
-                        in1=("vector3", view), in2=("vector3", bent))
+                        in1=("vector3", view), in2=("vector3", read_bent))
     facing = graph.node("ViewFacingAbs", "ND_absval_float", "float",
                         **{"in": ("float", facing)})
     facing = graph.node("ViewFacingMin", "ND_max_float", "float", in1=("float", facing),
                         in2=("float", MIN_FACING))
     steep = graph.node("Steep", "ND_divide_vector3FA", in1=("vector3", view),
                        in2=("float", facing))
-    seen = graph.node("Seen", "ND_add_vector3", in1=("vector3", steep), in2=("vector3", bent))
+    seen = graph.node("Seen", "ND_add_vector3", in1=("vector3", steep),
+                      in2=("vector3", read_bent))
     ds = graph.node("OffsetS", "ND_dotproduct_vector3", "float",
                     in1=("vector3", read["parallaxS"]), in2=("vector3", seen))
     dt = graph.node("OffsetT", "ND_dotproduct_vector3", "float",
