@@ -145,10 +145,8 @@ def author_network(layer: Sdf.Layer, material: Sdf.Path, inputs: tuple, map_st: 
     bent = graph.node("Horizon", "ND_ifgreatereq_vector3", value1=("float", 0.0),
                       value2=("float", deficit), in1=("vector3", read_bent),
                       in2=("vector3", turned))
-    facing = graph.node("ViewFacing", "ND_dotproduct_vector3", "float",
-                        in1=("vector3", view), in2=("vector3", read_bent))
     facing = graph.node("ViewFacingAbs", "ND_absval_float", "float",
-                        **{"in": ("float", facing)})
+                        **{"in": ("float", bent_side)})
     facing = graph.node("ViewFacingMin", "ND_max_float", "float", in1=("float", facing),
                         in2=("float", MIN_FACING))
     steep = graph.node("Steep", "ND_divide_vector3FA", in1=("vector3", view),
