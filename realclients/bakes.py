@@ -488,21 +488,16 @@ def without_turned(normals: tuple, towards_eye: np.ndarray) -> tuple:
 
 def view_directions(stage_path: Path, camera: str, frame: float, shape) -> np.ndarray:
     """(h, w, 3) unit world-space directions from each pixel's surface toward the camera
-    (row 0 at the top), through ``camera`` of ``stage_path`` at ``frame``."""
-    from pxr import Gf, Usd, UsdGeom
+    (row 0 at the top), through ``camera`` of ``stage_path`` at ``frame`` as usdwrinkle
+    frames it for an image of that shape (scene.camera.towards_eye)."""
+    from pxr import Usd
+
+    from usdwrinkle.scene.camera import towards_eye, usd_camera
 
     stage = Usd.Stage.Open(str(stage_path))
-    frustum = UsdGeom.Camera(stage.GetPrimAtPath(camera)).GetCamera(
-        Usd.TimeCode(frame)).frustum
     height, width = shape[:2]
-    window = frustum.GetWindow()
-    x = window.GetMin()[0] + (np.arange(width) + 0.5) / width * window.GetSize()[0]
-    y = window.GetMax()[1] - (np.arange(height) + 0.5) / height * window.GetSize()[1]
-    local = np.dstack([np.broadcast_to(x[None, :], (height, width)),
-                       np.broadcast_to(y[:, None], (height, width)),
-                       -np.ones((height, width))])
-    rotation = np.array(Gf.Matrix4d().SetRotate(frustum.GetRotation()).ExtractRotationMatrix())
-    return _unit(-(local @ rotation))  # Gf's row vectors: world = local * R
+    record = usd_camera(stage.GetPrimAtPath(camera), Usd.TimeCode(frame), width / height)
+    return towards_eye(record, width, height)
 
 
 def cycles_reflection_clamp(n: np.ndarray, ng: np.ndarray, i: np.ndarray) -> np.ndarray:

@@ -124,21 +124,12 @@ def test_relief_shows_the_sheet_as_its_displaced_geometry_stands(slanted):
 
 def view_directions(source: Path, width: int, height: int) -> np.ndarray:
     """Per pixel centre, the unit vector from the surface towards the eye of the stage's
-    /Camera at frame 1, from the camera the engine frames the render with."""
-    from usdwrinkle.engine import WrinkleEngine
-    from usdwrinkle.render.context import create_context
+    /Camera at frame 1, as the engine frames the render with it."""
+    from usdwrinkle.scene.camera import towards_eye, usd_camera
 
-    engine = WrinkleEngine(str(source), camera="/Camera", ctx=create_context())
-    try:
-        camera = engine.sample(1.0, width / height).camera
-    finally:
-        engine.release()
-    ys, xs = np.mgrid[0:height, 0:width]
-    ndc = np.stack([(xs + 0.5) / width * 2 - 1, 1 - (ys + 0.5) / height * 2,
-                    np.ones((height, width)), np.ones((height, width))], -1)
-    far = ndc @ np.linalg.inv(np.asarray(camera.view) @ np.asarray(camera.projection))
-    ray = far[..., :3] / far[..., 3:] - np.asarray(camera.position)[:3]
-    return -ray / np.linalg.norm(ray, axis=-1, keepdims=True)
+    stage = Usd.Stage.Open(str(source))
+    record = usd_camera(stage.GetPrimAtPath("/Camera"), Usd.TimeCode(1.0), width / height)
+    return towards_eye(record, width, height)
 
 
 def test_no_bent_normal_faces_away_from_the_eye(slanted, tmp_path):

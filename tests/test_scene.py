@@ -11,7 +11,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.process.errors import UsdWrinkleError
-from usdwrinkle.scene.camera import find_camera
+from usdwrinkle.scene.camera import find_camera, towards_eye, usd_camera
 from usdwrinkle.scene.stage import StageSceneDelegate
 from usdwrinkle.scene.topology import build_topology, ear_clip
 
@@ -94,6 +94,39 @@ def test_camera_selection():
     assert str(find_camera(stage, None).GetPath()) == "/A/first"  # first camera
     stage.RemovePrim("/A")
     assert find_camera(stage, None) is None  # framing
+
+
+def test_view_rays_are_the_pinhole_cameras(tmp_path):
+    """scene.camera.towards_eye against the pinhole model from the camera's own attributes:
+    a pixel centre at (x, y) in [-1, 1] looks along (x a_h / 2f, y a_h / (2f aspect), -1)
+    in the camera's frame (the horizontal aperture kept, the vertical fitted to the
+    image), turned into the world by the camera's transform; an orthographic camera's
+    rays are all its backward axis."""
+    stage = Usd.Stage.CreateInMemory()
+    camera = UsdGeom.Camera.Define(stage, "/Cam")
+    camera.CreateFocalLengthAttr(35.0)
+    camera.CreateHorizontalApertureAttr(36.0)
+    camera.CreateVerticalApertureAttr(30.0)  # not the image's aspect: fitted away
+    xform = UsdGeom.Xformable(camera)
+    xform.AddTranslateOp().Set(Gf.Vec3d(1.0, 2.0, 9.0))
+    xform.AddRotateXYZOp().Set(Gf.Vec3f(-20.0, 35.0, 10.0))
+    width, height = 48, 30
+    got = towards_eye(usd_camera(camera.GetPrim(), Usd.TimeCode.Default(), width / height),
+                      width, height)
+    to_world = camera.ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+    ys, xs = np.mgrid[0:height, 0:width]
+    x = ((xs + 0.5) / width * 2 - 1) * 18.0 / 35.0
+    y = (1 - (ys + 0.5) / height * 2) * 18.0 / 35.0 * height / width
+    expected = np.array([[-np.asarray(to_world.TransformDir(Gf.Vec3d(x[r, c], y[r, c], -1.0)))
+                          for c in range(width)] for r in range(height)])
+    expected /= np.linalg.norm(expected, axis=-1, keepdims=True)
+    assert got.shape == (height, width, 3)
+    assert np.degrees(np.arccos(np.clip(np.sum(got * expected, -1), -1, 1))).max() < 1e-3
+    camera.CreateProjectionAttr(UsdGeom.Tokens.orthographic)
+    flat = towards_eye(usd_camera(camera.GetPrim(), Usd.TimeCode.Default(), width / height),
+                       width, height)
+    back = np.asarray(to_world.TransformDir(Gf.Vec3d(0.0, 0.0, 1.0)))
+    assert np.abs(flat - back / np.linalg.norm(back)).max() < 1e-6
 
 
 def test_lights_are_read():

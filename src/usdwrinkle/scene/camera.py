@@ -160,3 +160,18 @@ def framing_gf_camera(bounds_min, bounds_max, up_axis: str, aspect: float) -> Gf
     far = float(record.projection[3, 2] / (record.projection[2, 2] + 1.0))
     camera.clippingRange = Gf.Range1f(near, far)
     return camera
+
+
+def towards_eye(record: CameraRecord, width: int, height: int) -> np.ndarray:
+    """(height, width, 3) unit world-space vectors from each pixel centre's surface
+    toward the eye (row 0 at the top), through the camera as the engine draws with it:
+    the pixel's ray from its far-plane point to its near-plane point (parallel rays for
+    an orthographic camera)."""
+    ys, xs = np.mgrid[0:height, 0:width]
+    x = (xs + 0.5) / width * 2.0 - 1.0
+    y = 1.0 - (ys + 0.5) / height * 2.0
+    ones = np.ones((height, width))
+    to_world = np.linalg.inv(np.asarray(record.view) @ np.asarray(record.projection))
+    near, far = (np.stack([x, y, z * ones, ones], -1) @ to_world for z in (-1.0, 1.0))
+    ray = near[..., :3] / near[..., 3:] - far[..., :3] / far[..., 3:]
+    return ray / np.linalg.norm(ray, axis=-1, keepdims=True)
