@@ -64,6 +64,42 @@ def test_comb_projects_the_stroke_onto_each_tangent_plane():
     assert not mesh.q[~inside].any()
 
 
+def _comb_line(mesh, brush, y: float) -> None:
+    """Stamps along rest x at height y, spaced as a drag places them (spacing x radius)."""
+    for x in np.arange(-0.6, 0.6 + 1e-9, brush.spacing * brush.radius):
+        stamp(mesh, brush, np.array([x, y, 0.0]), None, np.array([1.0, 0.0, 0.0]))
+
+
+def test_a_comb_strokes_folds_die_out_over_a_wavelength_at_its_edges():
+    """A stroke painted its full amount up to the brush's rim, so that its folds stood as a
+    band cut off along two straight lines (2026-12-06, painting the pull). Across a comb
+    stroke on a fine sheet, the fold's height (about sqrt(rho - 1), rho the fold law's
+    excess length of the painted q, method.folds.excess_length) falls from 90% to 10% of
+    the stroke's own over at least 0.4 W (brush.stamp.COMB_TAPER; measured 0.50 W, 0.125 W
+    before), while it stays at 90% out to 0.45 of the radius (measured 0.57: the folds
+    span the stroke). A second stroke beside it lowers no q the first painted (no valley
+    carved where they overlap)."""
+    from usdwrinkle.method.folds import excess_length
+
+    mesh = sheet(nx=101)  # 2 cm between points: the taper, not the mesh, sets the edge
+    w = 0.16
+    mesh.width[:] = w
+    brush = BrushSettings(radius=0.28, strength=0.5, amount=1.0, geodesic=False)
+    _comb_line(mesh, brush, 0.0)
+    column = np.abs(mesh.rest_points[:, 0]) < 1e-6  # across the stroke at its middle
+    d = np.abs(mesh.rest_points[column, 1])
+    size = np.linalg.norm(mesh.q[column], axis=1)
+    excess = excess_length(1.0 - size ** 2, 1.0, 0.05) - 1.0
+    share = np.sqrt(excess / excess.max())  # the fold height, about sqrt(rho - 1)
+    full, none = d[share >= 0.9].max(), d[share > 0.1].max()
+    assert none - full >= 0.4 * w, (full, none)
+    assert full >= 0.45 * brush.radius, full
+    assert none < brush.radius
+    before = np.linalg.norm(mesh.q, axis=1)
+    _comb_line(mesh, brush, 0.8 * brush.radius)
+    assert np.all(np.linalg.norm(mesh.q, axis=1) >= before - 1e-6)
+
+
 def test_comb_takes_the_sign_of_the_q_already_there():
     mesh = sheet()
     mesh.q[:] = [-0.5, 0.0, 0.0]

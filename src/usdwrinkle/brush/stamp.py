@@ -29,6 +29,12 @@ DIRECTED = ("comb", "attract")
 #: ``smooth`` they covered the middle 62% of it on the shirt's sleeve)
 FALLOFFS = ("sphere", "smooth", "linear", "constant")
 MIRROR_AXES = (None, "x", "y", "z")
+#: how far inside a comb stamp's rim the painted amount tapers to nothing, in the
+#: wrinkles' own W at each vertex (at most half the brush's radius): cloth's folds die out
+#: over about their own wavelength, where a stroke that painted its full amount up to the
+#: rim stood as a band of folds cut off along two straight lines (2026-12-06). The
+#: ``constant`` profile keeps its hard edge.
+COMB_TAPER = 1.0
 
 
 def falloff(name: str, t: np.ndarray) -> np.ndarray:
@@ -263,32 +269,37 @@ def stamp(mesh: PaintMesh, brush: BrushSettings, centre: np.ndarray, triangle: i
     them: where both reach (a stroke across the plane) a vertex's weight is
     ``1 - (1 - w)(1 - w')`` and its target the weighted mean of both targets, so the
     result is the mirror image of its partner's, whichever stamp came first."""
-    weight = _weights(mesh, brush, np.asarray(centre, np.float64), triangle, facing, pressure)
+    weight, reach = _weights(mesh, brush, np.asarray(centre, np.float64), triangle, facing,
+                             pressure)
     if brush.mirror is None:
         index = np.nonzero(weight > 0.0)[0]
         if len(index):
-            _apply(mesh, brush, index, weight[index], None, direction, None)
+            _apply(mesh, brush, index, weight[index], None, direction, None,
+                   reach[index])
         return index
     # the mirror stamp: each vertex takes its mirror partner's weight (exactly symmetric on
     # a mesh whose rest pose is), the direction mirrored; a vertex with no partner is
     # weighed from the mirrored centre
     partner = mesh.mirror_map(brush.mirror)
     mirrored = np.where(partner >= 0, weight[np.maximum(partner, 0)], 0.0)
+    mirrored_reach = np.where(partner >= 0, reach[np.maximum(partner, 0)], np.inf)
     lone = partner < 0
     if lone.any():
         centre_m = mirror_vector(centre, brush.mirror)
-        mirrored[lone] = _weights(mesh, brush, centre_m, _nearest_triangle(mesh, centre_m),
-                                  None, pressure)[lone]
+        lone_weight, lone_reach = _weights(mesh, brush, centre_m,
+                                           _nearest_triangle(mesh, centre_m), None, pressure)
+        mirrored[lone], mirrored_reach[lone] = lone_weight[lone], lone_reach[lone]
     index = np.nonzero((weight > 0.0) | (mirrored > 0.0))[0]
     if len(index):
         _apply(mesh, brush, index, weight[index], mirrored[index], direction,
-               None if direction is None else mirror_vector(direction, brush.mirror))
+               None if direction is None else mirror_vector(direction, brush.mirror),
+               np.minimum(reach[index], mirrored_reach[index]))
     return index
 
 
 def _weights(mesh: PaintMesh, brush: BrushSettings, centre: np.ndarray, triangle: int | None,
-             facing, pressure: float) -> np.ndarray:
-    """Each vertex's weight under a stamp at ``centre``."""
+             facing, pressure: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each vertex's weight under a stamp at ``centre``, and its distance from it."""
     if triangle is None and brush.geodesic:
         triangle = _nearest_triangle(mesh, centre)
     distance = mesh.distances(centre, triangle, brush.radius, brush.geodesic)
@@ -296,7 +307,7 @@ def _weights(mesh: PaintMesh, brush: BrushSettings, centre: np.ndarray, triangle
         falloff(brush.falloff, distance / brush.radius)
     if facing is not None and brush.front_facing_only:
         weight = np.where(facing, weight, 0.0)
-    return weight
+    return weight, distance
 
 
 def _nearest_triangle(mesh: PaintMesh, point: np.ndarray) -> int | None:
@@ -308,9 +319,10 @@ def _nearest_triangle(mesh: PaintMesh, point: np.ndarray) -> int | None:
 
 def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.ndarray,
            mirrored: np.ndarray | None, direction: np.ndarray | None,
-           mirrored_direction: np.ndarray | None) -> None:
+           mirrored_direction: np.ndarray | None, reach: np.ndarray | None = None) -> None:
     """One stamp at ``index`` with ``weight`` (and its mirror's ``mirrored`` weight and
-    direction, applied at once: see stamp)."""
+    direction, applied at once: see stamp); ``reach``: each vertex's distance from the
+    nearer of the two stamps' centres (comb's taper)."""
     w1 = weight
     w2 = np.zeros_like(w1) if mirrored is None else mirrored
     combined = 1.0 - (1.0 - w1) * (1.0 - w2)
@@ -323,9 +335,10 @@ def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.
     if brush.mode in DIRECTED:
         if direction is None or not np.any(direction):
             return
-        target = _comb_target(mesh, brush, index, q, direction)
+        amount = _comb_amount(mesh, brush, index, q, reach)
+        target = _comb_target(mesh, index, q, direction, amount)
         if mirrored is not None:
-            other = _comb_target(mesh, brush, index, q, mirrored_direction)
+            other = _comb_target(mesh, index, q, mirrored_direction, amount)
             empty = np.linalg.norm(q, axis=1) <= 1e-9
             # where q is empty the two lines' signs are set by each other, then the mean by
             # a sign the mirror keeps (the largest component off the mirror axis)
@@ -353,11 +366,27 @@ def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.
     mesh.q[index] = clamp_unit(q).astype(np.float32)
 
 
-def _comb_target(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, q: np.ndarray,
-                 direction: np.ndarray) -> np.ndarray:
+def _comb_amount(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, q: np.ndarray,
+                 reach: np.ndarray | None) -> np.ndarray:
+    """Per vertex, the |q| that a comb stamp moves q towards: the brush's ``amount``,
+    tapering linearly to 0 over the last ``COMB_TAPER`` W (at most half the radius) inside
+    the rim, so that a stroke's folds die out at its edges as cloth's do. Where q already
+    holds more (up to ``amount``), the taper leaves it: overlapping strokes do not carve
+    valleys into each other, and a stroke of a lower amount still lowers q to it."""
+    amount = np.full(len(index), brush.amount)
+    if reach is None or brush.falloff == "constant":
+        return amount
+    taper = np.minimum(COMB_TAPER * mesh.width[index].astype(np.float64), 0.5 * brush.radius)
+    inside = np.clip((brush.radius - reach) / np.maximum(taper, 1e-300), 0.0, 1.0)
+    held = np.minimum(np.linalg.norm(q, axis=1), brush.amount)
+    return np.maximum(brush.amount * inside, held)
+
+
+def _comb_target(mesh: PaintMesh, index: np.ndarray, q: np.ndarray, direction: np.ndarray,
+                 amount: np.ndarray) -> np.ndarray:
     """What comb moves q towards: the stroke's direction in each tangent plane, of length
-    ``amount``, its sign nearer the q already there (a line, not an arrow)."""
-    target = brush.amount * tangent_directions(mesh, direction, index)
+    ``amount`` (per vertex), its sign nearer the q already there (a line, not an arrow)."""
+    target = amount[:, None] * tangent_directions(mesh, direction, index)
     flip = np.sum(target * q, axis=1) < 0.0
     target[flip] *= -1.0
     return target
