@@ -81,7 +81,7 @@ def test_a_comb_strokes_folds_die_out_over_a_wavelength_at_its_edges():
     carved where they overlap)."""
     from usdwrinkle.method.folds import excess_length
 
-    mesh = sheet(nx=101)  # 2 cm between points: the taper, not the mesh, sets the edge
+    mesh = sheet(nx=101)  # points 0.02 apart: the taper, not the mesh, sets the edge
     w = 0.16
     mesh.width[:] = w
     brush = BrushSettings(radius=0.28, strength=0.5, amount=1.0, geodesic=False)
