@@ -676,6 +676,46 @@ def _period(samples: np.ndarray, step: float) -> float:
     return float(2.0 * np.mean(np.diff(exact)) * step)
 
 
+def test_a_curtain_seen_from_behind_is_painted_on_the_side_seen(gl_context, tmp_path):
+    """The curtain sample opens seen from its back (doubleSided; Storm draws both sides):
+    none of its 92 points faces the eye with its normal, and a comb stroke across it with
+    front-facing only touched none of them and said nothing (2026-12-06). Front-facing
+    now means facing the eye on the side the brush meets: the stroke paints the points
+    seen, and only those."""
+    from usdwrinkle.brush.view import vertex_normals
+
+    curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    stage, layer, save = open_paint_stage(str(curtain), str(tmp_path / "painted.usda"))
+    session = PaintSession(stage, layer, save, ctx=gl_context)
+    try:
+        session.render(640, 360, FULL)
+        path = session.active
+        posed = session.engine.posed_points(path)
+        normals = vertex_normals(posed, session.engine.meshes[path].topology.triangles)
+        towards_eye = session.last_frame.camera.position - posed
+        seen_front = np.einsum("ij,ij->i", normals, towards_eye) > 0.0
+        assert not seen_front.any()  # the case: only its back is seen
+        rest = session.mesh.rest_points
+        frame = session.last_frame
+        middle = np.abs(rest[:, 1] - np.median(rest[:, 1])) < 0.4  # the two middle rows
+        xy, _ = project(frame.camera, posed[middle], frame.width, frame.height)
+        xy *= [640 / frame.width, 360 / frame.height]
+        left, right = xy[np.argmin(xy[:, 0])], xy[np.argmax(xy[:, 0])]
+        a, b = left + 0.05 * (right - left), right - 0.05 * (right - left)  # on the cloth
+        q0 = session.mesh.q.copy()
+        assert session.begin_stroke(*a, 640, 360)
+        for t in np.linspace(0.0, 1.0, 30)[1:]:
+            session.drag(*(a + t * (b - a)), 640, 360)
+        session.end_stroke()
+        touched = np.array(session.last_touched)
+        changed = np.linalg.norm(session.mesh.q - q0, axis=1) > 1e-3
+        assert len(touched) >= 20 and changed.sum() >= 20, (len(touched), changed.sum())
+        assert not seen_front[touched].any()
+        assert session.facing(path).all() and not session.facing(path, 1.0).any()
+    finally:
+        session.release()
+
+
 def test_painting_more_gives_deeper_folds_across_the_stroke(shirt_session):
     """Issue 55: a comb stroke gave a narrow band of short, blobby crests, and painting
     more made them finer and darker. Amount 0.5, then 1.0 (each from the unpainted

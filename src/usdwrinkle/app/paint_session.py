@@ -258,6 +258,8 @@ class PaintSession:
         self._stroke: Stroke | None = None
         self._stroke_before: tuple | None = None
         self._stroke_facing: np.ndarray | None = None
+        #: per mesh: the side (1 front, -1 back) the last pick saw (see facing)
+        self._sides: dict[str, float] = {}
         #: the drag's last sample: pixel x, y, its rest point, rest length per pixel
         self._stroke_sample: tuple | None = None
         #: the last stroke's rest-space direction (what comb floods along)
@@ -405,12 +407,14 @@ class PaintSession:
     # -- picking --------------------------------------------------------------------
     def pick(self, x: float, y: float, width: int, height: int) -> Hit | None:
         """The nearest wrinkled-mesh point under pixel (x, y) of a ``width`` x ``height``
-        view of the last drawn frame (the same camera), or None."""
+        view of the last drawn frame (the same camera), or None; the side of its mesh it
+        meets is kept for ``facing``."""
         if self._camera is None:
             return None
         camera, w, h = self._camera
         origin, direction = pixel_ray(camera, x * w / width, y * h / height, w, h)
         best: Hit | None = None
+        best_side = 1.0
         for path in self.engine.visible_paths():
             points = self.posed_points(path)
             triangles = self.engine.meshes[path].topology.triangles
@@ -420,16 +424,30 @@ class PaintSession:
             tri, distance, bary = found
             rest = self.engine.meshes[path].rest_points[triangles[tri]].astype(np.float64)
             best = Hit(path, tri, bary, bary @ rest, distance)
+            corners = points[triangles[tri]].astype(np.float64)
+            normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+            best_side = 1.0 if normal @ (origin - bary @ corners) >= 0.0 else -1.0
         if best is not None and best.path not in self.meshes:
             return None  # an occluder that is not painted
+        if best is not None:
+            # the side of the mesh the eye sees there (Storm draws both sides of every
+            # mesh): front-facing only paints, and "show q" shows, the points facing the
+            # eye on that side
+            self._sides[best.path] = best_side
         return best
 
-    def facing(self, path: str) -> np.ndarray:
-        """Per vertex of ``path``: whether its posed normal faces the eye."""
+    def facing(self, path: str, side: float | None = None) -> np.ndarray:
+        """Per vertex of ``path``: whether its posed normal faces the eye on ``side``
+        (1: the front, -1: the back; by default the side the last pick met on that mesh,
+        the front before any). A curtain seen from behind shows its back: its back-facing
+        points are the ones an artist paints (all 92 of the curtain sample's at its
+        opening view, where before a stroke across it touched none)."""
         camera = self._camera[0]
         points = self.posed_points(path)
         normals = vertex_normals(points, self.engine.meshes[path].topology.triangles)
-        return np.einsum("ij,ij->i", normals, camera.position - points) > 0.0
+        if side is None:
+            side = self._sides.get(path, 1.0)
+        return side * np.einsum("ij,ij->i", normals, camera.position - points) > 0.0
 
     # -- strokes --------------------------------------------------------------------
     def begin_stroke(self, x: float, y: float, width: int, height: int,

@@ -30,10 +30,11 @@ DIRECTED = ("comb", "attract")
 FALLOFFS = ("sphere", "smooth", "linear", "constant")
 MIRROR_AXES = (None, "x", "y", "z")
 #: how far inside a comb stamp's rim the painted amount tapers to nothing, in the
-#: wrinkles' own W at each vertex (at most half the brush's radius): cloth's folds die out
-#: over about their own wavelength, where a stroke that painted its full amount up to the
-#: rim stood as a band of folds cut off along two straight lines (2026-12-06). The
-#: ``constant`` profile keeps its hard edge.
+#: wrinkles' own W at each vertex, less the vertex's edge length (over which the mesh's
+#: interpolation already spreads a fold's end), at most half the brush's radius: cloth's
+#: folds die out over about their own wavelength, where a stroke that painted its full
+#: amount up to the rim stood as a band of folds cut off along two straight lines on a
+#: mesh finer than its W (2026-12-06). The ``constant`` profile keeps its hard edge.
 COMB_TAPER = 1.0
 
 
@@ -156,6 +157,7 @@ class PaintMesh:
             self._neighbours[a].append((b, length))
             self._neighbours[b].append((a, length))
         self._mirror_maps: dict[str, np.ndarray] = {}
+        self._spacing: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -230,6 +232,13 @@ class PaintMesh:
     def mean_edge(self) -> float:
         lengths = [length for row in self._neighbours for _, length in row]
         return float(np.mean(lengths)) if lengths else 1.0
+
+    def spacing(self) -> np.ndarray:
+        """Per vertex, the mean rest length of its edges (0 for a lone vertex)."""
+        if self._spacing is None:
+            self._spacing = np.array([np.mean([length for _, length in row]) if row else 0.0
+                                      for row in self._neighbours])
+        return self._spacing
 
 
 def _cell_keys(cells: np.ndarray) -> np.ndarray:
@@ -369,14 +378,20 @@ def _apply(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, weight: np.
 def _comb_amount(mesh: PaintMesh, brush: BrushSettings, index: np.ndarray, q: np.ndarray,
                  reach: np.ndarray | None) -> np.ndarray:
     """Per vertex, the |q| that a comb stamp moves q towards: the brush's ``amount``,
-    tapering linearly to 0 over the last ``COMB_TAPER`` W (at most half the radius) inside
+    tapering linearly to 0 over the last ``COMB_TAPER`` W (less the vertex's edge length,
+    over which the mesh spreads the fold's end itself; at most half the radius) inside
     the rim, so that a stroke's folds die out at its edges as cloth's do. Where q already
     holds more (up to ``amount``), the taper leaves it: overlapping strokes do not carve
     valleys into each other, and a stroke of a lower amount still lowers q to it."""
     amount = np.full(len(index), brush.amount)
     if reach is None or brush.falloff == "constant":
         return amount
-    taper = np.minimum(COMB_TAPER * mesh.width[index].astype(np.float64), 0.5 * brush.radius)
+    # the mesh's own interpolation between its points already spreads a step over an
+    # edge: only the rest of the W is tapered (none on a mesh as coarse as its folds)
+    taper = np.clip(COMB_TAPER * mesh.width[index].astype(np.float64) -
+                    mesh.spacing()[index], 0.0, 0.5 * brush.radius)
+    if not np.any(taper > 0.0):
+        return amount
     inside = np.clip((brush.radius - reach) / np.maximum(taper, 1e-300), 0.0, 1.0)
     held = np.minimum(np.linalg.norm(q, axis=1), brush.amount)
     return np.maximum(brush.amount * inside, held)
