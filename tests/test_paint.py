@@ -712,6 +712,28 @@ def test_a_curtain_seen_from_behind_is_painted_on_the_side_seen(gl_context, tmp_
         assert len(touched) >= 20 and changed.sum() >= 20, (len(touched), changed.sum())
         assert not seen_front[touched].any()
         assert session.facing(path).all() and not session.facing(path, 1.0).any()
+        assert session.untouched() is None
+        # a brush narrower than the rows' spacing, dragged between two rows, touches no
+        # point: the status bar says why instead of nothing happening
+        from usdwrinkle.app.paint_session import with_brush
+
+        rows = np.unique(np.round(rest[middle, 1], 6))
+        ends = []
+        for pick in (np.argmin, np.argmax):  # each row's end, then their mean: between
+            row_ends = []
+            for y in rows:
+                on_row = middle & (np.abs(rest[:, 1] - y) < 1e-6)
+                row_xy, _ = project(frame.camera, posed[on_row], frame.width, frame.height)
+                row_ends.append(row_xy[pick(row_xy[:, 0])])
+            ends.append(np.mean(row_ends, axis=0) * [640 / frame.width, 360 / frame.height])
+        a, b = ends[0] + 0.05 * (ends[1] - ends[0]), ends[1] - 0.05 * (ends[1] - ends[0])
+        with_brush(session, radius=0.05)
+        assert session.begin_stroke(*a, 640, 360)
+        for t in np.linspace(0.0, 1.0, 30)[1:]:
+            session.drag(*(a + t * (b - a)), 640, 360)
+        assert session.end_stroke() is None
+        why = session.untouched()
+        assert why is not None and path in why and "radius 0.05" in why, why
     finally:
         session.release()
 

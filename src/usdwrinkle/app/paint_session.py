@@ -514,6 +514,15 @@ class PaintSession:
         return self._record(Edit(mesh.path, "paint", before,
                                  (mesh.q.copy(), mesh.width.copy())))
 
+    def untouched(self) -> str | None:
+        """Why the last stroke, which met a mesh, touched none of its points (None if it
+        touched some): the brush fits between them, or none within it faces the eye."""
+        if len(self.last_touched) or not self.stamp_centres:
+            return None
+        brush, mesh = self.brush, self.mesh
+        return (f"the brush (radius {brush.radius:.3g}) reached no point of {mesh.path} "
+                f"(about {mesh.mean_edge():.3g} apart): raise it with ]")
+
     def cancel_stroke(self) -> None:
         """Drop the stroke in progress (Esc): the values before it come back."""
         if self._stroke is None:

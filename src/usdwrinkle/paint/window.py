@@ -462,6 +462,8 @@ class PaintView(QOpenGLWidget):
                 self.owner.statusBar().showMessage(
                     "the stroke missed the cloth: start or drag it over a wrinkled mesh "
                     f"({', '.join(self.session.paths)})", 6000)
+            elif why := self.session.untouched():
+                self.owner.statusBar().showMessage(why, 6000)
         self.update()  # refine: the full-quality frame
 
     @guarded
