@@ -43,7 +43,7 @@ def measure(corpus: Path | None = None, quick: bool = False) -> dict:
     cesium = corpus / "usd-wg" / "CesiumMan.usdz" if corpus else None
     if cesium is not None and cesium.is_file():
         stages.append(("CesiumMan", cesium, ["--all-meshes"]))
-    combos = combinations(cores())
+    combos = combinations(cores())[:2] if quick else combinations(cores())
     repeats = 1 if quick else 2
     runs: dict = {}
     with tempfile.TemporaryDirectory() as folder:

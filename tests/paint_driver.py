@@ -633,25 +633,80 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
     return result
 
 
+class MouseLog(QtCore.QObject):
+    """The mouse events the view has been sent (an application-wide event filter): what
+    x_drag waits for after each xdotool call, instead of a fixed half second."""
+
+    def __init__(self, view):
+        super().__init__()
+        self.view, self.events = view, []
+        QtWidgets.QApplication.instance().installEventFilter(self)
+
+    def eventFilter(self, obj, event):  # noqa: N802
+        kind = event.type()
+        if obj is self.view and kind in (QtCore.QEvent.MouseMove,
+                                         QtCore.QEvent.MouseButtonPress,
+                                         QtCore.QEvent.MouseButtonRelease):
+            position = event.position()
+            self.events.append((kind, round(position.x()), round(position.y())))
+        return False
+
+    def close(self) -> None:
+        QtWidgets.QApplication.instance().removeEventFilter(self)
+
+
 def x_drag(window, points, hold=None) -> dict:
     """A left-button drag through widget pixels ``points`` with real X events (xdotool:
-    press, moves, release); ``hold(k)`` runs after the k-th move, the button still down.
-    Returns what ``hold`` returned, by move."""
+    press, moves, release), each waited for until the view has handled it; ``hold(k)``
+    runs after the k-th move, the button still down. Returns what ``hold`` returned, by
+    move."""
     wid = str(int(window.winId()))
     origin = window.view.mapTo(window, QtCore.QPoint(0, 0))
     seen = {}
+    log = MouseLog(window.view)
 
     def at(x, y):
         return str(int(round(origin.x() + x))), str(int(round(origin.y() + y)))
 
-    x_events(window, "mousemove", "--window", wid, *at(*points[0]), "mousedown", "1")
-    for k, (x, y) in enumerate(points[1:], 1):
-        x_events(window, "mousemove", "--window", wid, *at(x, y))
-        if hold is not None:
-            seen[k] = hold(k)
-    x_events(window, "mouseup", "1")
+    def sent(kind, x=None, y=None) -> None:
+        """Wait until the view has handled a ``kind`` event (at view pixel x, y)."""
+        def arrived():
+            return any(e[0] == kind and (x is None or (e[1], e[2]) == (x, y))
+                       for e in log.events)
+        wait_for(arrived, f"the view to get {kind} at {x}, {y}", timeout=60.0)
+        log.events.clear()
+
+    try:
+        # a pixel beside the first point, then onto it: a move that surely moves
+        x0, y0 = points[0]
+        x_events_only("mousemove", "--window", wid, *at(x0 + 1, y0))
+        x_events_only("mousemove", "--window", wid, *at(x0, y0))
+        first = (int(at(x0, y0)[0]) - origin.x(), int(at(x0, y0)[1]) - origin.y())
+        sent(QtCore.QEvent.MouseMove, *first)
+        x_events_only("mousedown", "1")
+        sent(QtCore.QEvent.MouseButtonPress)
+        last = first
+        for k, (x, y) in enumerate(points[1:], 1):
+            x_events_only("mousemove", "--window", wid, *at(x, y))
+            target = (int(at(x, y)[0]) - origin.x(), int(at(x, y)[1]) - origin.y())
+            if target != last:  # a move to where the pointer is sends nothing
+                sent(QtCore.QEvent.MouseMove, *target)
+            last = target
+            if hold is not None:
+                seen[k] = hold(k)
+        x_events_only("mouseup", "1")
+        sent(QtCore.QEvent.MouseButtonRelease)
+    finally:
+        log.close()
     settle(window)
     return seen
+
+
+def x_events_only(*args: str) -> None:
+    """xdotool, without waiting for Qt to handle what it sent (the caller waits)."""
+    import subprocess
+
+    subprocess.run(["xdotool", *args], check=True, timeout=60, capture_output=True)
 
 
 def scenario_big_brush(out: Path, stage: str) -> dict:

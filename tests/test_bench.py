@@ -52,11 +52,10 @@ def test_bench_quick_reports_every_field(gl_context, corpus, tmp_path):
             "serial_cpu_utilisation", "dask_cpu_utilisation", "bake_s"} <= set(farm), farm
     assert farm["frames"] == 8 and farm["speedup"] > 0
     assert len(result["targets"]) == 13  # 7, and the paint window's 3 for each of 2 cases
-    peers = result["peers"]
-    if peers["ran"]:  # the real-client tier's Python is here: both renderers timed
-        assert peers["ours_fps"] > 0 and peers["storm_fps"] > 0 and len(peers["ours_s"]) == 1
-    else:
-        assert "bpy" in peers["why"]
+    # the Storm peer and the paint window are timed by the full bench only (each starts a
+    # program of its own: Blender, a Qt window)
+    assert not result["peers"]["ran"] and "quick" in result["peers"]["why"]
+    assert not result["paint"]["window"]["ran"]
     floors = result["floors"]
     assert {"empty_dispatch_ms", "gather6_50k_ms", "gather6_50k_tables_ms", "copy_points_ms",
             "readback_330k_rgba32f_ms"} <= set(floors)
