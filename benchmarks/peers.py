@@ -8,8 +8,9 @@ CesiumMan, framed closely by one camera, 960x540, frames 1-24, to PNG:
   the frame loop only: the sum of its Record calls, each of which renders and writes one
   PNG (realclients/storm_client.py), without its process's start-up.
 
-The two alternate, three rounds (--quick, a smoke test, skips them); medians. Storm runs in a Python with
-Blender's bpy wheel (realclients/__init__.py); without one the row says why it did not run.
+The two alternate, three rounds (--quick, a smoke test, skips them); medians. Storm runs
+in a Python with Blender's bpy wheel (realclients/__init__.py); without one the row says
+why it did not run.
 The child processes keep Python's bytecode cache, as an installed package has it (this
 workplace sets PYTHONDONTWRITEBYTECODE, which would add about 40 ms of compiling to each
 usdwrinkle start).
