@@ -426,7 +426,7 @@ class PaintSession:
             best = Hit(path, tri, bary, bary @ rest, distance)
             corners = points[triangles[tri]].astype(np.float64)
             normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
-            best_side = 1.0 if normal @ (origin - bary @ corners) >= 0.0 else -1.0
+            best_side = 1.0 if normal @ direction <= 0.0 else -1.0  # the ray meets its front
         if best is not None and best.path not in self.meshes:
             return None  # an occluder that is not painted
         if best is not None:
@@ -516,7 +516,8 @@ class PaintSession:
 
     def untouched(self) -> str | None:
         """Why the last stroke, which met a mesh, touched none of its points (None if it
-        touched some): the brush fits between them, or none within it faces the eye."""
+        touched some, or placed no stamp): none lay within the brush's radius (and, with
+        front-facing only, faced the eye on the side the brush met)."""
         if len(self.last_touched) or not self.stamp_centres:
             return None
         brush, mesh = self.brush, self.mesh
