@@ -537,9 +537,7 @@ def scenario_bench(out: Path, stage: str) -> dict:
 def x_events(window, *args: str) -> None:
     """xdotool on this process's own window (real X events through the X server, as an
     artist's keyboard and mouse send them), then the events handled."""
-    import subprocess
-
-    subprocess.run(["xdotool", *args], check=True, timeout=60, capture_output=True)
+    x_events_only(*args)
     app = QtWidgets.QApplication.instance()
     deadline = time.monotonic() + 0.5
     while time.monotonic() < deadline:
@@ -665,8 +663,14 @@ def x_drag(window, points, hold=None) -> dict:
     seen = {}
     log = MouseLog(window.view)
 
+    def pixel(x, y):
+        """The view pixel the pointer lands on for widget point (x, y)."""
+        return int(round(x)), int(round(y))
+
     def at(x, y):
-        return str(int(round(origin.x() + x))), str(int(round(origin.y() + y)))
+        """xdotool's window coordinates of that pixel."""
+        px, py = pixel(x, y)
+        return str(origin.x() + px), str(origin.y() + py)
 
     def sent(kind, x=None, y=None) -> None:
         """Wait until the view has handled a ``kind`` event (at view pixel x, y)."""
@@ -681,14 +685,14 @@ def x_drag(window, points, hold=None) -> dict:
         x0, y0 = points[0]
         x_events_only("mousemove", "--window", wid, *at(x0 + 1, y0))
         x_events_only("mousemove", "--window", wid, *at(x0, y0))
-        first = (int(at(x0, y0)[0]) - origin.x(), int(at(x0, y0)[1]) - origin.y())
+        first = pixel(x0, y0)
         sent(QtCore.QEvent.MouseMove, *first)
         x_events_only("mousedown", "1")
         sent(QtCore.QEvent.MouseButtonPress)
         last = first
         for k, (x, y) in enumerate(points[1:], 1):
             x_events_only("mousemove", "--window", wid, *at(x, y))
-            target = (int(at(x, y)[0]) - origin.x(), int(at(x, y)[1]) - origin.y())
+            target = pixel(x, y)
             if target != last:  # a move to where the pointer is sends nothing
                 sent(QtCore.QEvent.MouseMove, *target)
             last = target
