@@ -536,20 +536,60 @@ def scenario_bench(out: Path, stage: str) -> dict:
 
 def x_events(window, *args: str) -> None:
     """xdotool on this process's own window (real X events through the X server, as an
-    artist's keyboard and mouse send them), then the events handled."""
-    x_events_only(*args)
+    artist's keyboard and mouse send them), then waited for until Qt has handled the
+    events it sent (InputLog; ``expected_input``), and what they posted."""
+    log = InputLog()
+    try:
+        x_events_only(*args)
+        for kind, modifiers, count in expected_input(args):
+            wait_for(lambda kind=kind, modifiers=modifiers, count=count:
+                     log.count(kind, modifiers) >= count,
+                     f"{count} {kind} event(s) from xdotool {' '.join(args)}", timeout=60.0)
+        if args[0] == "windowfocus":
+            wait_for(window.isActiveWindow, "the window to take the keyboard")
+    finally:
+        log.close()
     app = QtWidgets.QApplication.instance()
-    deadline = time.monotonic() + 0.5
-    while time.monotonic() < deadline:
+    for _ in range(3):  # what the handlers posted (zero timers, updates)
         app.processEvents(QtCore.QEventLoop.AllEvents, 50)
         time.sleep(0.01)
 
 
+def expected_input(args) -> list[tuple]:
+    """The input events an xdotool command line sends Qt: (kind, whether a modifier
+    key's events count, how many). A key or a typed character is one release of a key
+    that is not a modifier (Ctrl+Z's Z); keydown and keyup one press or release of that
+    key, modifiers too; a button's down and up its press and release; a move alone a
+    move (our calls always move the pointer somewhere it is not)."""
+    ev = QtCore.QEvent
+    command, operands = args[0], [a for a in args[1:] if not a.startswith("--")]
+    if command == "key":
+        return [(ev.KeyRelease, False, 1)]
+    if command == "type":
+        return [(ev.KeyRelease, False, len(operands[-1]))]
+    if command == "keydown":
+        return [(ev.KeyPress, True, 1)]
+    if command == "keyup":
+        return [(ev.KeyRelease, True, 1)]
+    if command == "mouseup":
+        return [(ev.MouseButtonRelease, True, 1)]
+    if command == "mousedown":
+        return [(ev.MouseButtonPress, True, 1)]
+    if command == "mousemove":
+        after = {"click": ev.MouseButtonRelease, "mousedown": ev.MouseButtonPress}
+        follow = [after[a] for a in args if a in after]
+        return [(follow[-1] if follow else ev.MouseMove, True, 1)]
+    return []
+
+
 def x_click(window, widget) -> None:
-    """A real left click in the middle of ``widget``."""
+    """A real left click in the middle of ``widget``; on a combo box, waited for until
+    its list has opened (the keys that follow go to the list)."""
     centre = widget.mapTo(window, QtCore.QPoint(widget.width() // 2, widget.height() // 2))
     x_events(window, "mousemove", "--window", str(int(window.winId())), str(centre.x()),
              str(centre.y()), "click", "1")
+    if isinstance(widget, QtWidgets.QComboBox):
+        wait_for(widget.view().isVisible, "the combo box's list to open")
 
 
 def x_type(window, field, text: str) -> None:
@@ -631,23 +671,43 @@ def scenario_help_and_typed(out: Path, stage: str) -> dict:
     return result
 
 
-class MouseLog(QtCore.QObject):
-    """The mouse events the view has been sent (an application-wide event filter): what
-    x_drag waits for after each xdotool call, instead of a fixed half second."""
+class InputLog(QtCore.QObject):
+    """The input events Qt has handled since it was made (an application-wide event
+    filter): what the x_ helpers wait for after each xdotool call, instead of a fixed
+    half second. Qt offers one event to every widget up the parent chain, and a window's
+    event again to the widget under it, so each is kept once, by its kind, X timestamp
+    and key or button. ``view``: keep only the mouse events that reach it, with their
+    view pixel (x_drag)."""
 
-    def __init__(self, view):
+    KEYS = (QtCore.QEvent.KeyPress, QtCore.QEvent.KeyRelease)
+    MOUSE = (QtCore.QEvent.MouseMove, QtCore.QEvent.MouseButtonPress,
+             QtCore.QEvent.MouseButtonRelease)
+    MODIFIERS = (Qt.Key_Shift, Qt.Key_Control, Qt.Key_Alt, Qt.Key_Meta, Qt.Key_AltGr)
+
+    def __init__(self, view=None):
         super().__init__()
-        self.view, self.events = view, []
+        self.view, self.events, self.seen = view, [], set()
         QtWidgets.QApplication.instance().installEventFilter(self)
 
     def eventFilter(self, obj, event):  # noqa: N802
         kind = event.type()
-        if obj is self.view and kind in (QtCore.QEvent.MouseMove,
-                                         QtCore.QEvent.MouseButtonPress,
-                                         QtCore.QEvent.MouseButtonRelease):
-            position = event.position()
-            self.events.append((kind, round(position.x()), round(position.y())))
+        if self.view is not None:
+            if obj is self.view and kind in self.MOUSE:
+                position = event.position()
+                self.events.append((kind, round(position.x()), round(position.y())))
+        elif kind in self.MOUSE or kind in self.KEYS:
+            detail = event.key() if kind in self.KEYS else event.button()
+            identity = (kind, event.timestamp(), detail)
+            if identity not in self.seen:
+                self.seen.add(identity)
+                self.events.append((kind, detail))
         return False
+
+    def count(self, kind, modifiers: bool = True) -> int:
+        """How many ``kind`` events came; ``modifiers`` False: not counting the key
+        events of Shift, Ctrl, Alt and Meta."""
+        return sum(1 for e in self.events
+                   if e[0] == kind and (modifiers or e[1] not in self.MODIFIERS))
 
     def close(self) -> None:
         QtWidgets.QApplication.instance().removeEventFilter(self)
@@ -661,7 +721,7 @@ def x_drag(window, points, hold=None) -> dict:
     wid = str(int(window.winId()))
     origin = window.view.mapTo(window, QtCore.QPoint(0, 0))
     seen = {}
-    log = MouseLog(window.view)
+    log = InputLog(window.view)
 
     def pixel(x, y):
         """The view pixel the pointer lands on for widget point (x, y)."""
