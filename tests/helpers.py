@@ -204,6 +204,19 @@ def xdotool(display: str, *args: str, timeout: float = 60, check: bool = True) -
     return done.stdout
 
 
+def wait_for_session(display: str, window: str, timeout: float = 120) -> None:
+    """Wait until the paint window ``window`` has made its session (its title then names
+    the layer it saves: "usdwrinkle paint - PATH"): before that, the view has no mesh to
+    take a stroke."""
+    import time
+
+    deadline = time.monotonic() + timeout
+    while " - " not in xdotool(display, "getwindowname", window):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"the paint window made no session within {timeout:g} s")
+        time.sleep(0.1)
+
+
 def start_window(display: str, argv: list, log_path, name: str = "usdwrinkle paint",
                  timeout: float = 120):
     """Start a window's process (its output in ``log_path``) and find its window: (the

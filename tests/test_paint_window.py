@@ -23,7 +23,15 @@ from pxr import Usd
 
 from usdwrinkle.authoring import WrinkleAPI
 
-from helpers import X_REFUSED, find_window, sheet_stage, start_window, x_env, xdotool
+from helpers import (
+    X_REFUSED,
+    find_window,
+    sheet_stage,
+    start_window,
+    wait_for_session,
+    x_env,
+    xdotool,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 DRIVER = REPO / "tests" / "paint_driver.py"
@@ -392,7 +400,7 @@ def test_an_artist_paints_and_saves(display, tmp_path):
                                                "1000x650"], tmp_path / "paint.log")
     try:
         xdotool(display, "windowfocus", "--sync", window)
-        time.sleep(4)  # the first frame (llvmpipe)
+        wait_for_session(display, window)
         geometry = dict(line.split("=") for line in
                         xdotool(display, "getwindowgeometry", "--shell", window).split())
         width, height = int(geometry["WIDTH"]), int(geometry["HEIGHT"])
@@ -404,8 +412,8 @@ def test_an_artist_paints_and_saves(display, tmp_path):
             xdotool(display, "mousemove", "--window", window, str(x), str(y))
             time.sleep(0.05)
         xdotool(display, "mouseup", "1")
-        time.sleep(2)  # the full-quality frame after release
         if shutil.which("import"):  # ImageMagick's, where installed: a screenshot to look at
+            time.sleep(2)  # the full-quality frame after release
             subprocess.run(["import", "-window", "root", str(tmp_path / "artist.png")],
                            env=x_env(display), timeout=60, check=False)
         xdotool(display, "key", "--window", window, "ctrl+s")
@@ -479,7 +487,7 @@ def test_usdview_paints_through_usdwrinkle_python(display, tmp_path, monkeypatch
     try:
         window = find_window(display, "usdwrinkle paint", process.pid)
         xdotool(display, "windowfocus", "--sync", window)
-        time.sleep(4)
+        wait_for_session(display, window)
         geometry = dict(line.split("=") for line in
                         xdotool(display, "getwindowgeometry", "--shell", window).split())
         width, height = int(geometry["WIDTH"]), int(geometry["HEIGHT"])
@@ -490,7 +498,6 @@ def test_usdview_paints_through_usdwrinkle_python(display, tmp_path, monkeypatch
                     str(width // 6 + step * (width // 2) // 24), str(height // 2))
             time.sleep(0.05)
         xdotool(display, "mouseup", "1")
-        time.sleep(2)
         before = os.path.getmtime(strokes)
         xdotool(display, "key", "--window", window, "ctrl+s")
         deadline = time.monotonic() + 30
