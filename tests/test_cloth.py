@@ -143,16 +143,16 @@ def tube_file(tmp_path, radius, meters):
 def test_the_fallback_width_narrows_on_curved_cloth(tmp_path, radius, meters):
     """A tube of radius R (metres) gets the tube's width, whatever the cloth, W = min(W_cloth,
     7.7 cm (R / 10 cm)^0.5) in scene units, R at least CURVED_RADIUS_MIN_M: a 6 cm sleeve
-    6.0 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (10.2 cm); cotton
-    narrows under 17.5 cm."""
+    6.0 cm, a 0.5 cm strap as a 2 cm tube, a 50 cm drum as flat cotton (9.5 cm); cotton
+    narrows under 15.2 cm."""
     path = tube_file(tmp_path, radius, meters)
     width, note = fallback_width(path)
-    expected = min(0.102, 0.077 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
+    expected = min(0.095, 0.077 * (max(radius, 0.02) / 0.10) ** 0.5) / meters
     assert (schema.CLOTH_WIDTHS_M["cotton"], schema.CURVED_WIDTH_M, schema.CURVED_RADIUS_M,
-            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.102, 0.077, 0.10, 0.5,
+            schema.CURVED_EXPONENT, schema.CURVED_RADIUS_MIN_M) == (0.095, 0.077, 0.10, 0.5,
                                                                    0.02)
     assert width == pytest.approx(expected, rel=1e-4)
-    assert ("narrower where curved under 17.5 cm" in note) == (radius < 0.175)
+    assert ("narrower where curved under 15.2 cm" in note) == (radius < 0.1522)
     if radius == 0.06:
         assert width * meters == pytest.approx(0.0596, abs=1e-4)
 
@@ -231,7 +231,7 @@ def test_check_and_the_bake_summary_print_the_effective_width(gl_context, tmp_pa
            "0.01))" in out
     curved = tube_file(tmp_path, 0.06, 0.01)
     assert main(["check", str(curved), "--wrinkles-only"]) == 0
-    assert ("W = 5.964 scene units (cotton 10.2 cm flat, narrower where curved under 17.5 cm "
+    assert ("W = 5.964 scene units (cotton 9.5 cm flat, narrower where curved under 15.2 cm "
             "(metersPerUnit 0.01))") in capsys.readouterr().out
     assert main(["check", str(path), "--wrinkles-only", "--json"]) == 0
     widths = json.loads(capsys.readouterr().out)["widths"]

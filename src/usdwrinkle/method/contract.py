@@ -67,11 +67,12 @@ COARSENING_MAX = 1.5
 #: gates that read the curvature along the crests (a tube's, not a pleat's) switched
 #: with the turning direction and moved the crests (bend 1.89x, held 3.4x), or, frozen
 #: where the fold formed, coarsened most of the sleeve (bend 2.12x): docs/method.md.
-#: The window's lower edge: the referee's 25 cm cotton sleeve (W 10.2 cm, 0.84 of its
-#: tube's 12.2) folds at 7.9-9.4 cm through its bend, not coarsening; at (0.75, 0.9) its
-#: cap was 1.19 and its wavelength 1.32x the cloth's, at (0.68, 0.8) 1 and 1.07x. The
-#: shirt's sleeve lies below 0.68 throughout (its cap stays 1.5); the pillow's cap fell
-#: at 130 of its 1202 points (mean 1.390 -> 1.376, misfit 0.600 -> 0.612), CesiumMan's at
+#: The window's lower edge: the referee's 25 cm cotton sleeve (W 10.2 cm, the cotton
+#: preset until 2026-12-06, 0.84 of its tube's 12.2) folds at 7.9-9.4 cm through its
+#: bend, not coarsening; at (0.75, 0.9) its cap was 1.19 and its wavelength 1.32x the
+#: cloth's, at (0.68, 0.8) 1 and 1.07x (at cotton's 9.5 cm since, 0.78 of its tube's,
+#: 1.04x). The shirt's sleeve lies below 0.68 throughout (its cap stays 1.5); the pillow's
+#: cap fell at 130 of its 1202 points (mean 1.390 -> 1.376, misfit 0.600 -> 0.612), CesiumMan's at
 #: 4 of 3273, no other sample stage's (2026-12-03).
 CURVED_COARSENING = (0.68, 0.8, 1.2, 1.5)
 ONE_WAY = (0.5, 0.9)
