@@ -577,7 +577,8 @@ def main(argv=None) -> int:
                              "sweep: usdwrinkle against it (1 cm, 10 iterations); "
                              "converged: against it at 160 iterations, 2 cm (1 cm for the "
                              "shots in CONVERGED_FINER) (10-32 minutes of solver per shot "
-                             "at 2 cm on one core, 25-80 at 1 cm); all: the three")
+                             "at 2 cm on one core, 25 minutes to 4 hours at 1 cm); all: the "
+                             "three")
     parser.add_argument("--write", type=Path, default=None,
                         help="replace the chosen blocks of this file (docs/physics.md)")
     parser.add_argument("--keep-uncached", action="store_true",
