@@ -116,7 +116,7 @@ def measured_controls(stage, mesh_width: bool, slack: float | None = 0.0) -> Non
     compression under 6% draws none, and the per-tile and colour-ramp comparisons lose
     their signal; None leaves the fallback, as test_realclients' Storm normals check), and with
     ``mesh_width`` (a corpus asset wrinkled with --all-meshes) wrinkle:cloth = "mesh",
-    4 x its mean edge: CesiumMan, in metres, would get cotton's 1.3-8.5 cm folds, finer
+    4 x its mean edge: CesiumMan, in metres, would get cotton's 3.4-9.5 cm folds, finer
     than these frames resolve. The renderers' agreement is what is tested, not the defaults
     (docs/physics.md tests those)."""
     from pxr import Sdf, UsdGeom
