@@ -335,27 +335,31 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
 
     default, _ = baked("default")
     first = per_phase(sim, default)
+    default_w = default_width(sim.shot)
     width = matched_width(sim.shot, first)
     matched, matched_fine = baked("matched", width)
-    off = np.log(mean_ratio(per_phase(sim, matched)))
+    phases = per_phase(sim, matched)
+    off = np.log(mean_ratio(phases))
     if abs(off) > MATCH_TOLERANCE:
         # the law is not linear in W (the coarsening gate): one secant step on log W
         # between the default bake and this one, kept where it lands nearer
-        slope = (off - np.log(mean_ratio(first))) / np.log(width / default_width(sim.shot))
+        slope = (off - np.log(mean_ratio(first))) / np.log(width / default_w)
         if np.isfinite(slope) and abs(slope) > 1e-3:
             again = width * float(np.exp(-off / slope))
             bake_again, again_fine = baked("matched again", again)
-            if abs(np.log(mean_ratio(per_phase(sim, bake_again)))) < abs(off):
+            phases_again = per_phase(sim, bake_again)
+            if abs(np.log(mean_ratio(phases_again))) < abs(off):
                 width, matched, matched_fine = again, bake_again, again_fine
+                phases = phases_again
     result = compare(sim, matched)
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
               if key.startswith("motion") and key.endswith(" sim")}
-    return {"default": first, "matched": per_phase(sim, matched), "width": width,
+    return {"default": first, "matched": phases, "width": width,
             "matched bake": matched, "compared": result,
             "correlation": result["correlation"], "motion": motion,
             "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK, matched_fine),
             "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK),
-            "default_width": default_width(sim.shot)}
+            "default_width": default_w}
 
 
 def mean_ratio(phases: dict) -> float:
