@@ -96,7 +96,7 @@ FOLD_ROOM = 0.5
 #: along the wave; at most DEEPEN_CAP times the full fold's height, and at most a |kappa|
 #: a / FOLD_ROOM of it, so that it fades where the surface turns flat along the wave.
 #: Measured (docs/physics.md, "Deepening the pleats where the room is short"; cap: held
-#: 25 cm sleeve's crest motion over the cloth's, leather curtain's correlation and area,
+#: 25 cm sleeve's crest motion over the cloth's, leather curtain's (2 cm run) correlation and area,
 #: curtain sample's area): 0: 1.01x, 0.74, 0.729, 0.627; 0.6: 0.99x, 0.91, 0.994, 0.911;
 #: 0.75: 0.99x, 0.91, 1.02, 0.990; 1: 0.99x, 1.026 (the curtain sample). So 0.75: the
 #: curtain sample keeps its area (bar 0.95) and no other bar moves. Until the crest

@@ -86,19 +86,17 @@ DEFAULT_TENSION_THRESHOLD = 0.02
 #: Fallback width: the cloth's (wrinkle:cloth) onset fold wavelength in metres on flat
 #: cloth (W: the posed wavelength folds keep while they coarsen, docs/method.md), from
 #: the cloth referee's curtains and sheared panels at its solver's convergence (Newton's
-#: VBD at 160 iterations on a 2 cm grid, 1 cm where a 1 cm run differs: both curtains of
-#: silk and cotton and both panels; benchmarks/physics/referee.py CONVERGED,
-#: CONVERGED_FINER; docs/physics.md): for silk, cotton and leather (bending 2.5e-6, 1e-5
-#: and 1.6e-4 N m) the W whose worst wavelength ratio over the cloth's flat shots (its
-#: curtain's phases from 8% to 48% compression and, for cotton and leather, its sheared
-#: panel's, and for cotton the 25 cm sleeve's, whose W is the flat one) is smallest
-#: (cotton 1.23x). Leather keeps the 16.8 cm fitted on its 2 cm panel until its curtain
-#: has a 1 cm run: its 1 cm panel (12.8 cm) and 2 cm curtain (19-22 cm) lie 1.75x apart,
-#: 1.56x at 16.8 cm, 1.41x at best (14.7 cm, where the curtain's onset falls to 0.71x).
+#: VBD at 160 iterations on a 2 cm grid, 1 cm where a 1 cm run differs: the three curtains
+#: and both panels; benchmarks/physics/referee.py CONVERGED, CONVERGED_FINER;
+#: docs/physics.md): for silk, cotton and leather (bending 2.5e-6, 1e-5 and 1.6e-4 N m)
+#: the W whose worst wavelength ratio over the cloth's flat shots (its curtain's phases
+#: from 8% to 48% compression and, for cotton and leather, its sheared panel's, and for
+#: cotton the 25 cm sleeve's, whose W is the flat one) is smallest (cotton 1.23x, leather
+#: 1.19x: 16.8 cm until its curtain's 1 cm run, which folds 0.7x as long as its 2 cm one).
 #: Denim (4e-5 N m) between cotton and leather by their power law in D (the geometric
 #: mean).
 #: Converted to scene units through the stage's metersPerUnit.
-CLOTH_WIDTHS_M = {"silk": 0.072, "cotton": 0.095, "denim": 0.126, "leather": 0.168}
+CLOTH_WIDTHS_M = {"silk": 0.072, "cotton": 0.095, "denim": 0.107, "leather": 0.120}
 #: On curved cloth (a sleeve, a trouser leg) the fallback width is the tube's, whatever the
 #: cloth: CURVED_WIDTH_M at a rest radius of curvature of CURVED_RADIUS_M, as (R /
 #: CURVED_RADIUS_M) ** CURVED_EXPONENT (R the point's smallest radius of curvature, never
