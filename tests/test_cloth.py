@@ -68,6 +68,21 @@ def test_the_fallback_width_is_the_cloth_s_in_scene_units(tmp_path, meters, clot
     assert ("unauthored" in note) == (meters is None)
 
 
+def test_denim_lies_between_cotton_and_leather_by_their_power_law():
+    """Denim is not fitted (the referee's sweep has no denim shot): its bending is the
+    geometric mean of cotton's and leather's (benchmarks/physics/sweep.py FABRICS), so its
+    fallback W is the geometric mean of theirs, to the millimetre the presets are kept
+    to (schema.CLOTH_WIDTHS_M; docs/decisions.md). Refitting cotton or leather without
+    denim fails here."""
+    from benchmarks.physics.sweep import FABRICS
+
+    assert FABRICS["denim"] == pytest.approx(np.sqrt(FABRICS["cotton"] * FABRICS["leather"]))
+    widths = schema.CLOTH_WIDTHS_M
+    assert widths["denim"] == pytest.approx(np.sqrt(widths["cotton"] * widths["leather"]),
+                                            abs=5e-4)
+    assert widths["silk"] < widths["cotton"] < widths["denim"] < widths["leather"]
+
+
 def test_cloth_mesh_is_the_old_edge_multiple_and_an_authored_width_wins(tmp_path):
     path, rest, counts, indices = sheet_file(tmp_path, 1.0)
     stage = Usd.Stage.Open(str(path))
