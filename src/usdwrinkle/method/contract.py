@@ -96,10 +96,12 @@ FOLD_ROOM = 0.5
 #: along the wave; at most DEEPEN_CAP times the full fold's height, and at most a |kappa|
 #: a / FOLD_ROOM of it, so that it fades where the surface turns flat along the wave.
 #: Measured (docs/physics.md, "Deepening the pleats where the room is short"; cap: held
-#: 25 cm sleeve's crest motion over the cloth's, leather curtain's (2 cm run) correlation and area,
-#: curtain sample's area): 0: 1.01x, 0.74, 0.729, 0.627; 0.6: 0.99x, 0.91, 0.994, 0.911;
-#: 0.75: 0.99x, 0.91, 1.02, 0.990; 1: 0.99x, 1.026 (the curtain sample). So 0.75: the
-#: curtain sample keeps its area (bar 0.95) and no other bar moves. Until the crest
+#: 25 cm sleeve's crest motion over the cloth's, the leather curtain's correlation and
+#: area (its 2 cm run), the curtain sample's area): 0: 1.01x, 0.74, 0.729, 0.627; 0.6:
+#: 0.99x, 0.91, 0.994, 0.911; 0.75: 0.99x, 0.91, 1.02, 0.990; 1: 0.99x, 1.026 (the
+#: curtain sample). So 0.75: the curtain sample keeps its area (bar 0.95) and no other
+#: bar moved. On the leather curtain's 1 cm run, judged since 2026-12-06: 0.82, 0.870 at
+#: 0; 0.79, 0.938 at 0.75 (docs/physics.md, "The leather curtain at 1 cm"). Until the crest
 #: damping became a play (2026-12-06) the held sleeve's crests moved 1.35-1.54x the
 #: cloth's from cap 0.7 on, in one frame's catch-up after the arm stopped, and the cap
 #: was 0.6.
