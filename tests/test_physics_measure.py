@@ -370,22 +370,14 @@ def test_the_converged_table_is_the_referee_s_grids_and_presets():
     and its default W the one usdwrinkle gives the shot now (the preset through the
     curvature law). A preset refitted, or a shot moved to its 1 cm run, without the table
     made again fails here (the leather preset moved 16.8 -> 12.0 cm on 2026-12-06)."""
-    from pathlib import Path
+    from benchmarks.physics.referee import ROOT, SWEEP, default_width, kept_rows, referee_grid
 
-    from benchmarks.physics.referee import SWEEP, default_width, referee_grid
-
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "physics.md").read_text()
-    block = doc[doc.index("<!-- referee-converged:begin -->"):
-                doc.index("<!-- referee-converged:end -->")]
-    rows = {}
-    for line in block.splitlines():
-        cells = [c.strip() for c in line.strip("|").split("|")]
-        if len(cells) > 4 and cells[0] in SWEEP:
-            rows[cells[0]] = cells
-    assert set(rows) == set(SWEEP)
-    for name, cells in rows.items():
+    doc = (ROOT / "docs" / "physics.md").read_text()
+    for name, make in SWEEP.items():
+        kept = kept_rows(doc, "converged", name)
+        assert kept is not None, name
+        cells = [c.strip() for c in kept[0].strip("|").split("|")]
         grid = referee_grid(name, True)
         assert cells[2] == f"{100 * grid:g} cm", name
         printed = float(cells[4].split(",")[0])
-        assert printed == pytest.approx(100 * default_width(SWEEP[name](grid).shot),
-                                        abs=0.051), name
+        assert printed == pytest.approx(100 * default_width(make(grid).shot), abs=0.051), name
