@@ -381,3 +381,36 @@ def test_the_converged_table_is_the_referee_s_grids_and_presets():
         assert cells[2] == f"{100 * grid:g} cm", name
         printed = float(cells[4].split(",")[0])
         assert printed == pytest.approx(100 * default_width(make(grid).shot), abs=0.051), name
+
+
+def test_the_correlation_s_parts_on_folds_that_fall_down_the_curtain():
+    """benchmarks.physics.bands.correlations on 7 cm folds that grow over 6 frames. The
+    cloth's fall to half their height from the top row to the bottom one; ours stand
+    evenly. Ours is then a linear function of its frame means, so its correlation with
+    the cloth's field equals that of the cloth's field's own frame means, sqrt(between-frame
+    sum of squares / total): the analysis of variance, computed here without the module.
+    The cloth's mean per row restores its field, and ours smoothed across changes nothing."""
+    from benchmarks.physics.bands import correlations
+    from benchmarks.physics.oracle import zones
+
+    shot = flat_shot(rows=49, cols=65)
+    shot.frames = 6
+    shot.phases = {"push": (1, 6)}
+    x, y = shot.material[:, 0], shot.material[:, 1]
+    shot.pinned[y == 0.0] = True                # the rings
+    wave = np.cos(2 * np.pi / 0.07 * x)
+    grow = np.linspace(0.2, 1.0, shot.frames)[:, None]
+    sim_h = 0.01 * grow * (1.0 - 0.5 * y / y.max()) * wave
+    our_h = 0.008 * grow * wave
+    parts = correlations(shot, sim_h, our_h)
+
+    inner = zones(shot)["all"]
+    field = measure.amplitude_field(shot, sim_h)[:, inner]
+    between = (field.mean(1, keepdims=True) - field.mean()) ** 2 * field.shape[1]
+    expected = np.sqrt(between.sum() / ((field - field.mean()) ** 2).sum())
+    assert expected < 0.99                      # the place carries part of the field
+    assert parts["whole"] == pytest.approx(expected, abs=2e-3)
+    assert parts["frame means"] == pytest.approx(expected, abs=2e-3)
+    assert parts["our rows"] == pytest.approx(expected, abs=2e-3)
+    assert parts["ours smoothed across"] == pytest.approx(expected, abs=2e-3)
+    assert parts["cloth rows"] > 0.999

@@ -1,0 +1,188 @@
+"""The curtains band by band, from the rings to the hem (issue 55: where the amplitude-field
+correlation goes).
+
+    python -m benchmarks.physics.bands [--write docs/physics.md] [--only SHOT ...]
+                                       [--grid M] [--cache .physics-cache]
+
+The correlation bar compares the two amplitude fields (measure.amplitude_field) over the
+cloth and the shot's frames at once. Per curtain, baked at its matched W as the
+converged table bakes it (referee.sweep_row), this prints:
+
+- the correlation, and what parts of the fields carry it: ours replaced by its own mean
+  over the cloth at each frame (no place in it, only the folds' growth in time); the
+  cloth's own mean per grid row (its profile from the rings to the hem, the same across
+  the curtain); ours the same; ours smoothed across the curtain (a Gaussian of ACROSS
+  along each grid row);
+- per band of BAND grid rows (from the rings down), at the last phase: the area over the
+  rest area of the low-pass (the coarse surface), of the cloth's offsets along its
+  normals, and of the same offsets band-passed as the measure takes them (measure.detail:
+  less their own window's average, which drops what sharpens the low-pass's own folds);
+  the material wavelength and the RMS fold height, the cloth's and ours.
+
+Needs the cached simulations at the converged referee's 160 iterations (``--grid``,
+1 cm by default: the grid the converged table judges the curtains on); about 15 s a
+curtain here (two or three bakes).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..blocks import add_write_option, emit, markers
+from . import measure, referee
+from .coarse import _smooth_axis, lowpass
+from .oracle import zones
+
+NAME = "referee-bands"
+#: the shots this measures: the curtains, whose grid rows run from the rings to the hem
+CURTAINS = ("curtain-silk", "curtain-cotton", "curtain-leather")
+#: m, the grid of the simulations measured (the converged table's for the curtains)
+GRID = 0.01
+#: grid rows in a band (13 cm at 1 cm)
+BAND = 13
+#: m, the Gaussian that smooths our field across the curtain
+ACROSS = 0.2
+
+
+def _rows_mean(field: np.ndarray, inner: np.ndarray) -> np.ndarray:
+    """(frames, rows, 1): each grid row's mean over the inner zone."""
+    kept = np.where(inner, field, 0.0).sum(-1, keepdims=True)
+    count = np.maximum(inner.sum(-1, keepdims=True), 1)
+    return kept / count
+
+
+def correlations(shot, sim_h: np.ndarray, our_h: np.ndarray) -> dict:
+    """The correlation of the amplitude fields over the shot's moving frames (as
+    oracle.compare takes it) and of the parts named in the module docstring."""
+    rows, cols = shot.rows, shot.cols
+    moving = list(range(min(start for start, _ in shot.phases.values()) - 1, shot.frames))
+    inner = zones(shot)["all"]
+    grid_inner = inner.reshape(rows, cols)
+    sim = measure.amplitude_field(shot, sim_h[moving]).reshape(-1, rows, cols)
+    ours = measure.amplitude_field(shot, our_h[moving]).reshape(-1, rows, cols)
+    ones = np.ones_like(ours)
+
+    def against_sim(field):
+        return measure.correlation(field.reshape(len(moving), -1)[:, inner],
+                                   sim.reshape(len(moving), -1)[:, inner])
+
+    frame_mean = ours.reshape(len(moving), -1)[:, inner].mean(1)[:, None, None]
+    across = _smooth_axis(ours, 2, ACROSS / shot.spacing, False)
+    return {"whole": against_sim(ours), "frame means": against_sim(frame_mean * ones),
+            "cloth rows": against_sim(_rows_mean(sim, grid_inner) * ones),
+            "our rows": against_sim(_rows_mean(ours, grid_inner) * ones),
+            "ours smoothed across": against_sim(across)}
+
+
+def bands(sim, our_h: np.ndarray, frame: int) -> list[dict]:
+    """Per band of BAND grid rows at ``frame`` (module docstring)."""
+    from usdwrinkle.geometry.measure import triangle_areas
+
+    from .newton_client import triangles
+
+    shot = sim.shot
+    tri = triangles(shot.quads())
+    rest = triangle_areas(shot.rest, tri)
+    inner = zones(shot)["all"]
+    row_of = np.repeat(np.arange(shot.rows), shot.cols)
+    points = sim.points[frame]
+    low = lowpass(shot, points[None])[0]
+    normals = measure.grid_normals(shot, low[None])[0]
+    h = ((points - low) * normals).sum(-1)
+    passed = measure.detail(shot, h[None])[0]
+    out = []
+    for first in range(0, shot.rows, BAND):
+        points_in = inner & (row_of >= first) & (row_of < first + BAND)
+        faces = inner[tri].all(1) & points_in[tri].all(1)
+        if faces.sum() < 50:
+            continue
+
+        def area(surface, faces=faces):
+            return float(triangle_areas(surface, tri)[faces].sum() / rest[faces].sum())
+
+        out.append({"rows": (first, min(first + BAND, shot.rows) - 1),
+                    "low": area(low), "offsets": area(low + h[:, None] * normals),
+                    "passed": area(low + passed[:, None] * normals),
+                    "wavelength": (measure.wavelength(shot, sim.h[frame], points_in),
+                                   measure.wavelength(shot, our_h[frame], points_in)),
+                    "rms": (measure.rms(sim.h[frame], points_in),
+                            measure.rms(our_h[frame], points_in))})
+    return out
+
+
+def shot_rows(name: str, cache, grid: float) -> dict:
+    sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
+    row = referee.sweep_row(sim, fine)
+    our_h = row["matched bake"].h
+    last_phase, (_, end) = list(sim.shot.phases.items())[-1]
+    return {"grid": grid, "window": sim.shot.window, "width": row["width"],
+            "correlations": correlations(sim.shot, sim.h, our_h),
+            "phase": last_phase, "bands": bands(sim, our_h, end - 1),
+            "spacing": sim.shot.spacing}
+
+
+def report(rows: dict, seconds: float, grid: float) -> str:
+    begin, end = markers(NAME)
+    lines = [begin, "", f"Made by `python -m benchmarks.physics.bands --write docs/physics.md"
+             f"` ({seconds:.0f} s here; the simulations at {grid * 100:g} cm and 160 "
+             "iterations, cached in .physics-cache).", "",
+             "The amplitude-field correlation at matched W, and with ours replaced by: its "
+             "mean over the cloth at each frame; the cloth's mean per grid row; our own mean "
+             f"per grid row; ours smoothed across the curtain ({ACROSS * 100:g} cm).", "",
+             "| shot | window | matched W | correlation | ours: frame means | the cloth's rows "
+             "| our rows | ours smoothed across |", "|---|---|---|---|---|---|---|---|"]
+    for name, row in rows.items():
+        c = row["correlations"]
+        lines.append(f"| {name} | {row['window'] * 100:.1f} cm | {row['width'] * 100:.1f} cm "
+                     f"| {c['whole']:.3f} | {c['frame means']:.3f} | {c['cloth rows']:.3f} "
+                     f"| {c['our rows']:.3f} | {c['ours smoothed across']:.3f} |")
+    lines += ["", "At the last phase, band by band from the rings to the hem: the area over "
+              "the rest area of the low-pass, of the cloth's offsets along its normals, and of "
+              "the same band-passed as the measure takes them; the material wavelength and the "
+              "RMS fold height (cloth, ours).", "",
+              "| shot | band (cm from the rings) | low-pass | normal offsets | band-passed "
+              "| wavelength: cloth, ours | RMS height: cloth, ours |",
+              "|---|---|---|---|---|---|---|"]
+    for name, row in rows.items():
+        for band in row["bands"]:
+            top, bottom = (v * row["spacing"] * 100 for v in band["rows"])
+            lines.append(
+                f"| {name} | {top:.0f}-{bottom:.0f} | {band['low']:.3f} | "
+                f"{band['offsets']:.3f} | {band['passed']:.3f} | "
+                f"{band['wavelength'][0] * 100:.1f}, {band['wavelength'][1] * 100:.1f} cm | "
+                f"{band['rms'][0] * 1000:.1f}, {band['rms'][1] * 1000:.1f} mm |")
+    lines += ["", end]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.bands",
+                                     description=__doc__.split("\n\n")[0])
+    add_write_option(parser, NAME, "docs/physics.md")
+    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
+                        help=f"these curtains (default: {', '.join(CURTAINS)})")
+    parser.add_argument("--grid", type=float, default=GRID, metavar="M",
+                        help=f"the simulations' grid spacing in metres (default {GRID}: the "
+                             "grid the converged table judges the curtains on)")
+    parser.add_argument("--cache", type=Path, default=referee.ROOT / ".physics-cache")
+    args = parser.parse_args(argv)
+    names = args.only or list(CURTAINS)
+    elsewhere = sorted(set(names) - set(CURTAINS))
+    if elsewhere:
+        parser.error(f"not a curtain: {', '.join(elsewhere)} (shots: {', '.join(CURTAINS)})")
+    started = time.perf_counter()
+    rows = {}
+    for number, name in enumerate(names, start=1):
+        # a shot not in the cache is simulated first: minutes to hours on one core
+        print(f"bands: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
+        rows[name] = shot_rows(name, args.cache, args.grid)
+    emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
