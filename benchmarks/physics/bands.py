@@ -26,9 +26,7 @@ curtain here (two or three bakes).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -163,23 +161,13 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.bands",
                                      description=__doc__.split("\n\n")[0])
     add_write_option(parser, NAME, "docs/physics.md")
-    parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
-                        help=f"these curtains (default: {', '.join(CURTAINS)})")
-    parser.add_argument("--grid", type=float, default=GRID, metavar="M",
-                        help=f"the simulations' grid spacing in metres (default {GRID}: the "
-                             "grid the converged table judges the curtains on)")
-    parser.add_argument("--cache", type=Path, default=referee.ROOT / ".physics-cache")
+    referee.add_shot_options(parser, CURTAINS, GRID,
+                             "the grid the converged table judges the curtains on")
     args = parser.parse_args(argv)
-    names = args.only or list(CURTAINS)
-    elsewhere = sorted(set(names) - set(CURTAINS))
-    if elsewhere:
-        parser.error(f"not a curtain: {', '.join(elsewhere)} (shots: {', '.join(CURTAINS)})")
+    names = referee.chosen_shots(parser, args)
     started = time.perf_counter()
-    rows = {}
-    for number, name in enumerate(names, start=1):
-        # a shot not in the cache is simulated first: minutes to hours on one core
-        print(f"bands: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
-        rows[name] = shot_rows(name, args.cache, args.grid)
+    rows = {name: shot_rows(name, args.cache, args.grid)
+            for name in referee.each_shot("bands", names)}
     emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
     return 0
 

@@ -38,7 +38,6 @@ about 20 s a shot here (two bakes).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -187,11 +186,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     names = referee.chosen_shots(parser, args)
     started = time.perf_counter()
-    rows = {}
-    for number, name in enumerate(names, start=1):
-        # a shot not in the cache is simulated first: minutes to an hour on one core
-        print(f"heightfield: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
-        rows[name] = shot_rows(name, args.cache, args.grid)
+    rows = {name: shot_rows(name, args.cache, args.grid)
+            for name in referee.each_shot("heightfield", names)}
     emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
     return 0
 

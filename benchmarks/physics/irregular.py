@@ -18,7 +18,6 @@ About 12 s a shot and value here with the simulations cached.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -100,9 +99,7 @@ def main(argv=None) -> int:
         parser.error(f"irregularities must be in [0, {IRREGULARITY_MAX:g}]")
     started = time.perf_counter()
     rows = {}
-    for number, name in enumerate(names, start=1):
-        # a shot not in the cache is simulated first: minutes to an hour on one core
-        print(f"irregular: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
+    for name in referee.each_shot("irregular", names):
         for value in args.values:
             rows[(name, value)] = shot_row(name, args.cache, args.grid, value)
     emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import sys
 import time
 from pathlib import Path
 
@@ -573,24 +574,36 @@ def _newton_version() -> str:
         return "?"
 
 
-def add_shot_options(parser) -> None:
+def add_shot_options(parser, shots=tuple(SWEEP), grid: float = CONVERGED[0],
+                     grid_doc: str = "the converged referee's") -> None:
     """The options of a command measured per shot of the converged sweep (heightfield.py,
-    irregular.py): --only, --grid, --cache; chosen_shots reads them."""
+    irregular.py, bands.py): --only (among ``shots``), --grid (``grid`` by default,
+    ``grid_doc`` saying whose), --cache; chosen_shots reads them."""
+    parser.set_defaults(shot_choices=tuple(shots))
     parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
-                        help=f"these shots (default: all of {', '.join(SWEEP)})")
-    parser.add_argument("--grid", type=float, default=CONVERGED[0], metavar="M",
-                        help="the simulations' grid spacing in metres (default "
-                             f"{CONVERGED[0]}: the converged referee's)")
+                        help=f"these shots (default: all of {', '.join(shots)})")
+    parser.add_argument("--grid", type=float, default=grid, metavar="M",
+                        help=f"the simulations' grid spacing in metres (default {grid}: "
+                             f"{grid_doc})")
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
 
 
 def chosen_shots(parser, args) -> list[str]:
-    """The shots of add_shot_options' --only (every shot of the sweep by default); an
+    """The shots of add_shot_options' --only (every one of its shots by default); an
     unknown one is a usage error."""
-    unknown = sorted(set(args.only or ()) - set(SWEEP))
+    shots = args.shot_choices
+    unknown = sorted(set(args.only or ()) - set(shots))
     if unknown:
-        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(SWEEP)})")
-    return args.only or list(SWEEP)
+        parser.error(f"unknown shots {', '.join(unknown)} (shots: {', '.join(shots)})")
+    return args.only or list(shots)
+
+
+def each_shot(command: str, names: list[str]):
+    """``names`` in turn, each announced on stderr as ``command: i/n name`` (a shot not in
+    the cache is simulated first: minutes to hours on one core)."""
+    for number, name in enumerate(names, start=1):
+        print(f"{command}: {number}/{len(names)} {name}", file=sys.stderr, flush=True)
+        yield name
 
 
 def main(argv=None) -> int:
