@@ -6,7 +6,7 @@ correlation goes).
 
 The correlation bar compares the two amplitude fields (measure.amplitude_field) over the
 cloth and the shot's frames at once. Per curtain, baked at its matched W as the
-converged table bakes it (referee.sweep_row), this prints:
+converged table matches it (referee.matched_bakes), this prints:
 
 - the correlation, and what parts of the fields carry it: ours replaced by its own mean
   over the cloth at each frame (no place in it, only the folds' growth in time); the
@@ -114,7 +114,7 @@ def bands(sim, our_h: np.ndarray, frame: int) -> list[dict]:
 
 def shot_rows(name: str, cache, grid: float) -> dict:
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
-    row = referee.sweep_row(sim, fine)
+    row = referee.matched_bakes(sim, fine, referee.cloth_attributes(sim.shot))
     our_h = row["matched bake"].h
     last_phase, (_, end) = list(sim.shot.phases.items())[-1]
     return {"grid": grid, "window": sim.shot.window, "width": row["width"],

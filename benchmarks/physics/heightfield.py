@@ -29,7 +29,7 @@ the slack (where referee.area_ratio takes the area bar), this prints:
   (measure.spectral_spread): at the same small-slope length, folds of spread c stand 1 / c
   as high as one wave of their mean wavelength;
 - usdwrinkle's fold height over the cloth's at the W matched to the simulation (baked as
-  the referee bakes it: referee.bake_on, matched_width), beside s.
+  the converged table matches it: referee.matched_bakes), beside s.
 
 Needs the cached simulations (referee.py; at the converged referee's 160 iterations), on
 one grid for every shot (``--grid``, 2 cm; the converged table takes three shots at 1 cm);
@@ -46,7 +46,7 @@ import numpy as np
 from ..blocks import add_write_option, emit, markers
 from . import measure, referee
 from .coarse import lowpass
-from .oracle import per_phase, zones
+from .oracle import zones
 from .referee import CONVERGED
 
 NAME = "referee-heightfield"
@@ -119,16 +119,13 @@ def phase_row(shot, points: np.ndarray, slack: float) -> dict | None:
 def shot_rows(name: str, cache: Path, grid: float) -> dict:
     """Per phase (its name: phase_row, with the cloth's spectral spread) for the shot
     simulated on ``grid`` at the converged referee's iterations; and usdwrinkle baked on
-    it at the W matched to it (as the referee bakes: referee.bake_on), with its height
-    ratio and spectral spread per phase."""
+    it at the W matched to it as the converged table matches it (referee.matched_bakes),
+    with its height ratio and spectral spread per phase."""
     from usdwrinkle.usd import schema
 
     sim, fine = referee.referee_pair(name, cache, grid, CONVERGED[1])
-    cloth = referee.cloth_attributes(sim.shot)
-    default, _ = referee.bake_on(sim, fine, "default", None, cloth)
-    width = referee.matched_width(sim.shot, per_phase(sim, default))
-    ours, _ = referee.bake_on(sim, fine, "matched", width, cloth)
-    heights = per_phase(sim, ours)
+    bakes = referee.matched_bakes(sim, fine, referee.cloth_attributes(sim.shot))
+    width, ours, heights = bakes["width"], bakes["matched bake"], bakes["matched"]
     inside = zones(sim.shot)["all"]
     phases = {}
     for phase, (_, end) in sim.shot.phases.items():

@@ -90,7 +90,7 @@ BARS = {"wavelength": 1.3, "amplitude_matched": 1.25, "correlation_flat": 0.85,
 
 
 #: a matched bake whose mean wavelength ratio is off by more than this (in log) gets one
-#: secant step more (sweep_row): where the coarsening gate opens, our wavelength is not
+#: secant step more (matched_bakes): where the coarsening gate opens, our wavelength is not
 #: proportional to W (the 25 cm sleeve: 1.04x at 9.5 cm, 1.21x at 9.1 cm)
 MATCH_TOLERANCE = 0.03
 
@@ -318,20 +318,13 @@ def bake_on(sim: Simulated, fine: Simulated | None, label: str, width: float | N
     return on_coarser_grid(out, fine.shot, sim.shot), out
 
 
-def sweep_row(sim: Simulated, fine: Simulated | None = None,
-              attributes: dict | None = None) -> dict:
-    """usdwrinkle at the default width and at the width matched to the simulation's mean
-    wavelength, against the simulation: per phase (ours / sim) wavelength and height, the
-    amplitude-field correlation, the crest motion at the elbow, our area ratio. ``fine``:
-    the simulation resampled at half its spacing, which usdwrinkle is baked on (its area
-    taken there) and measured from at the simulation's points (oracle.on_coarser_grid).
-    ``attributes``: more WrinkleAPI values to author beside the cloth's (name -> (type,
-    value), as oracle.bake takes them). ``matched bake``: the bake at the matched W,
-    measured at the simulation's points."""
-    from usdwrinkle.usd import schema
-
-    cloth = {**cloth_attributes(sim.shot), **(attributes or {})}
-
+def matched_bakes(sim: Simulated, fine: Simulated | None, cloth: dict) -> dict:
+    """usdwrinkle baked on the simulation (bake_on) at the default width and at the width
+    matched to the simulation's mean wavelength (matched_width; where that bake is still
+    more than MATCH_TOLERANCE off, one secant step on log W between the two bakes, kept
+    where it lands nearer). ``cloth``: the WrinkleAPI values authored (oracle.bake's
+    attributes). ``default`` and ``matched``: per_phase's ratios of the two bakes;
+    ``matched bake`` and ``matched fine``: bake_on's pair at the matched ``width``."""
     def baked(label: str, width: float | None = None):
         return bake_on(sim, fine, label, width, cloth)
 
@@ -353,15 +346,33 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
             if abs(np.log(mean_ratio(phases_again))) < abs(off):
                 width, matched, matched_fine = again, bake_again, again_fine
                 phases = phases_again
-    result = compare(sim, matched)
+    return {"default": first, "default_width": default_w, "width": width,
+            "matched": phases, "matched bake": matched, "matched fine": matched_fine}
+
+
+def sweep_row(sim: Simulated, fine: Simulated | None = None,
+              attributes: dict | None = None) -> dict:
+    """usdwrinkle at the default width and at the width matched to the simulation's mean
+    wavelength (matched_bakes), against the simulation: per phase (ours / sim) wavelength
+    and height, the amplitude-field correlation, the crest motion at the elbow, our area
+    ratio. ``fine``: the simulation resampled at half its spacing, which usdwrinkle is
+    baked on (its area taken there) and measured from at the simulation's points
+    (oracle.on_coarser_grid). ``attributes``: more WrinkleAPI values to author beside the
+    cloth's (name -> (type, value), as oracle.bake takes them). ``matched bake``: the bake
+    at the matched W, measured at the simulation's points."""
+    from usdwrinkle.usd import schema
+
+    cloth = {**cloth_attributes(sim.shot), **(attributes or {})}
+    row = matched_bakes(sim, fine, cloth)
+    width = row["width"]
+    result = compare(sim, row["matched bake"])
     motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
               if key.startswith("motion") and key.endswith(" sim")}
-    return {"default": first, "matched": phases, "width": width,
-            "matched bake": matched, "compared": result,
+    return {**row, "compared": result,
             "correlation": result["correlation"], "motion": motion,
-            "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK, matched_fine),
-            "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK),
-            "default_width": default_w}
+            "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK,
+                             row["matched fine"]),
+            "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK)}
 
 
 def mean_ratio(phases: dict) -> float:
@@ -373,7 +384,7 @@ def mean_ratio(phases: dict) -> float:
 def matched_width(shot, phases: dict) -> float:
     """The W matched to the simulation's mean wavelength: the default W over the geometric
     mean of the default bake's wavelength ratios per phase (``phases``: per_phase's).
-    sweep_row refines it where the bake at it is still MATCH_TOLERANCE off."""
+    matched_bakes refines it where the bake at it is still MATCH_TOLERANCE off."""
     return default_width(shot) / mean_ratio(phases)
 
 
