@@ -25,12 +25,9 @@ curtain here (two or three bakes).
 """
 from __future__ import annotations
 
-import argparse
-import time
-
 import numpy as np
 
-from ..blocks import add_write_option, emit, markers
+from ..blocks import markers
 from . import measure, referee
 from .coarse import _smooth_axis, lowpass
 from .oracle import zones
@@ -158,18 +155,9 @@ def report(rows: dict, seconds: float, grid: float) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.bands",
-                                     description=__doc__.split("\n\n")[0])
-    add_write_option(parser, NAME, "docs/physics.md")
-    referee.add_shot_options(parser, CURTAINS, GRID,
-                             "the grid the converged table judges the curtains on")
-    args = parser.parse_args(argv)
-    names = referee.chosen_shots(parser, args)
-    started = time.perf_counter()
-    rows = {name: shot_rows(name, args.cache, args.grid)
-            for name in referee.each_shot("bands", names)}
-    emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
-    return 0
+    return referee.shot_block_main(
+        argv, "bands", NAME, __doc__, shot_rows, report, shots=CURTAINS, grid=GRID,
+        grid_doc="the grid the converged table judges the curtains on")
 
 
 if __name__ == "__main__":

@@ -37,13 +37,11 @@ about 20 s a shot here (two bakes).
 """
 from __future__ import annotations
 
-import argparse
-import time
 from pathlib import Path
 
 import numpy as np
 
-from ..blocks import add_write_option, emit, markers
+from ..blocks import markers
 from . import measure, referee
 from .coarse import lowpass
 from .oracle import zones
@@ -176,17 +174,7 @@ def report(rows: dict, seconds: float, grid: float) -> str:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.heightfield",
-                                     description=__doc__.split("\n\n")[0])
-    add_write_option(parser, NAME, "docs/physics.md")
-    referee.add_shot_options(parser)
-    args = parser.parse_args(argv)
-    names = referee.chosen_shots(parser, args)
-    started = time.perf_counter()
-    rows = {name: shot_rows(name, args.cache, args.grid)
-            for name in referee.each_shot("heightfield", names)}
-    emit(args.write, NAME, report(rows, time.perf_counter() - started, args.grid))
-    return 0
+    return referee.shot_block_main(argv, "heightfield", NAME, __doc__, shot_rows, report)
 
 
 if __name__ == "__main__":

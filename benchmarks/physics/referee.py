@@ -609,6 +609,28 @@ def chosen_shots(parser, args) -> list[str]:
     return args.only or list(shots)
 
 
+def shot_block_main(argv, command: str, name: str, doc: str, shot_rows, report,
+                    **options) -> int:
+    """The command of a docs/physics.md block measured per shot (``python -m
+    benchmarks.physics.COMMAND [--write docs/physics.md] [--only SHOT ...] [--grid M]
+    [--cache DIR]``; heightfield.py, bands.py): ``shot_rows(shot, cache, grid)`` gives a
+    shot's row, ``report(rows, seconds, grid)`` the block ``name``; ``doc``: the module's
+    docstring (its first paragraph is the description); ``options``: add_shot_options'."""
+    from ..blocks import add_write_option, emit
+
+    parser = argparse.ArgumentParser(prog=f"python -m benchmarks.physics.{command}",
+                                     description=doc.split("\n\n")[0])
+    add_write_option(parser, name, "docs/physics.md")
+    add_shot_options(parser, **options)
+    args = parser.parse_args(argv)
+    names = chosen_shots(parser, args)
+    started = time.perf_counter()
+    rows = {shot: shot_rows(shot, args.cache, args.grid)
+            for shot in each_shot(command, names)}
+    emit(args.write, name, report(rows, time.perf_counter() - started, args.grid))
+    return 0
+
+
 def each_shot(command: str, names: list[str]):
     """``names`` in turn, each announced on stderr as ``command: i/n name`` (a shot not in
     the cache is simulated first: minutes to hours on one core)."""
