@@ -33,7 +33,7 @@ the slack (where referee.area_ratio takes the area bar), this prints:
 
 Needs the cached simulations (referee.py; at the converged referee's 160 iterations), on
 one grid for every shot (``--grid``, 2 cm; the converged table takes three shots at 1 cm);
-about 20 s a shot here (two bakes).
+about 10-20 s a shot here (two or three bakes).
 """
 from __future__ import annotations
 
