@@ -29,8 +29,8 @@ import numpy as np
 
 from ..blocks import markers
 from . import measure, referee
-from .coarse import _smooth_axis, lowpass
-from .oracle import zones
+from .coarse import _smooth_axis
+from .oracle import moving_frames, zones
 
 NAME = "referee-bands"
 #: the shots this measures: the curtains, whose grid rows run from the rings to the hem
@@ -54,7 +54,7 @@ def correlations(shot, sim_h: np.ndarray, our_h: np.ndarray) -> dict:
     """The correlation of the amplitude fields over the shot's moving frames (as
     oracle.compare takes it) and of the parts named in the module docstring."""
     rows, cols = shot.rows, shot.cols
-    moving = list(range(min(start for start, _ in shot.phases.values()) - 1, shot.frames))
+    moving = moving_frames(shot)
     inner = zones(shot)["all"]
     grid_inner = inner.reshape(rows, cols)
     sim = measure.amplitude_field(shot, sim_h[moving]).reshape(-1, rows, cols)
@@ -84,10 +84,7 @@ def bands(sim, our_h: np.ndarray, frame: int) -> list[dict]:
     rest = triangle_areas(shot.rest, tri)
     inner = zones(shot)["all"]
     row_of = np.repeat(np.arange(shot.rows), shot.cols)
-    points = sim.points[frame]
-    low = lowpass(shot, points[None])[0]
-    normals = measure.grid_normals(shot, low[None])[0]
-    h = ((points - low) * normals).sum(-1)
+    low, normals, h = measure.normal_offsets(shot, sim.points[frame])
     passed = measure.detail(shot, h[None])[0]
     out = []
     for first in range(0, shot.rows, BAND):
@@ -113,10 +110,10 @@ def shot_rows(name: str, cache, grid: float) -> dict:
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
     row = referee.matched_bakes(sim, fine, referee.cloth_attributes(sim.shot))
     our_h = row["matched bake"].h
-    last_phase, (_, end) = list(sim.shot.phases.items())[-1]
+    _, end = list(sim.shot.phases.values())[-1]
     return {"grid": grid, "window": sim.shot.window, "width": row["width"],
             "correlations": correlations(sim.shot, sim.h, our_h),
-            "phase": last_phase, "bands": bands(sim, our_h, end - 1),
+            "bands": bands(sim, our_h, end - 1),
             "spacing": sim.shot.spacing}
 
 

@@ -43,7 +43,6 @@ import numpy as np
 
 from ..blocks import markers
 from . import measure, referee
-from .coarse import lowpass
 from .oracle import zones
 from .referee import CONVERGED
 
@@ -93,9 +92,7 @@ def phase_row(shot, points: np.ndarray, slack: float) -> dict | None:
 
     tri = triangles(shot.quads())
     rest = triangle_areas(shot.rest, tri)
-    low = lowpass(shot, points[None])[0]
-    normals = measure.grid_normals(shot, low[None])[0]
-    h = ((points - low) * normals).sum(-1)
+    low, normals, h = measure.normal_offsets(shot, points)
     inside = zones(shot)["all"]
     compressed = (inside[tri].all(axis=1)
                   & (triangle_areas(low, tri) < (1.0 - SLACK_RAMP * slack) * rest))

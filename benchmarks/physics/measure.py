@@ -40,11 +40,19 @@ def grid_normals(shot: Shot, points: np.ndarray) -> np.ndarray:
     return n.reshape(points.shape)
 
 
+def normal_offsets(shot: Shot, points: np.ndarray, low: np.ndarray | None = None):
+    """The cloth over its low-pass, (frames, n, 3) or (n, 3) points: (the low-pass, its
+    normals, the points' offsets from it along them, not band-passed). ``low``:
+    lowpass(shot, points), where the caller has it already."""
+    low = lowpass(shot, points) if low is None else low
+    normals = grid_normals(shot, low)
+    return low, normals, ((points - low) * normals).sum(-1)
+
+
 def sim_height(shot: Shot, points: np.ndarray, low: np.ndarray | None = None) -> np.ndarray:
     """(frames, n): the simulated fold height over the low-passed surface, band-passed
     (``low``: lowpass(shot, points), where the caller has it already)."""
-    low = lowpass(shot, points) if low is None else low
-    return detail(shot, ((points - low) * grid_normals(shot, low)).sum(-1))
+    return detail(shot, normal_offsets(shot, points, low)[2])
 
 
 def our_height(shot: Shot, points: np.ndarray, flat: np.ndarray,

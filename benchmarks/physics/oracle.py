@@ -42,6 +42,12 @@ def measured_frames(shot: Shot) -> list[int]:
     return sorted({end - 1 for _, end in shot.phases.values()})
 
 
+def moving_frames(shot: Shot) -> list[int]:
+    """0-based frames over which the fields are compared: from the frame before the first
+    phase starts to the last."""
+    return list(range(min(start for start, _ in shot.phases.values()) - 1, shot.frames))
+
+
 #: grid lines this close to an open border are left out of every statistic: there the
 #: low-pass (a renormalised Gaussian) departs from the pinned rows it cannot see past
 MARGIN = 0.02
@@ -136,7 +142,7 @@ def compare(sim: Simulated, ours: Baked) -> dict:
     shot = sim.shot
     frames = measured_frames(shot)
     zone = zones(shot)
-    moving = list(range(min(start for start, _ in shot.phases.values()) - 1, shot.frames))
+    moving = moving_frames(shot)
     a_sim = measure.amplitude_field(shot, sim.h[moving])
     a_our = measure.amplitude_field(shot, ours.h[moving])
     inner = zone["all"]
