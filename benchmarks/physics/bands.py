@@ -17,7 +17,10 @@ converged table matches it (referee.matched_bakes), this prints:
   rest area of the low-pass (the coarse surface), of the cloth's offsets along its
   normals, and of the same offsets band-passed as the measure takes them (measure.detail:
   less their own window's average, which drops what sharpens the low-pass's own folds);
-  the material wavelength and the RMS fold height, the cloth's and ours.
+  of our bake's surface without its folds (usdwrinkle's coarse mesh, every stride-th grid
+  line of the low-pass, subdivided) and with them, at the simulation's grid points (at
+  the default grid, the bake's own: the fine mesh is that grid); the material wavelength
+  and the RMS fold height, the cloth's and ours.
 
 Needs the cached simulations at the converged referee's 160 iterations (``--grid``,
 1 cm by default: the grid the converged table judges the curtains on); about 15 s a
@@ -73,8 +76,9 @@ def correlations(shot, sim_h: np.ndarray, our_h: np.ndarray) -> dict:
             "ours smoothed across": against_sim(across)}
 
 
-def bands(sim, our_h: np.ndarray, frame: int) -> list[dict]:
-    """Per band of BAND grid rows at ``frame`` (module docstring)."""
+def bands(sim, baked, frame: int) -> list[dict]:
+    """Per band of BAND grid rows at ``frame`` (module docstring); ``baked``: our bake at
+    the simulation's grid points (oracle.bake, on_coarser_grid)."""
     from usdwrinkle.geometry.measure import triangle_areas
 
     from .newton_client import triangles
@@ -99,21 +103,22 @@ def bands(sim, our_h: np.ndarray, frame: int) -> list[dict]:
         out.append({"rows": (first, min(first + BAND, shot.rows) - 1),
                     "low": area(low), "offsets": area(low + h[:, None] * normals),
                     "passed": area(low + passed[:, None] * normals),
+                    "ours": (area(baked.flat[frame]), area(baked.points[frame])),
                     "wavelength": (measure.wavelength(shot, sim.h[frame], points_in),
-                                   measure.wavelength(shot, our_h[frame], points_in)),
+                                   measure.wavelength(shot, baked.h[frame], points_in)),
                     "rms": (measure.rms(sim.h[frame], points_in),
-                            measure.rms(our_h[frame], points_in))})
+                            measure.rms(baked.h[frame], points_in))})
     return out
 
 
 def shot_rows(name: str, cache, grid: float) -> dict:
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
     row = referee.matched_bakes(sim, fine, referee.cloth_attributes(sim.shot))
-    our_h = row["matched bake"].h
+    baked = row["matched bake"]
     _, end = list(sim.shot.phases.values())[-1]
     return {"grid": grid, "window": sim.shot.window, "width": row["width"],
-            "correlations": correlations(sim.shot, sim.h, our_h),
-            "bands": bands(sim, our_h, end - 1),
+            "correlations": correlations(sim.shot, sim.h, baked.h),
+            "bands": bands(sim, baked, end - 1),
             "spacing": sim.shot.spacing}
 
 
@@ -134,17 +139,19 @@ def report(rows: dict, seconds: float, grid: float) -> str:
                      f"| {c['our rows']:.3f} | {c['ours smoothed across']:.3f} |")
     lines += ["", "At the last phase, band by band from the rings to the hem: the area over "
               "the rest area of the low-pass, of the cloth's offsets along its normals, and of "
-              "the same band-passed as the measure takes them; the material wavelength and the "
-              "RMS fold height (cloth, ours).", "",
+              "the same band-passed as the measure takes them; of our bake's surface without "
+              "its folds (the coarse mesh subdivided) and with them; the material wavelength "
+              "and the RMS fold height (cloth, ours).", "",
               "| shot | band (cm from the rings) | low-pass | normal offsets | band-passed "
-              "| wavelength: cloth, ours | RMS height: cloth, ours |",
-              "|---|---|---|---|---|---|---|"]
+              "| ours: unfolded, folded | wavelength: cloth, ours | RMS height: cloth, ours |",
+              "|---|---|---|---|---|---|---|---|"]
     for name, row in rows.items():
         for band in row["bands"]:
             top, bottom = (v * row["spacing"] * 100 for v in band["rows"])
             lines.append(
                 f"| {name} | {top:.0f}-{bottom:.0f} | {band['low']:.3f} | "
                 f"{band['offsets']:.3f} | {band['passed']:.3f} | "
+                f"{band['ours'][0]:.3f}, {band['ours'][1]:.3f} | "
                 f"{band['wavelength'][0] * 100:.1f}, {band['wavelength'][1] * 100:.1f} cm | "
                 f"{band['rms'][0] * 1000:.1f}, {band['rms'][1] * 1000:.1f} mm |")
     lines += ["", end]
