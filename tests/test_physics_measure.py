@@ -414,3 +414,47 @@ def test_the_correlation_s_parts_on_folds_that_fall_down_the_curtain():
     assert parts["our rows"] == pytest.approx(expected, abs=2e-3)
     assert parts["ours smoothed across"] == pytest.approx(expected, abs=2e-3)
     assert parts["cloth rows"] > 0.999
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_folds_are_scaled_to_draw_the_rest_area_around_them(exact):
+    """benchmarks.physics.localarea.length_scaled on a sheet pushed to 0.5 of its width
+    whose folds (z = a cos(2 pi x / 10 cm) along the pushed x) draw 1.2 times its rest
+    area on the left and 0.9 times on the right (the length of the fold as the grid
+    samples it, its chords over a wavelength, computed here by bisection). Scaled exactly,
+    both sides draw their rest area: the scale is the amplitude at which the fold
+    restores 2x its posed length over each side's own; scaled down, the right side keeps
+    its folds. Away from the border (three windows), one frame."""
+    from benchmarks.physics.localarea import length_scaled
+
+    shot = flat_shot(rows=49, cols=129, spacing=0.01)
+    x = shot.rest[:, 0]
+    posed = shot.rest * [0.5, 1.0, 1.0]
+    k = 2 * np.pi / 0.1
+
+    def length(amplitude):  # per posed length, of the fold as the grid samples it
+        step = 0.5 * shot.spacing
+        at = np.arange(21) * step  # one wavelength, 20 grid cells
+        return np.mean(np.hypot(step, np.diff(amplitude * np.cos(k * at)))) / step
+
+    def amplitude_for(ratio):  # the amplitude whose fold draws ratio x its posed length
+        lo, hi = 0.0, 1.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if length(mid) < ratio else (lo, mid)
+        return lo
+
+    left = x < 0.64
+    amplitude = np.where(left, amplitude_for(2 * 1.2), amplitude_for(2 * 0.9))
+    points = posed + np.stack([0 * x, amplitude * np.cos(k * posed[:, 0]), 0 * x], 1)
+    scale = length_scaled(shot, posed[None], posed[None], points[None], exact, 0.02)[0]
+    away = (np.abs(x - 0.64) > 3 * shot.window) & (x > 3 * shot.window) & (
+        x < x.max() - 3 * shot.window)
+    assert away[left].sum() > 0 and away[~left].sum() > 0
+    if exact:
+        expected = amplitude_for(2.0) / amplitude
+    else:
+        expected = np.where(left, amplitude_for(2.0) / amplitude, 1.0)
+    # the Gaussian (5 cm of rest length) leaves a ripple of 0.4% along the 20 cm wave in
+    # the area around each point, and the scale follows it
+    np.testing.assert_allclose(scale[away], expected[away], rtol=6e-3)

@@ -80,9 +80,10 @@ def simulated(shot: Shot, cache: Path, preset: str = "Cotton") -> Simulated:
 
 
 def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
-         attributes: dict | None = None) -> Baked:
+         attributes: dict | None = None, held: bool = True) -> Baked:
     """Bake the coarse shot with --geometry (and once with wrinkle:amplitudeScale 0 for
-    the undisplaced surface) and read back the fold height on the grid."""
+    the undisplaced surface) and read back the fold height on the grid. ``held``: the
+    simulation's pinned points marked wrinkle:held (stage.write_stage)."""
     from usdwrinkle import api
     from usdwrinkle.process.log import collect
 
@@ -93,7 +94,7 @@ def bake(shot: Shot, sim: Simulated, label: str, width: float | None = None,
             stage = os.path.join(scratch, f"{name}.usda")
             layer = os.path.join(scratch, f"{name}_geometry.usdc")
             write_stage(stage, shot, sim.points, width=width, amplitude_scale=scale,
-                        attributes=attributes)
+                        held=held, attributes=attributes)
             with collect() as messages:  # frame 0 (the rest pose) lies before the shot
                 api.bake(stage, layer, frames=frames, geometry=True, levels=levels(shot))
             for message in messages:

@@ -307,26 +307,29 @@ def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: d
 
 
 def bake_on(sim: Simulated, fine: Simulated | None, label: str, width: float | None = None,
-            attributes: dict | None = None):
+            attributes: dict | None = None, held: bool = True):
     """usdwrinkle baked on the simulation (oracle.bake): (the bake measured at the
     simulation's points, the bake on its own fine grid). ``fine``: the simulation resampled
-    at half its spacing (sweep.resample), the grid of the bake's fine mesh."""
+    at half its spacing (sweep.resample), the grid of the bake's fine mesh; ``held``: as
+    oracle.bake takes it."""
     if fine is None:
-        out = bake(sim.shot, sim, label, width=width, attributes=attributes)
+        out = bake(sim.shot, sim, label, width=width, attributes=attributes, held=held)
         return out, out
-    out = bake(fine.shot, fine, label, width=width, attributes=attributes)
+    out = bake(fine.shot, fine, label, width=width, attributes=attributes, held=held)
     return on_coarser_grid(out, fine.shot, sim.shot), out
 
 
-def matched_bakes(sim: Simulated, fine: Simulated | None, cloth: dict) -> dict:
+def matched_bakes(sim: Simulated, fine: Simulated | None, cloth: dict,
+                  held: bool = True) -> dict:
     """usdwrinkle baked on the simulation (bake_on) at the default width and at the width
     matched to the simulation's mean wavelength (matched_width; where that bake is still
     more than MATCH_TOLERANCE off, one secant step on log W between the two bakes, kept
     where it lands nearer). ``cloth``: the WrinkleAPI values authored (oracle.bake's
-    attributes). ``default`` and ``matched``: per_phase's ratios of the two bakes;
+    attributes); ``held``: the simulation's pinned points marked wrinkle:held, as the
+    tables bake them. ``default`` and ``matched``: per_phase's ratios of the two bakes;
     ``matched bake`` and ``matched fine``: bake_on's pair at the matched ``width``."""
     def baked(label: str, width: float | None = None):
-        return bake_on(sim, fine, label, width, cloth)
+        return bake_on(sim, fine, label, width, cloth, held)
 
     default, _ = baked("default")
     first = per_phase(sim, default)
