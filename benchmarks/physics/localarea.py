@@ -1,17 +1,18 @@
-"""What the curtains' bars would be if our folds drew the cloth's length in every place
-(issue 55: where the area, the heights and the correlation part ways; docs/physics.md,
-"Where our area goes, band by band").
+"""What the converged referee's bars would be if our folds drew the cloth's length in
+every place (issue 55: where the area, the heights and the correlation part ways;
+docs/physics.md, "Where our area goes, band by band").
 
     python -m benchmarks.physics.localarea [--write docs/physics.md] [--only SHOT ...]
                                            [--grid M] [--cache .physics-cache]
 
 Below their rings the silk and cotton curtains draw more than the cloth's area, at the
 rings every curtain draws less (the bands block). This takes the bake apart in numpy.
-Per curtain, baked at its matched W as the converged table matches it
-(referee.matched_bakes), once with the simulation's pinned rings marked wrinkle:held, as
-the tables bake them, and once without, it prints the bars (the heights over the phases,
-ours / the cloth's; the amplitude-field correlation; our area over the rest area where
-compressed, referee.area_ratio) of:
+Per shot of the converged sweep, on the grid the converged table judges it on (--grid:
+every shot on that one), baked at its matched W as that table matches it
+(referee.matched_bakes) with the simulation's pinned points marked wrinkle:held, as the
+tables bake them (the curtains' rings once more without), it prints the bars (the
+heights over the phases, ours / the cloth's; the amplitude-field correlation; our area
+over the rest area where compressed, referee.area_ratio; the sleeves' crest motion) of:
 
 - the bake as it is;
 - **down**: our folds scaled down wherever they draw more than the rest area
@@ -20,14 +21,15 @@ compressed, referee.area_ratio) of:
   cloth is compressed.
 
 Where is a neighbourhood: the areas are taken per grid point (a third of each fine
-triangle's) and smoothed with the measure's Gaussian (the shot's window, 5 cm or more of
-rest length), over which a posed wave of the curtains' (5-7 cm at half the width) draws
-the same length whatever its phase. The displacement scaled is the bake's surface less
-its unfolded one, so the deepened pleats scale with the folds. It is numpy on the bake,
-not a law: what a law that counted the length of its own blend could buy, and what it
-could not.
+triangle's) and smoothed with the measure's Gaussian (the shot's window, 5 cm and more of
+rest length), over which a posed wave draws the same length whatever its phase. The bake
+scaled is the one the area is taken on (referee.area_grid: 0.5 cm on the sleeves), and
+its displacement, the surface less its unfolded one, so that the deepened pleats scale
+with the folds; the heights, the correlation and the crests are measured from it at the
+simulation's points. It is numpy on the bake, not a law: what a law that counted the
+length of its own blend could buy, and what it could not.
 
-About 5 minutes here with the 1 cm curtains cached (two matched bakes a curtain).
+About 16 minutes here with the simulations cached.
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ import numpy as np
 
 from ..blocks import markers
 from . import measure, referee
-from .bands import CURTAINS, GRID
+from .bands import CURTAINS
 
 NAME = "referee-local-area"
 #: the most our folds are scaled up (exact)
@@ -110,65 +112,103 @@ def scaled_bake(sim, baked, exact: bool):
     return out
 
 
-def bars(sim, baked) -> dict:
+def bars(sim, baked, base, base_baked) -> dict:
     """The heights over the phases (ours / the cloth's, at matched W), the correlation and
-    our area where compressed."""
+    the crest motion (ours / the cloth's; the sleeves) of ``baked`` (at the simulation's
+    points), and our area where compressed, of ``base_baked`` on ``base``'s grid."""
     from usdwrinkle.usd import schema
 
     from .oracle import compare, per_phase
 
     heights = [h for _, h in per_phase(sim, baked).values()]
-    return {"heights": (min(heights), max(heights)),
-            "correlation": compare(sim, baked)["correlation"],
-            "area": referee.area_ratio(sim, baked, schema.DEFAULT_SLACK)}
+    result = compare(sim, baked)
+    return {"heights": (min(heights), max(heights)), "correlation": result["correlation"],
+            "motion": {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
+                       if key.startswith("motion") and key.endswith(" sim")},
+            "area": referee.area_ratio(base, base_baked, schema.DEFAULT_SLACK)}
 
 
-def shot_rows(name: str, cache, grid: float) -> dict:
+def area_chain(sim, fine, width: float) -> list:
+    """The simulation resampled from SPACING's grid (``fine``, or ``sim`` where that is
+    its grid) down to the grid its area is taken on at ``width`` (referee.area_grid,
+    halving), finest last."""
+    name = sim.shot.name
+    chain, spacing = [fine or sim], referee.SPACING
+    grid = referee.area_grid(width, referee.coarsening_of(sim.shot, width))
+    while spacing > grid:
+        chain.append(referee.resampled(chain[-1], referee.SWEEP[name](spacing),
+                                       referee.SWEEP[name](spacing / 2)))
+        spacing /= 2
+    return chain
+
+
+def shot_rows(name: str, cache, grid: float | None) -> dict:
+    """Per held (the curtains: rings held and not; the other shots as the tables bake
+    them): the matched W and the bars of the bake as it is, down and exact. The bake on
+    the grid the area is taken on (area_chain) is scaled, and measured at the
+    simulation's points through every grid between (oracle.on_coarser_grid)."""
+    from .oracle import bake, on_coarser_grid
+
+    grid = referee.referee_grid(name, True) if grid is None else grid
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
-    if fine is not None:
-        raise ValueError(f"{name} at {grid * 100:g} cm: localarea measures the bake's own grid")
+    cloth = referee.cloth_attributes(sim.shot)
     out = {}
-    for held in (True, False):
-        row = referee.matched_bakes(sim, None, referee.cloth_attributes(sim.shot), held)
-        baked = row["matched bake"]
-        out[held] = {"width": row["width"], "as is": bars(sim, baked),
-                     "down": bars(sim, scaled_bake(sim, baked, False)),
-                     "exact": bars(sim, scaled_bake(sim, baked, True))}
+    for held in ((True, False) if name in CURTAINS else (True,)):
+        row = referee.matched_bakes(sim, fine, cloth, held)
+        width = row["width"]
+        chain = area_chain(sim, fine, width)
+        base = chain[-1]
+        base_baked = (row["matched fine"] if len(chain) == 1
+                      else bake(base.shot, base, "area", width=width, attributes=cloth,
+                                held=held))
+        shots = [c.shot for c in chain[::-1]] + ([sim.shot] if fine is not None else [])
+        entry = {"width": width, "grid": grid}
+        for key in ("as is", "down", "exact"):
+            scaled = base_baked if key == "as is" else scaled_bake(base, base_baked,
+                                                                   key == "exact")
+            at_sim = scaled
+            for finer, coarser in zip(shots[:-1], shots[1:], strict=True):
+                at_sim = on_coarser_grid(at_sim, finer, coarser)
+            entry[key] = bars(sim, at_sim, base, scaled)
+        out[held] = entry
     return out
 
 
-def report(rows: dict, seconds: float, grid: float) -> str:
+def report(rows: dict, seconds: float, grid: float | None) -> str:
     begin, end = markers(NAME)
     lines = [begin, "", f"Made by `python -m benchmarks.physics.localarea --write docs/physics.md"
-             f"` ({seconds:.0f} s here; the simulations at {grid * 100:g} cm and 160 "
-             "iterations, cached in .physics-cache).", "",
-             "Per curtain at its matched W, with its rings marked `wrinkle:held` (as the "
-             "tables bake them) and without: the bake as it is; its folds scaled down wherever "
-             "they draw more than the rest area around them; scaled to draw it wherever the "
-             "cloth is compressed. Heights over the phases (ours / the "
-             "cloth's), the amplitude-field correlation, our area over the rest area where "
-             "compressed.", "",
-             "| shot | rings held | matched W | as is | down | exact |",
-             "|---|---|---|---|---|---|"]
+             f"` ({seconds:.0f} s here; the simulations at 160 iterations on the grids the "
+             "converged table judges them on, cached in .physics-cache).", "",
+             "Per shot at its matched W, its pinned points marked `wrinkle:held` as the tables "
+             "bake them (the curtains' rings also without): the bake as it is; its folds scaled "
+             "down wherever they draw more than the rest area around them; scaled to draw it "
+             "wherever the cloth is compressed. Heights over the phases (ours / the cloth's), "
+             "the amplitude-field correlation, our area over the rest area where compressed, "
+             "and on the sleeves the crest motion (ours / the cloth's, bending and held). "
+             "The bake is the one the area is taken on (on the sleeves 0.5 cm, measured at the "
+             "simulation's points), so an unscaled row can differ from the converged table's "
+             "by a few hundredths.", "",
+             "| shot | grid | held | matched W | as is | down | exact |",
+             "|---|---|---|---|---|---|---|"]
 
     def bars_cell(b):
         low, high = b["heights"]
-        return f"{low:.2f}-{high:.2f}x, {b['correlation']:.3f}, {b['area']:.3f}"
+        motion = "".join(f", {key} {value:.2f}x" for key, value in b["motion"].items())
+        return f"{low:.2f}-{high:.2f}x, {b['correlation']:.3f}, {b['area']:.3f}{motion}"
 
     for name, row in rows.items():
-        for held in (True, False):
-            r = row[held]
+        for held, r in row.items():
             cells = " | ".join(bars_cell(r[key]) for key in ("as is", "down", "exact"))
-            lines.append(f"| {name} | {'yes' if held else 'no'} | {r['width'] * 100:.1f} cm | "
-                         f"{cells} |")
+            lines.append(f"| {name} | {r['grid'] * 100:g} cm | {'yes' if held else 'no'} | "
+                         f"{r['width'] * 100:.1f} cm | {cells} |")
     lines += ["", end]
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     return referee.shot_block_main(
-        argv, "localarea", NAME, __doc__, shot_rows, report, shots=CURTAINS, grid=GRID,
-        grid_doc="the grid the converged table judges the curtains on")
+        argv, "localarea", NAME, __doc__, shot_rows, report, shots=tuple(referee.SWEEP),
+        grid=None, grid_doc="each shot's, the converged table's")
 
 
 if __name__ == "__main__":

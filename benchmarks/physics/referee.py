@@ -588,7 +588,7 @@ def _newton_version() -> str:
         return "?"
 
 
-def add_shot_options(parser, shots=tuple(SWEEP), grid: float = CONVERGED[0],
+def add_shot_options(parser, shots=tuple(SWEEP), grid: float | None = CONVERGED[0],
                      grid_doc: str = "the converged referee's") -> None:
     """The options of a command measured per shot of the converged sweep (heightfield.py,
     irregular.py, bands.py): --only (among ``shots``), --grid (``grid`` by default,
