@@ -123,10 +123,8 @@ def shot_rows(name: str, cache, grid: float) -> dict:
 
 
 def report(rows: dict, seconds: float, grid: float) -> str:
-    begin, end = markers(NAME)
-    lines = [begin, "", f"Made by `python -m benchmarks.physics.bands --write docs/physics.md"
-             f"` ({seconds:.0f} s here; the simulations at {grid * 100:g} cm and 160 "
-             "iterations, cached in .physics-cache).", "",
+    end = markers(NAME)[1]
+    lines = referee.shot_block_head(NAME, "bands", seconds, grid) + [
              "The amplitude-field correlation at matched W, and with ours replaced by: its "
              "mean over the cloth at each frame; the cloth's mean per grid row; our own mean "
              f"per grid row; ours smoothed across the curtain ({ACROSS * 100:g} cm).", "",

@@ -134,10 +134,8 @@ def shot_rows(name: str, cache: Path, grid: float) -> dict:
 
 
 def report(rows: dict, seconds: float, grid: float) -> str:
-    begin, end = markers(NAME)
-    lines = [begin, "", f"Made by `python -m benchmarks.physics.heightfield --write "
-             f"docs/physics.md` ({seconds:.0f} s here; the simulations at {100 * grid:g} cm "
-             f"and {CONVERGED[1]} iterations, cached in .physics-cache).", "",
+    end = markers(NAME)[1]
+    lines = referee.shot_block_head(NAME, "heightfield", seconds, grid) + [
              "At the last phase: the cloth's area over its rest area, its low-pass's, its "
              "normal offsets' alone; s; the cloth's spectral spread; usdwrinkle's at the "
              "matched W, and its height there (ours / sim); the share of the cloth's points "

@@ -55,11 +55,9 @@ def span(ratios: list) -> str:
 
 
 def report(rows: dict, seconds: float, grid: float) -> str:
-    begin, end = markers(NAME)
+    end = markers(NAME)[1]
     bars = referee.BARS
-    lines = [begin, "", f"Made by `python -m benchmarks.physics.irregular --write "
-             f"docs/physics.md` ({seconds:.0f} s here; the simulations at {100 * grid:g} cm "
-             f"and {CONVERGED[1]} iterations, cached in .physics-cache).", "",
+    lines = referee.shot_block_head(NAME, "irregular", seconds, grid) + [
              "Per shot and irregularity: the phases' wavelength ratios at the default W, the "
              f"least and the largest (bar {bars['wavelength']}x); at the matched W the "
              f"phases' height ratios (bar {bars['amplitude_matched']}x either way; ours / sim), "

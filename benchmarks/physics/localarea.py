@@ -175,10 +175,8 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
 
 
 def report(rows: dict, seconds: float, grid: float | None) -> str:
-    begin, end = markers(NAME)
-    lines = [begin, "", f"Made by `python -m benchmarks.physics.localarea --write docs/physics.md"
-             f"` ({seconds:.0f} s here; the simulations at 160 iterations on the grids the "
-             "converged table judges them on, cached in .physics-cache).", "",
+    end = markers(NAME)[1]
+    lines = referee.shot_block_head(NAME, "localarea", seconds, grid) + [
              "Per shot at its matched W, its pinned points marked `wrinkle:held` as the tables "
              "bake them (the curtains' rings also without): the bake as it is; its folds scaled "
              "down wherever they draw more than the rest area around them; scaled to draw it "

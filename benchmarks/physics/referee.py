@@ -634,6 +634,21 @@ def shot_block_main(argv, command: str, name: str, doc: str, shot_rows, report,
     return 0
 
 
+def shot_block_head(name: str, command: str, seconds: float,
+                    grid: float | None) -> list[str]:
+    """The first lines of a block shot_block_main makes: its begin marker, the command that
+    made it and the simulations it read (``grid``: theirs; None: each shot's, the
+    converged table's)."""
+    from ..blocks import markers
+
+    where = (f"at {100 * grid:g} cm and {CONVERGED[1]} iterations" if grid is not None
+             else f"at {CONVERGED[1]} iterations on the grids the converged table judges "
+                  "them on")
+    return [markers(name)[0], "", f"Made by `python -m benchmarks.physics.{command} --write "
+            f"docs/physics.md` ({seconds:.0f} s here; the simulations {where}, cached in "
+            ".physics-cache).", ""]
+
+
 def each_shot(command: str, names: list[str]):
     """``names`` in turn, each announced on stderr as ``command: i/n name`` (a shot not in
     the cache is simulated first: minutes to hours on one core)."""
