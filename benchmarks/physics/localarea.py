@@ -128,24 +128,10 @@ def bars(sim, baked, base, base_baked) -> dict:
             "area": referee.area_ratio(base, base_baked, schema.DEFAULT_SLACK)}
 
 
-def area_chain(sim, fine, width: float) -> list:
-    """The simulation resampled from SPACING's grid (``fine``, or ``sim`` where that is
-    its grid) down to the grid its area is taken on at ``width`` (referee.area_grid,
-    halving), finest last."""
-    name = sim.shot.name
-    chain, spacing = [fine or sim], referee.SPACING
-    grid = referee.area_grid(width, referee.coarsening_of(sim.shot, width))
-    while spacing > grid:
-        chain.append(referee.resampled(chain[-1], referee.SWEEP[name](spacing),
-                                       referee.SWEEP[name](spacing / 2)))
-        spacing /= 2
-    return chain
-
-
 def shot_rows(name: str, cache, grid: float | None) -> dict:
     """Per held (the curtains: rings held and not; the other shots as the tables bake
     them): the matched W and the bars of the bake as it is, down and exact. The bake on
-    the grid the area is taken on (area_chain) is scaled, and measured at the
+    the grid the area is taken on (referee.area_chain) is scaled, and measured at the
     simulation's points through every grid between (oracle.on_coarser_grid)."""
     from .oracle import bake, on_coarser_grid
 
@@ -156,7 +142,7 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
     for held in ((True, False) if name in CURTAINS else (True,)):
         row = referee.matched_bakes(sim, fine, cloth, held)
         width = row["width"]
-        chain = area_chain(sim, fine, width)
+        chain = referee.area_chain(sim, fine, width)
         base = chain[-1]
         base_baked = (row["matched fine"] if len(chain) == 1
                       else bake(base.shot, base, "area", width=width, attributes=cloth,

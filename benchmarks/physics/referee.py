@@ -289,19 +289,28 @@ def coarsening_of(shot, width: float) -> float | None:
     return float(coarsening_cap(width, tube_width(np.array([1.0 / radius]))[0]))
 
 
+def area_chain(sim: Simulated, fine: Simulated | None, width: float) -> list:
+    """The simulation on SPACING's grid (``fine``, or ``sim`` where that is its grid) and
+    resampled from it, halving (sweep.resample), down to the grid our area is taken on at
+    ``width`` (area_grid), finest last."""
+    name = sim.shot.name
+    chain, spacing = [fine or sim], SPACING
+    grid = area_grid(width, coarsening_of(sim.shot, width))
+    while spacing > grid:
+        chain.append(resampled(chain[-1], SWEEP[name](spacing), SWEEP[name](spacing / 2)))
+        spacing /= 2
+    return chain
+
+
 def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: dict | None,
              slack: float, on_fine) -> float:
     """Our wrinkled area over the rest area (area_ratio) at ``width``, on area_grid's grid:
     ``on_fine`` (the bake on SPACING's grid) where that is it, else a bake on the
-    simulation resampled onto it (sweep.resample, halving from SPACING)."""
-    base = fine or sim
-    grid, spacing = area_grid(width, coarsening_of(sim.shot, width)), SPACING
-    if grid == spacing:
+    simulation resampled onto it (area_chain)."""
+    chain = area_chain(sim, fine, width)
+    base = chain[-1]
+    if len(chain) == 1:
         return area_ratio(base, on_fine, slack)
-    name = sim.shot.name
-    while spacing > grid:
-        base = resampled(base, SWEEP[name](spacing), SWEEP[name](spacing / 2))
-        spacing /= 2
     return area_ratio(base, bake(base.shot, base, "area", width=width, attributes=attributes),
                       slack)
 
