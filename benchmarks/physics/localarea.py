@@ -12,7 +12,8 @@ every shot on that one), baked at its matched W as that table matches it
 (referee.matched_bakes) with the simulation's pinned points marked wrinkle:held, as the
 tables bake them (the curtains' rings once more without), it prints the bars (the
 heights over the phases, ours / the cloth's; the amplitude-field correlation; our area
-over the rest area where compressed, referee.area_ratio; the sleeves' crest motion) of:
+over the rest area where compressed, referee.area_ratio; the sleeves' crest motion),
+with regular folds and again with wrinkle:irregularity IRREGULAR, of:
 
 - the bake as it is;
 - **down**: our folds scaled down wherever they draw more than the rest area
@@ -29,7 +30,7 @@ with the folds; the heights, the correlation and the crests are measured from it
 simulation's points. It is numpy on the bake, not a law: what a law that counted the
 length of its own blend could buy, and what it could not.
 
-About 16 minutes here with the simulations cached.
+About 30 minutes here with the simulations cached.
 """
 from __future__ import annotations
 
@@ -40,6 +41,9 @@ from . import measure, referee
 from .bands import CURTAINS
 
 NAME = "referee-local-area"
+#: the irregularity of the second row of every shot (docs/physics.md, "Irregular folds
+#: against the referee": 0.3 brings our folds' spectral spread to the cloth's)
+IRREGULAR = 0.3
 #: the most our folds are scaled up (exact)
 SCALE_MAX = 2.0
 #: uniform scales tried, from 0 to the largest (length_scaled)
@@ -128,18 +132,30 @@ def bars(sim, baked, base, base_baked) -> dict:
             "area": referee.area_ratio(base, base_baked, schema.DEFAULT_SLACK)}
 
 
+def variants(name: str) -> tuple:
+    """(held, irregularity) per row of a shot: as the tables bake it, then with
+    wrinkle:irregularity IRREGULAR; the curtains once more without their rings held."""
+    return ((True, 0.0), (True, IRREGULAR)) + (((False, 0.0),) if name in CURTAINS else ())
+
+
 def shot_rows(name: str, cache, grid: float | None) -> dict:
-    """Per held (the curtains: rings held and not; the other shots as the tables bake
-    them): the matched W and the bars of the bake as it is, down and exact. The bake on
-    the grid the area is taken on (referee.area_chain) is scaled, and measured at the
-    simulation's points through every grid between (oracle.on_coarser_grid)."""
+    """Per variant (held, irregularity; ``variants``): the matched W and the bars of the
+    bake as it is, down and exact. The bake on the grid the area is taken on
+    (referee.area_chain) is scaled, and measured at the simulation's points through every
+    grid between (oracle.on_coarser_grid)."""
+    from pxr import Sdf
+
+    from usdwrinkle.usd import schema
+
     from .oracle import bake, on_coarser_grid
 
     grid = referee.referee_grid(name, True) if grid is None else grid
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
-    cloth = referee.cloth_attributes(sim.shot)
     out = {}
-    for held in ((True, False) if name in CURTAINS else (True,)):
+    for held, irregularity in variants(name):
+        cloth = referee.cloth_attributes(sim.shot)
+        if irregularity:
+            cloth[schema.IRREGULARITY] = (Sdf.ValueTypeNames.Float, irregularity)
         row = referee.matched_bakes(sim, fine, cloth, held)
         width = row["width"]
         chain = referee.area_chain(sim, fine, width)
@@ -156,7 +172,7 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
             for finer, coarser in zip(shots[:-1], shots[1:], strict=True):
                 at_sim = on_coarser_grid(at_sim, finer, coarser)
             entry[key] = bars(sim, at_sim, base, scaled)
-        out[held] = entry
+        out[held, irregularity] = entry
     return out
 
 
@@ -164,7 +180,8 @@ def report(rows: dict, seconds: float, grid: float | None) -> str:
     end = markers(NAME)[1]
     lines = referee.shot_block_head(NAME, "localarea", seconds, grid) + [
              "Per shot at its matched W, its pinned points marked `wrinkle:held` as the tables "
-             "bake them (the curtains' rings also without): the bake as it is; its folds scaled "
+             f"bake them (the curtains' rings also without), with regular folds and with "
+             f"`wrinkle:irregularity` {IRREGULAR:g}: the bake as it is; its folds scaled "
              "down wherever they draw more than the rest area around them; scaled to draw it "
              "wherever the cloth is compressed. Heights over the phases (ours / the cloth's), "
              "the amplitude-field correlation, our area over the rest area where compressed, "
@@ -172,8 +189,8 @@ def report(rows: dict, seconds: float, grid: float | None) -> str:
              "The bake is the one the area is taken on (on the sleeves 0.5 cm, measured at the "
              "simulation's points), so an unscaled row can differ from the converged table's "
              "by a few hundredths.", "",
-             "| shot | grid | held | matched W | as is | down | exact |",
-             "|---|---|---|---|---|---|---|"]
+             "| shot | grid | held | irregularity | matched W | as is | down | exact |",
+             "|---|---|---|---|---|---|---|---|"]
 
     def bars_cell(b):
         low, high = b["heights"]
@@ -181,10 +198,10 @@ def report(rows: dict, seconds: float, grid: float | None) -> str:
         return f"{low:.2f}-{high:.2f}x, {b['correlation']:.3f}, {b['area']:.3f}{motion}"
 
     for name, row in rows.items():
-        for held, r in row.items():
+        for (held, irregularity), r in row.items():
             cells = " | ".join(bars_cell(r[key]) for key in ("as is", "down", "exact"))
             lines.append(f"| {name} | {r['grid'] * 100:g} cm | {'yes' if held else 'no'} | "
-                         f"{r['width'] * 100:.1f} cm | {cells} |")
+                         f"{irregularity:g} | {r['width'] * 100:.1f} cm | {cells} |")
     lines += ["", end]
     return "\n".join(lines)
 
