@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import measure
-from .oracle import compare, per_phase, zones
+from .oracle import compare, motion_ratios, per_phase, zones
 from .referee import (
     CONVERGED,
     ROOT,
@@ -124,9 +124,8 @@ def main(argv=None) -> int:
             result = evaluate(sim, width, slack, profile, fines[name])
             phases = result["phases"]
             text = " ".join(f"{w:.2f}/{a:.2f}" for w, a in phases.values())
-            motion = " ".join(f"{key[7:-4]} {result[key[:-4]] / max(result[key], 1e-12):.2f}x"
-                              for key in result if key.startswith("motion") and
-                              key.endswith(" sim"))
+            motion = " ".join(f"{key} {ratio:.2f}x"
+                              for key, ratio in motion_ratios(result).items())
             print(f"  {name:16s} W {100 * width:.1f} cm corr {result['correlation']:.3f} "
                   f"area {result['area']:.3f} "
                   f"amp {result['amplitude_ratio']:.2f} per phase (wavelength/height): "

@@ -52,14 +52,15 @@ TRIALS = 81
 
 def point_areas(shot, points: np.ndarray) -> np.ndarray:
     """(frames, n): a third of the area of each fine triangle at each of its corners."""
+    from usdwrinkle.geometry.measure import triangle_areas
+
     from .newton_client import triangles
 
     tri = triangles(shot.quads())
     out = np.zeros(points.shape[:-1])
     for f in range(len(points)):
-        a, b, c = (points[f][tri[:, i]] for i in range(3))
-        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1) / 3.0
-        out[f] = sum(np.bincount(tri[:, i], area, out.shape[1]) for i in range(3))
+        third = triangle_areas(points[f], tri) / 3.0
+        out[f] = sum(np.bincount(tri[:, i], third, out.shape[1]) for i in range(3))
     return out
 
 
@@ -122,13 +123,12 @@ def bars(sim, baked, base, base_baked) -> dict:
     points), and our area where compressed, of ``base_baked`` on ``base``'s grid."""
     from usdwrinkle.usd import schema
 
-    from .oracle import compare, per_phase
+    from .oracle import compare, motion_ratios, per_phase
 
     heights = [h for _, h in per_phase(sim, baked).values()]
     result = compare(sim, baked)
     return {"heights": (min(heights), max(heights)), "correlation": result["correlation"],
-            "motion": {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
-                       if key.startswith("motion") and key.endswith(" sim")},
+            "motion": motion_ratios(result),
             "area": referee.area_ratio(base, base_baked, schema.DEFAULT_SLACK)}
 
 

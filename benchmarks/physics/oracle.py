@@ -139,6 +139,13 @@ def read_waves(layer_path: str, frames: int) -> dict:
     return out
 
 
+def motion_ratios(result: dict) -> dict:
+    """compare's crest motions at the elbow, ours over the simulation's, by what the arm
+    does ("bend", "held"; none on a shot without an elbow)."""
+    return {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
+            if key.startswith("motion") and key.endswith(" sim")}
+
+
 def compare(sim: Simulated, ours: Baked) -> dict:
     shot = sim.shot
     frames = measured_frames(shot)

@@ -30,7 +30,16 @@ from pathlib import Path
 import numpy as np
 
 from . import measure
-from .oracle import Simulated, bake, compare, measured_frames, on_coarser_grid, per_phase, zones
+from .oracle import (
+    Simulated,
+    bake,
+    compare,
+    measured_frames,
+    motion_ratios,
+    on_coarser_grid,
+    per_phase,
+    zones,
+)
 from .shots import WINDOW
 from .simulate import simulate_newton
 from .sweep import FABRICS, SweepShot, curtain, resample, shear, sleeve
@@ -378,10 +387,8 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
     row = matched_bakes(sim, fine, cloth)
     width = row["width"]
     result = compare(sim, row["matched bake"])
-    motion = {key[7:-4]: result[key[:-4]] / max(result[key], 1e-12) for key in result
-              if key.startswith("motion") and key.endswith(" sim")}
     return {**row, "compared": result,
-            "correlation": result["correlation"], "motion": motion,
+            "correlation": result["correlation"], "motion": motion_ratios(result),
             "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK,
                              row["matched fine"]),
             "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK)}
