@@ -147,7 +147,7 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
 
     from usdwrinkle.usd import schema
 
-    from .oracle import bake, on_coarser_grid
+    from .oracle import on_coarser_grid
 
     grid = referee.referee_grid(name, True) if grid is None else grid
     sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
@@ -160,9 +160,7 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
         width = row["width"]
         chain = referee.area_chain(sim, fine, width)
         base = chain[-1]
-        base_baked = (row["matched fine"] if len(chain) == 1
-                      else bake(base.shot, base, "area", width=width, attributes=cloth,
-                                held=held))
+        base_baked = referee.area_bake(chain, width, cloth, row["matched fine"], held)
         shots = [c.shot for c in chain[::-1]] + ([sim.shot] if fine is not None else [])
         entry = {"width": width, "grid": grid}
         for key in ("as is", "down", "exact"):

@@ -311,17 +311,23 @@ def area_chain(sim: Simulated, fine: Simulated | None, width: float) -> list:
     return chain
 
 
+def area_bake(chain: list, width: float, attributes: dict | None, on_fine,
+              held: bool = True):
+    """Our bake on the grid our area is taken on (``chain``'s last, area_chain):
+    ``on_fine`` (the bake on SPACING's grid) where that is it, else a bake at ``width`` on
+    the simulation resampled onto it (oracle.bake's ``attributes`` and ``held``)."""
+    if len(chain) == 1:
+        return on_fine
+    base = chain[-1]
+    return bake(base.shot, base, "area", width=width, attributes=attributes, held=held)
+
+
 def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: dict | None,
              slack: float, on_fine) -> float:
-    """Our wrinkled area over the rest area (area_ratio) at ``width``, on area_grid's grid:
-    ``on_fine`` (the bake on SPACING's grid) where that is it, else a bake on the
-    simulation resampled onto it (area_chain)."""
+    """Our wrinkled area over the rest area (area_ratio) at ``width``, on area_grid's grid
+    (area_chain, area_bake)."""
     chain = area_chain(sim, fine, width)
-    base = chain[-1]
-    if len(chain) == 1:
-        return area_ratio(base, on_fine, slack)
-    return area_ratio(base, bake(base.shot, base, "area", width=width, attributes=attributes),
-                      slack)
+    return area_ratio(chain[-1], area_bake(chain, width, attributes, on_fine), slack)
 
 
 def bake_on(sim: Simulated, fine: Simulated | None, label: str, width: float | None = None,
@@ -607,8 +613,8 @@ def _newton_version() -> str:
 def add_shot_options(parser, shots=tuple(SWEEP), grid: float | None = CONVERGED[0],
                      grid_doc: str = "the converged referee's") -> None:
     """The options of a command measured per shot of the converged sweep (heightfield.py,
-    irregular.py, bands.py): --only (among ``shots``), --grid (``grid`` by default,
-    ``grid_doc`` saying whose), --cache; chosen_shots reads them."""
+    irregular.py, bands.py, localarea.py): --only (among ``shots``), --grid (``grid`` by
+    default, ``grid_doc`` saying whose), --cache; chosen_shots reads them."""
     parser.set_defaults(shot_choices=tuple(shots))
     parser.add_argument("--only", nargs="*", default=None, metavar="SHOT",
                         help=f"these shots (default: all of {', '.join(shots)})")
@@ -632,9 +638,10 @@ def shot_block_main(argv, command: str, name: str, doc: str, shot_rows, report,
                     **options) -> int:
     """The command of a docs/physics.md block measured per shot (``python -m
     benchmarks.physics.COMMAND [--write docs/physics.md] [--only SHOT ...] [--grid M]
-    [--cache DIR]``; heightfield.py, bands.py): ``shot_rows(shot, cache, grid)`` gives a
-    shot's row, ``report(rows, seconds, grid)`` the block ``name``; ``doc``: the module's
-    docstring (its first paragraph is the description); ``options``: add_shot_options'."""
+    [--cache DIR]``; heightfield.py, bands.py, localarea.py): ``shot_rows(shot, cache,
+    grid)`` gives a shot's row, ``report(rows, seconds, grid)`` the block ``name``;
+    ``doc``: the module's docstring (its first paragraph is the description); ``options``:
+    add_shot_options'."""
     from ..blocks import add_write_option, emit
 
     parser = argparse.ArgumentParser(prog=f"python -m benchmarks.physics.{command}",
