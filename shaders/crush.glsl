@@ -149,6 +149,8 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 5 * i + 3));
     // the offset as baked; its gradient, from the posed points, by DEEPEN_GRADIENT
     STORE(fields, FIELD_DEEPEN(i), vec4(fetch(baked, 5 * i + 4).x, 0.0, 0.0, 0.0));
+    // the length pass's scale: in the baked amplitudes already
+    STORE(fields, FIELD_LENGTH(i), vec4(1.0, 0.0, 0.0, 0.0));
 }
 
 #else
@@ -501,6 +503,8 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
     // its gradient: DEEPEN_GRADIENT, once every point's offset is written
     STORE(fields, FIELD_DEEPEN(i), vec4(offset, 0.0, 0.0, 0.0));
+    // the length pass's scale (length.glsl): none until it runs
+    STORE(fields, FIELD_LENGTH(i), vec4(1.0, 0.0, 0.0, 0.0));
     // material-anchored start: crests ride with the cloth, frames stay independent.
     // Where the wave runs along the anchor table's direction (within 45 degrees: the
     // paint's, or a gathered tube's curvature), that stripe pattern in rest space

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
-from pxr import Sdf, Vt
+from pxr import Sdf, UsdGeom, Vt
 
 from usdwrinkle.authoring.builders import point_cache_stage  # noqa: F401
 
@@ -139,6 +139,24 @@ def random_cloth(seed):
     q[painted] = rng.normal(size=(painted.sum(), 3))
     q[painted] *= (rng.random(painted.sum()) * 0.9 / np.linalg.norm(q[painted], axis=1))[:, None]
     return rest, posed.astype(np.float32), faces, q.astype(np.float32)
+
+
+def random_cloth_fields(ctx, seed: int, relax_iterations: int, meters: float | None = None):
+    """A random cloth's GPU fields at its posed frame and crush's numpy reference of it:
+    (posed points, the GPU's fields, its MeshRecord, the reference's fields). ``meters``:
+    the stage's metersPerUnit (None: unauthored, USD's 0.01)."""
+    rest, posed, faces, q = random_cloth(seed)
+    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
+                              width=0.2, relax_iterations=relax_iterations)
+    if meters is not None:
+        UsdGeom.SetStageMetersPerUnit(stage, meters)
+    from usdwrinkle.reference.crush import crush as crush_reference
+
+    ours, record = gpu_fields(ctx, stage)
+    ref = crush_reference(rest, posed, record.topology, q, record.params.width,
+                          slack=record.params.slack, hold=record.params.hold,
+                          coarsening=record.params.coarsening)
+    return posed, ours, record, ref
 
 
 def read_pixels(path) -> np.ndarray:

@@ -37,6 +37,8 @@ STAGE_SWITCHES = {"VERTEX_SHADER", "FRAGMENT_SHADER", "FACE_NORMALS", "FROM_BAKE
                   "OUTPUT_8BIT", "HALF_COLOR_NORMAL", "OVER_BLACK",
                   # the maps' (maps/raster.py)
                   "MIKKTSPACE", "PARALLAX",
+                  # the length pass's (render/passes/length.py)
+                  "APPLY",
                   # the mipmap pass's (render/mipmaps.py)
                   "FLOAT"}
 def pass_classes():
@@ -109,8 +111,9 @@ def test_fields_follow_the_layout():
                                      "drawn", "direction", "compression", "phase", "anchor_phase",
                                      "wave_vector2", "amplitude2", "direction2",
                                      "compression2", "phase2", "anchor_phase2", "wavenumber",
-                                     "offset", "offset_gradient"]
+                                     "offset", "offset_gradient", "length_scale"]
     np.testing.assert_array_equal(fields.offset, texel[:, contract.FIELD_DEEPEN_TEXEL, 0])
+    np.testing.assert_array_equal(fields.length_scale, texel[:, contract.FIELD_LENGTH_TEXEL, 0])
     np.testing.assert_array_equal(fields.offset_gradient,
                                   texel[:, contract.FIELD_DEEPEN_TEXEL, 1:])
     np.testing.assert_array_equal(fields.wavenumber, 0.0)  # no damped table given
@@ -120,14 +123,17 @@ def test_fields_follow_the_layout():
     drawn = WrinkleFields.from_tables(posed, table, phases, phases)
     np.testing.assert_array_equal(drawn.usable, [False, True, True, True, True])
     np.testing.assert_array_equal(drawn.drawn, [1.0, 0.0, 0.25, 1.0, 1.0])
-    np.testing.assert_array_equal(drawn.drawn_amplitude, drawn.amplitude * drawn.drawn)
+    # the drawn amplitudes carry the share and the length pass's scale
+    np.testing.assert_array_equal(drawn.drawn_amplitude,
+                                  drawn.amplitude * drawn.drawn * drawn.length_scale)
+    np.testing.assert_array_equal(drawn.drawn_amplitude2, drawn.amplitude2 * drawn.length_scale)
     damped = np.arange(n * 4, dtype=np.float32).reshape(n, 4)
     np.testing.assert_array_equal(
         WrinkleFields.from_tables(posed, table, phases, phases, damped).wavenumber, damped[:, 3])
 
 
 def test_the_wave_blend_is_written_once():
-    """Draw, the wrinkle maps and the geometry evaluate the waves through
+    """Draw, the wrinkle maps, the geometry and the length pass evaluate the waves through
     include/wave.glsl's blend (wave_blend, or blend_corner_waves of corners gathered by
     corner_waves): no other shader samples the profiles or sums the corner waves itself."""
     users = []
@@ -138,11 +144,13 @@ def test_the_wave_blend_is_written_once():
             continue
         assert "u_height_profile" not in text and "u_gradient_profile" not in text, path.name
         if '#include "include/wave.glsl"' in text:
-            assert "FIELD_WAVE" not in text, path.name  # the corners come from corner_waves
+            # the corners come from corner_waves (the length pass reads and scales each
+            # vertex's own wave, beside the blends it samples)
+            assert "FIELD_WAVE" not in text or path.name == "length.glsl", path.name
             assert "wave_blend(" in text or ("corner_waves(" in text and
                                              "blend_corner_waves(" in text), path.name
             users.append(path.name)
-    assert {"draw.glsl", "maps.glsl", "geometry.glsl"} <= set(users)
+    assert {"draw.glsl", "maps.glsl", "geometry.glsl", "length.glsl"} <= set(users)
 
 
 def test_each_on_disk_contract_is_written_once():

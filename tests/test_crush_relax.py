@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pxr import UsdGeom
 
 from usdwrinkle.engine import WrinkleEngine
 from usdwrinkle.method.contract import FIELD_TEXELS
@@ -18,24 +17,9 @@ from helpers import (
     interior,
     point_cache_stage,
     random_cloth,
+    random_cloth_fields,
     rotation_matrix,
 )
-
-
-def random_cloth_fields(ctx, seed: int, relax_iterations: int, meters: float | None = None):
-    """A random cloth's GPU fields at its posed frame and crush's numpy reference of it:
-    (posed points, the GPU's fields, its MeshRecord, the reference's fields). ``meters``:
-    the stage's metersPerUnit (None: unauthored, USD's 0.01)."""
-    rest, posed, faces, q = random_cloth(seed)
-    stage = point_cache_stage(rest, {1: posed}, np.full(len(faces), 3), faces.ravel(), q=q,
-                              width=0.2, relax_iterations=relax_iterations)
-    if meters is not None:
-        UsdGeom.SetStageMetersPerUnit(stage, meters)
-    ours, record = gpu_fields(ctx, stage)
-    ref = crush_reference(rest, posed, record.topology, q, record.params.width,
-                          slack=record.params.slack, hold=record.params.hold,
-                          coarsening=record.params.coarsening)
-    return posed, ours, record, ref
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -28,7 +28,7 @@ def test_the_smallest_wave_pass_runs_in_the_chain_and_owns_its_table(gl_context)
         plain.release()
     with registered(MotionPass):
         assert [cls.__name__ for cls in wave_passes()] == [
-            "SkinPass", "MotionPass", "NormalsPass", "CrushPass", "RelaxPass"]
+            "SkinPass", "MotionPass", "NormalsPass", "CrushPass", "RelaxPass", "LengthPass"]
         engine = WrinkleEngine(str(SHIRT), ctx=gl_context)
     try:
         drawn = colour(engine, 24.0)
@@ -55,7 +55,7 @@ def test_every_pass_declares_its_units_and_its_shader():
 
     chain = wave_passes()
     assert [cls.__name__ for cls in chain] == ["SkinPass", "NormalsPass", "CrushPass",
-                                               "RelaxPass"]
+                                               "RelaxPass", "LengthPass"]
     for cls in [*chain, DrawPass, MapRasterizer, GeometryEvaluator, MotionPass]:
         assert issubclass(cls, Pass) and cls.UNITS, cls
         text = ShaderSource(cls.SHADER, root=cls.ROOT).body  # its #includes expanded

@@ -20,6 +20,7 @@ ivec4 fetch(isampler2D table, int i) { return texelFetch(table, TABLE_TEXEL(i), 
 #define FIELD_WAVE(i) (FIELD_TEXELS * (i) + FIELD_WAVE_TEXEL)
 #define FIELD_DIRECTION(i) (FIELD_TEXELS * (i) + FIELD_DIRECTION_TEXEL)
 #define FIELD_DEEPEN(i) (FIELD_TEXELS * (i) + FIELD_DEEPEN_TEXEL)
+#define FIELD_LENGTH(i) (FIELD_TEXELS * (i) + FIELD_LENGTH_TEXEL)
 // wave system s (0: the strongest compression or tension, 1: the second compression)
 #define FIELD_WAVE_OF(i, s) (FIELD_TEXELS * (i) + ((s) == 0 ? FIELD_WAVE_TEXEL : FIELD_WAVE2_TEXEL))
 

@@ -104,6 +104,12 @@ float drawn_share(int i) {
     return clamp(fetch(fields, FIELD_NORMAL(i)).w - 1.0, 0.0, 1.0);
 }
 
+// the length pass's scale of vertex i's folds, both systems (1 until it runs; a bake's is
+// in its amplitudes)
+float length_kept(int i) {
+    return fetch(fields, FIELD_LENGTH(i)).x;
+}
+
 CornerWaves corner_waves(int t) {
     CornerWaves cw;
     ivec3 corners = fetch(triangles, t).xyz;
@@ -140,13 +146,14 @@ CornerWaves corner_waves(int t) {
             int system = swapped[c] ? 1 - s : s;
             vec4 wave = s < SYSTEMS ? fetch(fields, FIELD_WAVE_OF(i, system)) : vec4(0.0);
             if (system == 0) wave.w *= drawn_share(i);
+            wave.w *= length_kept(i);
             float phi = fetch(phase, i)[system];
             vec4 direction = fetch(fields, FIELD_TEXELS * i + (system == 0
                 ? FIELD_DIRECTION_TEXEL : FIELD_DIRECTION2_TEXEL));
             cw.ratio[s][c] = direction.w;
 #else
             vec4 wave = fetch(fields, FIELD_WAVE(i));
-            wave.w *= drawn_share(i);
+            wave.w *= drawn_share(i) * length_kept(i);
             float phi = fetch(phase, i).x;
             vec4 direction = fetch(fields, FIELD_DIRECTION(i));
             cw.ratio[s][c] = direction.w;

@@ -115,6 +115,31 @@ STRETCH_ONSET = 1.1
 #: corners cancel). Measured choice (docs/method.md, "Coherence"): the referee's cotton
 #: sleeve kept 0.834 of its rest area where compressed without it, 0.887 with it.
 BLEND_COHERENCE_FLOOR = 0.5
+#: The length law (docs/method.md, "The cloth's length"; shaders/length.glsl): no ring of
+#: the wrinkled surface draws more than the cloth's rest area around it. Per vertex, over
+#: the triangles around it, the blend's surface is sampled with its exact gradient; where
+#: the ring is compressed beyond the slack, the vertex's folds (both systems' amplitudes)
+#: are scaled by the largest s <= 1 at which the ring draws at most the rest area the
+#: slack leaves, ramped in with the slack's ramp. A blend that is one plane wave over the
+#: ring (the analytic cases) keeps s = 1. LENGTH_LAW 0 turns it off.
+LENGTH_LAW = 1
+#: samples per vertex at most (over its whole ring: each triangle gets m x m, m from its
+#: waves' phase advance, 4 a wavelength, and at most what this budget leaves it)
+LENGTH_SAMPLES = 192
+#: a blend whose gradient is that of its corners carrying one wave, to this relative
+#: difference over the ring (RMS), is that plane wave: its scale is exactly 1 (rounding
+#: of the corners' phases differs by ~1e-7)
+LENGTH_SNAP = 1e-4
+#: a ring may draw this much more than its allowance: its samples' own error (4 a
+#: wavelength; the referee's curtains and panels, the sample stages: 0.03 left the shirt
+#: 0.965 of its rest area where compressed, 0.002 cut it to 0.952, and a calibration on a
+#: plane wave of the blend's slope to 0.922-0.939) is no reason to scale a fold
+LENGTH_TOLERANCE = 0.03
+#: a vertex whose drawn folds are less steep than this (a|k|: they draw a 1e-8 of the
+#: length) keeps scale 1
+LENGTH_MIN_SLOPE = 1e-4
+#: Newton steps of the scale's solve (each kept inside its bracket, else bisected)
+LENGTH_STEPS = 16
 #: Irregularity (wrinkle:irregularity, docs/method.md "Irregular folds"; beyond the
 #: paper): three smooth fields N = (N_x, N_y, N_z) over the rest surface. A corner whose
 #: wave runs along the rest-space unit direction u has its phase moved by beta u . N:
@@ -287,14 +312,17 @@ UDIM_REPEAT = -2
 #:   direction2 xyz: rest-space direction of the other principal stretch; w: r2
 #:   deepen     x: the offset o along the normal (DEEPEN_CAP; scene units, local
 #:              space); yzw: its gradient over the posed surface (local space)
+#:   length     x: the length pass's scale of the drawn folds, both systems (1: none;
+#:              docs/method.md, "The cloth's length"); yzw: 0
 #: Phases are per system too: the phase tables are RG (x: system 1, y: system 2).
-FIELD_TEXELS = 6
+FIELD_TEXELS = 7
 FIELD_NORMAL_TEXEL = 0
 FIELD_WAVE_TEXEL = 1
 FIELD_DIRECTION_TEXEL = 2
 FIELD_WAVE2_TEXEL = 3
 FIELD_DIRECTION2_TEXEL = 4
 FIELD_DEEPEN_TEXEL = 5
+FIELD_LENGTH_TEXEL = 6
 #: floats per vertex in the fields table
 FIELD_FLOATS = 4 * FIELD_TEXELS
 #: wave systems per vertex: the strongest compression (or tension), and the second
@@ -341,6 +369,10 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("FIELD_DIRECTION_TEXEL", FIELD_DIRECTION_TEXEL), ("FIELD_WAVE2_TEXEL", FIELD_WAVE2_TEXEL),
     ("FIELD_DIRECTION2_TEXEL", FIELD_DIRECTION2_TEXEL),
     ("FIELD_DEEPEN_TEXEL", FIELD_DEEPEN_TEXEL), ("DEEPEN_CAP", DEEPEN_CAP),
+    ("FIELD_LENGTH_TEXEL", FIELD_LENGTH_TEXEL), ("LENGTH_LAW", LENGTH_LAW),
+    ("LENGTH_SAMPLES", LENGTH_SAMPLES), ("LENGTH_SNAP", LENGTH_SNAP),
+    ("LENGTH_STEPS", LENGTH_STEPS), ("LENGTH_MIN_SLOPE", LENGTH_MIN_SLOPE),
+    ("LENGTH_TOLERANCE", LENGTH_TOLERANCE),
     ("WAVE_SYSTEMS", WAVE_SYSTEMS),
     ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE),
     ("COARSENING_EXPONENT", COARSENING_EXPONENT), ("COARSENING_MAX", COARSENING_MAX),
@@ -401,6 +433,11 @@ class WrinkleFields:
         The deepened pleats' offset along the normal (scene units; DEEPEN_CAP).
     offset_gradient : (n, 3) float32
         Its gradient over the posed surface (local space).
+    length_scale : (n,) float32
+        The length pass's scale of the drawn folds, both systems (1: none; docs/method.md,
+        "The cloth's length"): ``drawn_amplitude`` and ``drawn_amplitude2`` carry it,
+        ``amplitude`` and ``amplitude2`` are the fold law's, which the relaxation weighs
+        the phases by.
     """
 
     points: np.ndarray
@@ -422,6 +459,7 @@ class WrinkleFields:
     wavenumber: np.ndarray
     offset: np.ndarray
     offset_gradient: np.ndarray
+    length_scale: np.ndarray
 
     @classmethod
     def from_tables(cls, posed: np.ndarray, fields: np.ndarray, phase: np.ndarray,
@@ -436,6 +474,7 @@ class WrinkleFields:
         wave2 = texels[:, FIELD_WAVE2_TEXEL]
         direction2 = texels[:, FIELD_DIRECTION2_TEXEL]
         deepen = texels[:, FIELD_DEEPEN_TEXEL]
+        length = texels[:, FIELD_LENGTH_TEXEL]
         phase = np.asarray(phase, np.float32).reshape(-1, WAVE_SYSTEMS)
         anchor = np.asarray(anchor_phase, np.float32).reshape(-1, WAVE_SYSTEMS)
         return cls(points=posed[:, :3].copy(), normals=normal[:, :3].copy(),
@@ -451,13 +490,20 @@ class WrinkleFields:
                    anchor_phase2=anchor[:, 1].copy(),
                    wavenumber=(np.zeros(len(posed), np.float32) if damped is None else
                                np.asarray(damped, np.float32).reshape(-1, 4)[:, 3].copy()),
-                   offset=deepen[:, 0].copy(), offset_gradient=deepen[:, 1:].copy())
+                   offset=deepen[:, 0].copy(), offset_gradient=deepen[:, 1:].copy(),
+                   length_scale=length[:, 0].copy())
 
     @property
     def drawn_amplitude(self) -> np.ndarray:
         """The first system's amplitude as the surface draws it (``amplitude`` times
-        ``drawn``): what a bake writes as primvars:wrinkle:amplitude."""
-        return (self.amplitude * self.drawn).astype(np.float32)
+        ``drawn`` and ``length_scale``): what a bake writes as primvars:wrinkle:amplitude."""
+        return (self.amplitude * self.drawn * self.length_scale).astype(np.float32)
+
+    @property
+    def drawn_amplitude2(self) -> np.ndarray:
+        """The second system's amplitude as the surface draws it (``amplitude2`` times
+        ``length_scale``): what a bake writes as primvars:wrinkle:amplitude2."""
+        return (self.amplitude2 * self.length_scale).astype(np.float32)
 
     def arrays(self) -> dict:
         """Name -> array, in field order."""

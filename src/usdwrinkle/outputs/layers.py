@@ -51,9 +51,13 @@ def viridis(values: np.ndarray) -> np.ndarray:
 
 
 def _baked(fields, field: str) -> np.ndarray:
-    """A baked primvar's values: the amplitude as the surface draws it (a render from the
-    bake draws the baked amplitude as it is), every other field as computed."""
-    return fields.drawn_amplitude if field == "amplitude" else getattr(fields, field)
+    """A baked primvar's values: the amplitudes as the surface draws them (a render from
+    the bake draws the baked amplitudes as they are), every other field as computed."""
+    if field == "amplitude":
+        return fields.drawn_amplitude
+    if field == "amplitude2":
+        return fields.drawn_amplitude2
+    return getattr(fields, field)
 
 
 def display_values(field: str, fields: dict, params) -> np.ndarray:

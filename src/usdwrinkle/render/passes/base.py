@@ -130,7 +130,7 @@ class WavePass(Pass):
 
     #: the render --stats entry its time adds to
     TIMING: ClassVar[str]
-    #: its place in the chain (skin 10, normals 20, crush 30, relax 40)
+    #: its place in the chain (skin 10, normals 20, crush 30, relax 40, length 50)
     ORDER: ClassVar[float]
 
     def run(self, res: Any, step: Step) -> None:
