@@ -131,9 +131,9 @@ LENGTH_SAMPLES = 192
 #: of the corners' phases differs by ~1e-7)
 LENGTH_SNAP = 1e-4
 #: a ring may draw this much more than its allowance: its samples' own error (4 a
-#: wavelength; the referee's curtains and panels, the sample stages: 0.03 left the shirt
-#: 0.965 of its rest area where compressed, 0.002 cut it to 0.952, and a calibration on a
-#: plane wave of the blend's slope to 0.922-0.939) is no reason to scale a fold
+#: wavelength) is no reason to scale a fold (0.03 left the shirt 0.965 of its rest area
+#: where compressed; none cut it to 0.952, and a calibration of the samples on a plane
+#: wave of the blend's slope to 0.922-0.939)
 LENGTH_TOLERANCE = 0.03
 #: a vertex whose drawn folds are less steep than this (a|k|: they draw a 1e-8 of the
 #: length) keeps scale 1
