@@ -78,6 +78,13 @@ def _solve(gg: np.ndarray, weight: np.ndarray, target: float) -> float:
     return 0.5 * (low + high)
 
 
+def _area(points: np.ndarray, triangles: np.ndarray) -> float:
+    """The summed area of ``triangles`` (rows of corners) over ``points``."""
+    e1 = points[triangles[:, 1]] - points[triangles[:, 0]]
+    e2 = points[triangles[:, 2]] - points[triangles[:, 0]]
+    return float(0.5 * np.linalg.norm(np.cross(e1, e2), axis=1).sum())
+
+
 def _smoothstep(low: float, high: float, x: float) -> float:
     t = min(max((x - low) / (high - low), 0.0), 1.0)
     return t * t * (3 - 2 * t)
@@ -96,9 +103,10 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
     posed = np.asarray(posed, np.float64)
     waves = np.asarray(waves, np.float64)
     phases = np.asarray(phases, np.float64)
+    triangles = np.asarray(triangles)
     n = len(posed)
     incident = [[] for _ in range(n)]
-    for t, tri in enumerate(np.asarray(triangles)):
+    for t, tri in enumerate(triangles):
         for c in tri:
             incident[int(c)].append(t)
     out = np.ones(n)
@@ -107,12 +115,8 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
         ring = incident[i]
         if not a_i * np.linalg.norm(waves[i, :3]) >= LENGTH_MIN_SLOPE or not ring:
             continue
-        def areas(points, ring=ring):
-            tri = np.asarray(triangles)[ring]
-            e1, e2 = points[tri[:, 1]] - points[tri[:, 0]], points[tri[:, 2]] - points[tri[:, 0]]
-            return 0.5 * np.linalg.norm(np.cross(e1, e2), axis=1).sum()
-
-        rest_area, posed_area = areas(rest), areas(posed)
+        rest_area = _area(rest, triangles[ring])
+        posed_area = _area(posed, triangles[ring])
         ratio = posed_area / max(rest_area, 1e-30)
         onset = (_smoothstep(1 - SLACK_RAMP * slack, 1 - slack, ratio) if slack > 0
                  else float(ratio >= 1))
@@ -123,7 +127,7 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
         gg, weight = [], []
         apart, reference = 0.0, 0.0
         for t in ring:
-            tri = np.asarray(triangles[t])
+            tri = triangles[t]
             corners = posed[tri]
             face = np.cross(corners[1] - corners[0], corners[2] - corners[0])
             area = 0.5 * np.linalg.norm(face)
