@@ -207,12 +207,13 @@ void main() {
     // the samples' own error (4 a wavelength, a ring a few wavelengths wide) is no reason
     // to scale: a ring may draw LENGTH_TOLERANCE more
     target *= 1.0 + LENGTH_TOLERANCE;
-    if (!single && count > 0 && drawn_over(1.0, count, target).x > 0.0) {
+    vec2 f = !single && count > 0 ? drawn_over(1.0, count, target) : vec2(0.0);
+    if (f.x > 0.0) {
         // the ring draws more than it may at s = 1: the s in [0, 1] at which it draws
-        // that (0 where the pleats alone draw more)
+        // that (0 where the pleats alone draw more); the first step starts from s = 1's
         float low = 0.0, high = 1.0;
         for (int step = 0; step < LENGTH_STEPS; ++step) {
-            vec2 f = drawn_over(s, count, target);
+            if (step > 0) f = drawn_over(s, count, target);
             if (f.x > 0.0) high = s; else low = s;
             float next = f.y > 0.0 ? s - f.x / f.y : 0.5 * (low + high);
             s = next > low && next < high ? next : 0.5 * (low + high);
