@@ -41,13 +41,14 @@ def grid_sheet(nx: int = 21, ny: int = 21, size: float = 2.0, centered: bool = T
 
 def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width=None,
                       amplitude_scale=None, relax_iterations=None, apply_api=True,
-                      path="/Sheet", slack=0.0, crest_damping=0.0) -> Usd.Stage:
+                      path="/Sheet", slack=0.0, crest_damping=0.0,
+                      irregularity=0.0) -> Usd.Stage:
     """A stage with one mesh: ``primvars:rest`` = rest, ``points`` time-sampled.
 
-    These are the analytic cases: ``slack`` and ``crest_damping`` are authored as 0 (the
-    paper's amplitude law and frames that follow the strain at once, which the analytic
-    bars assume) unless given; None leaves the attribute unauthored (its fallback
-    applies)."""
+    These are the analytic cases: ``slack``, ``crest_damping`` and ``irregularity`` are
+    authored as 0 (the paper's amplitude law, frames that follow the strain at once and
+    regular waves, which the analytic bars assume) unless given; None leaves the attribute
+    unauthored (its fallback applies)."""
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     frames = sorted(posed_by_frame)
@@ -83,6 +84,9 @@ def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width
     if crest_damping is not None and apply_api:
         prim.CreateAttribute(schema.CREST_DAMPING, Sdf.ValueTypeNames.Float).Set(
             float(crest_damping))
+    if irregularity is not None and apply_api:
+        prim.CreateAttribute(schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(
+            float(irregularity))
     return stage
 
 
