@@ -132,57 +132,70 @@ def system_shift(directions, db, waves, b, field, field_gradient, q, sines, beta
 def blend_at(waves: np.ndarray, phases: np.ndarray, corners: np.ndarray, bary: np.ndarray,
              p: np.ndarray, height: np.ndarray, gradient: np.ndarray,
              irregular: tuple | None = None):
-    """One point's blend with its exact gradient (``exact_gradient`` in wave.glsl):
-    ``waves`` (3, 4) the corners' (k, a), sign-aligned; ``phases`` (3,); ``corners``
-    (3, 3) posed; ``bary`` its barycentrics; ``p`` the point. ``irregular``: (the rest
+    """The blend with its exact gradient (``exact_gradient`` in wave.glsl) at one point
+    or at a batch of points of one triangle: ``waves`` (3, 4) the corners' (k, a),
+    sign-aligned; ``phases`` (3,); ``corners`` (3, 3) posed; ``bary`` the barycentrics and
+    ``p`` the point, (3,) each, or (s, 3) each for s points. ``irregular``: (the rest
     corners (3, 3), the corners' unit rest directions (3, 3; sign-aligned with their
     waves), beta, 1 / Lambda) for the IRREGULAR variant (wrinkle:irregularity;
-    docs/method.md, "Irregular folds"). Returns (h, gradient, the coherence's factor)."""
-    b = np.clip(bary, 0, 1)
-    b = b / b.sum()
-    k, a = waves[:, :3], waves[:, 3]
-    theta = phases + np.einsum("cj,cj->c", k, p - corners)
+    docs/method.md, "Irregular folds"). Returns (h, gradient, the coherence's factor):
+    floats and a (3,) for one point, (s,), (s, 3) and (s,) for a batch."""
+    single = np.ndim(bary) == 1
+    b = np.clip(np.atleast_2d(np.asarray(bary, np.float64)), 0, 1)
+    b = b / b.sum(1, keepdims=True)
+    p = np.atleast_2d(np.asarray(p, np.float64))
+    waves = np.asarray(waves, np.float64)
+    count = len(b)
+    k = np.repeat(waves[None, :, :3], count, 0)
+    a = np.repeat(waves[None, :, 3], count, 0)
+    theta = np.asarray(phases, np.float64)[None] \
+        + np.einsum("scj,scj->sc", k, p[:, None] - corners[None])
     db = weight_gradients(corners)
-    d_a = np.zeros((3, 3))  # each corner amplitude's own gradient
+    d_a = np.zeros((count, 3, 3))  # each corner amplitude's own gradient
     if irregular is not None:
         rest, directions, beta, scale = irregular
         rest = np.asarray(rest, np.float64)
-        field, field_gradient, q, sines = irregular_field(rest, db, b, scale)
-        m, m_gradient, hessian = system_shift(directions, db, waves, b, field,
-                                              field_gradient, q, sines, beta)
-        length = np.linalg.norm(k, axis=1)
-        theta = theta + m
-        k = k + m_gradient
-        local = np.linalg.norm(k, axis=1)
-        ratio = np.where(length > 0, length / np.maximum(local, 1e-30), 1.0)
-        factor = np.where(length > 0, np.clip(ratio, IRREGULARITY_FACTOR_MIN,
-                                              IRREGULARITY_FACTOR_MAX), 1.0)
-        for c in range(3):
-            if length[c] > 0 and IRREGULARITY_FACTOR_MIN < factor[c] < IRREGULARITY_FACTOR_MAX:
-                d_a[c] = a[c] * (-length[c] / local[c] ** 3 * hessian @ k[c])
-        a = a * factor
+        length = np.linalg.norm(waves[:, :3], axis=1)
+        for n in range(count):
+            field, field_gradient, q, sines = irregular_field(rest, db, b[n], scale)
+            m, m_gradient, hessian = system_shift(directions, db, waves, b[n], field,
+                                                  field_gradient, q, sines, beta)
+            theta[n] += m
+            k[n] += m_gradient
+            local = np.linalg.norm(k[n], axis=1)
+            ratio = np.where(length > 0, length / np.maximum(local, 1e-30), 1.0)
+            factor = np.where(length > 0, np.clip(ratio, IRREGULARITY_FACTOR_MIN,
+                                                  IRREGULARITY_FACTOR_MAX), 1.0)
+            for c in range(3):
+                if length[c] > 0 and \
+                        IRREGULARITY_FACTOR_MIN < factor[c] < IRREGULARITY_FACTOR_MAX:
+                    d_a[n, c] = a[n, c] * (-length[c] / local[c] ** 3 * hessian @ k[n, c])
+            a[n] *= factor
     H, G = profile(height, theta), profile(gradient, theta)
-    h = np.sum(b * a * H)
-    g = np.einsum("c,cj->j", b * a * G, k) + np.einsum("c,cj->j", a * H, db) \
-        + np.einsum("c,cj->j", b * H, d_a)
-    total = np.sum(b * a)
-    phasor = np.array([np.sum(b * a * np.cos(theta)), np.sum(b * a * np.sin(theta))])
-    magnitude = float(np.linalg.norm(phasor))
-    keep = float(coherence_keep(total, magnitude))
-    if keep == 1.0:
-        return h, g, keep
-    d_total = np.einsum("c,cj->j", a, db) + np.einsum("c,cj->j", b, d_a)
-    if abs(h) * keep >= total:  # the crest held at the interpolated amplitude
-        return np.sign(h) * total, np.sign(h) * d_total, keep
-    if magnitude > BLEND_COHERENCE_FLOOR * total:
-        d_cos = np.einsum("c,cj->j", a * np.cos(theta), db) \
-            - np.einsum("c,cj->j", b * a * np.sin(theta), k) \
-            + np.einsum("c,cj->j", b * np.cos(theta), d_a)
-        d_sin = np.einsum("c,cj->j", a * np.sin(theta), db) \
-            + np.einsum("c,cj->j", b * a * np.cos(theta), k) \
-            + np.einsum("c,cj->j", b * np.sin(theta), d_a)
-        d_magnitude = (phasor[0] * d_cos + phasor[1] * d_sin) / magnitude
-        g = keep * g + h * (d_total - keep * d_magnitude) / magnitude
-    else:
-        g = keep * g
-    return keep * h, g, keep
+    h = np.sum(b * a * H, 1)
+    g = np.einsum("sc,scj->sj", b * a * G, k) + np.einsum("sc,cj->sj", a * H, db) \
+        + np.einsum("sc,scj->sj", b * H, d_a)
+    total = np.sum(b * a, 1)
+    cos, sin = np.cos(theta), np.sin(theta)
+    phasor = np.stack([np.sum(b * a * cos, 1), np.sum(b * a * sin, 1)], 1)
+    magnitude = np.linalg.norm(phasor, axis=1)
+    keep = coherence_keep(total, magnitude)
+    d_total = np.einsum("sc,cj->sj", a, db) + np.einsum("sc,scj->sj", b, d_a)
+    # the crest held at the interpolated amplitude; else the blend lifted by the coherence
+    # (its gradient too, while the phasor stands above the floor)
+    held = (keep != 1.0) & (np.abs(h) * keep >= total)
+    lifted = (keep != 1.0) & ~held & (magnitude > BLEND_COHERENCE_FLOOR * total)
+    d_cos = np.einsum("sc,cj->sj", a * cos, db) - np.einsum("sc,scj->sj", b * a * sin, k) \
+        + np.einsum("sc,scj->sj", b * cos, d_a)
+    d_sin = np.einsum("sc,cj->sj", a * sin, db) + np.einsum("sc,scj->sj", b * a * cos, k) \
+        + np.einsum("sc,scj->sj", b * sin, d_a)
+    safe = np.maximum(magnitude, 1e-300)[:, None]
+    d_magnitude = (phasor[:, :1] * d_cos + phasor[:, 1:] * d_sin) / safe
+    g = np.where(lifted[:, None],
+                 keep[:, None] * g + h[:, None] * (d_total - keep[:, None] * d_magnitude)
+                 / safe, keep[:, None] * g)
+    g = np.where(held[:, None], np.sign(h)[:, None] * d_total, g)
+    h = np.where(held, np.sign(h) * total, keep * h)
+    if single:
+        return float(h[0]), g[0], float(keep[0])
+    return h, g, keep

@@ -9,14 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..method.contract import (
-    BLEND_COHERENCE_FLOOR,
     LENGTH_MIN_SLOPE,
     LENGTH_SAMPLES,
     LENGTH_SNAP,
     LENGTH_TOLERANCE,
     SLACK_RAMP,
 )
-from .blend import coherence_keep, profile, weight_gradients
+from .blend import blend_at, weight_gradients
 
 
 def sample_points(m: int) -> np.ndarray:
@@ -32,35 +31,6 @@ def sample_points(m: int) -> np.ndarray:
                 u, v = (np.array([a, b], float) + (2.0 if down else 1.0) / 3.0) / m
                 out.append((1.0 - u - v, u, v))
     return np.array(out)
-
-
-def _blend_gradients(waves, phases, corners, bary, points, height, gradient):
-    """(s, 3): the exact gradient of the blend (blend.blend_at, vectorised over the
-    samples; one system, regular, no pleats) at each sample."""
-    b = np.clip(bary, 0, 1)
-    b = b / b.sum(1, keepdims=True)
-    k, a = waves[:, :3], waves[:, 3]
-    theta = phases[None] + np.einsum("cj,scj->sc", k, points[:, None] - corners[None])
-    db = weight_gradients(corners)
-    H, G = profile(height, theta), profile(gradient, theta)
-    h = np.sum(b * a * H, 1)
-    g = np.einsum("sc,cj->sj", b * a * G, k) + np.einsum("sc,cj->sj", a * H, db)
-    total = np.sum(b * a, 1)
-    cos, sin = np.cos(theta), np.sin(theta)
-    phasor = np.stack([np.sum(b * a * cos, 1), np.sum(b * a * sin, 1)], 1)
-    magnitude = np.linalg.norm(phasor, axis=1)
-    keep = coherence_keep(total, magnitude)
-    d_total = np.einsum("c,cj->j", a, db)[None].repeat(len(b), 0)
-    held = (keep != 1.0) & (np.abs(h) * keep >= total)
-    lifted = (keep != 1.0) & ~held & (magnitude > BLEND_COHERENCE_FLOOR * total)
-    d_cos = np.einsum("sc,cj->sj", a * cos, db) - np.einsum("sc,cj->sj", b * a * sin, k)
-    d_sin = np.einsum("sc,cj->sj", a * sin, db) + np.einsum("sc,cj->sj", b * a * cos, k)
-    safe = np.maximum(magnitude, 1e-300)[:, None]
-    d_magnitude = (phasor[:, :1] * d_cos + phasor[:, 1:] * d_sin) / safe
-    out = np.where(lifted[:, None],
-                   keep[:, None] * g + h[:, None] * (d_total - keep[:, None] * d_magnitude)
-                   / safe, keep[:, None] * g)
-    return np.where(held[:, None], np.sign(h)[:, None] * d_total, out)
 
 
 def _solve(gg: np.ndarray, weight: np.ndarray, target: float) -> float:
@@ -148,7 +118,7 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
             m = min(max(int(np.ceil(4 * k_max * reach / (2 * np.pi))), 2), cap)
             bary = sample_points(m)
             points = bary @ corners
-            g = _blend_gradients(w, ph, corners, bary, points, height, gradient)
+            g = blend_at(w, ph, corners, bary, points, height, gradient)[1]
             g -= np.outer(g @ normal, normal)
             d = np.zeros_like(g)
             if deepen is not None:
@@ -164,8 +134,8 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
             agree = np.column_stack([np.tile(k_i, (3, 1)),
                                      w[:, 3] * lengths / np.linalg.norm(k_i)])
             agree_phases = ph[mine] + (corners - corners[mine]) @ k_i
-            g_ref = _blend_gradients(agree, agree_phases, corners, bary, points, height,
-                                     gradient)
+            g_ref = blend_at(agree, agree_phases, corners, bary, points, height,
+                             gradient)[1]
             g_ref -= np.outer(g_ref @ normal, normal)
             apart += np.sum((g - g_ref) ** 2)
             reference += np.sum(g_ref ** 2)
