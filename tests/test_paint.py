@@ -321,8 +321,11 @@ def test_the_irregularity_control_previews_authors_and_undoes(sheet_session):
     session.flood()  # painted folds over the whole sheet
     first = session.render(320, 180, FULL).pixels
     assert session.control("irregularity") == 0.0
+    layer = session.stage.GetEditTarget().GetLayer()
+    authored = layer.ExportToString()  # the sheet authors irregularity 0 (point_cache_stage)
     session.set_control("irregularity", 0.3, live=True)
-    assert not prim.GetAttribute("wrinkle:irregularity").HasAuthoredValue()
+    assert prim.GetAttribute("wrinkle:irregularity").Get() == 0.0
+    assert layer.ExportToString() == authored
     moved = session.render(320, 180, FULL).pixels
     assert np.abs(moved.astype(np.float64) - first).max() > 0.1 * np.abs(first).max()
     edit = session.set_control("irregularity", 0.3)
