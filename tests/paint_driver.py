@@ -876,9 +876,15 @@ def scenario_resize(out: Path, stage: str) -> dict:
     result = {"radius_before": session.brush.radius}
 
     def outline(k):
+        # an outline painted since the radius changed: repaint() need not paint at once
+        # under Xvfb, and the last outline then stood for this move (two equal sizes)
+        view.outline = None
         view.repaint()
-        drawn = view.outline
-        return None if drawn is None else float(np.ptp(drawn["ring"][:, 0]))
+        try:
+            wait_for(lambda: view.outline is not None, "the outline painted", timeout=10.0)
+        except TimeoutError:
+            return None
+        return float(np.ptp(view.outline["ring"][:, 0]))
 
     x_events(window, "keydown", "b")
     seen = x_drag(window, [tuple(start + [dx, 0.0]) for dx in range(0, 101, 20)],
