@@ -79,14 +79,11 @@ def point_cache_stage(rest, posed_by_frame: dict, counts, indices, q=None, width
     if relax_iterations is not None:
         prim.CreateAttribute(schema.RELAX_ITERATIONS, Sdf.ValueTypeNames.Int).Set(
             int(relax_iterations))
-    if slack is not None and apply_api:
-        prim.CreateAttribute(schema.SLACK, Sdf.ValueTypeNames.Float).Set(float(slack))
-    if crest_damping is not None and apply_api:
-        prim.CreateAttribute(schema.CREST_DAMPING, Sdf.ValueTypeNames.Float).Set(
-            float(crest_damping))
-    if irregularity is not None and apply_api:
-        prim.CreateAttribute(schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(
-            float(irregularity))
+    analytic = ((schema.SLACK, slack), (schema.CREST_DAMPING, crest_damping),
+                (schema.IRREGULARITY, irregularity))
+    for name, value in analytic if apply_api else ():
+        if value is not None:
+            prim.CreateAttribute(name, Sdf.ValueTypeNames.Float).Set(float(value))
     return stage
 
 
