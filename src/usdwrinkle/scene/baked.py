@@ -28,7 +28,7 @@ from ..usd import schema
 #: baked primvar -> (field, components), the required ones, the second system's
 BAKED_PRIMVARS = schema.BAKED_PRIMVARS
 REQUIRED = schema.BAKED_REQUIRED
-SECOND_SYSTEM = schema.BAKED_SECOND_SYSTEM
+SECOND_SYSTEM = schema.BAKED_SECOND_REQUIRED
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,9 @@ class BakedFields:
     compression : (n,) float32
         r (ones when not baked).
     amplitude2, wave_vector2, phase2 : the second wave system, or None (one system).
-    direction2, compression2 : zeros and ones (not baked; nothing draws them).
+    direction2, compression2 : the second system's rest direction and compression, which
+        the irregular blend reads (zeros and ones from a bake made before they were
+        written).
     offset : (n,) float32 or None
         The deepened pleats' offset along the normal (method/deepen.py); None: a bake
         that has none (made before it was drawn), drawn without it.
@@ -160,8 +162,11 @@ class BakedSource:
         values.setdefault("direction", np.zeros((n, 3), np.float32))
         values.setdefault("compression", np.ones(n, np.float32))
         if "amplitude2" in values:
-            values["direction2"] = np.zeros((n, 3), np.float32)
-            values["compression2"] = np.ones(n, np.float32)
+            values.setdefault("direction2", np.zeros((n, 3), np.float32))
+            values.setdefault("compression2", np.ones(n, np.float32))
+        else:
+            values.pop("direction2", None)
+            values.pop("compression2", None)
         return BakedFields(**values)
 
 

@@ -46,12 +46,18 @@ BAKED_PRIMVARS = {
     "primvars:wrinkle:amplitude2": ("amplitude2", 1),
     "primvars:wrinkle:waveVector2": ("wave_vector2", 3),
     "primvars:wrinkle:phase2": ("phase2", 1),
+    # its rest direction and compression, which the irregular blend reads for it (since
+    # 2026-12-07; a bake made before has none, and draws zeros and ones there)
+    "primvars:wrinkle:direction2": ("direction2", 3),
+    "primvars:wrinkle:compression2": ("compression2", 1),
 }
 #: what a mesh's bake must hold to be drawn from it
 BAKED_REQUIRED = ("primvars:wrinkle:amplitude", "primvars:wrinkle:waveVector",
                   "primvars:wrinkle:phase")
-BAKED_SECOND_SYSTEM = ("primvars:wrinkle:amplitude2", "primvars:wrinkle:waveVector2",
-                       "primvars:wrinkle:phase2")
+BAKED_SECOND_REQUIRED = ("primvars:wrinkle:amplitude2", "primvars:wrinkle:waveVector2",
+                         "primvars:wrinkle:phase2")
+BAKED_SECOND_SYSTEM = (*BAKED_SECOND_REQUIRED, "primvars:wrinkle:direction2",
+                       "primvars:wrinkle:compression2")
 
 
 def baked_names_text() -> str:
