@@ -126,17 +126,26 @@ def test_a_bake_carries_the_offset_and_renders_as_computed(gl_context, tmp_path)
     passes computed it; a render from that bake (the gradient fitted again from the baked
     offset and the posed points) equals the render that computed it; and a bake without
     the offset (made before it existed) is drawn without it: its heights stay within the
-    tallest fold, where the computed frame's pass it."""
+    tallest fold, where the computed frame's pass it. Regular folds (irregularity 0
+    authored on a copy): an irregular fold's pixels stand up to IRREGULARITY_FACTOR_MAX
+    times its corners' amplitude, so "the tallest fold" is a regular one's."""
     from pathlib import Path
 
     from pxr import Sdf
 
     from usdwrinkle.cli.main import main
     from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.usd import schema
 
     from helpers import read_exr
 
-    curtain = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    sample = Path(__file__).resolve().parents[1] / "sample_stages" / "curtain.usda"
+    curtain = tmp_path / "curtain.usda"
+    Sdf.Layer.FindOrOpen(str(sample)).Export(str(curtain))
+    regular = Usd.Stage.Open(str(curtain))
+    regular.GetPrimAtPath("/World/Curtain/Cloth").CreateAttribute(
+        schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(0.0)
+    regular.Save()
     engine = WrinkleEngine(str(curtain))
     try:
         for frame in range(1, 25):
