@@ -150,10 +150,18 @@ def elbow_length(radius: float) -> float:
     return max(ELBOW, 2.0 * radius)
 
 
+#: the spacing (m) at which a sleeve's ring count is rounded to a multiple of 8 (sleeve)
+RING_SPACING = 0.02
+
+
 def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
            ) -> SweepShot:
     length = 0.80
-    cols = max(8, int(round(2 * np.pi * radius / spacing / 8)) * 8)
+    # points around: a multiple of 8 at 2 cm, doubled with each halving of the spacing
+    # (sweep.resample needs it; rounding at 0.5 cm gave the 25 cm sleeve 312, not 320)
+    coarse = max(spacing, RING_SPACING)
+    cols = max(8, int(round(2 * np.pi * radius / coarse / 8)) * 8) * max(
+        1, int(round(coarse / spacing)))
     rows = int(round(length / spacing)) + 1
     around = np.arange(cols) * (2 * np.pi / cols)
     along = np.linspace(0.0, length, rows)
