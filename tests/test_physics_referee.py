@@ -31,6 +31,26 @@ def test_a_sweep_shot_is_the_same_cloth_at_half_the_spacing(make):
     assert spec(fine)["bending"] == FABRICS["cotton"]
 
 
+@pytest.mark.parametrize("spacing", [0.02, 0.01, 0.005])
+def test_the_curtain_s_rings_are_6_cm_apart_and_a_sleeve_s_rings_double(spacing):
+    """The curtain hangs from rings every 6 cm along its rail at every grid (a constant of
+    the sleeve's once shadowed this one and pinned every 2 cm, which changed the curtain's
+    arrays and so its cache names); a sleeve's points around double with each halving of
+    the spacing, which sweep.resample needs (the 25 cm sleeve had 312 at 0.5 cm, not 320)."""
+    from benchmarks.physics.sweep import resample
+
+    shot = curtain("cotton", spacing).shot
+    top = shot.pinned.reshape(shot.rows, shot.cols)[0]
+    below = shot.pinned.reshape(shot.rows, shot.cols)[1]
+    rings = np.sort(shot.material[:shot.cols][top & ~below][:, 0])
+    np.testing.assert_allclose(np.diff(rings), 0.06, atol=0.5 * shot.spacing)
+    for radius in (0.05, 0.10, 0.25):
+        coarse, fine = sleeve("cotton", 2 * spacing, radius), sleeve("cotton", spacing, radius)
+        assert fine.shot.cols == 2 * coarse.shot.cols
+        points = coarse.shot.rest[None]
+        assert resample(points, coarse, fine).shape == (1, fine.shot.rows * fine.shot.cols, 3)
+
+
 @pytest.mark.parametrize("radius, zone", [(0.05, 0.20), (0.10, 0.20), (0.25, 0.50)])
 def test_a_bent_sleeve_s_arm_does_not_pass_through_itself(radius, zone):
     """The sweep's sleeves bend 90 degrees over 20 cm, over twice the radius beyond 10 cm

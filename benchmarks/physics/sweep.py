@@ -151,7 +151,7 @@ def elbow_length(radius: float) -> float:
 
 
 #: the spacing (m) at which a sleeve's ring count is rounded to a multiple of 8 (sleeve)
-RING_SPACING = 0.02
+AROUND_SPACING = 0.02
 
 
 def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
@@ -159,7 +159,7 @@ def sleeve(fabric: str = "cotton", spacing: float = 0.01, radius: float = 0.10
     length = 0.80
     # points around: a multiple of 8 at 2 cm, doubled with each halving of the spacing
     # (sweep.resample needs it; rounding at 0.5 cm gave the 25 cm sleeve 312, not 320)
-    coarse = max(spacing, RING_SPACING)
+    coarse = max(spacing, AROUND_SPACING)
     cols = max(8, int(round(2 * np.pi * radius / coarse / 8)) * 8) * max(
         1, int(round(coarse / spacing)))
     rows = int(round(length / spacing)) + 1
