@@ -458,3 +458,33 @@ def test_folds_are_scaled_to_draw_the_rest_area_around_them(exact):
     # the Gaussian (5 cm of rest length) leaves a ripple of 0.4% along the 20 cm wave in
     # the area around each point, and the scale follows it
     np.testing.assert_allclose(scale[away], expected[away], rtol=6e-3)
+
+
+def test_a_candidate_s_fallbacks_reach_what_reads_them_and_are_restored():
+    """benchmarks.physics.candidate sets a candidate's fallbacks in-process: the width a
+    cotton stage falls back to, the slack and irregularity a mesh without them reads, and
+    the coarsening gate as folds.coarsening_cap applies it (W at 0.666 of its tube's, the
+    25 cm sleeve's at cotton 8.1 cm: open with the window at (0.68, 0.8), closed at
+    (0.56, 0.66)); all restored afterwards. And its bars are referee.BARS."""
+    from benchmarks.physics.candidate import failures, fallbacks
+    from usdwrinkle.method.folds import coarsening_cap
+    from usdwrinkle.scene.params import curved_width
+    from usdwrinkle.usd import schema
+
+    before = (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, dict(schema.CLOTH_WIDTHS_M),
+              schema.CURVED_WIDTH_M, float(coarsening_cap(0.666, 1.0)))
+    assert before[-1] == pytest.approx(1.5)
+    settings = {"slack": 0.04, "irregularity": 0.3, "widths": {"cotton": 0.081},
+                "tube": 0.065, "gate": (0.56, 0.66)}
+    with fallbacks(settings):
+        assert (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY) == (0.04, 0.3)
+        assert float(curved_width(schema.CLOTH_WIDTHS_M["cotton"], np.array([0.0]))[0]) \
+            == pytest.approx(0.081)
+        assert float(curved_width(1.0, np.array([10.0]))[0]) == pytest.approx(0.065)
+        assert float(coarsening_cap(0.666, 1.0)) == pytest.approx(1.0)
+    assert (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, dict(schema.CLOTH_WIDTHS_M),
+            schema.CURVED_WIDTH_M, float(coarsening_cap(0.666, 1.0))) == before
+    row = {"wavelength": [0.97, 1.21], "heights": [0.86, 1.28], "correlation": 0.76,
+           "motion": {"bend": 1.56, "held": 1.87}, "area": 1.017, "shear": True}
+    assert failures(row) == ["height", "motion"]
+    assert failures({**row, "shear": False}) == ["height", "correlation", "motion"]

@@ -1,0 +1,185 @@
+"""A candidate for the fallbacks, measured on every shot of the converged sweep on the grid
+the converged table judges it on (issue 55): the rows that table would print if the
+candidate were the code's.
+
+    python -m benchmarks.physics.candidate [--write docs/physics.md] [--only SHOT ...]
+        [--slack C] [--irregularity U] [--width CLOTH=CM ...] [--tube CM]
+        [--gate LOW HIGH] [--cache .physics-cache]
+
+The fallbacks the shots are baked with are set in this process for the run: the slack
+and irregularity fallbacks (schema.DEFAULT_SLACK, DEFAULT_IRREGULARITY), the cloth presets
+(schema.CLOTH_WIDTHS_M), the tube's width at 10 cm (schema.CURVED_WIDTH_M) and the
+coarsening gate's lower window (contract.CURVED_COARSENING[:2]); nothing is authored on the
+shots but their cloth, as the converged table bakes them (referee.sweep_row). Per shot:
+the default and the matched W, the wavelength ratios at the default W over the phases,
+the heights at the matched W over the phases, the amplitude-field correlation, our area
+over the rest area where compressed beyond 3 x the slack, and on the sleeves the crest
+motion (bent, held), each against issue 55's bars (referee.BARS). The sample stages'
+crest-stability bars are tests (tests/test_stability.py), not measured here: a candidate
+the referee likes still has to pass them as the defaults.
+
+Needs the cached simulations (a shot not cached is simulated first: minutes to hours on
+one core); about 10 minutes for the ten shots here.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+
+import numpy as np
+
+from ..blocks import add_write_option, emit, markers
+from . import referee
+from .oracle import per_phase
+
+NAME = "referee-candidate"
+
+
+def candidate_text(settings: dict) -> str:
+    """The candidate as its command's options say it (only what differs from the code)."""
+    parts = []
+    for key, value in settings.items():
+        if key == "widths":
+            parts += [f"{cloth} {100 * metres:.1f} cm" for cloth, metres in value.items()]
+        elif key == "tube":
+            parts.append(f"tube {100 * value:.1f} cm at 10 cm")
+        elif key == "gate":
+            parts.append(f"gate ({value[0]:g}, {value[1]:g})")
+        else:
+            parts.append(f"{key} {value:g}")
+    return ", ".join(parts) or "the code's fallbacks"
+
+
+@contextlib.contextmanager
+def fallbacks(settings: dict):
+    """The candidate's fallbacks set in this process (restored after): ``settings`` keys
+    slack, irregularity, widths ({cloth: metres}), tube (metres), gate ((low, high))."""
+    from usdwrinkle.method import contract, folds
+    from usdwrinkle.usd import schema
+
+    saved = (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, dict(schema.CLOTH_WIDTHS_M),
+             schema.CURVED_WIDTH_M, contract.CURVED_COARSENING, folds.CURVED_COARSENING)
+    try:
+        schema.DEFAULT_SLACK = settings.get("slack", schema.DEFAULT_SLACK)
+        schema.DEFAULT_IRREGULARITY = settings.get("irregularity", schema.DEFAULT_IRREGULARITY)
+        schema.CLOTH_WIDTHS_M.update(settings.get("widths", {}))
+        schema.CURVED_WIDTH_M = settings.get("tube", schema.CURVED_WIDTH_M)
+        if "gate" in settings:
+            gate = (*settings["gate"], *contract.CURVED_COARSENING[2:])
+            contract.CURVED_COARSENING = folds.CURVED_COARSENING = gate
+        yield
+    finally:
+        (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, widths, schema.CURVED_WIDTH_M,
+         contract.CURVED_COARSENING, folds.CURVED_COARSENING) = saved
+        schema.CLOTH_WIDTHS_M.clear()
+        schema.CLOTH_WIDTHS_M.update(widths)
+
+
+def shot_row(name: str, cache, settings: dict) -> dict:
+    """One shot's row under the candidate (referee.sweep_row on its judged grid)."""
+    with fallbacks(settings):
+        sim, fine = referee.referee_pair(name, cache, referee.referee_grid(name, True),
+                                         referee.CONVERGED[1])
+        row = referee.sweep_row(sim, fine)
+        heights = [h for _, h in per_phase(sim, row["matched bake"]).values()]
+    return {"grid": referee.referee_grid(name, True), "default_width": row["default_width"],
+            "width": row["width"],
+            "wavelength": [w for w, _ in row["default"].values()], "heights": heights,
+            "correlation": row["correlation"], "area": row["area"], "motion": row["motion"],
+            "shear": name.startswith("shear")}
+
+
+def failures(row: dict) -> list[str]:
+    """The bars of referee.BARS the row misses."""
+    bars, out = referee.BARS, []
+    if max(max(w, 1 / w) for w in row["wavelength"]) > bars["wavelength"]:
+        out.append("wavelength")
+    if max(max(h, 1 / h) for h in row["heights"]) > bars["amplitude_matched"]:
+        out.append("height")
+    floor = bars["correlation_shear" if row["shear"] else "correlation_flat"]
+    if row["correlation"] < floor:
+        out.append("correlation")
+    if row["motion"] and max(row["motion"].values()) > bars["motion"]:
+        out.append("motion")
+    low, high = bars["area"]
+    if np.isfinite(row["area"]) and not low <= row["area"] <= high:
+        out.append("area")
+    return out
+
+
+def report(rows: dict, seconds: float, settings: dict, argv: list[str]) -> str:
+    def span(values):
+        return f"{min(values):.2f}-{max(values):.2f}x" if max(values) > min(values) + 5e-3 \
+            else f"{values[0]:.2f}x"
+
+    options = " ".join(argv)
+    lines = [markers(NAME)[0], "", "Made by `python -m benchmarks.physics.candidate "
+             f"{options}{' ' if options else ''}--write docs/physics.md` ({seconds:.0f} s "
+             "here; the simulations at 160 iterations on the grids the converged table "
+             "judges them on, cached in .physics-cache).", "",
+             f"The candidate: {candidate_text(settings)}.", "",
+             "| shot | grid | W default, matched | wavelength (default W) | heights (matched) "
+             "| correlation | area | crest motion (bent, held) | misses |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, row in rows.items():
+        motion = ", ".join(f"{value:.2f}x" for value in row["motion"].values()) or "-"
+        lines.append(
+            f"| {name} | {100 * row['grid']:g} cm | {100 * row['default_width']:.1f}, "
+            f"{100 * row['width']:.1f} cm | {span(row['wavelength'])} | "
+            f"{span(row['heights'])} | {row['correlation']:.3f} | {row['area']:.3f} | "
+            f"{motion} | {', '.join(failures(row)) or '-'} |")
+    lines += ["", markers(NAME)[1]]
+    return "\n".join(lines)
+
+
+def _width(text: str) -> tuple[str, float]:
+    from usdwrinkle.usd import schema
+
+    cloth, _, cm = text.partition("=")
+    if cloth not in schema.CLOTH_WIDTHS_M or not cm:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected CLOTH=CM, CLOTH one of {', '.join(schema.CLOTH_WIDTHS_M)}")
+    return cloth, float(cm) / 100.0
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.candidate",
+                                     description=__doc__.split("\n\n")[0])
+    add_write_option(parser, NAME, "docs/physics.md")
+    referee.add_shot_options(parser, grid=None, grid_doc="each shot's judged grid")
+    parser.add_argument("--slack", type=float, default=None, metavar="C",
+                        help="the wrinkle:slack fallback (default: the code's)")
+    parser.add_argument("--irregularity", type=float, default=None, metavar="U",
+                        help="the wrinkle:irregularity fallback (default: the code's)")
+    parser.add_argument("--width", type=_width, nargs="*", default=[], metavar="CLOTH=CM",
+                        help="cloth presets' flat widths in cm (e.g. cotton=8.1)")
+    parser.add_argument("--tube", type=float, default=None, metavar="CM",
+                        help="the tube's width at a rest radius of 10 cm, in cm")
+    parser.add_argument("--gate", type=float, nargs=2, default=None, metavar=("LOW", "HIGH"),
+                        help="the coarsening gate's window, in W over the tube's width")
+    args = parser.parse_args(argv)
+    if args.grid is not None:
+        parser.error("--grid: the candidate is measured on each shot's judged grid")
+    settings = {key: value for key, value in (
+        ("slack", args.slack), ("irregularity", args.irregularity),
+        ("widths", dict(args.width) or None),
+        ("tube", None if args.tube is None else args.tube / 100),
+        ("gate", None if args.gate is None else tuple(args.gate))) if value is not None}
+    names = referee.chosen_shots(parser, args)
+    # the command as the block names it: its options but --write
+    shown = list(argv)
+    if "--write" in shown:
+        index = shown.index("--write")
+        del shown[index:index + 2]
+    started = time.perf_counter()
+    rows = {name: shot_row(name, args.cache, settings)
+            for name in referee.each_shot("candidate", names)}
+    emit(args.write, NAME, report(rows, time.perf_counter() - started, settings, shown))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
