@@ -111,8 +111,8 @@ def failures(row: dict) -> list[str]:
 
 def report(rows: dict, seconds: float, settings: dict, argv: list[str]) -> str:
     def span(values):
-        return f"{min(values):.2f}-{max(values):.2f}x" if max(values) > min(values) + 5e-3 \
-            else f"{values[0]:.2f}x"
+        low, high = f"{min(values):.2f}", f"{max(values):.2f}"
+        return f"{low}x" if low == high else f"{low}-{high}x"
 
     options = " ".join(argv)
     lines = [markers(NAME)[0], "", "Made by `python -m benchmarks.physics.candidate "
