@@ -390,14 +390,17 @@ def sweep_row(sim: Simulated, fine: Simulated | None = None,
     from usdwrinkle.usd import schema
 
     cloth = {**cloth_attributes(sim.shot), **(attributes or {})}
+    # the area is taken where the coarse surface is compressed beyond 3 x the slack the
+    # bake used: an authored one, else the fallback (it was the fallback's always until
+    # 2026-12-07, also for probes that authored another)
+    slack = float(cloth[schema.SLACK][1]) if schema.SLACK in cloth else schema.DEFAULT_SLACK
     row = matched_bakes(sim, fine, cloth)
     width = row["width"]
     result = compare(sim, row["matched bake"])
     return {**row, "compared": result,
             "correlation": result["correlation"], "motion": motion_ratios(result),
-            "area": our_area(sim, fine, width, cloth, schema.DEFAULT_SLACK,
-                             row["matched fine"]),
-            "sim_area": area_ratio(fine or sim, fine or sim, schema.DEFAULT_SLACK)}
+            "area": our_area(sim, fine, width, cloth, slack, row["matched fine"]),
+            "sim_area": area_ratio(fine or sim, fine or sim, slack)}
 
 
 def mean_ratio(phases: dict) -> float:
