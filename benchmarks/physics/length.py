@@ -4,14 +4,15 @@
     python -m benchmarks.physics.length [--write docs/physics.md] [--only SHOT ...]
                                         [--grid M] [--cache .physics-cache]
 
-Per shot of the converged sweep, on its run at --grid (2 cm by default) and 160
-iterations, as the converged table measures it (referee.sweep_row: matched W, the
+Per shot of the converged sweep, on the run the converged table judges it on (1 cm for
+the curtains, the panels and the 5 cm sleeve, 2 cm for the others; --grid M: every shot
+at M instead; 2 cm for all until 2026-12-07) and 160 iterations, as the converged table measures it (referee.sweep_row: matched W, the
 simulation's pinned points marked wrinkle:held), once with the length pass turned off
 (contract.LENGTH_LAW 0, the law before 2026-12-06) and once as usdwrinkle draws: the
 heights over the phases (ours / the cloth's), the amplitude-field correlation, our area
 over the rest area where compressed beside the cloth's own, and on the sleeves the crest
 motion (ours / the cloth's, bending and held). A shot not in the cache is simulated first
-(10-30 minutes of solver at 2 cm on one core).
+(10-30 minutes of solver at 2 cm on one core, 20-55 at 1 cm).
 """
 from __future__ import annotations
 
@@ -75,7 +76,8 @@ def report(rows: dict, seconds: float, grid: float | None) -> str:
 
 def main(argv=None) -> int:
     return referee.shot_block_main(argv, "length", NAME, __doc__, shot_rows, report,
-                                   shots=tuple(referee.SWEEP))
+                                   shots=tuple(referee.SWEEP), grid=None,
+                                   grid_doc="each shot's judged grid")
 
 
 if __name__ == "__main__":
