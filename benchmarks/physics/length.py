@@ -6,8 +6,9 @@
 
 Per shot of the converged sweep, on the run the converged table judges it on (1 cm for
 the curtains, the panels and the 5 cm sleeve, 2 cm for the others; --grid M: every shot
-at M instead; 2 cm for all until 2026-12-07) and 160 iterations, as the converged table measures it (referee.sweep_row: matched W, the
-simulation's pinned points marked wrinkle:held), once with the length pass turned off
+at M instead; 2 cm for all until 2026-12-07) and 160 iterations, as the converged table
+measures it (referee.sweep_row: matched W, the simulation's pinned points marked
+wrinkle:held), once with the length pass turned off
 (contract.LENGTH_LAW 0, the law before 2026-12-06) and once as usdwrinkle draws: the
 heights over the phases (ours / the cloth's), the amplitude-field correlation, our area
 over the rest area where compressed beside the cloth's own, and on the sleeves the crest
