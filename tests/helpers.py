@@ -166,6 +166,21 @@ def read_pixels(path) -> np.ndarray:
     return pixels
 
 
+def rendered_frames(stages: dict, folder, frame: int = 24, width: int = 160) -> dict:
+    """``usdwrinkle render`` of each stage ({name: path}) at ``frame``, ``width`` pixels
+    wide, into ``folder``: {name: pixels} (to compare a direct render with one from a
+    bake)."""
+    from usdwrinkle.cli.main import main
+
+    images = {}
+    for name, path in stages.items():
+        out = Path(folder) / f"{name}.exr"
+        assert main(["render", str(path), str(out), "--frames", str(frame), "--width",
+                     str(width), "--quiet"]) == 0
+        images[name] = read_pixels(out)
+    return images
+
+
 #: material name -> (diffuse colour, the purpose it is bound for) (bind_purpose_looks)
 PURPOSE_LOOKS = {"Look": ((1, 0, 0), "allPurpose"), "Final": ((0, 0, 1), "full"),
                  "Proxy": ((0, 1, 0), "preview")}

@@ -194,13 +194,9 @@ def test_pillow_bake_holds_the_second_system_and_renders_from_it(gl_context, tmp
     assert amplitude2.max() > 0.01
     assert UsdGeom.Primvar(prim.GetAttribute("primvars:wrinkle:phase2")).GetInterpolation() \
         == UsdGeom.Tokens.vertex
-    images = {}
-    for name, stage in (("direct", source), ("baked", layer)):
-        out = tmp_path / f"{name}.exr"
-        assert main(["render", str(stage), str(out), "--frames", "24", "--width", "160",
-                     "--quiet"]) == 0
-        from helpers import read_pixels as read
-        images[name] = read(out)
+    from helpers import rendered_frames
+
+    images = rendered_frames({"direct": source, "baked": layer}, tmp_path)
     assert np.abs(images["direct"][..., :3] - images["baked"][..., :3]).max() < 1e-4
 
 

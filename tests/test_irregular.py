@@ -255,7 +255,7 @@ def test_a_render_from_the_pillow_s_bake_draws_its_irregular_second_system(tmp_p
     by up to 0.61 (2026-12-07)."""
     from pathlib import Path
 
-    from helpers import read_pixels as read
+    from helpers import rendered_frames
 
     sample = Path(__file__).resolve().parents[1] / "sample_stages" / "pillow.usda"
     source = tmp_path / "pillow.usda"
@@ -271,10 +271,5 @@ def test_a_render_from_the_pillow_s_bake_draws_its_irregular_second_system(tmp_p
     direction2 = np.asarray(prim.GetAttribute("primvars:wrinkle:direction2").Get(24))
     compression2 = np.asarray(prim.GetAttribute("primvars:wrinkle:compression2").Get(24))
     assert np.linalg.norm(direction2, axis=1).max() > 0.5 and compression2.min() < 1.0
-    images = {}
-    for name, path in (("direct", source), ("baked", layer)):
-        out = tmp_path / f"{name}.exr"
-        assert main(["render", str(path), str(out), "--frames", "24", "--width", "160",
-                     "--quiet"]) == 0
-        images[name] = read(out)
+    images = rendered_frames({"direct": source, "baked": layer}, tmp_path)
     assert np.abs(images["direct"][..., :3] - images["baked"][..., :3]).max() < 1e-4
