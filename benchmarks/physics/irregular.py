@@ -5,7 +5,9 @@ converged referee: every bar of issue 55, and the spectral spread, at a few irre
                                            [--values U ...] [--grid M]
                                            [--cache .physics-cache]
 
-Per shot (simulated on ``--grid``, 2 cm, at the converged referee's 160 iterations) and
+Per shot (on the run the converged table judges it on, 1 cm for the curtains, the panels
+and the 5 cm sleeve, 2 cm for the others, or every shot on ``--grid`` M; 2 cm for all until
+2026-12-07; at the converged referee's 160 iterations) and
 irregularity U (0: the paper's regular waves, the default), usdwrinkle is baked as the
 referee bakes it (referee.sweep_row with wrinkle:irregularity authored beside the
 cloth's preset): at the default W the phases' wavelength ratios (ours / sim, the least and
@@ -30,13 +32,14 @@ NAME = "referee-irregular"
 VALUES = (0.0, 0.15, 0.3)
 
 
-def shot_row(name: str, cache: Path, grid: float, value: float) -> dict:
+def shot_row(name: str, cache: Path, grid: float | None, value: float) -> dict:
     """referee.sweep_row at irregularity ``value``, with the spectral spreads at the last
-    phase (the cloth's, ours at the matched W)."""
+    phase (the cloth's, ours at the matched W); ``grid`` None: the shot's judged grid."""
     from pxr import Sdf
 
     from usdwrinkle.usd import schema
 
+    grid = referee.referee_grid(name, True) if grid is None else grid
     sim, fine = referee.referee_pair(name, cache, grid, CONVERGED[1])
     extra = {schema.IRREGULARITY: (Sdf.ValueTypeNames.Float, value)} if value else {}
     row = referee.sweep_row(sim, fine, extra)
@@ -45,6 +48,7 @@ def shot_row(name: str, cache: Path, grid: float, value: float) -> dict:
     row["spread"] = (measure.spectral_spread(sim.shot, sim.h[end - 1], inside),
                      measure.spectral_spread(sim.shot, row["matched bake"].h[end - 1],
                                              inside))
+    row["grid"] = grid
     return row
 
 
@@ -54,7 +58,7 @@ def span(ratios: list) -> str:
     return f"{low:.2f}x" if f"{low:.2f}" == f"{high:.2f}" else f"{low:.2f}-{high:.2f}x"
 
 
-def report(rows: dict, seconds: float, grid: float) -> str:
+def report(rows: dict, seconds: float, grid: float | None) -> str:
     end = markers(NAME)[1]
     bars = referee.BARS
     lines = referee.shot_block_head(NAME, "irregular", seconds, grid) + [
@@ -67,14 +71,16 @@ def report(rows: dict, seconds: float, grid: float) -> str:
              f"(bar {bars['area'][0]}-{bars['area'][1]}; the simulation's own beside it); "
              "the spectral spread of the fold height at the last phase, the cloth's and "
              "ours.", "",
-             "| shot | irregularity | matched W | wavelengths (default W) | heights (matched) "
-             "| correlation | crest motion | area: ours, sim | spread: cloth, ours |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| shot | grid | irregularity | matched W | wavelengths (default W) | "
+             "heights (matched) | correlation | crest motion | area: ours, sim | "
+             "spread: cloth, ours |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for (name, value), row in rows.items():
         wavelengths = [w for w, _ in row["default"].values()]
         heights = [h for _, h in row["matched"].values()]
         motion = ", ".join(f"{phase} {ratio:.2f}x" for phase, ratio in row["motion"].items())
-        lines.append(f"| {name} | {value:g} | {100 * row['width']:.1f} cm | "
+        lines.append(f"| {name} | {100 * row['grid']:g} cm | {value:g} | "
+                     f"{100 * row['width']:.1f} cm | "
                      f"{span(wavelengths)} | {span(heights)} | {row['correlation']:.2f} | "
                      f"{motion or '-'} | {row['area']:.3f}, {row['sim_area']:.3f} | "
                      f"{row['spread'][0]:.3f}, {row['spread'][1]:.3f} |")
@@ -85,7 +91,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.physics.irregular",
                                      description=__doc__.split("\n\n")[0])
     add_write_option(parser, NAME, "docs/physics.md")
-    referee.add_shot_options(parser)
+    referee.add_shot_options(parser, grid=None, grid_doc="each shot's judged grid")
     parser.add_argument("--values", nargs="*", type=float, default=list(VALUES),
                         metavar="U", help="the irregularities (default "
                                           f"{' '.join(f'{v:g}' for v in VALUES)})")
