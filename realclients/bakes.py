@@ -249,6 +249,10 @@ def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         layers["display"] = p.bake(p.base("display.usda"), "--display-color", "amplitude",
                                    "--with-points")
         images["ours_aovs"] = p.render(p.stage, p.base("ours_aovs.exr"))
+        # the amplitude of regular folds: what a per-vertex layer can hold (irregular
+        # folds vary within a fold, by up to 2x; display_ramp_order)
+        images["ours_aovs_regular"] = p.render(regular_layer(p.stage, p.base("regular.usda")),
+                                               p.base("ours_aovs_regular.exr"))
         # usdwrinkle's render of that layer (its preview material reads displayColor)
         images["ours_display"] = p.render(layers["display"], p.base("ours_display.png"),
                                           "--no-wrinkles")
@@ -280,15 +284,33 @@ def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.corrcoef(*ranks)[0, 1])
 
 
+def regular_layer(stage_path, target) -> Path:
+    """A layer over ``stage_path`` with wrinkle:irregularity 0 on every mesh (the same
+    waves, drawn regular; every mesh, since a shot may wrinkle all of them, --all-meshes,
+    where none has WrinkleAPI applied)."""
+    from pxr import Sdf, UsdGeom
+
+    from usdwrinkle.usd import schema
+
+    stage, layer = over_layer(Path(stage_path).resolve(), Path(target))
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Mesh):
+            prim.CreateAttribute(schema.IRREGULARITY, Sdf.ValueTypeNames.Float).Set(0.0)
+    layer.Save()
+    return Path(layer.realPath)
+
+
 def display_ramp_order(views: BakeViews) -> tuple[float, int]:
     """(rank correlation between the hue Storm shows of the display-colour layer and the
-    wrinkle amplitude usdwrinkle renders (its EXR's wrinkle.amplitude), pixels compared).
-    The ramp is viridis, whose hue falls from purple to yellow as the amplitude rises:
-    close to -1 when Storm shows the amplitude the layer holds."""
+    wrinkle amplitude usdwrinkle renders for regular folds (the EXR's wrinkle.amplitude of
+    the stage with wrinkle:irregularity 0: the layer holds one amplitude per vertex, and
+    irregular folds vary within a fold, which it cannot hold), pixels compared). The ramp
+    is viridis, whose hue falls from purple to yellow as the amplitude rises: close to -1
+    when Storm shows the amplitude the layer holds."""
     import OpenEXR
 
     rgba = read_rgba8(views.images["storm_display"])
-    channels = OpenEXR.File(str(views.images["ours_aovs"])).channels()
+    channels = OpenEXR.File(str(views.images["ours_aovs_regular"])).channels()
     amplitude = np.asarray(channels["wrinkle.amplitude"].pixels, np.float64)
     covered = np.asarray(channels["RGBA"].pixels, np.float64)[..., 3] >= 0.999
     mask = erode(covered & (rgba[..., 3] == 255)) & np.isfinite(amplitude)
