@@ -8,7 +8,8 @@ converged referee: every bar of issue 55, and the spectral spread, at a few irre
 Per shot (on the run the converged table judges it on, 1 cm for the curtains, the panels
 and the 5 cm sleeve, 2 cm for the others, or every shot on ``--grid`` M; 2 cm for all until
 2026-12-07; at the converged referee's 160 iterations) and
-irregularity U (0: the paper's regular waves, the default), usdwrinkle is baked as the
+irregularity U (authored; 0: the paper's regular waves, the fallback until 2026-12-07,
+0.15 since), usdwrinkle is baked as the
 referee bakes it (referee.sweep_row with wrinkle:irregularity authored beside the
 cloth's preset): at the default W the phases' wavelength ratios (ours / sim, the least and
 the largest); at the W matched to the simulation, the phases' height ratios, the amplitude-field
@@ -41,7 +42,8 @@ def shot_row(name: str, cache: Path, grid: float | None, value: float) -> dict:
 
     grid = referee.referee_grid(name, True) if grid is None else grid
     sim, fine = referee.referee_pair(name, cache, grid, CONVERGED[1])
-    extra = {schema.IRREGULARITY: (Sdf.ValueTypeNames.Float, value)} if value else {}
+    # authored at every value, 0 too: the fallback is not regular since 2026-12-07
+    extra = {schema.IRREGULARITY: (Sdf.ValueTypeNames.Float, value)}
     row = referee.sweep_row(sim, fine, extra)
     inside = zones(sim.shot)["all"]
     _, end = list(sim.shot.phases.values())[-1]

@@ -154,8 +154,8 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
     out = {}
     for held, irregularity in variants(name):
         cloth = referee.cloth_attributes(sim.shot)
-        if irregularity:
-            cloth[schema.IRREGULARITY] = (Sdf.ValueTypeNames.Float, irregularity)
+        # authored at every value, 0 too: the fallback is not regular since 2026-12-07
+        cloth[schema.IRREGULARITY] = (Sdf.ValueTypeNames.Float, irregularity)
         row = referee.matched_bakes(sim, fine, cloth, held)
         width = row["width"]
         chain = referee.area_chain(sim, fine, width)
