@@ -10,7 +10,9 @@ per pixel, 4.9 with the default 4 on 2026-11-27; on 2026-12-04, with the folds t
 the cloth's length (steeper, so the samples' placement weighs more), p99 0.38 with one
 sample, and with 4 p99 6.66 but 0.98 outside the envelope (ENVELOPE_P99). The bake was made
 again on 2026-12-04 (night), when the shirt's rig changed (dual quaternions; its points are
-skinned from the stage); the H200's figures are the old bake's.
+skinned from the stage); the H200's figures are the old bake's. Its frames were made
+again on 2026-12-07, when the irregularity fallback became 0.15 (the bake authors none,
+so it is drawn irregular since).
 """
 from __future__ import annotations
 

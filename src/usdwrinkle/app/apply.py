@@ -17,6 +17,7 @@ from ..usd.schema import (  # noqa: F401  (what the command line's help says of 
     CLOTH_WIDTHS_M,
     DEFAULT_CLOTH,
     DEFAULT_CREST_DAMPING,
+    DEFAULT_IRREGULARITY,
     DEFAULT_SLACK,
     WIDTH_EDGE_MULTIPLE,
 )

@@ -42,7 +42,8 @@ def add_parser(subparsers) -> None:
                    help="wrinkle:irregularity in [0, 0.5]: how unequal the folds are (the "
                         "coefficient of variation of their width; their crests meander and "
                         "the wider ones stand taller; about 0.3 in the cloth referee's "
-                        "folds). Default 0: the paper's regular waves")
+                        f"folds). Default {schema.DEFAULT_IRREGULARITY:g}; 0: the paper's "
+                        "regular waves")
     p.add_argument("--held-from-primvar", metavar="NAME",
                    help="author primvars:wrinkle:held from this float primvar of the mesh "
                         "(a painted pin or seam weight in [0, 1], vertex interpolation)")

@@ -130,9 +130,12 @@ DEFAULT_SLACK = 0.05
 #: damping). 0.5-3 degrees hold the converged referee's held sleeves' crests alike
 #: (docs/physics.md); within 1 degree a trembling input's turn comes through
 DEFAULT_CREST_DAMPING = 1.5
-#: wrinkle:irregularity fallback: the paper's regular waves (method/contract.py,
-#: IRREGULARITY_*; docs/method.md, "Irregular folds")
-DEFAULT_IRREGULARITY = 0.0
+#: wrinkle:irregularity fallback: folds of unequal width (method/contract.py,
+#: IRREGULARITY_*; docs/method.md, "Irregular folds"). 0.15 since 2026-12-07 (0 before:
+#: the paper's regular waves): every referee shot's area where compressed comes into
+#: issue 55's bar and no bar that held breaks (docs/physics.md, the irregularity block);
+#: 0.3, the cloth's own spread, lengthens the measured folds past the presets' fit
+DEFAULT_IRREGULARITY = 0.15
 #: and its largest value (check refuses more): at 0.5 the local wave number's variation
 #: is half its mean, and its wave sometimes turns back
 IRREGULARITY_MAX = 0.5
