@@ -32,7 +32,6 @@ import numpy as np
 
 from ..blocks import add_write_option, emit, markers
 from . import referee
-from .oracle import per_phase
 
 NAME = "referee-candidate"
 
@@ -79,14 +78,13 @@ def fallbacks(settings: dict):
 
 def shot_row(name: str, cache, settings: dict) -> dict:
     """One shot's row under the candidate (referee.sweep_row on its judged grid)."""
+    grid = referee.referee_grid(name, True)
     with fallbacks(settings):
-        sim, fine = referee.referee_pair(name, cache, referee.referee_grid(name, True),
-                                         referee.CONVERGED[1])
+        sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
         row = referee.sweep_row(sim, fine)
-        heights = [h for _, h in per_phase(sim, row["matched bake"]).values()]
-    return {"grid": referee.referee_grid(name, True), "default_width": row["default_width"],
-            "width": row["width"],
-            "wavelength": [w for w, _ in row["default"].values()], "heights": heights,
+    return {"grid": grid, "default_width": row["default_width"], "width": row["width"],
+            "wavelength": [w for w, _ in row["default"].values()],
+            "heights": [h for _, h in row["matched"].values()],
             "correlation": row["correlation"], "area": row["area"], "motion": row["motion"],
             "shear": name.startswith("shear")}
 
