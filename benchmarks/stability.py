@@ -1,6 +1,7 @@
 """Stable crests (issue 46): how far the crest pattern moves under a tiny change of input.
 
-    python -m benchmarks.stability [--write docs/method.md | --draws N [--degrees D] [--phases]]
+    python -m benchmarks.stability [--write docs/method.md |
+                                    --draws N [--degrees D] [--phases] [--slack C]]
 
 Two measurements, on the shirt and on CesiumMan (``--all-meshes``, its metres authored in a
 wrapper layer):
@@ -34,7 +35,9 @@ on four axes can pass by luck (docs/method.md, "Three couplings"). Two processes
 1.5 minutes for 64 draws on llvmpipe. ``--phases``: per draw instead, the most of the
 sleeve's waves whose phase moved by more than 0.5 rad (the shirt and the loop), which sees
 what the frames' band limit fades (the elbow's pinch; docs/method.md, "What the image
-does not see").
+does not see"). ``--slack C``: the draws with the wrinkle:slack fallback at C (none of the
+stages authors one), to see how the crests' stability depends on it (docs/physics.md,
+"The slack and the crests' stability").
 """
 from __future__ import annotations
 
@@ -357,10 +360,23 @@ def table(result: dict) -> str:
 
 
 def _draws_of(job: tuple) -> tuple[str, list]:
-    """One process of ``draws``: (stage, degrees, [(index, axis)], phases) -> (stage,
-    [(index, share)]); with ``phases`` the share is the most waves moved by more than 0.5
-    rad at any of FRAMES (moved_waves), the sleeve's, instead of the pixels'."""
-    stage, degrees, axes, phases = job
+    """One process of ``draws``: (stage, degrees, [(index, axis)], phases, slack) ->
+    (stage, [(index, share)]); with ``phases`` the share is the most waves moved by more
+    than 0.5 rad at any of FRAMES (moved_waves), the sleeve's, instead of the pixels';
+    ``slack``: the wrinkle:slack fallback in this process (None: the code's)."""
+    from usdwrinkle.usd import schema
+
+    stage, degrees, axes, phases, slack = job
+    saved = schema.DEFAULT_SLACK
+    if slack is not None:
+        schema.DEFAULT_SLACK = slack
+    try:
+        return _stage_draws(stage, degrees, axes, phases)
+    finally:
+        schema.DEFAULT_SLACK = saved
+
+
+def _stage_draws(stage: str, degrees: float, axes: list, phases: bool) -> tuple[str, list]:
     with tempfile.TemporaryDirectory() as folder:
         all_meshes = stage == "cesium_man"
         if stage == "shirt":
@@ -378,16 +394,18 @@ def _draws_of(job: tuple) -> tuple[str, list]:
 
 
 def draws(count: int, degrees: float = 0.01, processes: int = 2,
-          stages=DRAW_STAGES, phases: bool = False) -> dict:
+          stages=DRAW_STAGES, phases: bool = False, slack: float | None = None) -> dict:
     """stage -> the worst frame's moved share under ``degrees`` about each of ``count``
     random axes (random_axes), in their order (CesiumMan where the corpus is there); with
-    ``phases``, the sleeve's moved waves instead (the shirt and the loop; _draws_of)."""
+    ``phases``, the sleeve's moved waves instead (the shirt and the loop; _draws_of);
+    ``slack``: the wrinkle:slack fallback the stages are drawn with (None: the code's; the
+    shirt and CesiumMan author none, the loop's layer neither)."""
     from concurrent.futures import ProcessPoolExecutor
 
     if phases or not cesium_man().exists():
         stages = tuple(s for s in stages if s != "cesium_man")
     axes = list(enumerate(random_axes(count)))
-    jobs = [(stage, degrees, axes[part::processes], phases) for stage in stages
+    jobs = [(stage, degrees, axes[part::processes], phases, slack) for stage in stages
             for part in range(processes)]
     out: dict = {stage: {} for stage in stages}
     with ProcessPoolExecutor(processes) as pool:
@@ -396,10 +414,12 @@ def draws(count: int, degrees: float = 0.01, processes: int = 2,
     return {stage: [shares[i] for i in range(count)] for stage, shares in out.items()}
 
 
-def phase_draws_table(result: dict, degrees: float = 0.01) -> str:
+def phase_draws_table(result: dict, degrees: float = 0.01,
+                      slack: float | None = None) -> str:
+    fallback = "" if slack is None else f", the wrinkle:slack fallback at {slack:g}"
     lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
-             f"(seed {DRAWS_SEED}): per draw, the most of the sleeve's waves (above 5% of "
-             "the largest amplitude) whose phase moved by more than 0.5 rad at frames "
+             f"(seed {DRAWS_SEED}{fallback}): per draw, the most of the sleeve's waves "
+             "(above 5% of the largest amplitude) whose phase moved by more than 0.5 rad at frames "
              + ", ".join(map(str, FRAMES)) + " (what the band limit may hide from the "
              "frames).", "", "| stage | draws with a wave moved | median | largest | draws |",
              "|---|---|---|---|---|"]
@@ -410,10 +430,11 @@ def phase_draws_table(result: dict, degrees: float = 0.01) -> str:
     return "\n".join(lines)
 
 
-def draws_table(result: dict, degrees: float = 0.01) -> str:
+def draws_table(result: dict, degrees: float = 0.01, slack: float | None = None) -> str:
     bar = BARS.get(degrees, BARS[0.01])
+    fallback = "" if slack is None else f", the wrinkle:slack fallback at {slack:g}"
     lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
-             f"(seed {DRAWS_SEED}): per draw, the worst frame's moved share; bar "
+             f"(seed {DRAWS_SEED}{fallback}): per draw, the worst frame's moved share; bar "
              f"{100 * bar:g}%.", "", "| stage | over the bar | median | largest | draws |",
              "|---|---|---|---|---|"]
     for stage, shares in result.items():
@@ -440,17 +461,22 @@ def main(argv=None) -> int:
     parser.add_argument("--phases", action="store_true",
                         help="per draw the most waves whose phase moved by over 0.5 rad, "
                              "instead of the moved share of the frames")
+    parser.add_argument("--slack", type=float, default=None, metavar="C",
+                        help="draw with the wrinkle:slack fallback at C (default: the "
+                             "code's; the stages author none)")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
-    if args.draws is None and (args.phases or args.degrees != 0.01):
-        parser.error("--degrees and --phases go with --draws N")
+    if args.draws is None and (args.phases or args.degrees != 0.01 or
+                               args.slack is not None):
+        parser.error("--degrees, --phases and --slack go with --draws N")
     if args.draws is not None:
         if args.write:
             parser.error("--write writes the named-axis block; --draws prints its table")
         if args.phases:
-            print(phase_draws_table(draws(args.draws, args.degrees, phases=True),
-                                    args.degrees))
+            print(phase_draws_table(draws(args.draws, args.degrees, phases=True,
+                                          slack=args.slack), args.degrees, args.slack))
         else:
-            print(draws_table(draws(args.draws, args.degrees), args.degrees))
+            print(draws_table(draws(args.draws, args.degrees, slack=args.slack),
+                              args.degrees, args.slack))
         return 0
     emit(args.write, "stability", table(measure()))
     return 0

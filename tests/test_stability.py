@@ -288,3 +288,29 @@ def test_neighbouring_waves_align_no_worse_than_before(gl_context, tmp_path, nam
                               gl_context)[0] for deg in misfit.DEGREES]
     assert len(set(draws)) > 1  # the joint changes reach the phases
     assert np.mean(draws) <= MISFIT_BOUND[name] + 0.005, draws
+
+
+def test_draws_take_the_slack_they_are_given_and_give_the_code_s_back(monkeypatch,
+                                                                       gl_context):
+    """`python -m benchmarks.stability --draws N --slack C` (docs/physics.md, "The slack
+    and the crests' stability"): each worker draws with the wrinkle:slack fallback C, which
+    reaches the frames (the shirt authors none), and gives the code's back after."""
+    from usdwrinkle.usd import schema
+
+    seen = []
+
+    def stage_draws(stage, degrees, axes, phases):
+        seen.append(schema.DEFAULT_SLACK)
+        _, amplitude, alpha = stability.heights(str(stability.SHIRT), frames=(12,),
+                                                ctx=gl_context)[12]
+        covered = alpha > 0.5
+        return stage, [(0, float((amplitude[covered] > 0).mean()))]
+
+    monkeypatch.setattr(stability, "_stage_draws", stage_draws)
+    code = schema.DEFAULT_SLACK
+    _, [(_, loose)] = stability._draws_of(("shirt", 0.01, [], False, 0.3))
+    _, [(_, default)] = stability._draws_of(("shirt", 0.01, [], False, None))
+    assert seen == [0.3, code] and schema.DEFAULT_SLACK == code
+    # folds begin at 30% compression instead of the fallback's: the unpainted sleeve
+    # keeps far fewer of them at frame 12
+    assert loose < 0.8 * default, (loose, default)
