@@ -488,3 +488,26 @@ def test_a_candidate_s_fallbacks_reach_what_reads_them_and_are_restored():
            "motion": {"bend": 1.56, "held": 1.87}, "area": 1.017, "shear": True}
     assert failures(row) == ["height", "motion"]
     assert failures({**row, "shear": False}) == ["height", "correlation", "motion"]
+
+
+def test_a_candidate_s_worst_case_is_the_farthest_any_shot_sits_from_a_bar():
+    """benchmarks.physics.candidate's "worst": per bar the factor by which a row misses it
+    (over 1) or comes near it (under 1), either way of a ratio, and the largest over the
+    rows (issue 55 chooses the laws by the worst case over the sweep)."""
+    from benchmarks.physics.candidate import excesses, worst
+
+    leather = {"wavelength": [0.85, 1.01], "heights": [0.74, 1.25], "correlation": 0.835,
+               "motion": {}, "area": 1.007, "shear": False}
+    sleeve = {"wavelength": [0.92], "heights": [1.34], "correlation": 0.953,
+              "motion": {"bend": 0.49, "held": 1.22}, "area": 0.948, "shear": False}
+    e = excesses(leather)
+    assert e["wavelength"] == pytest.approx(1 / 0.85 / 1.3)
+    assert e["height"] == pytest.approx(1 / 0.74 / 1.25)  # the onset, not the 1.25x
+    assert e["correlation"] == pytest.approx(0.85 / 0.835)
+    assert e["area"] == pytest.approx(1.007 / 1.05)  # nearer the top of [0.95, 1.05]
+    assert "motion" not in e
+    s = excesses(sleeve)
+    assert s["motion"] == pytest.approx(1.22 / 1.5)
+    assert s["area"] == pytest.approx(0.95 / 0.948)
+    assert worst({"curtain-leather": leather, "sleeve25-cotton": sleeve}) == \
+        pytest.approx((1 / 0.74 / 1.25, "curtain-leather", "height"))

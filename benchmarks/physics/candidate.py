@@ -89,6 +89,31 @@ def shot_row(name: str, cache, settings: dict) -> dict:
             "shear": name.startswith("shear")}
 
 
+def excesses(row: dict) -> dict:
+    """bar -> how far the row sits from it: the factor by which it misses the bar (over 1)
+    or stays inside it (1 at the bar): its worst phase's wavelength or height ratio, either
+    way, over the bar's ratio; the bar's correlation over the row's; the crest motion over
+    the bar; for the area, the larger of low / area and area / high (the nearer end)."""
+    bars = referee.BARS
+    out = {"wavelength": max(max(w, 1 / w) for w in row["wavelength"]) / bars["wavelength"],
+           "height": max(max(h, 1 / h) for h in row["heights"]) / bars["amplitude_matched"],
+           "correlation": bars["correlation_shear" if row["shear"] else "correlation_flat"]
+           / row["correlation"]}
+    if row["motion"]:
+        out["motion"] = max(row["motion"].values()) / bars["motion"]
+    low, high = bars["area"]
+    if np.isfinite(row["area"]):
+        out["area"] = max(low / row["area"], row["area"] / high)
+    return out
+
+
+def worst(rows: dict) -> tuple[float, str, str]:
+    """The worst case over the sweep (issue 55 chooses the laws by it): (the largest
+    excess of any row, its shot, its bar)."""
+    return max((value, name, bar) for name, row in rows.items()
+               for bar, value in excesses(row).items())
+
+
 def failures(row: dict) -> list[str]:
     """The bars of referee.BARS the row misses."""
     bars, out = referee.BARS, []
@@ -119,17 +144,26 @@ def report(rows: dict, seconds: float, settings: dict, argv: list[str]) -> str:
              "judges them on, cached in .physics-cache).", "",
              f"The candidate: {candidate_text(settings)}.", "",
              "| shot | grid | W default, matched | wavelength (default W) | heights (matched) "
-             "| correlation | area | crest motion (bent, held) | misses |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| correlation | area | crest motion (bent, held) | misses | worst |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, row in rows.items():
         motion = ", ".join(f"{value:.2f}x" for value in row["motion"].values()) or "-"
         lines.append(
             f"| {name} | {100 * row['grid']:g} cm | {100 * row['default_width']:.1f}, "
             f"{100 * row['width']:.1f} cm | {span(row['wavelength'])} | "
             f"{span(row['heights'])} | {row['correlation']:.3f} | {row['area']:.3f} | "
-            f"{motion} | {', '.join(failures(row)) or '-'} |")
+            f"{motion} | {', '.join(failures(row)) or '-'} | {_worst_text(row)} |")
+    value, shot, bar = worst(rows)
+    lines += ["", f"Worst over these shots: {value:.3f} ({shot}, {bar}). \"worst\": the "
+              "largest factor by which the row misses a bar, or under 1 how near it comes to "
+              "one (excesses)."]
     lines += ["", markers(NAME)[1]]
     return "\n".join(lines)
+
+
+def _worst_text(row: dict) -> str:
+    bar, value = max(excesses(row).items(), key=lambda item: item[1])
+    return f"{value:.3f} ({bar})"
 
 
 def _width(text: str) -> tuple[str, float]:
