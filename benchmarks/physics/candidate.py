@@ -115,21 +115,8 @@ def worst(rows: dict) -> tuple[float, str, str]:
 
 
 def failures(row: dict) -> list[str]:
-    """The bars of referee.BARS the row misses."""
-    bars, out = referee.BARS, []
-    if max(max(w, 1 / w) for w in row["wavelength"]) > bars["wavelength"]:
-        out.append("wavelength")
-    if max(max(h, 1 / h) for h in row["heights"]) > bars["amplitude_matched"]:
-        out.append("height")
-    floor = bars["correlation_shear" if row["shear"] else "correlation_flat"]
-    if row["correlation"] < floor:
-        out.append("correlation")
-    if row["motion"] and max(row["motion"].values()) > bars["motion"]:
-        out.append("motion")
-    low, high = bars["area"]
-    if np.isfinite(row["area"]) and not low <= row["area"] <= high:
-        out.append("area")
-    return out
+    """The bars of referee.BARS the row misses (those whose excess is over 1)."""
+    return [bar for bar, value in excesses(row).items() if value > 1.0]
 
 
 def report(rows: dict, seconds: float, settings: dict, argv: list[str]) -> str:
