@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from .blocks import add_write_option, emit, markers
+from .fallbacks import fallbacks
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIRT = ROOT / "sample_stages" / "shirt.usda"
@@ -364,16 +365,9 @@ def _draws_of(job: tuple) -> tuple[str, list]:
     (stage, [(index, share)]); with ``phases`` the share is the most waves moved by more
     than 0.5 rad at any of FRAMES (moved_waves), the sleeve's, instead of the pixels';
     ``slack``: the wrinkle:slack fallback in this process (None: the code's)."""
-    from usdwrinkle.usd import schema
-
     stage, degrees, axes, phases, slack = job
-    saved = schema.DEFAULT_SLACK
-    if slack is not None:
-        schema.DEFAULT_SLACK = slack
-    try:
+    with fallbacks({} if slack is None else {"slack": slack}):
         return _stage_draws(stage, degrees, axes, phases)
-    finally:
-        schema.DEFAULT_SLACK = saved
 
 
 def _stage_draws(stage: str, degrees: float, axes: list, phases: bool) -> tuple[str, list]:
@@ -414,11 +408,16 @@ def draws(count: int, degrees: float = 0.01, processes: int = 2,
     return {stage: [shares[i] for i in range(count)] for stage, shares in out.items()}
 
 
+def _draws_head(result: dict, degrees: float, slack: float | None) -> str:
+    """The draws tables' first words: the turn, the draws, the seed (and the slack)."""
+    fallback = "" if slack is None else f", the wrinkle:slack fallback at {slack:g}"
+    return (f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
+            f"(seed {DRAWS_SEED}{fallback}): per draw, ")
+
+
 def phase_draws_table(result: dict, degrees: float = 0.01,
                       slack: float | None = None) -> str:
-    fallback = "" if slack is None else f", the wrinkle:slack fallback at {slack:g}"
-    lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
-             f"(seed {DRAWS_SEED}{fallback}): per draw, the most of the sleeve's waves "
+    lines = [_draws_head(result, degrees, slack) + "the most of the sleeve's waves "
              "(above 5% of the largest amplitude) whose phase moved by more than 0.5 rad at frames "
              + ", ".join(map(str, FRAMES)) + " (what the band limit may hide from the "
              "frames).", "", "| stage | draws with a wave moved | median | largest | draws |",
@@ -432,9 +431,7 @@ def phase_draws_table(result: dict, degrees: float = 0.01,
 
 def draws_table(result: dict, degrees: float = 0.01, slack: float | None = None) -> str:
     bar = BARS.get(degrees, BARS[0.01])
-    fallback = "" if slack is None else f", the wrinkle:slack fallback at {slack:g}"
-    lines = [f"{degrees:g} degrees about {len(next(iter(result.values())))} random axes "
-             f"(seed {DRAWS_SEED}{fallback}): per draw, the worst frame's moved share; bar "
+    lines = [_draws_head(result, degrees, slack) + "the worst frame's moved share; bar "
              f"{100 * bar:g}%.", "", "| stage | over the bar | median | largest | draws |",
              "|---|---|---|---|---|"]
     for stage, shares in result.items():

@@ -24,13 +24,13 @@ one core); about 10 minutes for the ten shots here.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 import time
 
 import numpy as np
 
 from ..blocks import add_write_option, emit, markers
+from ..fallbacks import fallbacks
 from . import referee
 
 NAME = "referee-candidate"
@@ -49,31 +49,6 @@ def candidate_text(settings: dict) -> str:
         else:
             parts.append(f"{key} {value:g}")
     return ", ".join(parts) or "the code's fallbacks"
-
-
-@contextlib.contextmanager
-def fallbacks(settings: dict):
-    """The candidate's fallbacks set in this process (restored after): ``settings`` keys
-    slack, irregularity, widths ({cloth: metres}), tube (metres), gate ((low, high))."""
-    from usdwrinkle.method import contract, folds
-    from usdwrinkle.usd import schema
-
-    saved = (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, dict(schema.CLOTH_WIDTHS_M),
-             schema.CURVED_WIDTH_M, contract.CURVED_COARSENING, folds.CURVED_COARSENING)
-    try:
-        schema.DEFAULT_SLACK = settings.get("slack", schema.DEFAULT_SLACK)
-        schema.DEFAULT_IRREGULARITY = settings.get("irregularity", schema.DEFAULT_IRREGULARITY)
-        schema.CLOTH_WIDTHS_M.update(settings.get("widths", {}))
-        schema.CURVED_WIDTH_M = settings.get("tube", schema.CURVED_WIDTH_M)
-        if "gate" in settings:
-            gate = (*settings["gate"], *contract.CURVED_COARSENING[2:])
-            contract.CURVED_COARSENING = folds.CURVED_COARSENING = gate
-        yield
-    finally:
-        (schema.DEFAULT_SLACK, schema.DEFAULT_IRREGULARITY, widths, schema.CURVED_WIDTH_M,
-         contract.CURVED_COARSENING, folds.CURVED_COARSENING) = saved
-        schema.CLOTH_WIDTHS_M.clear()
-        schema.CLOTH_WIDTHS_M.update(widths)
 
 
 def shot_row(name: str, cache, settings: dict) -> dict:
