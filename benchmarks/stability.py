@@ -208,36 +208,13 @@ def sleeve_fields(path: str, frames, ctx=None) -> dict:
     engine = WrinkleEngine(path, ctx=ctx)
     out = {}
     try:
-        topology = engine.scene.meshes[SLEEVE].topology
         for frame in range(1, max(frames) + 1):
             engine.compute_frame(float(frame))
             if frame in frames:
                 out[frame] = engine.read_fields(SLEEVE).arrays()
-                out[frame]["coherence"] = coherence(out[frame], topology)
     finally:
         engine.release()
     return out
-
-
-#: A wave whose ring's pulls agree to less than this (``coherence``) sits at the core of a
-#: dislocation, where the ring's phases wind by 2 pi and the phase is no crest's place
-CORE_COHERENCE = 0.2
-
-
-def coherence(fields: dict, topology) -> np.ndarray:
-    """Per point, how well its ring's pulls agree: |sum_j p_ij e^{i (phi~_j - d_ij)}| /
-    sum_j p_ij (reference.relax.pulls: the relaxation's weights), 1 where every
-    neighbour asks for one phase, near 0 at a dislocation's core (0 without a ring)."""
-    from usdwrinkle.reference.relax import pulls, ring_edges
-
-    src, dst = ring_edges(topology)
-    amplitude = np.maximum(fields["amplitude"], 0.0)
-    sign, drift, pull = pulls(fields["points"], fields["wave_vector"], amplitude, src, dst)
-    asked = np.zeros(len(amplitude), complex)
-    total = np.zeros(len(amplitude))
-    np.add.at(asked, src, pull * np.exp(1j * (sign * fields["phase"][dst] - drift)))
-    np.add.at(total, src, pull)
-    return np.abs(asked) / np.maximum(total, 1e-30)
 
 
 def _sleeve():
@@ -322,14 +299,11 @@ def moved_wave_counts(path: str, axes, degrees: float, folder: str, ctx=None,
 def moved_waves(a: dict, b: dict, radians: float = 0.5) -> np.ndarray:
     """Per point of two runs' fields (read_fields(...).arrays()), whether it has a wave
     above 5% of the largest amplitude in both and its phase (sign-aligned) moved by more
-    than ``radians``; where the fields carry their ``coherence`` (sleeve_fields), not at
-    a dislocation's core in either (under CORE_COHERENCE: its phase places no crest)."""
+    than ``radians``."""
     from usdwrinkle.reference.relax import wrap
 
     largest = max(float(a["amplitude"].max()), float(b["amplitude"].max()), 1e-12)
     both = (a["amplitude"] > 0.05 * largest) & (b["amplitude"] > 0.05 * largest)
-    if "coherence" in a and "coherence" in b:
-        both &= (a["coherence"] >= CORE_COHERENCE) & (b["coherence"] >= CORE_COHERENCE)
     sign = np.where(np.sum(a["wave_vector"] * b["wave_vector"], axis=1) < 0, -1.0, 1.0)
     return both & (np.abs(wrap(a["phase"] - sign * b["phase"])) > radians)
 

@@ -1,15 +1,9 @@
 #version 430
-// Relax pass. The phases live as phasors z (seeded as unit phasors e^{i phi}) during the
-// iterations, so a Jacobi step is complex multiply-adds only: no sin, cos or atan per edge.
-// A step is the weighted mean, not normalised, and phi = arg z at the end:
+// Relax pass. The phases live as unit phasors z = e^{i phi} during the iterations, so a
+// Jacobi step is complex multiply-adds only: no sin, cos or atan per edge.
 //
-//   z_i <- ( a_i z_i + sum_j a_j z~_j e^{-i d_ij} ) / ( a_i + sum_j a_j )
-//   z~_j = z_j, or conj(z_j) when (k, phi) flips;  d_ij = kbar_ij . (x_j - x_i)
-//
-// A vertex whose ring disagrees keeps a short phasor and so pulls less in the next step;
-// normalising every step (phi_i <- arg of the same sum) let a disagreement anywhere pull
-// as hard as agreement, and which way a defect settled became a lottery in the slack
-// (docs/physics.md, "A linear relaxation").
+//   phi_i <- arg( a_i e^{i phi_i} + sum_j a_j e^{i (phi~_j - kbar_ij . (x_j - x_i))} )
+//   e^{i (phi~_j - d_ij)} = z~_j * e^{-i d_ij},  z~_j = conj(z_j) when (k, phi) flips
 //
 // Each vertex has u_systems wave systems (1, or 2 with wrinkle:biaxial): each
 // relaxes on its own, against the neighbour's partner system matched by direction
@@ -353,17 +347,14 @@ void main() {
     vec4 z = z_i;
     for (int s = 0; s < SYSTEMS; ++s) {
         vec2 own = s == 0 ? z_i.xy : z_i.zw;
-        float total = wave_of(fields, i, s).w + WEIGHT_FLOOR;
-        vec2 sum = total * own;
+        vec2 sum = (wave_of(fields, i, s).w + WEIGHT_FLOOR) * own;
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             vec4 edge = fetch(edges, EDGE(e, s));
             int j;
             sum += abs(edge.z) * complex_mul(neighbour_phasor(z_in, edge, j), edge.xy);
-            total += abs(edge.z);
         }
-        // the weighted mean, not normalised: a vertex whose ring disagrees carries a
-        // short phasor into the next step and pulls its neighbours less
-        vec2 next = dot(sum, sum) > 0.0 ? sum / total : own;
+        float len2 = dot(sum, sum);
+        vec2 next = len2 > 0.0 ? sum * inversesqrt(len2) : own;
         if (s == 0) z.xy = next; else z.zw = next;
     }
     if (u_write_phase == 0) {

@@ -64,29 +64,24 @@ def pulls(points, k, amplitude, src, dst, floor: float = 0.0
 
 
 def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
-    """``iterations`` Jacobi steps; returns the new phases (n,). The phases live as phasors
-    z, seeded as e^{i phase}; a step is the weighted mean, not normalised (relax.glsl):
-    z_i <- (w_i z_i + sum_j p_ij z~_j e^{-i d_ij}) / (w_i + sum_j p_ij), z~_j = conj(z_j)
-    where the pair flips, w_i = a_i + WEIGHT_FLOOR, p_ij = (a_j + WEIGHT_FLOOR)
-    :func:`aligned`; the phase is arg z. A vertex whose ring disagrees keeps a short
-    phasor and pulls less in the next step."""
+    """``iterations`` Jacobi steps; returns the new phases (n,). A neighbour pulls by its
+    amplitude plus WEIGHT_FLOOR times :func:`aligned`, a vertex itself by its own plus
+    WEIGHT_FLOOR."""
     points = np.asarray(points, np.float64)
     k = np.asarray(wave_vector, np.float64)
     a = np.asarray(amplitude, np.float64)
     weight = a + WEIGHT_FLOOR
     phi = np.asarray(phase, np.float64).copy()
-    z = np.exp(1j * phi)
     src, dst = ring_edges(topology)
     sign, drift, pull = pulls(points, k, a, src, dst, WEIGHT_FLOOR)
-    rotation = np.exp(-1j * drift)
-    total = weight.copy()
-    np.add.at(total, src, pull)
     for _ in range(iterations):
-        partner = np.where(sign < 0, np.conj(z[dst]), z[dst])
-        pulled = weight * z
-        np.add.at(pulled, src, pull * partner * rotation)
-        z = np.where(np.abs(pulled) > 0, pulled / total, z)
-    return np.where(np.abs(z) > 0, np.angle(z), phi)
+        predicted = phi[dst] * sign - drift
+        re = weight * np.cos(phi)
+        im = weight * np.sin(phi)
+        np.add.at(re, src, pull * np.cos(predicted))
+        np.add.at(im, src, pull * np.sin(predicted))
+        phi = np.where(re * re + im * im > 0, np.arctan2(im, re), phi)
+    return phi
 
 
 def fit(points, normals, wave_vector, amplitude, phase, topology: Topology,

@@ -65,8 +65,8 @@ class WaveFields:
         self.anchor_phase = table(n, WAVE_SYSTEMS, data=np.zeros((n, WAVE_SYSTEMS), np.float32))
         #: relax's per-vertex mobility and seed phases (x: mobility, yz: seeds): this frame's
         self.mobility = table(n, 4, data=np.zeros((n, 4), np.float32))
-        #: phasors during relaxation (ping-pong; unit at the seed) and the per-edge
-        #: rotations, laid out for the wave systems relaxed (set_systems)
+        #: unit phasors during relaxation (ping-pong) and the per-edge rotations, laid
+        #: out for the wave systems relaxed (set_systems)
         self.phasors: list = []
         self.edge_rotations = None
         #: wave systems the passes run and draw: 2 with wrinkle:biaxial (or a bake of it)
