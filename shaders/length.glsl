@@ -216,7 +216,11 @@ void main() {
             if (step > 0) f = drawn_over(s, count, target);
             if (f.x > 0.0) high = s; else low = s;
             float next = f.y > 0.0 ? s - f.x / f.y : 0.5 * (low + high);
-            s = next > low && next < high ? next : 0.5 * (low + high);
+            // within the bracket, its ends included: at the root the step moves s by
+            // nothing, and s is one of the ends (a strict test bisected away from the
+            // root there, and a ring's scale depended on where LENGTH_STEPS stopped
+            // that cycle: 0.6485 against the root's 0.6694 on a random cloth)
+            s = next >= low && next <= high ? next : 0.5 * (low + high);
         }
         s = mix(1.0, s, float(LENGTH_LAW) * ramp);
     }

@@ -107,7 +107,7 @@ def test_the_scale_ramps_in_with_the_slack():
     assert np.all((scales[0.9] < 1.0) & (scales[0.9] > scales[0.8]))
 
 
-@pytest.mark.parametrize("seed", [3, 4])
+@pytest.mark.parametrize("seed", [0, 3, 4, 15])
 def test_the_length_pass_matches_numpy_reference(gl_context, seed):
     """The GPU's scales (read back as the fields' length_scale) against
     reference/length.length_scales fed the same drawn waves, phases and pleats, on a
@@ -128,6 +128,10 @@ def test_the_length_pass_matches_numpy_reference(gl_context, seed):
     wrinkled = waves[:, 3] > 1e-3
     assert wrinkled.sum() > 50
     assert np.mean(expected[wrinkled] < 0.95) > 0.01
-    # (float32 sums of ~190 samples on the GPU: 99% within 2e-3, the worst 0.8% apart)
-    apart = np.abs(scale[wrinkled] - expected[wrinkled]) / expected[wrinkled]
-    assert np.percentile(apart, 99) < 2e-3 and apart.max() < 1e-2, apart.max()
+    # float32 sums of up to LENGTH_SAMPLES samples on the GPU: within 1.4e-5 (seed 13's
+    # worst). Until 2026-12-07 the GPU's Newton steps bisected away from the root once
+    # they had reached it (a strict bracket test) and stopped wherever LENGTH_STEPS fell
+    # in that cycle: 1/256 to 1/4 of the scale apart on these seeds (99% within 2e-3, the
+    # bound then), 0.026 on 18 of the zeppelin's 183 scaled points
+    apart = np.abs(scale[wrinkled] - expected[wrinkled])
+    assert apart.max() < 1e-4, apart.max()
