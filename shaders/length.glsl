@@ -219,7 +219,7 @@ void main() {
             // within the bracket, its ends included: at the root the step moves s by
             // nothing, and s is one of the ends (a strict test bisected away from the
             // root there, and a ring's scale depended on where LENGTH_STEPS stopped
-            // that cycle: 0.6485 against the root's 0.6694 on a random cloth)
+            // that cycle: up to a quarter of it off on a random cloth)
             s = next >= low && next <= high ? next : 0.5 * (low + high);
         }
         s = mix(1.0, s, float(LENGTH_LAW) * ramp);
