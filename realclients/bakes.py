@@ -172,9 +172,10 @@ class Contribution:
         """{(row, column): (correlation, pixels)} over an n x n grid on the covered
         pixels' bound, for each tile with ``min_pixels`` and wrinkles that show (our
         contribution's standard deviation at least ``min_std`` codes, and at least
-        ``min_std`` codes on ``min_share`` of its pixels: CesiumMan's head tile, 2.5% of
-        it the shoulders' folds, the rest Storm's 8-bit flat normal map and silhouette
-        ring, measured 0.89)."""
+        ``min_std`` codes on ``min_share`` of its pixels: a tile of a bare head with a rim
+        of folds scores Storm's 8-bit flat normal map and silhouette ring, measured 0.89
+        when 2.5% of CesiumMan's head tile showed its shoulders' folds; on 2026-12-07
+        5.5% do, and it scores 0.954: docs/physics.md, "What that tile is")."""
         ys, xs = np.nonzero(self.mask)
         y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
         result = {}
