@@ -254,7 +254,9 @@ def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
     cannot: those pixels (measured 2026-12-06, grown by a pixel: shirt 2.9%, pull 1.9%,
     CesiumMan 2.7% of the compared ones) are left out, and are few. With them the
     correlations were 0.995, 0.994 and 0.934, the least tiles 0.966, 0.982 and 0.921
-    (CesiumMan's hips and thigh); without them 0.996, 0.998 and 0.991, tiles from 0.967."""
+    (CesiumMan's hips and thigh); without them 0.996, 0.998 and 0.991, tiles from 0.967.
+    Measured again 2026-12-07: CesiumMan 0.989, its least tile 0.954, its head with the
+    shoulders' folds on its bottom rows (docs/physics.md, "What that tile is")."""
     views = bake_views[name]
     contribution = views.maps()
     turned = views.horizon_turned() & contribution.mask
