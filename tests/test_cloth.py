@@ -14,7 +14,7 @@ from usdwrinkle.cli.main import main
 from usdwrinkle.method.contract import COARSENING_MAX
 from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.render.passes.crush import DAMPING_DEADBAND
-from usdwrinkle.scene.params import held_weights
+from usdwrinkle.scene.params import held_edges, held_weights
 from usdwrinkle.scene.topology import build_topology, curvature, mean_edge_length
 from usdwrinkle.usd import schema
 from usdwrinkle.usd.validation import wrinkle_findings
@@ -380,6 +380,49 @@ def test_a_held_edge_damps_crossing_waves_not_parallel_ones(gl_context):
     np.testing.assert_allclose(ours["amplitude"][near_side], full, rtol=1e-3)
     far = (x > 0) & (y > -1 + reach + 0.05)
     np.testing.assert_allclose(ours["amplitude"][far], full, rtol=1e-3)
+
+
+def test_held_edges_damp_and_pins_do_not():
+    """A point damps the waves around it by its firmest held edge, an edge held as firmly
+    as its weaker end: a held run of points keeps its weights, a held point with no held
+    neighbour (a pin, as a curtain's ring) damps nothing, one value for every point holds
+    every point as it did."""
+    rest, counts, indices = grid_sheet(5, 5, 2.0)          # row r, column c: 5 r + c
+    topology = build_topology(counts, indices, rest)
+    held = np.zeros(25, np.float32)
+    held[[0, 1, 2]] = [1.0, 0.5, 1.0]                      # a run along the first row
+    held[[4, 12]] = 1.0                                    # a corner pin, a pin inside
+    out = held_edges(held, topology)
+    np.testing.assert_array_equal(out[[0, 1, 2]], [0.5, 0.5, 0.5])
+    np.testing.assert_array_equal(out[[4, 12]], [0.0, 0.0])
+    assert not np.delete(out, [0, 1, 2]).any()
+    np.testing.assert_array_equal(held_edges(np.array([0.7], np.float32), topology),
+                                  np.full(25, 0.7, np.float32))
+
+
+def test_pins_along_an_edge_leave_the_waves_that_run_into_it(gl_context):
+    """The sheet of the test above held only at every fourth point of its y = -1 edge, as
+    a curtain hangs from its rings: no wave fades (the referee's rings gather, and its
+    folds stand tallest there; docs/physics.md, "Pins and held edges"), where the whole
+    edge held fades them."""
+    rest, counts, indices = grid_sheet(41, 41, 2.0)
+    posed = rest * np.array([0.7, 1, 1], np.float32)
+    x, y = rest[:, 0], rest[:, 1]
+    column = np.rint((x + 1) * 20).astype(int)
+    pins = ((y < -0.99) & (column % 4 == 0)).astype(np.float32)
+    full, _ = fold_law(0.7, 0.2)
+    inside = (np.abs(x) < 0.9) & (y < 0.5)
+    amplitude = {}
+    for label, held in (("pins", pins), ("edge", (y < -0.99).astype(np.float32))):
+        stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.2)
+        UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
+            "wrinkle:held", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(held)
+        ours, record = gpu_fields(gl_context, stage)
+        amplitude[label] = ours["amplitude"][inside]
+        if label == "pins":
+            assert not record.params.hold[:, 0].any()
+    np.testing.assert_allclose(amplitude["pins"], full, rtol=1e-3)
+    assert amplitude["edge"].min() < 0.1 * full       # the edge itself fades them
 
 
 def geometry_heights(tmp_path, width, levels, name):

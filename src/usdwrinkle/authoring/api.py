@@ -187,7 +187,9 @@ class WrinkleAPI:
         return self._primvars().GetPrimvar("wrinkle:held")
 
     def CreateHeldPrimvar(self, default_value=None) -> UsdGeom.Primvar:  # noqa: N802
-        """One weight in [0, 1] per point (vertex), or one for every point (constant)."""
+        """One weight in [0, 1] per point (vertex), or one for every point (constant). An
+        edge of the mesh with both ends held damps the waves around it; a held point on
+        no held edge is a pin and damps nothing (docs/method.md, "Held edges")."""
         return self._float_primvar("wrinkle:held", default_value, check_held,
                                    UsdGeom.Tokens.vertex)
 

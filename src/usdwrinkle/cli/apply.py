@@ -46,7 +46,9 @@ def add_parser(subparsers) -> None:
                         "regular waves")
     p.add_argument("--held-from-primvar", metavar="NAME",
                    help="author primvars:wrinkle:held from this float primvar of the mesh "
-                        "(a painted pin or seam weight in [0, 1], vertex interpolation)")
+                        "(a painted seam or clamp weight in [0, 1], vertex interpolation; "
+                        "what damps the waves is a held edge, both its ends held: a lone "
+                        "held point is a pin, at which the cloth gathers)")
     p.add_argument("--amplitude-scale", type=float, metavar="S",
                    help="amplitude scale s (default 1: the amplitude law of docs/method.md)")
     p.add_argument("--biaxial", type=float, metavar="WEIGHT",
