@@ -12,6 +12,7 @@ from pxr import Sdf, Usd, UsdGeom, Vt
 from usdwrinkle.authoring.builders import grid_faces
 from usdwrinkle.cli.main import main
 from usdwrinkle.method.contract import COARSENING_MAX
+from usdwrinkle.process import log
 from usdwrinkle.reference.crush import crush as crush_reference
 from usdwrinkle.render.passes.crush import DAMPING_DEADBAND
 from usdwrinkle.scene.params import held_edges, held_weights
@@ -417,10 +418,15 @@ def test_pins_along_an_edge_leave_the_waves_that_run_into_it(gl_context):
         stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.2)
         UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/Sheet")).CreatePrimvar(
             "wrinkle:held", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex).Set(held)
-        ours, record = gpu_fields(gl_context, stage)
+        with log.collect() as messages:
+            ours, record = gpu_fields(gl_context, stage)
         amplitude[label] = ours["amplitude"][inside]
+        said = [m for m in messages if "lone held points are pins" in m]
         if label == "pins":
             assert not record.params.hold[:, 0].any()
+            assert len(said) == 1 and "/Sheet" in said[0], messages  # no held edge: said
+        else:
+            assert not said, messages
     np.testing.assert_allclose(amplitude["pins"], full, rtol=1e-3)
     assert amplitude["edge"].min() < 0.1 * full       # the edge itself fades them
 

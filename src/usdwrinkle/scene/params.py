@@ -152,8 +152,15 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     irregularity = schema.DEFAULT_IRREGULARITY if irregularity is None \
         else float(irregularity)
     held = _primvar(prim, "wrinkle:held")
-    hold = None if held is None else held_weights(
-        rest_points, held_edges(np.asarray(held, np.float32), topology), width)
+    hold = None
+    if held is not None:
+        edges = held_edges(np.asarray(held, np.float32), topology)
+        if np.any(np.asarray(held) > 0) and not edges.any():
+            _log.warning("%s: wrinkle:held holds points but no edge of the mesh (both its "
+                         "ends held): lone held points are pins, at which the cloth "
+                         "gathers, and damp no wave (docs/method.md, \"Held edges\")",
+                         prim.GetPath())
+        hold = held_weights(rest_points, edges, width)
 
     scale = _get(prim, schema.AMPLITUDE_SCALE)
     scale = 1.0 if scale is None else float(scale)
