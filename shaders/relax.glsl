@@ -20,6 +20,16 @@
 //             and system.
 //   (default) one Jacobi step on the phasors (ping-pong); the last step also writes phi,
 //             moved from the seed by only the vertex's mobility m of the way (below).
+//             On a cold start (u_cold_start: no history, COLD_START_FACTOR times the
+//             steps) a step is the weighted mean, not normalised: z_i <- (a_i z_i +
+//             sum_j a_j z~_j e^{-i d_ij}) / (a_i + sum_j a_j), so a vertex whose ring
+//             disagrees (a defect's core) keeps a short phasor and pulls less; where the
+//             defects of the first frame settle was a lottery a 0.1 degree change of a
+//             joint could tip (CesiumMan: 2 of 32 random axes over the 5% bar at the
+//             slack 0.05, 29 at 0.055; 0 and 8 with the mean; docs/method.md, "Jacobi
+//             step"). Every later frame normalises: with the mean there, a core that
+//             a dislocation sweeps past, frozen by its mobility, unwinds either way as
+//             it leaves (docs/physics.md, "Adopting it, tried").
 //   FIT       per vertex and system, after the last step: the wave the relaxed phases
 //             draw. Phases carried through a shot keep the crest count of the folds'
 //             onset while coarsening asks for fewer; the corner waves of a triangle,
@@ -336,7 +346,9 @@ layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 layout(binding = RELAX_MOBILITY) uniform sampler2D mobility;  // x: m, yz: the seeds
 
-uniform int u_write_phase;  // the last iteration also stores phi = arg z, moved by m
+uniform int u_write_phase;
+// a cold start (no history: the shot's first frame): the steps are the weighted mean
+uniform int u_cold_start;  // the last iteration also stores phi = arg z, moved by m
 
 float wrap_angle(float a) { return a - TWO_PI * floor((a + PI) / TWO_PI); }
 
@@ -347,14 +359,17 @@ void main() {
     vec4 z = z_i;
     for (int s = 0; s < SYSTEMS; ++s) {
         vec2 own = s == 0 ? z_i.xy : z_i.zw;
-        vec2 sum = (wave_of(fields, i, s).w + WEIGHT_FLOOR) * own;
+        float total = wave_of(fields, i, s).w + WEIGHT_FLOOR;
+        vec2 sum = total * own;
         for (int e = NEIGHBOR_BEGIN(i); e < NEIGHBOR_END(i); ++e) {
             vec4 edge = fetch(edges, EDGE(e, s));
             int j;
             sum += abs(edge.z) * complex_mul(neighbour_phasor(z_in, edge, j), edge.xy);
+            total += abs(edge.z);
         }
         float len2 = dot(sum, sum);
-        vec2 next = len2 > 0.0 ? sum * inversesqrt(len2) : own;
+        vec2 next = !(len2 > 0.0) ? own
+                  : u_cold_start != 0 ? sum / total : sum * inversesqrt(len2);
         if (s == 0) z.xy = next; else z.zw = next;
     }
     if (u_write_phase == 0) {

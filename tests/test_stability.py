@@ -123,6 +123,30 @@ def test_a_tiny_joint_change_moves_no_crest_on_cesium_man(gl_context, corpus, tm
     assert max(shares[0.1].values()) > 0  # the perturbation reaches the meshes
 
 
+#: the random axes (benchmarks.stability.random_axes(32)) about which 0.1 degrees moved
+#: more than 5% of CesiumMan's crests at the fallback slack while the cold start's steps
+#: were normalised: 6.4% and 5.9%
+CESIUM_MAN_TIPPED = (8, 23)
+
+
+def test_the_cold_start_does_not_tip_cesium_man_under_a_small_joint_change(gl_context,
+                                                                          corpus, tmp_path):
+    """Where the first frame's defects settle was a lottery a 0.1 degree change could tip
+    (CesiumMan: 2 of 32 random axes over the 5% bar at the slack 0.05, 29 of 32 at 0.055);
+    the cold start's steps are the weighted mean since 2026-12-07, and those two axes move
+    0.13% and 0.37% (docs/method.md, "The cold start's steps are the weighted mean")."""
+    stage = stability.with_units(str(corpus / "usd-wg" / "CesiumMan.usdz"),
+                                 str(tmp_path / "cesium.usda"))
+    base = stability.heights(stage, all_meshes=True, ctx=gl_context)
+    axes = stability.random_axes(32)
+    for index in CESIUM_MAN_TIPPED:
+        shares = stability.perturbation(stage, str(tmp_path), all_meshes=True,
+                                        degrees=(0.1,), ctx=gl_context, axis=axes[index],
+                                        base=base)[0.1]
+        assert max(shares.values()) > 0, index  # the change reaches the mesh
+        assert max(shares.values()) <= 0.05, (index, shares)
+
+
 def test_q_painted_on_the_cuff_changes_crests_only_near_it(gl_context, tmp_path):
     """Before: crests moved 6.25 W (7 edges) away, along the whole sleeve. The bar is 2 W
     or 2 edges, whichever is farther: the phases live on the points, and where W is

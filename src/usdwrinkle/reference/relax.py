@@ -63,10 +63,13 @@ def pulls(points, k, amplitude, src, dst, floor: float = 0.0
     return sign, drift, pull
 
 
-def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int):
+def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations: int,
+          mean: bool = False):
     """``iterations`` Jacobi steps; returns the new phases (n,). A neighbour pulls by its
     amplitude plus WEIGHT_FLOOR times :func:`aligned`, a vertex itself by its own plus
-    WEIGHT_FLOOR."""
+    WEIGHT_FLOOR. ``mean`` (relax.glsl's cold start): the steps are the weighted mean of
+    the phasors, not normalised, z_i <- (w_i z_i + sum_j p_ij z~_j e^{-i d_ij}) / (w_i +
+    sum_j p_ij) from z = e^{i phase}, and the phases arg z."""
     points = np.asarray(points, np.float64)
     k = np.asarray(wave_vector, np.float64)
     a = np.asarray(amplitude, np.float64)
@@ -74,6 +77,17 @@ def relax(points, wave_vector, amplitude, phase, topology: Topology, iterations:
     phi = np.asarray(phase, np.float64).copy()
     src, dst = ring_edges(topology)
     sign, drift, pull = pulls(points, k, a, src, dst, WEIGHT_FLOOR)
+    if mean:
+        z = np.exp(1j * phi)
+        rotation = np.exp(-1j * drift)
+        total = weight.copy()
+        np.add.at(total, src, pull)
+        for _ in range(iterations):
+            pulled = weight * z
+            np.add.at(pulled, src, pull * np.where(sign < 0, np.conj(z[dst]), z[dst])
+                      * rotation)
+            z = np.where(np.abs(pulled) > 0, pulled / total, z)
+        return np.where(np.abs(z) > 0, np.angle(z), phi)
     for _ in range(iterations):
         predicted = phi[dst] * sign - drift
         re = weight * np.cos(phi)
@@ -257,7 +271,8 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
     seed by each vertex's mobility (relax.glsl), else fully. With ``coarsening`` (each
     point's cap), the fit follows it (:func:`fit`). ``state``: the wave state of
     the shot's previous grid frame (its wave_vector, amplitude, relaxed phase and kappa;
-    the GPU's also holds crest damping's directions), or None for a cold start. Returns
+    the GPU's also holds crest damping's directions), or None for a cold start (its
+    steps the weighted mean, :func:`relax`'s ``mean``). Returns
     the relaxed phases and this frame's state (its wave_vector and amplitude are the
     fitted ones, :func:`fit`, as the GPU's fields are after relax; with no iterations
     there is no fit). ``state`` is read, never changed: the same frame from the same
@@ -271,7 +286,7 @@ def relax_frame(fields: dict, state: dict | None, topology: Topology, iterations
                      fields["points"], topology)
         count = iterations
     phase = relax(fields["points"], fields["wave_vector"], fields["amplitude"], start,
-                  topology, count)
+                  topology, count, mean=state is None)
     if state is not None and count > 0 and "kappa" in fields and "kappa" in state:
         share = mobility(fields["rest_points"], fields["kappa"], state["kappa"],
                          fields["amplitude"], state["amplitude"], topology)

@@ -69,7 +69,8 @@ class RelaxPass(WavePass):
         set_uniforms(self.variants(TWO_SYSTEMS=two), uniforms)  # once, not every step
         for index in range(iterations):
             src = index % 2
-            self.dispatch(count, {"u_write_phase": int(index == iterations - 1)},
+            self.dispatch(count, {"u_write_phase": int(index == iterations - 1),
+                                  "u_cold_start": int(not step.history)},
                           reads={"RELAX_Z_IN": waves.phasors[src]},
                           writes={"RELAX_Z_OUT": waves.phasors[1 - src]}, TWO_SYSTEMS=two)
         self.dispatch(count, uniforms, reads={"RELAX_Z_IN": waves.phasors[iterations % 2],
