@@ -212,13 +212,15 @@ class BakeViews:
         i = self.images
         return contribution(i["ours"], i["ours_plain"], i["storm_maps"], i["storm_points"])
 
-    def horizon_turned(self) -> np.ndarray:
+    def horizon_turned(self, grow: int = 1) -> np.ndarray:
         """horizon_turned() of usdwrinkle's shading normals (its ours_aovs.exr, which
-        bake_views(display_color=True) renders) through the shot's camera."""
+        bake_views(display_color=True) renders) through the shot's camera, grown by
+        ``grow`` pixels."""
         normals, covered = our_normals(self.images["ours_aovs"])
         p = self.prepared
         return horizon_turned(normals, covered,
-                              view_directions(p.stage, p.camera, p.shot.frame, normals.shape))
+                              view_directions(p.stage, p.camera, p.shot.frame, normals.shape),
+                              grow)
 
 
 def map_set_flags(tangent_space: str | None, layout: str | None = None) -> tuple:
@@ -491,16 +493,18 @@ def cycles_back_face(n: np.ndarray, facing: np.ndarray) -> np.ndarray:
 
 
 def horizon_turned(normals: np.ndarray, covered: np.ndarray,
-                   towards_eye: np.ndarray) -> np.ndarray:
+                   towards_eye: np.ndarray, grow: int = 1) -> np.ndarray:
     """(h, w) bool: the covered pixels where usdwrinkle's draw turned a bent normal back
-    to its horizon (contract.HORIZON_COSINE: a seen point faces the eye), grown by a pixel
-    for the antialiasing. A normal map is the same for every view and cannot: there Storm
-    shades the normal that faces away, and Cycles decodes it (then clamps its reflection:
-    cycles_reflection_clamp)."""
+    to its horizon (contract.HORIZON_COSINE: a seen point faces the eye), grown by
+    ``grow`` pixels (4-neighbourhood; one for the antialiasing). A normal map is the same
+    for every view and cannot: there Storm shades the normal that faces away, and Cycles
+    decodes it (then clamps its reflection: cycles_reflection_clamp)."""
     from usdwrinkle.method.contract import HORIZON_COSINE
 
     turned = covered & (np.sum(normals * towards_eye, axis=-1) < HORIZON_COSINE + 0.02)
-    return ~erode(~turned)  # grown by a pixel (4-neighbourhood), as erode shrinks
+    for _ in range(grow):
+        turned = ~erode(~turned)  # grown by a pixel, as erode shrinks
+    return turned
 
 
 def without_turned(normals: tuple, towards_eye: np.ndarray) -> tuple:

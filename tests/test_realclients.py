@@ -255,11 +255,16 @@ def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
     CesiumMan 2.7% of the compared ones) are left out, and are few. With them the
     correlations were 0.995, 0.994 and 0.934, the least tiles 0.966, 0.982 and 0.921
     (CesiumMan's hips and thigh); without them 0.996, 0.998 and 0.991, tiles from 0.967.
-    Measured again 2026-12-07: CesiumMan 0.989, its least tile 0.954, its head with the
-    shoulders' folds on its bottom rows (docs/physics.md, "What that tile is")."""
+    The pixels left out are those within two pixels of a turned one (2026-12-07): beside
+    a turned pixel the view is grazing, and the two images part there over more than the
+    antialiasing's pixel (RMS of their difference at 1 / 2 / 3 pixels from a turned one,
+    against the rest: shirt 14.4 / 8.9 / 4.7 codes against 2.3, pull 3.5 / 2.3 / 1.4
+    against 0.7, CesiumMan 8.1 / 3.8 / 2.7 against 0.9); with one pixel, CesiumMan's
+    head tile, the shoulders' folds along its bottom rows, scored 0.954, and 0.934 with the
+    cold start's mean (docs/physics.md, "What that tile is")."""
     views = bake_views[name]
     contribution = views.maps()
-    turned = views.horizon_turned() & contribution.mask
+    turned = views.horizon_turned(grow=2) & contribution.mask
     assert turned.sum() <= 0.05 * contribution.mask.sum(), turned.mean()
     contribution.mask &= ~turned
     tiles = contribution.tiles()
