@@ -346,9 +346,9 @@ layout(Z_FORMAT, binding = RELAX_Z_OUT) writeonly uniform image2D z_out;
 layout(rg32f, binding = RELAX_PHASE) writeonly uniform image2D phase;
 layout(binding = RELAX_MOBILITY) uniform sampler2D mobility;  // x: m, yz: the seeds
 
-uniform int u_write_phase;
+uniform int u_write_phase;  // the last iteration also stores phi = arg z, moved by m
 // a cold start (no history: the shot's first frame): the steps are the weighted mean
-uniform int u_cold_start;  // the last iteration also stores phi = arg z, moved by m
+uniform int u_cold_start;
 
 float wrap_angle(float a) { return a - TWO_PI * floor((a + PI) / TWO_PI); }
 

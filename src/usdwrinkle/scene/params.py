@@ -268,7 +268,7 @@ def held_edges(held: np.ndarray, topology: Topology) -> np.ndarray:
     (wrinkle:held, one value per point or one for all). A held point on no held edge is a
     pin, as a curtain's ring: it holds its point, not the cloth around it, which gathers
     at it, and damps nothing. Measured against the converged referee, whose curtains hang
-    from rings 6 cm apart and gather there (the coarse mesh holds every fourth of its top
+    from rings 6 cm apart and gather there (the coarse mesh holds every third of its top
     points): its rings damping the waves over 2 W as a held edge does, the leather
     curtain's folds stood evenly down it and correlated 0.826 with the cloth's (bar 0.85);
     as pins 0.875 (docs/physics.md, "Pins and held edges"). Blender's curtain, whose whole
