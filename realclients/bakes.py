@@ -502,9 +502,7 @@ def horizon_turned(normals: np.ndarray, covered: np.ndarray,
     from usdwrinkle.method.contract import HORIZON_COSINE
 
     turned = covered & (np.sum(normals * towards_eye, axis=-1) < HORIZON_COSINE + 0.02)
-    for _ in range(grow):
-        turned = ~erode(~turned)  # grown by a pixel, as erode shrinks
-    return turned
+    return ~erode(~turned, grow)  # grown as erode shrinks
 
 
 def without_turned(normals: tuple, towards_eye: np.ndarray) -> tuple:
