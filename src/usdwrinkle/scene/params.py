@@ -154,8 +154,9 @@ def read_params(prim: Usd.Prim, rest_points: np.ndarray, topology: Topology,
     held = _primvar(prim, "wrinkle:held")
     hold = None
     if held is not None:
-        edges = held_edges(np.asarray(held, np.float32), topology)
-        if np.any(np.asarray(held) > 0) and not edges.any():
+        held = np.asarray(held, np.float32)
+        edges = held_edges(held, topology)
+        if np.any(held > 0) and not edges.any():
             _log.warning("%s: wrinkle:held holds points but no edge of the mesh (both its "
                          "ends held): lone held points are pins, at which the cloth "
                          "gathers, and damp no wave (docs/method.md, \"Held edges\")",
