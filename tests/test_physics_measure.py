@@ -335,7 +335,8 @@ def test_the_height_field_scale_of_a_fold_that_leans(along):
     at which its offsets along the low-pass's normals alone (a plain sine) hold the
     trochoid's length, against the curves' arc lengths integrated in 1D. Upright (b = 0)
     the cloth is its own height field (s = 1); leaning (b k = 0.84), its offsets along
-    the surface hold length that the sine must stand 1.094 times as tall for."""
+    the surface hold length that the sine must stand 1.094 times as tall for; and the scale
+    at which the sine holds the area bar's lowest area, 0.95 of the rest."""
     from benchmarks.physics.heightfield import phase_row
 
     shot = flat_shot(rows=33, cols=129, spacing=0.005)
@@ -352,14 +353,20 @@ def test_the_height_field_scale_of_a_fold_that_leans(along):
     def sine(scale):
         return np.hypot(1.0, scale * height * k * np.cos(t)).mean()
 
-    low, high = 0.5, 4.0
-    for _ in range(60):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if sine(middle) < cloth else (low, middle)
+    def holding(length):
+        low, high = 0.5, 4.0
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if sine(middle) < length else (low, middle)
+        return low
+
+    low = holding(cloth)
     assert row["low"] == pytest.approx(push, rel=0.01)
     assert row["cloth"] == pytest.approx(push * cloth, rel=0.01)
     assert row["offsets"] == pytest.approx(push * sine(1.0), rel=0.01)
     assert row["s"] == pytest.approx(low, abs=0.015)   # 1.0 upright, 1.094 leaning
+    # the area bar's edge, 0.95 of the rest area: the sine's arc factor 0.95 / push
+    assert row["s edge"] == pytest.approx(holding(0.95 / push), abs=0.015)
     assert row["beyond"] == 0.0
 
 

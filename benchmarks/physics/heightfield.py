@@ -20,6 +20,10 @@ the slack (where referee.area_ratio takes the area bar), this prints:
   bars ask that field for two things. Folds of another shape hold more or less length per
   height (docs/physics.md, "What a height field can reach"), so s is the cloth's shape's
   number, not a bound on every profile;
+- ``s at the edge``: the same scale where that height field holds the area bar's lowest
+  area (referee.BARS, 0.95 of the rest area): the least height at which the cloth's own
+  folds, drawn as a height field, meet the area bar at all. Where it is over the height
+  bar, no height field of the cloth's folds meets both bars;
 - the share of points where an offset towards the low-pass's centre of curvature reaches
   its radius (h k >= 1 along a grid line; beyond it the height field would pass through
   itself): 0 says the cloth is such a height field; the largest h k towards the centre;
@@ -106,6 +110,8 @@ def phase_row(shot, points: np.ndarray, slack: float) -> dict | None:
     bent = (h[None] * grid_curvatures(shot, low, normals))[:, inside]
     return {"cloth": cloth, "low": area(low), "offsets": area(low + h[:, None] * normals),
             "s": scale_to_hold(lambda s: area(low + s * h[:, None] * normals), cloth),
+            "s edge": scale_to_hold(lambda s: area(low + s * h[:, None] * normals),
+                                    referee.BARS["area"][0]),
             "beyond": float((bent >= 1.0).any(axis=0).mean()),
             "toward": float(bent.max()),
             "past room": float((np.abs(bent) > FOLD_ROOM).any(axis=0).mean())}
@@ -137,33 +143,39 @@ def report(rows: dict, seconds: float, grid: float) -> str:
     end = markers(NAME)[1]
     lines = referee.shot_block_head(NAME, "heightfield", seconds, grid) + [
              "At the last phase: the cloth's area over its rest area, its low-pass's, its "
-             "normal offsets' alone; s; the cloth's spectral spread; usdwrinkle's at the "
+             "normal offsets' alone; s; s at the area bar's edge; the cloth's spectral "
+             "spread; usdwrinkle's at the "
              "matched W, and its height there (ours / sim); the share of the cloth's points "
              "whose offset |h k| exceeds usdwrinkle's room (FOLD_ROOM). Then, over every "
              "phase, the worst s, the largest h k towards the centre of curvature and the "
              "share of offsets beyond the reach (h k >= 1).", "",
              "| shot | window | matched W | cloth's area | its low-pass's | its normal "
-             "offsets' | s | spread: cloth, ours | height (matched) | past the room "
+             "offsets' | s | s at the edge | spread: cloth, ours | height (matched) "
+             "| past the room "
              "| s, worst phase | h k towards the centre | beyond the reach |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     detail = []
     for name, row in rows.items():
         phases = {p: r for p, r in row["phases"].items() if r is not None}
         last = list(phases.values())[-1]
         worst_phase, worst = max(phases.items(), key=lambda item: item[1]["s"])
+        edge_phase, edge = max(phases.items(), key=lambda item: item[1]["s edge"])
         beyond = max(r["beyond"] for r in phases.values())
         toward = max(r["toward"] for r in phases.values())
         lines.append(f"| {name} | {100 * row['window']:.1f} cm | {100 * row['width']:.1f} cm "
                      f"| {last['cloth']:.3f} | {last['low']:.3f} | {last['offsets']:.3f} | "
-                     f"{last['s']:.2f} | {last['spread']:.3f}, {last['our spread']:.3f} | "
+                     f"{last['s']:.2f} | {last['s edge']:.2f} | "
+                     f"{last['spread']:.3f}, {last['our spread']:.3f} | "
                      f"{last['height']:.2f}x | {100 * last['past room']:.1f}% | "
-                     f"{worst['s']:.2f} ({worst_phase}) | {toward:.2f} | "
+                     f"{worst['s']:.2f} ({worst_phase}); at the edge {edge['s edge']:.2f} "
+                     f"({edge_phase}) | {toward:.2f} | "
                      f"{100 * beyond:.1f}% |")
         detail.append(f"- {name}: " + "; ".join(
-            f"{p} {r['s']:.2f}, {r['wavelength']:.2f}x, {r['height']:.2f}x"
+            f"{p} {r['s']:.2f} ({r['s edge']:.2f} at the edge), {r['wavelength']:.2f}x, "
+            f"{r['height']:.2f}x"
             for p, r in phases.items()))
-    lines += ["", "Phase by phase (s; our wavelength and height at matched W over the "
-              "cloth's):", ""] \
+    lines += ["", "Phase by phase (s, and at the area bar's edge; our wavelength and "
+              "height at matched W over the cloth's):", ""] \
         + detail + ["", end]
     return "\n".join(lines)
 
