@@ -3,15 +3,16 @@ sample stages, as a distribution over tiny changes of the input (issue 46).
 
     python -m benchmarks.misfit [--before SRC] [--write docs/method.md]
 
-For each sample stage: the mean over frames 9-24 of ``phase_misfit`` (points above 5% of
-the largest amplitude) and of ``phase_swim`` (reference/relax.py). A stage animated by
-UsdSkel is measured again with every joint rotation turned by 0.0005-2 degrees
-(benchmarks.stability.perturbed): where nothing but rounding places a dislocation, the
-misfit of one run is one draw, and the mean over the draws is what a version of the code
-gets. ``--before SRC`` runs the same measurement on another checkout's ``src`` folder (in a
-process of its own, with PYTHONPATH=SRC; its shaders come from SRC/../shaders) and puts
-it beside this one's. ``--write`` replaces the block between the misfit markers.
-"""
+For each sample stage: the mean over frames 9-24 of ``phase_misfit`` (the points whose
+waves the relaxation weighs, above 5% of the largest: the folds drawn before the crests
+settle, contract.DRAWN_SLACK, take their phases from their neighbours') and of
+``phase_swim`` (reference/relax.py). A stage animated by UsdSkel is measured again with
+every joint rotation turned by 0.0005-2 degrees (benchmarks.stability.perturbed): where
+nothing but rounding places a dislocation, the misfit of one run is one draw, and the mean
+over the draws is what a version of the code gets. ``--before SRC`` runs the same
+measurement on another checkout's ``src`` folder (in a process of its own, with
+PYTHONPATH=SRC; its shaders come from SRC/../shaders) and puts it beside this one's.
+``--write`` replaces the block between the misfit markers."""
 from __future__ import annotations
 
 import json
@@ -47,8 +48,10 @@ def run_stage(path: str, ctx) -> tuple[float, float]:
             engine.compute_frame(float(frame))
             current = engine.read_fields(mesh).arrays()
             if frame >= 9:
-                amplitude = current["amplitude"]
-                mask = amplitude > 0.05 * amplitude.max()
+                # the waves the relaxation aligns (weighs): the folds drawn before the
+                # crests settle take their phases from their neighbours'
+                weight = current["weight"]
+                mask = weight > 0.05 * weight.max()
                 misfits.append(phase_misfit(current["points"], current["wave_vector"],
                                             current["phase"], topology, mask))
                 if frame >= 10:

@@ -298,12 +298,14 @@ def moved_wave_counts(path: str, axes, degrees: float, folder: str, ctx=None,
 
 def moved_waves(a: dict, b: dict, radians: float = 0.5) -> np.ndarray:
     """Per point of two runs' fields (read_fields(...).arrays()), whether it has a wave
-    above 5% of the largest amplitude in both and its phase (sign-aligned) moved by more
-    than ``radians``."""
+    that the relaxation weighs (``weight``: beyond the crests' slack) above 5% of the
+    largest in both and its phase (sign-aligned) moved by more than ``radians``. The folds
+    drawn before the crests settle take their phases from their neighbours'; the images
+    (``perturbation``) count them with every other fold."""
     from usdwrinkle.reference.relax import wrap
 
-    largest = max(float(a["amplitude"].max()), float(b["amplitude"].max()), 1e-12)
-    both = (a["amplitude"] > 0.05 * largest) & (b["amplitude"] > 0.05 * largest)
+    largest = max(float(a["weight"].max()), float(b["weight"].max()), 1e-12)
+    both = (a["weight"] > 0.05 * largest) & (b["weight"] > 0.05 * largest)
     sign = np.where(np.sum(a["wave_vector"] * b["wave_vector"], axis=1) < 0, -1.0, 1.0)
     return both & (np.abs(wrap(a["phase"] - sign * b["phase"])) > radians)
 

@@ -149,8 +149,9 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, fetch(baked, 5 * i + 3));
     // the offset as baked; its gradient, from the posed points, by DEEPEN_GRADIENT
     STORE(fields, FIELD_DEEPEN(i), vec4(fetch(baked, 5 * i + 4).x, 0.0, 0.0, 0.0));
-    // the length pass's scale: in the baked amplitudes already
-    STORE(fields, FIELD_LENGTH(i), vec4(1.0, 0.0, 0.0, 0.0));
+    // the length pass's scale: in the baked amplitudes already; no relaxation weighs them
+    STORE(fields, FIELD_LENGTH(i), vec4(1.0, fetch(baked, 5 * i).w, fetch(baked, 5 * i + 2).w,
+                                        0.0));
 }
 
 #else
@@ -234,22 +235,31 @@ struct Fold {
     float wavelength;  // material (rest space): what the anchored phase counts
     // the share of the amplitude the surface draws: below 1 where the mesh is stretched
     // across d (it holds that share of the cloth's area already); the relaxation weighs
-    // the phases by the whole amplitude (weighing by the drawn one moved the crests)
+    // the phases by ``weight``, never by this share (weighing by it moved the crests)
     float drawn;
+    // the fold the relaxation weighs the phases by: the law with the crests' slack
+    // (wrinkle:slack) in place of the drawn folds' (DRAWN_SLACK of it), within the room;
+    // 0 where the compression is within the slack
+    float weight;
 };
 
 // the slack c: the first of the compression is taken in-plane; the folds begin at a
 // compression of c (restoring all but c) and restore the whole rest length from SLACK_RAMP c
 // on (a smooth onset, so that a compression that comes and goes near it does not make
 // crests appear and vanish). What the mesh's compression r_geo asks the folds to restore.
-float excess_of(float r_geo) {
-    float restored = 1.0 - u_slack * smoothstep(1.0 - SLACK_RAMP * u_slack, 1.0 - u_slack,
-                                              r_geo);
+float excess_of(float r_geo, float c) {
+    if (!(c > 0.0)) return max(1.0, 1.0 / r_geo);
+    float restored = 1.0 - c * smoothstep(1.0 - SLACK_RAMP * c, 1.0 - c, r_geo);
     return max(1.0, restored / r_geo);
 }
 
+// The fold of compression r (r_geo the mesh's alone) drawn with the slack c_fold, its wave
+// (coarsening) and its relaxation weight with the crests' slack c_wave (>= c_fold): the
+// folds are drawn from a compression of c_fold, and the crests are set by the folds beyond
+// c_wave, where the compression has a direction of its own (docs/method.md, "The fold law")
 Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretched,
-          float W, float cap, float room, float scale, vec3 t1, vec3 t2) {
+          float W, float cap, float room, float scale, vec3 t1, vec3 t2, float c_wave,
+          float c_fold) {
     Fold f;
     f.drawn = 1.0;
     // r == r_geo where nothing is painted: exactly 1 there (a GPU's division, a * rcp(b),
@@ -257,27 +267,34 @@ Fold fold(mat2 M_geo, vec2 d, float r, float r_geo, float across, float stretche
     // drew them at random points, whose waves switched on and off under a 0.01 degree
     // change of a joint and moved the crests)
     float gather = r == r_geo ? 1.0 : min(r_geo / r, PAINT_GATHER_MAX);
-    float rho = excess_of(r_geo) * gather;
-    float rho_area = max(rho, excess_of(r_geo * across) * gather);
-    if (!(rho > 1.0)) {
+    float rho = excess_of(r_geo, c_wave) * gather;
+    float rho_fold = excess_of(r_geo, c_fold) * gather;
+    if (!(rho_fold > 1.0)) {
         f.k = wave_vector(M_geo, d, W, t1, t2);
         f.amplitude = 0.0;
         f.full = 0.0;
         f.wavelength = W;
+        f.weight = 0.0;
         return f;
     }
     // coarsening up to the point's cap (COARSENING_MAX on flat cloth, 1 where the rest
-    // surface curves one way: folds.coarsening_cap)
-    float L = W * min(pow(rho, COARSENING_EXPONENT), cap);
+    // surface curves one way: folds.coarsening_cap), by the crests' excess (W within it)
+    float L = W * min(pow(max(rho, 1.0), COARSENING_EXPONENT), cap);
     f.k = wave_vector(M_geo, d, L, t1, t2);
+    float lowest = room / max(scale, 1e-30);
+    f.weight = rho > 1.0
+        ? min(profile_slope(max(rho, excess_of(r_geo * across, c_wave) * gather))
+              / max(length(f.k), 1e-30), lowest)
+        : 0.0;
+    float rho_area = max(rho_fold, excess_of(r_geo * across, c_fold) * gather);
     f.amplitude = profile_slope(rho_area) / max(length(f.k), 1e-30);
     // the fold that restores the area the stretched mesh lacks (its slope for the excess
     // with r_geo * across * stretched in place of r_geo), within the same room
-    float lowered = profile_slope(excess_of(r_geo * across * stretched) * gather)
+    float lowered = profile_slope(excess_of(r_geo * across * stretched, c_fold) * gather)
                     / max(length(f.k), 1e-30);
     f.full = f.amplitude;
-    f.amplitude = min(f.amplitude, room / max(scale, 1e-30));
-    lowered = min(lowered, room / max(scale, 1e-30));
+    f.amplitude = min(f.amplitude, lowest);
+    lowered = min(lowered, lowest);
     f.drawn = f.amplitude > 0.0 ? min(lowered / f.amplitude, 1.0) : 1.0;
     f.wavelength = L;
     return f;
@@ -431,10 +448,12 @@ void main() {
     // lies below it), up to ACROSS_MAX, which lowers only the drawn fold
     float stretched = usable ? clamp(length(M_geo * e) / STRETCH_ONSET, 1.0, ACROSS_MAX)
                              : 1.0;
+    float drawn_slack = DRAWN_SLACK * u_slack;
     Fold f1 = fold(M_geo, d, r, r_geo, across, stretched, W, cap, room, u_amplitude_scale,
-                   t1, t2);
+                   t1, t2, u_slack, drawn_slack);
     float drawn = f1.drawn;
     float amplitude = held * u_amplitude_scale * f1.amplitude;
+    float weight = held * u_amplitude_scale * f1.weight;
     vec3 k = f1.k;
     float wavelength = f1.wavelength;  // the material-anchored phase's (rest space)
     bool compression_wave = true;      // false where the tension wave takes its place
@@ -450,6 +469,7 @@ void main() {
             * sqrt(strain) * tension_wavelength;
         if (tension_amplitude > amplitude) {
             amplitude = tension_amplitude;
+            weight = tension_amplitude;
             drawn = 1.0;
             wavelength = tension_wavelength;
             k = wave_vector(M_geo, d, wavelength, t1, t2);
@@ -491,9 +511,10 @@ void main() {
     float r2 = any_wave ? clamp(length(M * e), MIN_RATIO, 1.0) : 1.0;
     float r2_geo = any_wave ? clamp(length(M_geo * e), MIN_RATIO, 1.0) : 1.0;
     Fold f2 = fold(M_geo, e, r2, r2_geo, 1.0, 1.0, W, cap, room,
-                   u_amplitude_scale * u_biaxial, t1, t2);
+                   u_amplitude_scale * u_biaxial, t1, t2, u_slack, drawn_slack);
     float amplitude2 = u_biaxial > 0.0 ? held * u_biaxial * u_amplitude_scale * f2.amplitude
                                         : 0.0;
+    float weight2 = u_biaxial > 0.0 ? held * u_biaxial * u_amplitude_scale * f2.weight : 0.0;
     vec3 k2 = f2.k;
 
     STORE(fields, FIELD_NORMAL(i), vec4(n, usable ? 1.0 + drawn : 0.0));
@@ -503,8 +524,8 @@ void main() {
     STORE(fields, FIELD_TEXELS * i + FIELD_DIRECTION2_TEXEL, vec4(e3, r2));
     // its gradient: DEEPEN_GRADIENT, once every point's offset is written
     STORE(fields, FIELD_DEEPEN(i), vec4(offset, 0.0, 0.0, 0.0));
-    // the length pass's scale (length.glsl): none until it runs
-    STORE(fields, FIELD_LENGTH(i), vec4(1.0, 0.0, 0.0, 0.0));
+    // the length pass's scale (length.glsl): none until it runs; the relaxation's weights
+    STORE(fields, FIELD_LENGTH(i), vec4(1.0, weight, weight2, 0.0));
     // material-anchored start: crests ride with the cloth, frames stay independent.
     // Where the wave runs along the anchor table's direction (within 45 degrees: the
     // paint's, or a gathered tube's curvature), that stripe pattern in rest space

@@ -53,13 +53,15 @@ uniform int u_num_points;
 #if defined APPLY
 
 layout(binding = LENGTH_SCALE) uniform sampler2D scale_table;
-layout(rgba32f, binding = LENGTH_FIELDS) writeonly uniform image2D fields_image;
+// read and written: the scale goes into x, the relaxation's weights (yz) stay
+layout(rgba32f, binding = LENGTH_FIELDS) uniform image2D fields_image;
 
 void main() {
     int i = int(gl_GlobalInvocationID.x);
     if (i >= u_num_points) return;
+    vec4 texel = imageLoad(fields_image, TABLE_TEXEL(FIELD_LENGTH(i)));
     imageStore(fields_image, TABLE_TEXEL(FIELD_LENGTH(i)),
-               vec4(fetch(scale_table, i).x, 0.0, 0.0, 0.0));
+               vec4(fetch(scale_table, i).x, texel.yzw));
 }
 
 #else

@@ -100,7 +100,11 @@ layout(binding = RELAX_FIELDS) uniform sampler2D fields;
 
 vec2 complex_mul(vec2 a, vec2 b) { return vec2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x); }
 
-vec4 wave_of(sampler2D table, int i, int s) { return fetch(table, FIELD_WAVE_OF(i, s)); }
+// vertex i's system s: its wave vector k, and in w the fold the relaxation weighs its phase
+// by (crush's weight: the fold law with the crests' slack; the drawn fold is FIELD_WAVE's w)
+vec4 wave_of(sampler2D table, int i, int s) {
+    return vec4(fetch(table, FIELD_WAVE_OF(i, s)).xyz, fetch(table, FIELD_LENGTH(i))[1 + s]);
+}
 
 // How much a neighbour's wave pulls a vertex's phase beside its amplitude (contract.py's
 // RELAX_ALIGNED): fully within 78 degrees, not at all at right angles (no phase to agree
@@ -284,6 +288,7 @@ void main() {
     vec3 n = fetch(fields, FIELD_NORMAL(i)).xyz;
     vec3 x_i = fetch(posed_points, i).xyz;
     vec4 z_i = fetch(z_in, i);
+    vec4 weights = fetch(fields, FIELD_LENGTH(i));
     for (int s = 0; s < SYSTEMS; ++s) {
         vec4 wave = wave_of(fields, i, s);
         if (wave.w <= 0.0) continue;
@@ -334,8 +339,12 @@ void main() {
         // it): k keeps at least crush's length
         k *= max(1.0, length(wave.xyz) / max(length(k), 1e-30));
         float scale = length(wave.xyz) / max(length(k), 1e-30);
-        STORE(fields_out, FIELD_WAVE_OF(i, s), vec4(k, wave.w * scale));
+        // the drawn fold and the weight alike keep their slope a|k|
+        STORE(fields_out, FIELD_WAVE_OF(i, s),
+              vec4(k, fetch(fields, FIELD_WAVE_OF(i, s)).w * scale));
+        weights[1 + s] = wave.w * scale;
     }
+    STORE(fields_out, FIELD_LENGTH(i), weights);
 }
 
 #else

@@ -299,11 +299,15 @@ def find_window(display: str, name: str, pid: int | None = None,
                          f"(xdotool: {last.stderr.strip() if last else ''})")
 
 
-def fold_law(ratio, width, geometric=None, slack=0.0, height=None, cap=None):
+def fold_law(ratio, width, geometric=None, slack=0.0, height=None, cap=None, crests=False):
     """(amplitude, |k|) of the fold law (usdwrinkle/method/folds.py, docs/method.md) on an
     analytic sheet: ``ratio`` the compression along the wave with the painted q,
     ``geometric`` the mesh's alone (default: ``ratio``), with no room limit; ``cap`` the
-    coarsening cap (flat cloth's COARSENING_MAX by default)."""
+    coarsening cap (flat cloth's COARSENING_MAX by default); ``slack`` wrinkle:slack,
+    whose excess sets the wave, while the drawn fold's slope takes the drawn folds' slack
+    (contract.DRAWN_SLACK of it); ``crests``: instead the fold the relaxation weighs the
+    phases by (the slope with the slack itself)."""
+    from usdwrinkle.method.contract import DRAWN_SLACK
     from usdwrinkle.method.folds import (
         excess_length,
         material_wavelength,
@@ -314,11 +318,12 @@ def fold_law(ratio, width, geometric=None, slack=0.0, height=None, cap=None):
 
     geometric = ratio if geometric is None else geometric
     rho = excess_length(ratio, geometric, slack)
+    drawn = rho if crests else excess_length(ratio, geometric, DRAWN_SLACK * slack)
     wavelength = material_wavelength(width, rho) if cap is None else \
         material_wavelength(width, rho, cap)
     k = 2 * np.pi / (np.maximum(geometric, 1e-30) * wavelength)
     table = slope_table(default_profile() if height is None else height)
-    amplitude = np.where(rho > 1.0, profile_slope(table, rho) / k, 0.0)
+    amplitude = np.where(drawn > 1.0, profile_slope(table, drawn) / k, 0.0)
     return amplitude, k
 
 

@@ -334,18 +334,22 @@ def test_slack_and_held_edges_match_the_numpy_reference(gl_context, seed):
     ref = crush_reference(rest, posed, record.topology, q, record.params.width, slack=0.1,
                           hold=hold, coarsening=record.params.coarsening)
     np.testing.assert_allclose(ours["amplitude"], ref["amplitude"], atol=2e-4 * 0.05)
+    np.testing.assert_allclose(ours["weight"], ref["weight"], atol=2e-4 * 0.05)
+    assert (ref["weight"] < ref["amplitude"] - 1e-3).any()   # the two slacks differ
     plain = crush_reference(rest, posed, record.topology, q, record.params.width,
                             coarsening=record.params.coarsening)
     assert np.abs(ours["amplitude"] - plain["amplitude"]).max() > 1e-3   # it did something
 
 
 def test_slack_follows_its_law_on_the_analytic_sheet(gl_context, tmp_path):
-    """Uniform compression by r with slack c: the fold law restores all but the slack where
-    folds begin (r = 1 - c) and the whole length from r = 1 - SLACK_RAMP c on (3 c;
-    folds.restored), and there is no wave at all once r >= 1 - c."""
+    """Uniform compression by r with slack c: the drawn folds take the slack DRAWN_SLACK c
+    (c_d): they restore all but it where they begin (r = 1 - c_d) and the whole length from
+    r = 1 - SLACK_RAMP c_d on (folds.restored), and there is no wave at all once r >= 1 -
+    c_d. The fold the relaxation weighs the phases by takes c itself: none from r = 1 - c
+    on, while the drawn fold is there."""
     rest, counts, indices = grid_sheet(21, 21, 2.0)
     inside = interior(rest, 0.2)
-    for ratio, slack in ((0.7, 0.1), (0.8, 0.1), (0.93, 0.08)):
+    for ratio, slack in ((0.7, 0.1), (0.8, 0.1), (0.93, 0.08), (0.96, 0.08)):
         posed = rest * np.array([ratio, 1, 1], np.float32)
         stage = point_cache_stage(rest, {1: posed}, counts, indices, width=0.3, slack=slack)
         source = tmp_path / f"slack{ratio}.usda"
@@ -356,8 +360,15 @@ def test_slack_follows_its_law_on_the_analytic_sheet(gl_context, tmp_path):
         expected, _ = fold_law(ratio, 0.3, slack=slack)
         np.testing.assert_allclose(fields["amplitude"][inside], expected, atol=1e-6,
                                    rtol=0.01)
+        ours, _ = gpu_fields(gl_context, stage)
+        weight, _ = fold_law(ratio, 0.3, slack=slack, crests=True)
+        np.testing.assert_allclose(ours["weight"][inside], weight, atol=1e-6, rtol=0.01)
         if ratio > 0.92:
+            assert not ours["weight"][inside].any()
+        if ratio > 0.95:
             assert not fields["amplitude"][inside].any()
+        else:
+            assert (fields["amplitude"][inside] > 0.01).all()   # drawn before the crests
 
 
 def test_a_held_edge_damps_crossing_waves_not_parallel_ones(gl_context):

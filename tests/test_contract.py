@@ -111,9 +111,12 @@ def test_fields_follow_the_layout():
                                      "drawn", "direction", "compression", "phase", "anchor_phase",
                                      "wave_vector2", "amplitude2", "direction2",
                                      "compression2", "phase2", "anchor_phase2", "wavenumber",
-                                     "offset", "offset_gradient", "length_scale"]
+                                     "offset", "offset_gradient", "length_scale", "weight",
+                                     "weight2"]
     np.testing.assert_array_equal(fields.offset, texel[:, contract.FIELD_DEEPEN_TEXEL, 0])
     np.testing.assert_array_equal(fields.length_scale, texel[:, contract.FIELD_LENGTH_TEXEL, 0])
+    np.testing.assert_array_equal(fields.weight, texel[:, contract.FIELD_LENGTH_TEXEL, 1])
+    np.testing.assert_array_equal(fields.weight2, texel[:, contract.FIELD_LENGTH_TEXEL, 2])
     np.testing.assert_array_equal(fields.offset_gradient,
                                   texel[:, contract.FIELD_DEEPEN_TEXEL, 1:])
     np.testing.assert_array_equal(fields.wavenumber, 0.0)  # no damped table given

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..method.contract import DRAWN_SLACK  # noqa: F401  (the slack's help)
 from ..process.errors import UsdWrinkleError
 from ..usd.schema import (  # noqa: F401  (what the command line's help says of the fallbacks)
     CLOTH_TOKENS,

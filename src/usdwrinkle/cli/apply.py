@@ -31,8 +31,9 @@ def add_parser(subparsers) -> None:
                         + f"; mesh: {schema.WIDTH_EDGE_MULTIPLE:g} x the mean rest edge "
                         f"length (default {schema.DEFAULT_CLOTH})")
     p.add_argument("--slack", type=float, metavar="C",
-                   help="wrinkle:slack in [0, 0.9], the compression the cloth takes in-plane "
-                        f"before it buckles (default {schema.DEFAULT_SLACK:g}; 0: the "
+                   help="wrinkle:slack in [0, 0.9], the compression before the crests "
+                        "settle; folds are drawn from "
+                        f"{schema.DRAWN_SLACK:g} x it on (default {schema.DEFAULT_SLACK:g}; 0: the "
                         "paper's law)")
     p.add_argument("--crest-damping", type=float, metavar="DEGREES",
                    help="wrinkle:crestDamping in [0, 45], the band in degrees within which "

@@ -87,6 +87,18 @@ ONE_WAY_REACH = 2.0
 #: shirt 1.1% of its pixels under a 0.01 degree change at 3, 1.5% at 2.5, 1.9% at 2, bar
 #: 2%; CesiumMan 12-14% under 0.1 degrees at 1.5, bar 5%): docs/physics.md, the heights
 SLACK_RAMP = 3.0
+#: The drawn folds' slack, a share of wrinkle:slack c (crush.glsl fold, folds.restored):
+#: the folds are drawn from a compression of DRAWN_SLACK c on (restoring all from
+#: SLACK_RAMP DRAWN_SLACK c), while the crests are set, and the waves coarsen, by the folds
+#: beyond c alone (the relaxation weighs the phases by the law with c: FIELD_LENGTH's yz).
+#: A fold between the two takes its phase from its neighbours'. The referee's cloth
+#: buckles at once: with the folds drawn from c (the same share as the crests', 1) the
+#: curtains stood 0.71-0.80x its height at their first phase (8%); a lower c for both
+#: made the crests tip under a 0.1 degree change of a joint (the shirt 13 of 32 draws
+#: over the 5% bar at c = 0.045, CesiumMan 17 of 32 at 0.04). At 0.6 (2026-12-07): the
+#: onsets 0.98-1.09x, every draw holds (docs/physics.md, "Folds drawn before the crests
+#: settle").
+DRAWN_SLACK = 0.6
 FOLD_ROOM = 0.5
 #: Deepening (docs/method.md, "Deepened pleats"; method/deepen.py): where the room lowers
 #: a fold, the length the lowered fold does not draw goes into an offset of the surface
@@ -317,7 +329,9 @@ UDIM_REPEAT = -2
 #:   deepen     x: the offset o along the normal (DEEPEN_CAP; scene units, local
 #:              space); yzw: its gradient over the posed surface (local space)
 #:   length     x: the length pass's scale of the drawn folds, both systems (1: none;
-#:              docs/method.md, "The cloth's length"); yzw: 0
+#:              docs/method.md, "The cloth's length"); yz: the folds the relaxation
+#:              weighs each system's phase by (the law with the crests' slack,
+#:              DRAWN_SLACK; a frame drawn from a bake: its amplitudes); w: 0
 #: Phases are per system too: the phase tables are RG (x: system 1, y: system 2).
 FIELD_TEXELS = 7
 FIELD_NORMAL_TEXEL = 0
@@ -380,7 +394,7 @@ SHADER_DEFINES = {name: glsl_literal(value) for name, value in (
     ("WAVE_SYSTEMS", WAVE_SYSTEMS),
     ("TENSION_REFERENCE_STRAIN", TENSION_REFERENCE_STRAIN), ("TENSION_SLOPE", TENSION_SLOPE),
     ("COARSENING_EXPONENT", COARSENING_EXPONENT), ("COARSENING_MAX", COARSENING_MAX),
-    ("SLACK_RAMP", SLACK_RAMP),
+    ("SLACK_RAMP", SLACK_RAMP), ("DRAWN_SLACK", DRAWN_SLACK),
     ("FOLD_ROOM", FOLD_ROOM), ("PAINT_GATHER_MAX", PAINT_GATHER_MAX),
     ("ANCHOR_ALIGNED", ANCHOR_ALIGNED),
     ("ACROSS_MIN", ACROSS_MIN), ("ACROSS_MAX", ACROSS_MAX), ("STRETCH_ONSET", STRETCH_ONSET),
@@ -440,8 +454,11 @@ class WrinkleFields:
     length_scale : (n,) float32
         The length pass's scale of the drawn folds, both systems (1: none; docs/method.md,
         "The cloth's length"): ``drawn_amplitude`` and ``drawn_amplitude2`` carry it,
-        ``amplitude`` and ``amplitude2`` are the fold law's, which the relaxation weighs
-        the phases by.
+        ``amplitude`` and ``amplitude2`` are the fold law's as drawn (with the drawn folds'
+        slack, DRAWN_SLACK of wrinkle:slack).
+    weight, weight2 : (n,) float32
+        The folds the relaxation weighs each system's phase by: the fold law with the
+        crests' slack (wrinkle:slack itself), 0 where the compression is within it.
     """
 
     points: np.ndarray
@@ -464,6 +481,8 @@ class WrinkleFields:
     offset: np.ndarray
     offset_gradient: np.ndarray
     length_scale: np.ndarray
+    weight: np.ndarray
+    weight2: np.ndarray
 
     @classmethod
     def from_tables(cls, posed: np.ndarray, fields: np.ndarray, phase: np.ndarray,
@@ -495,7 +514,8 @@ class WrinkleFields:
                    wavenumber=(np.zeros(len(posed), np.float32) if damped is None else
                                np.asarray(damped, np.float32).reshape(-1, 4)[:, 3].copy()),
                    offset=deepen[:, 0].copy(), offset_gradient=deepen[:, 1:].copy(),
-                   length_scale=length[:, 0].copy())
+                   length_scale=length[:, 0].copy(), weight=length[:, 1].copy(),
+                   weight2=length[:, 2].copy())
 
     @property
     def drawn_amplitude(self) -> np.ndarray:

@@ -11,6 +11,10 @@ the profile's slope table from here.
   (``area_excess``: the compression across joins, down to ACROSS_MIN); the surface
   draws it lowered where the mesh is stretched across beyond STRETCH_ONSET, up to
   ACROSS_MAX (``drawn_excess``).
+- **Two slacks.** The drawn fold takes the slack contract.DRAWN_SLACK x wrinkle:slack;
+  the wave (its coarsening) and the fold the relaxation weighs the phases by take
+  wrinkle:slack itself (reference/crush.py; docs/method.md, "folds drawn before the crests
+  settle"). The functions here take the slack they are given.
 - **Coarsening.** ``L = W min(rho^COARSENING_EXPONENT, COARSENING_MAX)``: the cloth
   referee's folds widen under compression while their posed wavelength stays about
   constant (docs/physics.md); exponent 1 keeps the posed wavelength at W up to rho =

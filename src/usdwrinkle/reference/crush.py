@@ -7,6 +7,7 @@ from ..method.anchor import start_phases
 from ..method.contract import (
     ANCHOR_ALIGNED,
     COARSENING_MAX,
+    DRAWN_SLACK,
     FOLD_ROOM,
     MIN_RATIO,
 )
@@ -125,15 +126,19 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     np.maximum.at(bend, src, bend_edge)
     room = np.where(bend > 0, FOLD_ROOM / np.maximum(bend, 1e-300), np.inf)
     table = default_slope() if slope is None else np.asarray(slope, np.float64)
+    # the crests' excess (wrinkle:slack: the wave's coarsening and the relaxation's
+    # weight) and the drawn folds' (DRAWN_SLACK of it: the amplitude)
+    fold_slack = DRAWN_SLACK * slack
     rho = excess_length(r, r_geo, slack)
+    rho_fold = excess_length(r, r_geo, fold_slack)
     # the compression across d (crush.glsl: one wave restores the area; wrinkle:biaxial,
     # which the reference does not draw, would restore it with a second system)
     e = np.stack([-d[:, 1], d[:, 0]], 1)
     across = np.where(usable, np.linalg.norm(np.einsum("nij,nj->ni", M_geo, e), axis=1), 1.0)
-    rho_area = area_excess(r, r_geo, across, slack)
-    folding = rho > 1.0
+    rho_area = area_excess(r, r_geo, across, fold_slack)
+    folding = rho_fold > 1.0
     most = COARSENING_MAX if coarsening is None else np.asarray(coarsening, np.float64)
-    wavelength = np.where(folding, material_wavelength(width, rho, most), width)
+    wavelength = np.where(rho > 1.0, material_wavelength(width, rho, most), width)
     k2 = wave_vector(M_geo, d, wavelength)
     kl = np.linalg.norm(k2, axis=1)
     amplitude = np.where(folding, profile_slope(table, rho_area) / np.maximum(kl, 1e-30),
@@ -141,8 +146,12 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
     # the share of it the surface draws: lowered where the mesh is stretched across d
     # (crush.glsl: FIELD_NORMAL's w), within the same room
     cap = room / max(amplitude_scale, 1e-30)
-    lowered = np.where(folding, profile_slope(table, drawn_excess(r, r_geo, across, slack))
+    lowered = np.where(folding, profile_slope(table, drawn_excess(r, r_geo, across,
+                                                                  fold_slack))
                        / np.maximum(kl, 1e-30), 0.0)
+    # the fold the relaxation weighs the phases by: the law with the crests' slack
+    weight = np.where(rho > 1.0, np.minimum(profile_slope(table, area_excess(
+        r, r_geo, across, slack)) / np.maximum(kl, 1e-30), cap), 0.0) * amplitude_scale
     drawn = np.where(amplitude > 0, np.minimum(np.minimum(lowered, cap)
                                                / np.maximum(np.minimum(amplitude, cap), 1e-300),
                                                1.0), 1.0)
@@ -154,6 +163,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
         hold = np.asarray(hold, np.float64)
         along = np.sum(d3 / np.linalg.norm(d3, axis=1, keepdims=True) * hold[:, 1:], 1)
         amplitude = amplitude * (1.0 - hold[:, 0] * (1.0 - along ** 2))
+        weight = weight * (1.0 - hold[:, 0] * (1.0 - along ** 2))
     k = k2[:, :1] * t1 + k2[:, 1:] * t2
     # the deepened pleats (method/deepen.py): the offset where the room lowered the fold,
     # from the form fitted over the ring in the posed tangent coordinates b
@@ -172,6 +182,7 @@ def crush(rest: np.ndarray, posed: np.ndarray, topology: Topology, q: np.ndarray
                      np.where(along_paint < 0, -painted[:, 3], painted[:, 3]), phase)
     stretch = np.sqrt(np.linalg.eigvalsh(np.transpose(M_geo, (0, 2, 1)) @ M_geo)[:, 1])
     return {"normals": nrm, "wave_vector": k, "amplitude": amplitude, "drawn": drawn,
+            "weight": weight,
             "direction": d3,
             "compression": r, "phase": phase, "usable": usable,
             # the material wave vector (2 pi / L) d3 that relax's mobility compares

@@ -1,14 +1,15 @@
 """The length pass (shaders/length.glsl) in numpy: per vertex, the largest scale s <= 1 of
-its folds at which the blend of the corner waves over the triangles around it draws no
-more than the cloth's rest area there (less the slack's share, plus LENGTH_TOLERANCE),
-ramped in with the slack's ramp; 1 where the blend is one plane wave (docs/method.md,
-"The cloth's length"). One wave system, regular folds, no band limit: what
-tests/test_length.py checks the shader against."""
+its folds at which the blend of the corner waves over the triangles around it draws no more
+than the cloth's rest area there (less the drawn folds' slack, DRAWN_SLACK of
+wrinkle:slack, plus LENGTH_TOLERANCE), ramped in with that slack's ramp; 1 where the blend
+is one plane wave (docs/method.md, "The cloth's length"). One wave system, regular folds,
+no band limit: what tests/test_length.py checks the shader against."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..method.contract import (
+    DRAWN_SLACK,
     LENGTH_MIN_SLOPE,
     LENGTH_SAMPLES,
     LENGTH_SNAP,
@@ -66,9 +67,11 @@ def length_scales(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray,
                   ) -> np.ndarray:
     """(n,): each vertex's scale. ``rest`` and ``posed`` (n, 3); ``triangles`` (m, 3)
     corners; ``waves`` (n, 4) each vertex's drawn wave (k, a); ``phases`` (n,) its relaxed
-    phase; ``height`` and ``gradient`` the profile tables; ``slack`` wrinkle:slack;
+    phase; ``height`` and ``gradient`` the profile tables; ``slack`` wrinkle:slack (the
+    allowance takes the drawn folds' share of it, DRAWN_SLACK);
     ``deepen`` (n, 4) the pleats' offset and its gradient (None: none), which the blend
     carries unscaled."""
+    slack = DRAWN_SLACK * slack
     rest = np.asarray(rest, np.float64)
     posed = np.asarray(posed, np.float64)
     waves = np.asarray(waves, np.float64)

@@ -121,9 +121,11 @@ DEFAULT_CLOTH = "cotton"
 MESH_CLOTH = "mesh"
 WIDTH_EDGE_MULTIPLE = 4.0
 CLOTH_TOKENS = (*CLOTH_WIDTHS_M, MESH_CLOTH)
-#: wrinkle:slack fallback: the compression cloth takes in-plane before it buckles. 0: the
-#: Newton referee's cloth keeps its area (docs/physics.md), and with the inextensible
-#: law a slack c leaves the wrinkled surface 1 - c of its rest area
+#: wrinkle:slack fallback: the compression before the crests settle (the relaxation weighs
+#: the folds beyond it); the folds are drawn from contract.DRAWN_SLACK of it on, the share
+#: the cloth takes in-plane. 0: the Newton referee's cloth keeps its area
+#: (docs/physics.md), and with the inextensible law a slack c leaves the wrinkled surface
+#: 1 - DRAWN_SLACK c of its rest area
 DEFAULT_SLACK = 0.05
 #: wrinkle:crestDamping fallback: the band (degrees) within which the compression
 #: direction holds where the cloth folds, followed beyond it (docs/method.md: crest

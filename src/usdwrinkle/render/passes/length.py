@@ -3,8 +3,9 @@ around it (length.glsl; docs/method.md, "The cloth's length").
 
 After the relaxation and its fit, per vertex, the blend's surface over the triangles
 around it is sampled with its exact gradient; where the ring is compressed beyond the
-slack, the vertex's drawn folds are scaled down as far as the ring needs to draw no more
-than the rest area the slack leaves. A second dispatch writes the scales into the fields'
+slack the drawn folds leave (contract.DRAWN_SLACK of wrinkle:slack), the vertex's drawn
+folds are scaled down as far as the ring needs to draw no more than the rest area that
+slack leaves. A second dispatch writes the scales into the fields'
 length texels, once every vertex's is computed, since each vertex's samples read its
 neighbours' folds; the blend multiplies the drawn amplitudes by them, and a bake writes
 the drawn amplitudes. A frame drawn from a bake has its scales in its amplitudes
@@ -13,6 +14,7 @@ and has no scale either.
 """
 from __future__ import annotations
 
+from ...method.contract import DRAWN_SLACK
 from .. import bindings
 from ..resources import MeshResources
 from . import bind_wave, irregular
@@ -43,7 +45,9 @@ class LengthPass(WavePass):
         shader = self.variants(TWO_SYSTEMS=two, IRREGULAR=rough)
         bind_wave(self.UNITS, res, shader)
         self.dispatch(res.num_points, {"u_num_points": res.num_points,
-                                       "u_slack": float(res.record.params.slack),
+                                       # the drawn folds' slack: their allowance
+                                       "u_slack": DRAWN_SLACK
+                                       * float(res.record.params.slack),
                                        **res.topology_uniforms},
                       reads={"TOPOLOGY_TABLE": res.topology,
                              "LENGTH_REST_POINTS": res.rest_points},
