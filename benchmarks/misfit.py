@@ -50,7 +50,9 @@ def run_stage(path: str, ctx) -> tuple[float, float]:
             if frame >= 9:
                 # the waves the relaxation aligns (weighs): the folds drawn before the
                 # crests settle take their phases from their neighbours'
-                weight = current["weight"]
+                # (a checkout from before the two slacks, --before: its amplitude is
+                # the weight)
+                weight = current.get("weight", current["amplitude"])
                 mask = weight > 0.05 * weight.max()
                 misfits.append(phase_misfit(current["points"], current["wave_vector"],
                                             current["phase"], topology, mask))
