@@ -97,17 +97,17 @@ def test_a_small_joint_change_about_random_axes_moves_few_crests(gl_context, tmp
 @pytest.mark.parametrize("stage", ["shirt", "loop"])
 def test_a_tiny_joint_change_moves_no_wave_s_phase_on_the_sleeve(gl_context, tmp_path,
                                                                  stage):
-    """The phases themselves, not the image: 0.01 degrees about each of 4 random axes
-    moves no wave of the sleeve's coarse points that the relaxation weighs by more than
-    0.5 rad at any of FRAMES (stability.moved_waves: the folds drawn before the crests
-    settle, which take their phases from their neighbours', moved 2-3 of them, at most
-    22% of the largest fold; the images above count them; `python -m benchmarks.stability --draws 16 --phases`). The
-    image measure above did not see the shirt's elbow settle into one of two layouts of
-    its phases: with the old rig (linear blending, the forearm's weight rising over 0.7
-    units around the elbow) up to 29 waves moved, a median of 7.5 over 16 draws, and 20
-    of the painted loop's; with the rig since 2026-12-04 (dual quaternions, the weight
-    rising from 0.8 to 2.1) none in 16 draws (docs/method.md, "What the image does not
-    see")."""
+    """The phases themselves, not the image: 0.01 degrees about each of 4 random axes moves
+    no wave of the sleeve's coarse points that the relaxation weighs by more than 0.5 rad at
+    any of FRAMES (stability.moved_waves: the folds drawn before the crests settle, which
+    take their phases from their neighbours', moved 2-3 of them, at most 22% of the largest
+    fold; the images above count them; `python -m benchmarks.stability --draws 16
+    --phases`). The image measure above did not see the shirt's elbow settle into one of two
+    layouts of its phases: with the old rig (linear blending, the forearm's weight rising
+    over 0.7 units around the elbow) up to 29 waves moved, a median of 7.5 over 16 draws,
+    and 20 of the painted loop's; with the rig since 2026-12-04 (dual quaternions, the
+    weight rising from 0.8 to 2.1) none in 16 draws (docs/method.md, "What the image does
+    not see")."""
     path = str(stability.SHIRT) if stage == "shirt" else stability.painted_loop(str(tmp_path))
     base = stability.sleeve_fields(path, stability.FRAMES, gl_context)
     assert int((base[24]["weight"] > 0).sum()) > 50  # waves that could move

@@ -90,7 +90,8 @@ TIPS = {
     "width": "W, the wrinkle width (rest wavelength) of the active mesh, in scene units; "
              "width mode paints this value",
     "amplitude": "wrinkle:amplitudeScale: scales every fold's height (1 is the fold law's)",
-    "slack": "wrinkle:slack: the compression the cloth takes in-plane before it folds",
+    "slack": "wrinkle:slack: the compression before the crests settle (folds are drawn "
+             "from 0.6 of it on)",
     "irregularity": "wrinkle:irregularity: how unequal the folds are (0: regular waves; "
                     "about 0.3 in simulated cloth): their crests meander and the wider "
                     "ones stand taller",

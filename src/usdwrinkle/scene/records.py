@@ -74,8 +74,9 @@ class WrinkleParams:
     biaxial : float, the second wave system's weight in [0, 1] (0: one system).
     tension : float, the tension wave's amplitude factor (0: no tension wrinkles).
     tension_threshold : float, the strain below which no tension wrinkle appears.
-    slack : float, the compression the cloth takes in-plane before it buckles (r is read
-        as min(r / (1 - slack), 1)).
+    slack : float, wrinkle:slack: the compression before the crests settle (the
+        relaxation weighs the folds beyond it); the folds are drawn from
+        contract.DRAWN_SLACK of it on (docs/method.md, "The fold law").
     hold : (n, 4) float32 or None, what held edges leave each point (wrinkle:held;
         params.held_weights): damping strength, and the unit rest vector from the holder;
         None: nothing held.
