@@ -803,3 +803,44 @@ def test_curved_cloth_holds_its_wavelength(gl_context, tmp_path, radius, width, 
     law = crush_reference(record.rest_points, posed, record.topology, record.params.q,
                           record.params.width, coarsening=record.params.coarsening)
     np.testing.assert_allclose(law["amplitude"][inner], amplitude[0], rtol=2e-3)
+
+
+def test_the_folds_drawn_before_the_crests_settle_move_no_crest(gl_context, monkeypatch):
+    """contract.DRAWN_SLACK changes what is drawn, not where the crests are: the shirt's
+    phases, wave vectors and relaxation weights over its 24 frames are the same to the bit
+    with the drawn folds' slack at DRAWN_SLACK c (the code's) and at c (one slack for the
+    folds and the crests, the law until 2026-12-07); the drawn folds differ, by the folds
+    between the two slacks."""
+    from pathlib import Path
+
+    from usdwrinkle.engine import WrinkleEngine
+    from usdwrinkle.method.contract import DRAWN_SLACK, glsl_literal
+    from usdwrinkle.render import bindings
+    from usdwrinkle.render.passes import length as length_pass
+
+    shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
+
+    def run():
+        engine = WrinkleEngine(shirt, ctx=gl_context)
+        mesh = engine.wrinkled_paths[0]
+        frames = []
+        try:
+            for frame in range(1, 25):
+                engine.compute_frame(float(frame))
+                frames.append(engine.read_fields(mesh).arrays())
+        finally:
+            engine.release()
+        return frames
+
+    assert DRAWN_SLACK < 1.0
+    drawn = run()
+    monkeypatch.setitem(bindings.COMMON, "DRAWN_SLACK", glsl_literal(1.0))
+    monkeypatch.setattr(length_pass, "DRAWN_SLACK", 1.0)
+    one = run()
+    for ours, before in zip(drawn, one):
+        for name in ("phase", "wave_vector", "weight"):
+            np.testing.assert_array_equal(ours[name], before[name], err_msg=name)
+        # with one slack the drawn fold is the weight
+        np.testing.assert_array_equal(before["amplitude"], before["weight"])
+    between = [int(((f["amplitude"] > 0) & ~(f["weight"] > 0)).sum()) for f in drawn]
+    assert max(between) > 10, between   # folds drawn before the crests settle
