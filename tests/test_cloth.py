@@ -837,7 +837,7 @@ def test_the_folds_drawn_before_the_crests_settle_move_no_crest(gl_context, monk
     monkeypatch.setitem(bindings.COMMON, "DRAWN_SLACK", glsl_literal(1.0))
     monkeypatch.setattr(length_pass, "DRAWN_SLACK", 1.0)
     one = run()
-    for ours, before in zip(drawn, one):
+    for ours, before in zip(drawn, one, strict=True):
         for name in ("phase", "wave_vector", "weight"):
             np.testing.assert_array_equal(ours[name], before[name], err_msg=name)
         # with one slack the drawn fold is the weight
