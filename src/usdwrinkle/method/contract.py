@@ -96,7 +96,7 @@ SLACK_RAMP = 3.0
 #: curtains stood 0.71-0.80x its height at their first phase (8%); a lower c for both
 #: made the crests tip under a 0.1 degree change of a joint (the shirt 13 of 32 draws
 #: over the 5% bar at c = 0.045, CesiumMan 17 of 32 at 0.04). At 0.6 (2026-12-07): the
-#: onsets 0.98-1.09x, every draw holds (docs/physics.md, "Folds drawn before the crests
+#: onsets 0.99-1.11x, every draw holds (docs/physics.md, "Folds drawn before the crests
 #: settle").
 DRAWN_SLACK = 0.6
 FOLD_ROOM = 0.5
