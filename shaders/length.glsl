@@ -117,15 +117,17 @@ void main() {
                                          fetch(posed_points, corners.z).xyz - P0));
     }
     float ratio = posed_area / max(rest_area, 1e-30);
-    float onset = u_slack > 0.0
-        ? smoothstep(1.0 - SLACK_RAMP * u_slack, 1.0 - u_slack, ratio)
+    // the drawn folds' slack (crush.glsl's): their allowance
+    float slack = DRAWN_SLACK * u_slack;
+    float onset = slack > 0.0
+        ? smoothstep(1.0 - SLACK_RAMP * slack, 1.0 - slack, ratio)
         : (ratio < 1.0 ? 0.0 : 1.0);
     float ramp = 1.0 - onset;
     if (!(ramp > 0.0)) {
         imageStore(scale_out, TABLE_TEXEL(i), vec4(1.0));
         return;
     }
-    float target = max((1.0 - u_slack * onset) * rest_area, posed_area);
+    float target = max((1.0 - slack * onset) * rest_area, posed_area);
 
     int per_triangle = max(int(floor(sqrt(float(LENGTH_SAMPLES) / float(end - begin)))), 1);
     int count = 0;

@@ -816,7 +816,6 @@ def test_the_folds_drawn_before_the_crests_settle_move_no_crest(gl_context, monk
     from usdwrinkle.engine import WrinkleEngine
     from usdwrinkle.method.contract import DRAWN_SLACK, glsl_literal
     from usdwrinkle.render import bindings
-    from usdwrinkle.render.passes import length as length_pass
 
     shirt = str(Path(__file__).resolve().parents[1] / "sample_stages" / "shirt.usda")
 
@@ -835,7 +834,6 @@ def test_the_folds_drawn_before_the_crests_settle_move_no_crest(gl_context, monk
     assert DRAWN_SLACK < 1.0
     drawn = run()
     monkeypatch.setitem(bindings.COMMON, "DRAWN_SLACK", glsl_literal(1.0))
-    monkeypatch.setattr(length_pass, "DRAWN_SLACK", 1.0)
     one = run()
     for ours, before in zip(drawn, one, strict=True):
         for name in ("phase", "wave_vector", "weight"):

@@ -330,8 +330,9 @@ UDIM_REPEAT = -2
 #:              space); yzw: its gradient over the posed surface (local space)
 #:   length     x: the length pass's scale of the drawn folds, both systems (1: none;
 #:              docs/method.md, "The cloth's length"); yz: the folds the relaxation
-#:              weighs each system's phase by (the law with the crests' slack,
-#:              DRAWN_SLACK; a frame drawn from a bake: its amplitudes); w: 0
+#:              weighs each system's phase by (the law with wrinkle:slack itself, where
+#:              the drawn folds take DRAWN_SLACK of it; a frame drawn from a bake: its
+#:              amplitudes); w: 0
 #: Phases are per system too: the phase tables are RG (x: system 1, y: system 2).
 FIELD_TEXELS = 7
 FIELD_NORMAL_TEXEL = 0

@@ -14,7 +14,6 @@ and has no scale either.
 """
 from __future__ import annotations
 
-from ...method.contract import DRAWN_SLACK
 from .. import bindings
 from ..resources import MeshResources
 from . import bind_wave, irregular
@@ -45,9 +44,7 @@ class LengthPass(WavePass):
         shader = self.variants(TWO_SYSTEMS=two, IRREGULAR=rough)
         bind_wave(self.UNITS, res, shader)
         self.dispatch(res.num_points, {"u_num_points": res.num_points,
-                                       # the drawn folds' slack: their allowance
-                                       "u_slack": DRAWN_SLACK
-                                       * float(res.record.params.slack),
+                                       "u_slack": float(res.record.params.slack),
                                        **res.topology_uniforms},
                       reads={"TOPOLOGY_TABLE": res.topology,
                              "LENGTH_REST_POINTS": res.rest_points},
