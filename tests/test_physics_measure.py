@@ -497,6 +497,29 @@ def test_a_candidate_s_fallbacks_reach_what_reads_them_and_are_restored():
     assert failures({**row, "shear": False}) == ["height", "correlation", "motion"]
 
 
+def test_a_candidate_s_profile_fold_k_is_the_fold_preset_at_its_rounding():
+    """benchmarks.physics.candidate's --profile foldK authors the fold with rounding K
+    (fit.profile_values): at the preset's own K it is the default profile a stage that
+    authors none draws, so the candidate's rows for it are the code's; the triangle is K = 1
+    (the zigzag, 1 - 2|theta|/pi), and any other K rounds its crests below the triangle's."""
+    from benchmarks.physics.candidate import candidate_text
+    from benchmarks.physics.fit import profile_values
+    from usdwrinkle.method.profiles import FOLD_ROUNDING, default_profile, profile_preset
+
+    np.testing.assert_allclose(np.float32(profile_values(f"fold{FOLD_ROUNDING}")),
+                               default_profile(), atol=1e-7)
+    np.testing.assert_allclose(profile_values("fold1"), profile_preset("triangle"), atol=1e-6)
+    theta = np.arange(len(default_profile())) * 2 * np.pi / len(default_profile())
+    from_crest = np.abs(np.angle(np.exp(1j * theta)))
+    near_crest = (from_crest > 0) & (from_crest < 0.3)  # the crest itself is 1 in both
+    for k in (0.9, 0.97, 0.99):
+        values = np.asarray(profile_values(f"fold{k}"))
+        assert values.max() == pytest.approx(1.0) and values.min() == pytest.approx(-1.0)
+        assert np.all(values[near_crest] > np.asarray(profile_preset("triangle"))[near_crest])
+    assert candidate_text({"profile": "fold0.99", "slack": 0.04}) == \
+        "the profile fold0.99 authored, slack 0.04"
+
+
 def test_a_candidate_s_worst_case_is_the_farthest_any_shot_sits_from_a_bar():
     """benchmarks.physics.candidate's "worst": per bar the factor by which a row misses it
     (over 1) or comes near it (under 1), either way of a ratio, and the largest over the

@@ -4,13 +4,15 @@ candidate were the code's.
 
     python -m benchmarks.physics.candidate [--write docs/physics.md] [--only SHOT ...]
         [--slack C] [--irregularity U] [--width CLOTH=CM ...] [--tube CM]
-        [--gate LOW HIGH] [--cache .physics-cache]
+        [--gate LOW HIGH] [--profile NAME] [--cache .physics-cache]
 
 The fallbacks the shots are baked with are set in this process for the run: the slack
 and irregularity fallbacks (schema.DEFAULT_SLACK, DEFAULT_IRREGULARITY), the cloth presets
 (schema.CLOTH_WIDTHS_M), the tube's width at 10 cm (schema.CURVED_WIDTH_M) and the
 coarsening gate's lower window (contract.CURVED_COARSENING[:2]); nothing is authored on the
-shots but their cloth, as the converged table bakes them (referee.sweep_row). Per shot:
+shots but their cloth, as the converged table bakes them (referee.sweep_row), and with
+``--profile`` a height profile (``wrinkle:heightProfile``: a preset, or ``fold<K>``, the
+fold's rounding K, fit.profile_values), which a stage would author. Per shot:
 the default and the matched W, the wavelength ratios at the default W over the phases,
 the heights at the matched W over the phases, the amplitude-field correlation, our area
 over the rest area where compressed beyond 3 x the slack, and on the sleeves the crest
@@ -46,6 +48,8 @@ def candidate_text(settings: dict) -> str:
             parts.append(f"tube {100 * value:.1f} cm at 10 cm")
         elif key == "gate":
             parts.append(f"gate ({value[0]:g}, {value[1]:g})")
+        elif key == "profile":
+            parts.append(f"the profile {value} authored")
         else:
             parts.append(f"{key} {value:g}")
     return ", ".join(parts) or "the code's fallbacks"
@@ -53,10 +57,20 @@ def candidate_text(settings: dict) -> str:
 
 def shot_row(name: str, cache, settings: dict) -> dict:
     """One shot's row under the candidate (referee.sweep_row on its judged grid)."""
+    from pxr import Sdf
+
+    from usdwrinkle.usd import schema
+
+    from .fit import profile_values
+
     grid = referee.referee_grid(name, True)
-    with fallbacks(settings):
+    attributes = {}
+    if "profile" in settings:
+        attributes[schema.HEIGHT_PROFILE] = (Sdf.ValueTypeNames.FloatArray,
+                                             profile_values(settings["profile"]))
+    with fallbacks({key: value for key, value in settings.items() if key != "profile"}):
         sim, fine = referee.referee_pair(name, cache, grid, referee.CONVERGED[1])
-        row = referee.sweep_row(sim, fine)
+        row = referee.sweep_row(sim, fine, attributes)
     return {"grid": grid, "default_width": row["default_width"], "width": row["width"],
             "wavelength": [w for w, _ in row["default"].values()],
             "heights": [h for _, h in row["matched"].values()],
@@ -154,6 +168,9 @@ def main(argv=None) -> int:
                         help="the tube's width at a rest radius of 10 cm, in cm")
     parser.add_argument("--gate", type=float, nargs=2, default=None, metavar=("LOW", "HIGH"),
                         help="the coarsening gate's window, in W over the tube's width")
+    parser.add_argument("--profile", default=None, metavar="NAME",
+                        help="a height profile authored on every shot: a preset (fold, "
+                             "triangle, ...) or foldK, the fold with rounding K (fold0.97)")
     args = parser.parse_args(argv)
     if args.grid is not None:
         parser.error("--grid: the candidate is measured on each shot's judged grid")
@@ -161,7 +178,8 @@ def main(argv=None) -> int:
         ("slack", args.slack), ("irregularity", args.irregularity),
         ("widths", dict(args.width) or None),
         ("tube", None if args.tube is None else args.tube / 100),
-        ("gate", None if args.gate is None else tuple(args.gate))) if value is not None}
+        ("gate", None if args.gate is None else tuple(args.gate)),
+        ("profile", args.profile)) if value is not None}
     names = referee.chosen_shots(parser, args)
     # the command as the block names it: its options but --write
     shown = list(argv)

@@ -44,8 +44,8 @@ def set_law(exponent: float, most: float, room: float | None = None) -> None:
 
 
 def profile_values(name: str) -> list[float]:
-    """A preset's samples, or ``fold<K>``: (2/pi) asin(K cos theta) / asin(K) normalised,
-    a triangle whose crests are rounded (K < 1)."""
+    """A preset's samples, or ``fold<K>``: asin(K cos theta) / asin(K), a triangle whose
+    crests are rounded (K < 1; the fold preset's K is profiles.FOLD_ROUNDING)."""
     from usdwrinkle.method.profiles import profile_preset
     from usdwrinkle.usd.schema import PROFILE_SAMPLES
 
