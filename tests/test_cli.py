@@ -318,6 +318,9 @@ def test_a_farm_log_holds_whole_lines_and_the_summary(tmp_path):
     assert progress[-1] == "usdwrinkle: render: 48/48 frame(s) (100%)"
     assert 8 <= len(progress) <= 12, progress
     assert lines[-1].startswith("usdwrinkle: wrote 48 frame(s) 64x")
+    # it names the first file and the last
+    assert f" to {tmp_path / 'f.0001.png'} .. {tmp_path / 'f.0048.png'} in " in lines[-1], \
+        lines[-1]
     # the header says what ran where (issue 42, finding 20: a farm log could not tell a
     # GPU node from llvmpipe)
     from usdwrinkle import __version__

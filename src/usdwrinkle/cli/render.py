@@ -140,13 +140,11 @@ def render_job(args, reporter: Reporter | None = None):
 
 def summary(result, output: str) -> str:
     """The closing line of a render (an app.RenderResult), serial or on a farm."""
-    from ..process.timecode import format_frame
-
     frames = result.frames
     text = (f"usdwrinkle: wrote {len(result.written)} frame(s) {result.width}x"
             f"{result.height} to {frame_path(output, frames[0])}")
-    if len(frames) > 1:
-        text += f" .. {format_frame(frames[-1])}"
+    if len(frames) > 1:  # the first file and the last ('.. 24' read as a count)
+        text += f" .. {frame_path(output, frames[-1])}"
     if result.skipped:
         text += f", kept {result.skipped} complete frame(s) (--skip-existing)"
     text += f" in {result.elapsed:.1f} s"
