@@ -518,6 +518,11 @@ def test_a_candidate_s_profile_fold_k_is_the_fold_preset_at_its_rounding():
         assert np.all(values[near_crest] > np.asarray(profile_preset("triangle"))[near_crest])
     assert candidate_text({"profile": "fold0.99", "slack": 0.04}) == \
         "the profile fold0.99 authored, slack 0.04"
+    from benchmarks.physics.candidate import main
+    for wrong in ("bogus", "foldx"):  # refused before any shot is baked
+        with pytest.raises(SystemExit) as refused:
+            main(["--profile", wrong, "--only", "curtain-silk"])
+        assert refused.value.code == 2
 
 
 def test_a_candidate_s_worst_case_is_the_farthest_any_shot_sits_from_a_bar():

@@ -174,6 +174,14 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.grid is not None:
         parser.error("--grid: the candidate is measured on each shot's judged grid")
+    if args.profile is not None:  # refused before the first shot, not after minutes
+        from usdwrinkle.process.errors import UsdWrinkleError
+
+        from .fit import profile_values
+        try:
+            profile_values(args.profile)
+        except (UsdWrinkleError, ValueError) as error:
+            parser.error(f"--profile: {error}")
     settings = {key: value for key, value in (
         ("slack", args.slack), ("irregularity", args.irregularity),
         ("widths", dict(args.width) or None),
