@@ -53,7 +53,9 @@ def add_lights(stage, direction_euler=(-40.0, 30.0, 0.0)):
     radiance of its disc (inputs:angle, 0.53 degrees by default), so the key at the
     schema's own 50,000 (the sun's disc) gives an irradiance of 3.36, and a white
     UsdPreviewSurface facing it shows 3.36 x albedo / pi: about its albedo. The fill
-    comes from the other side, low, at a sixth of that."""
+    comes from the other side, low, at a sixth of that, and a warm bounce from below (the
+    ground's light, at the fill's strength), so that fold flanks turned down from both are
+    shaded, not black."""
     key = UsdLux.DistantLight.Define(stage, "/World/Lights/key")
     key.CreateIntensityAttr(50000.0)
     key.CreateAngleAttr(0.53)
@@ -65,6 +67,11 @@ def add_lights(stage, direction_euler=(-40.0, 30.0, 0.0)):
     fill.CreateColorAttr(Gf.Vec3f(0.8, 0.85, 1.0))
     fill.AddRotateXYZOp().Set(Gf.Vec3f(-direction_euler[0] * 0.25,
                                        direction_euler[1] - 150.0, 0.0))
+    bounce = UsdLux.DistantLight.Define(stage, "/World/Lights/bounce")
+    bounce.CreateIntensityAttr(8000.0)
+    bounce.CreateAngleAttr(0.53)
+    bounce.CreateColorAttr(Gf.Vec3f(1.0, 0.92, 0.82))
+    bounce.AddRotateXYZOp().Set(Gf.Vec3f(80.0, 0.0, 0.0))  # shines up (-Z turned to +Y)
 
 
 def add_material(stage, name, color=None, texture=None):

@@ -130,7 +130,7 @@ def test_view_rays_are_the_pinhole_cameras(tmp_path):
 
 
 def test_lights_are_read():
-    """The sample's two distant lights (UsdLux units) and an added sphere light; the
+    """The sample's three distant lights (UsdLux units) and an added sphere light; the
     formulas themselves are checked in tests/test_lights.py."""
     stage = Usd.Stage.Open(str(SAMPLES / "shirt.usda"))
     stage.SetEditTarget(stage.GetSessionLayer())  # the sample's own layer stays as it is
@@ -138,7 +138,7 @@ def test_lights_are_read():
     scene = StageSceneDelegate(stage)
     frame = scene.sample(1.0, 1.5)
     kinds = sorted(light.kind for light in frame.lights)
-    assert kinds == ["directional", "directional", "positional"]
+    assert kinds == ["directional", "directional", "directional", "positional"]
     key = max((light for light in frame.lights if light.kind == "directional"),
               key=lambda light: light.color[0])
     assert np.linalg.norm(key.vector) == pytest.approx(1.0)
