@@ -120,6 +120,42 @@ def test_a_step_back_replays_nothing(gl_context):
         engine.release()
 
 
+def test_a_preroll_leaves_out_the_length_pass_and_draws_the_same(gl_context, monkeypatch):
+    """The length pass's scales are read by what is drawn alone (crush sets them to 1 each
+    frame; relax and the next frame read the weights beside them), so a preroll step leaves
+    the pass out (Step.drawn): frame 12 of the zeppelin drawn after frames 1-11 were drawn,
+    each with the pass, is the same image to the bit as frame 12 drawn alone, after a
+    preroll of 1-11 without it. By frame 11 the pass scales 182 of its points' folds (down
+    to 0.72), so a scale that reached the next frame would show."""
+    from usdwrinkle.render.passes.length import LengthPass
+
+    runs: list[bool] = []
+    scaled: list[int] = []
+    original = LengthPass.run
+
+    def counted(self, res, step):
+        runs.append(step.drawn)
+        return original(self, res, step)
+
+    monkeypatch.setattr(LengthPass, "run", counted)
+    stage = str(SAMPLES / "zeppelin.usda")
+    engine = WrinkleEngine(stage, ctx=gl_context)
+    try:
+        mesh = engine.wrinkled_paths[0]
+        for frame in range(1, 12):
+            draw(engine, float(frame))
+            scaled.append(int((engine.read_fields(mesh).arrays()["length_scale"] < 1).sum()))
+        in_order = draw(engine, 12.0)
+    finally:
+        engine.release()
+    assert runs == [True] * 12
+    assert scaled[-1] > 100, scaled
+    runs.clear()
+    alone = fresh(gl_context, stage, 12.0)
+    assert runs == [False] * 11 + [True]
+    assert_identical(in_order, alone, "frame 12")
+
+
 def test_a_scrub_past_the_kept_states_replays_from_the_nearest(gl_context):
     stage = str(SAMPLES / "shirt.usda")
     engine = WrinkleEngine(stage, ctx=gl_context, history_cache=3)

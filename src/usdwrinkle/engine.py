@@ -283,9 +283,11 @@ class WrinkleEngine:
 
     def _compute_only(self, frame: float, write: int, read: int | None,
                       wrinkles: bool) -> None:
-        """A preroll step: the meshes that have no baked fields, compute only."""
+        """A preroll step: the meshes that have no baked fields, compute only (never drawn:
+        Step.drawn)."""
         self._sync(self.scene.sample_meshes(frame, with_baked=False))
-        self.render_pass.compute(wrinkles, None, write, read, skip=frozenset(self.scene.baked))
+        self.render_pass.compute(wrinkles, None, write, read, skip=frozenset(self.scene.baked),
+                                 drawn=False)
 
     @in_own_context
     def pull_changes(self) -> None:

@@ -67,7 +67,7 @@ class Mesh:
         return DirtyBits.CLEAN
 
     def compute(self, wrinkles: bool, timer=None, write: int = 0,
-                read: int | None = None) -> None:
+                read: int | None = None, drawn: bool = True) -> None:
         """Run the wave passes (skin, normals, crush, relax: render/passes/base.py) for
         the synced frame, into the wave state in slot ``write``.
 
@@ -75,7 +75,8 @@ class Mesh:
         never written); relaxation then starts from its phases (``relaxIterations``
         steps). Without one (None) it starts from the material-anchored phase and runs
         COLD_START_FACTOR times longer. A frame drawn from baked wave fields computes its
-        normals alone: no fit and no relax (scene/baked.py).
+        normals alone: no fit and no relax (scene/baked.py). ``drawn`` False: a preroll
+        step, computed for the history alone (Step.drawn).
         """
         res = self.resources
         history = read is not None
@@ -84,7 +85,7 @@ class Mesh:
         if not history:
             iterations *= COLD_START_FACTOR
         step = Step(self.frame, wrinkles, history and wrinkles, iterations,
-                    self.frame.baked if wrinkles else None)
+                    self.frame.baked if wrinkles else None, drawn)
         for wave_pass in self.delegate.wave_passes:
             with _timed(timer, wave_pass.TIMING, self.timings):
                 wave_pass.run(res, step)
@@ -198,16 +199,18 @@ class RenderPass:
         self.delegate = delegate
 
     def compute(self, wrinkles: bool, timings: dict | None = None, write: int = 0,
-                read: int | None = None, skip: frozenset = frozenset()) -> None:
+                read: int | None = None, skip: frozenset = frozenset(),
+                drawn: bool = True) -> None:
         """Skin, crush and relax every rprim but those in ``skip`` (a preroll leaves out
         the meshes drawn from baked fields), each into its wave state in slot ``write``,
-        from the one in slot ``read`` (None: a cold start)."""
+        from the one in slot ``read`` (None: a cold start). ``drawn`` False: a preroll
+        step, never drawn (Step.drawn)."""
         timer = self.delegate.ctx if self.delegate.profile else None
         for path, mesh in self.delegate.rprims.items():
             if path in skip:
                 continue
             mesh.timings = {}
-            mesh.compute(wrinkles, timer, write, read)
+            mesh.compute(wrinkles, timer, write, read, drawn)
             if timings is not None:
                 for key, value in mesh.timings.items():
                     timings[key] = value if isinstance(value, str) else \

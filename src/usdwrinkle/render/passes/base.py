@@ -123,6 +123,9 @@ class Step:
     #: the frame's baked wave fields (scene/baked.BakedFields), drawn instead of computed;
     #: None: computed
     baked: Any = None
+    #: False: a preroll step, computed for the phase history alone and never drawn (the
+    #: passes whose results only the outputs read leave it out: the length pass)
+    drawn: bool = True
 
 
 class WavePass(Pass):

@@ -10,7 +10,8 @@ length texels, once every vertex's is computed, since each vertex's samples read
 neighbours' folds; the blend multiplies the drawn amplitudes by them, and a bake writes
 the drawn amplitudes. A frame drawn from a bake has its scales in its amplitudes
 already; a frame without relaxation (relaxIterations 0) draws crush's waves as they are,
-and has no scale either.
+and has no scale either, and a preroll step (computed for the phase history alone, never
+drawn) leaves the pass out.
 """
 from __future__ import annotations
 
@@ -35,6 +36,11 @@ class LengthPass(WavePass):
 
     def run(self, res: MeshResources, step: Step) -> None:
         if step.baked is not None or step.iterations <= 0:
+            return
+        # a preroll step is never drawn, and its scales are read by nothing else: crush
+        # sets them to 1 each frame, and relax and the next frame read the weights beside
+        # them, not them
+        if not step.drawn:
             return
         if not (step.wrinkles and res.record.wrinkled) or not res.num_triangles:
             return
