@@ -95,10 +95,11 @@ vec2 drawn_over(float s, int count, float target) {
 
 // Walks the ring's samples, the same points in the same order on every walk. With
 // against_agreeing false: each sample's |g|^2, g . d, |d|^2 and weight into samples and
-// sample_weight; returns their count. With it true: sums |g - g_ref|^2 (x) and
-// |g_ref|^2 (y) over the same samples into totals, g_ref the blend of the corners that
-// agree (each carrying vertex i's wave, its k and its phase carried to the corner, at
-// the corner's own slope a_c |k_c|).
+// sample_weight, and g itself into folds_gradient; returns their count. With it true
+// (after such a walk): sums |g - g_ref|^2 (x) and |g_ref|^2 (y) over the same samples
+// into totals, g from folds_gradient and g_ref the blend of the corners that agree (each
+// carrying vertex i's wave, its k and its phase carried to the corner, at the corner's
+// own slope a_c |k_c|).
 int walk_ring(int i, int begin, int end, bool against_agreeing, out vec2 totals) {
     int per_triangle = max(int(floor(sqrt(float(LENGTH_SAMPLES) / float(end - begin)))), 1);
     int count = 0;
