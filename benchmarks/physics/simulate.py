@@ -4,6 +4,7 @@ from __future__ import annotations
 import hashlib
 import os
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -88,6 +89,10 @@ def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
     the shot's arrays."""
     out, arrays = _newton_path(sweep_shot, cache, solver)
     if not out.exists():
+        # a fresh checkout has no cache: say what is about to take hours, before it does
+        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:g} cm is "
+              f"not in {cache}: simulating it with Newton (a 1 cm curtain took 1.9-3.9 hours "
+              "on one core here; cached afterwards)", file=sys.stderr, flush=True)
         cache.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") as scratch:
             path = os.path.join(scratch, "shot.npz")
