@@ -39,8 +39,10 @@ def _bake(source: str, layer: str, *args: str) -> None:
         raise SystemExit(f"usdwrinkle bake {source} failed ({code})")
 
 
-def sheet_lengths(preset: str, ratio: float, folder: str, levels: int = LEVELS) -> dict:
-    """Bake the compressed sheet with ``preset`` and measure its fine mesh's middle row."""
+def sheet_lengths(preset: str, ratio: float, folder: str, levels: int | None = LEVELS,
+                  *bake_args: str) -> dict:
+    """Bake the compressed sheet with ``preset`` and measure its fine mesh's middle row
+    (``levels`` None: the bake's default levels; ``bake_args`` more of bake's flags)."""
     from pxr import Usd, UsdGeom
 
     from usdwrinkle.authoring.api import WrinkleAPI
@@ -62,7 +64,7 @@ def sheet_lengths(preset: str, ratio: float, folder: str, levels: int = LEVELS) 
     source = os.path.join(folder, f"sheet_{name}.usda")
     layer = os.path.join(folder, f"sheet_{name}_geometry.usdc")
     stage.GetRootLayer().Export(source)
-    _bake(source, layer, "--levels", str(levels))
+    _bake(source, layer, *(() if levels is None else ("--levels", str(levels))), *bake_args)
     baked = Usd.Stage.Open(layer)  # held: its prims die with it
     fine = UsdGeom.Mesh(baked.GetPrimAtPath("/Sheet_wrinkled"))
     points = np.asarray(fine.GetPointsAttr().Get(1), np.float64)

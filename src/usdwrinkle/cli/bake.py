@@ -101,7 +101,9 @@ def add_parser(subparsers) -> None:
                              "(S: --samples-per-wavelength)")
     levels.add_argument("--samples-per-wavelength", type=float, metavar="S",
                         help="fine vertices per wavelength the default levels aim for "
-                             f"(default {GEOMETRY_DEFAULTS.samples_per_wavelength:g})")
+                             f"(default {GEOMETRY_DEFAULTS.samples_per_wavelength:g}) on "
+                             "the fold profile; a mesh whose profile turns faster (sharp, "
+                             "box, a curve) gets up to 2x as many")
     p.add_argument("--sparse", action="store_true",
                    help="write the overs alone, without sublayering the input")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")

@@ -3,7 +3,8 @@ real displacement, with the coarse mesh as its proxy (geometry/subdivide.py for 
 topology, geometry/evaluate.py on the GPU, geometry/layer.py for the layer).
 
 The level count, unless ``--levels`` gives it, is the fewest for which (a) every fine
-edge is at most W/S long in the rest pose (S samples per wavelength, default 6: under
+edge is at most W/S long in the rest pose (S samples per wavelength, default 6 for the
+fold, times profile_sampling for a profile that turns faster: under
 uniform compression the wave and the edges shrink together), and (b) fine edges advance
 a wave's phase by at most 2 pi / S on 99% of the wrinkled triangles of every frame (the
 posed waves, painted q included): the bake then surveys every frame's wave fields first
@@ -19,12 +20,13 @@ import logging
 import numpy as np
 
 from ..method.contract import COARSENING_MAX
+from ..method.profiles import fold_profile, turning_phase
 from ..outputs.sink import BakeScene
 from ..process.errors import UsdWrinkleError
 from ..process.memory import require_memory
 from .evaluate import GeometryEvaluator
 from .layer import FineMeshWriter
-from .options import GeometryOptions
+from .options import PROFILE_SAMPLING_MAX, SAMPLED_ROUNDING, GeometryOptions
 from .subdivide import (
     AUTO_FINE_POINTS,
     MAX_LEVELS,
@@ -41,6 +43,15 @@ _log = logging.getLogger(__name__)
 BYTES_PER_POINT_FRAME = 2 * 12 + 2 * 16
 #: the share of wrinkled triangles (over all frames) whose phase advance sets the levels
 SURVEY_PERCENTILE = 99.0
+
+
+def profile_sampling(height: np.ndarray) -> float:
+    """How many times the samples per wavelength a mesh's height profile asks for: the
+    fold's turning phase (at options.SAMPLED_ROUNDING) over the profile's, between 1 and
+    options.PROFILE_SAMPLING_MAX (1 for the default fold and for the cosine)."""
+    own = turning_phase(height)
+    reference = turning_phase(fold_profile(SAMPLED_ROUNDING))
+    return float(np.clip(reference / own, 1.0, PROFILE_SAMPLING_MAX))
 
 
 def check_geometry_options(options: GeometryOptions) -> None:
@@ -128,7 +139,8 @@ class GeometryBake:
         for path, record in self.meshes.items():
             levels = self.options.levels
             if levels is None:
-                samples = self.options.samples_per_wavelength
+                samples = self.options.samples_per_wavelength * profile_sampling(
+                    record.params.height_profile)
                 levels = self._fitting_levels(path, record, max(
                     levels_for(rest_phase_step(record), samples),
                     levels_for(self.phase_step(path), samples)))
