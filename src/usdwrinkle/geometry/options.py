@@ -12,8 +12,8 @@ DEFAULT_SAMPLES_PER_WAVELENGTH = 6.0
 #: many times more, at most PROFILE_SAMPLING_MAX times (the triangle's kink resolves at
 #: no count). The relief against the displaced slanted sheet at 55 degrees (tests/
 #: test_relief.py), the normals' 90th percentile of difference at 6 a wavelength and at
-#: the profile's own count: fold 6.8 degrees; sharp (1.49x) 33.8 and 8.2 at 9; box
-#: (2.02x) 34.5 and 8.6 at 12; the fold at K = 0.97 (1.79x) 12.9 and 1.5 at 12
+#: the profile's own count: fold 6.8 degrees; sharp (1.48x) 33.8 and 8.2 at 9; box
+#: (2x) 34.5 and 8.6 at 12; the fold at K = 0.97 (1.79x) 12.9 and 1.5 at 12
 #: (docs/physics.md, "The fold's rounding, probed")
 SAMPLED_ROUNDING = 0.9
 PROFILE_SAMPLING_MAX = 2.0
