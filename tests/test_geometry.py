@@ -56,6 +56,21 @@ def test_the_default_levels_sample_each_profile_as_finely_as_it_turns(gl_context
     assert 0.99 <= row["measured"] <= 1.01, row["measured"]
 
 
+def test_the_profile_factor_of_profiles_with_no_turn_or_one_within_a_sample():
+    """A flat profile asks for no more samples than the fold (1); an authored zigzag at
+    the table's Nyquist rate, whose central slope is 0 and whose turning phase is 0, asks
+    for the most (PROFILE_SAMPLING_MAX) instead of dividing by zero."""
+    from usdwrinkle.geometry.bake import profile_sampling
+    from usdwrinkle.geometry.options import PROFILE_SAMPLING_MAX
+    from usdwrinkle.method.profiles import profile_preset
+
+    assert profile_sampling(np.zeros(256, np.float32)) == 1.0
+    assert profile_sampling(np.tile([1.0, -1.0], 128).astype(np.float32)) == \
+        PROFILE_SAMPLING_MAX
+    assert profile_sampling(profile_preset("fold")) == 1.0
+    assert profile_sampling(profile_preset("sharp")) == pytest.approx(1.484, abs=1e-3)
+
+
 @pytest.fixture(scope="module")
 def shirt(tmp_path_factory):
     folder = tmp_path_factory.mktemp("geometry")

@@ -50,6 +50,8 @@ def profile_sampling(height: np.ndarray) -> float:
     fold's turning phase (at options.SAMPLED_ROUNDING) over the profile's, between 1 and
     options.PROFILE_SAMPLING_MAX (1 for the default fold and for the cosine)."""
     own = turning_phase(height)
+    if not own > 0:  # it turns within a sample (a zigzag at the table's Nyquist rate)
+        return PROFILE_SAMPLING_MAX
     reference = turning_phase(fold_profile(SAMPLED_ROUNDING))
     return float(np.clip(reference / own, 1.0, PROFILE_SAMPLING_MAX))
 
