@@ -222,6 +222,15 @@ class BakeViews:
                               view_directions(p.stage, p.camera, p.shot.frame, normals.shape),
                               grow)
 
+    def grazing(self, cosine: float) -> np.ndarray:
+        """(h, w) bool: the covered pixels where the coarse surface (usdwrinkle's shading
+        normals without wrinkles, its ours_plain_aovs.exr) faces the eye at a cosine under
+        ``cosine``: a view that grazes the cloth."""
+        normals, covered = our_normals(self.images["ours_plain_aovs"])
+        p = self.prepared
+        eye = view_directions(p.stage, p.camera, p.shot.frame, normals.shape)
+        return covered & (np.sum(normals * eye, axis=-1) < cosine)
+
 
 def map_set_flags(tangent_space: str | None, layout: str | None = None) -> tuple:
     """bake's flags for one map set in ``tangent_space`` and ``layout``; with neither, none
@@ -252,6 +261,9 @@ def bake_views(shot: BakeShot, folder: Path, map_size: int = 2048,
         layers["display"] = p.bake(p.base("display.usda"), "--display-color", "amplitude",
                                    "--with-points")
         images["ours_aovs"] = p.render(p.stage, p.base("ours_aovs.exr"))
+        # the coarse surface's normals (BakeViews.grazing)
+        images["ours_plain_aovs"] = p.render(p.stage, p.base("ours_plain_aovs.exr"),
+                                             "--no-wrinkles")
         # the amplitude of regular folds: what a per-vertex layer can hold (irregular
         # folds vary within a fold, by up to 2x; display_ramp_order)
         images["ours_aovs_regular"] = p.render(regular_layer(p.stage, p.base("regular.usda")),

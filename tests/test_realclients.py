@@ -194,6 +194,12 @@ def test_probes_are_documented():
 #: against usdwrinkle's, in every tile of a 4 x 4 grid where the wrinkles show (the
 #: shirt's elbow and cuff, pull's sheet, CesiumMan's body and limbs)
 MIN_MAPS_CORRELATION = 0.95
+#: the coarse surface's cosine with the eye under which the maps test leaves a pixel out
+#: (a view that grazes the cloth; test_maps_show_in_storm_what_usdwrinkle_draws)
+GRAZING_COSINE = 0.25
+#: CesiumMan's head tile in Contribution.tiles' grid (row, column): the shoulders' folds
+#: along its bottom rows
+HEAD_TILE = {"CesiumMan": (0, 2)}
 #: the geometry layer, Storm (render purpose) against usdwrinkle's render of that layer
 MIN_GEOMETRY_CORRELATION = 0.98
 
@@ -261,12 +267,27 @@ def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
     against the rest: shirt 14.4 / 8.9 / 4.7 codes against 2.3, pull 3.5 / 2.3 / 1.4
     against 0.7, CesiumMan 8.1 / 3.8 / 2.7 against 0.9); with one pixel, CesiumMan's
     head tile, the shoulders' folds along its bottom rows, scored 0.954, and 0.934 with the
-    cold start's mean (docs/physics.md, "What that tile is")."""
+    cold start's mean (docs/physics.md, "What that tile is").
+    Also left out (2026-12-07): the pixels where the view grazes the coarse surface
+    (GRAZING_COSINE), where the map's folds show weaker in Storm than usdwrinkle draws
+    them, the more the more the view grazes (CesiumMan, RMS of the difference by the
+    coarse cosine: 0.77 codes above 0.5, 1.9 at 0.35-0.5, 2.7 at 0.25-0.35, 5.4 at
+    0.15-0.25, 11.3 under 0.15, where ours is 22 codes and Storm's 19). Those are
+    0.7% of CesiumMan's compared pixels, 0.9% of the shirt's and none of the pull's;
+    17 of them held 57% of the squared difference of CesiumMan's head tile, which scored
+    0.937 with them and 0.966 without (docs/physics.md, "What that tile is"). That tile
+    counts when our contribution's deviation there reaches Contribution.tiles' 3 codes:
+    2.98 now, so it must pass when it does."""
     views = bake_views[name]
     contribution = views.maps()
     turned = views.horizon_turned(grow=2) & contribution.mask
     assert turned.sum() <= 0.05 * contribution.mask.sum(), turned.mean()
-    contribution.mask &= ~turned
+    grazing = views.grazing(GRAZING_COSINE) & contribution.mask & ~turned
+    assert grazing.sum() <= 0.02 * contribution.mask.sum(), grazing.mean()
+    contribution.mask &= ~(turned | grazing)
+    if name in HEAD_TILE:  # the tile the deviation filter leaves out by 0.02 codes
+        head = contribution.tiles(min_std=0.0, min_share=0.0)[HEAD_TILE[name]]
+        assert head[0] >= MIN_MAPS_CORRELATION, head
     tiles = contribution.tiles()
     assert len(tiles) >= 8, tiles  # the wrinkles show over most of the mesh
     low = {k: v for k, v in tiles.items() if v[0] < MIN_MAPS_CORRELATION}
