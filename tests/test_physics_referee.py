@@ -132,3 +132,30 @@ def test_the_converged_table_keeps_the_rows_of_shots_not_simulated_here(tmp_path
     assert kept in again.splitlines() and "*kept* *kept*" not in again
     with pytest.raises(SystemExit, match="curtain-cotton is not simulated"):
         referee.sweep_report(["curtain-cotton"], empty, "converged", keep=doc)
+
+
+@pytest.mark.parametrize("profile", ["fold", "fold0.97", "box"])
+def test_the_area_is_taken_on_a_grid_as_fine_as_the_bake_samples_the_profile(profile):
+    """referee.area_grid samples W as usdwrinkle's geometry bake does, the height profile's
+    factor included (a sharper crest gets more points a wavelength: fold0.97 1.79x, box
+    2x), so that a sharper profile's area is not the grid's loss (docs/physics.md, "The
+    fold's rounding, probed": the 10 cm silk sleeve 0.969 -> 0.962 at K = 0.97 on the
+    fold's grid)."""
+    from pxr import Sdf
+
+    from benchmarks.physics import referee
+    from benchmarks.physics.fit import profile_values
+    from usdwrinkle.geometry.options import DEFAULT_SAMPLES_PER_WAVELENGTH
+    from usdwrinkle.usd import schema
+
+    values = profile_values(profile)
+    factor = referee.profile_factor_of(
+        {schema.HEIGHT_PROFILE: (Sdf.ValueTypeNames.FloatArray, values)})
+    expected = {"fold": 1.0, "fold0.97": 1.790, "box": 2.0}[profile]
+    assert factor == pytest.approx(expected, abs=1e-3)
+    assert referee.profile_factor_of(None) == 1.0  # the default profile is the fold
+    for width in (0.049, 0.077, 0.095, 0.122):  # the sweep's matched widths, flat cloth
+        grid = referee.area_grid(width, None, factor)
+        assert grid <= width / (DEFAULT_SAMPLES_PER_WAVELENGTH * factor)
+        assert grid * 2 > width / (DEFAULT_SAMPLES_PER_WAVELENGTH * factor) or \
+            grid == referee.SPACING

@@ -158,7 +158,7 @@ def shot_rows(name: str, cache, grid: float | None) -> dict:
         cloth[schema.IRREGULARITY] = (Sdf.ValueTypeNames.Float, irregularity)
         row = referee.matched_bakes(sim, fine, cloth, held)
         width = row["width"]
-        chain = referee.area_chain(sim, fine, width)
+        chain = referee.area_chain(sim, fine, width, referee.profile_factor_of(cloth))
         base = chain[-1]
         base_baked = referee.area_bake(chain, width, cloth, row["matched fine"], held)
         shots = [c.shot for c in chain[::-1]] + ([sim.shot] if fine is not None else [])

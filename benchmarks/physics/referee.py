@@ -266,12 +266,13 @@ def area_ratio(sim: Simulated, baked, slack: float) -> float:
                  / rest[compressed].sum())
 
 
-def area_grid(width: float, cap: float | None = None) -> float:
+def area_grid(width: float, cap: float | None = None, profile_factor: float = 1.0) -> float:
     """The grid our area is taken on for a bake of width ``width``: SPACING, halved until
     it samples a wavelength at usdwrinkle's own geometry bake's rate (its level rule (a):
-    fine edges at most W cap / (COARSENING_MAX DEFAULT_SAMPLES_PER_WAVELENGTH) in the
-    rest pose, cap the coarsening cap, folds.coarsening_cap: COARSENING_MAX on flat cloth
-    (None), 1 on the sleeves). A displaced
+    fine edges at most W cap / (COARSENING_MAX DEFAULT_SAMPLES_PER_WAVELENGTH
+    profile_factor) in the rest pose, cap the coarsening cap, folds.coarsening_cap:
+    COARSENING_MAX on flat cloth (None), 1 on the sleeves; profile_factor the bake's
+    geometry.bake.profile_sampling of the height profile, profile_factor_of). A displaced
     mesh keeps only sinc(pi / n)^2 of its folds' extra length at n samples a wavelength;
     the sleeves' W (3.9-5.7 cm) took 3.9-5.7 samples on the 1 cm grid, which measured
     their area 0.928-0.936 and 0.974-0.979 at 0.5 cm (2026-12-03)."""
@@ -280,9 +281,22 @@ def area_grid(width: float, cap: float | None = None) -> float:
 
     sampled = width * (COARSENING_MAX if cap is None else cap) / COARSENING_MAX
     grid = SPACING
-    while grid > sampled / DEFAULT_SAMPLES_PER_WAVELENGTH:
+    while grid > sampled / (DEFAULT_SAMPLES_PER_WAVELENGTH * profile_factor):
         grid /= 2
     return grid
+
+
+def profile_factor_of(attributes: dict | None) -> float:
+    """geometry.bake.profile_sampling of the height profile in ``attributes`` (the
+    wrinkle:heightProfile a candidate authors; the default profile where none is): how
+    many times the samples a wavelength usdwrinkle's geometry bake gives that profile."""
+    from usdwrinkle.geometry.bake import profile_sampling
+    from usdwrinkle.method.profiles import default_profile
+    from usdwrinkle.usd import schema
+
+    authored = (attributes or {}).get(schema.HEIGHT_PROFILE)
+    table = default_profile() if authored is None else np.asarray(authored[1], np.float32)
+    return profile_sampling(table)
 
 
 def coarsening_of(shot, width: float) -> float | None:
@@ -298,13 +312,14 @@ def coarsening_of(shot, width: float) -> float | None:
     return float(coarsening_cap(width, tube_width(np.array([1.0 / radius]))[0]))
 
 
-def area_chain(sim: Simulated, fine: Simulated | None, width: float) -> list:
+def area_chain(sim: Simulated, fine: Simulated | None, width: float,
+               profile_factor: float = 1.0) -> list:
     """The simulation on SPACING's grid (``fine``, or ``sim`` where that is its grid) and
     resampled from it, halving (sweep.resample), down to the grid our area is taken on at
-    ``width`` (area_grid), finest last."""
+    ``width`` (area_grid, with the profile's ``profile_factor``), finest last."""
     name = sim.shot.name
     chain, spacing = [fine or sim], SPACING
-    grid = area_grid(width, coarsening_of(sim.shot, width))
+    grid = area_grid(width, coarsening_of(sim.shot, width), profile_factor)
     while spacing > grid:
         chain.append(resampled(chain[-1], SWEEP[name](spacing), SWEEP[name](spacing / 2)))
         spacing /= 2
@@ -325,8 +340,9 @@ def area_bake(chain: list, width: float, attributes: dict | None, on_fine,
 def our_area(sim: Simulated, fine: Simulated | None, width: float, attributes: dict | None,
              slack: float, on_fine) -> float:
     """Our wrinkled area over the rest area (area_ratio) at ``width``, on area_grid's grid
-    (area_chain, area_bake)."""
-    chain = area_chain(sim, fine, width)
+    (area_chain, area_bake), which samples the height profile in ``attributes`` as the
+    geometry bake does (profile_factor_of)."""
+    chain = area_chain(sim, fine, width, profile_factor_of(attributes))
     return area_ratio(chain[-1], area_bake(chain, width, attributes, on_fine), slack)
 
 
@@ -555,7 +571,8 @@ def sweep_report(names: list[str], cache: Path, tables: str = "sweep",
               " the elbow (ours / sim; sleeves) and our wrinkled area over the rest area, and "
               "the simulated cloth's, where the coarse surface is compressed beyond 3 x the "
               "slack (ours on a grid that samples W at least 6 times, 9 where the folds do not "
-              "coarsen, as usdwrinkle's geometry bake does: 1 cm, halved where W is under 6 "
+              "coarsen, times the height profile's factor, as usdwrinkle's geometry bake "
+              "does: 1 cm, halved where W is under 6 "
               "cm, 9 cm on the sleeves; referee.area_grid). Bars (issue 55): "
               "wavelength and height within 1.3x and 1.25x, correlation >= 0.85 (0.75 shear), "
               "motion <= 1.5x, area in [0.95, 1.05].", "",
