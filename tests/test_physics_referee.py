@@ -159,3 +159,40 @@ def test_the_area_is_taken_on_a_grid_as_fine_as_the_bake_samples_the_profile(pro
         assert grid <= width / (DEFAULT_SAMPLES_PER_WAVELENGTH * factor)
         assert grid * 2 > width / (DEFAULT_SAMPLES_PER_WAVELENGTH * factor) or \
             grid == referee.SPACING
+
+
+def test_one_shot_is_simulated_by_one_process_at_a_time(tmp_path):
+    """simulate.py's lock (fill.py runs several simulations at once): a second process
+    asking for the same shot is refused while the first holds it, and a lock whose
+    process is gone (a run killed with the session) is taken over."""
+    import os
+    import subprocess
+    import sys
+
+    from benchmarks.physics.simulate import _simulating
+
+    out = tmp_path / "newton-shot.npz"
+    lock = tmp_path / "newton-shot.npz.lock"
+    with _simulating(out):
+        assert lock.read_text() == str(os.getpid())
+        with pytest.raises(RuntimeError, match="being simulated by process"):
+            with _simulating(out):
+                pass
+    assert not lock.exists()
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    lock.write_text(gone)
+    with _simulating(out):
+        assert lock.read_text() == str(os.getpid())
+
+
+def test_the_cache_is_filled_longest_first():
+    """fill.py's order: the 1 cm curtains (6,305 points, 100 frames) before the sheared
+    panels and the sleeves, so that several at once end together."""
+    from benchmarks.physics import fill, referee
+
+    order = fill.planned("converged", None)
+    assert order[:3] == ["curtain-silk", "curtain-cotton", "curtain-leather"]
+    assert set(order) == set(referee.SWEEP)
+    assert order[-1].startswith("sleeve10")
+    assert "sleeve25-cotton" not in fill.planned("sweep", None)

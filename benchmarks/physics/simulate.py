@@ -1,6 +1,7 @@
 """Simulate a shot in Blender's cloth solver (sim_client.py in the bpy Python), cached."""
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import subprocess
@@ -82,6 +83,34 @@ def cached_newton(sweep_shot, cache: Path, solver: dict | None = None) -> bool:
     return _newton_path(sweep_shot, cache, solver)[0].exists()
 
 
+@contextlib.contextmanager
+def _simulating(out: Path):
+    """Hold OUT.lock while this process simulates OUT: two processes that simulated the
+    same shot would write one checkpoint and one result (fill.py runs several at once).
+    A lock whose process is gone is taken over."""
+    lock = Path(str(out) + ".lock")
+    while True:
+        try:
+            with open(lock, "x") as handle:
+                handle.write(str(os.getpid()))
+            break
+        except FileExistsError:
+            try:
+                holder = int(lock.read_text() or 0)
+                os.kill(holder, 0)
+            except (ValueError, ProcessLookupError, FileNotFoundError):
+                lock.unlink(missing_ok=True)  # its process is gone
+                continue
+            except PermissionError:
+                pass  # alive, another user's
+            raise RuntimeError(f"{out.name} is being simulated by process {holder} "
+                               f"(its lock: {lock})") from None
+    try:
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
+
+
 def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
                     progress: bool = False) -> tuple[np.ndarray, float, float]:
     """Newton's VBD on a sweep shot (sweep.py): the fine points of every frame, the solver's
@@ -94,7 +123,8 @@ def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
               f"not in {cache}: simulating it with Newton (a 1 cm curtain took 1.9-3.9 hours "
               "on one core here; cached afterwards)", file=sys.stderr, flush=True)
         cache.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") as scratch:
+        with _simulating(out), tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") \
+                as scratch:
             path = os.path.join(scratch, "shot.npz")
             np.savez(path, **arrays)
             env = {**os.environ, "PYTHONNOUSERSITE": "1",
