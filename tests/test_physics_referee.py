@@ -196,3 +196,35 @@ def test_the_cache_is_filled_longest_first():
     assert set(order) == set(referee.SWEEP)
     assert order[-1].startswith("sleeve10")
     assert "sleeve25-cotton" not in fill.planned("sweep", None)
+
+
+def test_a_kept_simulation_is_read_instead_of_simulated(tmp_path, monkeypatch):
+    """kept.py: a simulation kept in the repository comes back within half its step
+    (int16 steps from the first frame), and simulate_newton reads it into an empty cache
+    instead of running Newton (which this test has none of)."""
+    from benchmarks.physics import kept, simulate
+    from benchmarks.physics.sweep import curtain
+
+    monkeypatch.setattr(kept, "KEPT", tmp_path / "kept")
+    monkeypatch.setenv("USDWRINKLE_NEWTON_PYTHON", str(tmp_path / "no-newton"))
+    shot = curtain("cotton", 0.04)
+    source = tmp_path / "source"
+    cached, _ = simulate.newton_path(shot, source)
+    rng = np.random.default_rng(3)
+    rest = shot.shot.rest.astype(np.float32)
+    points = np.stack([rest + rng.uniform(-0.12 * k, 0.12 * k, rest.shape).astype(np.float32)
+                       for k in range(5)])  # up to 48 cm, as the curtains are pushed
+    source.mkdir()
+    np.savez(cached, points=points, seconds=12.5, stretch_p99=0.004)
+    out = kept.keep(cached)
+    assert out.parent == tmp_path / "kept"
+
+    cache = tmp_path / "cache"
+    assert simulate.cached_newton(shot, cache)  # kept counts as cached
+    back, seconds, stretch = simulate.simulate_newton(shot, cache)
+    step = float(np.load(out)["scale"])
+    assert 0 < step < 2e-5
+    assert np.array_equal(back[0], points[0])
+    assert np.abs(back.astype(np.float64) - points).max() <= 0.5 * step + 1e-6
+    assert (seconds, stretch) == (12.5, 0.004)
+    assert simulate.newton_path(shot, cache)[0].exists()  # now in the cache too

@@ -2,7 +2,7 @@
 the tables that read them (referee.py, candidate.py) are made.
 
     python -m benchmarks.physics.fill [--table converged|sweep] [--only NAME ...]
-                                      [--jobs N] [--cache .physics-cache]
+                                      [--jobs N] [--keep] [--cache .physics-cache]
 
 A fresh checkout has none of them: the converged referee's ten shots are about 13 hours of
 solver on one core here (each 1 cm curtain 1.9-3.9 hours, each 1 cm sheared panel about
@@ -11,7 +11,9 @@ an hour, each 2 cm sleeve 10-32 minutes). Each simulation runs in its own proces
 each is cached as it ends. A run that is stopped (or outlasts simulate's four hours) goes
 on from its last checkpoint, every 10 frames, the next time (newton_client.py); a resumed
 run is the same simulation, not bit for bit the same numbers. Prints each shot as it
-starts and ends, and what is left."""
+starts and ends, and what is left. A shot kept in the repository (kept.py,
+benchmarks/physics/simulations/) is read from there, not simulated; ``--keep`` keeps
+every simulation of the table that the cache holds there, to be committed."""
 from __future__ import annotations
 
 import argparse
@@ -21,8 +23,8 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
-from . import referee
-from .simulate import cached_newton, simulate_newton
+from . import kept, referee
+from .simulate import cached_newton, newton_path, simulate_newton
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,6 +58,10 @@ def main(argv=None) -> int:
     parser.add_argument("--only", nargs="*", default=None, help="these shots only")
     parser.add_argument("--jobs", type=int, default=1,
                         help="simulations at once (each takes one core)")
+    parser.add_argument("--keep", action="store_true",
+                        help="then keep the table's cached simulations in "
+                             "benchmarks/physics/simulations/ (to commit: a fresh checkout "
+                             "reads them instead of simulating)")
     parser.add_argument("--cache", type=Path, default=ROOT / ".physics-cache")
     args = parser.parse_args(argv)
     if args.jobs < 1:
@@ -93,6 +99,13 @@ def main(argv=None) -> int:
                     print(f"{name}: failed ({exc}); run again to go on from its last "
                           "checkpoint", file=sys.stderr, flush=True)
     print(f"{(time.perf_counter() - started) / 60:.0f} minutes", flush=True)
+    if args.keep:
+        for name in names:
+            cached = newton_path(shot(name), args.cache, solver)[0]
+            if cached.exists():
+                out = kept.keep(cached)
+                print(f"{name}: kept in {out.relative_to(ROOT)} "
+                      f"({out.stat().st_size / 2 ** 20:.1f} MiB)", flush=True)
     return 1 if failed else 0
 
 

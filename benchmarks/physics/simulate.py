@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import kept
 from .shots import Shot
 
 HERE = Path(__file__).resolve().parent
@@ -68,7 +69,7 @@ def newton_python() -> str:
                        "(or set USDWRINKLE_NEWTON_PYTHON)")
 
 
-def _newton_path(sweep_shot, cache: Path, solver: dict | None = None) -> tuple[Path, dict]:
+def newton_path(sweep_shot, cache: Path, solver: dict | None = None) -> tuple[Path, dict]:
     from .sweep import spec
 
     arrays = spec(sweep_shot, solver)
@@ -79,8 +80,10 @@ def _newton_path(sweep_shot, cache: Path, solver: dict | None = None) -> tuple[P
 
 
 def cached_newton(sweep_shot, cache: Path, solver: dict | None = None) -> bool:
-    """Whether the shot's simulation is in the cache already."""
-    return _newton_path(sweep_shot, cache, solver)[0].exists()
+    """Whether the shot's simulation is in the cache already, or kept in the repository
+    (kept.py), where simulate_newton reads it from."""
+    path = newton_path(sweep_shot, cache, solver)[0]
+    return path.exists() or kept.kept_path(path).exists()
 
 
 @contextlib.contextmanager
@@ -116,7 +119,10 @@ def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
     """Newton's VBD on a sweep shot (sweep.py): the fine points of every frame, the solver's
     seconds and the 99th percentile of the last frame's edge strain; cached in ``cache`` by
     the shot's arrays."""
-    out, arrays = _newton_path(sweep_shot, cache, solver)
+    out, arrays = newton_path(sweep_shot, cache, solver)
+    if not out.exists() and kept.restore(out):
+        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:g} cm "
+              f"read from {kept.KEPT}", file=sys.stderr, flush=True)
     if not out.exists():
         # a fresh checkout has no cache: say what is about to take hours, before it does
         print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:g} cm is "
