@@ -4,11 +4,12 @@ about 13 hours of solver on one core here, and ``.physics-cache`` is not committ
 
 A kept simulation is its cache file (simulate.simulate_newton's, named by the shot's
 arrays and the solver's options) made small: the first frame as float32, every later
-frame as int16 steps from it of ``scale`` metres (the largest displacement over 32,767:
-15 micrometres on a curtain pushed 48 cm, against folds millimetres to centimetres tall),
-compressed. simulate_newton reads a kept simulation into the cache when the cache lacks
-it, before it would simulate; ``python -m benchmarks.physics.fill --keep`` keeps what the
-cache holds. A kept simulation's points differ from the cache's by at most half a step."""
+frame as int16 steps of ``scale`` metres from the frame before as it is kept (so that
+the rounding does not add up: every point within half a step of the cache's), the
+step the largest move from one frame to the next over 32,767 (about a micrometre on the
+sleeves, against folds millimetres to centimetres tall), compressed. simulate_newton
+reads a kept simulation into the cache when the cache lacks it, before it would
+simulate; ``python -m benchmarks.physics.fill --keep`` keeps what the cache holds."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -32,10 +33,14 @@ def keep(cached: Path) -> Path:
     data = np.load(cached)
     points = np.asarray(data["points"], np.float64)
     first = points[0].astype(np.float32)
-    offset = points[1:] - first.astype(np.float64)
-    reach = float(np.abs(offset).max()) if offset.size else 0.0
-    scale = reach / STEPS if reach > 0 else 1.0
-    steps = np.round(offset / scale).astype(np.int16)
+    # the step: the largest move between frames, with a margin for the rounding carried
+    moves = np.abs(np.diff(points, axis=0)).max() if len(points) > 1 else 0.0
+    scale = float(moves) / (STEPS - 2) if moves > 0 else 1.0
+    steps = np.empty((len(points) - 1, *points.shape[1:]), np.int16)
+    shown = first.astype(np.float64)  # the frame before, as it will be read back
+    for frame in range(1, len(points)):
+        steps[frame - 1] = np.round((points[frame] - shown) / scale)
+        shown = shown + steps[frame - 1] * scale
     KEPT.mkdir(parents=True, exist_ok=True)
     out = kept_path(cached)
     tmp = out.with_name(out.name + ".tmp.npz")
@@ -54,8 +59,9 @@ def restore(cached: Path) -> bool:
         return False
     data = np.load(source)
     first = np.asarray(data["first"], np.float32)
-    later = first.astype(np.float64) + data["steps"].astype(np.float64) * float(data["scale"])
-    points = np.concatenate([first[None], later.astype(np.float32)])
+    moved = np.cumsum(data["steps"].astype(np.float64), axis=0) * float(data["scale"])
+    points = np.concatenate([first[None], (first.astype(np.float64) + moved)
+                             .astype(np.float32)])
     cached.parent.mkdir(parents=True, exist_ok=True)
     tmp = cached.with_name(cached.name + ".restoring.npz")
     np.savez(tmp, points=points, seconds=data["seconds"], stretch_p99=data["stretch_p99"])
