@@ -270,12 +270,12 @@ def test_maps_show_in_storm_what_usdwrinkle_draws(bake_views, name):
     cold start's mean (docs/physics.md, "What that tile is").
     Also left out (2026-12-07): the pixels where the view grazes the coarse surface
     (GRAZING_COSINE), where the map's folds show weaker in Storm than usdwrinkle draws
-    them, the more the more the view grazes (CesiumMan, RMS of the difference by the
+    them, and part the more, the more the view grazes (CesiumMan, RMS of the difference by the
     coarse cosine: 0.77 codes above 0.5, 1.9 at 0.35-0.5, 2.7 at 0.25-0.35, 5.4 at
     0.15-0.25, 11.3 under 0.15, where ours is 22 codes and Storm's 19). Those are
     0.7% of CesiumMan's compared pixels, 0.9% of the shirt's and none of the pull's;
     17 of them held 57% of the squared difference of CesiumMan's head tile, which scored
-    0.937 with them and 0.966 without (docs/physics.md, "What that tile is"). That tile
+    0.937 with them and 0.966 without (docs/physics.md, "The grazing pixels"). That tile
     counts when our contribution's deviation there reaches Contribution.tiles' 3 codes:
     2.98 now, so it must pass when it does."""
     views = bake_views[name]
