@@ -121,11 +121,11 @@ def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
     the shot's arrays."""
     out, arrays = newton_path(sweep_shot, cache, solver)
     if not out.exists() and kept.restore(out):
-        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:g} cm "
+        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:.3g} cm "
               f"read from {kept.KEPT}", file=sys.stderr, flush=True)
     if not out.exists():
         # a fresh checkout has no cache: say what is about to take hours, before it does
-        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:g} cm is "
+        print(f"physics: {sweep_shot.shot.name} at {100 * sweep_shot.shot.spacing:.3g} cm is "
               f"not in {cache}: simulating it with Newton (a 1 cm curtain took 1.9-3.9 hours "
               "on one core here; cached afterwards)", file=sys.stderr, flush=True)
         cache.mkdir(parents=True, exist_ok=True)
