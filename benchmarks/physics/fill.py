@@ -28,6 +28,7 @@ from .simulate import cached_newton, newton_path, simulate_newton
 
 ROOT = Path(__file__).resolve().parents[2]
 
+
 def _cost(name: str, converged: bool) -> float:
     """A shot's share of the solver's time, for the order (the longest first): its points
     times its frames (the 1 cm curtains 630,500, the sheared panels 274,625, the 25 cm

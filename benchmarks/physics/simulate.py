@@ -114,6 +114,25 @@ def _simulating(out: Path):
         lock.unlink(missing_ok=True)
 
 
+def _run_newton(sweep_shot, out: Path, arrays: dict, cache: Path, progress: bool) -> None:
+    """newton_client.py on the shot's arrays, its result moved to ``out`` when done."""
+    with tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") as scratch:
+        path = os.path.join(scratch, "shot.npz")
+        np.savez(path, **arrays)
+        env = {**os.environ, "PYTHONNOUSERSITE": "1",
+               "WARP_CACHE_PATH": str(cache / "warp-kernels")}
+        if progress:
+            env["NEWTON_CLIENT_PROGRESS"] = "1"
+        done = subprocess.run([newton_python(), str(HERE / "newton_client.py"), path,
+                               str(out) + ".tmp.npz"], stdout=subprocess.PIPE,
+                              stderr=None if progress else subprocess.PIPE, text=True,
+                              timeout=4 * 3600, env=env)
+        if done.returncode != 0 or not os.path.exists(str(out) + ".tmp.npz"):
+            raise RuntimeError(f"Newton's cloth failed on {sweep_shot.shot.name}: "
+                               f"{(done.stderr or '').strip()[-800:]}")
+        os.replace(str(out) + ".tmp.npz", out)
+
+
 def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
                     progress: bool = False) -> tuple[np.ndarray, float, float]:
     """Newton's VBD on a sweep shot (sweep.py): the fine points of every frame, the solver's
@@ -129,21 +148,8 @@ def simulate_newton(sweep_shot, cache: Path, solver: dict | None = None,
               f"not in {cache}: simulating it with Newton (a 1 cm curtain took 1.9-3.9 hours "
               "on one core here; cached afterwards)", file=sys.stderr, flush=True)
         cache.mkdir(parents=True, exist_ok=True)
-        with _simulating(out), tempfile.TemporaryDirectory(prefix="usdwrinkle-newton-") \
-                as scratch:
-            path = os.path.join(scratch, "shot.npz")
-            np.savez(path, **arrays)
-            env = {**os.environ, "PYTHONNOUSERSITE": "1",
-                   "WARP_CACHE_PATH": str(cache / "warp-kernels")}
-            if progress:
-                env["NEWTON_CLIENT_PROGRESS"] = "1"
-            done = subprocess.run([newton_python(), str(HERE / "newton_client.py"), path,
-                                   str(out) + ".tmp.npz"], stdout=subprocess.PIPE,
-                                  stderr=None if progress else subprocess.PIPE, text=True,
-                                  timeout=4 * 3600, env=env)
-            if done.returncode != 0 or not os.path.exists(str(out) + ".tmp.npz"):
-                raise RuntimeError(f"Newton's cloth failed on {sweep_shot.shot.name}: "
-                                   f"{(done.stderr or '').strip()[-800:]}")
-            os.replace(str(out) + ".tmp.npz", out)
+        with _simulating(out):
+            if not out.exists():  # not finished by another process before the lock
+                _run_newton(sweep_shot, out, arrays, cache, progress)
     data = np.load(out)
     return data["points"], float(data["seconds"]), float(data["stretch_p99"])
