@@ -46,13 +46,10 @@ def set_law(exponent: float, most: float, room: float | None = None) -> None:
 def profile_values(name: str) -> list[float]:
     """A preset's samples, or ``fold<K>``: asin(K cos theta) / asin(K), a triangle whose
     crests are rounded (K < 1; the fold preset's K is profiles.FOLD_ROUNDING)."""
-    from usdwrinkle.method.profiles import profile_preset
-    from usdwrinkle.usd.schema import PROFILE_SAMPLES
+    from usdwrinkle.method.profiles import fold_profile, profile_preset
 
     if name.startswith("fold") and name != "fold":
-        k = float(name[4:])
-        theta = np.arange(PROFILE_SAMPLES) * 2 * np.pi / PROFILE_SAMPLES
-        return (np.arcsin(k * np.cos(theta)) / np.arcsin(k)).tolist()
+        return fold_profile(float(name[4:])).tolist()
     return profile_preset(name).tolist()
 
 
