@@ -38,7 +38,7 @@ def test_a_gathered_cuff_is_offset_outward_by_the_law():
     R = 6 cm): the ring's fitted curvature along the wave is the circle's (its chords give
     2 (e.n) / |e|^2 = 1/R exactly), so the offset is the law's closed form at kappa =
     -1/R, away from the axis; the room binds (the full fold stands 1.46x its room 0.5 R),
-    and the first bound sets the offset, (D - 1) R: 1.35 cm."""
+    and the first bound sets the offset, (D - 1) R: 1.40 cm."""
     rest, counts, indices, inner = cuff()
     posed = cuff(RATIO)[0]
     radius = RADIUS * RATIO
@@ -58,7 +58,9 @@ def test_a_gathered_cuff_is_offset_outward_by_the_law():
     first = (gain - 1.0) * radius
     assert np.all(first[inner] < DEEPEN_CAP * full[inner])
     np.testing.assert_allclose(law["offset"][inner], first[inner], rtol=1e-9)
-    np.testing.assert_allclose(law["offset"][inner], 0.0135, atol=5e-5)
+    # 1.35 cm with the fold at K = 0.9 (until 2026-12-08): a sharper crest holds the same
+    # length lower, so the full fold's length gain over the drawn one is larger
+    np.testing.assert_allclose(law["offset"][inner], 0.0140, atol=5e-5)
     assert np.all(law["offset"][inner] > 0)  # along the outward normal: away from the axis
     # uniform around and along: its gradient is nothing
     assert np.abs(law["offset_gradient"][inner]).max() < 1e-5

@@ -61,13 +61,16 @@ def test_the_profile_factor_of_profiles_with_no_turn_or_one_within_a_sample():
     the table's Nyquist rate, whose central slope is 0 and whose turning phase is 0, asks
     for the most (PROFILE_SAMPLING_MAX) instead of dividing by zero."""
     from usdwrinkle.geometry.bake import profile_sampling
-    from usdwrinkle.geometry.options import PROFILE_SAMPLING_MAX
-    from usdwrinkle.method.profiles import profile_preset
+    from usdwrinkle.geometry.options import PROFILE_SAMPLING_MAX, SAMPLED_ROUNDING
+    from usdwrinkle.method.profiles import fold_profile, profile_preset
 
     assert profile_sampling(np.zeros(256, np.float32)) == 1.0
     assert profile_sampling(np.tile([1.0, -1.0], 128).astype(np.float32)) == \
         PROFILE_SAMPLING_MAX
-    assert profile_sampling(profile_preset("fold")) == 1.0
+    # the samples were measured on the fold at K = 0.9; the default fold (K = 0.97) turns
+    # 1.79x as fast
+    assert profile_sampling(fold_profile(SAMPLED_ROUNDING)) == 1.0
+    assert profile_sampling(profile_preset("fold")) == pytest.approx(1.790, abs=1e-3)
     assert profile_sampling(profile_preset("sharp")) == pytest.approx(1.484, abs=1e-3)
 
 

@@ -37,8 +37,10 @@ def _fold(theta=_THETA, rounding=None):
     return np.arcsin(k * np.cos(theta)) / np.arcsin(k)
 
 
-#: how rounded the fold preset's crests are: 0.9 rounds about a fifth of a period
-FOLD_ROUNDING = 0.9
+#: how rounded the fold preset's crests are: 0.97 rounds about a seventh of a period (0.9
+#: until 2026-12-08, a fifth: its folds stood taller than the cloth referee's for the
+#: length they hold; docs/decisions.md, "The fold's rounding is 0.97")
+FOLD_ROUNDING = 0.97
 
 
 def default_profile() -> np.ndarray:
